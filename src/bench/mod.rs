@@ -1,0 +1,4 @@
+//! The papers' experiments as library code: `flaneur bench` and the criterion benches
+//! call these and only print or plot what they return.
+
+pub mod csearch;

@@ -1,0 +1,43 @@
+//! The one error type of the library. Every variant names what is wrong and where
+//! (file, page, object), so that a user can act on it.
+
+use std::path::PathBuf;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+
+    /// The file is not a flaneur database, or a different version of one.
+    #[error("{path}: not a flaneur database: {what}")]
+    NotADatabase { path: PathBuf, what: String },
+
+    /// A page failed its checks: checksum, kind, length or content.
+    #[error("{path}: page {page} is corrupt: {what}")]
+    CorruptPage { path: PathBuf, page: u64, what: String },
+
+    /// The file is shorter than its header says.
+    #[error("{path}: truncated: {what}")]
+    Truncated { path: PathBuf, what: String },
+
+    #[error("bad box: {0}")]
+    BadBox(String),
+
+    /// A scene or model file that cannot be read (scene file, OBJ).
+    #[error("{path}: {what}")]
+    BadInput { path: PathBuf, what: String },
+
+    #[error(transparent)]
+    Scene(#[from] citygen::SceneError),
+
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Error {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
+        Error::Io { path: path.into(), source }
+    }
+}

@@ -1,0 +1,299 @@
+//! The `flaneur` command line. Parses arguments, calls the library, prints; nothing
+//! else lives here.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+
+use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
+use flaneur::geom::Aabb;
+use flaneur::walk::{cells::disk_cell, street_walk};
+use flaneur::{Backend, BuildOptions, Database, History};
+
+#[derive(Parser)]
+#[command(name = "flaneur", version, about = "An urban walkthrough engine built around disk-resident spatial indexes")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Generate a default city (once, into a cache folder), build it, and walk it headless.
+    Demo {
+        /// Objects in the generated city.
+        #[arg(long, default_value_t = 20_000)]
+        objects: u64,
+        /// Where the city and its database are kept between runs.
+        #[arg(long, env = "FLANEUR_CACHE", default_value = "cache")]
+        cache: PathBuf,
+        /// Queries along the walk.
+        #[arg(long, default_value_t = 60)]
+        steps: usize,
+        /// Disk cell side, metres.
+        #[arg(long, default_value_t = 1000.0)]
+        cell: f32,
+        /// Metres between queries.
+        #[arg(long, default_value_t = 25.0)]
+        step: f32,
+    },
+    /// Build a database from a citygen scene file or OBJ files.
+    Build {
+        /// A `.scene` file from citygen, or one or more `.obj` files.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// The database file to write.
+        #[arg(long, short)]
+        out: PathBuf,
+        #[arg(long, default_value_t = 4096)]
+        page_size: usize,
+        /// Share of each R-tree node that bulk loading fills.
+        #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL)]
+        fill: f32,
+        /// Build the index by one-by-one insertion (linear split), as the thesis did.
+        #[arg(long)]
+        insertion: bool,
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Objects, triangles, pages by kind, tree height and fill.
+    Info {
+        db: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Range query (BOX), or CSearch when history cells are given.
+    Query {
+        db: PathBuf,
+        /// The query box: x0,y0,z0,x1,y1,z1.
+        #[arg(long = "box", value_name = "BOX")]
+        query: Aabb,
+        /// History cells for CSearch (repeatable).
+        #[arg(long, value_name = "BOX")]
+        history: Vec<Aabb>,
+        #[arg(long, default_value = "mmap")]
+        backend: Backend,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Rerun an experiment of the papers on a database.
+    Bench {
+        #[command(subcommand)]
+        experiment: Experiment,
+    },
+}
+
+#[derive(Subcommand)]
+enum Experiment {
+    /// Pages read by BOX against CSearch along a walk of overlapping disk cells.
+    Csearch {
+        db: PathBuf,
+        #[arg(long, default_value_t = CsearchConfig::default().cell)]
+        cell: f32,
+        #[arg(long, default_value_t = CsearchConfig::default().step)]
+        step: f32,
+        #[arg(long, default_value_t = CsearchConfig::default().steps)]
+        steps: usize,
+        #[arg(long, default_value_t = CsearchConfig::default().seed)]
+        seed: u64,
+        #[arg(long, default_value_t = CsearchConfig::default().history_len)]
+        history_len: usize,
+        /// Also run on a copy of the index built by insertion (the thesis's setting).
+        #[arg(long)]
+        insertion_tree: bool,
+        #[arg(long, default_value = "mmap")]
+        backend: Backend,
+        /// Folder for the CSV.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+        /// Print every query, not just the summary.
+        #[arg(long)]
+        verbose: bool,
+    },
+}
+
+fn main() {
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Demo { objects, cache, steps, cell, step } => demo(objects, &cache, steps, cell, step),
+        Command::Build { inputs, out, page_size, fill, insertion, quiet } => {
+            let opts = BuildOptions { page_size, fill, insertion, progress: !quiet };
+            let summary = build(&inputs, &out, &opts)?;
+            println!(
+                "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, {:.1} s",
+                out.display(),
+                summary.objects,
+                summary.triangles,
+                summary.pages,
+                summary.bytes as f64 / (1 << 20) as f64,
+                summary.height,
+                summary.seconds
+            );
+            Ok(())
+        }
+        Command::Info { db, json } => info(&db, json),
+        Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
+        Command::Bench { experiment } => match experiment {
+            Experiment::Csearch { db, cell, step, steps, seed, history_len, insertion_tree, backend, out, verbose } => {
+                let cfg = CsearchConfig { cell, step, steps, seed, history_len, ..CsearchConfig::default() };
+                bench_csearch(&db, &cfg, insertion_tree, backend, &out, verbose)
+            }
+        },
+    }
+}
+
+fn build(inputs: &[PathBuf], out: &Path, opts: &BuildOptions) -> Result<flaneur::BuildSummary> {
+    let is_obj = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if inputs.iter().all(is_obj) {
+        Ok(flaneur::build_from_obj(inputs, out, opts)?)
+    } else if inputs.len() == 1 {
+        Ok(flaneur::build_from_scene(&inputs[0], out, opts)?)
+    } else {
+        bail!("give one scene file, or OBJ files only")
+    }
+}
+
+fn info(path: &Path, json: bool) -> Result<()> {
+    let db = Database::open(path)?;
+    let info = db.info()?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+        return Ok(());
+    }
+    let k = &info.pages_by_kind;
+    println!("database    {}", path.display());
+    println!("objects     {}", info.objects);
+    println!("triangles   {}", info.triangles);
+    println!("pages       {} of {} bytes ({:.1} MiB)", info.pages, info.page_size, info.file_bytes as f64 / (1 << 20) as f64);
+    println!("  by kind   header 1, r-tree {}, mesh {}, meta {}", k.rtree, k.mesh, k.meta);
+    let b = info.bounds;
+    println!("bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}", b[0], b[3], b[1], b[4], b[2], b[5]);
+    println!("r-tree      height {}, fan-out {} (leaf) / {} (internal), fill {:.1}%", info.tree.height, info.fanout_leaf, info.fanout_internal, info.tree.fill * 100.0);
+    for (level, (n, e)) in info.tree.nodes.iter().zip(&info.tree.entries).enumerate() {
+        println!("  level {level}   {n} nodes, {e} entries");
+    }
+    Ok(())
+}
+
+fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bool) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let t = Instant::now();
+    let result = if history.is_empty() { db.range(q)? } else { db.csearch(q, history)? };
+    let us = t.elapsed().as_secs_f64() * 1e6;
+    let io = db.io();
+    if json {
+        let v = serde_json::json!({
+            "query": if history.is_empty() { "box" } else { "csearch" },
+            "ids": result.ids(),
+            "pages": result.pages,
+            "page_reads": io.page_reads,
+            "micros": us,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    let ids: Vec<String> = result.ids().iter().map(u64::to_string).collect();
+    println!("{} objects: {}", ids.len(), ids.join(" "));
+    let pages: Vec<String> = result.pages.iter().map(u64::to_string).collect();
+    println!("{} pages read: {}", pages.len(), pages.join(" "));
+    println!("{:.0} µs", us);
+    Ok(())
+}
+
+fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Backend, out: &Path, verbose: bool) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let mut reports = vec![csearch::run(&db, cfg)?];
+    if insertion {
+        let scratch = out.join("insertion-tree.flaneur");
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        reports.push(csearch::run_insertion_tree(&db, cfg, &scratch)?);
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let csv: String = reports.iter().enumerate().map(|(i, r)| {
+        let s = r.to_csv();
+        if i == 0 { s } else { s.lines().skip(1).map(|l| format!("{l}\n")).collect() }
+    }).collect();
+    let csv_path = out.join("csearch.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    println!("csearch: {} queries, cell {} m, step {} m, history ≤ {}", cfg.steps, cfg.cell, cfg.step, cfg.history_len);
+    for r in &reports {
+        print_report(r, verbose);
+    }
+    println!("per-query rows in {}", csv_path.display());
+    Ok(())
+}
+
+fn print_report(r: &CsearchReport, verbose: bool) {
+    println!("tree: {}", r.tree);
+    if verbose {
+        println!("{:>5} {:>8} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8}", "step", "box pg", "cs pg", "thesis", "ratio", "box µs", "cs µs", "new");
+        for row in &r.rows {
+            let ratio = if row.box_pages == 0 { 0.0 } else { row.csearch_pages as f64 / row.box_pages as f64 };
+            println!(
+                "{:>5} {:>8} {:>8} {:>8} {:>6.1}% {:>8.0} {:>8.0} {:>8}",
+                row.step, row.box_pages, row.csearch_pages, row.thesis_pages, ratio * 100.0, row.box_us, row.csearch_us, row.csearch_objects
+            );
+        }
+    }
+    println!("  pages  BOX {}  CSearch {} ({:.1}%)  CSearch with the thesis's COverlap {} ({:.1}%)", r.box_pages, r.csearch_pages, r.ratio * 100.0, r.thesis_pages, r.thesis_ratio * 100.0);
+    println!("  time   BOX {:.1} ms  CSearch {:.1} ms  thesis COverlap {:.1} ms", r.box_ms, r.csearch_ms, r.thesis_ms);
+}
+
+fn demo(objects: u64, cache: &Path, steps: usize, cell: f32, step: f32) -> Result<()> {
+    std::fs::create_dir_all(cache).with_context(|| format!("creating cache folder {}", cache.display()))?;
+    let scene = cache.join(format!("demo-{objects}.scene"));
+    let db_path = cache.join(format!("demo-{objects}.flaneur"));
+    let city = citygen::CityConfig { objects, ..Default::default() };
+    if !db_path.exists() {
+        if !scene.exists() {
+            println!("generating a city of {objects} objects into {}", scene.display());
+            let s = citygen::write_city(&city, &scene, true)?;
+            println!("  {} objects, {} triangles, {:.1} MiB", s.objects, s.triangles, s.bytes as f64 / (1 << 20) as f64);
+        }
+        println!("building {}", db_path.display());
+        let b = flaneur::build_from_scene(&scene, &db_path, &BuildOptions { progress: true, ..Default::default() })?;
+        println!("  {} pages, tree height {}, {:.1} s", b.pages, b.height, b.seconds);
+    } else {
+        println!("using {} (delete it to rebuild)", db_path.display());
+    }
+    let db = Database::open(&db_path)?;
+    let bounds = db.bounds();
+    let path = street_walk(&bounds, steps, step, 24, 1)?;
+    let mut history = History::default();
+    println!("walking {steps} steps of {step} m, disk cells of {cell} m");
+    println!("{:>5} {:>8} {:>8} {:>6} {:>9} {:>9} {:>7} {:>9} {:>8}", "step", "x", "z", "new", "triangles", "cs pages", "box pg", "mesh pg", "ms");
+    let (mut total_cs, mut total_box, mut total_new) = (0u64, 0u64, 0u64);
+    let mut worst_ms: f64 = 0.0;
+    for (i, eye) in path.positions.iter().enumerate() {
+        let c = disk_cell(*eye, cell, &bounds)?;
+        let box_pages = db.range(&c)?.pages.len();
+        let before = db.io();
+        let t = Instant::now();
+        let new = db.csearch_step(&mut history, &c)?;
+        let mut triangles = 0u64;
+        for o in &new.objects {
+            triangles += db.mesh(o)?.triangle_count() as u64;
+        }
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let io = db.io().since(&before);
+        let mesh_pages = io.reads_of(flaneur::store::PageKind::Mesh);
+        worst_ms = worst_ms.max(ms);
+        total_cs += new.pages.len() as u64;
+        total_box += box_pages as u64;
+        total_new += new.objects.len() as u64;
+        println!("{:>5} {:>8.0} {:>8.0} {:>6} {:>9} {:>9} {:>7} {:>9} {:>8.2}", i, eye.x, eye.z, new.objects.len(), triangles, new.pages.len(), box_pages, mesh_pages, ms);
+    }
+    println!(
+        "{total_new} objects loaded; index pages: CSearch {total_cs}, BOX would read {total_box} ({:.1}%); slowest query with its meshes {worst_ms:.1} ms",
+        if total_box == 0 { 0.0 } else { 100.0 * total_cs as f64 / total_box as f64 }
+    );
+    Ok(())
+}

@@ -1,0 +1,124 @@
+//! The paged R-tree: one node per page of the store, the objects' boxes in its leaves.
+//!
+//! Shou 2002 §4.1–4.2.2. BOX (`range`) and CSearch (`complement`) are two selection
+//! functions over one traversal (`search`); the tree is bulk-loaded at build (STR,
+//! `bulk`) and can grow by one-by-one insertion with the Ang–Tan linear split
+//! (`insert`, `split`), as the thesis built its trees.
+
+mod bulk;
+mod complement;
+mod history;
+mod insert;
+mod node;
+mod range;
+mod search;
+mod split;
+mod stats;
+
+pub use bulk::DEFAULT_FILL;
+pub use complement::{covered, Complement, Coverlap};
+pub use history::{History, DEFAULT_HISTORY_LEN};
+pub use node::{ChildEntry, Fanout, Node, NodeView, ObjectEntry};
+pub use range::Range;
+pub use search::{QueryResult, Selection};
+pub use stats::TreeStats;
+
+use crate::error::{Error, Result};
+use crate::geom::Aabb;
+use crate::store::{Segment, Store};
+
+/// The name of the store segment that records the tree: a = root page, b = height,
+/// c = number of objects.
+pub const SEGMENT: &str = "rtree";
+
+/// A handle on the tree in a store: where its root is and how tall it is. Reads go
+/// through the `Store` passed to each call, so they are all counted there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RTree {
+    pub root: u64,
+    /// Levels including the leaves: 1 when the root is a leaf.
+    pub height: u32,
+    pub objects: u64,
+    pub fanout: Fanout,
+}
+
+impl RTree {
+    /// Reads the tree's segment from an open store.
+    pub fn load(store: &Store) -> Result<RTree> {
+        let seg = store.header().segment(SEGMENT).ok_or_else(|| Error::NotADatabase {
+            path: store.path().to_path_buf(),
+            what: "it has no R-tree segment".into(),
+        })?;
+        if seg.a == 0 || seg.a >= store.page_count() || seg.b == 0 || seg.b > 64 {
+            return Err(Error::CorruptPage {
+                path: store.path().to_path_buf(),
+                page: 0,
+                what: format!("R-tree segment names root page {} and height {}", seg.a, seg.b),
+            });
+        }
+        Ok(RTree {
+            root: seg.a,
+            height: seg.b as u32,
+            objects: seg.c,
+            fanout: Fanout::for_payload(store.payload_size()),
+        })
+    }
+
+    /// Records the tree in the store's header (persisted at the store's flush/finish).
+    pub fn save(&self, store: &mut Store) -> Result<()> {
+        store.set_segment(Segment { name: SEGMENT.into(), a: self.root, b: self.height as u64, c: self.objects })
+    }
+
+    /// The plain range query BOX: every object whose box overlaps `query`.
+    pub fn range(&self, store: &Store, query: &Aabb) -> Result<QueryResult> {
+        query.validate()?;
+        search::search(self, store, &Range { query: *query })
+    }
+
+    /// CSearch (Shou 2002, Fig. 4.5): the objects whose boxes overlap `cell` and none
+    /// of the `history` cells — exactly `range(cell) − ∪ range(hᵢ)`.
+    pub fn csearch(&self, store: &Store, cell: &Aabb, history: &[Aabb]) -> Result<QueryResult> {
+        self.csearch_with(store, cell, history, Coverlap::default())
+    }
+
+    /// CSearch with an explicit descent rule (see [`Coverlap`]); the result is the
+    /// same under both, the pages read are not.
+    pub fn csearch_with(&self, store: &Store, cell: &Aabb, history: &[Aabb], rule: Coverlap) -> Result<QueryResult> {
+        cell.validate()?;
+        for h in history {
+            h.validate()?;
+        }
+        search::search(self, store, &Complement { cell: *cell, history, rule })
+    }
+
+    /// One step of a walk: filters `history` against `cell`, runs CSearch, and records
+    /// `cell` with what it retrieved.
+    pub fn csearch_step(&self, store: &Store, history: &mut History, cell: &Aabb, rule: Coverlap) -> Result<QueryResult> {
+        cell.validate()?;
+        history.filter(cell);
+        let result = search::search(self, store, &Complement { cell: *cell, history: &history.cells(), rule })?;
+        history.record(*cell, &result.objects);
+        Ok(result)
+    }
+
+    /// Adds one object to the tree, writing changed and new nodes through the store.
+    pub fn insert(&mut self, store: &mut Store, entry: ObjectEntry) -> Result<()> {
+        entry.bounds.validate()?;
+        insert::insert(self, store, entry)
+    }
+
+    /// Builds a tree over `entries` by Sort-Tile-Recursive packing, nodes filled to
+    /// `fill` of their fan-out.
+    pub fn bulk_load(store: &mut Store, entries: Vec<ObjectEntry>, fill: f32) -> Result<RTree> {
+        bulk::bulk_load(store, entries, fill)
+    }
+
+    /// Walks every node: nodes and entries per level, fill.
+    pub fn stats(&self, store: &Store) -> Result<TreeStats> {
+        stats::collect(self, store)
+    }
+}
+
+pub(crate) fn corrupt(store: &Store, page: u64, what: impl Into<String>) -> Error {
+    Error::CorruptPage { path: store.path().to_path_buf(), page, what: what.into() }
+}

@@ -1,0 +1,27 @@
+//! Where page bytes come from: a small trait with two implementations, `mmap` (the
+//! fast default) and `pread` (explicit reads, optionally O_DIRECT for cold-cache
+//! experiments). Backends only move bytes; checking and counting is the store's job.
+
+mod mmap;
+mod pread;
+
+use std::io;
+
+pub(crate) use mmap::MmapSource;
+pub(crate) use pread::PreadSource;
+
+/// A source of whole pages of one database file.
+pub(crate) trait PageSource: Send + Sync {
+    /// Reads page `page` whole (`buf.len()` = page size) into `buf`.
+    fn read(&self, page: u64, buf: &mut [u8]) -> io::Result<()>;
+
+    /// The bytes of page `page` without copying, where the backend has them in memory.
+    fn page_bytes(&self, _page: u64) -> Option<&[u8]> {
+        None
+    }
+
+    /// The file may have grown through writes: make its new pages reachable.
+    fn refresh(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}

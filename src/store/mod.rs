@@ -1,0 +1,662 @@
+//! The page file store: one database file of fixed-size pages.
+//!
+//! Layered one idea per file:
+//! - `header.rs`: page 0, the file header with its segment table (layout drawn there);
+//! - `page.rs`: every other page's header (kind, length, checksum) and its codec;
+//! - `extent.rs`: blobs stored as runs of contiguous pages;
+//! - `counters.rs`: the read counters, the papers' currency;
+//! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
+//! - `writer.rs`: buffered appends, overwrites and the commit.
+//!
+//! Every read goes through [`Store`], which checks the page (range, kind, length,
+//! checksum), counts it, and names the page in any error. Nothing in a file can make
+//! the store panic.
+//!
+//! Write model: a new database is written to `<path>.tmp` and renamed into place by
+//! [`Store::finish`]; the header (page 0) is the commit point, written last and
+//! fsynced. Pages past the header's page count are not part of the database.
+
+mod backend;
+mod counters;
+mod extent;
+mod header;
+mod page;
+mod writer;
+
+#[cfg(test)]
+mod tests;
+
+use std::fmt;
+use std::fs::{File, OpenOptions};
+use std::io;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::error::{Error, Result};
+
+pub use counters::IoStats;
+pub use extent::Extent;
+pub use header::{
+    max_segments, valid_page_size, Header, Segment, DEFAULT_PAGE_SIZE, FORMAT_VERSION, MAGIC,
+    MAX_PAGE_SIZE, MAX_SEGMENT_NAME_LEN, MIN_PAGE_SIZE,
+};
+pub use page::{PageKind, KIND_SLOTS, PAGE_HEADER_LEN};
+
+use backend::{MmapSource, PageSource, PreadSource};
+use counters::Counters;
+use header::HeaderError;
+use writer::Writer;
+
+/// How a store reads pages.
+///
+/// ```
+/// use flaneur::store::Backend;
+/// assert_eq!("mmap".parse::<Backend>().unwrap(), Backend::Mmap);
+/// assert_eq!("direct".parse::<Backend>().unwrap(), Backend::Pread { direct: true });
+/// assert_eq!(Backend::Pread { direct: false }.to_string(), "pread");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// The whole file memory-mapped; pages are copied out of the map. The fast default.
+    #[default]
+    Mmap,
+    /// One positioned read per page; with `direct`, the file is opened with O_DIRECT
+    /// so reads bypass the page cache (cold-cache experiments; not every filesystem
+    /// allows it).
+    Pread { direct: bool },
+}
+
+impl Backend {
+    /// The name `FromStr` accepts: `"mmap"`, `"pread"` or `"direct"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Mmap => "mmap",
+            Backend::Pread { direct: false } => "pread",
+            Backend::Pread { direct: true } => "direct",
+        }
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Backend {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Backend> {
+        match s {
+            "mmap" => Ok(Backend::Mmap),
+            "pread" => Ok(Backend::Pread { direct: false }),
+            "direct" => Ok(Backend::Pread { direct: true }),
+            other => Err(Error::Invalid(format!(
+                "unknown storage backend {other:?} (expected mmap, pread or direct)"
+            ))),
+        }
+    }
+}
+
+/// One database file of fixed-size pages: page 0 is the [`Header`], every other page
+/// carries its [`PageKind`], payload length and a checksum verified on every read.
+///
+/// Reads take `&self` and may run on many threads at once; every page read is counted
+/// ([`Store::stats`]). Writes take `&mut self` and need a store from
+/// [`Store::create`] or [`Store::open_writable`].
+///
+/// ```
+/// use flaneur::store::{Backend, PageKind, Segment, Store};
+///
+/// # fn main() -> flaneur::error::Result<()> {
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("city.db");
+///
+/// let mut store = Store::create(&path, 4096)?;
+/// let node = store.append_page(PageKind::RtreeNode, b"a node")?;
+/// let mesh = store.append_extent(PageKind::Mesh, &vec![7u8; 10_000])?;
+/// store.set_segment(Segment::new("rtree", node, 1, 1))?;
+/// store.finish()?; // only now does `path` exist
+///
+/// let store = Store::open(&path, Backend::Mmap)?;
+/// let root = store.header().segment("rtree").unwrap().a;
+/// assert_eq!(store.read_page(root, PageKind::RtreeNode)?, b"a node");
+/// assert_eq!(store.read_extent(&mesh, PageKind::Mesh)?, vec![7u8; 10_000]);
+/// assert_eq!(store.stats().page_reads, 1 + 3);
+/// # Ok(())
+/// # }
+/// ```
+pub struct Store {
+    /// The database's path (for a created store, where `finish` puts it).
+    path: PathBuf,
+    header: Header,
+    page_size: usize,
+    backend: Backend,
+    source: Box<dyn PageSource>,
+    /// Present for created and writable stores.
+    writer: Option<Writer>,
+    counters: Counters,
+}
+
+const _: fn() = || {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<Store>();
+};
+
+impl fmt::Debug for Store {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Store")
+            .field("path", &self.path)
+            .field("page_size", &self.page_size)
+            .field("page_count", &self.header.page_count())
+            .field("backend", &self.backend)
+            .field("writable", &self.writer.is_some())
+            .finish()
+    }
+}
+
+/// `<path>.tmp`, where a new database is built.
+fn temp_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".tmp");
+    PathBuf::from(s)
+}
+
+/// Reads and verifies page 0 of `file` (`len` bytes long).
+fn read_header(path: &Path, file: &File, len: u64) -> Result<Header> {
+    let not_db = |what: String| Error::NotADatabase {
+        path: path.to_path_buf(),
+        what,
+    };
+    let corrupt = |what: String| Error::CorruptPage {
+        path: path.to_path_buf(),
+        page: 0,
+        what,
+    };
+    let map_header_err = |e: HeaderError| match e {
+        HeaderError::NotADatabase(w) => not_db(w),
+        HeaderError::Corrupt(w) => corrupt(w),
+    };
+    let mut prefix = vec![0u8; len.min(header::PREFIX_LEN as u64) as usize];
+    file.read_exact_at(&mut prefix, 0)
+        .map_err(|e| Error::io(path, e))?;
+    let page_size = match Header::check_prefix(&prefix).map_err(map_header_err)? {
+        Some(ps) => ps,
+        None => {
+            return Err(Error::Truncated {
+                path: path.to_path_buf(),
+                what: format!("the file is {len} bytes, too short to hold a database header"),
+            })
+        }
+    };
+    if len < page_size as u64 {
+        return Err(Error::Truncated {
+            path: path.to_path_buf(),
+            what: format!("the file is {len} bytes, shorter than its {page_size}-byte header page"),
+        });
+    }
+    let mut page0 = vec![0u8; page_size];
+    file.read_exact_at(&mut page0, 0)
+        .map_err(|e| Error::io(path, e))?;
+    Header::decode(&page0).map_err(map_header_err)
+}
+
+impl Store {
+    /// Opens an existing database read-only. Many readers (threads or processes) may
+    /// share one file.
+    ///
+    /// Errors: `NotADatabase` (empty file, bad magic, other format version, bad page
+    /// size), `CorruptPage` page 0 (header checksum), `Truncated` (file shorter than
+    /// its page count, or not a whole number of pages), `Io` (including a filesystem
+    /// that refuses O_DIRECT for `Backend::Pread { direct: true }`).
+    pub fn open(path: &Path, backend: Backend) -> Result<Store> {
+        Store::open_existing(path, backend, false)
+    }
+
+    /// Opens an existing database for appending and overwriting pages (e.g. to insert
+    /// objects into an index). Changes are committed by [`Store::flush`] or
+    /// [`Store::finish`]; pages appended after the last commit are discarded when the
+    /// store is dropped or the file is reopened. Overwrites of committed pages are
+    /// written in place and are not rolled back.
+    pub fn open_writable(path: &Path, backend: Backend) -> Result<Store> {
+        Store::open_existing(path, backend, true)
+    }
+
+    fn open_existing(path: &Path, backend: Backend, writable: bool) -> Result<Store> {
+        let io_err = |e| Error::io(path, e);
+        let file = OpenOptions::new()
+            .read(true)
+            .write(writable)
+            .open(path)
+            .map_err(io_err)?;
+        let len = file.metadata().map_err(io_err)?.len();
+        let header = read_header(path, &file, len)?;
+        let page_size = header.page_size();
+        let truncated = |what: String| Error::Truncated {
+            path: path.to_path_buf(),
+            what,
+        };
+        let needed = header
+            .page_count()
+            .checked_mul(page_size as u64)
+            .ok_or_else(|| Error::CorruptPage {
+                path: path.to_path_buf(),
+                page: 0,
+                what: format!("page count {} is impossibly large", header.page_count()),
+            })?;
+        if len < needed {
+            return Err(truncated(format!(
+                "the header says {} pages of {page_size} bytes ({needed} bytes), the file has {len} bytes",
+                header.page_count()
+            )));
+        }
+        if writable && len > needed {
+            // Pages appended after the last commit: not part of the database.
+            file.set_len(needed).map_err(io_err)?;
+        } else if len % page_size as u64 != 0 {
+            return Err(truncated(format!(
+                "the file is {len} bytes, not a whole number of {page_size}-byte pages"
+            )));
+        }
+        let source: Box<dyn PageSource> = match backend {
+            Backend::Mmap => Box::new(
+                MmapSource::new(file.try_clone().map_err(io_err)?, page_size).map_err(io_err)?,
+            ),
+            Backend::Pread { direct: false } => Box::new(PreadSource::buffered(
+                file.try_clone().map_err(io_err)?,
+                page_size,
+            )),
+            Backend::Pread { direct: true } => {
+                Box::new(PreadSource::direct(path, page_size).map_err(io_err)?)
+            }
+        };
+        let writer = writable.then(|| Writer::new(file, page_size, header.page_count(), None));
+        Ok(Store {
+            path: path.to_path_buf(),
+            header,
+            page_size,
+            backend,
+            source,
+            writer,
+            counters: Counters::default(),
+        })
+    }
+
+    /// Starts a new database with `page_size`-byte pages (a power of two in
+    /// 1 KiB..=64 KiB; [`DEFAULT_PAGE_SIZE`] is 4096). It is written to `<path>.tmp`;
+    /// nothing appears at `path` until [`Store::finish`], and dropping the store
+    /// unfinished removes the temporary file. The new store reads its own pages
+    /// (through `pread`).
+    pub fn create(path: &Path, page_size: usize) -> Result<Store> {
+        if !valid_page_size(page_size) {
+            return Err(Error::Invalid(format!(
+                "page size {page_size} is not a power of two in {MIN_PAGE_SIZE}..={MAX_PAGE_SIZE}"
+            )));
+        }
+        let temp = temp_path(path);
+        let io_err = |e| Error::io(&temp, e);
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&temp)
+            .map_err(io_err)?;
+        let reader = file.try_clone().map_err(io_err)?;
+        let writer = Writer::new(file, page_size, 0, Some(temp.clone()));
+        Ok(Store {
+            path: path.to_path_buf(),
+            header: Header::new(page_size),
+            page_size,
+            backend: Backend::Pread { direct: false },
+            source: Box::new(PreadSource::buffered(reader, page_size)),
+            writer: Some(writer),
+            counters: Counters::default(),
+        })
+    }
+
+    /// Commits and closes. A created store: writes all pages and the header, fsyncs
+    /// and renames the temporary file to `path`. A writable store: writes the header
+    /// and fsyncs. A read-only store: nothing to do.
+    pub fn finish(mut self) -> Result<()> {
+        let Some(mut w) = self.writer.take() else {
+            return Ok(());
+        };
+        let file_path = w.temp().cloned().unwrap_or_else(|| self.path.clone());
+        w.commit(&self.header)
+            .map_err(|e| Error::io(&file_path, e))?;
+        if let Some(temp) = w.take_temp() {
+            if let Err(e) = std::fs::rename(&temp, &self.path) {
+                let _ = std::fs::remove_file(&temp);
+                return Err(Error::io(&self.path, e));
+            }
+            // Make the rename durable; best effort (not every platform can fsync a dir).
+            let dir = match self.path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            if let Ok(d) = File::open(dir) {
+                let _ = d.sync_all();
+            }
+        }
+        Ok(())
+    }
+
+    /// Commits without closing: writes pending pages and the header, fsyncs. For a
+    /// created store the file is still the temporary one. A read-only store: nothing to do.
+    pub fn flush(&mut self) -> Result<()> {
+        let Some(w) = self.writer.as_mut() else {
+            return Ok(());
+        };
+        let file_path = w.temp().cloned().unwrap_or_else(|| self.path.clone());
+        w.commit(&self.header)
+            .map_err(|e| Error::io(&file_path, e))?;
+        self.source.refresh().map_err(|e| Error::io(&file_path, e))
+    }
+
+    /// The database's path (for a created store, where `finish` will put it).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Bytes per page.
+    pub fn page_size(&self) -> usize {
+        self.page_size
+    }
+
+    /// Payload bytes per page: `page_size - PAGE_HEADER_LEN`.
+    pub fn payload_size(&self) -> usize {
+        self.page_size - PAGE_HEADER_LEN
+    }
+
+    /// Pages in the database, header included; the next appended page gets this id.
+    pub fn page_count(&self) -> u64 {
+        self.header.page_count()
+    }
+
+    /// The file header (as it will be written at the next commit, for a writer).
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// How this store reads pages (a created store reads with `pread`).
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
+    /// Whether this store accepts writes.
+    pub fn is_writable(&self) -> bool {
+        self.writer.is_some()
+    }
+
+    /// Inserts `seg` into the header's segment table, or replaces the segment of the
+    /// same name. Persisted at the next `flush`/`finish`. Errors: read-only store,
+    /// name empty, over 15 bytes or not ascii, table full.
+    pub fn set_segment(&mut self, seg: Segment) -> Result<()> {
+        if self.writer.is_none() {
+            return Err(self.read_only("set a segment"));
+        }
+        let path = &self.path;
+        self.header
+            .set_segment(seg)
+            .map_err(|why| Error::Invalid(format!("{}: {why}", path.display())))
+    }
+
+    fn read_only(&self, what: &str) -> Error {
+        Error::Invalid(format!(
+            "{}: cannot {what}: the store is open read-only",
+            self.path.display()
+        ))
+    }
+
+    fn corrupt(&self, page: u64, what: String) -> Error {
+        Error::CorruptPage {
+            path: self.path.clone(),
+            page,
+            what,
+        }
+    }
+
+    fn read_error(&self, page: u64, e: io::Error) -> Error {
+        if e.kind() == io::ErrorKind::UnexpectedEof {
+            Error::Truncated {
+                path: self.path.clone(),
+                what: format!("page {page} lies beyond the end of the file"),
+            }
+        } else {
+            Error::io(&self.path, e)
+        }
+    }
+
+    /// Checks that `page` is a data page of this database.
+    #[inline]
+    fn check_range(&self, page: u64) -> Result<()> {
+        if page == 0 {
+            return Err(self.corrupt(0, "page 0 is the file header, not a data page".to_string()));
+        }
+        let count = self.header.page_count();
+        if page >= count {
+            return Err(self.corrupt(
+                page,
+                format!("page {page} is beyond the end of the database ({count} pages)"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The bytes of `page` where they are in memory (write buffer or map).
+    #[inline]
+    fn in_memory(&self, page: u64) -> Option<&[u8]> {
+        match &self.writer {
+            Some(w) => w
+                .pending_page(page)
+                .or_else(|| self.source.page_bytes(page)),
+            None => self.source.page_bytes(page),
+        }
+    }
+
+    #[inline]
+    fn verify<'a>(&self, page: u64, bytes: &'a [u8], kind: PageKind) -> Result<&'a [u8]> {
+        page::decode(bytes, kind).map_err(|what| self.corrupt(page, what))
+    }
+
+    /// Reads, counts and verifies `page`, appending its payload to `out`; returns the
+    /// payload length. `scratch` holds the page when it has to be copied in.
+    fn read_append(
+        &self,
+        page: u64,
+        kind: PageKind,
+        scratch: &mut Vec<u8>,
+        out: &mut Vec<u8>,
+    ) -> Result<usize> {
+        self.check_range(page)?;
+        self.counters.record(kind);
+        let payload = match self.in_memory(page) {
+            Some(bytes) => self.verify(page, bytes, kind)?,
+            None => {
+                scratch.resize(self.page_size, 0);
+                self.source
+                    .read(page, scratch)
+                    .map_err(|e| self.read_error(page, e))?;
+                self.verify(page, scratch, kind)?
+            }
+        };
+        out.extend_from_slice(payload);
+        Ok(payload.len())
+    }
+
+    /// Reads data page `page`, which must be of `kind`, and returns its payload.
+    /// Counted. Errors (`CorruptPage` naming the page): page 0 or beyond the page
+    /// count, blank page, wrong kind (expected and found are named), bad payload
+    /// length, checksum mismatch.
+    pub fn read_page(&self, page: u64, kind: PageKind) -> Result<Vec<u8>> {
+        let mut buf = Vec::new();
+        self.read_page_into(page, kind, &mut buf)?;
+        Ok(buf)
+    }
+
+    /// [`Store::read_page`] into a reused buffer (the hot path): `buf` is replaced by
+    /// the payload. On error its contents are unspecified.
+    pub fn read_page_into(&self, page: u64, kind: PageKind, buf: &mut Vec<u8>) -> Result<()> {
+        self.check_range(page)?;
+        self.counters.record(kind);
+        buf.clear();
+        if let Some(bytes) = self.in_memory(page) {
+            buf.extend_from_slice(self.verify(page, bytes, kind)?);
+            return Ok(());
+        }
+        buf.resize(self.page_size, 0);
+        self.source
+            .read(page, buf)
+            .map_err(|e| self.read_error(page, e))?;
+        let len = self.verify(page, buf, kind)?.len();
+        buf.copy_within(PAGE_HEADER_LEN..PAGE_HEADER_LEN + len, 0);
+        buf.truncate(len);
+        Ok(())
+    }
+
+    /// Reads the blob `ext` (pages of `kind`). Each page is counted and verified; the
+    /// extent itself must be consistent: `byte_len` fills its pages exactly as
+    /// `append_extent` writes them (all full but the last), within the database.
+    pub fn read_extent(&self, ext: &Extent, kind: PageKind) -> Result<Vec<u8>> {
+        let payload = self.payload_size();
+        let byte_len = ext.byte_len as usize;
+        let need = Extent::pages_for(byte_len, payload);
+        if need != ext.page_count as usize {
+            return Err(self.corrupt(
+                ext.first_page,
+                format!(
+                    "extent of {byte_len} bytes needs {need} pages of {payload} payload bytes, it claims {}",
+                    ext.page_count
+                ),
+            ));
+        }
+        if ext.page_count == 0 {
+            return Ok(Vec::new());
+        }
+        // Check the whole range before allocating for it.
+        self.check_range(ext.first_page)?;
+        let last = ext.first_page.saturating_add(u64::from(ext.page_count) - 1);
+        self.check_range(last)?;
+        let mut out = Vec::with_capacity(byte_len);
+        let mut scratch = Vec::new();
+        for (i, page) in (ext.first_page..=last).enumerate() {
+            let expect = (byte_len - i * payload).min(payload);
+            let got = self.read_append(page, kind, &mut scratch, &mut out)?;
+            if got != expect {
+                return Err(self.corrupt(
+                    page,
+                    format!("page {i} of an extent of {byte_len} bytes holds {got} bytes, expected {expect}"),
+                ));
+            }
+        }
+        Ok(out)
+    }
+
+    fn check_write(&self, kind: PageKind, payload: usize, what: &str) -> Result<()> {
+        if self.writer.is_none() {
+            return Err(self.read_only(what));
+        }
+        if kind == PageKind::Header {
+            return Err(Error::Invalid(format!(
+                "{}: cannot {what} of kind header: only page 0 is the header",
+                self.path.display()
+            )));
+        }
+        if payload > self.payload_size() {
+            return Err(Error::Invalid(format!(
+                "{}: cannot {what}: payload of {payload} bytes exceeds the {} bytes a page holds",
+                self.path.display(),
+                self.payload_size()
+            )));
+        }
+        Ok(())
+    }
+
+    fn write_error(&self, e: io::Error) -> Error {
+        let file = self
+            .writer
+            .as_ref()
+            .and_then(|w| w.temp())
+            .unwrap_or(&self.path);
+        Error::io(file, e)
+    }
+
+    /// Appends one page of `kind` holding `payload` and returns its page id. Errors:
+    /// read-only store, kind `Header`, payload over [`Store::payload_size`].
+    pub fn append_page(&mut self, kind: PageKind, payload: &[u8]) -> Result<u64> {
+        self.check_write(kind, payload.len(), "append a page")?;
+        let id = self.header.page_count();
+        if let Some(w) = self.writer.as_mut() {
+            if let Err(e) = w.append(kind, payload) {
+                return Err(self.write_error(e));
+            }
+        }
+        self.header.page_count += 1;
+        Ok(id)
+    }
+
+    /// Overwrites existing data page `page` with a page of `kind` holding `payload`.
+    /// Errors: read-only store, page 0 or beyond the page count, kind `Header`,
+    /// payload too long.
+    pub fn write_page(&mut self, page: u64, kind: PageKind, payload: &[u8]) -> Result<()> {
+        self.check_write(kind, payload.len(), "write a page")?;
+        if page == 0 || page >= self.header.page_count() {
+            return Err(Error::Invalid(format!(
+                "{}: cannot overwrite page {page}: data pages are 1..{}",
+                self.path.display(),
+                self.header.page_count()
+            )));
+        }
+        if let Some(w) = self.writer.as_mut() {
+            if let Err(e) = w.overwrite(page, kind, payload) {
+                return Err(self.write_error(e));
+            }
+        }
+        Ok(())
+    }
+
+    /// Appends `bytes` as an extent: contiguous pages of `kind`, all full but the
+    /// last. An empty blob takes no pages. Errors: as `append_page`, and blobs over
+    /// 4 GiB - 1 bytes.
+    pub fn append_extent(&mut self, kind: PageKind, bytes: &[u8]) -> Result<Extent> {
+        self.check_write(kind, 0, "append an extent")?;
+        let byte_len = u32::try_from(bytes.len()).map_err(|_| {
+            Error::Invalid(format!(
+                "{}: cannot append an extent of {} bytes: at most {} bytes",
+                self.path.display(),
+                bytes.len(),
+                u32::MAX
+            ))
+        })?;
+        let first_page = self.header.page_count();
+        let payload = self.payload_size();
+        let mut pages = 0u32;
+        for chunk in bytes.chunks(payload) {
+            if let Some(w) = self.writer.as_mut() {
+                if let Err(e) = w.append(kind, chunk) {
+                    return Err(self.write_error(e));
+                }
+            }
+            // Count as we go, so a failed write leaves page_count matching the buffer.
+            self.header.page_count += 1;
+            pages += 1;
+        }
+        Ok(Extent {
+            first_page,
+            page_count: pages,
+            byte_len,
+        })
+    }
+
+    /// A snapshot of the read counters.
+    pub fn stats(&self) -> IoStats {
+        self.counters.snapshot(self.page_size)
+    }
+
+    /// Sets the read counters to zero.
+    pub fn reset_stats(&self) {
+        self.counters.reset()
+    }
+}

@@ -1,0 +1,62 @@
+//! The `flaneur` binary end to end: build, info, query (text and JSON), and its errors.
+
+mod common;
+
+use std::process::Command;
+
+use flaneur::BuildOptions;
+
+fn flaneur(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_flaneur")).args(args).output().unwrap()
+}
+
+#[test]
+fn build_info_query() {
+    let c = common::city(300, 2, &BuildOptions::default());
+    let db = c.dir.path().join("cli.flaneur");
+    let out = flaneur(&["build", c.scene.to_str().unwrap(), "--out", db.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("300 objects"));
+
+    let out = flaneur(&["info", db.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && text.contains("objects     300") && text.contains("height"), "{text}");
+    let out = flaneur(&["info", db.to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["objects"], 300);
+
+    let b = c.bounds();
+    let q = format!("{},{},{},{},{},{}", b.min.x, b.min.y, b.min.z, b.center().x, b.max.y, b.center().z);
+    let h = format!("{},{},{},{},{},{}", b.min.x, b.min.y, b.min.z, b.min.x + 50.0, b.max.y, b.max.z);
+    let out = flaneur(&["query", db.to_str().unwrap(), "--box", &q, "--history", &h, "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let ids: Vec<u64> = v["ids"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
+    assert_eq!(ids, c.brute_complement(&q.parse().unwrap(), &[h.parse().unwrap()]));
+    assert_eq!(v["query"], "csearch");
+    assert_eq!(v["pages"].as_array().unwrap().len() as u64, v["page_reads"].as_u64().unwrap());
+
+    let out = flaneur(&["query", db.to_str().unwrap(), "--box", &q, "--backend", "pread"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("pages read"));
+}
+
+#[test]
+fn errors_are_messages_not_panics() {
+    let c = common::city(100, 2, &BuildOptions::default());
+    let db = c.db.to_str().unwrap();
+    for args in [
+        vec!["query", db, "--box", "nan,0,0,1,1,1"],
+        vec!["query", db, "--box", "5,0,0,1,1,1"],
+        vec!["query", db, "--box", "1,2,3"],
+        vec!["query", "no-such.flaneur", "--box", "0,0,0,1,1,1"],
+        vec!["info", c.scene.to_str().unwrap()],
+        vec!["build", "no-such.scene", "--out", "x.flaneur"],
+    ] {
+        let out = flaneur(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        assert!(err.contains("error"), "{args:?}: {err}");
+    }
+}

@@ -1,0 +1,58 @@
+//! Small cities for the integration tests, generated with citygen and built into
+//! real database files in temporary folders.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use flaneur::geom::Aabb;
+use flaneur::BuildOptions;
+
+pub struct City {
+    pub dir: tempfile::TempDir,
+    pub scene: PathBuf,
+    pub db: PathBuf,
+    /// Every object's id and box, read from the scene file: the brute-force truth.
+    pub boxes: Vec<(u64, Aabb)>,
+}
+
+pub fn city(objects: u64, seed: u64, opts: &BuildOptions) -> City {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("city.scene");
+    let db = dir.path().join("city.flaneur");
+    let config = citygen::CityConfig { objects, seed, landmarks: 0.0, ..Default::default() };
+    citygen::write_city(&config, &scene, false).unwrap();
+    flaneur::build_from_scene(&scene, &db, opts).unwrap();
+    let boxes = citygen::SceneReader::open(&scene)
+        .unwrap()
+        .map(|o| {
+            let o = o.unwrap();
+            let (min, max) = o.mesh.bounds();
+            (o.id, Aabb::new(min, max).unwrap())
+        })
+        .collect();
+    City { dir, scene, db, boxes }
+}
+
+impl City {
+    pub fn brute_range(&self, q: &Aabb) -> Vec<u64> {
+        let mut ids: Vec<u64> = self.boxes.iter().filter(|(_, b)| b.overlaps(q)).map(|(id, _)| *id).collect();
+        ids.sort_unstable();
+        ids
+    }
+
+    /// range(C) − ∪ range(Hᵢ), by scanning every object.
+    pub fn brute_complement(&self, c: &Aabb, history: &[Aabb]) -> Vec<u64> {
+        let mut ids: Vec<u64> = self
+            .boxes
+            .iter()
+            .filter(|(_, b)| b.overlaps(c) && history.iter().all(|h| !b.overlaps(h)))
+            .map(|(id, _)| *id)
+            .collect();
+        ids.sort_unstable();
+        ids
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.boxes.iter().fold(Aabb::EMPTY, |b, (_, o)| b.union(o))
+    }
+}
