@@ -297,8 +297,8 @@ impl SceneWriter {
     }
 }
 
-/// A unit-range float as snorm8.
-fn quantize_snorm8(c: f32) -> i8 {
+/// A unit-range float as snorm8 (the normals' codec of the scene file and the database).
+pub fn quantize_snorm8(c: f32) -> i8 {
     (c.clamp(-1.0, 1.0) * 127.0).round() as i8
 }
 
@@ -633,7 +633,7 @@ impl Iterator for SceneReader {
 
 /// snorm8 back to a unit vector. An all-zero triple (never written for a unit normal)
 /// decodes to +y rather than to NaN.
-fn dequantize_normal(q: [i8; 3]) -> [f32; 3] {
+pub fn dequantize_normal(q: [i8; 3]) -> [f32; 3] {
     let v = glam::Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / 127.0;
     v.try_normalize().unwrap_or(glam::Vec3::Y).to_array()
 }

@@ -35,9 +35,7 @@ pub fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
         }
     }
     for n in &mesh.normals {
-        for c in n {
-            out.push(((c.clamp(-1.0, 1.0) * 127.0).round() as i8) as u8);
-        }
+        out.extend(n.map(|c| citygen::quantize_snorm8(c) as u8));
         out.push(0);
     }
     for &i in &mesh.indices {
@@ -79,9 +77,7 @@ pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     let normals = (0..v)
         .map(|i| {
             let o = normals_at + i * NORMAL_LEN;
-            let q = |k: usize| bytes[o + k] as i8 as f32 / 127.0;
-            let n = glam::Vec3::new(q(0), q(1), q(2)).normalize_or_zero();
-            n.to_array()
+            citygen::dequantize_normal([bytes[o] as i8, bytes[o + 1] as i8, bytes[o + 2] as i8])
         })
         .collect();
     let mut indices = Vec::with_capacity(n);
