@@ -73,8 +73,16 @@ const MAX_PIECES: usize = 256;
 /// of it lies strictly outside the cell, so the answer is exact for closed boxes: a
 /// box that merely touches the union's boundary from inside is covered.
 pub fn covered(b: Aabb, cells: &[Aabb]) -> bool {
+    // The common cases on a walk, without allocating: one cell holds it all, or no
+    // cell touches it.
+    if cells.iter().any(|h| h.contains(&b)) {
+        return true;
+    }
+    if !cells.iter().any(|h| h.overlaps(&b)) {
+        return false;
+    }
     let mut pieces = vec![b];
-    for h in cells {
+    for h in cells.iter().filter(|h| h.overlaps(&b)) {
         let mut next = Vec::with_capacity(pieces.len());
         for p in pieces {
             subtract(p, h, &mut next);
