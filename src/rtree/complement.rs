@@ -59,7 +59,8 @@ impl Selection for Complement<'_> {
 
     #[inline]
     fn select(&self, bounds: &Aabb) -> bool {
-        self.cell.overlaps(bounds) && self.history.iter().all(|h| !h.overlaps(bounds))
+        // Newest first: on a walk the latest cells are the likeliest to hold an object.
+        self.cell.overlaps(bounds) && self.history.iter().rev().all(|h| !h.overlaps(bounds))
     }
 }
 
@@ -75,7 +76,7 @@ const MAX_PIECES: usize = 256;
 pub fn covered(b: Aabb, cells: &[Aabb]) -> bool {
     // The common cases on a walk, without allocating: one cell holds it all, or no
     // cell touches it.
-    if cells.iter().any(|h| h.contains(&b)) {
+    if cells.iter().rev().any(|h| h.contains(&b)) {
         return true;
     }
     if !cells.iter().any(|h| h.overlaps(&b)) {
