@@ -125,7 +125,9 @@ impl Database {
 
     /// Adds an object to an open database (opened with [`Database::open_writable`]):
     /// its mesh is appended and the R-tree grows by insertion. Durable when this
-    /// returns.
+    /// returns. Not crash-atomic: changed nodes are rewritten in place, so a crash in
+    /// the middle of an insert can leave the index inconsistent — every read checks
+    /// its page, so that shows as an error naming the page, never as a wrong answer.
     pub fn insert(&mut self, id: u64, mesh: &Mesh) -> Result<ObjectEntry> {
         let entry = write_object(&mut self.store, id, crate::scene::KIND_IMPORTED, mesh)?;
         let before = self.store.page_count();

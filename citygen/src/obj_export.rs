@@ -19,7 +19,7 @@ pub fn export_obj(
     region: ([f32; 2], [f32; 2]),
     out: &Path,
 ) -> Result<u64, SceneError> {
-    config.validate()?;
+    let layout = crate::recipe::checked_layout(config)?;
     let (min, max) = region;
     if !min.iter().chain(&max).all(|v| v.is_finite()) || min[0] > max[0] || min[1] > max[1] {
         return Err(SceneError::Config(format!(
@@ -27,7 +27,6 @@ pub fn export_obj(
             min[0], max[0], min[1], max[1]
         )));
     }
-    let layout = crate::layout::Layout::new(config).expect("a valid config has a layout");
     let file = File::create(out).map_err(|e| SceneError::io(out, e))?;
     let mut w = BufWriter::with_capacity(1 << 20, file);
     let mut written = 0u64;
