@@ -22,9 +22,9 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
     let mut level = tree.height.saturating_sub(1) as u16;
     loop {
         let payload = store.read_page(page, PageKind::RtreeNode)?;
-        let node = Node::decode(&payload).map_err(|w| corrupt(store, page, w))?;
+        let node = Node::decode(&payload).map_err(|w| corrupt(store.path(), page, w))?;
         if node.level() != level {
-            return Err(corrupt(store, page, format!("node at level {} where level {level} was expected", node.level())));
+            return Err(corrupt(store.path(), page, format!("node at level {} where level {level} was expected", node.level())));
         }
         match &node {
             Node::Leaf(_) => {
@@ -33,7 +33,7 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
             }
             Node::Internal { children, .. } => {
                 if children.is_empty() {
-                    return Err(corrupt(store, page, "internal node without children"));
+                    return Err(corrupt(store.path(), page, "internal node without children"));
                 }
                 let idx = choose(children, &entry.bounds);
                 let next = children[idx].page;

@@ -12,6 +12,7 @@ mod insert;
 mod node;
 mod range;
 mod search;
+mod source;
 mod split;
 mod stats;
 
@@ -21,6 +22,7 @@ pub use history::{History, DEFAULT_HISTORY_LEN};
 pub use node::{ChildEntry, Fanout, Node, NodeView, ObjectEntry};
 pub use range::Range;
 pub use search::{QueryResult, Selection};
+pub use source::{NodeHint, PageSource};
 pub use stats::TreeStats;
 
 use crate::error::{Error, Result};
@@ -70,33 +72,45 @@ impl RTree {
     }
 
     /// The plain range query BOX: every object whose box overlaps `query`.
-    pub fn range(&self, store: &Store, query: &Aabb) -> Result<QueryResult> {
+    pub fn range<P: PageSource + ?Sized>(&self, pages: &P, query: &Aabb) -> Result<QueryResult> {
         query.validate()?;
-        search::search(self, store, &Range { query: *query })
+        search::search(self, pages, &Range { query: *query }, query)
     }
 
     /// CSearch (Shou 2002, Fig. 4.5): the objects whose boxes overlap `cell` and none
     /// of the `history` cells — exactly `range(cell) − ∪ range(hᵢ)`.
-    pub fn csearch(&self, store: &Store, cell: &Aabb, history: &[Aabb]) -> Result<QueryResult> {
-        self.csearch_with(store, cell, history, Coverlap::default())
+    pub fn csearch<P: PageSource + ?Sized>(&self, pages: &P, cell: &Aabb, history: &[Aabb]) -> Result<QueryResult> {
+        self.csearch_with(pages, cell, history, Coverlap::default())
     }
 
     /// CSearch with an explicit descent rule (see [`Coverlap`]); the result is the
     /// same under both, the pages read are not.
-    pub fn csearch_with(&self, store: &Store, cell: &Aabb, history: &[Aabb], rule: Coverlap) -> Result<QueryResult> {
+    pub fn csearch_with<P: PageSource + ?Sized>(
+        &self,
+        pages: &P,
+        cell: &Aabb,
+        history: &[Aabb],
+        rule: Coverlap,
+    ) -> Result<QueryResult> {
         cell.validate()?;
         for h in history {
             h.validate()?;
         }
-        search::search(self, store, &Complement { cell: *cell, history, rule })
+        search::search(self, pages, &Complement { cell: *cell, history, rule }, cell)
     }
 
     /// One step of a walk: filters `history` against `cell`, runs CSearch, and records
     /// `cell` with what it retrieved.
-    pub fn csearch_step(&self, store: &Store, history: &mut History, cell: &Aabb, rule: Coverlap) -> Result<QueryResult> {
+    pub fn csearch_step<P: PageSource + ?Sized>(
+        &self,
+        pages: &P,
+        history: &mut History,
+        cell: &Aabb,
+        rule: Coverlap,
+    ) -> Result<QueryResult> {
         cell.validate()?;
         history.filter(cell);
-        let result = search::search(self, store, &Complement { cell: *cell, history: &history.cells(), rule })?;
+        let result = search::search(self, pages, &Complement { cell: *cell, history: &history.cells(), rule }, cell)?;
         history.record(*cell, &result.objects);
         Ok(result)
     }
@@ -119,6 +133,6 @@ impl RTree {
     }
 }
 
-pub(crate) fn corrupt(store: &Store, page: u64, what: impl Into<String>) -> Error {
-    Error::CorruptPage { path: store.path().to_path_buf(), page, what: what.into() }
+pub(crate) fn corrupt(path: &std::path::Path, page: u64, what: impl Into<String>) -> Error {
+    Error::CorruptPage { path: path.to_path_buf(), page, what: what.into() }
 }

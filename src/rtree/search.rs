@@ -3,10 +3,10 @@
 //! their pages through `NodeView`, without decoding them whole.
 
 use super::node::{NodeView, ObjectEntry};
+use super::source::{NodeHint, PageSource};
 use super::{corrupt, RTree};
 use crate::error::Result;
 use crate::geom::Aabb;
-use crate::store::{PageKind, Store};
 
 /// What a query selects. `descend` is asked of internal entries (subtree MBRs),
 /// `select` of leaf entries (object boxes).
@@ -31,17 +31,26 @@ impl QueryResult {
     }
 }
 
-pub(crate) fn search<S: Selection>(tree: &RTree, store: &Store, sel: &S) -> Result<QueryResult> {
+pub(crate) fn search<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: &S, query: &Aabb) -> Result<QueryResult> {
+    pages.begin_search(query);
+    let result = traverse(tree, pages, sel);
+    pages.end_search();
+    result
+}
+
+fn traverse<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: &S) -> Result<QueryResult> {
     let mut result = QueryResult::default();
-    let mut buf = Vec::with_capacity(store.page_size());
+    let mut buf = Vec::with_capacity(4096);
+    let height = tree.height;
     // Levels must fall by one per step down: a corrupt child pointer cannot loop.
-    let mut stack = vec![(tree.root, tree.height.saturating_sub(1) as u16)];
-    while let Some((page, level)) = stack.pop() {
-        store.read_page_into(page, PageKind::RtreeNode, &mut buf)?;
+    let mut stack = vec![(tree.root, NodeHint { level: height.saturating_sub(1) as u16, height, mbr: Aabb::EMPTY })];
+    while let Some((page, hint)) = stack.pop() {
+        pages.read_node(page, &hint, &mut buf)?;
         result.pages.push(page);
-        let node = NodeView::parse(&buf).map_err(|w| corrupt(store, page, w))?;
+        let level = hint.level;
+        let node = NodeView::parse(&buf).map_err(|w| corrupt(pages.path(), page, w))?;
         if node.level != level {
-            return Err(corrupt(store, page, format!("node at level {} where level {level} was expected", node.level)));
+            return Err(corrupt(pages.path(), page, format!("node at level {} where level {level} was expected", node.level)));
         }
         if node.is_leaf() {
             for i in 0..node.len() {
@@ -53,7 +62,7 @@ pub(crate) fn search<S: Selection>(tree: &RTree, store: &Store, sel: &S) -> Resu
             for i in (0..node.len()).rev() {
                 let child = node.child(i);
                 if sel.descend(&child.mbr) {
-                    stack.push((child.page, level - 1));
+                    stack.push((child.page, NodeHint { level: level - 1, height, mbr: child.mbr }));
                 }
             }
         }

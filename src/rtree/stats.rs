@@ -25,9 +25,9 @@ pub(crate) fn collect(tree: &RTree, store: &Store) -> Result<TreeStats> {
     let mut stack = vec![(tree.root, tree.height.saturating_sub(1) as u16)];
     while let Some((page, level)) = stack.pop() {
         store.read_page_into(page, PageKind::RtreeNode, &mut buf)?;
-        let node = NodeView::parse(&buf).map_err(|w| corrupt(store, page, w))?;
+        let node = NodeView::parse(&buf).map_err(|w| corrupt(store.path(), page, w))?;
         if node.level != level {
-            return Err(corrupt(store, page, format!("node at level {} where level {level} was expected", node.level)));
+            return Err(corrupt(store.path(), page, format!("node at level {} where level {level} was expected", node.level)));
         }
         stats.nodes[level as usize] += 1;
         stats.entries[level as usize] += node.len() as u64;
