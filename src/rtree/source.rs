@@ -1,0 +1,45 @@
+//! Where a traversal reads its nodes: the store itself, or an index cache over it
+//! (`cache::BufferPool`). The hints tell a cache what a page is, so its replacement
+//! policy can weigh level and distance (Shou 2002 §4.2.4) without global state.
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::geom::Aabb;
+use crate::store::{PageKind, Store};
+
+/// What a node page is, as the traversal knows it when it asks for the page.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeHint {
+    /// Level of the node: 0 for a leaf, `height - 1` for the root.
+    pub level: u16,
+    /// Levels of the tree: the root is at `height - 1`.
+    pub height: u32,
+    /// The node's MBR from its parent's entry; `Aabb::EMPTY` for the root.
+    pub mbr: Aabb,
+}
+
+/// A source of R-tree node pages.
+pub trait PageSource {
+    /// Reads node `page` into `buf` (its payload), verified.
+    fn read_node(&self, page: u64, hint: &NodeHint, buf: &mut Vec<u8>) -> Result<()>;
+
+    /// The database file, for error messages.
+    fn path(&self) -> &Path;
+
+    /// A search of `query` starts (a cache measures distances against it).
+    fn begin_search(&self, _query: &Aabb) {}
+
+    /// The search is over (a cache ages its entries).
+    fn end_search(&self) {}
+}
+
+impl PageSource for Store {
+    fn read_node(&self, page: u64, _hint: &NodeHint, buf: &mut Vec<u8>) -> Result<()> {
+        self.read_page_into(page, PageKind::RtreeNode, buf)
+    }
+
+    fn path(&self) -> &Path {
+        Store::path(self)
+    }
+}
