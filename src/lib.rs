@@ -27,6 +27,7 @@
 
 pub mod bench;
 pub mod build;
+pub mod cache;
 pub mod database;
 pub mod error;
 pub mod geom;

@@ -9,6 +9,8 @@ use clap::{Parser, Subcommand};
 
 use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
 use flaneur::geom::Aabb;
+use flaneur::walk::motion::{self, CameraPath, Motion};
+use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::walk::{cells::disk_cell, street_walk};
 use flaneur::{Backend, BuildOptions, Database, History};
 
@@ -78,6 +80,54 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Walk a database headless along a camera path (REVIEW, Shou 2002 ch. 4) and
+    /// report per-frame figures.
+    Walk {
+        db: PathBuf,
+        /// `review` (CSearch with index cache and prefetching) or `box` (plain range queries).
+        #[arg(long, default_value = "review")]
+        mode: String,
+        /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
+        #[arg(long)]
+        config: Option<Preset>,
+        /// A motion pattern (normal, fast, slow, turning, backward, random) or a path CSV file.
+        #[arg(long, default_value = "normal")]
+        path: String,
+        #[arg(long, default_value_t = 600)]
+        frames: usize,
+        #[arg(long, default_value_t = 30.0)]
+        fps: f32,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Index cache policy: lru, dplru, dov, dovtime.
+        #[arg(long)]
+        policy: Option<String>,
+        /// Index cache size in bytes (0: no index cache).
+        #[arg(long)]
+        cache_bytes: Option<usize>,
+        /// Prefetch factor k (negative: no prefetching).
+        #[arg(long)]
+        k: Option<f32>,
+        /// Scale factor SF of the disk cell over the frustum cell.
+        #[arg(long)]
+        sf: Option<f32>,
+        /// Frustum depth, metres.
+        #[arg(long)]
+        far: Option<f32>,
+        /// Object buffer budget, MiB.
+        #[arg(long)]
+        budget_mb: Option<usize>,
+        /// Write one row per frame here.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Save the camera path as CSV (time, x, y, z, yaw, pitch).
+        #[arg(long)]
+        save_path: Option<PathBuf>,
+        #[arg(long, default_value = "mmap")]
+        backend: Backend,
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Rerun an experiment of the papers on a database.
     Bench {
         #[command(subcommand)]
@@ -141,6 +191,29 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
+        Command::Walk { db, mode, config, path, frames, fps, seed, policy, cache_bytes, k, sf, far, budget_mb, csv, save_path, backend, quiet } => {
+            let preset = match config {
+                Some(p) => p,
+                None => match mode.as_str() {
+                    "review" => Preset::Optimal,
+                    "box" => Preset::Box,
+                    other => bail!("unknown mode '{other}' (review, box)"),
+                },
+            };
+            let mut cfg = ReviewConfig::preset(preset);
+            if let Some(bytes) = cache_bytes {
+                cfg.index_cache = (bytes > 0).then(|| (policy.clone().unwrap_or_else(|| "dplru".into()), bytes));
+            } else if let (Some(p), Some(c)) = (&policy, &mut cfg.index_cache) {
+                c.0 = p.clone();
+            }
+            if let Some(k) = k {
+                cfg.prefetch_k = (k >= 0.0).then_some(k);
+            }
+            cfg.sf = sf.unwrap_or(cfg.sf);
+            cfg.far = far.unwrap_or(cfg.far);
+            cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
+            walk_cmd(&db, &cfg, &path, frames, fps, seed, csv.as_deref(), save_path.as_deref(), backend, quiet)
+        }
         Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
             Experiment::Csearch { db, cell, step, steps, seed, history_len, packed_only, backend, out, verbose } => {
@@ -222,11 +295,15 @@ fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Bac
     }).collect();
     let csv_path = out.join("csearch.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    for (r, name) in reports.iter().zip(["csearch-pages.png", "csearch-pages-insertion.png"]) {
+        csearch::plot(r, &out.join(name))?;
+    }
+    std::fs::write(out.join("csearch.md"), csearch::markdown(&reports, cfg)).with_context(|| format!("writing {}", out.display()))?;
     println!("csearch: {} queries, cell {} m, step {} m, history ≤ {}", cfg.steps, cfg.cell, cfg.step, cfg.history_len);
     for r in &reports {
         print_report(r, verbose);
     }
-    println!("per-query rows in {}", csv_path.display());
+    println!("per-query rows in {}, plots and a summary beside it", csv_path.display());
     Ok(())
 }
 
@@ -295,4 +372,49 @@ fn demo(objects: u64, cache: &Path, steps: usize, cell: f32, step: f32) -> Resul
         if total_box == 0 { 0.0 } else { 100.0 * total_cs as f64 / total_box as f64 }
     );
     Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn walk_cmd(
+    path: &Path,
+    cfg: &ReviewConfig,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+    csv: Option<&Path>,
+    save_path: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = match camera.parse::<Motion>() {
+        Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
+        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| format!("'{camera}' is neither a motion pattern nor a readable path file"))?,
+    };
+    if let Some(p) = save_path {
+        poses.save_csv(p)?;
+    }
+    let bar = if quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(poses.poses.len() as u64) };
+    let report = review::walk(&db, &poses, cfg, |_| bar.inc(1))?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        std::fs::write(p, report.to_csv()).with_context(|| format!("writing {}", p.display()))?;
+    }
+    print_walk(&report);
+    Ok(())
+}
+
+fn print_walk(r: &WalkReport) {
+    let s = &r.summary;
+    let c = &r.config;
+    let cache = c.index_cache.as_ref().map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
+    let k = c.prefetch_k.map_or("off".to_string(), |k| format!("k = {k}"));
+    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
+    println!("  frames {}   mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}", s.frames, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms);
+    println!("  queries {} ({} from prefetch)   index pages {} ({:.1} per query)   mesh pages {}", s.queries, s.prefetches_used, s.index_pages, s.index_pages_per_query, s.mesh_pages);
+    println!("  visual misses {}   peak buffer {:.1} MiB   frames over budget {}", s.visual_misses, s.peak_buffer_bytes as f64 / (1 << 20) as f64, s.overflow_frames);
+    if let Some(cs) = &s.index_cache {
+        println!("  index cache: {} hits, {} misses, hit rate {:.1}%", cs.hits, cs.misses, cs.hit_rate() * 100.0);
+    }
 }

@@ -2,3 +2,4 @@
 //! call these and only print or plot what they return.
 
 pub mod csearch;
+pub mod plot;

@@ -1,0 +1,149 @@
+//! The object buffer of a walk (Shou 2002 §4.2.2, Fig. 4.8): the objects loaded so far,
+//! keyed by object id, under a memory budget in bytes.
+//!
+//! When the buffer is over budget, the thesis keeps only the objects that overlap the
+//! latest disk cell. The walk then restarts its CSearch history at that cell, so that
+//! the buffer always holds every object of every cell in the history — the condition
+//! under which CSearch's "only what is new" never leaves a hole. Departure: when even
+//! the objects of the latest cell do not fit, the farthest from the viewer go too (the
+//! budget is a hard limit), and the walk records an overflow.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::geom::Aabb;
+use crate::rtree::ObjectEntry;
+use crate::scene::Mesh;
+
+/// An object in memory: its index entry and its mesh.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub entry: ObjectEntry,
+    pub mesh: Arc<Mesh>,
+    pub bytes: usize,
+}
+
+/// Bytes a mesh takes in memory (positions, normals, indices).
+pub fn mesh_bytes(mesh: &Mesh) -> usize {
+    mesh.positions.len() * 24 + mesh.indices.len() * 4
+}
+
+/// What an eviction did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Eviction {
+    pub evicted: usize,
+    /// The latest cell's own objects did not fit: some of them were dropped too.
+    pub overflow: bool,
+}
+
+#[derive(Debug)]
+pub struct ObjectBuffer {
+    objects: HashMap<u64, Loaded>,
+    bytes: usize,
+    budget: usize,
+}
+
+impl ObjectBuffer {
+    pub fn new(budget: usize) -> ObjectBuffer {
+        ObjectBuffer { objects: HashMap::new(), bytes: 0, budget }
+    }
+
+    pub fn len(&self) -> usize {
+        self.objects.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.objects.is_empty()
+    }
+
+    pub fn bytes(&self) -> usize {
+        self.bytes
+    }
+
+    pub fn budget(&self) -> usize {
+        self.budget
+    }
+
+    pub fn contains(&self, id: u64) -> bool {
+        self.objects.contains_key(&id)
+    }
+
+    pub fn over_budget(&self) -> bool {
+        self.bytes > self.budget
+    }
+
+    /// Adds an object (a second copy of the same id is ignored).
+    pub fn insert(&mut self, loaded: Loaded) {
+        if let std::collections::hash_map::Entry::Vacant(slot) = self.objects.entry(loaded.entry.id) {
+            self.bytes += loaded.bytes;
+            slot.insert(loaded);
+        }
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &Loaded> {
+        self.objects.values()
+    }
+
+    /// Fig. 4.8: keeps only the objects overlapping `cell`; if they still exceed the
+    /// budget, drops the farthest from `eye` until they fit.
+    pub fn evict_outside(&mut self, cell: &Aabb, eye: Vec3) -> Eviction {
+        let before = self.objects.len();
+        self.objects.retain(|_, o| o.entry.bounds.overlaps(cell));
+        self.bytes = self.objects.values().map(|o| o.bytes).sum();
+        let mut overflow = false;
+        if self.bytes > self.budget {
+            overflow = true;
+            let mut by_distance: Vec<(f32, u64, usize)> = self
+                .objects
+                .values()
+                .map(|o| (o.entry.bounds.center().distance_squared(eye), o.entry.id, o.bytes))
+                .collect();
+            by_distance.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            for (_, id, bytes) in by_distance {
+                if self.bytes <= self.budget {
+                    break;
+                }
+                self.objects.remove(&id);
+                self.bytes -= bytes;
+            }
+        }
+        Eviction { evicted: before - self.objects.len(), overflow }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::Extent;
+
+    fn loaded(id: u64, x: f32, bytes: usize) -> Loaded {
+        Loaded {
+            entry: ObjectEntry {
+                id,
+                bounds: Aabb::new([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0]).unwrap(),
+                mesh: Extent { first_page: 1, page_count: 1, byte_len: 10 },
+                triangles: 1,
+                kind: 0,
+            },
+            mesh: Arc::new(Mesh::default()),
+            bytes,
+        }
+    }
+
+    #[test]
+    fn keeps_the_latest_cell_then_the_nearest() {
+        let mut b = ObjectBuffer::new(250);
+        for i in 0..5 {
+            b.insert(loaded(i, i as f32 * 10.0, 100));
+        }
+        assert!(b.over_budget());
+        let cell = Aabb::new([0.0, 0.0, 0.0], [25.0, 1.0, 1.0]).unwrap();
+        let e = b.evict_outside(&cell, Vec3::ZERO);
+        assert_eq!((e.evicted, e.overflow, b.len()), (3, true, 2));
+        assert!(b.contains(0) && b.contains(1) && b.bytes() <= 250);
+        b.insert(loaded(1, 10.0, 100));
+        assert_eq!(b.bytes(), 200, "a second copy is not counted");
+    }
+}

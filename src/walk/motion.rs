@@ -1,0 +1,651 @@
+//! Camera paths in the motion patterns of Shou 2002 §4.4.1 (Fig. 4.17): the thesis tunes
+//! its prefetch factor k on five recorded sessions — normal, fast, slow, turning and
+//! backward — without defining them. We define them here, plus a random walk, for any
+//! city box, deterministically from a seed.
+//!
+//! # Where the viewer goes
+//!
+//! The eye is at street level: `bounds.min.y + 1.7 m` (or the city's top, if the box is
+//! lower than that). On the ground it stays inside the city's x/z rectangle shrunk by a
+//! margin of `min(7 m, 5 % of the side)` (7 m is half of citygen's default street).
+//!
+//! Every pattern but `Random` drives along a **street grid** laid over that rectangle:
+//! lines one block pitch apart, the pitch being the one of citygen's default city
+//! (4 lots × 20 m + a 14 m street = 94 m) stretched so that a whole number of blocks
+//! fits (at least one). Edges of the rectangle are streets too (a ring road), so the
+//! viewer turns back at the city's edge by turning at its last intersection. At an
+//! intersection the viewer turns 90° left or right (evenly) with the pattern's turn
+//! probability, or when it cannot go straight on; it goes back only in a dead end.
+//!
+//! # The patterns
+//!
+//! Speeds make a 1 km-deep frustum walk meaningful (a car, not a pedestrian). The view
+//! turns toward its target heading at most at the pattern's yaw rate, so 90° turns are
+//! smooth rotations of the view while the position turns the corner.
+//!
+//! | pattern    | speed (m/s)          | turns at intersections | yaw rate | view                                  |
+//! |------------|----------------------|------------------------|----------|---------------------------------------|
+//! | `Normal`   | 15                   | 25 %                   | 90 °/s   | along the street                      |
+//! | `Fast`     | 40                   | 25 %                   | 180 °/s  | along the street                      |
+//! | `Slow`     | 4                    | 25 %                   | 60 °/s   | along the street                      |
+//! | `Turning`  | 15                   | 75 %                   | 120 °/s  | looks around: ±30°, period 4 s        |
+//! | `Backward` | 15                   | 25 %                   | 120 °/s  | opposite to the motion (see below)    |
+//! | `Random`   | U[2, 40], redrawn    | off the grid (below)   | 180 °/s  | along the motion                      |
+//!
+//! - `Backward`: the camera looks one way and moves the other. Every U[10, 20] s it
+//!   reverses: it starts back along the street it came, and the view swings 180° round
+//!   (at the yaw rate, about 1.5 s) to keep looking against the motion. During the first
+//!   half of a swing the viewer moves forward; the rest of the time, backward.
+//! - `Random`: not bound to streets. Every U[1, 6] s it draws a new speed in
+//!   U[2, 40] m/s and turns its heading by U[−120°, 120°]. At the city's edge it is held
+//!   inside (clamped) and heads back toward the centre, ±45°.
+//!
+//! Pitch is `A·sin(2πt / 8 s + φ)` with a random phase: A = 2° (3° for `Turning`, 5° for
+//! `Random`). Yaw is continuous (not wrapped into ±π), so consecutive poses differ by the
+//! actual turn. Pose `i` is at time `i / fps`. Every pose is finite, and consecutive
+//! positions are at most `max speed / fps` apart.
+
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI, TAU};
+use std::str::FromStr;
+
+use glam::{Vec2, Vec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::path::EYE_HEIGHT;
+use crate::error::{Error, Result};
+use crate::geom::{Aabb, Camera};
+
+/// Nominal block pitch of the street grid, metres: citygen's default 4 lots × 20 m plus
+/// a 14 m street.
+pub const BLOCK_PITCH: f32 = 94.0;
+
+/// The frame rates [`generate`] accepts, frames per second.
+pub const MIN_FPS: f32 = 0.01;
+/// See [`MIN_FPS`].
+pub const MAX_FPS: f32 = 10_000.0;
+
+/// A motion pattern of Shou 2002 §4.4.1, or a random walk. See the module docs for the
+/// definitions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Motion {
+    Normal,
+    Fast,
+    Slow,
+    Turning,
+    Backward,
+    Random,
+}
+
+impl Motion {
+    /// Every pattern, in the order above.
+    pub const ALL: [Motion; 6] =
+        [Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward, Motion::Random];
+
+    /// The lowercase name that [`FromStr`] parses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Motion::Normal => "normal",
+            Motion::Fast => "fast",
+            Motion::Slow => "slow",
+            Motion::Turning => "turning",
+            Motion::Backward => "backward",
+            Motion::Random => "random",
+        }
+    }
+
+    /// The range of the viewer's speed in m/s, `(min, max)`; equal for the constant-speed
+    /// patterns. No two consecutive poses are more than `max / fps` apart.
+    pub fn speed_range(self) -> (f32, f32) {
+        match self.params().speed {
+            Speed::Constant(v) => (v, v),
+            Speed::Redrawn(lo, hi) => (lo, hi),
+        }
+    }
+
+    fn params(self) -> Params {
+        let deg = |d: f32| d.to_radians();
+        let base = Params {
+            speed: Speed::Constant(15.0),
+            turn_probability: 0.25,
+            yaw_rate: deg(90.0),
+            look_around: 0.0,
+            backward: false,
+            pitch_amplitude: deg(2.0),
+        };
+        match self {
+            Motion::Normal => base,
+            Motion::Fast => Params { speed: Speed::Constant(40.0), yaw_rate: deg(180.0), ..base },
+            Motion::Slow => Params { speed: Speed::Constant(4.0), yaw_rate: deg(60.0), ..base },
+            Motion::Turning => Params {
+                turn_probability: 0.75,
+                yaw_rate: deg(120.0),
+                look_around: deg(30.0),
+                pitch_amplitude: deg(3.0),
+                ..base
+            },
+            Motion::Backward => Params { yaw_rate: deg(120.0), backward: true, ..base },
+            Motion::Random => {
+                Params { speed: Speed::Redrawn(2.0, 40.0), yaw_rate: deg(180.0), pitch_amplitude: deg(5.0), ..base }
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for Motion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Motion {
+    type Err = Error;
+
+    /// Parses a pattern's name, case-insensitively: `normal`, `fast`, `slow`, `turning`,
+    /// `backward` or `random`.
+    fn from_str(s: &str) -> Result<Motion> {
+        let t = s.trim();
+        Motion::ALL.into_iter().find(|m| m.name().eq_ignore_ascii_case(t)).ok_or_else(|| {
+            let names: Vec<&str> = Motion::ALL.iter().map(|m| m.name()).collect();
+            Error::Invalid(format!("unknown motion pattern '{s}': expected one of {}", names.join(", ")))
+        })
+    }
+}
+
+/// One camera pose of a path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Seconds since the start of the path.
+    pub time: f64,
+    /// The eye, world coordinates (metres).
+    pub position: Vec3,
+    /// Radians; 0 looks along +x, increasing toward +z (as [`Camera::yaw`]).
+    pub yaw: f32,
+    /// Radians, positive up (as [`Camera::pitch`]).
+    pub pitch: f32,
+}
+
+impl Pose {
+    /// The camera at this pose, with the thesis's default frustum (45° × 45°, 1 km).
+    pub fn camera(&self) -> Result<Camera> {
+        Camera::new(self.position, self.yaw, self.pitch)
+    }
+}
+
+/// A timed sequence of poses: what [`generate`] makes, what a recorded session holds,
+/// what [`CameraPath::save_csv`] writes.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct CameraPath {
+    pub poses: Vec<Pose>,
+}
+
+impl CameraPath {
+    /// A checked path: at least one pose, all finite, pitch strictly inside ±90°, times
+    /// strictly increasing.
+    pub fn new(poses: Vec<Pose>) -> Result<CameraPath> {
+        let p = CameraPath { poses };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Checks what [`CameraPath::new`] checks; the error names the first bad pose.
+    pub fn validate(&self) -> Result<()> {
+        if self.poses.is_empty() {
+            return Err(Error::Invalid("camera path has no poses".into()));
+        }
+        let mut prev = None;
+        for (i, pose) in self.poses.iter().enumerate() {
+            check_pose(pose, prev).map_err(|what| Error::Invalid(format!("camera path, pose {i}: {what}")))?;
+            prev = Some(pose.time);
+        }
+        Ok(())
+    }
+
+    pub fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.poses.is_empty()
+    }
+
+    /// Seconds from the first pose to the last; 0 for fewer than two poses.
+    pub fn duration(&self) -> f64 {
+        match (self.poses.first(), self.poses.last()) {
+            (Some(a), Some(b)) => b.time - a.time,
+            _ => 0.0,
+        }
+    }
+
+    /// The viewer's velocity at pose `i` (m/s), by finite difference: from pose `i − 1`
+    /// to `i` (causal: what a prefetcher knows at frame `i`), and from pose 0 to 1 for
+    /// `i = 0`. Zero for a path of one pose or none, or where two times do not increase;
+    /// an `i` past the end is taken as the last pose.
+    pub fn velocity_at(&self, i: usize) -> Vec3 {
+        let n = self.poses.len();
+        if n < 2 {
+            return Vec3::ZERO;
+        }
+        let i = i.min(n - 1).max(1);
+        let (a, b) = (&self.poses[i - 1], &self.poses[i]);
+        let dt = b.time - a.time;
+        let v = (b.position - a.position) / dt as f32;
+        if dt > 0.0 && v.is_finite() {
+            v
+        } else {
+            Vec3::ZERO
+        }
+    }
+}
+
+/// What makes a pose valid after `prev` (the previous pose's time); the reason if not.
+pub(super) fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(), String> {
+    if !p.time.is_finite() || !p.position.is_finite() || !p.yaw.is_finite() || !p.pitch.is_finite() {
+        return Err("a value is not finite".into());
+    }
+    if p.pitch.abs() >= FRAC_PI_2 {
+        return Err(format!("pitch {} is not strictly between -pi/2 and pi/2", p.pitch));
+    }
+    if let Some(t) = prev {
+        if p.time <= t {
+            return Err(format!("time {} does not increase (previous {t})", p.time));
+        }
+    }
+    Ok(())
+}
+
+/// A path of `frames` poses at `fps` through the city `bounds` in the pattern `motion`,
+/// the same for the same arguments. Errors on an invalid box, one with no extent on x
+/// or z, no frames, or a frame rate outside [`MIN_FPS`]`..=`[`MAX_FPS`].
+///
+/// ```
+/// use flaneur::geom::Aabb;
+/// use flaneur::walk::motion::{generate, Motion};
+/// # fn main() -> flaneur::Result<()> {
+/// let city: Aabb = "0,0,0,2000,80,2000".parse()?;
+/// let path = generate(&city, Motion::Fast, 300, 30.0, 7)?;
+/// assert_eq!(path.len(), 300);
+/// assert!(path.poses.iter().all(|p| city.contains_point(p.position)));
+/// assert!((path.velocity_at(10).length() - 40.0).abs() < 1.0); // 40 m/s on a straight
+/// assert_eq!(path, generate(&city, Motion::Fast, 300, 30.0, 7)?);
+/// let camera = path.poses[0].camera()?; // the 1 km, 45° × 45° frustum of §4.4
+/// assert!(camera.frustum().contains_point(camera.far_center() - camera.forward()));
+/// # Ok(()) }
+/// ```
+pub fn generate(bounds: &Aabb, motion: Motion, frames: usize, fps: f32, seed: u64) -> Result<CameraPath> {
+    bounds.validate()?;
+    let ext = bounds.extent();
+    if !(ext.x > 0.0 && ext.z > 0.0) {
+        return Err(Error::Invalid(format!("city {bounds} has no extent on x or z to walk in")));
+    }
+    if frames == 0 {
+        return Err(Error::Invalid("a camera path needs at least one frame".into()));
+    }
+    if !(MIN_FPS..=MAX_FPS).contains(&fps) {
+        return Err(Error::Invalid(format!("frame rate {fps} must be in {MIN_FPS}..={MAX_FPS} frames per second")));
+    }
+    let params = motion.params();
+    let margin = Vec2::new((ext.x * 0.05).min(7.0), (ext.z * 0.05).min(7.0));
+    let area = Rect {
+        min: Vec2::new(bounds.min.x, bounds.min.z) + margin,
+        max: Vec2::new(bounds.max.x, bounds.max.z) - margin,
+    };
+    let eye_y = (bounds.min.y + EYE_HEIGHT).min(bounds.max.y);
+
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (motion as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut mover = match params.speed {
+        Speed::Constant(speed) => Mover::Street(Street::new(area, speed, params.turn_probability, &mut rng)),
+        Speed::Redrawn(lo, hi) => Mover::Free(Free::new(area, lo, hi)),
+    };
+    let pitch_phase = rng.gen_range(0.0..TAU);
+    let look_phase = rng.gen_range(0.0..TAU);
+    let mut next_reverse = rng.gen_range(10.0..20.0);
+
+    let dt = 1.0 / fps;
+    let mut poses = Vec::with_capacity(frames);
+    let mut yaw = f32::NAN;
+    for i in 0..frames {
+        let time = i as f64 / fps as f64;
+        let t = time as f32;
+        if i > 0 {
+            if params.backward && t >= next_reverse {
+                mover.reverse();
+                next_reverse = t + rng.gen_range(10.0..20.0);
+            }
+            mover.advance(dt, &mut rng);
+        }
+        let mut target = mover.heading();
+        if params.backward {
+            target += PI;
+        }
+        target += params.look_around * (TAU * t / 4.0 + look_phase).sin();
+        yaw = if yaw.is_nan() {
+            target
+        } else {
+            yaw + wrap(target - yaw).clamp(-params.yaw_rate * dt, params.yaw_rate * dt)
+        };
+        let p = mover.position();
+        poses.push(Pose {
+            time,
+            position: Vec3::new(p.x, eye_y, p.y),
+            yaw,
+            pitch: params.pitch_amplitude * (TAU * t / 8.0 + pitch_phase).sin(),
+        });
+    }
+    Ok(CameraPath { poses })
+}
+
+#[derive(Clone, Copy)]
+enum Speed {
+    Constant(f32),
+    /// Redrawn uniformly in `[min, max)` every few seconds (the random walk).
+    Redrawn(f32, f32),
+}
+
+/// A pattern's numbers: the rows of the table in the module docs.
+#[derive(Clone, Copy)]
+struct Params {
+    speed: Speed,
+    turn_probability: f64,
+    /// Radians per second.
+    yaw_rate: f32,
+    /// Amplitude of the look-around swing, radians (period 4 s).
+    look_around: f32,
+    backward: bool,
+    pitch_amplitude: f32,
+}
+
+/// The ground rectangle the viewer stays in, (x, z).
+#[derive(Clone, Copy)]
+struct Rect {
+    min: Vec2,
+    max: Vec2,
+}
+
+/// (-π, π] copy of an angle.
+fn wrap(a: f32) -> f32 {
+    let w = a.rem_euclid(TAU);
+    if w > PI {
+        w - TAU
+    } else {
+        w
+    }
+}
+
+/// How the viewer moves on the ground: along streets, or freely.
+enum Mover {
+    Street(Street),
+    Free(Free),
+}
+
+impl Mover {
+    fn advance(&mut self, dt: f32, rng: &mut ChaCha8Rng) {
+        match self {
+            Mover::Street(s) => s.advance(s.speed * dt, rng),
+            Mover::Free(f) => f.advance(dt, rng),
+        }
+    }
+
+    fn reverse(&mut self) {
+        match self {
+            Mover::Street(s) => s.reverse(),
+            Mover::Free(f) => f.heading += PI,
+        }
+    }
+
+    fn position(&self) -> Vec2 {
+        match self {
+            Mover::Street(s) => s.position(),
+            Mover::Free(f) => f.position,
+        }
+    }
+
+    /// Direction of travel, radians (0 = +x, π/2 = +z).
+    fn heading(&self) -> f32 {
+        match self {
+            Mover::Street(s) => s.dir as f32 * FRAC_PI_2,
+            Mover::Free(f) => f.heading,
+        }
+    }
+}
+
+/// Grid directions, indexed so that direction `d` has heading `d · π/2`.
+const DIRS: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+
+/// A driver on the street grid: left `node`, heading `dir`, `s` metres along the block.
+struct Street {
+    origin: Vec2,
+    /// Block size on x and z.
+    pitch: Vec2,
+    /// Blocks on x and z; nodes are `0..=blocks`.
+    blocks: (i64, i64),
+    node: (i64, i64),
+    dir: usize,
+    s: f32,
+    speed: f32,
+    turn_probability: f64,
+}
+
+impl Street {
+    fn new(area: Rect, speed: f32, turn_probability: f64, rng: &mut ChaCha8Rng) -> Street {
+        let size = area.max - area.min;
+        let count = |w: f32| (w / BLOCK_PITCH).round().clamp(1.0, 1e6) as i64;
+        let blocks = (count(size.x), count(size.y));
+        let pitch = Vec2::new(size.x / blocks.0 as f32, size.y / blocks.1 as f32);
+        let node = (blocks.0 / 2, blocks.1 / 2);
+        let mut s = Street { origin: area.min, pitch, blocks, node, dir: 0, s: 0.0, speed, turn_probability };
+        let open: Vec<usize> = (0..4).filter(|&d| s.open(node, d)).collect();
+        s.dir = open[rng.gen_range(0..open.len())];
+        s
+    }
+
+    fn open(&self, (i, j): (i64, i64), d: usize) -> bool {
+        let (a, b) = (i + DIRS[d].0, j + DIRS[d].1);
+        (0..=self.blocks.0).contains(&a) && (0..=self.blocks.1).contains(&b)
+    }
+
+    fn block_len(&self) -> f32 {
+        if self.dir % 2 == 0 {
+            self.pitch.x
+        } else {
+            self.pitch.y
+        }
+    }
+
+    fn next_node(&self) -> (i64, i64) {
+        (self.node.0 + DIRS[self.dir].0, self.node.1 + DIRS[self.dir].1)
+    }
+
+    fn position(&self) -> Vec2 {
+        let base = self.origin + Vec2::new(self.node.0 as f32 * self.pitch.x, self.node.1 as f32 * self.pitch.y);
+        let (dx, dz) = DIRS[self.dir];
+        let p = base + Vec2::new(dx as f32, dz as f32) * self.s;
+        // Rounding must not carry the viewer past the ring road.
+        p.clamp(self.origin, self.origin + self.pitch * Vec2::new(self.blocks.0 as f32, self.blocks.1 as f32))
+    }
+
+    /// Moves `step` metres along the streets, turning at intersections. The position
+    /// moves by at most `step` (by less when the step turns a corner).
+    fn advance(&mut self, mut step: f32, rng: &mut ChaCha8Rng) {
+        // Bounded: a city whose blocks are far smaller than a step would loop long.
+        for _ in 0..1000 {
+            let left = self.block_len() - self.s;
+            if step < left {
+                self.s += step;
+                return;
+            }
+            step -= left.max(0.0);
+            self.node = self.next_node();
+            self.s = 0.0;
+            self.dir = self.choose(rng);
+            if step <= 0.0 {
+                return;
+            }
+        }
+    }
+
+    /// The way on from `self.node`, arriving along `self.dir`.
+    fn choose(&self, rng: &mut ChaCha8Rng) -> usize {
+        let d = self.dir;
+        let sides: Vec<usize> = [(d + 1) % 4, (d + 3) % 4].into_iter().filter(|&e| self.open(self.node, e)).collect();
+        let straight = self.open(self.node, d);
+        if straight && (sides.is_empty() || !rng.gen_bool(self.turn_probability)) {
+            d
+        } else if !sides.is_empty() {
+            sides[rng.gen_range(0..sides.len())]
+        } else {
+            (d + 2) % 4
+        }
+    }
+
+    /// Turns back along the current block.
+    fn reverse(&mut self) {
+        let len = self.block_len();
+        self.node = self.next_node();
+        self.dir = (self.dir + 2) % 4;
+        self.s = (len - self.s).max(0.0);
+    }
+}
+
+/// A free walker: the random pattern.
+struct Free {
+    area: Rect,
+    position: Vec2,
+    heading: f32,
+    speed: f32,
+    /// Seconds until the next speed and heading change.
+    next_change: f32,
+    speeds: (f32, f32),
+}
+
+impl Free {
+    fn new(area: Rect, lo: f32, hi: f32) -> Free {
+        // The first advance draws speed and heading.
+        Free {
+            area,
+            position: (area.min + area.max) * 0.5,
+            heading: 0.0,
+            speed: 0.0,
+            next_change: 0.0,
+            speeds: (lo, hi),
+        }
+    }
+
+    fn advance(&mut self, dt: f32, rng: &mut ChaCha8Rng) {
+        self.next_change -= dt;
+        if self.next_change <= 0.0 {
+            self.speed = rng.gen_range(self.speeds.0..self.speeds.1);
+            self.heading += rng.gen_range(-120f32..120.0).to_radians();
+            self.next_change = rng.gen_range(1.0..6.0);
+        }
+        let (s, c) = self.heading.sin_cos();
+        let want = self.position + Vec2::new(c, s) * (self.speed * dt);
+        // Clamping to a convex set moves a point no farther than it was asked to go.
+        let at = want.clamp(self.area.min, self.area.max);
+        if at != want {
+            let home = (self.area.min + self.area.max) * 0.5 - at;
+            let back = if home.length_squared() > 0.0 { home.y.atan2(home.x) } else { self.heading + PI };
+            // Keep the heading continuous: turn by the wrapped difference.
+            self.heading += wrap(back - self.heading) + rng.gen_range(-FRAC_PI_4..FRAC_PI_4);
+        }
+        self.position = at;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn city() -> Aabb {
+        Aabb::new([0.0, 0.0, 0.0], [1000.0, 50.0, 600.0]).unwrap()
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for m in Motion::ALL {
+            assert_eq!(m.name().parse::<Motion>().unwrap(), m);
+            assert_eq!(m.to_string().to_uppercase().parse::<Motion>().unwrap(), m);
+            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{}\"", m.name()));
+        }
+        assert!("sideways".parse::<Motion>().is_err());
+    }
+
+    #[test]
+    fn bad_arguments_are_errors() {
+        let c = city();
+        assert!(generate(&c, Motion::Normal, 0, 30.0, 1).is_err());
+        assert!(generate(&c, Motion::Normal, 10, 0.0, 1).is_err());
+        assert!(generate(&c, Motion::Normal, 10, f32::NAN, 1).is_err());
+        assert!(generate(&c, Motion::Normal, 10, f32::INFINITY, 1).is_err());
+        assert!(generate(&c, Motion::Normal, 10, 1e-30, 1).is_err());
+        let flat = Aabb::new([0.0, 0.0, 5.0], [100.0, 10.0, 5.0]).unwrap();
+        assert!(generate(&flat, Motion::Random, 10, 30.0, 1).is_err());
+        let nan = Aabb { min: Vec3::splat(f32::NAN), max: Vec3::ONE };
+        assert!(generate(&nan, Motion::Random, 10, 30.0, 1).is_err());
+    }
+
+    #[test]
+    fn tiny_and_low_cities_still_work() {
+        // A city smaller than one step of the fast pattern, and one lower than the eye.
+        for bounds in [
+            Aabb::new([0.0, 0.0, 0.0], [0.5, 0.5, 0.5]).unwrap(),
+            Aabb::new([-3.0, 0.0, 10.0], [300.0, 0.0, 40.0]).unwrap(),
+        ] {
+            for m in Motion::ALL {
+                let p = generate(&bounds, m, 200, 30.0, 9).unwrap();
+                p.validate().unwrap();
+                assert!(p.poses.iter().all(|q| bounds.contains_point(q.position)), "{m} left {bounds}");
+                let (_, max) = m.speed_range();
+                assert!(p.poses.windows(2).all(|w| (w[1].position - w[0].position).length() <= max / 30.0 + 1e-3));
+            }
+        }
+    }
+
+    #[test]
+    fn street_patterns_stay_on_the_grid() {
+        let c = city();
+        for m in [Motion::Normal, Motion::Turning, Motion::Backward, Motion::Fast] {
+            let p = generate(&c, m, 3000, 30.0, 4).unwrap();
+            let s = Street::new(
+                Rect { min: Vec2::splat(7.0), max: Vec2::new(993.0, 593.0) },
+                15.0,
+                0.25,
+                &mut ChaCha8Rng::seed_from_u64(0),
+            );
+            for q in &p.poses {
+                let g = (Vec2::new(q.position.x, q.position.z) - s.origin) / s.pitch;
+                let off = (g - g.round()).abs();
+                assert!(off.min_element() < 1e-3, "{m} off the streets at {}", q.position);
+            }
+        }
+    }
+
+    #[test]
+    fn velocity_by_finite_difference() {
+        let pose = |t: f64, x: f32| Pose { time: t, position: Vec3::new(x, 0.0, 0.0), yaw: 0.0, pitch: 0.0 };
+        let one = CameraPath::new(vec![pose(0.0, 1.0)]).unwrap();
+        assert_eq!(one.velocity_at(0), Vec3::ZERO);
+        assert_eq!(one.duration(), 0.0);
+        let p = CameraPath::new(vec![pose(0.0, 0.0), pose(0.5, 1.0), pose(1.0, 3.0)]).unwrap();
+        assert_eq!(p.velocity_at(0), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(p.velocity_at(1), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(p.velocity_at(2), Vec3::new(4.0, 0.0, 0.0));
+        assert_eq!(p.velocity_at(99), Vec3::new(4.0, 0.0, 0.0));
+        assert_eq!(p.duration(), 1.0);
+        assert_eq!(CameraPath::default().velocity_at(0), Vec3::ZERO);
+        assert!(CameraPath::new(vec![]).is_err());
+        assert!(CameraPath::new(vec![pose(1.0, 0.0), pose(1.0, 1.0)]).is_err());
+        assert!(CameraPath::new(vec![pose(0.0, f32::NAN)]).is_err());
+        let steep = Pose { pitch: 1.6, ..pose(0.0, 0.0) };
+        assert!(CameraPath::new(vec![steep]).is_err());
+        assert!(steep.camera().is_err());
+    }
+
+    #[test]
+    fn wrap_is_half_open() {
+        assert!((wrap(3.0 * PI) - PI).abs() < 1e-5);
+        assert!((wrap(-0.5) + 0.5).abs() < 1e-6);
+        assert!((wrap(TAU + 0.25) - 0.25).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,125 @@
+//! The REVIEW walk end to end on a small city: every configuration, the memory budget
+//! every frame, no object missing from view, and the awkward walks (standing still,
+//! turning on the spot, teleporting, leaving the city, a read error) handled.
+
+mod common;
+
+use flaneur::walk::motion::{self, CameraPath, Motion, Pose};
+use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::{BuildOptions, Database};
+use glam::Vec3;
+
+fn city() -> common::City {
+    common::city(2500, 6, &BuildOptions { page_size: 1024, ..Default::default() })
+}
+
+/// A shallow frustum, so that a city of a kilometre holds many disk cells.
+fn cfg(p: Preset) -> ReviewConfig {
+    ReviewConfig { far: 150.0, ..ReviewConfig::preset(p) }
+}
+
+fn path(db: &Database, m: Motion, frames: usize) -> CameraPath {
+    motion::generate(&db.bounds(), m, frames, 30.0, 4).unwrap()
+}
+
+#[test]
+fn every_configuration_shows_everything_in_view() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Normal, 240);
+    let mut pages = Vec::new();
+    for preset in Preset::ALL {
+        let report = review::walk(&db, &p, &cfg(preset), |_| {}).unwrap();
+        let s = &report.summary;
+        assert_eq!(report.frames.len(), 240);
+        assert!(s.queries > 0, "{preset:?} never queried");
+        assert_eq!(s.overflow_frames, 0, "{preset:?}: the default budget holds a cell of this city");
+        assert_eq!(s.visual_misses, 0, "{preset:?}: objects in view were not loaded");
+        pages.push((preset, s.index_pages_per_query));
+    }
+    let per_query = |p: Preset| pages.iter().find(|(q, _)| *q == p).unwrap().1;
+    assert!(per_query(Preset::Np) < per_query(Preset::Box), "{pages:?}");
+}
+
+#[test]
+fn the_memory_budget_holds_every_frame() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Fast, 300);
+    for preset in Preset::ALL {
+        let cfg = ReviewConfig { memory_budget: 6 << 20, ..cfg(preset) };
+        let report = review::walk(&db, &p, &cfg, |_| {}).unwrap();
+        assert!(report.frames.iter().all(|f| f.buffer_bytes <= cfg.memory_budget), "{preset:?}");
+        if preset != Preset::Box {
+            // BOX replaces its buffer with each cell; the others keep what they load until full.
+            assert!(report.frames.iter().any(|f| f.evicted > 0), "{preset:?}: a 6 MiB budget must evict");
+        }
+    }
+}
+
+#[test]
+fn awkward_walks_are_handled() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let b = db.bounds();
+    let mid = b.center() * Vec3::new(1.0, 0.0, 1.0) + Vec3::Y * 1.7;
+    let pose = |t: f64, position: Vec3, yaw: f32| Pose { time: t, position, yaw, pitch: 0.0 };
+    let still = CameraPath { poses: (0..60).map(|i| pose(i as f64 / 30.0, mid, 0.3)).collect() };
+    let spin = CameraPath { poses: (0..90).map(|i| pose(i as f64 / 30.0, mid, i as f32 * 0.2)).collect() };
+    let far = mid + Vec3::new(b.extent().x * 3.0, 0.0, 0.0);
+    let teleport = CameraPath {
+        poses: (0..60).map(|i| pose(i as f64 / 30.0, if i % 20 < 10 { mid } else { b.min + Vec3::Y * 1.7 }, 0.0)).collect(),
+    };
+    let outside = CameraPath { poses: (0..30).map(|i| pose(i as f64 / 30.0, far + Vec3::X * i as f32, 0.0)).collect() };
+    for (name, p) in [("still", &still), ("spin", &spin), ("teleport", &teleport), ("outside", &outside)] {
+        for preset in Preset::ALL {
+            let report = review::walk(&db, p, &cfg(preset), |_| {}).unwrap();
+            assert_eq!(report.summary.visual_misses, 0, "{name} {preset:?}");
+            if name == "still" {
+                assert_eq!(report.summary.queries, 1, "standing still queries once");
+            }
+            if name == "outside" {
+                assert_eq!(report.frames.iter().map(|f| f.objects_drawn).sum::<usize>(), 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_read_error_is_the_walks_error_not_a_hang() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Fast, 300);
+    // Damage the meshes away from the start, which later queries (or prefetches) read.
+    let start = p.poses[0].position;
+    let objects = db.range(&db.bounds()).unwrap().objects;
+    let page_size = db.store().page_size() as u64;
+    drop(db);
+    let mut bytes = std::fs::read(&c.db).unwrap();
+    for o in objects.iter().filter(|o| o.bounds.center().distance(start) > 250.0) {
+        bytes[(o.mesh.first_page * page_size + 20) as usize] ^= 0xff;
+    }
+    std::fs::write(&c.db, bytes).unwrap();
+    let db = Database::open(&c.db).unwrap();
+    for preset in Preset::ALL {
+        let err = review::walk(&db, &p, &cfg(preset), |_| {}).unwrap_err();
+        assert!(err.to_string().contains("corrupt"), "{preset:?}: {err}");
+    }
+}
+
+#[test]
+fn bad_settings_are_errors() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Normal, 10);
+    for cfg in [
+        ReviewConfig { sf: 0.5, ..cfg(Preset::Optimal) },
+        ReviewConfig { sf: f32::NAN, ..cfg(Preset::Optimal) },
+        ReviewConfig { prefetch_k: Some(-1.0), ..cfg(Preset::Optimal) },
+        ReviewConfig { memory_budget: 0, ..cfg(Preset::Optimal) },
+        ReviewConfig { index_cache: Some(("nope".into(), 1 << 20)), ..cfg(Preset::Optimal) },
+    ] {
+        assert!(review::walk(&db, &p, &cfg, |_| {}).is_err());
+    }
+    assert!(review::walk(&db, &CameraPath { poses: vec![] }, &cfg(Preset::Box), |_| {}).is_err());
+}
