@@ -8,11 +8,11 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 
 use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
+use flaneur::bench::index_cache::{self, IndexCacheConfig};
 use flaneur::geom::Aabb;
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
-use flaneur::walk::{cells::disk_cell, street_walk};
-use flaneur::{Backend, BuildOptions, Database, History};
+use flaneur::{Backend, BuildOptions, Database};
 
 #[derive(Parser)]
 #[command(name = "flaneur", version, about = "An urban walkthrough engine built around disk-resident spatial indexes")]
@@ -23,7 +23,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Generate a default city (once, into a cache folder), build it, and walk it headless.
+    /// Generate a default city (once, into a cache folder), build it, and walk it headless
+    /// in REVIEW mode, then with plain BOX queries.
     Demo {
         /// Objects in the generated city.
         #[arg(long, default_value_t = 20_000)]
@@ -31,15 +32,9 @@ enum Command {
         /// Where the city and its database are kept between runs.
         #[arg(long, env = "FLANEUR_CACHE", default_value = "cache")]
         cache: PathBuf,
-        /// Queries along the walk.
-        #[arg(long, default_value_t = 60)]
-        steps: usize,
-        /// Disk cell side, metres.
-        #[arg(long, default_value_t = 1000.0)]
-        cell: f32,
-        /// Metres between queries.
-        #[arg(long, default_value_t = 25.0)]
-        step: f32,
+        /// Frames of the walk (30 per second).
+        #[arg(long, default_value_t = 1800)]
+        frames: usize,
     },
     /// Build a database from a citygen scene file or OBJ files.
     Build {
@@ -137,6 +132,17 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Experiment {
+    /// Index cache hit rate against cache size: LRU, DPLRU and Belady (Fig. 4.18).
+    IndexCache {
+        db: PathBuf,
+        #[command(flatten)]
+        walk: WalkArgs,
+        /// Cache sizes in pages, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = IndexCacheConfig::default().sizes)]
+        sizes: Vec<usize>,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
     /// Pages read by BOX against CSearch along a walk of overlapping disk cells.
     Csearch {
         db: PathBuf,
@@ -165,6 +171,23 @@ enum Experiment {
     },
 }
 
+/// The walk every walking experiment takes.
+#[derive(clap::Args)]
+struct WalkArgs {
+    #[arg(long, default_value_t = 1800)]
+    frames: usize,
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Frustum depth, metres.
+    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_FAR)]
+    far: f32,
+    /// Scale factor SF of the disk cell.
+    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_SF)]
+    sf: f32,
+}
+
 fn main() {
     if let Err(e) = run(Cli::parse()) {
         eprintln!("error: {e:#}");
@@ -174,7 +197,7 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo { objects, cache, steps, cell, step } => demo(objects, &cache, steps, cell, step),
+        Command::Demo { objects, cache, frames } => demo(objects, &cache, frames),
         Command::Build { inputs, out, page_size, fill, insertion, quiet } => {
             let opts = BuildOptions { page_size, fill, insertion, progress: !quiet };
             let summary = build(&inputs, &out, &opts)?;
@@ -216,6 +239,10 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
+            Experiment::IndexCache { db, walk, sizes, out } => {
+                let cfg = IndexCacheConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, sizes, ..IndexCacheConfig::default() };
+                bench_index_cache(&db, &cfg, &out)
+            }
             Experiment::Csearch { db, cell, step, steps, seed, history_len, packed_only, backend, out, verbose } => {
                 let cfg = CsearchConfig { cell, step, steps, seed, history_len, ..CsearchConfig::default() };
                 bench_csearch(&db, &cfg, !packed_only, backend, &out, verbose)
@@ -323,7 +350,7 @@ fn print_report(r: &CsearchReport, verbose: bool) {
     println!("  time   BOX {:.1} ms  CSearch {:.1} ms  thesis COverlap {:.1} ms", r.box_ms, r.csearch_ms, r.thesis_ms);
 }
 
-fn demo(objects: u64, cache: &Path, steps: usize, cell: f32, step: f32) -> Result<()> {
+fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     std::fs::create_dir_all(cache).with_context(|| format!("creating cache folder {}", cache.display()))?;
     let scene = cache.join(format!("demo-{objects}.scene"));
     let db_path = cache.join(format!("demo-{objects}.flaneur"));
@@ -341,36 +368,26 @@ fn demo(objects: u64, cache: &Path, steps: usize, cell: f32, step: f32) -> Resul
         println!("using {} (delete it to rebuild)", db_path.display());
     }
     let db = Database::open(&db_path)?;
-    let bounds = db.bounds();
-    let path = street_walk(&bounds, steps, step, 24, 1)?;
-    let mut history = History::default();
-    println!("walking {steps} steps of {step} m, disk cells of {cell} m");
-    println!("{:>5} {:>8} {:>8} {:>6} {:>9} {:>9} {:>7} {:>9} {:>8}", "step", "x", "z", "new", "triangles", "cs pages", "box pg", "mesh pg", "ms");
-    let (mut total_cs, mut total_box, mut total_new) = (0u64, 0u64, 0u64);
-    let mut worst_ms: f64 = 0.0;
-    for (i, eye) in path.positions.iter().enumerate() {
-        let c = disk_cell(*eye, cell, &bounds)?;
-        let box_pages = db.range(&c)?.pages.len();
-        let before = db.io();
-        let t = Instant::now();
-        let new = db.csearch_step(&mut history, &c)?;
-        let mut triangles = 0u64;
-        for o in &new.objects {
-            triangles += db.mesh(o)?.triangle_count() as u64;
+    let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
+    println!("walking {frames} frames ({:.0} s) of the 'normal' pattern in REVIEW mode, then with plain BOX queries", frames as f64 / 30.0);
+    for preset in [Preset::Optimal, Preset::Box] {
+        let bar = indicatif::ProgressBar::new(frames as u64);
+        let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
+        bar.finish_and_clear();
+        println!("{}:", preset.name());
+        for f in report.frames.iter().filter(|f| f.queried) {
+            println!(
+                "  frame {:>4}: queried{}, {} objects loaded, {} index + {} mesh pages, {:.1} ms",
+                f.frame,
+                if f.prefetch_used { " (prefetched)" } else { "" },
+                f.objects_loaded,
+                f.index_pages,
+                f.mesh_pages,
+                f.frame_ms
+            );
         }
-        let ms = t.elapsed().as_secs_f64() * 1e3;
-        let io = db.io().since(&before);
-        let mesh_pages = io.reads_of(flaneur::store::PageKind::Mesh);
-        worst_ms = worst_ms.max(ms);
-        total_cs += new.pages.len() as u64;
-        total_box += box_pages as u64;
-        total_new += new.objects.len() as u64;
-        println!("{:>5} {:>8.0} {:>8.0} {:>6} {:>9} {:>9} {:>7} {:>9} {:>8.2}", i, eye.x, eye.z, new.objects.len(), triangles, new.pages.len(), box_pages, mesh_pages, ms);
+        print_walk(&report);
     }
-    println!(
-        "{total_new} objects loaded; index pages: CSearch {total_cs}, BOX would read {total_box} ({:.1}%); slowest query with its meshes {worst_ms:.1} ms",
-        if total_box == 0 { 0.0 } else { 100.0 * total_cs as f64 / total_box as f64 }
-    );
     Ok(())
 }
 
@@ -417,4 +434,15 @@ fn print_walk(r: &WalkReport) {
     if let Some(cs) = &s.index_cache {
         println!("  index cache: {} hits, {} misses, hit rate {:.1}%", cs.hits, cs.misses, cs.hit_rate() * 100.0);
     }
+}
+
+fn bench_index_cache(path: &Path, cfg: &IndexCacheConfig, out: &Path) -> Result<()> {
+    let db = Database::open(path)?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let report = index_cache::run(&db, cfg)?;
+    std::fs::write(out.join("index-cache.csv"), report.to_csv()).with_context(|| format!("writing into {}", out.display()))?;
+    std::fs::write(out.join("index-cache.md"), report.markdown()).with_context(|| format!("writing into {}", out.display()))?;
+    report.plot(out)?;
+    print!("{}", report.markdown());
+    Ok(())
 }

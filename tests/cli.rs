@@ -60,3 +60,38 @@ fn errors_are_messages_not_panics() {
         assert!(err.contains("error"), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn walk_and_index_cache_bench() {
+    let c = common::city(1500, 2, &BuildOptions { page_size: 1024, ..Default::default() });
+    let db = c.db.to_str().unwrap();
+    let csv = c.dir.path().join("frames.csv");
+    let saved = c.dir.path().join("path.csv");
+    let out = flaneur(&[
+        "walk", db, "--path", "turning", "--frames", "90", "--far", "150", "--csv", csv.to_str().unwrap(), "--save-path",
+        saved.to_str().unwrap(), "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("visual misses 0") && text.contains("hit rate"), "{text}");
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 91);
+    // The saved path replays as a file.
+    let out = flaneur(&["walk", db, "--path", saved.to_str().unwrap(), "--config", "box", "--far", "150", "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = flaneur(&["walk", db, "--path", "nowhere.csv", "--quiet"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("nowhere.csv"));
+
+    let dir = c.dir.path().join("bench");
+    let out = flaneur(&["bench", "index-cache", db, "--frames", "120", "--far", "150", "--sizes", "2,8,32", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["index-cache.csv", "index-cache.md", "index-cache-normal.png", "index-cache-backward.png"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("index-cache.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 5 * 3);
+    // No online policy beats Belady on any row.
+    for line in csv.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').skip(3).take(3).map(|x| x.parse().unwrap()).collect();
+        assert!(v[0] <= v[2] && v[1] <= v[2], "{line}");
+    }
+}

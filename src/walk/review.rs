@@ -26,7 +26,7 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::motion::CameraPath;
-use crate::cache::{policy_by_name, BufferPool, CacheStats};
+use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
@@ -93,6 +93,8 @@ pub struct ReviewConfig {
     pub memory_budget: usize,
     /// Depth of the view frustum, metres (the thesis: 1 km).
     pub far: f32,
+    /// Record the index cache's access trace (for replaying other policies and sizes).
+    pub record_trace: bool,
 }
 
 /// The thesis's defaults (§4.4): index cache 1 MB with distance-priority LRU, k = 0.8.
@@ -114,6 +116,7 @@ impl ReviewConfig {
             sf: DEFAULT_SF,
             memory_budget: DEFAULT_MEMORY_BUDGET,
             far: DEFAULT_FAR,
+            record_trace: false,
         };
         match p {
             Preset::Optimal => base,
@@ -197,6 +200,9 @@ pub struct WalkReport {
     pub config: ReviewConfig,
     pub frames: Vec<FrameStats>,
     pub summary: WalkSummary,
+    /// The index cache's accesses, when `record_trace` was set and a cache was used.
+    #[serde(skip)]
+    pub trace: Option<Trace>,
 }
 
 impl WalkReport {
@@ -263,6 +269,9 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
         Some((policy, bytes)) => Some(BufferPool::new(db.store(), *bytes, policy_by_name(policy)?)?),
         None => None,
     };
+    if let (Some(p), true) = (&pool, cfg.record_trace) {
+        p.set_trace(true);
+    }
     let source: &(dyn PageSource + Sync) = match &pool {
         Some(p) => p,
         None => db.store(),
@@ -307,7 +316,8 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
         Ok(frames)
     })?;
     let summary = summarize(&frames, pool.as_ref().map(|p| p.stats()));
-    Ok(WalkReport { config: cfg.clone(), frames, summary })
+    let trace = pool.as_ref().filter(|_| cfg.record_trace).map(|p| p.take_trace());
+    Ok(WalkReport { config: cfg.clone(), frames, summary, trace })
 }
 
 struct Walker<'a> {
