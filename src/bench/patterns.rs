@@ -1,0 +1,382 @@
+//! The `patterns` experiment (Shou 2002 §4.4.2, Table 4.1): disk I/Os per query of the
+//! Optimal configuration (CSearch + 1 MB distance-priority index cache + prefetching)
+//! against plain BOX, on one walk per motion pattern.
+//!
+//! Each of the five patterns of the thesis (normal, fast, slow, turning, backward) is a
+//! generated camera path (`walk::motion`, the same seed for every pattern); both
+//! configurations walk the same path with the REVIEW frame loop (`walk::review`). A disk
+//! I/O is a physical page read counted by the store, on either thread of the walk: index
+//! (R-tree node) pages and mesh pages, reported apart and summed. Page counts are exact
+//! and deterministic for BOX; with prefetching they depend a little on thread timing
+//! (which prefetches finish in time).
+//!
+//! This module also holds what the walk experiments share: the thesis's five patterns
+//! and the checks of the settings every walk takes.
+
+use std::path::Path;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::walk::motion::{self, CameraPath, Motion};
+use crate::walk::review::{self, Preset, ReviewConfig, WalkReport};
+
+/// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
+/// order; `Motion::ALL` also has a random walk, which the thesis did not use.
+pub const THESIS_PATTERNS: [Motion; 5] = [Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward];
+
+/// The settings of a walk experiment.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PatternsConfig {
+    /// Frames of each walk.
+    pub frames: usize,
+    /// Frames per second of the generated paths.
+    pub fps: f32,
+    /// Seed of the generated paths (the same for every pattern).
+    pub seed: u64,
+    /// Depth of the view frustum, metres.
+    pub far: f32,
+    /// Scale factor SF of the disk cell.
+    pub sf: f32,
+    /// Object buffer budget, bytes.
+    pub memory_budget: usize,
+    /// Prefetch factor k of the Optimal configuration.
+    pub prefetch_k: f32,
+    /// The patterns walked, in order.
+    pub patterns: Vec<Motion>,
+}
+
+impl Default for PatternsConfig {
+    fn default() -> PatternsConfig {
+        PatternsConfig {
+            frames: 900,
+            fps: 30.0,
+            seed: 1,
+            far: review::DEFAULT_FAR,
+            sf: review::DEFAULT_SF,
+            memory_budget: review::DEFAULT_MEMORY_BUDGET,
+            prefetch_k: review::DEFAULT_K,
+            patterns: THESIS_PATTERNS.to_vec(),
+        }
+    }
+}
+
+impl PatternsConfig {
+    pub fn validate(&self) -> Result<()> {
+        check_walk(self.frames, self.fps, self.far, self.sf, self.memory_budget)?;
+        check_k(self.prefetch_k)?;
+        check_patterns(&self.patterns)
+    }
+
+    /// The walk settings of one configuration.
+    pub fn review(&self, preset: Preset) -> ReviewConfig {
+        let base = ReviewConfig::preset(preset);
+        ReviewConfig {
+            sf: self.sf,
+            far: self.far,
+            memory_budget: self.memory_budget,
+            prefetch_k: base.prefetch_k.map(|_| self.prefetch_k),
+            ..base
+        }
+    }
+}
+
+/// Pages read by one configuration on one walk.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PresetIo {
+    pub queries: usize,
+    pub index_pages: u64,
+    pub mesh_pages: u64,
+    pub index_per_query: f64,
+    pub mesh_per_query: f64,
+    /// Index and mesh pages per query: the thesis's "disk I/Os per query".
+    pub io_per_query: f64,
+    pub mean_frame_ms: f64,
+}
+
+impl PresetIo {
+    fn from_walk(w: &WalkReport) -> PresetIo {
+        let s = &w.summary;
+        let per = |pages: u64| if s.queries == 0 { 0.0 } else { pages as f64 / s.queries as f64 };
+        PresetIo {
+            queries: s.queries,
+            index_pages: s.index_pages,
+            mesh_pages: s.mesh_pages,
+            index_per_query: per(s.index_pages),
+            mesh_per_query: per(s.mesh_pages),
+            io_per_query: per(s.index_pages + s.mesh_pages),
+            mean_frame_ms: s.mean_frame_ms,
+        }
+    }
+}
+
+/// One pattern: both configurations on the same path.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PatternRow {
+    pub pattern: Motion,
+    pub optimal: PresetIo,
+    pub box_io: PresetIo,
+    /// Optimal's disk I/Os per query over BOX's (1 when BOX read nothing).
+    pub ratio: f64,
+    /// The same ratio for index pages alone.
+    pub index_ratio: f64,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PatternsReport {
+    pub config: PatternsConfig,
+    /// Page size of the database, bytes (what one disk I/O reads).
+    pub page_size: usize,
+    pub rows: Vec<PatternRow>,
+}
+
+/// The file [`PatternsReport::plot`] writes.
+pub const PLOT_FILE: &str = "patterns-io-per-query.png";
+
+/// The thesis's Table 4.1: (session, BOX, Optimal) disk I/Os per query.
+pub const THESIS_TABLE_4_1: [(usize, f64, f64); 5] =
+    [(1, 1877.75, 410.95), (2, 1900.94, 169.96), (3, 1963.73, 265.88), (4, 2018.24, 201.89), (5, 1934.57, 212.48)];
+
+/// Runs the experiment.
+pub fn run(db: &Database, cfg: &PatternsConfig) -> Result<PatternsReport> {
+    run_with_progress(db, cfg, |_, _| {})
+}
+
+/// Runs the experiment; `progress(done, total)` is told after each walk.
+pub fn run_with_progress(db: &Database, cfg: &PatternsConfig, mut progress: impl FnMut(usize, usize)) -> Result<PatternsReport> {
+    cfg.validate()?;
+    let total = cfg.patterns.len() * 2;
+    let mut rows = Vec::with_capacity(cfg.patterns.len());
+    for (i, &pattern) in cfg.patterns.iter().enumerate() {
+        let path = pattern_path(db, pattern, cfg.frames, cfg.fps, cfg.seed)?;
+        let optimal = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Optimal), |_| {})?);
+        progress(2 * i + 1, total);
+        let box_io = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?);
+        progress(2 * i + 2, total);
+        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
+        rows.push(PatternRow {
+            pattern,
+            ratio: share(optimal.io_per_query, box_io.io_per_query),
+            index_ratio: share(optimal.index_per_query, box_io.index_per_query),
+            optimal,
+            box_io,
+        });
+    }
+    Ok(PatternsReport { config: cfg.clone(), page_size: db.store().page_size(), rows })
+}
+
+impl PatternsReport {
+    /// One line per pattern and configuration.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "pattern,configuration,queries,index_pages,mesh_pages,index_per_query,mesh_per_query,io_per_query,mean_frame_ms,ratio_to_box\n",
+        );
+        for r in &self.rows {
+            for (name, io, ratio) in [("optimal", &r.optimal, r.ratio), ("box", &r.box_io, 1.0)] {
+                s.push_str(&format!(
+                    "{},{},{},{},{},{:.2},{:.2},{:.2},{:.3},{:.4}\n",
+                    r.pattern.name(),
+                    name,
+                    io.queries,
+                    io.index_pages,
+                    io.mesh_pages,
+                    io.index_per_query,
+                    io.mesh_per_query,
+                    io.io_per_query,
+                    io.mean_frame_ms,
+                    ratio
+                ));
+            }
+        }
+        s
+    }
+
+    /// The row of `pattern`, if it was walked.
+    pub fn row(&self, pattern: Motion) -> Option<&PatternRow> {
+        self.rows.iter().find(|r| r.pattern == pattern)
+    }
+
+    /// Disk I/Os per query against the pattern (x = its position in the report, from 1),
+    /// a line per configuration, index pages alone and index + mesh pages; written to
+    /// [`PLOT_FILE`] in `dir` (created if missing).
+    pub fn plot(&self, dir: &Path) -> Result<()> {
+        use super::plot::{line_plot, LinePlot, Series};
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let series = |name: &str, f: fn(&PatternRow) -> f64| Series {
+            name: name.into(),
+            points: self.rows.iter().enumerate().map(|(i, r)| ((i + 1) as f64, f(r))).collect(),
+        };
+        let names: Vec<String> = self.rows.iter().enumerate().map(|(i, r)| format!("{} {}", i + 1, r.pattern.name())).collect();
+        line_plot(
+            &dir.join(PLOT_FILE),
+            &LinePlot {
+                title: format!("Disk I/Os per query ({})", names.join(", ")),
+                x_label: "motion pattern".into(),
+                y_label: format!("pages read per query ({} B pages)", self.page_size),
+                series: vec![
+                    series("BOX, index + mesh", |r| r.box_io.io_per_query),
+                    series("Optimal, index + mesh", |r| r.optimal.io_per_query),
+                    series("BOX, index", |r| r.box_io.index_per_query),
+                    series("Optimal, index", |r| r.optimal.index_per_query),
+                ],
+            },
+        )
+    }
+
+    /// The figures beside the thesis's Table 4.1.
+    pub fn markdown(&self) -> String {
+        let c = &self.config;
+        let mut s = String::from("# patterns — disk I/Os per query, Optimal against BOX (Shou 2002, Table 4.1)\n\n");
+        s.push_str(&format!(
+            "{} frames at {} fps per pattern (seed {}), frustum {} m deep, SF {}, object buffer {} MiB, \
+             Optimal with k = {}. A disk I/O is one {}-byte page read (index or mesh).\n\n",
+            c.frames,
+            c.fps,
+            c.seed,
+            c.far,
+            c.sf,
+            c.memory_budget >> 20,
+            c.prefetch_k,
+            self.page_size
+        ));
+        s.push_str(
+            "| pattern | BOX queries | BOX index / q | BOX mesh / q | BOX I/Os / q | Optimal queries | Optimal index / q | Optimal mesh / q | Optimal I/Os / q | Optimal / BOX | index only |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|\n",
+        );
+        for r in &self.rows {
+            let (b, o) = (&r.box_io, &r.optimal);
+            s.push_str(&format!(
+                "| {} | {} | {:.1} | {:.1} | {:.1} | {} | {:.1} | {:.1} | {:.1} | {:.1} % | {:.1} % |\n",
+                r.pattern.name(),
+                b.queries,
+                b.index_per_query,
+                b.mesh_per_query,
+                b.io_per_query,
+                o.queries,
+                o.index_per_query,
+                o.mesh_per_query,
+                o.io_per_query,
+                r.ratio * 100.0,
+                r.index_ratio * 100.0
+            ));
+        }
+        if let (Some(lo), Some(hi)) = (
+            self.rows.iter().map(|r| r.ratio).min_by(f64::total_cmp),
+            self.rows.iter().map(|r| r.ratio).max_by(f64::total_cmp),
+        ) {
+            s.push_str(&format!("\nHere Optimal needs {:.1}–{:.1} % of BOX's disk I/Os per query.\n", lo * 100.0, hi * 100.0));
+        }
+        s.push_str("\nThe thesis's Table 4.1 (900,000 objects, 1 km frustum, 20 MB memory):\n\n");
+        s.push_str("| session | BOX I/Os / q | Optimal I/Os / q | Optimal / BOX |\n|---|---|---|---|\n");
+        for (session, b, o) in THESIS_TABLE_4_1 {
+            s.push_str(&format!("| {session} | {b:.2} | {o:.2} | {:.1} % |\n", o / b * 100.0));
+        }
+        s.push_str(
+            "\nThe thesis: Optimal does 9–21 % of BOX's disk I/Os per query; BOX 1,878–2,018 I/Os per query, \
+             Optimal 170–411. It does not say which session had which pattern in Table 4.1 (its Fig. 4.17 \
+             lists fast, slow, turning, backward and normal for its five sessions), nor its page size, so \
+             compare the shares, not the counts: ours depend on the city, the page size and the frustum.\n",
+        );
+        s
+    }
+}
+
+/// The generated path of `pattern` through the database's city.
+pub(super) fn pattern_path(db: &Database, pattern: Motion, frames: usize, fps: f32, seed: u64) -> Result<CameraPath> {
+    motion::generate(&db.bounds(), pattern, frames, fps, seed)
+}
+
+/// Checks the settings every walk experiment takes.
+pub(super) fn check_walk(frames: usize, fps: f32, far: f32, sf: f32, memory_budget: usize) -> Result<()> {
+    if frames == 0 {
+        return Err(Error::Invalid("a walk needs at least one frame".into()));
+    }
+    if !(fps.is_finite() && (motion::MIN_FPS..=motion::MAX_FPS).contains(&fps)) {
+        return Err(Error::Invalid(format!(
+            "frame rate {fps} must be in {}..={} frames per second",
+            motion::MIN_FPS,
+            motion::MAX_FPS
+        )));
+    }
+    if !(far.is_finite() && far > 1.0) {
+        return Err(Error::Invalid(format!("frustum depth {far} must be more than a metre")));
+    }
+    check_sf(sf)?;
+    if memory_budget == 0 {
+        return Err(Error::Invalid("the memory budget must be more than 0 bytes".into()));
+    }
+    Ok(())
+}
+
+pub(super) fn check_sf(sf: f32) -> Result<()> {
+    if !(sf.is_finite() && sf >= 1.0) {
+        return Err(Error::Invalid(format!("scale factor SF {sf} must be a number of at least 1")));
+    }
+    Ok(())
+}
+
+pub(super) fn check_k(k: f32) -> Result<()> {
+    if !(k.is_finite() && k >= 0.0) {
+        return Err(Error::Invalid(format!("prefetch factor k {k} must be a non-negative number")));
+    }
+    Ok(())
+}
+
+/// A sweep: not empty, every value passing `check`, no value twice.
+pub(super) fn check_sweep(what: &str, values: &[f32], check: fn(f32) -> Result<()>) -> Result<()> {
+    if values.is_empty() {
+        return Err(Error::Invalid(format!("the {what} sweep is empty")));
+    }
+    for (i, &v) in values.iter().enumerate() {
+        check(v)?;
+        if values[..i].contains(&v) {
+            return Err(Error::Invalid(format!("the {what} sweep has {v} twice")));
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn check_patterns(patterns: &[Motion]) -> Result<()> {
+    if patterns.is_empty() {
+        return Err(Error::Invalid("no motion pattern to walk".into()));
+    }
+    for (i, p) in patterns.iter().enumerate() {
+        if patterns[..i].contains(p) {
+            return Err(Error::Invalid(format!("motion pattern '{}' is listed twice", p.name())));
+        }
+    }
+    Ok(())
+}
+
+/// A number as the tables show it: at least one decimal, at most three.
+pub(super) fn num(v: f32) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0');
+    if s.ends_with('.') {
+        format!("{s}0")
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_and_sweeps() {
+        assert_eq!(num(0.8), "0.8");
+        assert_eq!(num(1.0), "1.0");
+        assert_eq!(num(0.25), "0.25");
+        assert!(check_sweep("k", &[], check_k).is_err());
+        assert!(check_sweep("k", &[0.2, 0.2], check_k).is_err());
+        assert!(check_sweep("k", &[f32::NAN], check_k).is_err());
+        assert!(check_sweep("k", &[-0.1], check_k).is_err());
+        assert!(check_sweep("SF", &[0.9], check_sf).is_err());
+        assert!(check_sweep("SF", &[1.0, 1.5], check_sf).is_ok());
+        assert!(check_patterns(&[Motion::Fast, Motion::Fast]).is_err());
+        assert!(check_walk(10, 30.0, 100.0, 1.5, 1 << 20).is_ok());
+        assert!(check_walk(0, 30.0, 100.0, 1.5, 1 << 20).is_err());
+        assert!(check_walk(10, f32::NAN, 100.0, 1.5, 1 << 20).is_err());
+        assert!(check_walk(10, 30.0, 100.0, 1.5, 0).is_err());
+    }
+}
