@@ -9,6 +9,9 @@ use clap::{Parser, Subcommand};
 
 use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
 use flaneur::bench::index_cache::{self, IndexCacheConfig};
+use flaneur::bench::patterns::{self, PatternsConfig};
+use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
+use flaneur::bench::view_culling::{self, ViewCullingConfig};
 use flaneur::geom::Aabb;
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
@@ -132,6 +135,36 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Experiment {
+    /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
+    PrefetchK {
+        db: PathBuf,
+        #[command(flatten)]
+        walk: WalkArgs,
+        /// The k values, comma-separated (default 0, 0.2, ..., 2).
+        #[arg(long, value_delimiter = ',')]
+        ks: Vec<f32>,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
+    ViewCulling {
+        db: PathBuf,
+        #[command(flatten)]
+        walk: WalkArgs,
+        /// The scale factors, comma-separated (default the thesis's 1.0 ... 3.1).
+        #[arg(long, value_delimiter = ',')]
+        sfs: Vec<f32>,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// Disk I/Os per query, Optimal against BOX, on the five motion patterns (Table 4.1).
+    Patterns {
+        db: PathBuf,
+        #[command(flatten)]
+        walk: WalkArgs,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
     /// Index cache hit rate against cache size: LRU, DPLRU and Belady (Fig. 4.18).
     IndexCache {
         db: PathBuf,
@@ -239,6 +272,26 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
+            Experiment::PrefetchK { db, walk, ks, out } => {
+                let d = PrefetchKConfig::default();
+                let cfg = PrefetchKConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, ks: if ks.is_empty() { d.ks.clone() } else { ks }, ..d };
+                let db = Database::open(&db)?;
+                let r = prefetch_k::run(&db, &cfg)?;
+                write_experiment(&out, "prefetch-k", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+            }
+            Experiment::ViewCulling { db, walk, sfs, out } => {
+                let d = ViewCullingConfig::default();
+                let cfg = ViewCullingConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sfs: if sfs.is_empty() { d.sfs.clone() } else { sfs }, ..d };
+                let db = Database::open(&db)?;
+                let r = view_culling::run(&db, &cfg)?;
+                write_experiment(&out, "view-culling", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+            }
+            Experiment::Patterns { db, walk, out } => {
+                let cfg = PatternsConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, ..PatternsConfig::default() };
+                let db = Database::open(&db)?;
+                let r = patterns::run(&db, &cfg)?;
+                write_experiment(&out, "patterns", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+            }
             Experiment::IndexCache { db, walk, sizes, out } => {
                 let cfg = IndexCacheConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, sizes, ..IndexCacheConfig::default() };
                 bench_index_cache(&db, &cfg, &out)
@@ -438,11 +491,19 @@ fn print_walk(r: &WalkReport) {
 
 fn bench_index_cache(path: &Path, cfg: &IndexCacheConfig, out: &Path) -> Result<()> {
     let db = Database::open(path)?;
+    let r = index_cache::run(&db, cfg)?;
+    write_experiment(out, "index-cache", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+}
+
+/// Writes an experiment's CSV, markdown summary and plots into `out`, and prints the summary.
+fn write_experiment(out: &Path, name: &str, csv: &str, markdown: &str, plot: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let report = index_cache::run(&db, cfg)?;
-    std::fs::write(out.join("index-cache.csv"), report.to_csv()).with_context(|| format!("writing into {}", out.display()))?;
-    std::fs::write(out.join("index-cache.md"), report.markdown()).with_context(|| format!("writing into {}", out.display()))?;
-    report.plot(out)?;
-    print!("{}", report.markdown());
+    for (ext, text) in [("csv", csv), ("md", markdown)] {
+        let file = out.join(format!("{name}.{ext}"));
+        std::fs::write(&file, text).with_context(|| format!("writing {}", file.display()))?;
+    }
+    plot(out)?;
+    print!("{markdown}");
+    println!("\nCSV, summary and plots in {}", out.display());
     Ok(())
 }

@@ -95,3 +95,31 @@ fn walk_and_index_cache_bench() {
         assert!(v[0] <= v[2] && v[1] <= v[2], "{line}");
     }
 }
+
+#[test]
+fn walking_experiments_write_their_outputs() {
+    let c = common::city(1500, 3, &BuildOptions { page_size: 1024, ..Default::default() });
+    let db = c.db.to_str().unwrap();
+    let dir = c.dir.path().join("bench");
+    let d = dir.to_str().unwrap();
+    let walk = ["--frames", "60", "--far", "150"];
+    for (args, files) in [
+        (vec!["prefetch-k", "--ks", "0,0.8"], vec!["prefetch-k.csv", "prefetch-k.md", "prefetch-k-frame-time.png"]),
+        (vec!["view-culling", "--sfs", "1,2"], vec!["view-culling.csv", "view-culling.md", "view-culling.png"]),
+        (vec!["patterns"], vec!["patterns.csv", "patterns.md", "patterns-io-per-query.png"]),
+    ] {
+        let mut all = vec!["bench"];
+        all.extend(&args[..1]);
+        all.push(db);
+        all.extend(&args[1..]);
+        all.extend(walk);
+        all.extend(["--out", d]);
+        let out = flaneur(&all);
+        assert!(out.status.success(), "{all:?}: {}", String::from_utf8_lossy(&out.stderr));
+        for f in files {
+            assert!(dir.join(f).exists(), "{all:?}: {f} missing");
+        }
+    }
+    let out = flaneur(&["bench", "prefetch-k", db, "--ks", "-1", "--out", d]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("error"));
+}

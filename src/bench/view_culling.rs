@@ -35,6 +35,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::scene::Mesh;
+use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::motion::Motion;
 use crate::walk::review;
@@ -200,7 +201,7 @@ fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, s
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
         if disk.is_none_or(|d| !contains_ground(&d, &fcell)) {
-            let cell = disk_cell_around(&bounds, &fcell, sf);
+            let cell = scaled_cell(&bounds, &fcell, fcell.center(), sf);
             if held.load(db, &cell, camera.position)? {
                 overflow_queries += 1;
             }
@@ -316,22 +317,6 @@ impl Held {
 /// Distance from `p` to the box (0 inside).
 fn distance(b: &Aabb, p: Vec3) -> f32 {
     (p.clamp(b.min, b.max) - p).length()
-}
-
-/// REVIEW's disk cell around the frustum cell: scaled by `sf` on the ground, centred
-/// on it, spanning the city's height.
-fn disk_cell_around(bounds: &Aabb, fcell: &Aabb, sf: f32) -> Aabb {
-    let half = fcell.extent() * 0.5 * sf;
-    let c = fcell.center();
-    Aabb {
-        min: Vec3::new(c.x - half.x, bounds.min.y, c.z - half.z),
-        max: Vec3::new(c.x + half.x, bounds.max.y, c.z + half.z),
-    }
-}
-
-/// Whether `outer` holds `inner` on the ground plane (x and z).
-fn contains_ground(outer: &Aabb, inner: &Aabb) -> bool {
-    outer.min.x <= inner.min.x && outer.min.z <= inner.min.z && inner.max.x <= outer.max.x && inner.max.z <= outer.max.z
 }
 
 /// The draw batch: every prepared object's vertices, normals and re-based indices.

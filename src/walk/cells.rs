@@ -27,6 +27,27 @@ pub fn disk_cell(eye: Vec3, size: f32, bounds: &Aabb) -> Result<Aabb> {
     )
 }
 
+/// REVIEW's disk cell (Shou 2002 §4.1, §4.4): the frustum cell `fcell` scaled by `sf` on
+/// the ground and centred on `center`, spanning the city's whole height. Cells are
+/// compared on the ground only (every object stands between the city's lowest and
+/// highest point anyway), and the cell always holds the frustum cell, even when the
+/// centre is a prediction elsewhere.
+pub fn scaled_cell(bounds: &Aabb, fcell: &Aabb, center: Vec3, sf: f32) -> Aabb {
+    let half = fcell.extent() * 0.5 * sf;
+    let lo = Vec3::new(center.x - half.x, bounds.min.y, center.z - half.z);
+    let hi = Vec3::new(center.x + half.x, bounds.max.y, center.z + half.z);
+    let ground = Aabb {
+        min: Vec3::new(fcell.min.x, bounds.min.y, fcell.min.z),
+        max: Vec3::new(fcell.max.x, bounds.max.y, fcell.max.z),
+    };
+    Aabb { min: lo, max: hi }.union(&ground)
+}
+
+/// Whether `outer` holds `inner` on the ground plane (x and z).
+pub fn contains_ground(outer: &Aabb, inner: &Aabb) -> bool {
+    outer.min.x <= inner.min.x && outer.min.z <= inner.min.z && inner.max.x <= outer.max.x && inner.max.z <= outer.max.z
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,6 +25,7 @@ use glam::Vec3;
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
 
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use super::cells::{contains_ground, scaled_cell};
 use super::motion::CameraPath;
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
@@ -390,17 +391,8 @@ impl Walker<'_> {
         Ok(stats)
     }
 
-    /// The disk cell: the frustum cell scaled by SF on the ground, centred on `center`,
-    /// and spanning the city's whole height (cells are compared on the ground only:
-    /// every object stands between the city's lowest and highest point anyway).
     fn disk_cell_around(&self, fcell: &Aabb, center: Vec3) -> Aabb {
-        let half = fcell.extent() * 0.5 * self.cfg.sf;
-        let bounds = self.db.bounds();
-        let lo = Vec3::new(center.x - half.x, bounds.min.y, center.z - half.z);
-        let hi = Vec3::new(center.x + half.x, bounds.max.y, center.z + half.z);
-        // The disk cell must contain the frustum cell even when the centre moved.
-        let ground = Aabb { min: Vec3::new(fcell.min.x, bounds.min.y, fcell.min.z), max: Vec3::new(fcell.max.x, bounds.max.y, fcell.max.z) };
-        Aabb { min: lo, max: hi }.union(&ground)
+        scaled_cell(&self.db.bounds(), fcell, center, self.cfg.sf)
     }
 
     fn request(&self, cell: Aabb) -> Request {
@@ -488,11 +480,6 @@ impl Walker<'_> {
             self.ready = None;
         }
     }
-}
-
-/// Whether `outer` holds `inner` on the ground plane (x and z).
-fn contains_ground(outer: &Aabb, inner: &Aabb) -> bool {
-    outer.min.x <= inner.min.x && outer.min.z <= inner.min.z && inner.max.x <= outer.max.x && inner.max.z <= outer.max.z
 }
 
 /// Runs one query and loads the meshes of what it returned.
