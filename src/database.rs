@@ -150,6 +150,11 @@ impl Database {
         self.triangles
     }
 
+    /// Pages written per kind (from the header; reads nothing).
+    pub fn pages_by_kind(&self) -> KindCounts {
+        self.kinds
+    }
+
     /// The box around every object.
     pub fn bounds(&self) -> Aabb {
         self.bounds

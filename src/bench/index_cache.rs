@@ -102,7 +102,7 @@ pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
 
 fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Trace, usize)> {
     let path = motion::generate(&db.bounds(), pattern, cfg.frames, cfg.fps, cfg.seed)?;
-    let whole_index = (db.info()?.pages_by_kind.rtree as usize + 1) * db.store().page_size();
+    let whole_index = (db.pages_by_kind().rtree as usize + 1) * db.store().page_size();
     let walk_cfg = ReviewConfig {
         index_cache: Some(("lru".into(), whole_index)),
         far: cfg.far,

@@ -18,7 +18,8 @@ use std::path::Path;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::walk::motion::{self, CameraPath, Motion};
-use crate::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use crate::walk::review::{self, check_budget, check_far, Preset, ReviewConfig, WalkReport};
+pub(super) use crate::walk::review::{check_k, check_sf};
 
 /// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
 /// order; `Motion::ALL` also has a random walk, which the thesis did not use.
@@ -297,28 +298,9 @@ pub(super) fn check_walk(frames: usize, fps: f32, far: f32, sf: f32, memory_budg
             motion::MAX_FPS
         )));
     }
-    if !(far.is_finite() && far > 1.0) {
-        return Err(Error::Invalid(format!("frustum depth {far} must be more than a metre")));
-    }
+    check_far(far)?;
     check_sf(sf)?;
-    if memory_budget == 0 {
-        return Err(Error::Invalid("the memory budget must be more than 0 bytes".into()));
-    }
-    Ok(())
-}
-
-pub(super) fn check_sf(sf: f32) -> Result<()> {
-    if !(sf.is_finite() && sf >= 1.0) {
-        return Err(Error::Invalid(format!("scale factor SF {sf} must be a number of at least 1")));
-    }
-    Ok(())
-}
-
-pub(super) fn check_k(k: f32) -> Result<()> {
-    if !(k.is_finite() && k >= 0.0) {
-        return Err(Error::Invalid(format!("prefetch factor k {k} must be a non-negative number")));
-    }
-    Ok(())
+    check_budget(memory_budget)
 }
 
 /// A sweep: not empty, every value passing `check`, no value twice.

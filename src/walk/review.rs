@@ -128,22 +128,42 @@ impl ReviewConfig {
     }
 
     fn validate(&self) -> Result<()> {
-        if !(self.sf.is_finite() && self.sf >= 1.0) {
-            return Err(Error::Invalid(format!("scale factor SF {} must be at least 1", self.sf)));
-        }
+        check_sf(self.sf)?;
         if let Some(k) = self.prefetch_k {
-            if !(k.is_finite() && k >= 0.0) {
-                return Err(Error::Invalid(format!("prefetch factor k {k} must be a non-negative number")));
-            }
+            check_k(k)?;
         }
-        if !(self.far.is_finite() && self.far > 1.0) {
-            return Err(Error::Invalid(format!("frustum depth {} must be more than a metre", self.far)));
-        }
-        if self.memory_budget == 0 {
-            return Err(Error::Invalid("the memory budget must be more than 0 bytes".into()));
-        }
-        Ok(())
+        check_far(self.far)?;
+        check_budget(self.memory_budget)
     }
+}
+
+/// The checks of a walk's settings, shared with the experiments that sweep them.
+pub(crate) fn check_sf(sf: f32) -> Result<()> {
+    if !(sf.is_finite() && sf >= 1.0) {
+        return Err(Error::Invalid(format!("scale factor SF {sf} must be a number of at least 1")));
+    }
+    Ok(())
+}
+
+pub(crate) fn check_k(k: f32) -> Result<()> {
+    if !(k.is_finite() && k >= 0.0) {
+        return Err(Error::Invalid(format!("prefetch factor k {k} must be a non-negative number")));
+    }
+    Ok(())
+}
+
+pub(crate) fn check_far(far: f32) -> Result<()> {
+    if !(far.is_finite() && far > 1.0) {
+        return Err(Error::Invalid(format!("frustum depth {far} must be more than a metre")));
+    }
+    Ok(())
+}
+
+pub(crate) fn check_budget(bytes: usize) -> Result<()> {
+    if bytes == 0 {
+        return Err(Error::Invalid("the memory budget must be more than 0 bytes".into()));
+    }
+    Ok(())
 }
 
 /// One frame's figures. Times in milliseconds.
