@@ -7,11 +7,15 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 
+use flaneur::bench::cell_size::{self, CellSizeConfig};
 use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
+use flaneur::bench::db_size::{self, DbSizeConfig};
+use flaneur::bench::frame_time::{self, FrameTimeConfig};
 use flaneur::bench::index_cache::{self, IndexCacheConfig};
 use flaneur::bench::patterns::{self, PatternsConfig};
 use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
 use flaneur::bench::view_culling::{self, ViewCullingConfig};
+use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
@@ -115,6 +119,10 @@ enum Command {
         /// Object buffer budget, MiB.
         #[arg(long)]
         budget_mb: Option<usize>,
+    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
+        /// to back; the prefetch thread then rarely finishes in time).
+        #[arg(long, default_value_t = review::DEFAULT_PACE)]
+        speed: f32,
         /// Write one row per frame here.
         #[arg(long)]
         csv: Option<PathBuf>,
@@ -176,7 +184,10 @@ enum Experiment {
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
     },
-    /// Pages read by BOX against CSearch along a walk of overlapping disk cells.
+    /// Pages read by BOX against CSearch along a walk of overlapping disk cells; then
+    /// REVIEW walks: frame time and variance against cell size, Optimal / NC / NP / BOX
+    /// (Fig. 4.19, 4.20), time per frame, Optimal against BOX (Fig. 4.21), and search
+    /// time against database size on generated cities (Fig. 4.22).
     Csearch {
         db: PathBuf,
         #[arg(long, default_value_t = CsearchConfig::default().cell)]
@@ -185,17 +196,28 @@ enum Experiment {
         step: f32,
         #[arg(long, default_value_t = CsearchConfig::default().steps)]
         steps: usize,
-        #[arg(long, default_value_t = CsearchConfig::default().seed)]
-        seed: u64,
         #[arg(long, default_value_t = CsearchConfig::default().history_len)]
         history_len: usize,
+        /// The REVIEW walks; --seed also seeds the street walk of the query-by-query run.
+        #[command(flatten)]
+        walk: WalkArgs,
+        /// Scale factors of the cell-size sweep, comma-separated (the thesis's cell sizes by default).
+        #[arg(long, value_delimiter = ',', default_values_t = CellSizeConfig::default().sfs)]
+        sfs: Vec<f32>,
+        /// Objects in each city of the database-size series, comma-separated; the cities
+        /// are generated and built once into `--out`/cities and reused.
+        #[arg(long, value_delimiter = ',', default_values_t = DbSizeConfig::default().sizes)]
+        sizes: Vec<u64>,
+        /// Only the query-by-query run: skip the REVIEW walks (long on a large city).
+        #[arg(long)]
+        no_walks: bool,
         /// Skip the second run on a copy of the index built by insertion with the
         /// linear split (the thesis's setting), which is built in `--out`.
         #[arg(long)]
         packed_only: bool,
         #[arg(long, default_value = "mmap")]
         backend: Backend,
-        /// Folder for the CSV.
+        /// Folder for the CSVs, plots and summary.
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
         /// Print every query, not just the summary.
@@ -204,21 +226,64 @@ enum Experiment {
     },
 }
 
-/// The walk every walking experiment takes.
+/// The walk every walking experiment takes (`bench::walk_setup::WalkSetup`).
 #[derive(clap::Args)]
 struct WalkArgs {
-    #[arg(long, default_value_t = 1800)]
-    frames: usize,
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, help = frames_help())]
+    frames: Option<usize>,
+    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS)]
     fps: f32,
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = walk_setup::DEFAULT_SEED)]
     seed: u64,
     /// Frustum depth, metres.
-    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_FAR)]
+    #[arg(long, default_value_t = review::DEFAULT_FAR)]
     far: f32,
-    /// Scale factor SF of the disk cell.
-    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_SF)]
+    /// Scale factor SF of the disk cell (not used where SF is swept).
+    #[arg(long, default_value_t = review::DEFAULT_SF)]
     sf: f32,
+    /// Object buffer budget, MiB.
+    #[arg(long, default_value_t = review::DEFAULT_MEMORY_BUDGET >> 20)]
+    budget_mb: usize,
+    /// Motion patterns, comma-separated (default: the thesis's five; normal where one
+    /// path is walked).
+    #[arg(long, value_delimiter = ',')]
+    patterns: Vec<Motion>,
+    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
+    /// to back; the prefetch thread then rarely finishes in time).
+    #[arg(long, default_value_t = review::DEFAULT_PACE)]
+    speed: f32,
+}
+
+/// `--speed` as the walk takes it: 0 for unpaced.
+fn pace(speed: f32) -> Option<f32> {
+    (speed != 0.0).then_some(speed)
+}
+
+/// `--frames`'s help, with the defaults as the library has them.
+fn frames_help() -> String {
+    format!(
+        "Frames of each walk [default: {}; {} for bench patterns; {} for bench csearch's figures, which walk once per configuration and cell size or city]",
+        walk_setup::DEFAULT_FRAMES,
+        walk_setup::PATTERN_FRAMES,
+        walk_setup::SHORT_FRAMES
+    )
+}
+
+impl WalkArgs {
+    /// The experiment's walk: these settings over `base`, the experiment's default,
+    /// which gives the frames and the patterns when they are not given.
+    fn setup(self, base: WalkSetup) -> WalkSetup {
+        WalkSetup {
+            frames: self.frames.unwrap_or(base.frames),
+            fps: self.fps,
+            seed: self.seed,
+            far: self.far,
+            sf: self.sf,
+            memory_budget: self.budget_mb.saturating_mul(1 << 20),
+            patterns: if self.patterns.is_empty() { base.patterns } else { self.patterns },
+            pace: pace(self.speed),
+        }
+    }
 }
 
 fn main() {
@@ -247,7 +312,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
-        Command::Walk { db, mode, config, path, frames, fps, seed, policy, cache_bytes, k, sf, far, budget_mb, csv, save_path, backend, quiet } => {
+        Command::Walk { db, mode, config, path, frames, fps, seed, policy, cache_bytes, k, sf, far, budget_mb, speed, csv, save_path, backend, quiet } => {
             let preset = match config {
                 Some(p) => p,
                 None => match mode.as_str() {
@@ -268,37 +333,40 @@ fn run(cli: Cli) -> Result<()> {
             cfg.sf = sf.unwrap_or(cfg.sf);
             cfg.far = far.unwrap_or(cfg.far);
             cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
+            cfg.pace = pace(speed);
             walk_cmd(&db, &cfg, &path, frames, fps, seed, csv.as_deref(), save_path.as_deref(), backend, quiet)
         }
         Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
             Experiment::PrefetchK { db, walk, ks, out } => {
                 let d = PrefetchKConfig::default();
-                let cfg = PrefetchKConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, ks: if ks.is_empty() { d.ks.clone() } else { ks }, ..d };
+                let cfg = PrefetchKConfig { walk: walk.setup(d.walk), ks: if ks.is_empty() { d.ks } else { ks } };
                 let db = Database::open(&db)?;
                 let r = prefetch_k::run(&db, &cfg)?;
                 write_experiment(&out, "prefetch-k", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
             }
             Experiment::ViewCulling { db, walk, sfs, out } => {
                 let d = ViewCullingConfig::default();
-                let cfg = ViewCullingConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sfs: if sfs.is_empty() { d.sfs.clone() } else { sfs }, ..d };
+                let cfg = ViewCullingConfig { walk: walk.setup(d.walk), sfs: if sfs.is_empty() { d.sfs } else { sfs }, ..d };
                 let db = Database::open(&db)?;
                 let r = view_culling::run(&db, &cfg)?;
                 write_experiment(&out, "view-culling", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
             }
             Experiment::Patterns { db, walk, out } => {
-                let cfg = PatternsConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, ..PatternsConfig::default() };
+                let d = PatternsConfig::default();
+                let cfg = PatternsConfig { walk: walk.setup(d.walk), ..d };
                 let db = Database::open(&db)?;
                 let r = patterns::run(&db, &cfg)?;
                 write_experiment(&out, "patterns", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
             }
             Experiment::IndexCache { db, walk, sizes, out } => {
-                let cfg = IndexCacheConfig { frames: walk.frames, fps: walk.fps, seed: walk.seed, far: walk.far, sf: walk.sf, sizes, ..IndexCacheConfig::default() };
+                let cfg = IndexCacheConfig { walk: walk.setup(IndexCacheConfig::default().walk), sizes };
                 bench_index_cache(&db, &cfg, &out)
             }
-            Experiment::Csearch { db, cell, step, steps, seed, history_len, packed_only, backend, out, verbose } => {
-                let cfg = CsearchConfig { cell, step, steps, seed, history_len, ..CsearchConfig::default() };
-                bench_csearch(&db, &cfg, !packed_only, backend, &out, verbose)
+            Experiment::Csearch { db, cell, step, steps, history_len, walk, sfs, sizes, no_walks, packed_only, backend, out, verbose } => {
+                let cfg = CsearchConfig { cell, step, steps, seed: walk.seed, history_len, ..CsearchConfig::default() };
+                let walks = (!no_walks).then(|| CsearchWalks { walk: walk.setup(CellSizeConfig::default().walk), sfs, sizes });
+                bench_csearch(&db, &cfg, !packed_only, backend, &out, verbose, walks)
             }
         },
     }
@@ -362,8 +430,39 @@ fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bo
     Ok(())
 }
 
-fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Backend, out: &Path, verbose: bool) -> Result<()> {
+/// The REVIEW walks of `bench csearch` as the command line gives them (Fig. 4.19–4.22).
+struct CsearchWalks {
+    walk: WalkSetup,
+    sfs: Vec<f32>,
+    sizes: Vec<u64>,
+}
+
+/// The settings of each figure of [`CsearchWalks`], checked.
+struct WalkFigures {
+    cell: CellSizeConfig,
+    frames: FrameTimeConfig,
+    sizes: DbSizeConfig,
+}
+
+impl CsearchWalks {
+    /// Each figure's settings, checked before anything runs; the cities of the size
+    /// series get the page size of the database benched.
+    fn figures(self, page_size: usize) -> Result<WalkFigures> {
+        let f = WalkFigures {
+            cell: CellSizeConfig { walk: self.walk.clone(), sfs: self.sfs },
+            frames: FrameTimeConfig { walk: self.walk.clone() },
+            sizes: DbSizeConfig { walk: self.walk, sizes: self.sizes, page_size, ..DbSizeConfig::default() },
+        };
+        f.cell.validate()?;
+        f.frames.validate()?;
+        f.sizes.validate()?;
+        Ok(f)
+    }
+}
+
+fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Backend, out: &Path, verbose: bool, walks: Option<CsearchWalks>) -> Result<()> {
     let db = Database::open_with(path, backend)?;
+    let walks = walks.map(|w| w.figures(db.store().page_size())).transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut reports = vec![csearch::run(&db, cfg)?];
     if insertion {
@@ -374,17 +473,70 @@ fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Bac
         if i == 0 { s } else { s.lines().skip(1).map(|l| format!("{l}\n")).collect() }
     }).collect();
     let csv_path = out.join("csearch.csv");
-    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    write_file(&csv_path, &csv)?;
     for (r, name) in reports.iter().zip(["csearch-pages.png", "csearch-pages-insertion.png"]) {
         csearch::plot(r, &out.join(name))?;
     }
-    std::fs::write(out.join("csearch.md"), csearch::markdown(&reports, cfg)).with_context(|| format!("writing {}", out.display()))?;
+    let md_path = out.join("csearch.md");
+    let mut md = csearch::markdown(&reports, cfg);
+    write_file(&md_path, &md)?;
     println!("csearch: {} queries, cell {} m, step {} m, history ≤ {}", cfg.steps, cfg.cell, cfg.step, cfg.history_len);
     for r in &reports {
         print_report(r, verbose);
     }
     println!("per-query rows in {}, plots and a summary beside it", csv_path.display());
+    if let Some(walks) = walks {
+        // The summary is written again after each figure, so that a long run that stops
+        // keeps what it measured.
+        csearch_walks(&db, &walks, out, |section| {
+            println!("\n{section}");
+            md.push('\n');
+            md.push_str(&section);
+            write_file(&md_path, &md)
+        })?;
+        println!("CSVs, plots and the summary ({}) in {}", md_path.display(), out.display());
+    }
     Ok(())
+}
+
+/// Runs the figures of `bench csearch` one after the other, each writing its CSV and
+/// plots into `out` and handing its markdown section to `section`; the cities of the
+/// size series go into `out`/cities.
+fn csearch_walks(db: &Database, f: &WalkFigures, out: &Path, mut section: impl FnMut(String) -> Result<()>) -> Result<()> {
+    let r = with_bar("cell size (Fig. 4.19, 4.20)", |p| cell_size::run_with_progress(db, &f.cell, p))?;
+    write_figure(out, "csearch-cell-size", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+    section(r.markdown())?;
+
+    let r = with_bar("time per frame (Fig. 4.21)", |p| frame_time::run_with_progress(db, &f.frames, p))?;
+    write_figure(out, "csearch-frame-time", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+    section(r.markdown())?;
+
+    let r = with_bar("database size (Fig. 4.22)", |p| db_size::run_with_progress(&out.join("cities"), &f.sizes, p))?;
+    write_figure(out, "csearch-db-size", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+    section(r.markdown())
+}
+
+/// Runs `f` under a progress bar that its `progress(done, total)` moves.
+fn with_bar<T>(what: &str, f: impl FnOnce(&mut dyn FnMut(usize, usize)) -> flaneur::Result<T>) -> Result<T> {
+    let bar = indicatif::ProgressBar::new(1);
+    bar.set_message(what.to_string());
+    bar.set_style(indicatif::ProgressStyle::with_template("{msg}: [{bar:30}] {pos}/{len} ({elapsed})").expect("a valid template").progress_chars("=> "));
+    let result = f(&mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    Ok(result?)
+}
+
+/// Writes a figure's CSV (`name`.csv) and plots into `out`.
+fn write_figure(out: &Path, name: &str, csv: &str, plot: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    write_file(&out.join(format!("{name}.csv")), csv)?;
+    plot(out)
+}
+
+fn write_file(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }
 
 fn print_report(r: &CsearchReport, verbose: bool) {
@@ -422,21 +574,26 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     }
     let db = Database::open(&db_path)?;
     let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
-    println!("walking {frames} frames ({:.0} s) of the 'normal' pattern in REVIEW mode, then with plain BOX queries", frames as f64 / 30.0);
+    println!(
+        "walking {frames} frames ({:.0} s of path, played {}x faster) of the 'normal' pattern in REVIEW mode, then with plain BOX queries",
+        frames as f64 / 30.0,
+        review::DEFAULT_PACE
+    );
     for preset in [Preset::Optimal, Preset::Box] {
         let bar = indicatif::ProgressBar::new(frames as u64);
         let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
         bar.finish_and_clear();
         println!("{}:", preset.name());
-        for f in report.frames.iter().filter(|f| f.queried) {
+        for f in report.frames.iter().filter(|f| f.queried || f.prefetch_adopted) {
+            let what = match (f.sync_query, f.prefetch_used, f.prefetch_adopted) {
+                (true, ..) => "queried",
+                (false, true, _) => "entered a prefetched cell",
+                (false, false, true) => "prefetch arrived",
+                _ => "waited for a prefetch",
+            };
             println!(
-                "  frame {:>4}: queried{}, {} objects loaded, {} index + {} mesh pages, {:.1} ms",
-                f.frame,
-                if f.prefetch_used { " (prefetched)" } else { "" },
-                f.objects_loaded,
-                f.index_pages,
-                f.mesh_pages,
-                f.frame_ms
+                "  frame {:>4}: {what}, {} objects loaded, {} index + {} mesh pages read, {:.1} ms",
+                f.frame, f.objects_loaded, f.index_pages, f.mesh_pages, f.frame_ms
             );
         }
         print_walk(&report);
@@ -480,9 +637,24 @@ fn print_walk(r: &WalkReport) {
     let c = &r.config;
     let cache = c.index_cache.as_ref().map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
     let k = c.prefetch_k.map_or("off".to_string(), |k| format!("k = {k}"));
-    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
-    println!("  frames {}   mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}", s.frames, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms);
-    println!("  queries {} ({} from prefetch)   index pages {} ({:.1} per query)   mesh pages {}", s.queries, s.prefetches_used, s.index_pages, s.index_pages_per_query, s.mesh_pages);
+    let pace = match (c.prefetch_k, c.pace) {
+        (Some(_), Some(p)) => format!(", played {p}x real time"),
+        (Some(_), None) => ", unpaced".to_string(),
+        _ => String::new(),
+    };
+    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}{pace}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
+    println!(
+        "  frames {}   first (cold) load {:.1} ms   then mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}",
+        s.frames, s.initial_load_ms, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms
+    );
+    println!(
+        "  queries {} ({} on the viewer's thread, {} prefetched, {} prefetches dropped)   cells entered {} ({} prefetched)",
+        s.queries, s.sync_queries, s.prefetches_adopted, s.prefetches_stale, s.cell_changes, s.prefetches_used
+    );
+    println!(
+        "  pages read: {} index + {} mesh, {:.1} per query ({:.1} index)",
+        s.index_pages, s.mesh_pages, s.io_per_query, s.index_pages_per_query
+    );
     println!("  visual misses {}   peak buffer {:.1} MiB   frames over budget {}", s.visual_misses, s.peak_buffer_bytes as f64 / (1 << 20) as f64, s.overflow_frames);
     if let Some(cs) = &s.index_cache {
         println!("  index cache: {} hits, {} misses, hit rate {:.1}%", cs.hits, cs.misses, cs.hit_rate() * 100.0);
@@ -499,8 +671,7 @@ fn bench_index_cache(path: &Path, cfg: &IndexCacheConfig, out: &Path) -> Result<
 fn write_experiment(out: &Path, name: &str, csv: &str, markdown: &str, plot: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     for (ext, text) in [("csv", csv), ("md", markdown)] {
-        let file = out.join(format!("{name}.{ext}"));
-        std::fs::write(&file, text).with_context(|| format!("writing {}", file.display()))?;
+        write_file(&out.join(format!("{name}.{ext}")), text)?;
     }
     plot(out)?;
     print!("{markdown}");

@@ -13,9 +13,10 @@ fn city() -> common::City {
     common::city(2500, 6, &BuildOptions { page_size: 1024, ..Default::default() })
 }
 
-/// A shallow frustum, so that a city of a kilometre holds many disk cells.
+/// A shallow frustum, so that a city of a kilometre holds many disk cells; paths played
+/// eight times faster than real time, which still leaves a small city's prefetches time.
 fn cfg(p: Preset) -> ReviewConfig {
-    ReviewConfig { far: 150.0, ..ReviewConfig::preset(p) }
+    ReviewConfig { far: 150.0, pace: Some(8.0), ..ReviewConfig::preset(p) }
 }
 
 fn path(db: &Database, m: Motion, frames: usize) -> CameraPath {
@@ -39,6 +40,21 @@ fn every_configuration_shows_everything_in_view() {
     }
     let per_query = |p: Preset| pages.iter().find(|(q, _)| *q == p).unwrap().1;
     assert!(per_query(Preset::Np) < per_query(Preset::Box), "{pages:?}");
+}
+
+#[test]
+fn prefetching_takes_reads_off_the_viewers_thread() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Fast, 300);
+    let optimal = review::walk(&db, &p, &cfg(Preset::Optimal), |_| {}).unwrap().summary;
+    let np = review::walk(&db, &p, &cfg(Preset::Np), |_| {}).unwrap().summary;
+    assert_eq!(np.sync_queries, np.queries, "without prefetching every query is the viewer's");
+    assert_eq!((np.prefetches_adopted, np.prefetches_used), (0, 0));
+    assert!(optimal.prefetches_used > 0 && optimal.prefetches_used <= optimal.prefetches_adopted, "{optimal:?}");
+    assert!(optimal.sync_queries < np.sync_queries, "Optimal {optimal:?}\nNP {np:?}");
+    assert_eq!(optimal.queries, optimal.sync_queries + optimal.prefetches_adopted + optimal.prefetches_stale);
+    assert_eq!(optimal.visual_misses, 0);
 }
 
 #[test]
@@ -118,6 +134,9 @@ fn bad_settings_are_errors() {
         ReviewConfig { prefetch_k: Some(-1.0), ..cfg(Preset::Optimal) },
         ReviewConfig { memory_budget: 0, ..cfg(Preset::Optimal) },
         ReviewConfig { index_cache: Some(("nope".into(), 1 << 20)), ..cfg(Preset::Optimal) },
+        ReviewConfig { pace: Some(0.0), ..cfg(Preset::Optimal) },
+        ReviewConfig { pace: Some(f32::INFINITY), ..cfg(Preset::Optimal) },
+        ReviewConfig { prefetch_k: Some(0.8), ..cfg(Preset::Box) },
     ] {
         assert!(review::walk(&db, &p, &cfg, |_| {}).is_err());
     }

@@ -11,38 +11,38 @@
 
 use std::path::Path;
 
+use super::walk_setup::{check_sweep, num, WalkSetup};
 use crate::cache::{belady, policy_by_name, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::walk::motion::{self, Motion};
+use crate::walk::motion::Motion;
 use crate::walk::review::{self, Preset, ReviewConfig};
 
 /// The walks and the cache sizes.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct IndexCacheConfig {
-    pub frames: usize,
-    pub fps: f32,
-    pub seed: u64,
-    /// Frustum depth, metres.
-    pub far: f32,
-    pub sf: f32,
+    /// The walks: every pattern of `walk.patterns`, in the Optimal configuration.
+    pub walk: WalkSetup,
     /// Cache sizes to replay, in pages.
     pub sizes: Vec<usize>,
-    pub patterns: Vec<Motion>,
 }
 
 impl Default for IndexCacheConfig {
     fn default() -> IndexCacheConfig {
-        let r = ReviewConfig::preset(Preset::Optimal);
-        IndexCacheConfig {
-            frames: 1800,
-            fps: 30.0,
-            seed: 1,
-            far: r.far,
-            sf: r.sf,
-            sizes: vec![2, 4, 8, 16, 32, 64, 128, 256],
-            patterns: vec![Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward],
-        }
+        IndexCacheConfig { walk: WalkSetup::default(), sizes: vec![2, 4, 8, 16, 32, 64, 128, 256] }
+    }
+}
+
+impl IndexCacheConfig {
+    /// Checks the walk and the sizes (at least one, each of at least one page, none twice).
+    pub fn validate(&self) -> Result<()> {
+        self.walk.validate()?;
+        check_sweep("cache size", &self.sizes, |pages| {
+            if pages == 0 {
+                return Err(Error::Invalid("a cache size must be at least one page".into()));
+            }
+            Ok(())
+        })
     }
 }
 
@@ -76,13 +76,11 @@ pub struct IndexCacheReport {
 
 /// Walks each pattern, records its index trace, and replays it at every size.
 pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
-    if cfg.sizes.is_empty() || cfg.sizes.contains(&0) || cfg.patterns.is_empty() {
-        return Err(Error::Invalid("index-cache needs at least one pattern and cache sizes of at least one page".into()));
-    }
+    cfg.validate()?;
     let page = db.store().page_size();
     let mut traces = Vec::new();
     let mut rows = Vec::new();
-    for &pattern in &cfg.patterns {
+    for &pattern in &cfg.walk.patterns {
         let trace = record(db, cfg, pattern)?;
         let (accesses, working_set) = (trace.0.len(), trace.0.distinct_pages());
         traces.push(PatternTrace { pattern, accesses, working_set, queries: trace.1 });
@@ -101,14 +99,12 @@ pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
 }
 
 fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Trace, usize)> {
-    let path = motion::generate(&db.bounds(), pattern, cfg.frames, cfg.fps, cfg.seed)?;
+    let path = cfg.walk.path(db, pattern)?;
     let whole_index = (db.pages_by_kind().rtree as usize + 1) * db.store().page_size();
     let walk_cfg = ReviewConfig {
         index_cache: Some(("lru".into(), whole_index)),
-        far: cfg.far,
-        sf: cfg.sf,
         record_trace: true,
-        ..ReviewConfig::preset(Preset::Optimal)
+        ..cfg.walk.review(Preset::Optimal)
     };
     let report = review::walk(db, &path, &walk_cfg, |_| {})?;
     let trace = report.trace.ok_or_else(|| Error::Invalid("the walk recorded no trace".into()))?;
@@ -177,9 +173,11 @@ impl IndexCacheReport {
 
     pub fn markdown(&self) -> String {
         let mut s = String::from("# index-cache — hit rate against cache size (Fig. 4.18)\n\n");
+        let w = &self.config.walk;
         s.push_str(&format!(
-            "Each pattern walked for {} frames at {} fps (frustum {} m, SF {}), its index accesses recorded and replayed.\n\n",
-            self.config.frames, self.config.fps, self.config.far, self.config.sf
+            "Each pattern walked ({}, SF {}), its index accesses recorded and replayed.\n\n",
+            w.describe(),
+            num(w.sf)
         ));
         s.push_str("| pattern | accesses | queries | pages touched | size (pages) | LRU | DPLRU | Belady |\n|---|---|---|---|---|---|---|---|\n");
         for t in &self.traces {

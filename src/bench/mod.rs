@@ -1,9 +1,17 @@
 //! The papers' experiments as library code: `flaneur bench` and the criterion benches
 //! call these and only print or plot what they return.
+//!
+//! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
+//! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
 
+pub mod cell_size;
+pub mod city_series;
 pub mod csearch;
+pub mod db_size;
+pub mod frame_time;
 pub mod index_cache;
 pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;
 pub mod view_culling;
+pub mod walk_setup;

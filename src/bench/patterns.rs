@@ -9,75 +9,42 @@
 //! (R-tree node) pages and mesh pages, reported apart and summed. Page counts are exact
 //! and deterministic for BOX; with prefetching they depend a little on thread timing
 //! (which prefetches finish in time).
-//!
-//! This module also holds what the walk experiments share: the thesis's five patterns
-//! and the checks of the settings every walk takes.
 
 use std::path::Path;
 
+use super::walk_setup::{check_k, num, per_query, WalkSetup, PATTERN_FRAMES};
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::walk::motion::{self, CameraPath, Motion};
-use crate::walk::review::{self, check_budget, check_far, Preset, ReviewConfig, WalkReport};
-pub(super) use crate::walk::review::{check_k, check_sf};
+use crate::walk::motion::Motion;
+use crate::walk::review::{self, Preset, ReviewConfig, WalkReport};
 
-/// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
-/// order; `Motion::ALL` also has a random walk, which the thesis did not use.
-pub const THESIS_PATTERNS: [Motion; 5] = [Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward];
-
-/// The settings of a walk experiment.
+/// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PatternsConfig {
-    /// Frames of each walk.
-    pub frames: usize,
-    /// Frames per second of the generated paths.
-    pub fps: f32,
-    /// Seed of the generated paths (the same for every pattern).
-    pub seed: u64,
-    /// Depth of the view frustum, metres.
-    pub far: f32,
-    /// Scale factor SF of the disk cell.
-    pub sf: f32,
-    /// Object buffer budget, bytes.
-    pub memory_budget: usize,
+    /// The walks: every pattern of `walk.patterns`, walked by both configurations.
+    pub walk: WalkSetup,
     /// Prefetch factor k of the Optimal configuration.
     pub prefetch_k: f32,
-    /// The patterns walked, in order.
-    pub patterns: Vec<Motion>,
 }
 
 impl Default for PatternsConfig {
     fn default() -> PatternsConfig {
-        PatternsConfig {
-            frames: 900,
-            fps: 30.0,
-            seed: 1,
-            far: review::DEFAULT_FAR,
-            sf: review::DEFAULT_SF,
-            memory_budget: review::DEFAULT_MEMORY_BUDGET,
-            prefetch_k: review::DEFAULT_K,
-            patterns: THESIS_PATTERNS.to_vec(),
-        }
+        PatternsConfig { walk: WalkSetup { frames: PATTERN_FRAMES, ..WalkSetup::default() }, prefetch_k: review::DEFAULT_K }
     }
 }
 
 impl PatternsConfig {
+    /// Checks the walk and k.
     pub fn validate(&self) -> Result<()> {
-        check_walk(self.frames, self.fps, self.far, self.sf, self.memory_budget)?;
-        check_k(self.prefetch_k)?;
-        check_patterns(&self.patterns)
+        self.walk.validate()?;
+        check_k(self.prefetch_k)
     }
 
-    /// The walk settings of one configuration.
+    /// The walk settings of one configuration: the preset with this experiment's walk,
+    /// and its k where the preset prefetches.
     pub fn review(&self, preset: Preset) -> ReviewConfig {
-        let base = ReviewConfig::preset(preset);
-        ReviewConfig {
-            sf: self.sf,
-            far: self.far,
-            memory_budget: self.memory_budget,
-            prefetch_k: base.prefetch_k.map(|_| self.prefetch_k),
-            ..base
-        }
+        let base = self.walk.review(preset);
+        ReviewConfig { prefetch_k: base.prefetch_k.map(|_| self.prefetch_k), ..base }
     }
 }
 
@@ -97,7 +64,7 @@ pub struct PresetIo {
 impl PresetIo {
     fn from_walk(w: &WalkReport) -> PresetIo {
         let s = &w.summary;
-        let per = |pages: u64| if s.queries == 0 { 0.0 } else { pages as f64 / s.queries as f64 };
+        let per = |pages: u64| per_query(pages, s.queries);
         PresetIo {
             queries: s.queries,
             index_pages: s.index_pages,
@@ -145,10 +112,11 @@ pub fn run(db: &Database, cfg: &PatternsConfig) -> Result<PatternsReport> {
 /// Runs the experiment; `progress(done, total)` is told after each walk.
 pub fn run_with_progress(db: &Database, cfg: &PatternsConfig, mut progress: impl FnMut(usize, usize)) -> Result<PatternsReport> {
     cfg.validate()?;
-    let total = cfg.patterns.len() * 2;
-    let mut rows = Vec::with_capacity(cfg.patterns.len());
-    for (i, &pattern) in cfg.patterns.iter().enumerate() {
-        let path = pattern_path(db, pattern, cfg.frames, cfg.fps, cfg.seed)?;
+    let patterns = &cfg.walk.patterns;
+    let total = patterns.len() * 2;
+    let mut rows = Vec::with_capacity(patterns.len());
+    for (i, &pattern) in patterns.iter().enumerate() {
+        let path = cfg.walk.path(db, pattern)?;
         let optimal = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Optimal), |_| {})?);
         progress(2 * i + 1, total);
         let box_io = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?);
@@ -228,15 +196,10 @@ impl PatternsReport {
         let c = &self.config;
         let mut s = String::from("# patterns — disk I/Os per query, Optimal against BOX (Shou 2002, Table 4.1)\n\n");
         s.push_str(&format!(
-            "{} frames at {} fps per pattern (seed {}), frustum {} m deep, SF {}, object buffer {} MiB, \
-             Optimal with k = {}. A disk I/O is one {}-byte page read (index or mesh).\n\n",
-            c.frames,
-            c.fps,
-            c.seed,
-            c.far,
-            c.sf,
-            c.memory_budget >> 20,
-            c.prefetch_k,
+            "Each pattern: {}, SF {}, Optimal with k = {}. A disk I/O is one {}-byte page read (index or mesh).\n\n",
+            c.walk.describe(),
+            num(c.walk.sf),
+            num(c.prefetch_k),
             self.page_size
         ));
         s.push_str(
@@ -278,87 +241,5 @@ impl PatternsReport {
              compare the shares, not the counts: ours depend on the city, the page size and the frustum.\n",
         );
         s
-    }
-}
-
-/// The generated path of `pattern` through the database's city.
-pub(super) fn pattern_path(db: &Database, pattern: Motion, frames: usize, fps: f32, seed: u64) -> Result<CameraPath> {
-    motion::generate(&db.bounds(), pattern, frames, fps, seed)
-}
-
-/// Checks the settings every walk experiment takes.
-pub(super) fn check_walk(frames: usize, fps: f32, far: f32, sf: f32, memory_budget: usize) -> Result<()> {
-    if frames == 0 {
-        return Err(Error::Invalid("a walk needs at least one frame".into()));
-    }
-    if !(fps.is_finite() && (motion::MIN_FPS..=motion::MAX_FPS).contains(&fps)) {
-        return Err(Error::Invalid(format!(
-            "frame rate {fps} must be in {}..={} frames per second",
-            motion::MIN_FPS,
-            motion::MAX_FPS
-        )));
-    }
-    check_far(far)?;
-    check_sf(sf)?;
-    check_budget(memory_budget)
-}
-
-/// A sweep: not empty, every value passing `check`, no value twice.
-pub(super) fn check_sweep(what: &str, values: &[f32], check: fn(f32) -> Result<()>) -> Result<()> {
-    if values.is_empty() {
-        return Err(Error::Invalid(format!("the {what} sweep is empty")));
-    }
-    for (i, &v) in values.iter().enumerate() {
-        check(v)?;
-        if values[..i].contains(&v) {
-            return Err(Error::Invalid(format!("the {what} sweep has {v} twice")));
-        }
-    }
-    Ok(())
-}
-
-pub(super) fn check_patterns(patterns: &[Motion]) -> Result<()> {
-    if patterns.is_empty() {
-        return Err(Error::Invalid("no motion pattern to walk".into()));
-    }
-    for (i, p) in patterns.iter().enumerate() {
-        if patterns[..i].contains(p) {
-            return Err(Error::Invalid(format!("motion pattern '{}' is listed twice", p.name())));
-        }
-    }
-    Ok(())
-}
-
-/// A number as the tables show it: at least one decimal, at most three.
-pub(super) fn num(v: f32) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0');
-    if s.ends_with('.') {
-        format!("{s}0")
-    } else {
-        s.to_string()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn numbers_and_sweeps() {
-        assert_eq!(num(0.8), "0.8");
-        assert_eq!(num(1.0), "1.0");
-        assert_eq!(num(0.25), "0.25");
-        assert!(check_sweep("k", &[], check_k).is_err());
-        assert!(check_sweep("k", &[0.2, 0.2], check_k).is_err());
-        assert!(check_sweep("k", &[f32::NAN], check_k).is_err());
-        assert!(check_sweep("k", &[-0.1], check_k).is_err());
-        assert!(check_sweep("SF", &[0.9], check_sf).is_err());
-        assert!(check_sweep("SF", &[1.0, 1.5], check_sf).is_ok());
-        assert!(check_patterns(&[Motion::Fast, Motion::Fast]).is_err());
-        assert!(check_walk(10, 30.0, 100.0, 1.5, 1 << 20).is_ok());
-        assert!(check_walk(0, 30.0, 100.0, 1.5, 1 << 20).is_err());
-        assert!(check_walk(10, f32::NAN, 100.0, 1.5, 1 << 20).is_err());
-        assert!(check_walk(10, 30.0, 100.0, 1.5, 0).is_err());
     }
 }

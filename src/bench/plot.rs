@@ -35,6 +35,9 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(60, 60, 60),
 ];
 
+/// Series with more points than this are drawn one pixel wide.
+const DENSE_POINTS: usize = 200;
+
 fn register_font() -> std::result::Result<(), String> {
     static DONE: OnceLock<std::result::Result<(), String>> = OnceLock::new();
     DONE.get_or_init(|| {
@@ -70,8 +73,11 @@ fn draw(path: &Path, plot: &LinePlot) -> std::result::Result<(), String> {
     chart.configure_mesh().x_desc(&plot.x_label).y_desc(&plot.y_label).draw().map_err(|e| e.to_string())?;
     for (i, s) in plot.series.iter().enumerate() {
         let color = COLORS[i % COLORS.len()];
+        // A polyline wider than a pixel joins its segments with miters, which shoot far
+        // past the sharp corners of a dense series (a frame-time trace): draw those thin.
+        let width = if s.points.len() > DENSE_POINTS { 1 } else { 2 };
         chart
-            .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(2)))
+            .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(width)))
             .map_err(|e| e.to_string())?
             .label(&s.name)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));

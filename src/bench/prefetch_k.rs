@@ -12,7 +12,7 @@
 
 use std::path::Path;
 
-use super::patterns::{check_k, check_patterns, check_sweep, check_walk, num, pattern_path, THESIS_PATTERNS};
+use super::walk_setup::{check_k, check_sweep, mean_query_ms, num, WalkSetup};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::walk::motion::Motion;
@@ -21,20 +21,8 @@ use crate::walk::review::{self, Preset, ReviewConfig, WalkReport};
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PrefetchKConfig {
-    /// Frames of each walk.
-    pub frames: usize,
-    /// Frames per second of the generated paths.
-    pub fps: f32,
-    /// Seed of the generated paths (the same for every pattern).
-    pub seed: u64,
-    /// Depth of the view frustum, metres.
-    pub far: f32,
-    /// Scale factor SF of the disk cell.
-    pub sf: f32,
-    /// Object buffer budget, bytes.
-    pub memory_budget: usize,
-    /// The patterns walked, in order.
-    pub patterns: Vec<Motion>,
+    /// The walks: every pattern of `walk.patterns`, once per k.
+    pub walk: WalkSetup,
     /// The prefetch factors tried, in order.
     pub ks: Vec<f32>,
 }
@@ -46,35 +34,20 @@ pub fn default_ks() -> Vec<f32> {
 
 impl Default for PrefetchKConfig {
     fn default() -> PrefetchKConfig {
-        PrefetchKConfig {
-            frames: 900,
-            fps: 30.0,
-            seed: 1,
-            far: review::DEFAULT_FAR,
-            sf: review::DEFAULT_SF,
-            memory_budget: review::DEFAULT_MEMORY_BUDGET,
-            patterns: THESIS_PATTERNS.to_vec(),
-            ks: default_ks(),
-        }
+        PrefetchKConfig { walk: WalkSetup::default(), ks: default_ks() }
     }
 }
 
 impl PrefetchKConfig {
+    /// Checks the walk and the sweep.
     pub fn validate(&self) -> Result<()> {
-        check_walk(self.frames, self.fps, self.far, self.sf, self.memory_budget)?;
-        check_patterns(&self.patterns)?;
+        self.walk.validate()?;
         check_sweep("prefetch factor k", &self.ks, check_k)
     }
 
-    /// The walk settings for factor `k`: Optimal with this experiment's frustum, SF and budget.
+    /// The walk settings for factor `k`: Optimal with this experiment's walk.
     pub fn review(&self, k: f32) -> ReviewConfig {
-        ReviewConfig {
-            prefetch_k: Some(k),
-            sf: self.sf,
-            far: self.far,
-            memory_budget: self.memory_budget,
-            ..ReviewConfig::preset(Preset::Optimal)
-        }
+        ReviewConfig { prefetch_k: Some(k), ..self.walk.review(Preset::Optimal) }
     }
 }
 
@@ -96,14 +69,13 @@ pub struct PrefetchKRow {
 
 impl PrefetchKRow {
     fn from_walk(pattern: Motion, k: f32, w: &WalkReport) -> PrefetchKRow {
-        let queried: Vec<f64> = w.frames.iter().filter(|f| f.queried).map(|f| f.query_ms).collect();
         let s = &w.summary;
         PrefetchKRow {
             pattern,
             k,
             mean_frame_ms: s.mean_frame_ms,
             frame_ms_variance: s.frame_ms_variance,
-            mean_query_ms: if queried.is_empty() { 0.0 } else { queried.iter().sum::<f64>() / queried.len() as f64 },
+            mean_query_ms: mean_query_ms(w),
             queries: s.queries,
             prefetches_used: s.prefetches_used,
             index_pages: s.index_pages,
@@ -134,10 +106,10 @@ pub fn run(db: &Database, cfg: &PrefetchKConfig) -> Result<PrefetchKReport> {
 /// Runs the experiment; `progress(done, total)` is told after each walk.
 pub fn run_with_progress(db: &Database, cfg: &PrefetchKConfig, mut progress: impl FnMut(usize, usize)) -> Result<PrefetchKReport> {
     cfg.validate()?;
-    let total = cfg.patterns.len() * cfg.ks.len();
+    let total = cfg.walk.patterns.len() * cfg.ks.len();
     let mut rows = Vec::with_capacity(total);
-    for &pattern in &cfg.patterns {
-        let path = pattern_path(db, pattern, cfg.frames, cfg.fps, cfg.seed)?;
+    for &pattern in &cfg.walk.patterns {
+        let path = cfg.walk.path(db, pattern)?;
         for &k in &cfg.ks {
             let walk = review::walk(db, &path, &cfg.review(k), |_| {})?;
             rows.push(PrefetchKRow::from_walk(pattern, k, &walk));
@@ -198,6 +170,7 @@ impl PrefetchKReport {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |by: fn(&PrefetchKRow) -> f64| -> Vec<Series> {
             self.config
+                .walk
                 .patterns
                 .iter()
                 .map(|&p| Series { name: p.name().into(), points: self.rows_of(p).map(|r| (r.k as f64, by(r))).collect() })
@@ -228,14 +201,10 @@ impl PrefetchKReport {
         let c = &self.config;
         let mut s = String::from("# prefetch-k — frame and query time against the prefetch factor k (Shou 2002, Fig. 4.17)\n\n");
         s.push_str(&format!(
-            "Optimal configuration (CSearch, 1 MB distance-priority index cache, prefetching), {} frames at {} fps \
-             per pattern (seed {}), frustum {} m deep, SF {}, object buffer {} MiB; k = {}.\n\n",
-            c.frames,
-            c.fps,
-            c.seed,
-            c.far,
-            c.sf,
-            c.memory_budget >> 20,
+            "Optimal configuration (CSearch, 1 MB distance-priority index cache, prefetching); each pattern: \
+             {}, SF {}; k = {}.\n\n",
+            c.walk.describe(),
+            num(c.walk.sf),
             c.ks.iter().map(|&k| num(k)).collect::<Vec<_>>().join(", ")
         ));
         let head = format!(
@@ -248,14 +217,14 @@ impl PrefetchKReport {
             ("Mean query time (frames that queried), ms", |r: &PrefetchKRow| r.mean_query_ms),
         ] {
             s.push_str(&format!("{title}:\n\n{head}"));
-            for &p in &c.patterns {
+            for &p in &c.walk.patterns {
                 let cells: Vec<String> = self.rows_of(p).map(|r| format!("{:.3}", by(r))).collect();
                 s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
             }
             s.push('\n');
         }
         s.push_str("| pattern | best k (frame time) | mean frame ms there | best k (query time) | queries | prefetches used |\n|---|---|---|---|---|---|\n");
-        for &p in &c.patterns {
+        for &p in &c.walk.patterns {
             let Some(best) = self.best(p, |r| r.mean_frame_ms) else { continue };
             s.push_str(&format!(
                 "| {} | {} | {:.3} | {} | {} | {} |\n",

@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::patterns::{check_sf, check_sweep, check_walk, num, pattern_path};
+use super::walk_setup::{check_sf, check_sweep, num, WalkSetup};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
@@ -38,23 +38,13 @@ use crate::scene::Mesh;
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::motion::Motion;
-use crate::walk::review;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ViewCullingConfig {
-    /// Frames of the walk.
-    pub frames: usize,
-    /// Frames per second of the generated path.
-    pub fps: f32,
-    /// Seed of the generated path.
-    pub seed: u64,
-    /// Depth of the view frustum, metres.
-    pub far: f32,
-    /// Object buffer budget, bytes.
-    pub memory_budget: usize,
-    /// The motion pattern of the path (the thesis does not say; normal by default).
-    pub motion: Motion,
+    /// The walk: one path, of the one pattern in `walk.patterns` (the thesis does not
+    /// say which; normal by default); `walk.sf` is not used, `sfs` replaces it.
+    pub walk: WalkSetup,
     /// The scale factors tried, in order.
     pub sfs: Vec<f32>,
     /// Timing repetitions per frame; the fastest counts.
@@ -103,23 +93,15 @@ pub const THESIS_TABLE_4_2: [(f32, f64, f64); 6] =
 
 impl Default for ViewCullingConfig {
     fn default() -> ViewCullingConfig {
-        ViewCullingConfig {
-            frames: 900,
-            fps: 30.0,
-            seed: 1,
-            far: review::DEFAULT_FAR,
-            memory_budget: review::DEFAULT_MEMORY_BUDGET,
-            motion: Motion::Normal,
-            sfs: THESIS_SFS.to_vec(),
-            repeats: 3,
-            buffer: BufferModel::Cell,
-        }
+        ViewCullingConfig { walk: WalkSetup::one_pattern(Motion::Normal), sfs: THESIS_SFS.to_vec(), repeats: 3, buffer: BufferModel::Cell }
     }
 }
 
 impl ViewCullingConfig {
+    /// Checks the walk (one pattern), the sweep and the repetitions.
     pub fn validate(&self) -> Result<()> {
-        check_walk(self.frames, self.fps, self.far, 1.0, self.memory_budget)?;
+        self.walk.validate()?;
+        self.walk.single_pattern("view-culling")?;
         check_sweep("scale factor SF", &self.sfs, check_sf)?;
         if self.repeats == 0 {
             return Err(Error::Invalid("timing needs at least one repetition per frame".into()));
@@ -167,7 +149,7 @@ pub fn run(db: &Database, cfg: &ViewCullingConfig) -> Result<ViewCullingReport> 
 /// Runs the experiment; `progress(done, total)` is told after each scale factor.
 pub fn run_with_progress(db: &Database, cfg: &ViewCullingConfig, mut progress: impl FnMut(usize, usize)) -> Result<ViewCullingReport> {
     cfg.validate()?;
-    let path = pattern_path(db, cfg.motion, cfg.frames, cfg.fps, cfg.seed)?;
+    let path = cfg.walk.path(db, cfg.walk.single_pattern("view-culling")?)?;
     let mut rows = Vec::with_capacity(cfg.sfs.len());
     for &sf in &cfg.sfs {
         rows.push(one_sf(db, &path.poses, cfg, sf)?);
@@ -190,13 +172,13 @@ struct Sums {
 
 fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, sf: f32) -> Result<ViewCullingRow> {
     let bounds = db.bounds();
-    let mut held = Held::new(cfg.buffer, cfg.memory_budget);
+    let mut held = Held::new(cfg.buffer, cfg.walk.memory_budget);
     let mut disk: Option<Aabb> = None;
     let mut batch = Batch::default();
     let (mut queries, mut overflow_queries) = (0, 0);
     let mut sums = Sums::default();
     for pose in poses {
-        let camera = Camera { far: cfg.far, ..Camera::new(pose.position, pose.yaw, pose.pitch)? };
+        let camera = Camera { far: cfg.walk.far, ..Camera::new(pose.position, pose.yaw, pose.pitch)? };
         camera.validate()?;
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
@@ -401,18 +383,13 @@ impl ViewCullingReport {
         let c = &self.config;
         let mut s = String::from("# view-culling — objects and time removed by frustum culling (Shou 2002, Table 4.2)\n\n");
         s.push_str(&format!(
-            "One {} walk of {} frames at {} fps (seed {}), frustum {} m deep; the buffer holds {} (budget {} MiB); \
-             times are the fastest of {} repetitions per frame.\n\n",
-            c.motion.name(),
-            c.frames,
-            c.fps,
-            c.seed,
-            c.far,
+            "One {} walk: {}; the buffer holds {}; times are the fastest of {} repetitions per frame.\n\n",
+            c.walk.patterns.iter().map(|p| p.name()).collect::<Vec<_>>().join(", "),
+            c.walk.describe(),
             match c.buffer {
                 BufferModel::Cell => "the current disk cell's objects",
                 BufferModel::Review => "what REVIEW's buffer holds (every loaded object until over budget, then the latest cell's)",
             },
-            c.memory_budget >> 20,
             c.repeats
         ));
         s.push_str(

@@ -89,8 +89,14 @@ impl ObjectBuffer {
     /// Fig. 4.8: keeps only the objects overlapping `cell`; if they still exceed the
     /// budget, drops the farthest from `eye` until they fit.
     pub fn evict_outside(&mut self, cell: &Aabb, eye: Vec3) -> Eviction {
+        self.evict_outside_all(std::slice::from_ref(cell), eye)
+    }
+
+    /// [`ObjectBuffer::evict_outside`] for several latest cells (the disk cell the
+    /// viewer is in and the one prefetched for it): keeps the objects overlapping any.
+    pub fn evict_outside_all(&mut self, cells: &[Aabb], eye: Vec3) -> Eviction {
         let before = self.objects.len();
-        self.objects.retain(|_, o| o.entry.bounds.overlaps(cell));
+        self.objects.retain(|_, o| cells.iter().any(|c| o.entry.bounds.overlaps(c)));
         self.bytes = self.objects.values().map(|o| o.bytes).sum();
         let mut overflow = false;
         if self.bytes > self.budget {

@@ -11,12 +11,23 @@
 //! before the viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
+//! Prefetching follows Fig. 4.11: the prefetched cell C2 is searched (CSearch against
+//! the history) while the viewer is still in C1, and its objects go into the buffer as
+//! soon as they arrive, its cell into the history; when the frustum cell leaves C1 and
+//! C2 holds it, C2 becomes the disk cell with no I/O on the viewer's thread. If the
+//! prediction was wrong, the viewer's own query is a CSearch against C1 and C2 both.
+//!
 //! Departures, named: a prefetch is started when the frustum cell, grown by one
 //! second of motion, would leave the disk cell (the thesis says "when approaching the
-//! boundary"); a prefetched result is used only if no eviction happened since it was
-//! asked for (an eviction restarts the CSearch history, so an older complement could
-//! miss objects); BOX reloads every object of its cell (the thesis's BOX has "no
-//! optimization").
+//! boundary"), and asked again from the same disk cell only when the prediction has
+//! moved by a quarter of a cell; a prefetched result is dropped if an eviction happened
+//! since it was asked for (an eviction restarts the CSearch history, so an older
+//! complement could miss objects); BOX reloads every object of its cell (the thesis's
+//! BOX has "no optimization") and has no prefetching. A walk with prefetching is paced
+//! to the path's clock (by default four times faster than real time, see
+//! [`ReviewConfig::pace`]): unpaced, the frames of a headless walk take microseconds and
+//! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
+//! first cell from nothing and is reported apart from the walk's frame times.
 
 use std::sync::mpsc;
 use std::time::Instant;
@@ -96,16 +107,28 @@ pub struct ReviewConfig {
     pub far: f32,
     /// Record the index cache's access trace (for replaying other policies and sizes).
     pub record_trace: bool,
+    /// Play the path's clock this many times faster than real time, so that the
+    /// prefetch thread has the time a viewer would give it (scaled down: a speed-up
+    /// only handicaps prefetching). `None` runs frames back to back, as fast as the CPU
+    /// goes: prefetches then rarely finish before the viewer arrives. Walks without
+    /// prefetching are never paced (nothing runs beside them).
+    pub pace: Option<f32>,
 }
 
 /// The thesis's defaults (§4.4): index cache 1 MB with distance-priority LRU, k = 0.8.
 pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
 pub const DEFAULT_K: f32 = 0.8;
-pub const DEFAULT_SF: f32 = 1.5;
+/// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
+/// on the demo city it gives the fewest pages per query of the sizes there (see
+/// `flaneur bench csearch`, Fig. 4.19) while a cell still holds the frustum for 100 m.
+pub const DEFAULT_SF: f32 = 1.2;
 pub const DEFAULT_FAR: f32 = 1000.0;
+/// Walks with prefetching play four times faster than real time by default: a
+/// minute's path in 15 s, the prefetch thread getting a quarter of a viewer's time.
+pub const DEFAULT_PACE: f32 = 4.0;
 /// The thesis capped memory at 20 MB for objects of a few hundred bytes on disk; our
 /// objects are 20 KB, so the default budget is scaled to hold a disk cell of the demo city.
-pub const DEFAULT_MEMORY_BUDGET: usize = 512 << 20;
+pub const DEFAULT_MEMORY_BUDGET: usize = 256 << 20;
 
 impl ReviewConfig {
     pub fn preset(p: Preset) -> ReviewConfig {
@@ -118,6 +141,7 @@ impl ReviewConfig {
             memory_budget: DEFAULT_MEMORY_BUDGET,
             far: DEFAULT_FAR,
             record_trace: false,
+            pace: Some(DEFAULT_PACE),
         };
         match p {
             Preset::Optimal => base,
@@ -131,10 +155,25 @@ impl ReviewConfig {
         check_sf(self.sf)?;
         if let Some(k) = self.prefetch_k {
             check_k(k)?;
+            if self.retrieval == Retrieval::Box {
+                return Err(Error::Invalid(
+                    "BOX retrieval has no prefetching (the thesis's BOX has no optimisation): leave k unset".into(),
+                ));
+            }
         }
         check_far(self.far)?;
+        if let Some(p) = self.pace {
+            check_pace(p)?;
+        }
         check_budget(self.memory_budget)
     }
+}
+
+pub(crate) fn check_pace(pace: f32) -> Result<()> {
+    if !(pace.is_finite() && pace > 0.0) {
+        return Err(Error::Invalid(format!("playback speed {pace} must be a positive factor of real time")));
+    }
+    Ok(())
 }
 
 /// The checks of a walk's settings, shared with the experiments that sweep them.
@@ -173,15 +212,24 @@ pub struct FrameStats {
     pub time: f64,
     /// Waiting for a query (synchronous, or a prefetch not yet done).
     pub query_ms: f64,
-    /// Reading and decoding meshes on this thread.
+    /// Reading and decoding meshes on this thread, and adding them to the buffer.
     pub load_ms: f64,
     pub cull_ms: f64,
     pub prep_ms: f64,
     pub frame_ms: f64,
-    /// A disk cell was queried on this frame (by this thread or taken from a prefetch).
+    /// The viewer moved to a new disk cell on this frame (queried on this thread, or
+    /// switched to a prefetched cell).
     pub queried: bool,
+    /// A query ran on this frame's thread (the viewer waited for its I/O).
+    pub sync_query: bool,
+    /// The new disk cell was one prefetched earlier.
     pub prefetch_used: bool,
+    /// A prefetch's result reached the buffer on this frame.
+    pub prefetch_adopted: bool,
+    /// Objects added to the buffer on this frame (by a query or a prefetch).
     pub objects_loaded: usize,
+    /// Objects in the buffer after loading, before culling.
+    pub objects_buffered: usize,
     pub objects_drawn: usize,
     pub triangles_drawn: u64,
     /// Objects in the view frustum that were not in memory.
@@ -195,21 +243,38 @@ pub struct FrameStats {
     pub overflow: bool,
 }
 
-/// A whole walk.
+/// A whole walk. Frame 0 loads the first disk cell from nothing (the thesis's session
+/// start); its time is reported as `initial_load_ms` and left out of the frame-time
+/// figures, which describe the walk itself.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct WalkSummary {
     pub frames: usize,
+    /// Frame 0: the first disk cell, loaded cold.
+    pub initial_load_ms: f64,
+    /// Mean, maximum and variance of the frame time, frames 1 onwards.
     pub mean_frame_ms: f64,
     pub max_frame_ms: f64,
     pub frame_ms_variance: f64,
-    /// Frames over 50 ms, the thesis's real-time limit.
+    /// Frames (from 1 on) over 50 ms, the thesis's real-time limit.
     pub frames_over_50ms: usize,
+    /// Index searches run, on either thread (each reads pages: the thesis's "query").
     pub queries: usize,
+    /// Searches on the frame thread: the viewer waited for them.
+    pub sync_queries: usize,
+    /// Prefetch results taken into the buffer.
+    pub prefetches_adopted: usize,
+    /// Prefetch results thrown away because an eviction came between.
+    pub prefetches_stale: usize,
+    /// Moves to a new disk cell.
+    pub cell_changes: usize,
+    /// Moves to a new disk cell that had been prefetched.
     pub prefetches_used: usize,
     pub index_pages: u64,
     pub mesh_pages: u64,
     /// Index pages per query.
     pub index_pages_per_query: f64,
+    /// Index and mesh pages per query: the thesis's "disk I/Os per query".
+    pub io_per_query: f64,
     pub visual_misses: u64,
     pub overflow_frames: usize,
     pub peak_buffer_bytes: usize,
@@ -230,11 +295,11 @@ impl WalkReport {
     /// One row per frame.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,prefetch_used,objects_loaded,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow\n",
+            "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow\n",
         );
         for f in &self.frames {
             s.push_str(&format!(
-                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 f.frame,
                 f.time,
                 f.frame_ms,
@@ -243,8 +308,11 @@ impl WalkReport {
                 f.cull_ms,
                 f.prep_ms,
                 f.queried as u8,
+                f.sync_query as u8,
                 f.prefetch_used as u8,
+                f.prefetch_adopted as u8,
                 f.objects_loaded,
+                f.objects_buffered,
                 f.objects_drawn,
                 f.triangles_drawn,
                 f.visual_misses,
@@ -297,7 +365,7 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
         Some(p) => p,
         None => db.store(),
     };
-    let frames = std::thread::scope(|scope| -> Result<Vec<FrameStats>> {
+    let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
         if cfg.prefetch_k.is_some() {
@@ -321,24 +389,42 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
             buffer: ObjectBuffer::new(cfg.memory_budget),
             history: History::default(),
             disk_cell: None,
+            prefetched: None,
+            last_prediction: None,
             epoch: 0,
             in_flight: None,
-            ready: None,
             req_tx: cfg.prefetch_k.map(|_| req_tx),
             res_rx,
+            counts: Counts::default(),
         };
         let mut frames = Vec::with_capacity(path.poses.len());
+        let pace = cfg.pace.filter(|_| cfg.prefetch_k.is_some());
+        let (clock, t0) = (Instant::now(), path.poses[0].time);
         for i in 0..path.poses.len() {
+            if let Some(speed) = pace {
+                let due = std::time::Duration::from_secs_f64(((path.poses[i].time - t0) / speed as f64).max(0.0));
+                if let Some(wait) = due.checked_sub(clock.elapsed()) {
+                    std::thread::sleep(wait);
+                }
+            }
             frames.push(state.frame(path, i)?);
             progress(i);
         }
         // Closing the request channel ends the prefetch thread.
         state.req_tx = None;
-        Ok(frames)
+        Ok((frames, state.counts))
     })?;
-    let summary = summarize(&frames, pool.as_ref().map(|p| p.stats()));
+    let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
     let trace = pool.as_ref().filter(|_| cfg.record_trace).map(|p| p.take_trace());
     Ok(WalkReport { config: cfg.clone(), frames, summary, trace })
+}
+
+/// Searches run along a walk, by where their results went.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    sync: usize,
+    adopted: usize,
+    stale: usize,
 }
 
 struct Walker<'a> {
@@ -347,14 +433,20 @@ struct Walker<'a> {
     cfg: &'a ReviewConfig,
     oracle: &'a Oracle,
     buffer: ObjectBuffer,
+    /// Every cell whose objects are all in the buffer (the CSearch history).
     history: History,
     disk_cell: Option<Aabb>,
+    /// The latest prefetched cell: its objects are in the buffer, the viewer not yet in it.
+    prefetched: Option<Aabb>,
+    /// Centre of the latest prefetch asked for from this disk cell.
+    last_prediction: Option<Vec3>,
+    /// Bumped by every eviction: a result asked for before it may miss objects.
     epoch: u64,
     /// The cell a prefetch is running for.
     in_flight: Option<Aabb>,
-    ready: Option<Fetched>,
     req_tx: Option<mpsc::Sender<Request>>,
     res_rx: mpsc::Receiver<Result<Fetched>>,
+    counts: Counts,
 }
 
 impl Walker<'_> {
@@ -367,34 +459,39 @@ impl Walker<'_> {
         let start = Instant::now();
         let mut stats = FrameStats { frame: i, time: pose.time, ..Default::default() };
 
-        self.collect_prefetch(false)?;
+        self.collect_prefetch(false, camera.position, &mut stats)?;
         if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
             stats.queried = true;
-            let t = Instant::now();
-            let fetched = match self.take_prefetch_for(&fcell)? {
-                Some(f) => {
+            if self.prefetched.is_none() && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell)) {
+                let t = Instant::now();
+                self.collect_prefetch(true, camera.position, &mut stats)?;
+                stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
+            }
+            match self.prefetched.filter(|p| contains_ground(p, &fcell)) {
+                Some(cell) => {
                     stats.prefetch_used = true;
-                    stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
-                    f
+                    self.enter(cell);
                 }
                 None => {
                     let cell = self.disk_cell_around(&fcell, fcell.center());
                     let req = self.request(cell);
                     let f = fetch(self.db, self.source, self.cfg.retrieval, &req)?;
-                    stats.query_ms = f.query_ms;
-                    stats.load_ms = f.load_ms;
-                    f
+                    self.counts.sync += 1;
+                    stats.sync_query = true;
+                    stats.query_ms += f.query_ms;
+                    stats.load_ms += f.load_ms;
+                    let t = Instant::now();
+                    self.adopt(f, camera.position, &mut stats);
+                    self.enter(cell);
+                    stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
                 }
-            };
-            stats.objects_loaded = fetched.objects.len();
-            let t = Instant::now();
-            self.adopt(fetched, camera.position, &mut stats);
-            stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
+            }
         }
         if let Some(k) = self.cfg.prefetch_k {
             self.maybe_prefetch(&camera, &fcell, path.velocity_at(i), k);
         }
 
+        stats.objects_buffered = self.buffer.len();
         let t = Instant::now();
         let drawn: Vec<&Loaded> = self.buffer.iter().filter(|o| frustum.overlaps_aabb(&o.entry.bounds)).collect();
         stats.cull_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -415,6 +512,13 @@ impl Walker<'_> {
         scaled_cell(&self.db.bounds(), fcell, center, self.cfg.sf)
     }
 
+    /// The viewer is now in `cell`, whose objects are all in the buffer.
+    fn enter(&mut self, cell: Aabb) {
+        self.disk_cell = Some(cell);
+        self.prefetched = None;
+        self.last_prediction = None;
+    }
+
     fn request(&self, cell: Aabb) -> Request {
         let mut history = self.history.clone();
         history.filter(&cell);
@@ -425,79 +529,98 @@ impl Walker<'_> {
         Request { cell, history: history.cells(), epoch: self.epoch, skip }
     }
 
-    /// Takes a finished (or, if it covers the frustum cell, a running) prefetch.
-    fn take_prefetch_for(&mut self, fcell: &Aabb) -> Result<Option<Fetched>> {
-        if self.ready.as_ref().is_some_and(|f| !contains_ground(&f.cell, fcell) || f.epoch != self.epoch) {
-            self.ready = None;
-        }
-        if self.ready.is_none() && self.in_flight.is_some_and(|c| contains_ground(&c, fcell)) {
-            self.collect_prefetch(true)?;
-        }
-        Ok(self.ready.take().filter(|f| contains_ground(&f.cell, fcell) && f.epoch == self.epoch))
-    }
-
-    /// Moves a finished prefetch into `ready`; with `wait`, blocks for the running one.
-    fn collect_prefetch(&mut self, wait: bool) -> Result<()> {
+    /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one.
+    fn collect_prefetch(&mut self, wait: bool, eye: Vec3, stats: &mut FrameStats) -> Result<()> {
         if self.in_flight.is_none() {
             return Ok(());
         }
+        let stopped = || Error::Invalid("the prefetch thread stopped".into());
         let got = if wait {
-            Some(self.res_rx.recv().map_err(|_| Error::Invalid("the prefetch thread stopped".into())))
+            self.res_rx.recv().map_err(|_| stopped())?
         } else {
             match self.res_rx.try_recv() {
-                Ok(r) => Some(Ok(r)),
-                Err(mpsc::TryRecvError::Empty) => None,
-                Err(mpsc::TryRecvError::Disconnected) => Some(Err(Error::Invalid("the prefetch thread stopped".into()))),
+                Ok(r) => r,
+                Err(mpsc::TryRecvError::Empty) => return Ok(()),
+                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
             }
         };
-        if let Some(r) = got {
-            self.in_flight = None;
-            self.ready = Some(r??);
+        self.in_flight = None;
+        let fetched = got?;
+        if fetched.epoch != self.epoch {
+            // An eviction came between: the complement it computed may miss objects.
+            self.counts.stale += 1;
+            return Ok(());
         }
+        let t = Instant::now();
+        self.counts.adopted += 1;
+        stats.prefetch_adopted = true;
+        let cell = fetched.cell;
+        self.adopt(fetched, eye, stats);
+        self.prefetched = Some(cell);
+        stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
 
     fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, velocity: Vec3, k: f32) {
         let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else { return };
-        if self.in_flight.is_some() || self.ready.as_ref().is_some_and(|f| f.epoch == self.epoch) {
+        if self.in_flight.is_some() {
             return;
         }
-        // Will the frustum cell leave the disk cell within a second?
+        // Will the frustum cell leave the disk cell (and the cell already prefetched)
+        // within a second?
         let ahead = Aabb { min: fcell.min.min(fcell.min + velocity), max: fcell.max.max(fcell.max + velocity) };
-        if contains_ground(&disk, &ahead) {
+        if contains_ground(&disk, &ahead) || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead)) {
             return;
         }
         let predicted = camera.far_center() + velocity * k;
         let center = Vec3::new(predicted.x, fcell.center().y, predicted.z);
         let cell = self.disk_cell_around(fcell, center);
+        // Ask again from the same disk cell only once the prediction has moved by a
+        // quarter of the cell: that bounds the prefetches per cell.
+        if let Some(last) = self.last_prediction {
+            let quarter = cell.extent() * 0.25;
+            if (center.x - last.x).abs() < quarter.x && (center.z - last.z).abs() < quarter.z {
+                return;
+            }
+        }
         let req = self.request(cell);
         if tx.send(req).is_ok() {
             self.in_flight = Some(cell);
+            self.last_prediction = Some(center);
         }
     }
 
+    /// Takes a query's objects into the buffer and its cell into the history, evicting
+    /// by Fig. 4.8 when over budget.
     fn adopt(&mut self, fetched: Fetched, eye: Vec3, stats: &mut FrameStats) {
         let cell = fetched.cell;
         if self.cfg.retrieval == Retrieval::Box {
             // BOX keeps exactly its cell.
             self.buffer = ObjectBuffer::new(self.cfg.memory_budget);
         }
+        stats.objects_loaded += fetched.objects.len();
         for o in fetched.objects {
             self.buffer.insert(o);
         }
         self.history.filter(&cell);
         self.history.record(cell, &fetched.retrieved);
-        self.disk_cell = Some(cell);
         if self.buffer.over_budget() {
-            let e = self.buffer.evict_outside(&cell, eye);
-            stats.evicted = e.evicted;
-            stats.overflow = e.overflow;
-            // Restart the history at the cell whose objects the buffer now holds.
-            let kept: Vec<ObjectEntry> = self.buffer.iter().map(|o| o.entry).collect();
+            // Keep the cell the viewer is in as well as the new one (a prefetch lands
+            // before the viewer gets there).
+            let keep: Vec<Aabb> = self.disk_cell.filter(|d| *d != cell).into_iter().chain([cell]).collect();
+            let e = self.buffer.evict_outside_all(&keep, eye);
+            stats.evicted += e.evicted;
+            stats.overflow |= e.overflow;
+            // Restart the history at the cells whose objects the buffer now holds.
             self.history.clear();
-            self.history.record(cell, &kept);
+            for c in &keep {
+                let kept: Vec<ObjectEntry> = self.buffer.iter().map(|o| o.entry).filter(|o| o.bounds.overlaps(c)).collect();
+                self.history.record(*c, &kept);
+            }
             self.epoch += 1;
-            self.ready = None;
+            if self.prefetched.is_some_and(|p| p != cell) {
+                self.prefetched = None;
+            }
         }
     }
 }
@@ -554,22 +677,31 @@ impl Oracle {
     }
 }
 
-fn summarize(frames: &[FrameStats], cache: Option<CacheStats>) -> WalkSummary {
-    let n = frames.len().max(1) as f64;
-    let mean = frames.iter().map(|f| f.frame_ms).sum::<f64>() / n;
-    let queries = frames.iter().filter(|f| f.queried).count();
+fn summarize(frames: &[FrameStats], counts: Counts, cache: Option<CacheStats>) -> WalkSummary {
+    let walk = frames.get(1..).unwrap_or_default();
+    let n = walk.len().max(1) as f64;
+    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let queries = counts.sync + counts.adopted + counts.stale;
     let index_pages: u64 = frames.iter().map(|f| f.index_pages).sum();
+    let mesh_pages: u64 = frames.iter().map(|f| f.mesh_pages).sum();
+    let per_query = |pages: u64| if queries == 0 { 0.0 } else { pages as f64 / queries as f64 };
     WalkSummary {
         frames: frames.len(),
+        initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
         mean_frame_ms: mean,
-        max_frame_ms: frames.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
-        frame_ms_variance: frames.iter().map(|f| (f.frame_ms - mean).powi(2)).sum::<f64>() / n,
-        frames_over_50ms: frames.iter().filter(|f| f.frame_ms > 50.0).count(),
+        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
+        frame_ms_variance: walk.iter().map(|f| (f.frame_ms - mean).powi(2)).sum::<f64>() / n,
+        frames_over_50ms: walk.iter().filter(|f| f.frame_ms > 50.0).count(),
         queries,
+        sync_queries: counts.sync,
+        prefetches_adopted: counts.adopted,
+        prefetches_stale: counts.stale,
+        cell_changes: frames.iter().filter(|f| f.queried).count(),
         prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
         index_pages,
-        mesh_pages: frames.iter().map(|f| f.mesh_pages).sum(),
-        index_pages_per_query: if queries == 0 { 0.0 } else { index_pages as f64 / queries as f64 },
+        mesh_pages,
+        index_pages_per_query: per_query(index_pages),
+        io_per_query: per_query(index_pages + mesh_pages),
         visual_misses: frames.iter().map(|f| f.visual_misses as u64).sum(),
         overflow_frames: frames.iter().filter(|f| f.overflow).count(),
         peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
