@@ -63,6 +63,9 @@ pub struct PrefetchKRow {
     pub queries: usize,
     /// Queries answered by a prefetch.
     pub prefetches_used: usize,
+    /// Queries the viewer's thread ran itself (it waited for their I/O): what a good
+    /// prediction avoids. A count, less noisy than the times.
+    pub sync_queries: usize,
     pub index_pages: u64,
     pub mesh_pages: u64,
 }
@@ -78,6 +81,7 @@ impl PrefetchKRow {
             mean_query_ms: mean_query_ms(w),
             queries: s.queries,
             prefetches_used: s.prefetches_used,
+            sync_queries: s.sync_queries,
             index_pages: s.index_pages,
             mesh_pages: s.mesh_pages,
         }
@@ -123,11 +127,11 @@ impl PrefetchKReport {
     /// One line per walk.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "pattern,k,mean_frame_ms,frame_ms_variance,mean_query_ms,queries,prefetches_used,index_pages,mesh_pages\n",
+            "pattern,k,mean_frame_ms,frame_ms_variance,mean_query_ms,queries,prefetches_used,sync_queries,index_pages,mesh_pages\n",
         );
         for r in &self.rows {
             s.push_str(&format!(
-                "{},{},{:.4},{:.4},{:.4},{},{},{},{}\n",
+                "{},{},{:.4},{:.4},{:.4},{},{},{},{},{}\n",
                 r.pattern.name(),
                 r.k,
                 r.mean_frame_ms,
@@ -135,6 +139,7 @@ impl PrefetchKReport {
                 r.mean_query_ms,
                 r.queries,
                 r.prefetches_used,
+                r.sync_queries,
                 r.index_pages,
                 r.mesh_pages
             ));
@@ -223,6 +228,12 @@ impl PrefetchKReport {
             }
             s.push('\n');
         }
+        s.push_str(&format!("Queries the viewer's thread ran itself (a prediction that held spares one):\n\n{head}"));
+        for &p in &c.walk.patterns {
+            let cells: Vec<String> = self.rows_of(p).map(|r| r.sync_queries.to_string()).collect();
+            s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
+        }
+        s.push('\n');
         s.push_str("| pattern | best k (frame time) | mean frame ms there | best k (query time) | queries | prefetches used |\n|---|---|---|---|---|---|\n");
         for &p in &c.walk.patterns {
             let Some(best) = self.best(p, |r| r.mean_frame_ms) else { continue };
