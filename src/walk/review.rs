@@ -119,8 +119,9 @@ pub struct ReviewConfig {
 pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
 pub const DEFAULT_K: f32 = 0.8;
 /// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
-/// on the demo city it gives the fewest pages per query of the sizes there (see
-/// `flaneur bench csearch`, Fig. 4.19) while a cell still holds the frustum for 100 m.
+/// on the demo city's pattern table (`flaneur bench patterns`) it gave Optimal 4-14 % of
+/// BOX's disk I/Os per query, where 1.5 gave 9-28 % (and a slow walker no query at all
+/// after the first), while a cell still holds the frustum for 100 m of forward motion.
 pub const DEFAULT_SF: f32 = 1.2;
 pub const DEFAULT_FAR: f32 = 1000.0;
 /// Walks with prefetching play four times faster than real time by default: a
