@@ -120,8 +120,9 @@ pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
 pub const DEFAULT_K: f32 = 0.8;
 /// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
 /// on the demo city's pattern table (`flaneur bench patterns`) it gave Optimal 4-14 % of
-/// BOX's disk I/Os per query, where 1.5 gave 9-28 % (and a slow walker no query at all
-/// after the first), while a cell still holds the frustum for 100 m of forward motion.
+/// BOX's disk I/Os per query, where 1.5 gave a normal walk 24 % and a slow one no query
+/// after the first in a minute, while a cell still holds the frustum for 100 m of
+/// forward motion.
 pub const DEFAULT_SF: f32 = 1.2;
 pub const DEFAULT_FAR: f32 = 1000.0;
 /// Walks with prefetching play four times faster than real time by default: a
