@@ -20,9 +20,20 @@ const HEIGHT: u32 = 3;
 /// A tree-like hint for page index `i`: index 0 is the root, every 32nd an internal
 /// node, the rest leaves, laid out on a 10 m grid.
 fn hint(i: u64) -> Hint {
-    let level = if i == 0 { 2 } else if i % 32 == 0 { 1 } else { 0 };
+    let level = if i == 0 {
+        2
+    } else if i % 32 == 0 {
+        1
+    } else {
+        0
+    };
     let (x, z) = ((i % 128) as f32 * 10.0, (i / 128) as f32 * 10.0);
-    Hint { level, height: HEIGHT, mbr: Aabb::new([x, 0.0, z], [x + 10.0, 30.0, z + 10.0]).unwrap(), dov: (i % 97) as f32 / 970.0 }
+    Hint {
+        level,
+        height: HEIGHT,
+        mbr: Aabb::new([x, 0.0, z], [x + 10.0, 30.0, z + 10.0]).unwrap(),
+        dov: (i % 97) as f32 / 970.0,
+    }
 }
 
 fn query(step: u64) -> Aabb {
@@ -46,10 +57,12 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("cache_get_256_pages");
     for policy in POLICY_NAMES {
         g.bench_function(BenchmarkId::new("hit", policy), |b| {
-            let pool = BufferPool::new(&store, CAPACITY * PAGE, policy_by_name(policy).unwrap()).unwrap();
+            let pool =
+                BufferPool::new(&store, CAPACITY * PAGE, policy_by_name(policy).unwrap()).unwrap();
             let mut buf = Vec::with_capacity(PAGE);
             for i in 0..CAPACITY as u64 {
-                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf).unwrap();
+                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf)
+                    .unwrap();
             }
             let mut i = 0u64;
             b.iter(|| {
@@ -57,13 +70,19 @@ fn benches(c: &mut Criterion) {
                 if i == 0 {
                     pool.end_search();
                 }
-                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf).unwrap();
+                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf)
+                    .unwrap();
                 black_box(&buf);
             });
-            assert_eq!(pool.stats().misses, CAPACITY as u64, "{policy}: every timed get is a hit");
+            assert_eq!(
+                pool.stats().misses,
+                CAPACITY as u64,
+                "{policy}: every timed get is a hit"
+            );
         });
         g.bench_function(BenchmarkId::new("miss", policy), |b| {
-            let pool = BufferPool::new(&store, CAPACITY * PAGE, policy_by_name(policy).unwrap()).unwrap();
+            let pool =
+                BufferPool::new(&store, CAPACITY * PAGE, policy_by_name(policy).unwrap()).unwrap();
             let mut buf = Vec::with_capacity(PAGE);
             let mut i = 0u64;
             b.iter(|| {
@@ -73,7 +92,8 @@ fn benches(c: &mut Criterion) {
                     pool.end_search();
                     pool.begin_search(&query(i / 64));
                 }
-                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf).unwrap();
+                pool.get(first + i, PageKind::RtreeNode, &hints[i as usize], &mut buf)
+                    .unwrap();
                 black_box(&buf);
             });
             let s = pool.stats();

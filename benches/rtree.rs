@@ -26,16 +26,41 @@ fn fixture() -> Fixture {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("bench.scene");
     let path = dir.path().join("bench.flaneur");
-    citygen::write_city(&citygen::CityConfig { objects: OBJECTS, landmarks: 0.0, ..Default::default() }, &scene, false).unwrap();
+    citygen::write_city(
+        &citygen::CityConfig {
+            objects: OBJECTS,
+            landmarks: 0.0,
+            ..Default::default()
+        },
+        &scene,
+        false,
+    )
+    .unwrap();
     flaneur::build_from_scene(&scene, &path, &BuildOptions::default()).unwrap();
     let db = Database::open(&path).unwrap();
     let walk = street_walk(&db.bounds(), 200, 25.0, 24, 1).unwrap();
-    let cells = walk.positions.iter().map(|p| disk_cell(*p, 500.0, &db.bounds()).unwrap()).collect();
+    let cells = walk
+        .positions
+        .iter()
+        .map(|p| disk_cell(*p, 500.0, &db.bounds()).unwrap())
+        .collect();
     let all = db.range(&db.bounds()).unwrap().objects;
     let rstar = RTree::bulk_load(
-        all.iter().map(|o| GeomWithData::new(Rectangle::from_corners(o.bounds.min.to_array(), o.bounds.max.to_array()), o.id)).collect(),
+        all.iter()
+            .map(|o| {
+                GeomWithData::new(
+                    Rectangle::from_corners(o.bounds.min.to_array(), o.bounds.max.to_array()),
+                    o.id,
+                )
+            })
+            .collect(),
     );
-    Fixture { _dir: dir, db, cells, rstar }
+    Fixture {
+        _dir: dir,
+        db,
+        cells,
+        rstar,
+    }
 }
 
 fn benches(c: &mut Criterion) {
@@ -67,7 +92,12 @@ fn benches(c: &mut Criterion) {
         b.iter(|| {
             for cell in &f.cells {
                 let q = AABB::from_corners(cell.min.to_array(), cell.max.to_array());
-                black_box(f.rstar.locate_in_envelope_intersecting(&q).map(|g| g.data).collect::<Vec<u64>>());
+                black_box(
+                    f.rstar
+                        .locate_in_envelope_intersecting(&q)
+                        .map(|g| g.data)
+                        .collect::<Vec<u64>>(),
+                );
             }
         })
     });

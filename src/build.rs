@@ -33,7 +33,12 @@ pub struct BuildOptions {
 
 impl Default for BuildOptions {
     fn default() -> BuildOptions {
-        BuildOptions { page_size: 4096, fill: DEFAULT_FILL, insertion: false, progress: false }
+        BuildOptions {
+            page_size: 4096,
+            fill: DEFAULT_FILL,
+            insertion: false,
+            progress: false,
+        }
     }
 }
 
@@ -52,7 +57,10 @@ pub struct BuildSummary {
 pub fn build_from_scene(scene: &Path, db: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     let reader = SceneReader::open(scene)?;
     let total = reader.object_count();
-    let objects = reader.map(|r| r.map(|o| (o.id, o.kind.as_u8(), o.mesh)).map_err(Error::from));
+    let objects = reader.map(|r| {
+        r.map(|o| (o.id, o.kind.as_u8(), o.mesh))
+            .map_err(Error::from)
+    });
     build(objects, Some(total), db, opts)
 }
 
@@ -67,7 +75,10 @@ pub fn build_from_obj(files: &[PathBuf], db: &Path, opts: &BuildOptions) -> Resu
         meshes.extend(load_obj(f)?.into_iter().map(|(_, m)| m));
     }
     let total = meshes.len() as u64;
-    let objects = meshes.into_iter().enumerate().map(|(i, m)| Ok((i as u64, KIND_IMPORTED, m)));
+    let objects = meshes
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| Ok((i as u64, KIND_IMPORTED, m)));
     build(objects, Some(total), db, opts)
 }
 
@@ -125,12 +136,24 @@ fn build(
 }
 
 /// Writes one object's mesh and returns its index entry.
-pub(crate) fn write_object(store: &mut Store, id: u64, kind: u8, mesh: &Mesh) -> Result<ObjectEntry> {
-    mesh.validate().map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
+pub(crate) fn write_object(
+    store: &mut Store,
+    id: u64,
+    kind: u8,
+    mesh: &Mesh,
+) -> Result<ObjectEntry> {
+    mesh.validate()
+        .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
     let (min, max) = mesh.bounds();
     let bounds = Aabb::new(min, max).map_err(|e| Error::Invalid(format!("object {id}: {e}")))?;
     let mesh_extent: Extent = store.append_extent(PageKind::Mesh, &encode_mesh(mesh))?;
-    Ok(ObjectEntry { id, bounds, mesh: mesh_extent, triangles: mesh.triangle_count() as u32, kind })
+    Ok(ObjectEntry {
+        id,
+        bounds,
+        mesh: mesh_extent,
+        triangles: mesh.triangle_count() as u32,
+        kind,
+    })
 }
 
 fn progress_bar(show: bool, total: Option<u64>) -> ProgressBar {
@@ -139,9 +162,10 @@ fn progress_bar(show: bool, total: Option<u64>) -> ProgressBar {
     }
     let bar = ProgressBar::new(total.unwrap_or(0));
     bar.set_style(
-        ProgressStyle::with_template("building {bar:40} {pos}/{len} objects ({per_sec}, eta {eta})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "building {bar:40} {pos}/{len} objects ({per_sec}, eta {eta})",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar
 }
-

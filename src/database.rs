@@ -78,19 +78,40 @@ impl Database {
             what: format!("it has no '{name}' segment"),
         };
         let h = store.header();
-        let objects = h.segment(OBJECTS_SEGMENT).ok_or_else(|| missing(OBJECTS_SEGMENT))?.clone();
-        let bounds = h.segment(BOUNDS_SEGMENT).ok_or_else(|| missing(BOUNDS_SEGMENT))?;
-        let kinds = h.segment(KINDS_SEGMENT).ok_or_else(|| missing(KINDS_SEGMENT))?;
+        let objects = h
+            .segment(OBJECTS_SEGMENT)
+            .ok_or_else(|| missing(OBJECTS_SEGMENT))?
+            .clone();
+        let bounds = h
+            .segment(BOUNDS_SEGMENT)
+            .ok_or_else(|| missing(BOUNDS_SEGMENT))?;
+        let kinds = h
+            .segment(KINDS_SEGMENT)
+            .ok_or_else(|| missing(KINDS_SEGMENT))?;
         let bounds = unpack_bounds(bounds);
-        let kinds = KindCounts { rtree: kinds.a, mesh: kinds.b, meta: kinds.c };
+        let kinds = KindCounts {
+            rtree: kinds.a,
+            mesh: kinds.b,
+            meta: kinds.c,
+        };
         if objects.a != tree.objects {
             return Err(Error::CorruptPage {
                 path: store.path().to_path_buf(),
                 page: 0,
-                what: format!("header counts {} objects but the R-tree {}", objects.a, tree.objects),
+                what: format!(
+                    "header counts {} objects but the R-tree {}",
+                    objects.a, tree.objects
+                ),
             });
         }
-        Ok(Database { tree, objects: objects.a, triangles: objects.b, bounds, kinds, store })
+        Ok(Database {
+            tree,
+            objects: objects.a,
+            triangles: objects.b,
+            bounds,
+            kinds,
+            store,
+        })
     }
 
     /// BOX: every object whose box overlaps `query`.
@@ -105,11 +126,17 @@ impl Database {
 
     /// One CSearch step of a walk, filtering and extending `history`.
     pub fn csearch_step(&self, history: &mut History, cell: &Aabb) -> Result<QueryResult> {
-        self.tree.csearch_step(&self.store, history, cell, Coverlap::default())
+        self.tree
+            .csearch_step(&self.store, history, cell, Coverlap::default())
     }
 
     /// CSearch with an explicit descent rule; same result, different pages.
-    pub fn csearch_with(&self, cell: &Aabb, history: &[Aabb], rule: Coverlap) -> Result<QueryResult> {
+    pub fn csearch_with(
+        &self,
+        cell: &Aabb,
+        history: &[Aabb],
+        rule: Coverlap,
+    ) -> Result<QueryResult> {
         self.tree.csearch_with(&self.store, cell, history, rule)
     }
 
@@ -137,7 +164,13 @@ impl Database {
         self.objects += 1;
         self.triangles += entry.triangles as u64;
         self.bounds = self.bounds.union(&entry.bounds);
-        save_meta(&mut self.store, self.objects, self.triangles, &self.bounds, &self.kinds)?;
+        save_meta(
+            &mut self.store,
+            self.objects,
+            self.triangles,
+            &self.bounds,
+            &self.kinds,
+        )?;
         self.store.flush()?;
         Ok(entry)
     }
@@ -196,11 +229,32 @@ impl Database {
     }
 }
 
-pub(crate) fn save_meta(store: &mut Store, objects: u64, triangles: u64, bounds: &Aabb, kinds: &KindCounts) -> Result<()> {
-    store.set_segment(Segment { name: OBJECTS_SEGMENT.into(), a: objects, b: triangles, c: 0 })?;
+pub(crate) fn save_meta(
+    store: &mut Store,
+    objects: u64,
+    triangles: u64,
+    bounds: &Aabb,
+    kinds: &KindCounts,
+) -> Result<()> {
+    store.set_segment(Segment {
+        name: OBJECTS_SEGMENT.into(),
+        a: objects,
+        b: triangles,
+        c: 0,
+    })?;
     let [a, b, c] = pack_bounds(bounds);
-    store.set_segment(Segment { name: BOUNDS_SEGMENT.into(), a, b, c })?;
-    store.set_segment(Segment { name: KINDS_SEGMENT.into(), a: kinds.rtree, b: kinds.mesh, c: kinds.meta })
+    store.set_segment(Segment {
+        name: BOUNDS_SEGMENT.into(),
+        a,
+        b,
+        c,
+    })?;
+    store.set_segment(Segment {
+        name: KINDS_SEGMENT.into(),
+        a: kinds.rtree,
+        b: kinds.mesh,
+        c: kinds.meta,
+    })
 }
 
 fn pack_bounds(b: &Aabb) -> [u64; 3] {

@@ -8,7 +8,10 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 
     /// The file is not a flaneur database, or a different version of one.
     #[error("{path}: not a flaneur database: {what}")]
@@ -16,7 +19,11 @@ pub enum Error {
 
     /// A page failed its checks: checksum, kind, length or content.
     #[error("{path}: page {page} is corrupt: {what}")]
-    CorruptPage { path: PathBuf, page: u64, what: String },
+    CorruptPage {
+        path: PathBuf,
+        page: u64,
+        what: String,
+    },
 
     /// The file is shorter than its header says.
     #[error("{path}: truncated: {what}")]
@@ -38,6 +45,9 @@ pub enum Error {
 
 impl Error {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
-        Error::Io { path: path.into(), source }
+        Error::Io {
+            path: path.into(),
+            source,
+        }
     }
 }

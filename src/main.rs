@@ -22,7 +22,11 @@ use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::{Backend, BuildOptions, Database};
 
 #[derive(Parser)]
-#[command(name = "flaneur", version, about = "An urban walkthrough engine built around disk-resident spatial indexes")]
+#[command(
+    name = "flaneur",
+    version,
+    about = "An urban walkthrough engine built around disk-resident spatial indexes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -119,7 +123,7 @@ enum Command {
         /// Object buffer budget, MiB.
         #[arg(long)]
         budget_mb: Option<usize>,
-    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
+        /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
         /// to back; the prefetch thread then rarely finishes in time).
         #[arg(long, default_value_t = review::DEFAULT_PACE)]
         speed: f32,
@@ -280,7 +284,11 @@ impl WalkArgs {
             far: self.far,
             sf: self.sf,
             memory_budget: self.budget_mb.saturating_mul(1 << 20),
-            patterns: if self.patterns.is_empty() { base.patterns } else { self.patterns },
+            patterns: if self.patterns.is_empty() {
+                base.patterns
+            } else {
+                self.patterns
+            },
             pace: pace(self.speed),
         }
     }
@@ -295,9 +303,25 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo { objects, cache, frames } => demo(objects, &cache, frames),
-        Command::Build { inputs, out, page_size, fill, insertion, quiet } => {
-            let opts = BuildOptions { page_size, fill, insertion, progress: !quiet };
+        Command::Demo {
+            objects,
+            cache,
+            frames,
+        } => demo(objects, &cache, frames),
+        Command::Build {
+            inputs,
+            out,
+            page_size,
+            fill,
+            insertion,
+            quiet,
+        } => {
+            let opts = BuildOptions {
+                page_size,
+                fill,
+                insertion,
+                progress: !quiet,
+            };
             let summary = build(&inputs, &out, &opts)?;
             println!(
                 "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, {:.1} s",
@@ -312,7 +336,26 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
-        Command::Walk { db, mode, config, path, frames, fps, seed, policy, cache_bytes, k, sf, far, budget_mb, speed, csv, save_path, backend, quiet } => {
+        Command::Walk {
+            db,
+            mode,
+            config,
+            path,
+            frames,
+            fps,
+            seed,
+            policy,
+            cache_bytes,
+            k,
+            sf,
+            far,
+            budget_mb,
+            speed,
+            csv,
+            save_path,
+            backend,
+            quiet,
+        } => {
             let preset = match config {
                 Some(p) => p,
                 None => match mode.as_str() {
@@ -323,7 +366,8 @@ fn run(cli: Cli) -> Result<()> {
             };
             let mut cfg = ReviewConfig::preset(preset);
             if let Some(bytes) = cache_bytes {
-                cfg.index_cache = (bytes > 0).then(|| (policy.clone().unwrap_or_else(|| "dplru".into()), bytes));
+                cfg.index_cache =
+                    (bytes > 0).then(|| (policy.clone().unwrap_or_else(|| "dplru".into()), bytes));
             } else if let (Some(p), Some(c)) = (&policy, &mut cfg.index_cache) {
                 c.0 = p.clone();
             }
@@ -334,38 +378,104 @@ fn run(cli: Cli) -> Result<()> {
             cfg.far = far.unwrap_or(cfg.far);
             cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
             cfg.pace = pace(speed);
-            walk_cmd(&db, &cfg, &path, frames, fps, seed, csv.as_deref(), save_path.as_deref(), backend, quiet)
+            walk_cmd(
+                &db,
+                &cfg,
+                &path,
+                frames,
+                fps,
+                seed,
+                csv.as_deref(),
+                save_path.as_deref(),
+                backend,
+                quiet,
+            )
         }
-        Command::Query { db, query, history, backend, json } => run_query(&db, &query, &history, backend, json),
+        Command::Query {
+            db,
+            query,
+            history,
+            backend,
+            json,
+        } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
             Experiment::PrefetchK { db, walk, ks, out } => {
                 let d = PrefetchKConfig::default();
-                let cfg = PrefetchKConfig { walk: walk.setup(d.walk), ks: if ks.is_empty() { d.ks } else { ks } };
+                let cfg = PrefetchKConfig {
+                    walk: walk.setup(d.walk),
+                    ks: if ks.is_empty() { d.ks } else { ks },
+                };
                 let db = Database::open(&db)?;
                 let r = prefetch_k::run(&db, &cfg)?;
-                write_experiment(&out, "prefetch-k", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+                write_experiment(&out, "prefetch-k", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
             }
             Experiment::ViewCulling { db, walk, sfs, out } => {
                 let d = ViewCullingConfig::default();
-                let cfg = ViewCullingConfig { walk: walk.setup(d.walk), sfs: if sfs.is_empty() { d.sfs } else { sfs }, ..d };
+                let cfg = ViewCullingConfig {
+                    walk: walk.setup(d.walk),
+                    sfs: if sfs.is_empty() { d.sfs } else { sfs },
+                    ..d
+                };
                 let db = Database::open(&db)?;
                 let r = view_culling::run(&db, &cfg)?;
-                write_experiment(&out, "view-culling", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+                write_experiment(&out, "view-culling", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
             }
             Experiment::Patterns { db, walk, out } => {
                 let d = PatternsConfig::default();
-                let cfg = PatternsConfig { walk: walk.setup(d.walk), ..d };
+                let cfg = PatternsConfig {
+                    walk: walk.setup(d.walk),
+                    ..d
+                };
                 let db = Database::open(&db)?;
                 let r = patterns::run(&db, &cfg)?;
-                write_experiment(&out, "patterns", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+                write_experiment(&out, "patterns", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
             }
-            Experiment::IndexCache { db, walk, sizes, out } => {
-                let cfg = IndexCacheConfig { walk: walk.setup(IndexCacheConfig::default().walk), sizes };
+            Experiment::IndexCache {
+                db,
+                walk,
+                sizes,
+                out,
+            } => {
+                let cfg = IndexCacheConfig {
+                    walk: walk.setup(IndexCacheConfig::default().walk),
+                    sizes,
+                };
                 bench_index_cache(&db, &cfg, &out)
             }
-            Experiment::Csearch { db, cell, step, steps, history_len, walk, sfs, sizes, no_walks, packed_only, backend, out, verbose } => {
-                let cfg = CsearchConfig { cell, step, steps, seed: walk.seed, history_len, ..CsearchConfig::default() };
-                let walks = (!no_walks).then(|| CsearchWalks { walk: walk.setup(CellSizeConfig::default().walk), sfs, sizes });
+            Experiment::Csearch {
+                db,
+                cell,
+                step,
+                steps,
+                history_len,
+                walk,
+                sfs,
+                sizes,
+                no_walks,
+                packed_only,
+                backend,
+                out,
+                verbose,
+            } => {
+                let cfg = CsearchConfig {
+                    cell,
+                    step,
+                    steps,
+                    seed: walk.seed,
+                    history_len,
+                    ..CsearchConfig::default()
+                };
+                let walks = (!no_walks).then(|| CsearchWalks {
+                    walk: walk.setup(CellSizeConfig::default().walk),
+                    sfs,
+                    sizes,
+                });
                 bench_csearch(&db, &cfg, !packed_only, backend, &out, verbose, walks)
             }
         },
@@ -394,11 +504,28 @@ fn info(path: &Path, json: bool) -> Result<()> {
     println!("database    {}", path.display());
     println!("objects     {}", info.objects);
     println!("triangles   {}", info.triangles);
-    println!("pages       {} of {} bytes ({:.1} MiB)", info.pages, info.page_size, info.file_bytes as f64 / (1 << 20) as f64);
-    println!("  by kind   header 1, r-tree {}, mesh {}, meta {}", k.rtree, k.mesh, k.meta);
+    println!(
+        "pages       {} of {} bytes ({:.1} MiB)",
+        info.pages,
+        info.page_size,
+        info.file_bytes as f64 / (1 << 20) as f64
+    );
+    println!(
+        "  by kind   header 1, r-tree {}, mesh {}, meta {}",
+        k.rtree, k.mesh, k.meta
+    );
     let b = info.bounds;
-    println!("bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}", b[0], b[3], b[1], b[4], b[2], b[5]);
-    println!("r-tree      height {}, fan-out {} (leaf) / {} (internal), fill {:.1}%", info.tree.height, info.fanout_leaf, info.fanout_internal, info.tree.fill * 100.0);
+    println!(
+        "bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}",
+        b[0], b[3], b[1], b[4], b[2], b[5]
+    );
+    println!(
+        "r-tree      height {}, fan-out {} (leaf) / {} (internal), fill {:.1}%",
+        info.tree.height,
+        info.fanout_leaf,
+        info.fanout_internal,
+        info.tree.fill * 100.0
+    );
     for (level, (n, e)) in info.tree.nodes.iter().zip(&info.tree.entries).enumerate() {
         println!("  level {level}   {n} nodes, {e} entries");
     }
@@ -408,7 +535,11 @@ fn info(path: &Path, json: bool) -> Result<()> {
 fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bool) -> Result<()> {
     let db = Database::open_with(path, backend)?;
     let t = Instant::now();
-    let result = if history.is_empty() { db.range(q)? } else { db.csearch(q, history)? };
+    let result = if history.is_empty() {
+        db.range(q)?
+    } else {
+        db.csearch(q, history)?
+    };
     let us = t.elapsed().as_secs_f64() * 1e6;
     let io = db.io();
     if json {
@@ -449,9 +580,19 @@ impl CsearchWalks {
     /// series get the page size of the database benched.
     fn figures(self, page_size: usize) -> Result<WalkFigures> {
         let f = WalkFigures {
-            cell: CellSizeConfig { walk: self.walk.clone(), sfs: self.sfs },
-            frames: FrameTimeConfig { walk: self.walk.clone() },
-            sizes: DbSizeConfig { walk: self.walk, sizes: self.sizes, page_size, ..DbSizeConfig::default() },
+            cell: CellSizeConfig {
+                walk: self.walk.clone(),
+                sfs: self.sfs,
+            },
+            frames: FrameTimeConfig {
+                walk: self.walk.clone(),
+            },
+            sizes: DbSizeConfig {
+                walk: self.walk,
+                sizes: self.sizes,
+                page_size,
+                ..DbSizeConfig::default()
+            },
         };
         f.cell.validate()?;
         f.frames.validate()?;
@@ -460,31 +601,62 @@ impl CsearchWalks {
     }
 }
 
-fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Backend, out: &Path, verbose: bool, walks: Option<CsearchWalks>) -> Result<()> {
+fn bench_csearch(
+    path: &Path,
+    cfg: &CsearchConfig,
+    insertion: bool,
+    backend: Backend,
+    out: &Path,
+    verbose: bool,
+    walks: Option<CsearchWalks>,
+) -> Result<()> {
     let db = Database::open_with(path, backend)?;
-    let walks = walks.map(|w| w.figures(db.store().page_size())).transpose()?;
+    let walks = walks
+        .map(|w| w.figures(db.store().page_size()))
+        .transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut reports = vec![csearch::run(&db, cfg)?];
     if insertion {
-        reports.push(csearch::run_insertion_tree(&db, cfg, &out.join("insertion-tree.flaneur"))?);
+        reports.push(csearch::run_insertion_tree(
+            &db,
+            cfg,
+            &out.join("insertion-tree.flaneur"),
+        )?);
     }
-    let csv: String = reports.iter().enumerate().map(|(i, r)| {
-        let s = r.to_csv();
-        if i == 0 { s } else { s.lines().skip(1).map(|l| format!("{l}\n")).collect() }
-    }).collect();
+    let csv: String = reports
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let s = r.to_csv();
+            if i == 0 {
+                s
+            } else {
+                s.lines().skip(1).map(|l| format!("{l}\n")).collect()
+            }
+        })
+        .collect();
     let csv_path = out.join("csearch.csv");
     write_file(&csv_path, &csv)?;
-    for (r, name) in reports.iter().zip(["csearch-pages.png", "csearch-pages-insertion.png"]) {
+    for (r, name) in reports
+        .iter()
+        .zip(["csearch-pages.png", "csearch-pages-insertion.png"])
+    {
         csearch::plot(r, &out.join(name))?;
     }
     let md_path = out.join("csearch.md");
     let mut md = csearch::markdown(&reports, cfg);
     write_file(&md_path, &md)?;
-    println!("csearch: {} queries, cell {} m, step {} m, history ≤ {}", cfg.steps, cfg.cell, cfg.step, cfg.history_len);
+    println!(
+        "csearch: {} queries, cell {} m, step {} m, history ≤ {}",
+        cfg.steps, cfg.cell, cfg.step, cfg.history_len
+    );
     for r in &reports {
         print_report(r, verbose);
     }
-    println!("per-query rows in {}, plots and a summary beside it", csv_path.display());
+    println!(
+        "per-query rows in {}, plots and a summary beside it",
+        csv_path.display()
+    );
     if let Some(walks) = walks {
         // The summary is written again after each figure, so that a long run that stops
         // keeps what it measured.
@@ -494,7 +666,11 @@ fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Bac
             md.push_str(&section);
             write_file(&md_path, &md)
         })?;
-        println!("CSVs, plots and the summary ({}) in {}", md_path.display(), out.display());
+        println!(
+            "CSVs, plots and the summary ({}) in {}",
+            md_path.display(),
+            out.display()
+        );
     }
     Ok(())
 }
@@ -502,25 +678,50 @@ fn bench_csearch(path: &Path, cfg: &CsearchConfig, insertion: bool, backend: Bac
 /// Runs the figures of `bench csearch` one after the other, each writing its CSV and
 /// plots into `out` and handing its markdown section to `section`; the cities of the
 /// size series go into `out`/cities.
-fn csearch_walks(db: &Database, f: &WalkFigures, out: &Path, mut section: impl FnMut(String) -> Result<()>) -> Result<()> {
-    let r = with_bar("cell size (Fig. 4.19, 4.20)", |p| cell_size::run_with_progress(db, &f.cell, p))?;
-    write_figure(out, "csearch-cell-size", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+fn csearch_walks(
+    db: &Database,
+    f: &WalkFigures,
+    out: &Path,
+    mut section: impl FnMut(String) -> Result<()>,
+) -> Result<()> {
+    let r = with_bar("cell size (Fig. 4.19, 4.20)", |p| {
+        cell_size::run_with_progress(db, &f.cell, p)
+    })?;
+    write_figure(
+        out,
+        "csearch-cell-size",
+        &r.to_csv(),
+        |dir| Ok(r.plot(dir)?),
+    )?;
     section(r.markdown())?;
 
-    let r = with_bar("time per frame (Fig. 4.21)", |p| frame_time::run_with_progress(db, &f.frames, p))?;
-    write_figure(out, "csearch-frame-time", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+    let r = with_bar("time per frame (Fig. 4.21)", |p| {
+        frame_time::run_with_progress(db, &f.frames, p)
+    })?;
+    write_figure(out, "csearch-frame-time", &r.to_csv(), |dir| {
+        Ok(r.plot(dir)?)
+    })?;
     section(r.markdown())?;
 
-    let r = with_bar("database size (Fig. 4.22)", |p| db_size::run_with_progress(&out.join("cities"), &f.sizes, p))?;
+    let r = with_bar("database size (Fig. 4.22)", |p| {
+        db_size::run_with_progress(&out.join("cities"), &f.sizes, p)
+    })?;
     write_figure(out, "csearch-db-size", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
     section(r.markdown())
 }
 
 /// Runs `f` under a progress bar that its `progress(done, total)` moves.
-fn with_bar<T>(what: &str, f: impl FnOnce(&mut dyn FnMut(usize, usize)) -> flaneur::Result<T>) -> Result<T> {
+fn with_bar<T>(
+    what: &str,
+    f: impl FnOnce(&mut dyn FnMut(usize, usize)) -> flaneur::Result<T>,
+) -> Result<T> {
     let bar = indicatif::ProgressBar::new(1);
     bar.set_message(what.to_string());
-    bar.set_style(indicatif::ProgressStyle::with_template("{msg}: [{bar:30}] {pos}/{len} ({elapsed})").expect("a valid template").progress_chars("=> "));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg}: [{bar:30}] {pos}/{len} ({elapsed})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
     let result = f(&mut |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
@@ -530,7 +731,12 @@ fn with_bar<T>(what: &str, f: impl FnOnce(&mut dyn FnMut(usize, usize)) -> flane
 }
 
 /// Writes a figure's CSV (`name`.csv) and plots into `out`.
-fn write_figure(out: &Path, name: &str, csv: &str, plot: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+fn write_figure(
+    out: &Path,
+    name: &str,
+    csv: &str,
+    plot: impl FnOnce(&Path) -> Result<()>,
+) -> Result<()> {
     write_file(&out.join(format!("{name}.csv")), csv)?;
     plot(out)
 }
@@ -542,33 +748,79 @@ fn write_file(path: &Path, text: &str) -> Result<()> {
 fn print_report(r: &CsearchReport, verbose: bool) {
     println!("tree: {}", r.tree);
     if verbose {
-        println!("{:>5} {:>8} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8}", "step", "box pg", "cs pg", "thesis", "ratio", "box µs", "cs µs", "new");
+        println!(
+            "{:>5} {:>8} {:>8} {:>8} {:>7} {:>8} {:>8} {:>8}",
+            "step", "box pg", "cs pg", "thesis", "ratio", "box µs", "cs µs", "new"
+        );
         for row in &r.rows {
-            let ratio = if row.box_pages == 0 { 0.0 } else { row.csearch_pages as f64 / row.box_pages as f64 };
+            let ratio = if row.box_pages == 0 {
+                0.0
+            } else {
+                row.csearch_pages as f64 / row.box_pages as f64
+            };
             println!(
                 "{:>5} {:>8} {:>8} {:>8} {:>6.1}% {:>8.0} {:>8.0} {:>8}",
-                row.step, row.box_pages, row.csearch_pages, row.thesis_pages, ratio * 100.0, row.box_us, row.csearch_us, row.csearch_objects
+                row.step,
+                row.box_pages,
+                row.csearch_pages,
+                row.thesis_pages,
+                ratio * 100.0,
+                row.box_us,
+                row.csearch_us,
+                row.csearch_objects
             );
         }
     }
-    println!("  pages  BOX {}  CSearch {} ({:.1}%)  CSearch with the thesis's COverlap {} ({:.1}%)", r.box_pages, r.csearch_pages, r.ratio * 100.0, r.thesis_pages, r.thesis_ratio * 100.0);
-    println!("  time   BOX {:.1} ms  CSearch {:.1} ms  thesis COverlap {:.1} ms", r.box_ms, r.csearch_ms, r.thesis_ms);
+    println!(
+        "  pages  BOX {}  CSearch {} ({:.1}%)  CSearch with the thesis's COverlap {} ({:.1}%)",
+        r.box_pages,
+        r.csearch_pages,
+        r.ratio * 100.0,
+        r.thesis_pages,
+        r.thesis_ratio * 100.0
+    );
+    println!(
+        "  time   BOX {:.1} ms  CSearch {:.1} ms  thesis COverlap {:.1} ms",
+        r.box_ms, r.csearch_ms, r.thesis_ms
+    );
 }
 
 fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
-    std::fs::create_dir_all(cache).with_context(|| format!("creating cache folder {}", cache.display()))?;
+    std::fs::create_dir_all(cache)
+        .with_context(|| format!("creating cache folder {}", cache.display()))?;
     let scene = cache.join(format!("demo-{objects}.scene"));
     let db_path = cache.join(format!("demo-{objects}.flaneur"));
-    let city = citygen::CityConfig { objects, ..Default::default() };
+    let city = citygen::CityConfig {
+        objects,
+        ..Default::default()
+    };
     if !db_path.exists() {
         if !scene.exists() {
-            println!("generating a city of {objects} objects into {}", scene.display());
+            println!(
+                "generating a city of {objects} objects into {}",
+                scene.display()
+            );
             let s = citygen::write_city(&city, &scene, true)?;
-            println!("  {} objects, {} triangles, {:.1} MiB", s.objects, s.triangles, s.bytes as f64 / (1 << 20) as f64);
+            println!(
+                "  {} objects, {} triangles, {:.1} MiB",
+                s.objects,
+                s.triangles,
+                s.bytes as f64 / (1 << 20) as f64
+            );
         }
         println!("building {}", db_path.display());
-        let b = flaneur::build_from_scene(&scene, &db_path, &BuildOptions { progress: true, ..Default::default() })?;
-        println!("  {} pages, tree height {}, {:.1} s", b.pages, b.height, b.seconds);
+        let b = flaneur::build_from_scene(
+            &scene,
+            &db_path,
+            &BuildOptions {
+                progress: true,
+                ..Default::default()
+            },
+        )?;
+        println!(
+            "  {} pages, tree height {}, {:.1} s",
+            b.pages, b.height, b.seconds
+        );
     } else {
         println!("using {} (delete it to rebuild)", db_path.display());
     }
@@ -584,7 +836,11 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
         bar.finish_and_clear();
         println!("{}:", preset.name());
-        for f in report.frames.iter().filter(|f| f.queried || f.prefetch_adopted) {
+        for f in report
+            .frames
+            .iter()
+            .filter(|f| f.queried || f.prefetch_adopted)
+        {
             let what = match (f.sync_query, f.prefetch_used, f.prefetch_adopted) {
                 (true, ..) => "queried",
                 (false, true, _) => "entered a prefetched cell",
@@ -617,12 +873,18 @@ fn walk_cmd(
     let db = Database::open_with(path, backend)?;
     let poses = match camera.parse::<Motion>() {
         Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
-        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| format!("'{camera}' is neither a motion pattern nor a readable path file"))?,
+        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| {
+            format!("'{camera}' is neither a motion pattern nor a readable path file")
+        })?,
     };
     if let Some(p) = save_path {
         poses.save_csv(p)?;
     }
-    let bar = if quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(poses.poses.len() as u64) };
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(poses.poses.len() as u64)
+    };
     let report = review::walk(&db, &poses, cfg, |_| bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(p) = csv {
@@ -635,8 +897,13 @@ fn walk_cmd(
 fn print_walk(r: &WalkReport) {
     let s = &r.summary;
     let c = &r.config;
-    let cache = c.index_cache.as_ref().map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
-    let k = c.prefetch_k.map_or("off".to_string(), |k| format!("k = {k}"));
+    let cache = c
+        .index_cache
+        .as_ref()
+        .map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
+    let k = c
+        .prefetch_k
+        .map_or("off".to_string(), |k| format!("k = {k}"));
     let pace = match (c.prefetch_k, c.pace) {
         (Some(_), Some(p)) => format!(", played {p}x real time"),
         (Some(_), None) => ", unpaced".to_string(),
@@ -655,20 +922,38 @@ fn print_walk(r: &WalkReport) {
         "  pages read: {} index + {} mesh, {:.1} per query ({:.1} index)",
         s.index_pages, s.mesh_pages, s.io_per_query, s.index_pages_per_query
     );
-    println!("  visual misses {}   peak buffer {:.1} MiB   frames over budget {}", s.visual_misses, s.peak_buffer_bytes as f64 / (1 << 20) as f64, s.overflow_frames);
+    println!(
+        "  visual misses {}   peak buffer {:.1} MiB   frames over budget {}",
+        s.visual_misses,
+        s.peak_buffer_bytes as f64 / (1 << 20) as f64,
+        s.overflow_frames
+    );
     if let Some(cs) = &s.index_cache {
-        println!("  index cache: {} hits, {} misses, hit rate {:.1}%", cs.hits, cs.misses, cs.hit_rate() * 100.0);
+        println!(
+            "  index cache: {} hits, {} misses, hit rate {:.1}%",
+            cs.hits,
+            cs.misses,
+            cs.hit_rate() * 100.0
+        );
     }
 }
 
 fn bench_index_cache(path: &Path, cfg: &IndexCacheConfig, out: &Path) -> Result<()> {
     let db = Database::open(path)?;
     let r = index_cache::run(&db, cfg)?;
-    write_experiment(out, "index-cache", &r.to_csv(), &r.markdown(), |dir| Ok(r.plot(dir)?))
+    write_experiment(out, "index-cache", &r.to_csv(), &r.markdown(), |dir| {
+        Ok(r.plot(dir)?)
+    })
 }
 
 /// Writes an experiment's CSV, markdown summary and plots into `out`, and prints the summary.
-fn write_experiment(out: &Path, name: &str, csv: &str, markdown: &str, plot: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+fn write_experiment(
+    out: &Path,
+    name: &str,
+    csv: &str,
+    markdown: &str,
+    plot: impl FnOnce(&Path) -> Result<()>,
+) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     for (ext, text) in [("csv", csv), ("md", markdown)] {
         write_file(&out.join(format!("{name}.{ext}")), text)?;

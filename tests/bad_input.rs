@@ -10,7 +10,14 @@ use flaneur::geom::Aabb;
 use flaneur::{BuildOptions, Database, Error};
 
 fn city() -> common::City {
-    common::city(200, 3, &BuildOptions { page_size: 1024, ..Default::default() })
+    common::city(
+        200,
+        3,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    )
 }
 
 fn flip(path: &std::path::Path, offset: u64) {
@@ -29,7 +36,10 @@ fn a_flipped_byte_in_a_node_names_the_page() {
     flip(&c.db, root * page_size + 40);
     let db = Database::open(&c.db).unwrap();
     let err = db.range(&c.bounds()).unwrap_err();
-    assert!(matches!(err, Error::CorruptPage { page, .. } if page == root), "{err}");
+    assert!(
+        matches!(err, Error::CorruptPage { page, .. } if page == root),
+        "{err}"
+    );
     assert!(err.to_string().contains(&format!("page {root}")), "{err}");
 }
 
@@ -43,7 +53,10 @@ fn a_flipped_byte_in_a_mesh_names_the_page() {
     flip(&c.db, obj.mesh.first_page * page_size + 30);
     let db = Database::open(&c.db).unwrap();
     let err = db.mesh(&obj).unwrap_err();
-    assert!(matches!(err, Error::CorruptPage { page, .. } if page == obj.mesh.first_page), "{err}");
+    assert!(
+        matches!(err, Error::CorruptPage { page, .. } if page == obj.mesh.first_page),
+        "{err}"
+    );
 }
 
 #[test]
@@ -54,7 +67,9 @@ fn truncated_databases_are_errors() {
         let f = fs::OpenOptions::new().write(true).open(&c.db).unwrap();
         f.set_len(cut).unwrap();
         drop(f);
-        let err = Database::open(&c.db).err().unwrap_or_else(|| panic!("a file cut to {cut} bytes opened"));
+        let err = Database::open(&c.db)
+            .err()
+            .unwrap_or_else(|| panic!("a file cut to {cut} bytes opened"));
         let msg = err.to_string();
         assert!(msg.contains(&c.db.display().to_string()), "{msg}");
     }
@@ -64,7 +79,10 @@ fn truncated_databases_are_errors() {
 fn bad_magic_and_foreign_files_are_errors() {
     let c = city();
     flip(&c.db, 0);
-    assert!(matches!(Database::open(&c.db), Err(Error::NotADatabase { .. })));
+    assert!(matches!(
+        Database::open(&c.db),
+        Err(Error::NotADatabase { .. })
+    ));
     let text = c.dir.path().join("notes.txt");
     fs::write(&text, "hello, this is not a database at all\n".repeat(200)).unwrap();
     assert!(Database::open(&text).is_err());
@@ -75,12 +93,21 @@ fn bad_magic_and_foreign_files_are_errors() {
 fn bad_boxes_are_errors() {
     let c = city();
     let db = Database::open(&c.db).unwrap();
-    let nan = Aabb { min: glam::Vec3::new(f32::NAN, 0.0, 0.0), max: glam::Vec3::ONE };
-    let inverted = Aabb { min: glam::Vec3::ONE, max: glam::Vec3::ZERO };
+    let nan = Aabb {
+        min: glam::Vec3::new(f32::NAN, 0.0, 0.0),
+        max: glam::Vec3::ONE,
+    };
+    let inverted = Aabb {
+        min: glam::Vec3::ONE,
+        max: glam::Vec3::ZERO,
+    };
     for bad in [nan, inverted] {
         assert!(matches!(db.range(&bad), Err(Error::BadBox(_))));
         assert!(matches!(db.csearch(&bad, &[]), Err(Error::BadBox(_))));
-        assert!(matches!(db.csearch(&c.bounds(), &[bad]), Err(Error::BadBox(_))));
+        assert!(matches!(
+            db.csearch(&c.bounds(), &[bad]),
+            Err(Error::BadBox(_))
+        ));
     }
 }
 
@@ -95,9 +122,14 @@ fn malformed_obj_files_are_errors_naming_the_file() {
     ];
     for (name, text) in cases {
         let obj = dir.path().join(name);
-        fs::File::create(&obj).unwrap().write_all(text.as_bytes()).unwrap();
+        fs::File::create(&obj)
+            .unwrap()
+            .write_all(text.as_bytes())
+            .unwrap();
         let out = dir.path().join("out.flaneur");
-        let err = flaneur::build_from_obj(std::slice::from_ref(&obj), &out, &BuildOptions::default()).err();
+        let err =
+            flaneur::build_from_obj(std::slice::from_ref(&obj), &out, &BuildOptions::default())
+                .err();
         let err = err.unwrap_or_else(|| panic!("{name} built"));
         assert!(err.to_string().contains(name), "{name}: {err}");
         assert!(!out.exists(), "{name}: a failed build left a database");

@@ -14,7 +14,14 @@ use flaneur::{BuildOptions, Database};
 const PAGE: usize = 1024;
 
 fn small_city() -> (common::City, Database) {
-    let city = common::city(3000, 5, &BuildOptions { page_size: PAGE, ..Default::default() });
+    let city = common::city(
+        3000,
+        5,
+        &BuildOptions {
+            page_size: PAGE,
+            ..Default::default()
+        },
+    );
     let db = Database::open(&city.db).unwrap();
     (city, db)
 }
@@ -24,16 +31,30 @@ fn walk_cells(db: &Database) -> Vec<(Aabb, Aabb)> {
     let path = street_walk(&db.bounds(), 200, 15.0, 10, 3).unwrap();
     path.positions
         .iter()
-        .map(|eye| (disk_cell(*eye, 300.0, &db.bounds()).unwrap(), disk_cell(*eye, 120.0, &db.bounds()).unwrap()))
+        .map(|eye| {
+            (
+                disk_cell(*eye, 300.0, &db.bounds()).unwrap(),
+                disk_cell(*eye, 120.0, &db.bounds()).unwrap(),
+            )
+        })
         .collect()
 }
 
 /// Runs the walk through `pages`, calling `after` after every query.
-fn walk<P: PageSource + ?Sized>(db: &Database, pages: &P, cells: &[(Aabb, Aabb)], mut after: impl FnMut()) -> Vec<QueryResult> {
+fn walk<P: PageSource + ?Sized>(
+    db: &Database,
+    pages: &P,
+    cells: &[(Aabb, Aabb)],
+    mut after: impl FnMut(),
+) -> Vec<QueryResult> {
     let mut history = History::default();
     let mut out = Vec::new();
     for (disk, view) in cells {
-        out.push(db.tree().csearch_step(pages, &mut history, disk, Coverlap::default()).unwrap());
+        out.push(
+            db.tree()
+                .csearch_step(pages, &mut history, disk, Coverlap::default())
+                .unwrap(),
+        );
         after();
         out.push(db.tree().range(pages, view).unwrap());
         after();
@@ -43,13 +64,25 @@ fn walk<P: PageSource + ?Sized>(db: &Database, pages: &P, cells: &[(Aabb, Aabb)]
 
 /// The walk through a fresh pool of `capacity` pages with `policy`: its results,
 /// counts and trace.
-fn live(db: &Database, cells: &[(Aabb, Aabb)], policy: &str, capacity: usize) -> (Vec<QueryResult>, CacheStats, Trace) {
-    let pool = BufferPool::new(db.store(), capacity * PAGE, policy_by_name(policy).unwrap()).unwrap();
+fn live(
+    db: &Database,
+    cells: &[(Aabb, Aabb)],
+    policy: &str,
+    capacity: usize,
+) -> (Vec<QueryResult>, CacheStats, Trace) {
+    let pool =
+        BufferPool::new(db.store(), capacity * PAGE, policy_by_name(policy).unwrap()).unwrap();
     pool.set_trace(true);
     db.reset_io();
-    let results = walk(db, &pool, cells, || assert!(pool.resident_bytes() <= pool.budget_bytes()));
+    let results = walk(db, &pool, cells, || {
+        assert!(pool.resident_bytes() <= pool.budget_bytes())
+    });
     let stats = pool.stats();
-    assert_eq!(db.io().page_reads, stats.misses, "{policy} at {capacity} pages: physical reads against misses");
+    assert_eq!(
+        db.io().page_reads,
+        stats.misses,
+        "{policy} at {capacity} pages: physical reads against misses"
+    );
     (results, stats, pool.take_trace())
 }
 
@@ -74,7 +107,12 @@ fn a_trace_survives_csv_and_no_policy_beats_belady() {
     let (city, db) = small_city();
     let cells = walk_cells(&db);
     let (_, _, trace) = live(&db, &cells, "lru", 16);
-    assert!(trace.len() > 500 && trace.distinct_pages() > 40, "{} accesses of {} pages", trace.len(), trace.distinct_pages());
+    assert!(
+        trace.len() > 500 && trace.distinct_pages() > 40,
+        "{} accesses of {} pages",
+        trace.len(),
+        trace.distinct_pages()
+    );
     let path = city.dir.path().join("walk.trace.csv");
     trace.write_csv(&path).unwrap();
     let back = Trace::read_csv(&path).unwrap();
@@ -96,7 +134,10 @@ fn a_trace_survives_csv_and_no_policy_beats_belady() {
     // With room for every page, every policy misses each page once.
     let all = back.distinct_pages();
     for policy in POLICY_NAMES {
-        assert_eq!(back.replay(policy_by_name(policy).unwrap(), all).misses, all as u64);
+        assert_eq!(
+            back.replay(policy_by_name(policy).unwrap(), all).misses,
+            all as u64
+        );
     }
 }
 
@@ -109,8 +150,15 @@ fn a_replay_gives_the_live_pools_counts() {
         let mut trace = None;
         for policy in POLICY_NAMES {
             let (_, stats, t) = live(&db, &cells, policy, capacity);
-            assert_eq!(t.replay(policy_by_name(policy).unwrap(), capacity), stats, "{policy} at {capacity} pages");
-            report += &format!("{capacity:>4} pages  {policy:<8} hit rate {:.4}  ({stats:?})\n", stats.hit_rate());
+            assert_eq!(
+                t.replay(policy_by_name(policy).unwrap(), capacity),
+                stats,
+                "{policy} at {capacity} pages"
+            );
+            report += &format!(
+                "{capacity:>4} pages  {policy:<8} hit rate {:.4}  ({stats:?})\n",
+                stats.hit_rate()
+            );
             // The access sequence does not depend on the policy.
             if let Some(prev) = &trace {
                 assert_eq!(&t, prev);
@@ -118,7 +166,11 @@ fn a_replay_gives_the_live_pools_counts() {
             trace = Some(t);
         }
         let best = belady::replay(trace.as_ref().unwrap(), capacity);
-        report += &format!("{capacity:>4} pages  {:<8} hit rate {:.4}  ({best:?})\n", "belady", best.hit_rate());
+        report += &format!(
+            "{capacity:>4} pages  {:<8} hit rate {:.4}  ({best:?})\n",
+            "belady",
+            best.hit_rate()
+        );
     }
     // Shown with --nocapture: the figures the policies reach on this walk.
     eprintln!("{report}");

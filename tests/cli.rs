@@ -7,36 +7,98 @@ use std::process::Command;
 use flaneur::BuildOptions;
 
 fn flaneur(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_flaneur")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 #[test]
 fn build_info_query() {
     let c = common::city(300, 2, &BuildOptions::default());
     let db = c.dir.path().join("cli.flaneur");
-    let out = flaneur(&["build", c.scene.to_str().unwrap(), "--out", db.to_str().unwrap(), "--quiet"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = flaneur(&[
+        "build",
+        c.scene.to_str().unwrap(),
+        "--out",
+        db.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("300 objects"));
 
     let out = flaneur(&["info", db.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success() && text.contains("objects     300") && text.contains("height"), "{text}");
+    assert!(
+        out.status.success() && text.contains("objects     300") && text.contains("height"),
+        "{text}"
+    );
     let out = flaneur(&["info", db.to_str().unwrap(), "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["objects"], 300);
 
     let b = c.bounds();
-    let q = format!("{},{},{},{},{},{}", b.min.x, b.min.y, b.min.z, b.center().x, b.max.y, b.center().z);
-    let h = format!("{},{},{},{},{},{}", b.min.x, b.min.y, b.min.z, b.min.x + 50.0, b.max.y, b.max.z);
-    let out = flaneur(&["query", db.to_str().unwrap(), "--box", &q, "--history", &h, "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let q = format!(
+        "{},{},{},{},{},{}",
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.center().x,
+        b.max.y,
+        b.center().z
+    );
+    let h = format!(
+        "{},{},{},{},{},{}",
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.min.x + 50.0,
+        b.max.y,
+        b.max.z
+    );
+    let out = flaneur(&[
+        "query",
+        db.to_str().unwrap(),
+        "--box",
+        &q,
+        "--history",
+        &h,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let ids: Vec<u64> = v["ids"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
-    assert_eq!(ids, c.brute_complement(&q.parse().unwrap(), &[h.parse().unwrap()]));
+    let ids: Vec<u64> = v["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert_eq!(
+        ids,
+        c.brute_complement(&q.parse().unwrap(), &[h.parse().unwrap()])
+    );
     assert_eq!(v["query"], "csearch");
-    assert_eq!(v["pages"].as_array().unwrap().len() as u64, v["page_reads"].as_u64().unwrap());
+    assert_eq!(
+        v["pages"].as_array().unwrap().len() as u64,
+        v["page_reads"].as_u64().unwrap()
+    );
 
-    let out = flaneur(&["query", db.to_str().unwrap(), "--box", &q, "--backend", "pread"]);
+    let out = flaneur(&[
+        "query",
+        db.to_str().unwrap(),
+        "--box",
+        &q,
+        "--backend",
+        "pread",
+    ]);
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("pages read"));
 }
@@ -63,50 +125,135 @@ fn errors_are_messages_not_panics() {
 
 #[test]
 fn walk_and_index_cache_bench() {
-    let c = common::city(1500, 2, &BuildOptions { page_size: 1024, ..Default::default() });
+    let c = common::city(
+        1500,
+        2,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    );
     let db = c.db.to_str().unwrap();
     let csv = c.dir.path().join("frames.csv");
     let saved = c.dir.path().join("path.csv");
     let out = flaneur(&[
-        "walk", db, "--path", "turning", "--frames", "90", "--far", "150", "--csv", csv.to_str().unwrap(), "--save-path",
-        saved.to_str().unwrap(), "--quiet",
+        "walk",
+        db,
+        "--path",
+        "turning",
+        "--frames",
+        "90",
+        "--far",
+        "150",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--save-path",
+        saved.to_str().unwrap(),
+        "--quiet",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("visual misses 0") && text.contains("hit rate"), "{text}");
+    assert!(
+        text.contains("visual misses 0") && text.contains("hit rate"),
+        "{text}"
+    );
     assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 91);
     // The saved path replays as a file.
-    let out = flaneur(&["walk", db, "--path", saved.to_str().unwrap(), "--config", "box", "--far", "150", "--quiet"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = flaneur(&[
+        "walk",
+        db,
+        "--path",
+        saved.to_str().unwrap(),
+        "--config",
+        "box",
+        "--far",
+        "150",
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = flaneur(&["walk", db, "--path", "nowhere.csv", "--quiet"]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("nowhere.csv"));
 
     let dir = c.dir.path().join("bench");
-    let out = flaneur(&["bench", "index-cache", db, "--frames", "120", "--far", "150", "--sizes", "2,8,32", "--out", dir.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for f in ["index-cache.csv", "index-cache.md", "index-cache-normal.png", "index-cache-backward.png"] {
+    let out = flaneur(&[
+        "bench",
+        "index-cache",
+        db,
+        "--frames",
+        "120",
+        "--far",
+        "150",
+        "--sizes",
+        "2,8,32",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "index-cache.csv",
+        "index-cache.md",
+        "index-cache-normal.png",
+        "index-cache-backward.png",
+    ] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     let csv = std::fs::read_to_string(dir.join("index-cache.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 5 * 3);
     // No online policy beats Belady on any row.
     for line in csv.lines().skip(1) {
-        let v: Vec<f64> = line.split(',').skip(3).take(3).map(|x| x.parse().unwrap()).collect();
+        let v: Vec<f64> = line
+            .split(',')
+            .skip(3)
+            .take(3)
+            .map(|x| x.parse().unwrap())
+            .collect();
         assert!(v[0] <= v[2] && v[1] <= v[2], "{line}");
     }
 }
 
 #[test]
 fn walking_experiments_write_their_outputs() {
-    let c = common::city(1500, 3, &BuildOptions { page_size: 1024, ..Default::default() });
+    let c = common::city(
+        1500,
+        3,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    );
     let db = c.db.to_str().unwrap();
     let dir = c.dir.path().join("bench");
     let d = dir.to_str().unwrap();
     let walk = ["--frames", "60", "--far", "150"];
     for (args, files) in [
-        (vec!["prefetch-k", "--ks", "0,0.8"], vec!["prefetch-k.csv", "prefetch-k.md", "prefetch-k-frame-time.png"]),
-        (vec!["view-culling", "--sfs", "1,2"], vec!["view-culling.csv", "view-culling.md", "view-culling.png"]),
-        (vec!["patterns"], vec!["patterns.csv", "patterns.md", "patterns-io-per-query.png"]),
+        (
+            vec!["prefetch-k", "--ks", "0,0.8"],
+            vec![
+                "prefetch-k.csv",
+                "prefetch-k.md",
+                "prefetch-k-frame-time.png",
+            ],
+        ),
+        (
+            vec!["view-culling", "--sfs", "1,2"],
+            vec!["view-culling.csv", "view-culling.md", "view-culling.png"],
+        ),
+        (
+            vec!["patterns"],
+            vec!["patterns.csv", "patterns.md", "patterns-io-per-query.png"],
+        ),
     ] {
         let mut all = vec!["bench"];
         all.extend(&args[..1]);
@@ -115,7 +262,11 @@ fn walking_experiments_write_their_outputs() {
         all.extend(walk);
         all.extend(["--out", d]);
         let out = flaneur(&all);
-        assert!(out.status.success(), "{all:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{all:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         for f in files {
             assert!(dir.join(f).exists(), "{all:?}: {f} missing");
         }

@@ -12,14 +12,26 @@ use flaneur::{BuildOptions, Database};
 fn small_city() -> common::City {
     // 1 KiB pages keep the tree's leaves small next to the cells, as 4 KiB pages are
     // next to kilometre cells in a big city.
-    common::city(3000, 5, &BuildOptions { page_size: 1024, ..Default::default() })
+    common::city(
+        3000,
+        5,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    )
 }
 
 #[test]
 fn csearch_reads_at_most_a_quarter_of_box_pages_along_a_walk() {
     let city = small_city();
     let db = Database::open(&city.db).unwrap();
-    let cfg = CsearchConfig { cell: 600.0, step: 10.0, steps: 120, ..Default::default() };
+    let cfg = CsearchConfig {
+        cell: 600.0,
+        step: 10.0,
+        steps: 120,
+        ..Default::default()
+    };
     let report = csearch::run(&db, &cfg).unwrap();
     assert!(report.box_pages > 0);
     assert!(
@@ -31,7 +43,12 @@ fn csearch_reads_at_most_a_quarter_of_box_pages_along_a_walk() {
     );
     // And the same on the thesis's insertion-built tree.
     let ins = csearch::run_insertion_tree(&db, &cfg, &city.dir.path().join("ins.flaneur")).unwrap();
-    assert!(ins.csearch_pages * 4 <= ins.box_pages, "insertion tree: {} of {}", ins.csearch_pages, ins.box_pages);
+    assert!(
+        ins.csearch_pages * 4 <= ins.box_pages,
+        "insertion tree: {} of {}",
+        ins.csearch_pages,
+        ins.box_pages
+    );
 }
 
 #[test]
@@ -46,7 +63,10 @@ fn pages_reported_are_the_pages_the_store_counted() {
         let r = db.csearch_step(&mut history, &cell).unwrap();
         let io = db.io().since(&before);
         assert_eq!(io.page_reads, r.pages.len() as u64);
-        assert_eq!(io.reads_of(flaneur::store::PageKind::RtreeNode), r.pages.len() as u64);
+        assert_eq!(
+            io.reads_of(flaneur::store::PageKind::RtreeNode),
+            r.pages.len() as u64
+        );
         let before = db.io();
         let b = db.range(&cell).unwrap();
         assert_eq!(db.io().since(&before).page_reads, b.pages.len() as u64);
@@ -70,5 +90,9 @@ fn history_filtering_never_changes_a_result() {
         assert_eq!(got.ids(), expected);
     }
     assert!(dropped > 0, "the walk should leave cells behind");
-    assert!(history.len() < 40, "filtering keeps the history short: {}", history.len());
+    assert!(
+        history.len() < 40,
+        "filtering keeps the history short: {}",
+        history.len()
+    );
 }

@@ -15,7 +15,16 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
 fn city() -> &'static common::City {
     static CITY: OnceLock<common::City> = OnceLock::new();
     // 1 KiB pages: a few hundred objects make a tree of three levels.
-    CITY.get_or_init(|| common::city(600, 11, &BuildOptions { page_size: 1024, ..Default::default() }))
+    CITY.get_or_init(|| {
+        common::city(
+            600,
+            11,
+            &BuildOptions {
+                page_size: 1024,
+                ..Default::default()
+            },
+        )
+    })
 }
 
 fn backends() -> [Backend; 2] {
@@ -25,12 +34,23 @@ fn backends() -> [Backend; 2] {
 /// A random box around the city, from a point and a size (sizes from 0: flat and
 /// point boxes included).
 fn a_box() -> impl Strategy<Value = Aabb> {
-    (0.0f32..1.0, 0.0f32..1.0, 0.0f32..1.0, 0.0f32..0.5, 0.0f32..1.0, 0.0f32..0.5).prop_map(|(x, y, z, w, h, d)| {
-        let b = city().bounds();
-        let e = b.extent() * 1.2;
-        let lo = b.min - e * 0.1 + glam::Vec3::new(x, y * 0.5, z) * e;
-        Aabb { min: lo, max: lo + glam::Vec3::new(w, h, d) * e }
-    })
+    (
+        0.0f32..1.0,
+        0.0f32..1.0,
+        0.0f32..1.0,
+        0.0f32..0.5,
+        0.0f32..1.0,
+        0.0f32..0.5,
+    )
+        .prop_map(|(x, y, z, w, h, d)| {
+            let b = city().bounds();
+            let e = b.extent() * 1.2;
+            let lo = b.min - e * 0.1 + glam::Vec3::new(x, y * 0.5, z) * e;
+            Aabb {
+                min: lo,
+                max: lo + glam::Vec3::new(w, h, d) * e,
+            }
+        })
 }
 
 proptest! {
@@ -79,14 +99,26 @@ proptest! {
 #[test]
 fn range_equals_rstar_on_the_same_boxes() {
     let tree: RTree<GeomWithData<Rectangle<[f32; 3]>, u64>> = RTree::bulk_load(
-        city().boxes.iter().map(|(id, b)| GeomWithData::new(Rectangle::from_corners(b.min.to_array(), b.max.to_array()), *id)).collect(),
+        city()
+            .boxes
+            .iter()
+            .map(|(id, b)| {
+                GeomWithData::new(
+                    Rectangle::from_corners(b.min.to_array(), b.max.to_array()),
+                    *id,
+                )
+            })
+            .collect(),
     );
     let db = Database::open(&city().db).unwrap();
     let mut runner = proptest::test_runner::TestRunner::deterministic();
     for _ in 0..200 {
         let q = a_box().new_tree(&mut runner).unwrap().current();
         let mut expected: Vec<u64> = tree
-            .locate_in_envelope_intersecting(&AABB::from_corners(q.min.to_array(), q.max.to_array()))
+            .locate_in_envelope_intersecting(&AABB::from_corners(
+                q.min.to_array(),
+                q.max.to_array(),
+            ))
             .map(|g| g.data)
             .collect();
         expected.sort_unstable();

@@ -10,16 +10,34 @@ use flaneur::{Backend, BuildOptions, Database};
 fn cube(x: f32, z: f32, size: f32) -> Mesh {
     let mut positions = Vec::new();
     for i in 0..8 {
-        positions.push([x + size * (i & 1) as f32, size * ((i >> 1) & 1) as f32, z + size * ((i >> 2) & 1) as f32]);
+        positions.push([
+            x + size * (i & 1) as f32,
+            size * ((i >> 1) & 1) as f32,
+            z + size * ((i >> 2) & 1) as f32,
+        ]);
     }
-    let indices = vec![0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5];
-    Mesh { normals: vec![[0.0, 1.0, 0.0]; 8], positions, indices }
+    let indices = vec![
+        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
+        1, 3, 5, 3, 7, 5,
+    ];
+    Mesh {
+        normals: vec![[0.0, 1.0, 0.0]; 8],
+        positions,
+        indices,
+    }
 }
 
 #[test]
 fn inserted_objects_are_found_and_survive_reopen() {
     for backend in [Backend::Mmap, Backend::Pread { direct: false }] {
-        let mut c = common::city(150, 8, &BuildOptions { page_size: 1024, ..Default::default() });
+        let mut c = common::city(
+            150,
+            8,
+            &BuildOptions {
+                page_size: 1024,
+                ..Default::default()
+            },
+        );
         let mut db = Database::open_writable(&c.db, backend).unwrap();
         let height = db.tree().height;
         let bounds = c.bounds();
@@ -30,9 +48,16 @@ fn inserted_objects_are_found_and_survive_reopen() {
             let e = db.insert(10_000 + i, &mesh).unwrap();
             c.boxes.push((e.id, e.bounds));
         }
-        assert!(db.tree().height > height, "400 inserts into 1 KiB pages must split the root");
+        assert!(
+            db.tree().height > height,
+            "400 inserts into 1 KiB pages must split the root"
+        );
         assert_eq!(db.objects(), 550);
-        let q = Aabb::new([bounds.min.x, 0.0, bounds.min.z], [bounds.center().x, 10.0, bounds.center().z]).unwrap();
+        let q = Aabb::new(
+            [bounds.min.x, 0.0, bounds.min.z],
+            [bounds.center().x, 10.0, bounds.center().z],
+        )
+        .unwrap();
         assert_eq!(db.range(&q).unwrap().ids(), c.brute_range(&q));
         drop(db);
 
@@ -40,25 +65,63 @@ fn inserted_objects_are_found_and_survive_reopen() {
         assert_eq!(db.objects(), 550);
         assert_eq!(db.range(&db.bounds()).unwrap().objects.len(), 550);
         assert_eq!(db.range(&q).unwrap().ids(), c.brute_range(&q));
-        let found = db.range(&Aabb::new([bounds.min.x, 0.0, bounds.min.z], [bounds.min.x + 1.0, 1.0, bounds.min.z + 1.0]).unwrap()).unwrap();
-        let inserted = found.objects.iter().find(|o| o.id == 10_000).expect("the first inserted cube");
+        let found = db
+            .range(
+                &Aabb::new(
+                    [bounds.min.x, 0.0, bounds.min.z],
+                    [bounds.min.x + 1.0, 1.0, bounds.min.z + 1.0],
+                )
+                .unwrap(),
+            )
+            .unwrap();
+        let inserted = found
+            .objects
+            .iter()
+            .find(|o| o.id == 10_000)
+            .expect("the first inserted cube");
         assert_eq!(db.mesh(inserted).unwrap().triangle_count(), 12);
     }
 }
 
 #[test]
 fn a_tree_built_by_insertion_answers_like_a_packed_one() {
-    let packed = common::city(500, 4, &BuildOptions { page_size: 1024, ..Default::default() });
-    let inserted = common::city(500, 4, &BuildOptions { page_size: 1024, insertion: true, ..Default::default() });
-    let (a, b) = (Database::open(&packed.db).unwrap(), Database::open(&inserted.db).unwrap());
+    let packed = common::city(
+        500,
+        4,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    );
+    let inserted = common::city(
+        500,
+        4,
+        &BuildOptions {
+            page_size: 1024,
+            insertion: true,
+            ..Default::default()
+        },
+    );
+    let (a, b) = (
+        Database::open(&packed.db).unwrap(),
+        Database::open(&inserted.db).unwrap(),
+    );
     let bounds = packed.bounds();
     for i in 0..50 {
         let t = i as f32 / 50.0;
         let lo = bounds.min + bounds.extent() * glam::Vec3::new(t, 0.0, 1.0 - t) * 0.8;
-        let q = Aabb { min: lo, max: lo + bounds.extent() * 0.2 };
+        let q = Aabb {
+            min: lo,
+            max: lo + bounds.extent() * 0.2,
+        };
         assert_eq!(a.range(&q).unwrap().ids(), b.range(&q).unwrap().ids());
         assert_eq!(b.range(&q).unwrap().ids(), packed.brute_range(&q));
     }
     let (ia, ib) = (a.info().unwrap(), b.info().unwrap());
-    assert!(ia.tree.fill > ib.tree.fill, "packing fills pages better: {} vs {}", ia.tree.fill, ib.tree.fill);
+    assert!(
+        ia.tree.fill > ib.tree.fill,
+        "packing fills pages better: {} vs {}",
+        ia.tree.fill,
+        ib.tree.fill
+    );
 }

@@ -26,7 +26,9 @@ fn steps(p: &CameraPath) -> impl Iterator<Item = (&Pose, &Pose)> {
 }
 
 fn mean_speed(p: &CameraPath) -> f32 {
-    let dist: f32 = steps(p).map(|(a, b)| (b.position - a.position).length()).sum();
+    let dist: f32 = steps(p)
+        .map(|(a, b)| (b.position - a.position).length())
+        .sum();
     dist / p.duration() as f32
 }
 
@@ -48,8 +50,16 @@ fn every_pattern_stays_in_the_city_and_is_finite() {
             assert_eq!(p.len(), FRAMES);
             p.validate().unwrap();
             for q in &p.poses {
-                assert!(c.contains_point(q.position), "{m} seed {seed}: {} is outside", q.position);
-                assert!((q.position.y - 1.7).abs() < 1e-4, "{m}: eye at {}", q.position.y);
+                assert!(
+                    c.contains_point(q.position),
+                    "{m} seed {seed}: {} is outside",
+                    q.position
+                );
+                assert!(
+                    (q.position.y - 1.7).abs() < 1e-4,
+                    "{m}: eye at {}",
+                    q.position.y
+                );
                 assert!(q.pitch.abs() < 6f32.to_radians());
             }
             assert!((p.duration() - (FRAMES - 1) as f64 / FPS as f64).abs() < 1e-9);
@@ -82,12 +92,17 @@ fn speeds_are_as_documented() {
         assert_eq!(m.speed_range(), (lo, hi), "{m}");
         for seed in 0..4 {
             let p = path(m, seed);
-            let max_step = steps(&p).map(|(a, b)| (b.position - a.position).length()).fold(0.0, f32::max);
+            let max_step = steps(&p)
+                .map(|(a, b)| (b.position - a.position).length())
+                .fold(0.0, f32::max);
             assert!(max_step <= hi / FPS + 1e-3, "{m}: a step of {max_step} m");
             let v = mean_speed(&p);
             if lo == hi {
                 // Only a corner cuts a step short.
-                assert!(v > 0.97 * lo && v <= hi + 1e-2, "{m} seed {seed}: mean speed {v}");
+                assert!(
+                    v > 0.97 * lo && v <= hi + 1e-2,
+                    "{m} seed {seed}: mean speed {v}"
+                );
             } else {
                 assert!(v > lo && v < hi, "{m} seed {seed}: mean speed {v}");
             }
@@ -101,8 +116,14 @@ fn speeds_are_as_documented() {
 #[test]
 fn turning_turns_more_than_normal() {
     for seed in 0..6 {
-        let (t, n) = (total_turn(&path(Motion::Turning, seed)), total_turn(&path(Motion::Normal, seed)));
-        assert!(t > 2.0 * n && t > std::f32::consts::TAU, "seed {seed}: turning {t} rad, normal {n} rad");
+        let (t, n) = (
+            total_turn(&path(Motion::Turning, seed)),
+            total_turn(&path(Motion::Normal, seed)),
+        );
+        assert!(
+            t > 2.0 * n && t > std::f32::consts::TAU,
+            "seed {seed}: turning {t} rad, normal {n} rad"
+        );
     }
 }
 
@@ -124,7 +145,9 @@ fn backward_moves_against_its_view() {
     }
     // It does reverse: over a minute the direction of travel flips at least twice.
     let p = generate(&city(), Motion::Backward, 1800, FPS, 3).unwrap();
-    let dirs: Vec<Vec3> = steps(&p).map(|(a, b)| (b.position - a.position).normalize_or_zero()).collect();
+    let dirs: Vec<Vec3> = steps(&p)
+        .map(|(a, b)| (b.position - a.position).normalize_or_zero())
+        .collect();
     let flips = dirs.windows(2).filter(|w| w[0].dot(w[1]) < -0.9).count();
     assert!(flips >= 2, "{flips} reversals");
 }
@@ -144,8 +167,18 @@ fn csv_round_trips_exactly() {
     }
     // Awkward floats survive too.
     let odd = CameraPath::new(vec![
-        Pose { time: 1e-9, position: Vec3::new(1e-30, -0.0, 3.4e38), yaw: -123.456_79, pitch: 1.569_9 },
-        Pose { time: 1.0 / 3.0, position: Vec3::new(f32::MIN_POSITIVE, 1.0 / 3.0, -7.0), yaw: 0.1, pitch: -1e-7 },
+        Pose {
+            time: 1e-9,
+            position: Vec3::new(1e-30, -0.0, 3.4e38),
+            yaw: -123.456_79,
+            pitch: 1.569_9,
+        },
+        Pose {
+            time: 1.0 / 3.0,
+            position: Vec3::new(f32::MIN_POSITIVE, 1.0 / 3.0, -7.0),
+            yaw: 0.1,
+            pitch: -1e-7,
+        },
     ])
     .unwrap();
     let file = dir.path().join("odd.csv");
@@ -161,10 +194,26 @@ fn malformed_files_name_the_file_and_line() {
         ("header-only", "time,x,y,z,yaw,pitch\n", 1),
         ("no-header", "0,1,2,3,0,0\n", 1),
         ("short", "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n1,1,2,3,0\n", 3),
-        ("word", "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n1,1,two,3,0,0\n", 3),
-        ("nan", "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n0.5,1,2,3,0,0\n1,1,2,3,NaN,0\n", 4),
-        ("same-time", "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n0,1,2,3,0,0\n", 3),
-        ("backwards-time", "time,x,y,z,yaw,pitch\n2,1,2,3,0,0\n\n1,1,2,3,0,0\n", 4),
+        (
+            "word",
+            "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n1,1,two,3,0,0\n",
+            3,
+        ),
+        (
+            "nan",
+            "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n0.5,1,2,3,0,0\n1,1,2,3,NaN,0\n",
+            4,
+        ),
+        (
+            "same-time",
+            "time,x,y,z,yaw,pitch\n0,1,2,3,0,0\n0,1,2,3,0,0\n",
+            3,
+        ),
+        (
+            "backwards-time",
+            "time,x,y,z,yaw,pitch\n2,1,2,3,0,0\n\n1,1,2,3,0,0\n",
+            4,
+        ),
     ];
     for (name, text, line) in cases {
         let file = dir.path().join(format!("{name}.csv"));
@@ -172,17 +221,26 @@ fn malformed_files_name_the_file_and_line() {
         let e = CameraPath::load_csv(&file).unwrap_err();
         assert!(matches!(e, Error::BadInput { .. }), "{name}: {e:?}");
         let msg = e.to_string();
-        assert!(msg.contains(&format!("{name}.csv")) && msg.contains(&format!("line {line}:")), "{name}: {msg}");
+        assert!(
+            msg.contains(&format!("{name}.csv")) && msg.contains(&format!("line {line}:")),
+            "{name}: {msg}"
+        );
     }
     let missing = CameraPath::load_csv(dir.path().join("missing.csv")).unwrap_err();
     assert!(matches!(missing, Error::Io { .. }) && missing.to_string().contains("missing.csv"));
-    assert!(CameraPath::default().save_csv(dir.path().join("none.csv")).is_err());
+    assert!(CameraPath::default()
+        .save_csv(dir.path().join("none.csv"))
+        .is_err());
 }
 
 // ---- the frustum -------------------------------------------------------------------
 
 fn random_camera(rng: &mut ChaCha8Rng) -> Camera {
-    let pos = Vec3::new(rng.gen_range(-500.0..1500.0), rng.gen_range(0.0..60.0), rng.gen_range(300.0..2300.0));
+    let pos = Vec3::new(
+        rng.gen_range(-500.0..1500.0),
+        rng.gen_range(0.0..60.0),
+        rng.gen_range(300.0..2300.0),
+    );
     let cam = Camera::new(pos, rng.gen_range(-7.0..7.0), rng.gen_range(-1.3..1.3)).unwrap();
     if rng.gen_bool(0.3) {
         return cam; // the thesis's defaults
@@ -211,7 +269,14 @@ fn sat_gap(f: &Frustum, b: &Aabb) -> f64 {
     let box_axes = [DVec3::X, DVec3::Y, DVec3::Z];
     // Across and up along the far face: the near face is too small (at f32 precision)
     // to give these directions accurately.
-    let f_edges = [fc[5] - fc[4], fc[6] - fc[4], fc[4] - fc[0], fc[5] - fc[1], fc[6] - fc[2], fc[7] - fc[3]];
+    let f_edges = [
+        fc[5] - fc[4],
+        fc[6] - fc[4],
+        fc[4] - fc[0],
+        fc[5] - fc[1],
+        fc[6] - fc[2],
+        fc[7] - fc[3],
+    ];
     let mut axes: Vec<DVec3> = box_axes.to_vec();
     axes.extend(f.planes().iter().map(|p| p.normal.as_dvec3()));
     for e in f_edges {
@@ -221,9 +286,15 @@ fn sat_gap(f: &Frustum, b: &Aabb) -> f64 {
     }
     let mut gap = f64::NEG_INFINITY;
     for axis in axes {
-        let Some(n) = axis.try_normalize() else { continue };
+        let Some(n) = axis.try_normalize() else {
+            continue;
+        };
         let span = |pts: &[DVec3]| {
-            pts.iter().map(|p| p.dot(n)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)))
+            pts.iter()
+                .map(|p| p.dot(n))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                    (lo.min(d), hi.max(d))
+                })
         };
         let ((a0, a1), (b0, b1)) = (span(&fc), span(&bc));
         gap = gap.max(b0 - a1).max(a0 - b1);
@@ -242,8 +313,13 @@ fn inside_point(c: &Camera, u: f32, v: f32, t: f32) -> Vec3 {
 
 fn random_box(rng: &mut ChaCha8Rng, c: &Camera, f: &Frustum, kind: usize) -> Aabb {
     let scale = c.far;
-    let half =
-        |rng: &mut ChaCha8Rng, s: f32| Vec3::new(rng.gen_range(0.0..s), rng.gen_range(0.0..s), rng.gen_range(0.0..s));
+    let half = |rng: &mut ChaCha8Rng, s: f32| {
+        Vec3::new(
+            rng.gen_range(0.0..s),
+            rng.gen_range(0.0..s),
+            rng.gen_range(0.0..s),
+        )
+    };
     let mut b = match kind {
         // Anywhere around the frustum, any size.
         0 => {
@@ -259,7 +335,12 @@ fn random_box(rng: &mut ChaCha8Rng, c: &Camera, f: &Frustum, kind: usize) -> Aab
         }
         // Small, inside.
         1 => {
-            let p = inside_point(c, rng.gen_range(-0.9..0.9), rng.gen_range(-0.9..0.9), rng.gen_range(0.05..0.95));
+            let p = inside_point(
+                c,
+                rng.gen_range(-0.9..0.9),
+                rng.gen_range(-0.9..0.9),
+                rng.gen_range(0.05..0.95),
+            );
             Aabb::around(p, half(rng, c.near * 0.1))
         }
         // Straddling a corner of the frustum.
@@ -267,7 +348,10 @@ fn random_box(rng: &mut ChaCha8Rng, c: &Camera, f: &Frustum, kind: usize) -> Aab
         // Containing the whole frustum.
         3 => {
             let cell = f.aabb();
-            Aabb { min: cell.min - half(rng, scale), max: cell.max + half(rng, scale) }
+            Aabb {
+                min: cell.min - half(rng, scale),
+                max: cell.max + half(rng, scale),
+            }
         }
         // Just outside the middle of a side edge, pushed out by a little: the hard case
         // for the plane test.
@@ -275,7 +359,10 @@ fn random_box(rng: &mut ChaCha8Rng, c: &Camera, f: &Frustum, kind: usize) -> Aab
             let k = rng.gen_range(0..4);
             let (a, z) = (f.corners()[k], f.corners()[k + 4]);
             let on_edge = a + (z - a) * rng.gen_range(0.1..0.9);
-            let (px, py) = (if k & 1 != 0 { 3 } else { 2 }, if k & 2 != 0 { 5 } else { 4 });
+            let (px, py) = (
+                if k & 1 != 0 { 3 } else { 2 },
+                if k & 2 != 0 { 5 } else { 4 },
+            );
             let out = -(f.planes()[px].normal + f.planes()[py].normal).normalize();
             let s = rng.gen_range(0.01..5.0f32);
             Aabb::around(on_edge + out * (s * rng.gen_range(0.5..3.0)), half(rng, s))
@@ -312,10 +399,16 @@ fn view_culling_matches_separating_axes() {
             let tol = 1e-5 * (c.far as f64).max(c.position.abs().max_element() as f64);
             if exact != (gap <= 0.0) {
                 // Only rounding may disagree, and then toward "overlaps".
-                assert!(exact && gap < tol, "kind {kind}: {b} against {c:?}: exact {exact}, gap {gap}");
+                assert!(
+                    exact && gap < tol,
+                    "kind {kind}: {b} against {c:?}: exact {exact}, gap {gap}"
+                );
                 near_misses += 1;
             }
-            assert!(!exact || f.cull_fast(&b), "the plane test rejected an overlapping box");
+            assert!(
+                !exact || f.cull_fast(&b),
+                "the plane test rejected an overlapping box"
+            );
             counts[kind][exact as usize] += 1;
         }
     }
@@ -325,7 +418,10 @@ fn view_culling_matches_separating_axes() {
     let [anywhere, inside, corner, containing, beside] = counts;
     assert!(anywhere[0] > 200 && anywhere[1] > 200, "{anywhere:?}");
     assert_eq!(inside[0], 0);
-    assert!(corner[1] > 0 && containing[0] == 0, "{corner:?} {containing:?}");
+    assert!(
+        corner[1] > 0 && containing[0] == 0,
+        "{corner:?} {containing:?}"
+    );
     assert!(beside[0] > 200, "{beside:?}");
 }
 
@@ -335,8 +431,10 @@ fn the_plane_test_keeps_what_the_exact_test_drops() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let c = Camera::new(Vec3::new(0.0, 1.7, 0.0), 0.3, 0.0).unwrap();
     let f = c.frustum();
-    let kept =
-        (0..20_000).map(|_| random_box(&mut rng, &c, &f, 4)).filter(|b| f.cull_fast(b) && !f.overlaps_aabb(b)).count();
+    let kept = (0..20_000)
+        .map(|_| random_box(&mut rng, &c, &f, 4))
+        .filter(|b| f.cull_fast(b) && !f.overlaps_aabb(b))
+        .count();
     assert!(kept > 100, "{kept}");
 }
 
@@ -349,10 +447,20 @@ fn frustum_geometry() {
         let tol = 2e-6 * c.far.max(c.position.abs().max_element());
         // Each corner lies on three planes and inside the other three.
         for (i, &k) in f.corners().iter().enumerate() {
-            let on = [i & 4 == 0, i & 4 != 0, i & 1 == 0, i & 1 != 0, i & 2 == 0, i & 2 != 0];
+            let on = [
+                i & 4 == 0,
+                i & 4 != 0,
+                i & 1 == 0,
+                i & 1 != 0,
+                i & 2 == 0,
+                i & 2 != 0,
+            ];
             for (pl, on) in f.planes().iter().zip(on) {
                 let d = pl.signed_distance(k);
-                assert!(if on { d.abs() <= tol * 4.0 } else { d > -tol }, "corner {i}: {d}");
+                assert!(
+                    if on { d.abs() <= tol * 4.0 } else { d > -tol },
+                    "corner {i}: {d}"
+                );
             }
         }
         let cell = f.aabb();
@@ -365,7 +473,12 @@ fn frustum_geometry() {
         assert!(f.planes()[1].signed_distance(fc).abs() <= tol * 4.0);
         // Points inside by construction are inside.
         for _ in 0..10 {
-            let p = inside_point(&c, rng.gen_range(-0.99..0.99), rng.gen_range(-0.99..0.99), rng.gen_range(0.01..0.99));
+            let p = inside_point(
+                &c,
+                rng.gen_range(-0.99..0.99),
+                rng.gen_range(-0.99..0.99),
+                rng.gen_range(0.01..0.99),
+            );
             assert!(f.contains_point(p));
         }
     }
@@ -374,7 +487,10 @@ fn frustum_geometry() {
 #[test]
 fn thesis_defaults() {
     let c = Camera::new(Vec3::new(0.0, 1.7, 0.0), 0.0, 0.0).unwrap();
-    assert_eq!((c.far, c.fov_x, c.fov_y), (1000.0, 45f32.to_radians(), 45f32.to_radians()));
+    assert_eq!(
+        (c.far, c.fov_x, c.fov_y),
+        (1000.0, 45f32.to_radians(), 45f32.to_radians())
+    );
     // The frustum cell of a level view is 1 km deep and 2·tan(22.5°) km wide at the far end.
     let cell = c.frustum().aabb();
     assert!((cell.extent().x - 999.5).abs() < 0.01);

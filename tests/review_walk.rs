@@ -10,13 +10,24 @@ use flaneur::{BuildOptions, Database};
 use glam::Vec3;
 
 fn city() -> common::City {
-    common::city(2500, 6, &BuildOptions { page_size: 1024, ..Default::default() })
+    common::city(
+        2500,
+        6,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    )
 }
 
 /// A shallow frustum, so that a city of a kilometre holds many disk cells; paths played
 /// eight times faster than real time, which still leaves a small city's prefetches time.
 fn cfg(p: Preset) -> ReviewConfig {
-    ReviewConfig { far: 150.0, pace: Some(8.0), ..ReviewConfig::preset(p) }
+    ReviewConfig {
+        far: 150.0,
+        pace: Some(8.0),
+        ..ReviewConfig::preset(p)
+    }
 }
 
 fn path(db: &Database, m: Motion, frames: usize) -> CameraPath {
@@ -34,8 +45,14 @@ fn every_configuration_shows_everything_in_view() {
         let s = &report.summary;
         assert_eq!(report.frames.len(), 240);
         assert!(s.queries > 0, "{preset:?} never queried");
-        assert_eq!(s.overflow_frames, 0, "{preset:?}: the default budget holds a cell of this city");
-        assert_eq!(s.visual_misses, 0, "{preset:?}: objects in view were not loaded");
+        assert_eq!(
+            s.overflow_frames, 0,
+            "{preset:?}: the default budget holds a cell of this city"
+        );
+        assert_eq!(
+            s.visual_misses, 0,
+            "{preset:?}: objects in view were not loaded"
+        );
         pages.push((preset, s.index_pages_per_query));
     }
     let per_query = |p: Preset| pages.iter().find(|(q, _)| *q == p).unwrap().1;
@@ -47,13 +64,29 @@ fn prefetching_takes_reads_off_the_viewers_thread() {
     let c = city();
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Fast, 300);
-    let optimal = review::walk(&db, &p, &cfg(Preset::Optimal), |_| {}).unwrap().summary;
-    let np = review::walk(&db, &p, &cfg(Preset::Np), |_| {}).unwrap().summary;
-    assert_eq!(np.sync_queries, np.queries, "without prefetching every query is the viewer's");
+    let optimal = review::walk(&db, &p, &cfg(Preset::Optimal), |_| {})
+        .unwrap()
+        .summary;
+    let np = review::walk(&db, &p, &cfg(Preset::Np), |_| {})
+        .unwrap()
+        .summary;
+    assert_eq!(
+        np.sync_queries, np.queries,
+        "without prefetching every query is the viewer's"
+    );
     assert_eq!((np.prefetches_adopted, np.prefetches_used), (0, 0));
-    assert!(optimal.prefetches_used > 0 && optimal.prefetches_used <= optimal.prefetches_adopted, "{optimal:?}");
-    assert!(optimal.sync_queries < np.sync_queries, "Optimal {optimal:?}\nNP {np:?}");
-    assert_eq!(optimal.queries, optimal.sync_queries + optimal.prefetches_adopted + optimal.prefetches_stale);
+    assert!(
+        optimal.prefetches_used > 0 && optimal.prefetches_used <= optimal.prefetches_adopted,
+        "{optimal:?}"
+    );
+    assert!(
+        optimal.sync_queries < np.sync_queries,
+        "Optimal {optimal:?}\nNP {np:?}"
+    );
+    assert_eq!(
+        optimal.queries,
+        optimal.sync_queries + optimal.prefetches_adopted + optimal.prefetches_stale
+    );
     assert_eq!(optimal.visual_misses, 0);
 }
 
@@ -63,12 +96,24 @@ fn the_memory_budget_holds_every_frame() {
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Fast, 300);
     for preset in Preset::ALL {
-        let cfg = ReviewConfig { memory_budget: 6 << 20, ..cfg(preset) };
+        let cfg = ReviewConfig {
+            memory_budget: 6 << 20,
+            ..cfg(preset)
+        };
         let report = review::walk(&db, &p, &cfg, |_| {}).unwrap();
-        assert!(report.frames.iter().all(|f| f.buffer_bytes <= cfg.memory_budget), "{preset:?}");
+        assert!(
+            report
+                .frames
+                .iter()
+                .all(|f| f.buffer_bytes <= cfg.memory_budget),
+            "{preset:?}"
+        );
         if preset != Preset::Box {
             // BOX replaces its buffer with each cell; the others keep what they load until full.
-            assert!(report.frames.iter().any(|f| f.evicted > 0), "{preset:?}: a 6 MiB budget must evict");
+            assert!(
+                report.frames.iter().any(|f| f.evicted > 0),
+                "{preset:?}: a 6 MiB budget must evict"
+            );
         }
     }
 }
@@ -79,15 +124,47 @@ fn awkward_walks_are_handled() {
     let db = Database::open(&c.db).unwrap();
     let b = db.bounds();
     let mid = b.center() * Vec3::new(1.0, 0.0, 1.0) + Vec3::Y * 1.7;
-    let pose = |t: f64, position: Vec3, yaw: f32| Pose { time: t, position, yaw, pitch: 0.0 };
-    let still = CameraPath { poses: (0..60).map(|i| pose(i as f64 / 30.0, mid, 0.3)).collect() };
-    let spin = CameraPath { poses: (0..90).map(|i| pose(i as f64 / 30.0, mid, i as f32 * 0.2)).collect() };
+    let pose = |t: f64, position: Vec3, yaw: f32| Pose {
+        time: t,
+        position,
+        yaw,
+        pitch: 0.0,
+    };
+    let still = CameraPath {
+        poses: (0..60).map(|i| pose(i as f64 / 30.0, mid, 0.3)).collect(),
+    };
+    let spin = CameraPath {
+        poses: (0..90)
+            .map(|i| pose(i as f64 / 30.0, mid, i as f32 * 0.2))
+            .collect(),
+    };
     let far = mid + Vec3::new(b.extent().x * 3.0, 0.0, 0.0);
     let teleport = CameraPath {
-        poses: (0..60).map(|i| pose(i as f64 / 30.0, if i % 20 < 10 { mid } else { b.min + Vec3::Y * 1.7 }, 0.0)).collect(),
+        poses: (0..60)
+            .map(|i| {
+                pose(
+                    i as f64 / 30.0,
+                    if i % 20 < 10 {
+                        mid
+                    } else {
+                        b.min + Vec3::Y * 1.7
+                    },
+                    0.0,
+                )
+            })
+            .collect(),
     };
-    let outside = CameraPath { poses: (0..30).map(|i| pose(i as f64 / 30.0, far + Vec3::X * i as f32, 0.0)).collect() };
-    for (name, p) in [("still", &still), ("spin", &spin), ("teleport", &teleport), ("outside", &outside)] {
+    let outside = CameraPath {
+        poses: (0..30)
+            .map(|i| pose(i as f64 / 30.0, far + Vec3::X * i as f32, 0.0))
+            .collect(),
+    };
+    for (name, p) in [
+        ("still", &still),
+        ("spin", &spin),
+        ("teleport", &teleport),
+        ("outside", &outside),
+    ] {
         for preset in Preset::ALL {
             let report = review::walk(&db, p, &cfg(preset), |_| {}).unwrap();
             assert_eq!(report.summary.visual_misses, 0, "{name} {preset:?}");
@@ -95,7 +172,10 @@ fn awkward_walks_are_handled() {
                 assert_eq!(report.summary.queries, 1, "standing still queries once");
             }
             if name == "outside" {
-                assert_eq!(report.frames.iter().map(|f| f.objects_drawn).sum::<usize>(), 0);
+                assert_eq!(
+                    report.frames.iter().map(|f| f.objects_drawn).sum::<usize>(),
+                    0
+                );
             }
         }
     }
@@ -112,7 +192,10 @@ fn a_read_error_is_the_walks_error_not_a_hang() {
     let page_size = db.store().page_size() as u64;
     drop(db);
     let mut bytes = std::fs::read(&c.db).unwrap();
-    for o in objects.iter().filter(|o| o.bounds.center().distance(start) > 250.0) {
+    for o in objects
+        .iter()
+        .filter(|o| o.bounds.center().distance(start) > 250.0)
+    {
         bytes[(o.mesh.first_page * page_size + 20) as usize] ^= 0xff;
     }
     std::fs::write(&c.db, bytes).unwrap();
@@ -129,16 +212,46 @@ fn bad_settings_are_errors() {
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Normal, 10);
     for cfg in [
-        ReviewConfig { sf: 0.5, ..cfg(Preset::Optimal) },
-        ReviewConfig { sf: f32::NAN, ..cfg(Preset::Optimal) },
-        ReviewConfig { prefetch_k: Some(-1.0), ..cfg(Preset::Optimal) },
-        ReviewConfig { memory_budget: 0, ..cfg(Preset::Optimal) },
-        ReviewConfig { index_cache: Some(("nope".into(), 1 << 20)), ..cfg(Preset::Optimal) },
-        ReviewConfig { pace: Some(0.0), ..cfg(Preset::Optimal) },
-        ReviewConfig { pace: Some(f32::INFINITY), ..cfg(Preset::Optimal) },
-        ReviewConfig { prefetch_k: Some(0.8), ..cfg(Preset::Box) },
+        ReviewConfig {
+            sf: 0.5,
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            sf: f32::NAN,
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            prefetch_k: Some(-1.0),
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            memory_budget: 0,
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            index_cache: Some(("nope".into(), 1 << 20)),
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            pace: Some(0.0),
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            pace: Some(f32::INFINITY),
+            ..cfg(Preset::Optimal)
+        },
+        ReviewConfig {
+            prefetch_k: Some(0.8),
+            ..cfg(Preset::Box)
+        },
     ] {
         assert!(review::walk(&db, &p, &cfg, |_| {}).is_err());
     }
-    assert!(review::walk(&db, &CameraPath { poses: vec![] }, &cfg(Preset::Box), |_| {}).is_err());
+    assert!(review::walk(
+        &db,
+        &CameraPath { poses: vec![] },
+        &cfg(Preset::Box),
+        |_| {}
+    )
+    .is_err());
 }

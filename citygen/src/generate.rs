@@ -125,9 +125,18 @@ mod tests {
 
     #[test]
     fn a_bad_config_is_an_error_not_a_panic() {
-        let config = CityConfig { objects: 0, ..Default::default() };
-        assert!(matches!(generate(&config, |_| Ok::<(), SceneError>(())), Err(SceneError::Config(_))));
-        assert!(matches!(crate::object(&config, 0), Err(SceneError::Config(_))));
+        let config = CityConfig {
+            objects: 0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            generate(&config, |_| Ok::<(), SceneError>(())),
+            Err(SceneError::Config(_))
+        ));
+        assert!(matches!(
+            crate::object(&config, 0),
+            Err(SceneError::Config(_))
+        ));
     }
 
     #[test]

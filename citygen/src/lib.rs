@@ -45,4 +45,7 @@ pub use mesh::Mesh;
 pub use obj_export::export_obj;
 pub use object::{ObjectKind, SceneObject};
 pub use recipe::object;
-pub use scene_file::{dequantize_normal, quantize_snorm8, SceneReader, SceneSummary, SceneWriter, MAX_INDICES, MAX_VERTICES};
+pub use scene_file::{
+    dequantize_normal, quantize_snorm8, SceneReader, SceneSummary, SceneWriter, MAX_INDICES,
+    MAX_VERTICES,
+};

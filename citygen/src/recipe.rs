@@ -7,10 +7,10 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::error::SceneError;
 use crate::archetypes::building;
 use crate::bunny::bunny_landmark;
 use crate::config::CityConfig;
+use crate::error::SceneError;
 use crate::layout::Layout;
 use crate::object::{ObjectKind, SceneObject};
 use crate::sculpture::sculpture;
@@ -52,7 +52,8 @@ pub(crate) fn is_landmark(config: &CityConfig, id: u64) -> bool {
 /// The street layout of a checked `config`: a `Config` error when it is out of range.
 pub(crate) fn checked_layout(config: &CityConfig) -> Result<Layout, SceneError> {
     config.validate()?;
-    Layout::new(config).ok_or_else(|| SceneError::Config("the city has no room for its lots".into()))
+    Layout::new(config)
+        .ok_or_else(|| SceneError::Config("the city has no room for its lots".into()))
 }
 
 /// Object `id` of the city `config`: deterministic, and independent of every other id.

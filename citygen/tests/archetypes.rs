@@ -116,7 +116,9 @@ fn neighbouring_objects_do_not_intersect_and_stay_in_the_city() {
             ..Default::default()
         };
         let extent = config.extent();
-        let objects: Vec<_> = (0..config.objects).map(|id| object(&config, id).unwrap()).collect();
+        let objects: Vec<_> = (0..config.objects)
+            .map(|id| object(&config, id).unwrap())
+            .collect();
         for (i, a) in objects.iter().enumerate() {
             let ba = a.mesh.bounds();
             assert!(ba.0[0] >= 0.0 && ba.0[2] >= 0.0 && ba.1[0] <= extent && ba.1[2] <= extent);

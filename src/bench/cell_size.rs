@@ -14,7 +14,9 @@
 use std::path::Path;
 
 use super::view_culling::THESIS_SFS;
-use super::walk_setup::{check_sf, check_sweep, describe_review, label, mean_query_ms, num, per_query, WalkSetup};
+use super::walk_setup::{
+    check_sf, check_sweep, describe_review, label, mean_query_ms, num, per_query, WalkSetup,
+};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::walk::motion::Motion;
@@ -32,7 +34,10 @@ pub struct CellSizeConfig {
 
 impl Default for CellSizeConfig {
     fn default() -> CellSizeConfig {
-        CellSizeConfig { walk: WalkSetup::short(Motion::Normal), sfs: THESIS_SFS.to_vec() }
+        CellSizeConfig {
+            walk: WalkSetup::short(Motion::Normal),
+            sfs: THESIS_SFS.to_vec(),
+        }
     }
 }
 
@@ -46,7 +51,10 @@ impl CellSizeConfig {
 
     /// The walk settings of configuration `preset` at scale factor `sf`.
     pub fn review(&self, preset: Preset, sf: f32) -> ReviewConfig {
-        ReviewConfig { sf, ..self.walk.review(preset) }
+        ReviewConfig {
+            sf,
+            ..self.walk.review(preset)
+        }
     }
 }
 
@@ -111,9 +119,15 @@ pub fn run(db: &Database, cfg: &CellSizeConfig) -> Result<CellSizeReport> {
 }
 
 /// Runs the sweep; `progress(done, total)` is told after each walk.
-pub fn run_with_progress(db: &Database, cfg: &CellSizeConfig, mut progress: impl FnMut(usize, usize)) -> Result<CellSizeReport> {
+pub fn run_with_progress(
+    db: &Database,
+    cfg: &CellSizeConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<CellSizeReport> {
     cfg.validate()?;
-    let path = cfg.walk.path(db, cfg.walk.single_pattern("the cell-size sweep")?)?;
+    let path = cfg
+        .walk
+        .path(db, cfg.walk.single_pattern("the cell-size sweep")?)?;
     let total = cfg.sfs.len() * Preset::ALL.len();
     let mut rows = Vec::with_capacity(total);
     for &sf in &cfg.sfs {
@@ -123,7 +137,10 @@ pub fn run_with_progress(db: &Database, cfg: &CellSizeConfig, mut progress: impl
             progress(rows.len(), total);
         }
     }
-    Ok(CellSizeReport { config: cfg.clone(), rows })
+    Ok(CellSizeReport {
+        config: cfg.clone(),
+        rows,
+    })
 }
 
 /// A column of the tables and a line of the plots: a figure of a row.
@@ -175,21 +192,45 @@ impl CellSizeReport {
             Preset::ALL
                 .iter()
                 .map(|&p| {
-                    let mut points: Vec<(f64, f64)> = self.rows_of(p).map(|r| (r.sf as f64, by(r))).collect();
+                    let mut points: Vec<(f64, f64)> =
+                        self.rows_of(p).map(|r| (r.sf as f64, by(r))).collect();
                     points.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    Series { name: label(p).into(), points }
+                    Series {
+                        name: label(p).into(),
+                        points,
+                    }
                 })
                 .collect()
         };
         let x_label = "cell size: scale factor SF (disk cell / frustum cell)".to_string();
         for (file, title, y_label, by) in [
-            (FRAME_PLOT_FILE, "Mean frame time against cell size (Fig. 4.19)", "mean frame time (ms)", (|r: &CellSizeRow| r.mean_frame_ms) as Figure),
-            (VARIANCE_PLOT_FILE, "Variance of the frame time against cell size (Fig. 4.20)", "frame time variance (ms²)", |r: &CellSizeRow| r.frame_ms_variance),
-            (PAGES_PLOT_FILE, "Index pages read per query against cell size", "index pages per query", |r: &CellSizeRow| r.index_per_query),
+            (
+                FRAME_PLOT_FILE,
+                "Mean frame time against cell size (Fig. 4.19)",
+                "mean frame time (ms)",
+                (|r: &CellSizeRow| r.mean_frame_ms) as Figure,
+            ),
+            (
+                VARIANCE_PLOT_FILE,
+                "Variance of the frame time against cell size (Fig. 4.20)",
+                "frame time variance (ms²)",
+                |r: &CellSizeRow| r.frame_ms_variance,
+            ),
+            (
+                PAGES_PLOT_FILE,
+                "Index pages read per query against cell size",
+                "index pages per query",
+                |r: &CellSizeRow| r.index_per_query,
+            ),
         ] {
             line_plot(
                 &dir.join(file),
-                &LinePlot { title: title.into(), x_label: x_label.clone(), y_label: y_label.into(), series: series(by) },
+                &LinePlot {
+                    title: title.into(),
+                    x_label: x_label.clone(),
+                    y_label: y_label.into(),
+                    series: series(by),
+                },
             )?;
         }
         Ok(())
@@ -210,20 +251,44 @@ impl CellSizeReport {
         ));
         let head = format!(
             "| SF | {} |\n|---|{}\n",
-            Preset::ALL.iter().map(|&p| label(p)).collect::<Vec<_>>().join(" | "),
+            Preset::ALL
+                .iter()
+                .map(|&p| label(p))
+                .collect::<Vec<_>>()
+                .join(" | "),
             "---|".repeat(Preset::ALL.len())
         );
         for (title, by) in [
-            ("Mean frame time, ms (Fig. 4.19)", (|r: &CellSizeRow| format!("{:.3}", r.mean_frame_ms)) as fn(&CellSizeRow) -> String),
-            ("Frame time variance, ms² (Fig. 4.20)", |r: &CellSizeRow| format!("{:.3}", r.frame_ms_variance)),
-            ("Longest frame, ms (frames over 50 ms)", |r: &CellSizeRow| format!("{:.1} ({})", r.max_frame_ms, r.frames_over_50ms)),
-            ("Queries (viewer's mean wait per query, ms)", |r: &CellSizeRow| format!("{} ({:.2})", r.queries, r.mean_query_ms)),
-            ("Index pages per query", |r: &CellSizeRow| format!("{:.1}", r.index_per_query)),
-            ("Disk I/Os (index + mesh pages) per query", |r: &CellSizeRow| format!("{:.0}", r.io_per_query)),
+            (
+                "Mean frame time, ms (Fig. 4.19)",
+                (|r: &CellSizeRow| format!("{:.3}", r.mean_frame_ms)) as fn(&CellSizeRow) -> String,
+            ),
+            (
+                "Frame time variance, ms² (Fig. 4.20)",
+                |r: &CellSizeRow| format!("{:.3}", r.frame_ms_variance),
+            ),
+            (
+                "Longest frame, ms (frames over 50 ms)",
+                |r: &CellSizeRow| format!("{:.1} ({})", r.max_frame_ms, r.frames_over_50ms),
+            ),
+            (
+                "Queries (viewer's mean wait per query, ms)",
+                |r: &CellSizeRow| format!("{} ({:.2})", r.queries, r.mean_query_ms),
+            ),
+            ("Index pages per query", |r: &CellSizeRow| {
+                format!("{:.1}", r.index_per_query)
+            }),
+            (
+                "Disk I/Os (index + mesh pages) per query",
+                |r: &CellSizeRow| format!("{:.0}", r.io_per_query),
+            ),
         ] {
             s.push_str(&format!("{title}:\n\n{head}"));
             for &sf in &c.sfs {
-                let cells: Vec<String> = Preset::ALL.iter().map(|&p| self.row(sf, p).map(by).unwrap_or_default()).collect();
+                let cells: Vec<String> = Preset::ALL
+                    .iter()
+                    .map(|&p| self.row(sf, p).map(by).unwrap_or_default())
+                    .collect();
                 s.push_str(&format!("| {} | {} |\n", num(sf), cells.join(" | ")));
             }
             s.push('\n');
@@ -246,16 +311,28 @@ impl CellSizeReport {
     /// which the first disk cell held the whole walk.
     fn comparison(&self) -> String {
         let n = self.config.sfs.len();
-        let one_cell: Vec<String> =
-            self.config.sfs.iter().filter(|&&sf| self.rows.iter().filter(|r| r.sf == sf).all(|r| r.queries <= 1)).map(|&sf| num(sf)).collect();
+        let one_cell: Vec<String> = self
+            .config
+            .sfs
+            .iter()
+            .filter(|&&sf| {
+                self.rows
+                    .iter()
+                    .filter(|r| r.sf == sf)
+                    .all(|r| r.queries <= 1)
+            })
+            .map(|&sf| num(sf))
+            .collect();
         let count = |by: Figure| {
             self.config
                 .sfs
                 .iter()
-                .filter(|&&sf| match (self.row(sf, Preset::Box), self.row(sf, Preset::Optimal)) {
-                    (Some(b), Some(o)) => by(b) > by(o),
-                    _ => false,
-                })
+                .filter(
+                    |&&sf| match (self.row(sf, Preset::Box), self.row(sf, Preset::Optimal)) {
+                        (Some(b), Some(o)) => by(b) > by(o),
+                        _ => false,
+                    },
+                )
                 .count()
         };
         let mut s = format!(

@@ -38,7 +38,13 @@ pub fn city_path(dir: &Path, objects: u64, seed: u64, page_size: usize) -> PathB
 /// A database already there is reused if it opens and holds the expected number of
 /// objects with the expected page size; otherwise this is an error naming the file, to
 /// be deleted by hand, rather than a silent rebuild.
-pub fn ensure(dir: &Path, sizes: &[u64], seed: u64, page_size: usize, mut progress: impl FnMut(u64, bool)) -> Result<Vec<SeriesCity>> {
+pub fn ensure(
+    dir: &Path,
+    sizes: &[u64],
+    seed: u64,
+    page_size: usize,
+    mut progress: impl FnMut(u64, bool),
+) -> Result<Vec<SeriesCity>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let mut cities = Vec::with_capacity(sizes.len());
     for &objects in sizes {
@@ -49,16 +55,31 @@ pub fn ensure(dir: &Path, sizes: &[u64], seed: u64, page_size: usize, mut progre
         }
         check(&path, objects, page_size)?;
         progress(objects, built);
-        cities.push(SeriesCity { objects, path, built });
+        cities.push(SeriesCity {
+            objects,
+            path,
+            built,
+        });
     }
     Ok(cities)
 }
 
 fn build(dir: &Path, db: &Path, objects: u64, seed: u64, page_size: usize) -> Result<()> {
     let scene = dir.join(format!("city-{objects}-seed{seed}.scene"));
-    let city = citygen::CityConfig { objects, seed, ..Default::default() };
+    let city = citygen::CityConfig {
+        objects,
+        seed,
+        ..Default::default()
+    };
     citygen::write_city(&city, &scene, false)?;
-    let built = build_from_scene(&scene, db, &BuildOptions { page_size, ..Default::default() });
+    let built = build_from_scene(
+        &scene,
+        db,
+        &BuildOptions {
+            page_size,
+            ..Default::default()
+        },
+    );
     // The scene is as large as the database and no longer needed, built or not.
     let removed = std::fs::remove_file(&scene).map_err(|e| Error::io(&scene, e));
     built?;
@@ -103,6 +124,9 @@ mod tests {
         // A file under the name of another city is an error, not a silent rebuild.
         std::fs::copy(&first[0].path, city_path(dir.path(), 90, 3, 1024)).unwrap();
         let err = ensure(dir.path(), &[90], 3, 1024, |_, _| {}).unwrap_err();
-        assert!(err.to_string().contains("expected a city of 90 objects"), "{err}");
+        assert!(
+            err.to_string().contains("expected a city of 90 objects"),
+            "{err}"
+        );
     }
 }

@@ -11,9 +11,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::database::Database;
+use crate::error::Error;
 use crate::error::Result;
 use crate::geom::Aabb;
-use crate::error::Error;
 use crate::rtree::{Coverlap, History, RTree, DEFAULT_HISTORY_LEN};
 use crate::store::Store;
 use crate::walk::{cells::disk_cell, street_walk};
@@ -34,7 +34,14 @@ pub struct CsearchConfig {
 
 impl Default for CsearchConfig {
     fn default() -> CsearchConfig {
-        CsearchConfig { cell: 1000.0, step: 25.0, steps: 200, segment: 24, seed: 1, history_len: DEFAULT_HISTORY_LEN }
+        CsearchConfig {
+            cell: 1000.0,
+            step: 25.0,
+            steps: 200,
+            segment: 24,
+            seed: 1,
+            history_len: DEFAULT_HISTORY_LEN,
+        }
     }
 }
 
@@ -76,12 +83,22 @@ pub struct CsearchReport {
 
 /// Runs the walk on the database's own index.
 pub fn run(db: &Database, cfg: &CsearchConfig) -> Result<CsearchReport> {
-    walk(db.store(), db.tree(), &db.bounds(), cfg, "packed (as built)")
+    walk(
+        db.store(),
+        db.tree(),
+        &db.bounds(),
+        cfg,
+        "packed (as built)",
+    )
 }
 
 /// Runs the walk on a copy of the index built by one-by-one insertion with the linear
 /// split, in a temporary file next to `scratch`.
-pub fn run_insertion_tree(db: &Database, cfg: &CsearchConfig, scratch: &Path) -> Result<CsearchReport> {
+pub fn run_insertion_tree(
+    db: &Database,
+    cfg: &CsearchConfig,
+    scratch: &Path,
+) -> Result<CsearchReport> {
     let all = db.range(&db.bounds())?.objects;
     let mut store = Store::create(scratch, db.store().page_size())?;
     let mut tree = RTree::bulk_load(&mut store, Vec::new(), 1.0)?;
@@ -94,7 +111,13 @@ pub fn run_insertion_tree(db: &Database, cfg: &CsearchConfig, scratch: &Path) ->
     walk(&store, &tree, &db.bounds(), cfg, "insertion, linear split")
 }
 
-fn walk(store: &Store, tree: &RTree, bounds: &Aabb, cfg: &CsearchConfig, name: &str) -> Result<CsearchReport> {
+fn walk(
+    store: &Store,
+    tree: &RTree,
+    bounds: &Aabb,
+    cfg: &CsearchConfig,
+    name: &str,
+) -> Result<CsearchReport> {
     let path = street_walk(bounds, cfg.steps, cfg.step, cfg.segment, cfg.seed)?;
     let mut history = History::new(cfg.history_len);
     let mut rows = Vec::with_capacity(path.positions.len());
@@ -113,7 +136,9 @@ fn walk(store: &Store, tree: &RTree, bounds: &Aabb, cfg: &CsearchConfig, name: &
         let complement = tree.csearch_with(store, &cell, &cells, Coverlap::Clipped)?;
         let csearch_us = t.elapsed().as_secs_f64() * 1e6;
         if thesis.objects.len() != complement.objects.len() {
-            return Err(Error::Invalid(format!("step {step}: the two COverlap rules disagree")));
+            return Err(Error::Invalid(format!(
+                "step {step}: the two COverlap rules disagree"
+            )));
         }
         history.record(cell, &complement.objects);
         rows.push(CsearchRow {
@@ -134,7 +159,13 @@ fn walk(store: &Store, tree: &RTree, bounds: &Aabb, cfg: &CsearchConfig, name: &
     let box_pages: u64 = rows.iter().map(|r| r.box_pages as u64).sum();
     let csearch_pages: u64 = rows.iter().map(|r| r.csearch_pages as u64).sum();
     let thesis_pages: u64 = rows.iter().map(|r| r.thesis_pages as u64).sum();
-    let share = |pages: u64| if box_pages == 0 { 0.0 } else { pages as f64 / box_pages as f64 };
+    let share = |pages: u64| {
+        if box_pages == 0 {
+            0.0
+        } else {
+            pages as f64 / box_pages as f64
+        }
+    };
     let ms = |f: fn(&CsearchRow) -> f64| rows.iter().map(f).sum::<f64>() / 1e3;
     Ok(CsearchReport {
         tree: name.into(),
@@ -184,7 +215,11 @@ pub fn plot(report: &CsearchReport, path: &Path) -> Result<()> {
     use super::plot::{line_plot, LinePlot, Series};
     let series = |name: &str, f: fn(&CsearchRow) -> usize| Series {
         name: name.into(),
-        points: report.rows.iter().map(|r| (r.step as f64, f(r) as f64)).collect(),
+        points: report
+            .rows
+            .iter()
+            .map(|r| (r.step as f64, f(r) as f64))
+            .collect(),
     };
     line_plot(
         path,

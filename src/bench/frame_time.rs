@@ -26,7 +26,9 @@ pub struct FrameTimeConfig {
 
 impl Default for FrameTimeConfig {
     fn default() -> FrameTimeConfig {
-        FrameTimeConfig { walk: WalkSetup::short(Motion::Normal) }
+        FrameTimeConfig {
+            walk: WalkSetup::short(Motion::Normal),
+        }
     }
 }
 
@@ -43,7 +45,10 @@ impl FrameTimeConfig {
     /// The walk settings of `preset`, with Optimal's index cache (1 MB, distance-priority
     /// LRU) whatever the preset, as in the thesis's figure.
     pub fn review(&self, preset: Preset) -> ReviewConfig {
-        ReviewConfig { index_cache: ReviewConfig::preset(Preset::Optimal).index_cache, ..self.walk.review(preset) }
+        ReviewConfig {
+            index_cache: ReviewConfig::preset(Preset::Optimal).index_cache,
+            ..self.walk.review(preset)
+        }
     }
 }
 
@@ -78,14 +83,24 @@ pub fn run(db: &Database, cfg: &FrameTimeConfig) -> Result<FrameTimeReport> {
 }
 
 /// Runs the experiment; `progress(done, total)` is told after each walk.
-pub fn run_with_progress(db: &Database, cfg: &FrameTimeConfig, mut progress: impl FnMut(usize, usize)) -> Result<FrameTimeReport> {
+pub fn run_with_progress(
+    db: &Database,
+    cfg: &FrameTimeConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<FrameTimeReport> {
     cfg.validate()?;
-    let path = cfg.walk.path(db, cfg.walk.single_pattern("the frame-time walk")?)?;
+    let path = cfg
+        .walk
+        .path(db, cfg.walk.single_pattern("the frame-time walk")?)?;
     let optimal = review::walk(db, &path, &cfg.review(Preset::Optimal), |_| {})?;
     progress(1, 2);
     let boxed = review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?;
     progress(2, 2);
-    Ok(FrameTimeReport { config: cfg.clone(), rows: rows(&optimal, &boxed)?, summaries: [optimal.summary, boxed.summary] })
+    Ok(FrameTimeReport {
+        config: cfg.clone(),
+        rows: rows(&optimal, &boxed)?,
+        summaries: [optimal.summary, boxed.summary],
+    })
 }
 
 fn rows(optimal: &WalkReport, boxed: &WalkReport) -> Result<Vec<FrameTimeRow>> {
@@ -118,7 +133,12 @@ impl FrameTimeReport {
         for r in &self.rows {
             s.push_str(&format!(
                 "{},{:.4},{:.4},{:.4},{},{}\n",
-                r.frame, r.time, r.optimal_ms, r.box_ms, r.optimal_queried as u8, r.box_queried as u8
+                r.frame,
+                r.time,
+                r.optimal_ms,
+                r.box_ms,
+                r.optimal_queried as u8,
+                r.box_queried as u8
             ));
         }
         s
@@ -131,7 +151,12 @@ impl FrameTimeReport {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |name: &str, by: fn(&FrameTimeRow) -> f64| Series {
             name: name.into(),
-            points: self.rows.iter().skip(1).map(|r| (r.frame as f64, by(r))).collect(),
+            points: self
+                .rows
+                .iter()
+                .skip(1)
+                .map(|r| (r.frame as f64, by(r)))
+                .collect(),
         };
         line_plot(
             &dir.join(PLOT_FILE),
@@ -147,7 +172,9 @@ impl FrameTimeReport {
     /// The figures beside the thesis's Fig. 4.21, described in words (it gives no numbers).
     pub fn markdown(&self) -> String {
         let c = &self.config;
-        let mut s = String::from("## Time per frame along one path, Optimal against BOX (Shou 2002, Fig. 4.21)\n\n");
+        let mut s = String::from(
+            "## Time per frame along one path, Optimal against BOX (Shou 2002, Fig. 4.21)\n\n",
+        );
         s.push_str(&format!(
             "One {} walk: {}, SF {}. Optimal: {}; BOX: {}. Every frame's time is in the CSV; the plot leaves out \
              frame 0 (the first cell, loaded cold).\n\n",
@@ -162,7 +189,13 @@ impl FrameTimeReport {
              |---|---|---|---|---|---|---|\n",
         );
         for (p, sum) in PRESETS.iter().zip(&self.summaries) {
-            let first = self.rows.first().map_or(0.0, |r| if *p == Preset::Box { r.box_ms } else { r.optimal_ms });
+            let first = self.rows.first().map_or(0.0, |r| {
+                if *p == Preset::Box {
+                    r.box_ms
+                } else {
+                    r.optimal_ms
+                }
+            });
             s.push_str(&format!(
                 "| {} | {:.1} | {:.3} | {:.3} | {:.1} | {} | {} |\n",
                 label(*p),

@@ -29,7 +29,10 @@ pub struct IndexCacheConfig {
 
 impl Default for IndexCacheConfig {
     fn default() -> IndexCacheConfig {
-        IndexCacheConfig { walk: WalkSetup::default(), sizes: vec![2, 4, 8, 16, 32, 64, 128, 256] }
+        IndexCacheConfig {
+            walk: WalkSetup::default(),
+            sizes: vec![2, 4, 8, 16, 32, 64, 128, 256],
+        }
     }
 }
 
@@ -39,7 +42,9 @@ impl IndexCacheConfig {
         self.walk.validate()?;
         check_sweep("cache size", &self.sizes, |pages| {
             if pages == 0 {
-                return Err(Error::Invalid("a cache size must be at least one page".into()));
+                return Err(Error::Invalid(
+                    "a cache size must be at least one page".into(),
+                ));
             }
             Ok(())
         })
@@ -83,7 +88,12 @@ pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
     for &pattern in &cfg.walk.patterns {
         let trace = record(db, cfg, pattern)?;
         let (accesses, working_set) = (trace.0.len(), trace.0.distinct_pages());
-        traces.push(PatternTrace { pattern, accesses, working_set, queries: trace.1 });
+        traces.push(PatternTrace {
+            pattern,
+            accesses,
+            working_set,
+            queries: trace.1,
+        });
         for &pages in &cfg.sizes {
             rows.push(IndexCacheRow {
                 pattern,
@@ -95,7 +105,11 @@ pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
             });
         }
     }
-    Ok(IndexCacheReport { config: cfg.clone(), traces, rows })
+    Ok(IndexCacheReport {
+        config: cfg.clone(),
+        traces,
+        rows,
+    })
 }
 
 fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Trace, usize)> {
@@ -107,7 +121,9 @@ fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Tra
         ..cfg.walk.review(Preset::Optimal)
     };
     let report = review::walk(db, &path, &walk_cfg, |_| {})?;
-    let trace = report.trace.ok_or_else(|| Error::Invalid("the walk recorded no trace".into()))?;
+    let trace = report
+        .trace
+        .ok_or_else(|| Error::Invalid("the walk recorded no trace".into()))?;
     Ok((trace, report.summary.queries))
 }
 
@@ -149,15 +165,26 @@ impl IndexCacheReport {
     pub fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         for t in &self.traces {
-            let rows: Vec<&IndexCacheRow> = self.rows.iter().filter(|r| r.pattern == t.pattern).collect();
+            let rows: Vec<&IndexCacheRow> = self
+                .rows
+                .iter()
+                .filter(|r| r.pattern == t.pattern)
+                .collect();
             let series = |name: &str, f: fn(&IndexCacheRow) -> f64| Series {
                 name: name.into(),
-                points: rows.iter().map(|r| (r.bytes as f64 / 1024.0, 100.0 * f(r))).collect(),
+                points: rows
+                    .iter()
+                    .map(|r| (r.bytes as f64 / 1024.0, 100.0 * f(r)))
+                    .collect(),
             };
             line_plot(
                 &dir.join(format!("index-cache-{}.png", t.pattern.name())),
                 &LinePlot {
-                    title: format!("Index cache hit rate, {} walk ({} pages touched)", t.pattern.name(), t.working_set),
+                    title: format!(
+                        "Index cache hit rate, {} walk ({} pages touched)",
+                        t.pattern.name(),
+                        t.working_set
+                    ),
                     x_label: "cache size (KiB)".into(),
                     y_label: "hit rate (%)".into(),
                     series: vec![

@@ -29,7 +29,13 @@ pub struct PatternsConfig {
 
 impl Default for PatternsConfig {
     fn default() -> PatternsConfig {
-        PatternsConfig { walk: WalkSetup { frames: PATTERN_FRAMES, ..WalkSetup::default() }, prefetch_k: review::DEFAULT_K }
+        PatternsConfig {
+            walk: WalkSetup {
+                frames: PATTERN_FRAMES,
+                ..WalkSetup::default()
+            },
+            prefetch_k: review::DEFAULT_K,
+        }
     }
 }
 
@@ -44,7 +50,10 @@ impl PatternsConfig {
     /// and its k where the preset prefetches.
     pub fn review(&self, preset: Preset) -> ReviewConfig {
         let base = self.walk.review(preset);
-        ReviewConfig { prefetch_k: base.prefetch_k.map(|_| self.prefetch_k), ..base }
+        ReviewConfig {
+            prefetch_k: base.prefetch_k.map(|_| self.prefetch_k),
+            ..base
+        }
     }
 }
 
@@ -101,8 +110,13 @@ pub struct PatternsReport {
 pub const PLOT_FILE: &str = "patterns-io-per-query.png";
 
 /// The thesis's Table 4.1: (session, BOX, Optimal) disk I/Os per query.
-pub const THESIS_TABLE_4_1: [(usize, f64, f64); 5] =
-    [(1, 1877.75, 410.95), (2, 1900.94, 169.96), (3, 1963.73, 265.88), (4, 2018.24, 201.89), (5, 1934.57, 212.48)];
+pub const THESIS_TABLE_4_1: [(usize, f64, f64); 5] = [
+    (1, 1877.75, 410.95),
+    (2, 1900.94, 169.96),
+    (3, 1963.73, 265.88),
+    (4, 2018.24, 201.89),
+    (5, 1934.57, 212.48),
+];
 
 /// Runs the experiment.
 pub fn run(db: &Database, cfg: &PatternsConfig) -> Result<PatternsReport> {
@@ -110,16 +124,26 @@ pub fn run(db: &Database, cfg: &PatternsConfig) -> Result<PatternsReport> {
 }
 
 /// Runs the experiment; `progress(done, total)` is told after each walk.
-pub fn run_with_progress(db: &Database, cfg: &PatternsConfig, mut progress: impl FnMut(usize, usize)) -> Result<PatternsReport> {
+pub fn run_with_progress(
+    db: &Database,
+    cfg: &PatternsConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<PatternsReport> {
     cfg.validate()?;
     let patterns = &cfg.walk.patterns;
     let total = patterns.len() * 2;
     let mut rows = Vec::with_capacity(patterns.len());
     for (i, &pattern) in patterns.iter().enumerate() {
         let path = cfg.walk.path(db, pattern)?;
-        let optimal = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Optimal), |_| {})?);
+        let optimal = PresetIo::from_walk(&review::walk(
+            db,
+            &path,
+            &cfg.review(Preset::Optimal),
+            |_| {},
+        )?);
         progress(2 * i + 1, total);
-        let box_io = PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?);
+        let box_io =
+            PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?);
         progress(2 * i + 2, total);
         let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
         rows.push(PatternRow {
@@ -130,7 +154,11 @@ pub fn run_with_progress(db: &Database, cfg: &PatternsConfig, mut progress: impl
             box_io,
         });
     }
-    Ok(PatternsReport { config: cfg.clone(), page_size: db.store().page_size(), rows })
+    Ok(PatternsReport {
+        config: cfg.clone(),
+        page_size: db.store().page_size(),
+        rows,
+    })
 }
 
 impl PatternsReport {
@@ -172,9 +200,19 @@ impl PatternsReport {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |name: &str, f: fn(&PatternRow) -> f64| Series {
             name: name.into(),
-            points: self.rows.iter().enumerate().map(|(i, r)| ((i + 1) as f64, f(r))).collect(),
+            points: self
+                .rows
+                .iter()
+                .enumerate()
+                .map(|(i, r)| ((i + 1) as f64, f(r)))
+                .collect(),
         };
-        let names: Vec<String> = self.rows.iter().enumerate().map(|(i, r)| format!("{} {}", i + 1, r.pattern.name())).collect();
+        let names: Vec<String> = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| format!("{} {}", i + 1, r.pattern.name()))
+            .collect();
         line_plot(
             &dir.join(PLOT_FILE),
             &LinePlot {
@@ -194,7 +232,9 @@ impl PatternsReport {
     /// The figures beside the thesis's Table 4.1.
     pub fn markdown(&self) -> String {
         let c = &self.config;
-        let mut s = String::from("# patterns — disk I/Os per query, Optimal against BOX (Shou 2002, Table 4.1)\n\n");
+        let mut s = String::from(
+            "# patterns — disk I/Os per query, Optimal against BOX (Shou 2002, Table 4.1)\n\n",
+        );
         s.push_str(&format!(
             "Each pattern: {}, SF {}, Optimal with k = {}. A disk I/O is one {}-byte page read (index or mesh).\n\n",
             c.walk.describe(),
@@ -227,12 +267,21 @@ impl PatternsReport {
             self.rows.iter().map(|r| r.ratio).min_by(f64::total_cmp),
             self.rows.iter().map(|r| r.ratio).max_by(f64::total_cmp),
         ) {
-            s.push_str(&format!("\nHere Optimal needs {:.1}–{:.1} % of BOX's disk I/Os per query.\n", lo * 100.0, hi * 100.0));
+            s.push_str(&format!(
+                "\nHere Optimal needs {:.1}–{:.1} % of BOX's disk I/Os per query.\n",
+                lo * 100.0,
+                hi * 100.0
+            ));
         }
         s.push_str("\nThe thesis's Table 4.1 (900,000 objects, 1 km frustum, 20 MB memory):\n\n");
-        s.push_str("| session | BOX I/Os / q | Optimal I/Os / q | Optimal / BOX |\n|---|---|---|---|\n");
+        s.push_str(
+            "| session | BOX I/Os / q | Optimal I/Os / q | Optimal / BOX |\n|---|---|---|---|\n",
+        );
         for (session, b, o) in THESIS_TABLE_4_1 {
-            s.push_str(&format!("| {session} | {b:.2} | {o:.2} | {:.1} % |\n", o / b * 100.0));
+            s.push_str(&format!(
+                "| {session} | {b:.2} | {o:.2} | {:.1} % |\n",
+                o / b * 100.0
+            ));
         }
         s.push_str(
             "\nThe thesis: Optimal does 9–21 % of BOX's disk I/Os per query; BOX 1,878–2,018 I/Os per query, \

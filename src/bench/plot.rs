@@ -41,14 +41,18 @@ const DENSE_POINTS: usize = 200;
 fn register_font() -> std::result::Result<(), String> {
     static DONE: OnceLock<std::result::Result<(), String>> = OnceLock::new();
     DONE.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).map_err(|_| "the plot font does not load".to_string())
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .map_err(|_| "the plot font does not load".to_string())
     })
     .clone()
 }
 
 /// Draws `plot` into a PNG at `path` (800 × 500).
 pub fn line_plot(path: &Path, plot: &LinePlot) -> Result<()> {
-    draw(path, plot).map_err(|what| Error::BadInput { path: path.to_path_buf(), what: format!("cannot draw the plot: {what}") })
+    draw(path, plot).map_err(|what| Error::BadInput {
+        path: path.to_path_buf(),
+        what: format!("cannot draw the plot: {what}"),
+    })
 }
 
 fn draw(path: &Path, plot: &LinePlot) -> std::result::Result<(), String> {
@@ -57,7 +61,9 @@ fn draw(path: &Path, plot: &LinePlot) -> std::result::Result<(), String> {
     if points().any(|(x, y)| !x.is_finite() || !y.is_finite()) {
         return Err("a point is not finite".into());
     }
-    let (x0, x1) = points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (x, _)| (a.min(x), b.max(x)));
+    let (x0, x1) = points().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (x, _)| {
+        (a.min(x), b.max(x))
+    });
     let y1 = points().fold(0.0f64, |b, (_, y)| b.max(y));
     let (x0, x1) = if x0 < x1 { (x0, x1) } else { (0.0, 1.0) };
     let y1 = if y1 > 0.0 { y1 * 1.05 } else { 1.0 };
@@ -70,17 +76,27 @@ fn draw(path: &Path, plot: &LinePlot) -> std::result::Result<(), String> {
         .y_label_area_size(60)
         .build_cartesian_2d(x0..x1, 0.0..y1)
         .map_err(|e| e.to_string())?;
-    chart.configure_mesh().x_desc(&plot.x_label).y_desc(&plot.y_label).draw().map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc(&plot.x_label)
+        .y_desc(&plot.y_label)
+        .draw()
+        .map_err(|e| e.to_string())?;
     for (i, s) in plot.series.iter().enumerate() {
         let color = COLORS[i % COLORS.len()];
         // A polyline wider than a pixel joins its segments with miters, which shoot far
         // past the sharp corners of a dense series (a frame-time trace): draw those thin.
         let width = if s.points.len() > DENSE_POINTS { 1 } else { 2 };
         chart
-            .draw_series(LineSeries::new(s.points.iter().copied(), color.stroke_width(width)))
+            .draw_series(LineSeries::new(
+                s.points.iter().copied(),
+                color.stroke_width(width),
+            ))
             .map_err(|e| e.to_string())?
             .label(&s.name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
     }
     chart
         .configure_series_labels()
@@ -104,7 +120,10 @@ mod tests {
             title: "t".into(),
             x_label: "x".into(),
             y_label: "y".into(),
-            series: vec![Series { name: "a".into(), points: vec![(0.0, 1.0), (1.0, 3.0)] }],
+            series: vec![Series {
+                name: "a".into(),
+                points: vec![(0.0, 1.0), (1.0, 3.0)],
+            }],
         };
         line_plot(&path, &plot).unwrap();
         assert_eq!(&std::fs::read(&path).unwrap()[1..4], b"PNG");

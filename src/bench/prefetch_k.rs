@@ -34,7 +34,10 @@ pub fn default_ks() -> Vec<f32> {
 
 impl Default for PrefetchKConfig {
     fn default() -> PrefetchKConfig {
-        PrefetchKConfig { walk: WalkSetup::default(), ks: default_ks() }
+        PrefetchKConfig {
+            walk: WalkSetup::default(),
+            ks: default_ks(),
+        }
     }
 }
 
@@ -47,7 +50,10 @@ impl PrefetchKConfig {
 
     /// The walk settings for factor `k`: Optimal with this experiment's walk.
     pub fn review(&self, k: f32) -> ReviewConfig {
-        ReviewConfig { prefetch_k: Some(k), ..self.walk.review(Preset::Optimal) }
+        ReviewConfig {
+            prefetch_k: Some(k),
+            ..self.walk.review(Preset::Optimal)
+        }
     }
 }
 
@@ -108,7 +114,11 @@ pub fn run(db: &Database, cfg: &PrefetchKConfig) -> Result<PrefetchKReport> {
 }
 
 /// Runs the experiment; `progress(done, total)` is told after each walk.
-pub fn run_with_progress(db: &Database, cfg: &PrefetchKConfig, mut progress: impl FnMut(usize, usize)) -> Result<PrefetchKReport> {
+pub fn run_with_progress(
+    db: &Database,
+    cfg: &PrefetchKConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<PrefetchKReport> {
     cfg.validate()?;
     let total = cfg.walk.patterns.len() * cfg.ks.len();
     let mut rows = Vec::with_capacity(total);
@@ -120,7 +130,10 @@ pub fn run_with_progress(db: &Database, cfg: &PrefetchKConfig, mut progress: imp
             progress(rows.len(), total);
         }
     }
-    Ok(PrefetchKReport { config: cfg.clone(), rows })
+    Ok(PrefetchKReport {
+        config: cfg.clone(),
+        rows,
+    })
 }
 
 impl PrefetchKReport {
@@ -164,7 +177,8 @@ impl PrefetchKReport {
     }
 
     fn best(&self, pattern: Motion, by: fn(&PrefetchKRow) -> f64) -> Option<&PrefetchKRow> {
-        self.rows_of(pattern).min_by(|a, b| by(a).total_cmp(&by(b)).then(a.k.total_cmp(&b.k)))
+        self.rows_of(pattern)
+            .min_by(|a, b| by(a).total_cmp(&by(b)).then(a.k.total_cmp(&b.k)))
     }
 
     /// Fig. 4.17: (a) mean frame time and (b) mean query time against k, one line per
@@ -178,7 +192,10 @@ impl PrefetchKReport {
                 .walk
                 .patterns
                 .iter()
-                .map(|&p| Series { name: p.name().into(), points: self.rows_of(p).map(|r| (r.k as f64, by(r))).collect() })
+                .map(|&p| Series {
+                    name: p.name().into(),
+                    points: self.rows_of(p).map(|r| (r.k as f64, by(r))).collect(),
+                })
                 .collect()
         };
         line_plot(
@@ -214,12 +231,21 @@ impl PrefetchKReport {
         ));
         let head = format!(
             "| pattern | {} |\n|---|{}\n",
-            c.ks.iter().map(|&k| format!("k = {}", num(k))).collect::<Vec<_>>().join(" | "),
+            c.ks.iter()
+                .map(|&k| format!("k = {}", num(k)))
+                .collect::<Vec<_>>()
+                .join(" | "),
             "---|".repeat(c.ks.len())
         );
         for (title, by) in [
-            ("Mean frame time, ms", (|r: &PrefetchKRow| r.mean_frame_ms) as fn(&PrefetchKRow) -> f64),
-            ("Mean query time (frames that queried), ms", |r: &PrefetchKRow| r.mean_query_ms),
+            (
+                "Mean frame time, ms",
+                (|r: &PrefetchKRow| r.mean_frame_ms) as fn(&PrefetchKRow) -> f64,
+            ),
+            (
+                "Mean query time (frames that queried), ms",
+                |r: &PrefetchKRow| r.mean_query_ms,
+            ),
         ] {
             s.push_str(&format!("{title}:\n\n{head}"));
             for &p in &c.walk.patterns {
@@ -228,15 +254,22 @@ impl PrefetchKReport {
             }
             s.push('\n');
         }
-        s.push_str(&format!("Queries the viewer's thread ran itself (a prediction that held spares one):\n\n{head}"));
+        s.push_str(&format!(
+            "Queries the viewer's thread ran itself (a prediction that held spares one):\n\n{head}"
+        ));
         for &p in &c.walk.patterns {
-            let cells: Vec<String> = self.rows_of(p).map(|r| r.sync_queries.to_string()).collect();
+            let cells: Vec<String> = self
+                .rows_of(p)
+                .map(|r| r.sync_queries.to_string())
+                .collect();
             s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
         }
         s.push('\n');
         s.push_str("| pattern | best k (frame time) | mean frame ms there | best k (query time) | queries | prefetches used |\n|---|---|---|---|---|---|\n");
         for &p in &c.walk.patterns {
-            let Some(best) = self.best(p, |r| r.mean_frame_ms) else { continue };
+            let Some(best) = self.best(p, |r| r.mean_frame_ms) else {
+                continue;
+            };
             s.push_str(&format!(
                 "| {} | {} | {:.3} | {} | {} | {} |\n",
                 p.name(),

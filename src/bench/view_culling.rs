@@ -35,8 +35,8 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::scene::Mesh;
-use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::motion::Motion;
 
 /// The settings of the experiment.
@@ -88,12 +88,23 @@ impl std::str::FromStr for BufferModel {
 pub const THESIS_SFS: [f32; 6] = [1.0, 1.2, 1.5, 2.1, 2.5, 3.1];
 
 /// The thesis's Table 4.2: (cell size, objects removed %, time reduced %).
-pub const THESIS_TABLE_4_2: [(f32, f64, f64); 6] =
-    [(1.0, 91.34, 34.93), (1.2, 92.26, 46.13), (1.5, 92.93, 50.53), (2.1, 93.99, 61.02), (2.5, 94.86, 65.16), (3.1, 95.33, 90.77)];
+pub const THESIS_TABLE_4_2: [(f32, f64, f64); 6] = [
+    (1.0, 91.34, 34.93),
+    (1.2, 92.26, 46.13),
+    (1.5, 92.93, 50.53),
+    (2.1, 93.99, 61.02),
+    (2.5, 94.86, 65.16),
+    (3.1, 95.33, 90.77),
+];
 
 impl Default for ViewCullingConfig {
     fn default() -> ViewCullingConfig {
-        ViewCullingConfig { walk: WalkSetup::one_pattern(Motion::Normal), sfs: THESIS_SFS.to_vec(), repeats: 3, buffer: BufferModel::Cell }
+        ViewCullingConfig {
+            walk: WalkSetup::one_pattern(Motion::Normal),
+            sfs: THESIS_SFS.to_vec(),
+            repeats: 3,
+            buffer: BufferModel::Cell,
+        }
     }
 }
 
@@ -104,7 +115,9 @@ impl ViewCullingConfig {
         self.walk.single_pattern("view-culling")?;
         check_sweep("scale factor SF", &self.sfs, check_sf)?;
         if self.repeats == 0 {
-            return Err(Error::Invalid("timing needs at least one repetition per frame".into()));
+            return Err(Error::Invalid(
+                "timing needs at least one repetition per frame".into(),
+            ));
         }
         Ok(())
     }
@@ -147,15 +160,24 @@ pub fn run(db: &Database, cfg: &ViewCullingConfig) -> Result<ViewCullingReport> 
 }
 
 /// Runs the experiment; `progress(done, total)` is told after each scale factor.
-pub fn run_with_progress(db: &Database, cfg: &ViewCullingConfig, mut progress: impl FnMut(usize, usize)) -> Result<ViewCullingReport> {
+pub fn run_with_progress(
+    db: &Database,
+    cfg: &ViewCullingConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<ViewCullingReport> {
     cfg.validate()?;
-    let path = cfg.walk.path(db, cfg.walk.single_pattern("view-culling")?)?;
+    let path = cfg
+        .walk
+        .path(db, cfg.walk.single_pattern("view-culling")?)?;
     let mut rows = Vec::with_capacity(cfg.sfs.len());
     for &sf in &cfg.sfs {
         rows.push(one_sf(db, &path.poses, cfg, sf)?);
         progress(rows.len(), cfg.sfs.len());
     }
-    Ok(ViewCullingReport { config: cfg.clone(), rows })
+    Ok(ViewCullingReport {
+        config: cfg.clone(),
+        rows,
+    })
 }
 
 #[derive(Default)]
@@ -170,7 +192,12 @@ struct Sums {
     prep_drawn: f64,
 }
 
-fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, sf: f32) -> Result<ViewCullingRow> {
+fn one_sf(
+    db: &Database,
+    poses: &[crate::walk::Pose],
+    cfg: &ViewCullingConfig,
+    sf: f32,
+) -> Result<ViewCullingRow> {
     let bounds = db.bounds();
     let mut held = Held::new(cfg.buffer, cfg.walk.memory_budget);
     let mut disk: Option<Aabb> = None;
@@ -178,7 +205,10 @@ fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, s
     let (mut queries, mut overflow_queries) = (0, 0);
     let mut sums = Sums::default();
     for pose in poses {
-        let camera = Camera { far: cfg.walk.far, ..Camera::new(pose.position, pose.yaw, pose.pitch)? };
+        let camera = Camera {
+            far: cfg.walk.far,
+            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
+        };
         camera.validate()?;
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
@@ -194,7 +224,8 @@ fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, s
         if buffer.is_empty() {
             continue;
         }
-        let (mut prep_all, mut cull, mut prep_drawn) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let (mut prep_all, mut cull, mut prep_drawn) =
+            (f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut drawn = 0;
         for _ in 0..cfg.repeats {
             let t = Instant::now();
@@ -202,8 +233,11 @@ fn one_sf(db: &Database, poses: &[crate::walk::Pose], cfg: &ViewCullingConfig, s
             prep_all = prep_all.min(t.elapsed().as_secs_f64());
 
             let t = Instant::now();
-            let visible: Vec<&Mesh> =
-                buffer.iter().filter(|o| frustum.overlaps_aabb(&o.entry.bounds)).map(|o| &*o.mesh).collect();
+            let visible: Vec<&Mesh> = buffer
+                .iter()
+                .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
+                .map(|o| &*o.mesh)
+                .collect();
             cull = cull.min(t.elapsed().as_secs_f64());
             drawn = visible.len();
 
@@ -247,7 +281,10 @@ enum Held {
 impl Held {
     fn new(model: BufferModel, budget: usize) -> Held {
         match model {
-            BufferModel::Cell => Held::Cell { objects: Vec::new(), budget },
+            BufferModel::Cell => Held::Cell {
+                objects: Vec::new(),
+                budget,
+            },
             BufferModel::Review => Held::Review(ObjectBuffer::new(budget)),
         }
     }
@@ -263,13 +300,24 @@ impl Held {
     fn load(&mut self, db: &Database, cell: &Aabb, eye: Vec3) -> Result<bool> {
         let load = |entry: crate::rtree::ObjectEntry| -> Result<Loaded> {
             let mesh = db.mesh(&entry)?;
-            Ok(Loaded { entry, bytes: mesh_bytes(&mesh), mesh: Arc::new(mesh) })
+            Ok(Loaded {
+                entry,
+                bytes: mesh_bytes(&mesh),
+                mesh: Arc::new(mesh),
+            })
         };
         match self {
             Held::Cell { objects, budget } => {
-                let mut old: HashMap<u64, Loaded> = std::mem::take(objects).into_iter().map(|o| (o.entry.id, o)).collect();
+                let mut old: HashMap<u64, Loaded> = std::mem::take(objects)
+                    .into_iter()
+                    .map(|o| (o.entry.id, o))
+                    .collect();
                 let mut entries = db.range(cell)?.objects;
-                entries.sort_by(|a, b| distance(&a.bounds, eye).total_cmp(&distance(&b.bounds, eye)).then(a.id.cmp(&b.id)));
+                entries.sort_by(|a, b| {
+                    distance(&a.bounds, eye)
+                        .total_cmp(&distance(&b.bounds, eye))
+                        .then(a.id.cmp(&b.id))
+                });
                 let mut bytes = 0usize;
                 for entry in entries {
                     let o = match old.remove(&entry.id) {
@@ -318,7 +366,8 @@ impl Batch {
             let base = self.positions.len() as u32;
             self.positions.extend_from_slice(&m.positions);
             self.normals.extend_from_slice(&m.normals);
-            self.indices.extend(m.indices.iter().map(|&i| i.wrapping_add(base)));
+            self.indices
+                .extend(m.indices.iter().map(|&i| i.wrapping_add(base)));
         }
         std::hint::black_box(&self.indices);
     }
@@ -356,11 +405,18 @@ impl ViewCullingReport {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let ours = |name: &str, f: fn(&ViewCullingRow) -> f64| Series {
             name: name.into(),
-            points: self.rows.iter().map(|r| (r.sf as f64, f(r).max(0.0))).collect(),
+            points: self
+                .rows
+                .iter()
+                .map(|r| (r.sf as f64, f(r).max(0.0)))
+                .collect(),
         };
         let thesis = |name: &str, f: fn(&(f32, f64, f64)) -> f64| Series {
             name: name.into(),
-            points: THESIS_TABLE_4_2.iter().map(|t| (t.0 as f64, f(t))).collect(),
+            points: THESIS_TABLE_4_2
+                .iter()
+                .map(|t| (t.0 as f64, f(t)))
+                .collect(),
         };
         line_plot(
             &dir.join(PLOT_FILE),

@@ -13,12 +13,21 @@ use std::fmt::Display;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::walk::motion::{self, CameraPath, Motion};
-use crate::walk::review::{self, check_budget, check_far, check_pace, FrameStats, Preset, Retrieval, ReviewConfig, WalkReport};
+use crate::walk::review::{
+    self, check_budget, check_far, check_pace, FrameStats, Preset, Retrieval, ReviewConfig,
+    WalkReport,
+};
 pub(super) use crate::walk::review::{check_k, check_sf};
 
 /// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
 /// order; `Motion::ALL` also has a random walk, which the thesis did not use.
-pub const THESIS_PATTERNS: [Motion; 5] = [Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward];
+pub const THESIS_PATTERNS: [Motion; 5] = [
+    Motion::Normal,
+    Motion::Fast,
+    Motion::Slow,
+    Motion::Turning,
+    Motion::Backward,
+];
 
 /// Frames of a walk by default: a minute at [`DEFAULT_FPS`], as long as the demo's walk.
 pub const DEFAULT_FRAMES: usize = 1800;
@@ -80,13 +89,19 @@ impl Default for WalkSetup {
 impl WalkSetup {
     /// The default setup walking only `pattern`.
     pub fn one_pattern(pattern: Motion) -> WalkSetup {
-        WalkSetup { patterns: vec![pattern], ..WalkSetup::default() }
+        WalkSetup {
+            patterns: vec![pattern],
+            ..WalkSetup::default()
+        }
     }
 
     /// The default setup of the figures that repeat a walk per configuration and per cell
     /// size or city: [`SHORT_FRAMES`] frames of `pattern`.
     pub fn short(pattern: Motion) -> WalkSetup {
-        WalkSetup { frames: SHORT_FRAMES, ..WalkSetup::one_pattern(pattern) }
+        WalkSetup {
+            frames: SHORT_FRAMES,
+            ..WalkSetup::one_pattern(pattern)
+        }
     }
 
     /// Checks every setting: at least one frame, a frame rate the path generator takes,
@@ -115,7 +130,10 @@ impl WalkSetup {
         }
         for (i, p) in self.patterns.iter().enumerate() {
             if self.patterns[..i].contains(p) {
-                return Err(Error::Invalid(format!("motion pattern '{}' is listed twice", p.name())));
+                return Err(Error::Invalid(format!(
+                    "motion pattern '{}' is listed twice",
+                    p.name()
+                )));
             }
         }
         Ok(())
@@ -129,7 +147,11 @@ impl WalkSetup {
             _ => Err(Error::Invalid(format!(
                 "{experiment} walks one path: give one motion pattern, not {} ({})",
                 self.patterns.len(),
-                self.patterns.iter().map(|p| p.name()).collect::<Vec<_>>().join(", ")
+                self.patterns
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ))),
         }
     }
@@ -192,7 +214,11 @@ fn searched_on_frame(f: &FrameStats) -> bool {
 }
 
 fn mean_over(walk: &WalkReport, which: impl Fn(&FrameStats) -> bool) -> f64 {
-    let (sum, n) = walk.frames.iter().filter(|f| which(f)).fold((0.0, 0usize), |(s, n), f| (s + f.query_ms, n + 1));
+    let (sum, n) = walk
+        .frames
+        .iter()
+        .filter(|f| which(f))
+        .fold((0.0, 0usize), |(s, n), f| (s + f.query_ms, n + 1));
     if n == 0 {
         0.0
     } else {
@@ -222,7 +248,9 @@ pub fn describe_review(cfg: &ReviewConfig) -> String {
         Some((policy, bytes)) => format!("a {} KiB {policy} index cache", bytes >> 10),
         None => "no index cache".into(),
     };
-    let prefetch = cfg.prefetch_k.map_or("no prefetching".to_string(), |k| format!("prefetching at k = {}", num(k)));
+    let prefetch = cfg.prefetch_k.map_or("no prefetching".to_string(), |k| {
+        format!("prefetching at k = {}", num(k))
+    });
     format!("{retrieval}, {cache}, {prefetch}")
 }
 
@@ -236,7 +264,11 @@ pub fn per_query(pages: u64, queries: usize) -> f64 {
 }
 
 /// A sweep: not empty, every value passing `check`, no value twice.
-pub(super) fn check_sweep<T: Copy + PartialEq + Display>(what: &str, values: &[T], check: impl Fn(T) -> Result<()>) -> Result<()> {
+pub(super) fn check_sweep<T: Copy + PartialEq + Display>(
+    what: &str,
+    values: &[T],
+    check: impl Fn(T) -> Result<()>,
+) -> Result<()> {
     if values.is_empty() {
         return Err(Error::Invalid(format!("the {what} sweep is empty")));
     }
@@ -280,7 +312,12 @@ mod tests {
 
     #[test]
     fn setups_are_checked() {
-        let ok = WalkSetup { frames: 10, far: 100.0, memory_budget: 1 << 20, ..WalkSetup::default() };
+        let ok = WalkSetup {
+            frames: 10,
+            far: 100.0,
+            memory_budget: 1 << 20,
+            ..WalkSetup::default()
+        };
         assert!(ok.validate().is_ok());
         let bad = |f: fn(&mut WalkSetup)| {
             let mut s = ok.clone();
@@ -296,10 +333,18 @@ mod tests {
         assert!(bad(|s| s.patterns.clear()));
         assert!(bad(|s| s.patterns = vec![Motion::Fast, Motion::Fast]));
 
-        assert_eq!(WalkSetup::one_pattern(Motion::Slow).single_pattern("x").unwrap(), Motion::Slow);
+        assert_eq!(
+            WalkSetup::one_pattern(Motion::Slow)
+                .single_pattern("x")
+                .unwrap(),
+            Motion::Slow
+        );
         assert!(ok.single_pattern("x").is_err());
         let cfg = ok.review(Preset::Box);
-        assert_eq!((cfg.sf, cfg.far, cfg.memory_budget), (ok.sf, ok.far, ok.memory_budget));
+        assert_eq!(
+            (cfg.sf, cfg.far, cfg.memory_budget),
+            (ok.sf, ok.far, ok.memory_budget)
+        );
         assert_eq!(cfg.prefetch_k, ReviewConfig::preset(Preset::Box).prefetch_k);
     }
 }

@@ -75,7 +75,17 @@ mod tests {
     use crate::geom::Aabb;
 
     fn trace(pages: &[u64]) -> Trace {
-        Trace { accesses: pages.iter().map(|&page| Access { page, hint: Hint::UNKNOWN, query: Aabb::EMPTY, search: 0 }).collect() }
+        Trace {
+            accesses: pages
+                .iter()
+                .map(|&page| Access {
+                    page,
+                    hint: Hint::UNKNOWN,
+                    query: Aabb::EMPTY,
+                    search: 0,
+                })
+                .collect(),
+        }
     }
 
     #[test]
@@ -91,7 +101,14 @@ mod tests {
     #[test]
     fn capacity_zero_and_bypass() {
         let t = trace(&[1, 2, 1, 2]);
-        assert_eq!(replay(&t, 0), CacheStats { hits: 0, misses: 4, evictions: 0 });
+        assert_eq!(
+            replay(&t, 0),
+            CacheStats {
+                hits: 0,
+                misses: 4,
+                evictions: 0
+            }
+        );
         // With one frame, 1 2 1 2 1: keeping 1 (bypassing 2) gives two hits.
         let t = trace(&[1, 2, 1, 2, 1]);
         assert_eq!(replay(&t, 1).hits, 2);

@@ -47,15 +47,25 @@ mod tests {
     fn overlap_touch_and_containment_are_zero() {
         let a = b([0.0; 3], [10.0; 3]);
         assert_eq!(block_distance(&a, &b([5.0; 3], [20.0; 3])), 0.0);
-        assert_eq!(block_distance(&a, &b([10.0, 0.0, 0.0], [12.0, 1.0, 1.0])), 0.0, "touching faces");
+        assert_eq!(
+            block_distance(&a, &b([10.0, 0.0, 0.0], [12.0, 1.0, 1.0])),
+            0.0,
+            "touching faces"
+        );
         assert_eq!(block_distance(&a, &b([2.0; 3], [3.0; 3])), 0.0, "contained");
     }
 
     #[test]
     fn the_largest_axis_gap_either_side() {
         let a = b([0.0; 3], [10.0; 3]);
-        assert_eq!(block_distance(&a, &b([14.0, 0.0, 0.0], [15.0, 1.0, 1.0])), 4.0);
-        assert_eq!(block_distance(&a, &b([-9.0, 0.0, 0.0], [-7.0, 1.0, 1.0])), 7.0);
+        assert_eq!(
+            block_distance(&a, &b([14.0, 0.0, 0.0], [15.0, 1.0, 1.0])),
+            4.0
+        );
+        assert_eq!(
+            block_distance(&a, &b([-9.0, 0.0, 0.0], [-7.0, 1.0, 1.0])),
+            7.0
+        );
         // Overlapping on x, apart on y and z: the larger gap counts (not Euclidean).
         let c = b([5.0, 13.0, 16.0], [6.0, 14.0, 17.0]);
         assert_eq!(block_distance(&a, &c), 6.0);
@@ -66,7 +76,10 @@ mod tests {
     fn empty_and_nan_boxes_are_at_zero() {
         let a = b([0.0; 3], [10.0; 3]);
         assert_eq!(block_distance(&Aabb::EMPTY, &a), 0.0);
-        let nan = Aabb { min: glam::Vec3::splat(f32::NAN), max: glam::Vec3::splat(f32::NAN) };
+        let nan = Aabb {
+            min: glam::Vec3::splat(f32::NAN),
+            max: glam::Vec3::splat(f32::NAN),
+        };
         assert!(!block_distance(&a, &nan).is_nan());
     }
 }

@@ -46,7 +46,9 @@ mod stats;
 mod trace;
 
 pub use distance::block_distance;
-pub use policy::{policy_by_name, Dov, DovTime, DpLru, Hint, Lru, Policy, DEFAULT_KAPPA, POLICY_NAMES};
+pub use policy::{
+    policy_by_name, Dov, DovTime, DpLru, Hint, Lru, Policy, DEFAULT_KAPPA, POLICY_NAMES,
+};
 pub use pool::BufferPool;
 pub use stats::CacheStats;
 pub use trace::{Access, Trace, CSV_HEADER, MAX_SEARCH_GAP};

@@ -142,7 +142,12 @@ struct Inner {
 impl Inner {
     fn record(&mut self, page: u64, hint: &Hint) {
         if let Some(t) = &mut self.trace {
-            t.push(Access { page, hint: *hint, query: self.frames.query(), search: self.frames.searches() });
+            t.push(Access {
+                page,
+                hint: *hint,
+                query: self.frames.query(),
+                search: self.frames.searches(),
+            });
         }
     }
 }
@@ -195,7 +200,11 @@ impl std::fmt::Debug for BufferPool<'_> {
 impl<'s> BufferPool<'s> {
     /// A pool of `budget_bytes / page_size` pages over `store`; a budget smaller than
     /// one page is an error.
-    pub fn new(store: &'s Store, budget_bytes: usize, policy: Box<dyn Policy>) -> Result<BufferPool<'s>> {
+    pub fn new(
+        store: &'s Store,
+        budget_bytes: usize,
+        policy: Box<dyn Policy>,
+    ) -> Result<BufferPool<'s>> {
         let page_size = store.page_size();
         let capacity = budget_bytes / page_size;
         if capacity == 0 {
@@ -204,8 +213,16 @@ impl<'s> BufferPool<'s> {
                 store.path().display()
             )));
         }
-        let inner = Inner { frames: Frames::new(policy, capacity), trace: None };
-        Ok(BufferPool { store, budget: budget_bytes, capacity, inner: Mutex::new(inner) })
+        let inner = Inner {
+            frames: Frames::new(policy, capacity),
+            trace: None,
+        };
+        Ok(BufferPool {
+            store,
+            budget: budget_bytes,
+            capacity,
+            inner: Mutex::new(inner),
+        })
     }
 
     fn lock(&self) -> MutexGuard<'_, Inner> {
@@ -238,7 +255,10 @@ impl<'s> BufferPool<'s> {
         self.store.read_page_into(page, kind, buf)?;
         let mut g = self.lock();
         g.frames.install(page, hint, |spare| {
-            let mut f = spare.unwrap_or(Frame { kind, bytes: Vec::new() });
+            let mut f = spare.unwrap_or(Frame {
+                kind,
+                bytes: Vec::new(),
+            });
             f.kind = kind;
             f.bytes.clear();
             f.bytes.extend_from_slice(buf);
@@ -336,7 +356,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("pages.db");
         let mut s = Store::create(&path, PAGE).unwrap();
-        let pages = (0..n).map(|i| s.append_page(PageKind::RtreeNode, &[i as u8; 100]).unwrap()).collect();
+        let pages = (0..n)
+            .map(|i| s.append_page(PageKind::RtreeNode, &[i as u8; 100]).unwrap())
+            .collect();
         s.finish().unwrap();
         (dir, path, pages)
     }
@@ -347,7 +369,12 @@ mod tests {
         let s = Store::open(&path, Backend::Mmap).unwrap();
         let e = BufferPool::new(&s, PAGE - 1, Box::new(Lru::default())).unwrap_err();
         assert!(matches!(e, Error::Invalid(_)), "{e}");
-        assert_eq!(BufferPool::new(&s, 3 * PAGE + 5, Box::new(Lru::default())).unwrap().capacity_pages(), 3);
+        assert_eq!(
+            BufferPool::new(&s, 3 * PAGE + 5, Box::new(Lru::default()))
+                .unwrap()
+                .capacity_pages(),
+            3
+        );
     }
 
     #[test]
@@ -358,7 +385,8 @@ mod tests {
         let mut buf = Vec::new();
         for round in 0..3 {
             for (i, p) in pages.iter().enumerate().take(8 + round * 10) {
-                pool.get(*p, PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf).unwrap();
+                pool.get(*p, PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf)
+                    .unwrap();
                 assert_eq!(buf, [i as u8; 100]);
                 assert!(pool.resident_bytes() <= pool.budget_bytes());
             }
@@ -370,8 +398,16 @@ mod tests {
         pool.clear();
         assert_eq!(pool.resident_bytes(), 0);
         pool.reset_stats();
-        pool.get(pages[0], PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf).unwrap();
-        assert_eq!(pool.stats(), CacheStats { hits: 0, misses: 1, evictions: 0 });
+        pool.get(pages[0], PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf)
+            .unwrap();
+        assert_eq!(
+            pool.stats(),
+            CacheStats {
+                hits: 0,
+                misses: 1,
+                evictions: 0
+            }
+        );
     }
 
     #[test]
@@ -381,24 +417,43 @@ mod tests {
         {
             use std::os::unix::fs::FileExt;
             let f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
-            f.write_all_at(&[0xAB; 8], pages[2] * PAGE as u64 + 40).unwrap();
+            f.write_all_at(&[0xAB; 8], pages[2] * PAGE as u64 + 40)
+                .unwrap();
         }
         let s = Store::open(&path, Backend::Mmap).unwrap();
         let pool = BufferPool::new(&s, 2 * PAGE, Box::new(DpLru::default())).unwrap();
         pool.set_trace(true);
         let mut buf = Vec::new();
-        let leaf = Hint { level: 0, height: 2, ..Hint::UNKNOWN };
-        pool.get(pages[0], PageKind::RtreeNode, &leaf, &mut buf).unwrap();
+        let leaf = Hint {
+            level: 0,
+            height: 2,
+            ..Hint::UNKNOWN
+        };
+        pool.get(pages[0], PageKind::RtreeNode, &leaf, &mut buf)
+            .unwrap();
         let before = pool.stats();
-        let e = pool.get(pages[2], PageKind::RtreeNode, &leaf, &mut buf).unwrap_err();
-        assert!(matches!(e, Error::CorruptPage { page, .. } if page == pages[2]), "{e}");
-        assert!(pool.get(999, PageKind::RtreeNode, &leaf, &mut buf).is_err(), "out of range");
+        let e = pool
+            .get(pages[2], PageKind::RtreeNode, &leaf, &mut buf)
+            .unwrap_err();
+        assert!(
+            matches!(e, Error::CorruptPage { page, .. } if page == pages[2]),
+            "{e}"
+        );
+        assert!(
+            pool.get(999, PageKind::RtreeNode, &leaf, &mut buf).is_err(),
+            "out of range"
+        );
         // Cached as a node, asked for as a mesh: the store's kind check answers.
         assert!(pool.get(pages[0], PageKind::Mesh, &leaf, &mut buf).is_err());
         assert_eq!(pool.stats(), before);
         assert_eq!(pool.resident_bytes(), PAGE);
-        assert_eq!(pool.take_trace().len(), 1, "failed accesses are not recorded");
-        pool.get(pages[0], PageKind::RtreeNode, &leaf, &mut buf).unwrap();
+        assert_eq!(
+            pool.take_trace().len(),
+            1,
+            "failed accesses are not recorded"
+        );
+        pool.get(pages[0], PageKind::RtreeNode, &leaf, &mut buf)
+            .unwrap();
         assert_eq!(buf, [0; 100]);
         assert_eq!(pool.stats().hits, 1);
     }
@@ -408,11 +463,20 @@ mod tests {
         let (_d, path, pages) = store(6);
         let s = Store::open(&path, Backend::Mmap).unwrap();
         let pool = BufferPool::new(&s, PAGE, Box::new(DpLru::default())).unwrap();
-        let root = Hint { level: 1, height: 2, ..Hint::UNKNOWN };
-        let leaf = Hint { level: 0, height: 2, ..Hint::UNKNOWN };
+        let root = Hint {
+            level: 1,
+            height: 2,
+            ..Hint::UNKNOWN
+        };
+        let leaf = Hint {
+            level: 0,
+            height: 2,
+            ..Hint::UNKNOWN
+        };
         let mut buf = Vec::new();
         for p in &pages[1..] {
-            pool.get(pages[0], PageKind::RtreeNode, &root, &mut buf).unwrap();
+            pool.get(pages[0], PageKind::RtreeNode, &root, &mut buf)
+                .unwrap();
             pool.get(*p, PageKind::RtreeNode, &leaf, &mut buf).unwrap();
             assert_eq!(buf, [(*p - pages[0]) as u8; 100]);
             pool.end_search();
@@ -434,7 +498,8 @@ mod tests {
                     let mut buf = Vec::new();
                     for i in 0..2000u64 {
                         let k = ((i * 7 + t * 13) % 24) as usize;
-                        pool.get(pages[k], PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf).unwrap();
+                        pool.get(pages[k], PageKind::RtreeNode, &Hint::UNKNOWN, &mut buf)
+                            .unwrap();
                         assert_eq!(buf, [k as u8; 100]);
                         assert!(pool.resident_bytes() <= pool.budget_bytes());
                     }

@@ -23,7 +23,8 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
 /// The first line of a trace file.
-pub const CSV_HEADER: &str = "search,page,level,height,dov,mbr_x0,mbr_y0,mbr_z0,mbr_x1,mbr_y1,mbr_z1,\
+pub const CSV_HEADER: &str =
+    "search,page,level,height,dov,mbr_x0,mbr_y0,mbr_z0,mbr_x1,mbr_y1,mbr_z1,\
 query_x0,query_y0,query_z0,query_x1,query_y1,query_z1";
 const FIELDS: usize = 17;
 
@@ -59,7 +60,11 @@ impl Trace {
 
     /// Distinct pages accessed.
     pub fn distinct_pages(&self) -> usize {
-        self.accesses.iter().map(|a| a.page).collect::<std::collections::HashSet<_>>().len()
+        self.accesses
+            .iter()
+            .map(|a| a.page)
+            .collect::<std::collections::HashSet<_>>()
+            .len()
     }
 
     /// Runs `policy` over the sequence in a pool of `capacity_pages` pages, with the
@@ -103,21 +108,44 @@ impl Trace {
             writeln!(
                 w,
                 "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                a.search, a.page, h.level, h.height, h.dov,
-                m.min.x, m.min.y, m.min.z, m.max.x, m.max.y, m.max.z,
-                q.min.x, q.min.y, q.min.z, q.max.x, q.max.y, q.max.z,
+                a.search,
+                a.page,
+                h.level,
+                h.height,
+                h.dov,
+                m.min.x,
+                m.min.y,
+                m.min.z,
+                m.max.x,
+                m.max.y,
+                m.max.z,
+                q.min.x,
+                q.min.y,
+                q.min.z,
+                q.max.x,
+                q.max.y,
+                q.max.z,
             )
             .map_err(io)?;
         }
-        w.into_inner().map_err(|e| io(e.into_error()))?.sync_all().map_err(io)
+        w.into_inner()
+            .map_err(|e| io(e.into_error()))?
+            .sync_all()
+            .map_err(io)
     }
 
     /// Reads a trace written by [`Trace::write_csv`]. A malformed line is an error
     /// naming the file and the line.
     pub fn read_csv(path: &Path) -> Result<Trace> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let bad = |line: usize, what: String| Error::BadInput { path: path.to_path_buf(), what: format!("line {line}: {what}") };
-        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let bad = |line: usize, what: String| Error::BadInput {
+            path: path.to_path_buf(),
+            what: format!("line {line}: {what}"),
+        };
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
         match lines.next() {
             Some((_, h)) if h == CSV_HEADER => {}
             _ => return Err(bad(1, format!("expected the trace header {CSV_HEADER:?}"))),
@@ -131,10 +159,19 @@ impl Trace {
             let a = parse_line(line).map_err(|w| bad(n, w))?;
             if let Some(prev) = last {
                 if a.search < prev {
-                    return Err(bad(n, format!("search {} comes after search {prev}", a.search)));
+                    return Err(bad(
+                        n,
+                        format!("search {} comes after search {prev}", a.search),
+                    ));
                 }
                 if a.search - prev > MAX_SEARCH_GAP {
-                    return Err(bad(n, format!("search {} skips more than {MAX_SEARCH_GAP} searches after {prev}", a.search)));
+                    return Err(bad(
+                        n,
+                        format!(
+                            "search {} skips more than {MAX_SEARCH_GAP} searches after {prev}",
+                            a.search
+                        ),
+                    ));
                 }
             }
             last = Some(a.search);
@@ -151,7 +188,9 @@ fn parse_line(line: &str) -> std::result::Result<Access, String> {
     }
     let names: Vec<&str> = CSV_HEADER.split(',').collect();
     fn num<T: std::str::FromStr>(s: &str, name: &str) -> std::result::Result<T, String> {
-        s.trim().parse().map_err(|_| format!("{name} {s:?} is not a valid number"))
+        s.trim()
+            .parse()
+            .map_err(|_| format!("{name} {s:?} is not a valid number"))
     }
     let float = |i: usize| -> std::result::Result<f32, String> {
         let v: f32 = num(f[i], names[i])?;
@@ -165,12 +204,20 @@ fn parse_line(line: &str) -> std::result::Result<Access, String> {
         for (k, x) in v.iter_mut().enumerate() {
             *x = float(i + k)?;
         }
-        Ok(Aabb { min: glam::Vec3::new(v[0], v[1], v[2]), max: glam::Vec3::new(v[3], v[4], v[5]) })
+        Ok(Aabb {
+            min: glam::Vec3::new(v[0], v[1], v[2]),
+            max: glam::Vec3::new(v[3], v[4], v[5]),
+        })
     };
     Ok(Access {
         search: num(f[0], names[0])?,
         page: num(f[1], names[1])?,
-        hint: Hint { level: num(f[2], names[2])?, height: num(f[3], names[3])?, dov: float(4)?, mbr: boxed(5)? },
+        hint: Hint {
+            level: num(f[2], names[2])?,
+            height: num(f[3], names[3])?,
+            dov: float(4)?,
+            mbr: boxed(5)?,
+        },
         query: boxed(11)?,
     })
 }
@@ -183,9 +230,34 @@ mod tests {
         let b = Aabb::new([0.5, -1.0, 1e-7], [3.25, 2.0, 1e9]).unwrap();
         Trace {
             accesses: vec![
-                Access { page: 7, hint: Hint { level: 2, height: 3, mbr: Aabb::EMPTY, dov: 0.0 }, query: b, search: 4 },
-                Access { page: 9, hint: Hint { level: 0, height: 3, mbr: b, dov: 0.125 }, query: b, search: 4 },
-                Access { page: 7, hint: Hint::UNKNOWN, query: Aabb::EMPTY, search: 6 },
+                Access {
+                    page: 7,
+                    hint: Hint {
+                        level: 2,
+                        height: 3,
+                        mbr: Aabb::EMPTY,
+                        dov: 0.0,
+                    },
+                    query: b,
+                    search: 4,
+                },
+                Access {
+                    page: 9,
+                    hint: Hint {
+                        level: 0,
+                        height: 3,
+                        mbr: b,
+                        dov: 0.125,
+                    },
+                    query: b,
+                    search: 4,
+                },
+                Access {
+                    page: 7,
+                    hint: Hint::UNKNOWN,
+                    query: Aabb::EMPTY,
+                    search: 6,
+                },
             ],
         }
     }
@@ -209,10 +281,31 @@ mod tests {
         let lines: Vec<&str> = good.lines().collect();
         let cases = [
             (format!("{}\n{}\n1,2,3\n", lines[0], lines[1]), "line 3"),
-            (format!("{}\n{}\n{}\n", lines[0], lines[1], lines[2].replacen("9", "x", 1)), "line 3"),
-            (format!("{}\n{}\n{}\n", lines[0], lines[3], lines[1]), "line 3"), // search goes back
-            (format!("{}\n{}\n", lines[0], lines[2].replace("0.125", "NaN")), "line 2"),
-            (format!("{}\n{}\n", lines[0], lines[2].replacen("9,0,3", "9,70000,3", 1)), "line 2"), // level > u16
+            (
+                format!(
+                    "{}\n{}\n{}\n",
+                    lines[0],
+                    lines[1],
+                    lines[2].replacen("9", "x", 1)
+                ),
+                "line 3",
+            ),
+            (
+                format!("{}\n{}\n{}\n", lines[0], lines[3], lines[1]),
+                "line 3",
+            ), // search goes back
+            (
+                format!("{}\n{}\n", lines[0], lines[2].replace("0.125", "NaN")),
+                "line 2",
+            ),
+            (
+                format!(
+                    "{}\n{}\n",
+                    lines[0],
+                    lines[2].replacen("9,0,3", "9,70000,3", 1)
+                ),
+                "line 2",
+            ), // level > u16
             ("page,search\n".to_string(), "line 1"),
             (String::new(), "line 1"),
         ];
@@ -221,7 +314,9 @@ mod tests {
             let e = Trace::read_csv(&path).unwrap_err().to_string();
             assert!(e.contains(want) && e.contains("bad.csv"), "{text:?}: {e}");
         }
-        let e = Trace::read_csv(&dir.path().join("missing.csv")).unwrap_err().to_string();
+        let e = Trace::read_csv(&dir.path().join("missing.csv"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("missing.csv"), "{e}");
     }
 
@@ -230,9 +325,20 @@ mod tests {
         use crate::cache::DpLru;
         // QN only (γ = 1): page 1 is used in search 0, page 2 in search 1, page 3 in
         // search 2; at capacity 2 the miss on 3 evicts page 1 (QN 2 against 1).
-        let leaf = Hint { level: 0, height: 2, ..Hint::UNKNOWN };
-        let at = |page, search| Access { page, hint: leaf, query: Aabb::EMPTY, search };
-        let t = Trace { accesses: vec![at(1, 10), at(2, 11), at(3, 12), at(2, 12), at(1, 12)] };
+        let leaf = Hint {
+            level: 0,
+            height: 2,
+            ..Hint::UNKNOWN
+        };
+        let at = |page, search| Access {
+            page,
+            hint: leaf,
+            query: Aabb::EMPTY,
+            search,
+        };
+        let t = Trace {
+            accesses: vec![at(1, 10), at(2, 11), at(3, 12), at(2, 12), at(1, 12)],
+        };
         let s = t.replay(Box::new(DpLru::new(0.0, 0.0, 1.0).unwrap()), 2);
         assert_eq!((s.hits, s.misses, s.evictions), (1, 4, 2));
     }

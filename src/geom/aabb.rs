@@ -28,7 +28,10 @@ impl Aabb {
     /// A checked box: every coordinate finite and `min <= max` on each axis.
     /// Zero-sized boxes (a point, a flat facade) are valid.
     pub fn new(min: [f32; 3], max: [f32; 3]) -> Result<Aabb> {
-        let b = Aabb { min: Vec3::from(min), max: Vec3::from(max) };
+        let b = Aabb {
+            min: Vec3::from(min),
+            max: Vec3::from(max),
+        };
         b.validate()?;
         Ok(b)
     }
@@ -36,7 +39,9 @@ impl Aabb {
     /// Checks a box that came from outside (a file, a command line, a caller).
     pub fn validate(&self) -> Result<()> {
         if !self.min.is_finite() || !self.max.is_finite() {
-            return Err(Error::BadBox(format!("{self} has a coordinate that is not finite")));
+            return Err(Error::BadBox(format!(
+                "{self} has a coordinate that is not finite"
+            )));
         }
         if self.min.cmpgt(self.max).any() {
             return Err(Error::BadBox(format!("{self} has min > max on some axis")));
@@ -45,7 +50,10 @@ impl Aabb {
     }
 
     /// The empty box: the identity of [`Aabb::union`]. Not valid as a query.
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
 
     pub fn is_empty(&self) -> bool {
         self.min.cmpgt(self.max).any()
@@ -53,7 +61,10 @@ impl Aabb {
 
     /// Smallest box around a set of points; `EMPTY` for none.
     pub fn from_points<I: IntoIterator<Item = Vec3>>(points: I) -> Aabb {
-        points.into_iter().fold(Aabb::EMPTY, |b, p| Aabb { min: b.min.min(p), max: b.max.max(p) })
+        points.into_iter().fold(Aabb::EMPTY, |b, p| Aabb {
+            min: b.min.min(p),
+            max: b.max.max(p),
+        })
     }
 
     /// Closed-box intersection test.
@@ -75,12 +86,18 @@ impl Aabb {
 
     #[inline]
     pub fn union(&self, other: &Aabb) -> Aabb {
-        Aabb { min: self.min.min(other.min), max: self.max.max(other.max) }
+        Aabb {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
     }
 
     /// The overlap of two boxes, or `None` when they are disjoint.
     pub fn intersection(&self, other: &Aabb) -> Option<Aabb> {
-        let b = Aabb { min: self.min.max(other.min), max: self.max.min(other.max) };
+        let b = Aabb {
+            min: self.min.max(other.min),
+            max: self.max.min(other.max),
+        };
         (!b.is_empty()).then_some(b)
     }
 
@@ -104,13 +121,22 @@ impl Aabb {
 
     /// A box of the given centre and half-size.
     pub fn around(center: Vec3, half: Vec3) -> Aabb {
-        Aabb { min: center - half, max: center + half }
+        Aabb {
+            min: center - half,
+            max: center + half,
+        }
     }
 
     /// Six little-endian f32s: min then max. The codec every on-disk MBR uses.
     pub fn to_le_bytes(&self) -> [u8; 24] {
         let mut out = [0u8; 24];
-        for (i, v) in self.min.to_array().into_iter().chain(self.max.to_array()).enumerate() {
+        for (i, v) in self
+            .min
+            .to_array()
+            .into_iter()
+            .chain(self.max.to_array())
+            .enumerate()
+        {
             out[i * 4..i * 4 + 4].copy_from_slice(&v.to_le_bytes());
         }
         out
@@ -119,7 +145,10 @@ impl Aabb {
     /// Inverse of [`Aabb::to_le_bytes`]; does not validate.
     pub fn from_le_bytes(b: &[u8; 24]) -> Aabb {
         let f = |i: usize| f32::from_le_bytes(b[i * 4..i * 4 + 4].try_into().unwrap());
-        Aabb { min: Vec3::new(f(0), f(1), f(2)), max: Vec3::new(f(3), f(4), f(5)) }
+        Aabb {
+            min: Vec3::new(f(0), f(1), f(2)),
+            max: Vec3::new(f(3), f(4), f(5)),
+        }
     }
 }
 
@@ -140,11 +169,15 @@ impl std::str::FromStr for Aabb {
     fn from_str(s: &str) -> Result<Aabb> {
         let parts: Vec<&str> = s.split(',').map(str::trim).collect();
         if parts.len() != 6 {
-            return Err(Error::BadBox(format!("'{s}': expected six numbers x0,y0,z0,x1,y1,z1")));
+            return Err(Error::BadBox(format!(
+                "'{s}': expected six numbers x0,y0,z0,x1,y1,z1"
+            )));
         }
         let mut v = [0f32; 6];
         for (slot, p) in v.iter_mut().zip(&parts) {
-            *slot = p.parse().map_err(|_| Error::BadBox(format!("'{s}': '{p}' is not a number")))?;
+            *slot = p
+                .parse()
+                .map_err(|_| Error::BadBox(format!("'{s}': '{p}' is not a number")))?;
         }
         Aabb::new([v[0], v[1], v[2]], [v[3], v[4], v[5]])
     }

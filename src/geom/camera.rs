@@ -78,7 +78,11 @@ impl Camera {
 
     /// The same camera with another field of view (radians, each in (0, π)).
     pub fn with_fov(self, fov_x: f32, fov_y: f32) -> Result<Camera> {
-        let c = Camera { fov_x, fov_y, ..self };
+        let c = Camera {
+            fov_x,
+            fov_y,
+            ..self
+        };
         c.validate()?;
         Ok(c)
     }
@@ -101,7 +105,10 @@ impl Camera {
             return bad(format!("yaw {} is not finite", self.yaw));
         }
         if !(self.pitch.is_finite() && self.pitch.abs() < FRAC_PI_2) {
-            return bad(format!("pitch {} must be finite and strictly between -pi/2 and pi/2", self.pitch));
+            return bad(format!(
+                "pitch {} must be finite and strictly between -pi/2 and pi/2",
+                self.pitch
+            ));
         }
         for (name, fov) in [("fov_x", self.fov_x), ("fov_y", self.fov_y)] {
             if !(fov > 0.0 && fov < PI) {
@@ -158,7 +165,9 @@ impl Camera {
     pub fn view_proj(&self, aspect: f32) -> Result<Mat4> {
         self.validate()?;
         if !(aspect.is_finite() && aspect > 0.0) {
-            return Err(Error::Invalid(format!("aspect {aspect} must be a positive number")));
+            return Err(Error::Invalid(format!(
+                "aspect {aspect} must be a positive number"
+            )));
         }
         let proj = Mat4::perspective_rh(self.fov_y, aspect, self.near, self.far);
         let view = Mat4::look_to_rh(self.position, self.forward(), Vec3::Y);

@@ -33,8 +33,20 @@ use super::Aabb;
 
 /// The 12 edges of a frustum or box whose corner `i` has bit 0 = right/max x, bit 1 =
 /// top/max y, bit 2 = far/max z: the pairs of corners that differ in one bit.
-const EDGES: [(usize, usize); 12] =
-    [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)];
+const EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (2, 3),
+    (4, 5),
+    (6, 7),
+    (0, 2),
+    (1, 3),
+    (4, 6),
+    (5, 7),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
 
 /// A view frustum: six planes whose inside is the frustum, and its eight corners.
 ///
@@ -56,7 +68,10 @@ impl Frustum {
         let (sx, cx) = hx.sin_cos();
         let (sy, cy) = hy.sin_cos();
         // Unit normals by construction (f, r, u orthonormal); no validation needed.
-        let through = |n: Vec3, q: Vec3| Plane { normal: n, d: -n.dot(q) };
+        let through = |n: Vec3, q: Vec3| Plane {
+            normal: n,
+            d: -n.dot(q),
+        };
         let planes = [
             through(f, p + f * c.near),
             through(-f, p + f * c.far),
@@ -73,7 +88,11 @@ impl Frustum {
             p + f * dist + r * (sx * dist * tx) + u * (sy * dist * ty)
         });
         let scale = c.far.max(c.position.abs().max_element()).max(1.0);
-        Frustum { planes, corners, eps: scale * 4e-6 }
+        Frustum {
+            planes,
+            corners,
+            eps: scale * 4e-6,
+        }
     }
 
     /// The six planes, inside positive: near, far, left, right, bottom, top.
@@ -133,21 +152,31 @@ impl Frustum {
             return false;
         }
         // (2) a vertex of R inside H; (3) a vertex of H inside R.
-        if r.iter().any(|&v| self.nearly_contains(v)) || self.corners.iter().any(|&v| b.contains_point(v)) {
+        if r.iter().any(|&v| self.nearly_contains(v))
+            || self.corners.iter().any(|&v| b.contains_point(v))
+        {
             return true;
         }
         // (4) edge/face crossings, both ways.
-        EDGES.iter().any(|&(i, j)| self.segment_crosses_box_face(self.corners[i], self.corners[j], b))
-            || EDGES.iter().any(|&(i, j)| self.segment_crosses_face(r[i], r[j]))
+        EDGES
+            .iter()
+            .any(|&(i, j)| self.segment_crosses_box_face(self.corners[i], self.corners[j], b))
+            || EDGES
+                .iter()
+                .any(|&(i, j)| self.segment_crosses_face(r[i], r[j]))
     }
 
     fn outside_one_plane(&self, pts: &[Vec3; 8]) -> bool {
-        self.planes.iter().any(|pl| pts.iter().all(|&v| pl.signed_distance(v) < -self.eps))
+        self.planes
+            .iter()
+            .any(|pl| pts.iter().all(|&v| pl.signed_distance(v) < -self.eps))
     }
 
     /// [`Frustum::contains_point`] with the tolerance of ViewCulling.
     fn nearly_contains(&self, p: Vec3) -> bool {
-        self.planes.iter().all(|pl| pl.signed_distance(p) >= -self.eps)
+        self.planes
+            .iter()
+            .all(|pl| pl.signed_distance(p) >= -self.eps)
     }
 
     /// Does segment `a`–`c` cross one of the six faces of the box `b`?
@@ -155,9 +184,12 @@ impl Frustum {
         for axis in 0..3 {
             for plane in [b.min[axis], b.max[axis]] {
                 let (da, dc) = (a[axis] - plane, c[axis] - plane);
-                let Some(p) = crossing(a, c, da, dc) else { continue };
-                let on_face =
-                    (0..3).filter(|&k| k != axis).all(|k| p[k] >= b.min[k] - self.eps && p[k] <= b.max[k] + self.eps);
+                let Some(p) = crossing(a, c, da, dc) else {
+                    continue;
+                };
+                let on_face = (0..3)
+                    .filter(|&k| k != axis)
+                    .all(|k| p[k] >= b.min[k] - self.eps && p[k] <= b.max[k] + self.eps);
                 if on_face {
                     return true;
                 }
@@ -173,7 +205,10 @@ impl Frustum {
             let Some(p) = crossing(a, c, pl.signed_distance(a), pl.signed_distance(c)) else {
                 return false;
             };
-            self.planes.iter().enumerate().all(|(j, q)| j == i || q.signed_distance(p) >= -self.eps)
+            self.planes
+                .iter()
+                .enumerate()
+                .all(|(j, q)| j == i || q.signed_distance(p) >= -self.eps)
         })
     }
 }
@@ -254,11 +289,20 @@ mod tests {
         assert!(f.overlaps_aabb(&Aabb::around(mid, Vec3::splat(5.0))));
         assert!(f.overlaps_aabb(&Aabb::around(c.position, Vec3::splat(5000.0))));
         assert!(f.overlaps_aabb(&Aabb::around(c.far_center(), Vec3::splat(20.0))));
-        assert!(!f.overlaps_aabb(&Aabb::around(c.position - c.forward() * 50.0, Vec3::splat(5.0))));
-        assert!(!f.overlaps_aabb(&Aabb::around(c.far_center() + c.forward() * 50.0, Vec3::splat(5.0))));
+        assert!(!f.overlaps_aabb(&Aabb::around(
+            c.position - c.forward() * 50.0,
+            Vec3::splat(5.0)
+        )));
+        assert!(!f.overlaps_aabb(&Aabb::around(
+            c.far_center() + c.forward() * 50.0,
+            Vec3::splat(5.0)
+        )));
         // A thin slab cutting straight through the middle has no vertex inside the
         // frustum and the frustum has none inside it: step 4 finds it.
-        let slab = b(mid - Vec3::new(0.5, 1e4, 1e4), mid + Vec3::new(0.5, 1e4, 1e4));
+        let slab = b(
+            mid - Vec3::new(0.5, 1e4, 1e4),
+            mid + Vec3::new(0.5, 1e4, 1e4),
+        );
         assert!(f.overlaps_aabb(&slab));
         // A long pole through the frustum, crossing its side faces only.
         let r = c.right();
@@ -290,13 +334,23 @@ mod tests {
     #[test]
     fn agrees_with_sampling_and_fast_culling() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let c = Camera::new(Vec3::new(0.0, 2.0, 0.0), 0.0, 0.0).unwrap().with_clip(1.0, 200.0).unwrap();
+        let c = Camera::new(Vec3::new(0.0, 2.0, 0.0), 0.0, 0.0)
+            .unwrap()
+            .with_clip(1.0, 200.0)
+            .unwrap();
         let f = c.frustum();
         let (mut hits, mut misses) = (0, 0);
         for _ in 0..3000 {
-            let centre =
-                Vec3::new(rng.gen_range(-60.0..260.0), rng.gen_range(-120.0..120.0), rng.gen_range(-150.0..150.0));
-            let half = Vec3::new(rng.gen_range(0.0..40.0), rng.gen_range(0.0..40.0), rng.gen_range(0.0..40.0));
+            let centre = Vec3::new(
+                rng.gen_range(-60.0..260.0),
+                rng.gen_range(-120.0..120.0),
+                rng.gen_range(-150.0..150.0),
+            );
+            let half = Vec3::new(
+                rng.gen_range(0.0..40.0),
+                rng.gen_range(0.0..40.0),
+                rng.gen_range(0.0..40.0),
+            );
             let bx = Aabb::around(centre, half);
             let exact = f.overlaps_aabb(&bx);
             assert!(!exact || f.cull_fast(&bx));

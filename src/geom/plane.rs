@@ -34,9 +34,14 @@ impl Plane {
     pub fn new(normal: Vec3, d: f32) -> Result<Plane> {
         let len = normal.length();
         if !(normal.is_finite() && d.is_finite() && len.is_finite() && len > 0.0) {
-            return Err(Error::Invalid(format!("plane normal {normal} / offset {d} must be finite and non-zero")));
+            return Err(Error::Invalid(format!(
+                "plane normal {normal} / offset {d} must be finite and non-zero"
+            )));
         }
-        Ok(Plane { normal: normal / len, d: d / len })
+        Ok(Plane {
+            normal: normal / len,
+            d: d / len,
+        })
     }
 
     /// The plane through `point` whose inside is where `normal` points.
@@ -44,10 +49,13 @@ impl Plane {
         if !point.is_finite() {
             return Err(Error::Invalid(format!("plane point {point} is not finite")));
         }
-        let n = normal
-            .try_normalize()
-            .ok_or_else(|| Error::Invalid(format!("plane normal {normal} must be finite and non-zero")))?;
-        Ok(Plane { normal: n, d: -n.dot(point) })
+        let n = normal.try_normalize().ok_or_else(|| {
+            Error::Invalid(format!("plane normal {normal} must be finite and non-zero"))
+        })?;
+        Ok(Plane {
+            normal: n,
+            d: -n.dot(point),
+        })
     }
 
     /// Signed distance of `p` from the plane: positive inside, negative outside
@@ -75,7 +83,8 @@ mod tests {
         assert_eq!(p.d, -2.0);
         assert_eq!(p.signed_distance(Vec3::new(9.0, 9.0, 5.0)), 3.0);
         assert!(!p.is_inside(Vec3::new(0.0, 0.0, 1.0)));
-        let q = Plane::from_point_normal(Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 0.0, 0.0)).unwrap();
+        let q =
+            Plane::from_point_normal(Vec3::new(1.0, 1.0, 1.0), Vec3::new(-1.0, 0.0, 0.0)).unwrap();
         assert!(q.signed_distance(Vec3::new(0.0, 5.0, 5.0)) > 0.0);
         assert_eq!(q.signed_distance(Vec3::new(1.0, -3.0, 8.0)), 0.0);
     }

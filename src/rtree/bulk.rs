@@ -19,41 +19,65 @@ pub const DEFAULT_FILL: f32 = 1.0;
 
 pub(crate) fn bulk_load(store: &mut Store, entries: Vec<ObjectEntry>, fill: f32) -> Result<RTree> {
     if !(0.1..=1.0).contains(&fill) {
-        return Err(Error::Invalid(format!("fill factor {fill} is outside 0.1..=1")));
+        return Err(Error::Invalid(format!(
+            "fill factor {fill} is outside 0.1..=1"
+        )));
     }
     for e in &entries {
         e.bounds.validate()?;
     }
     let fanout = Fanout::for_payload(store.payload_size());
     if fanout.leaf < 2 || fanout.internal < 2 {
-        return Err(Error::Invalid(format!("page size {} is too small for R-tree nodes", store.page_size())));
+        return Err(Error::Invalid(format!(
+            "page size {} is too small for R-tree nodes",
+            store.page_size()
+        )));
     }
     let cap = |max: usize| ((max as f32 * fill).floor() as usize).clamp(2, max);
     let objects = entries.len() as u64;
 
     if entries.is_empty() {
         let root = store.append_page(PageKind::RtreeNode, &Node::Leaf(Vec::new()).encode())?;
-        return Ok(RTree { root, height: 1, objects, fanout });
+        return Ok(RTree {
+            root,
+            height: 1,
+            objects,
+            fanout,
+        });
     }
 
     let mut level_nodes = Vec::new();
     for group in tile(entries, cap(fanout.leaf), |e| e.bounds.center()) {
         let node = Node::Leaf(group);
         let page = store.append_page(PageKind::RtreeNode, &node.encode())?;
-        level_nodes.push(ChildEntry { mbr: node.mbr(), page });
+        level_nodes.push(ChildEntry {
+            mbr: node.mbr(),
+            page,
+        });
     }
     let mut height = 1u32;
     while level_nodes.len() > 1 {
         let mut parents = Vec::new();
         for group in tile(level_nodes, cap(fanout.internal), |c| c.mbr.center()) {
-            let node = Node::Internal { level: height as u16, children: group };
+            let node = Node::Internal {
+                level: height as u16,
+                children: group,
+            };
             let page = store.append_page(PageKind::RtreeNode, &node.encode())?;
-            parents.push(ChildEntry { mbr: node.mbr(), page });
+            parents.push(ChildEntry {
+                mbr: node.mbr(),
+                page,
+            });
         }
         level_nodes = parents;
         height += 1;
     }
-    Ok(RTree { root: level_nodes[0].page, height, objects, fanout })
+    Ok(RTree {
+        root: level_nodes[0].page,
+        height,
+        objects,
+        fanout,
+    })
 }
 
 /// Splits `items` into runs of at most `cap`, tiled along the axes of spread.
@@ -63,7 +87,10 @@ fn tile<T>(mut items: Vec<T>, cap: usize, center: impl Fn(&T) -> Vec3 + Copy) ->
     let mut axes = [0usize, 1, 2];
     axes.sort_by(|&a, &b| spread[b].total_cmp(&spread[a]));
     let largest = spread[axes[0]];
-    let axes: Vec<usize> = axes.into_iter().filter(|&a| spread[a] >= 0.1 * largest && spread[a] > 0.0).collect();
+    let axes: Vec<usize> = axes
+        .into_iter()
+        .filter(|&a| spread[a] >= 0.1 * largest && spread[a] > 0.0)
+        .collect();
     let axes = if axes.is_empty() { vec![0] } else { axes };
 
     let mut out = Vec::with_capacity(items.len().div_ceil(cap));
@@ -77,7 +104,13 @@ fn tile<T>(mut items: Vec<T>, cap: usize, center: impl Fn(&T) -> Vec3 + Copy) ->
 }
 
 /// Sorts `items` in place into tiles and records the tile lengths in order.
-fn tile_axes<T>(items: &mut [T], cap: usize, axes: &[usize], center: impl Fn(&T) -> Vec3 + Copy, runs: &mut Vec<usize>) {
+fn tile_axes<T>(
+    items: &mut [T],
+    cap: usize,
+    axes: &[usize],
+    center: impl Fn(&T) -> Vec3 + Copy,
+    runs: &mut Vec<usize>,
+) {
     let n = items.len();
     if n <= cap {
         runs.push(n);
@@ -108,7 +141,9 @@ mod tests {
 
     #[test]
     fn tiles_are_full_and_cover_everything() {
-        let items: Vec<Vec3> = (0..1000).map(|i| Vec3::new((i % 37) as f32, 0.0, (i / 37) as f32)).collect();
+        let items: Vec<Vec3> = (0..1000)
+            .map(|i| Vec3::new((i % 37) as f32, 0.0, (i / 37) as f32))
+            .collect();
         let runs = tile(items, 10, |p| *p);
         assert_eq!(runs.iter().map(Vec::len).sum::<usize>(), 1000);
         assert!(runs.iter().all(|r| r.len() <= 10 && !r.is_empty()));

@@ -50,7 +50,9 @@ pub struct Complement<'a> {
 impl Selection for Complement<'_> {
     #[inline]
     fn descend(&self, mbr: &Aabb) -> bool {
-        let Some(inside) = self.cell.intersection(mbr) else { return false };
+        let Some(inside) = self.cell.intersection(mbr) else {
+            return false;
+        };
         match self.rule {
             Coverlap::Thesis => self.history.iter().all(|h| !h.contains(mbr)),
             Coverlap::Clipped => !covered(inside, self.history),

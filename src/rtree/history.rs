@@ -46,7 +46,10 @@ pub struct History {
 impl History {
     /// A history holding at most `max_len` cells (at least 1).
     pub fn new(max_len: usize) -> History {
-        History { cells: VecDeque::new(), max_len: max_len.max(1) }
+        History {
+            cells: VecDeque::new(),
+            max_len: max_len.max(1),
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -91,12 +94,16 @@ impl History {
         if self.cells.len() == self.max_len {
             self.remove(0);
         }
-        let covered = retrieved.iter().fold(Aabb::EMPTY, |b, o| b.union(&o.bounds));
+        let covered = retrieved
+            .iter()
+            .fold(Aabb::EMPTY, |b, o| b.union(&o.bounds));
         self.cells.push_back(Cell { cell, covered });
     }
 
     fn remove(&mut self, i: usize) {
-        let Some(gone) = self.cells.remove(i) else { return };
+        let Some(gone) = self.cells.remove(i) else {
+            return;
+        };
         if gone.covered.is_empty() {
             return;
         }

@@ -24,7 +24,14 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
         let payload = store.read_page(page, PageKind::RtreeNode)?;
         let node = Node::decode(&payload).map_err(|w| corrupt(store.path(), page, w))?;
         if node.level() != level {
-            return Err(corrupt(store.path(), page, format!("node at level {} where level {level} was expected", node.level())));
+            return Err(corrupt(
+                store.path(),
+                page,
+                format!(
+                    "node at level {} where level {level} was expected",
+                    node.level()
+                ),
+            ));
         }
         match &node {
             Node::Leaf(_) => {
@@ -33,7 +40,11 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
             }
             Node::Internal { children, .. } => {
                 if children.is_empty() {
-                    return Err(corrupt(store.path(), page, "internal node without children"));
+                    return Err(corrupt(
+                        store.path(),
+                        page,
+                        "internal node without children",
+                    ));
                 }
                 let idx = choose(children, &entry.bounds);
                 let next = children[idx].page;
@@ -54,14 +65,22 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
             let (keep, moved) = split(node, ((max as f32 * MIN_FILL) as usize).max(1));
             store.write_page(page, PageKind::RtreeNode, &keep.encode())?;
             let moved_page = store.append_page(PageKind::RtreeNode, &moved.encode())?;
-            (keep.mbr(), Some(ChildEntry { mbr: moved.mbr(), page: moved_page }))
+            (
+                keep.mbr(),
+                Some(ChildEntry {
+                    mbr: moved.mbr(),
+                    page: moved_page,
+                }),
+            )
         } else {
             store.write_page(page, PageKind::RtreeNode, &node.encode())?;
             (node.mbr(), None)
         };
         match path.pop() {
             Some((parent_page, mut parent, idx)) => {
-                let Node::Internal { children, .. } = &mut parent else { unreachable!("parents are internal") };
+                let Node::Internal { children, .. } = &mut parent else {
+                    unreachable!("parents are internal")
+                };
                 let unchanged = children[idx].mbr == mbr && sibling.is_none();
                 if unchanged {
                     break;
@@ -92,7 +111,11 @@ fn choose(children: &[ChildEntry], b: &Aabb) -> usize {
     let margin = |a: &Aabb| a.extent().x + a.extent().y + a.extent().z;
     let cost = |c: &ChildEntry| {
         let grown = c.mbr.union(b);
-        (grown.volume() - c.mbr.volume(), margin(&grown) - margin(&c.mbr), c.mbr.volume())
+        (
+            grown.volume() - c.mbr.volume(),
+            margin(&grown) - margin(&c.mbr),
+            c.mbr.volume(),
+        )
     };
     let mut best = 0;
     let mut best_cost = cost(&children[0]);
@@ -114,14 +137,23 @@ fn split(node: Node, min_fill: usize) -> (Node, Node) {
         Node::Leaf(objects) => {
             let mbrs: Vec<Aabb> = objects.iter().map(|o| o.bounds).collect();
             let (a, b) = linear_split(&mbrs, min_fill);
-            (Node::Leaf(pick(&objects, &a)), Node::Leaf(pick(&objects, &b)))
+            (
+                Node::Leaf(pick(&objects, &a)),
+                Node::Leaf(pick(&objects, &b)),
+            )
         }
         Node::Internal { level, children } => {
             let mbrs: Vec<Aabb> = children.iter().map(|c| c.mbr).collect();
             let (a, b) = linear_split(&mbrs, min_fill);
             (
-                Node::Internal { level, children: pick(&children, &a) },
-                Node::Internal { level, children: pick(&children, &b) },
+                Node::Internal {
+                    level,
+                    children: pick(&children, &a),
+                },
+                Node::Internal {
+                    level,
+                    children: pick(&children, &b),
+                },
             )
         }
     }

@@ -47,15 +47,21 @@ pub struct RTree {
 impl RTree {
     /// Reads the tree's segment from an open store.
     pub fn load(store: &Store) -> Result<RTree> {
-        let seg = store.header().segment(SEGMENT).ok_or_else(|| Error::NotADatabase {
-            path: store.path().to_path_buf(),
-            what: "it has no R-tree segment".into(),
-        })?;
+        let seg = store
+            .header()
+            .segment(SEGMENT)
+            .ok_or_else(|| Error::NotADatabase {
+                path: store.path().to_path_buf(),
+                what: "it has no R-tree segment".into(),
+            })?;
         if seg.a == 0 || seg.a >= store.page_count() || seg.b == 0 || seg.b > 64 {
             return Err(Error::CorruptPage {
                 path: store.path().to_path_buf(),
                 page: 0,
-                what: format!("R-tree segment names root page {} and height {}", seg.a, seg.b),
+                what: format!(
+                    "R-tree segment names root page {} and height {}",
+                    seg.a, seg.b
+                ),
             });
         }
         Ok(RTree {
@@ -68,7 +74,12 @@ impl RTree {
 
     /// Records the tree in the store's header (persisted at the store's flush/finish).
     pub fn save(&self, store: &mut Store) -> Result<()> {
-        store.set_segment(Segment { name: SEGMENT.into(), a: self.root, b: self.height as u64, c: self.objects })
+        store.set_segment(Segment {
+            name: SEGMENT.into(),
+            a: self.root,
+            b: self.height as u64,
+            c: self.objects,
+        })
     }
 
     /// The plain range query BOX: every object whose box overlaps `query`.
@@ -79,7 +90,12 @@ impl RTree {
 
     /// CSearch (Shou 2002, Fig. 4.5): the objects whose boxes overlap `cell` and none
     /// of the `history` cells — exactly `range(cell) − ∪ range(hᵢ)`.
-    pub fn csearch<P: PageSource + ?Sized>(&self, pages: &P, cell: &Aabb, history: &[Aabb]) -> Result<QueryResult> {
+    pub fn csearch<P: PageSource + ?Sized>(
+        &self,
+        pages: &P,
+        cell: &Aabb,
+        history: &[Aabb],
+    ) -> Result<QueryResult> {
         self.csearch_with(pages, cell, history, Coverlap::default())
     }
 
@@ -96,7 +112,16 @@ impl RTree {
         for h in history {
             h.validate()?;
         }
-        search::search(self, pages, &Complement { cell: *cell, history, rule }, cell)
+        search::search(
+            self,
+            pages,
+            &Complement {
+                cell: *cell,
+                history,
+                rule,
+            },
+            cell,
+        )
     }
 
     /// One step of a walk: filters `history` against `cell`, runs CSearch, and records
@@ -110,7 +135,16 @@ impl RTree {
     ) -> Result<QueryResult> {
         cell.validate()?;
         history.filter(cell);
-        let result = search::search(self, pages, &Complement { cell: *cell, history: &history.cells(), rule }, cell)?;
+        let result = search::search(
+            self,
+            pages,
+            &Complement {
+                cell: *cell,
+                history: &history.cells(),
+                rule,
+            },
+            cell,
+        )?;
         history.record(*cell, &result.objects);
         Ok(result)
     }
@@ -134,5 +168,9 @@ impl RTree {
 }
 
 pub(crate) fn corrupt(path: &std::path::Path, page: u64, what: impl Into<String>) -> Error {
-    Error::CorruptPage { path: path.to_path_buf(), page, what: what.into() }
+    Error::CorruptPage {
+        path: path.to_path_buf(),
+        page,
+        what: what.into(),
+    }
 }

@@ -59,7 +59,10 @@ pub struct ChildEntry {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Node {
     Leaf(Vec<ObjectEntry>),
-    Internal { level: u16, children: Vec<ChildEntry> },
+    Internal {
+        level: u16,
+        children: Vec<ChildEntry>,
+    },
 }
 
 impl Node {
@@ -85,7 +88,9 @@ impl Node {
     pub fn mbr(&self) -> Aabb {
         match self {
             Node::Leaf(e) => e.iter().fold(Aabb::EMPTY, |b, o| b.union(&o.bounds)),
-            Node::Internal { children, .. } => children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.mbr)),
+            Node::Internal { children, .. } => {
+                children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.mbr))
+            }
         }
     }
 
@@ -105,7 +110,8 @@ impl Node {
                     e[..MBR_LEN].copy_from_slice(&o.bounds.to_le_bytes());
                     e[ID_OFFSET..ID_OFFSET + 8].copy_from_slice(&o.id.to_le_bytes());
                     e[MESH_OFFSET..MESH_OFFSET + 16].copy_from_slice(&o.mesh.to_le_bytes());
-                    e[TRIANGLES_OFFSET..TRIANGLES_OFFSET + 4].copy_from_slice(&o.triangles.to_le_bytes());
+                    e[TRIANGLES_OFFSET..TRIANGLES_OFFSET + 4]
+                        .copy_from_slice(&o.triangles.to_le_bytes());
                     e[KIND_OFFSET] = o.kind;
                 }
                 Node::Internal { children, .. } => {
@@ -123,7 +129,10 @@ impl Node {
         Ok(if view.is_leaf() {
             Node::Leaf((0..view.len()).map(|i| view.object(i)).collect())
         } else {
-            Node::Internal { level: view.level, children: (0..view.len()).map(|i| view.child(i)).collect() }
+            Node::Internal {
+                level: view.level,
+                children: (0..view.len()).map(|i| view.child(i)).collect(),
+            }
         })
     }
 }
@@ -140,16 +149,30 @@ impl<'a> NodeView<'a> {
     /// accessors below cannot go out of bounds.
     pub fn parse(payload: &'a [u8]) -> Result<NodeView<'a>, String> {
         if payload.len() < NODE_HEADER_LEN {
-            return Err(format!("node payload of {} bytes is shorter than its header", payload.len()));
+            return Err(format!(
+                "node payload of {} bytes is shorter than its header",
+                payload.len()
+            ));
         }
         let level = u16::from_le_bytes([payload[LEVEL_OFFSET], payload[LEVEL_OFFSET + 1]]);
         let count = u16::from_le_bytes([payload[COUNT_OFFSET], payload[COUNT_OFFSET + 1]]) as usize;
-        let entry_len = if level == 0 { LEAF_ENTRY_LEN } else { INTERNAL_ENTRY_LEN };
+        let entry_len = if level == 0 {
+            LEAF_ENTRY_LEN
+        } else {
+            INTERNAL_ENTRY_LEN
+        };
         let need = NODE_HEADER_LEN + count * entry_len;
         if need > payload.len() {
-            return Err(format!("node claims {count} entries ({need} bytes) but holds {} bytes", payload.len()));
+            return Err(format!(
+                "node claims {count} entries ({need} bytes) but holds {} bytes",
+                payload.len()
+            ));
         }
-        Ok(NodeView { level, count, entries: &payload[NODE_HEADER_LEN..need] })
+        Ok(NodeView {
+            level,
+            count,
+            entries: &payload[NODE_HEADER_LEN..need],
+        })
     }
 
     pub fn is_leaf(&self) -> bool {
@@ -166,7 +189,11 @@ impl<'a> NodeView<'a> {
 
     #[inline]
     pub fn mbr(&self, i: usize) -> Aabb {
-        let len = if self.is_leaf() { LEAF_ENTRY_LEN } else { INTERNAL_ENTRY_LEN };
+        let len = if self.is_leaf() {
+            LEAF_ENTRY_LEN
+        } else {
+            INTERNAL_ENTRY_LEN
+        };
         Aabb::from_le_bytes(self.entries[i * len..i * len + MBR_LEN].try_into().unwrap())
     }
 
@@ -186,7 +213,11 @@ impl<'a> NodeView<'a> {
             bounds: Aabb::from_le_bytes(e[..MBR_LEN].try_into().unwrap()),
             id: u64::from_le_bytes(e[ID_OFFSET..ID_OFFSET + 8].try_into().unwrap()),
             mesh: Extent::from_le_bytes(e[MESH_OFFSET..MESH_OFFSET + 16].try_into().unwrap()),
-            triangles: u32::from_le_bytes(e[TRIANGLES_OFFSET..TRIANGLES_OFFSET + 4].try_into().unwrap()),
+            triangles: u32::from_le_bytes(
+                e[TRIANGLES_OFFSET..TRIANGLES_OFFSET + 4]
+                    .try_into()
+                    .unwrap(),
+            ),
             kind: e[KIND_OFFSET],
         }
     }
@@ -225,7 +256,11 @@ mod tests {
         ObjectEntry {
             id,
             bounds: Aabb::new([id as f32, 0.0, 1.0], [id as f32 + 1.0, 2.0, 3.0]).unwrap(),
-            mesh: Extent { first_page: 7 + id, page_count: 2, byte_len: 5000 },
+            mesh: Extent {
+                first_page: 7 + id,
+                page_count: 2,
+                byte_len: 5000,
+            },
             triangles: 300,
             kind: 1,
         }
@@ -237,7 +272,12 @@ mod tests {
         assert_eq!(Node::decode(&leaf.encode()).unwrap(), leaf);
         let internal = Node::Internal {
             level: 3,
-            children: (0..4).map(|i| ChildEntry { mbr: obj(i).bounds, page: 100 + i }).collect(),
+            children: (0..4)
+                .map(|i| ChildEntry {
+                    mbr: obj(i).bounds,
+                    page: 100 + i,
+                })
+                .collect(),
         };
         assert_eq!(Node::decode(&internal.encode()).unwrap(), internal);
     }

@@ -31,26 +31,49 @@ impl QueryResult {
     }
 }
 
-pub(crate) fn search<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: &S, query: &Aabb) -> Result<QueryResult> {
+pub(crate) fn search<S: Selection, P: PageSource + ?Sized>(
+    tree: &RTree,
+    pages: &P,
+    sel: &S,
+    query: &Aabb,
+) -> Result<QueryResult> {
     pages.begin_search(query);
     let result = traverse(tree, pages, sel);
     pages.end_search();
     result
 }
 
-fn traverse<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: &S) -> Result<QueryResult> {
+fn traverse<S: Selection, P: PageSource + ?Sized>(
+    tree: &RTree,
+    pages: &P,
+    sel: &S,
+) -> Result<QueryResult> {
     let mut result = QueryResult::default();
     let mut buf = Vec::with_capacity(4096);
     let height = tree.height;
     // Levels must fall by one per step down: a corrupt child pointer cannot loop.
-    let mut stack = vec![(tree.root, NodeHint { level: height.saturating_sub(1) as u16, height, mbr: Aabb::EMPTY })];
+    let mut stack = vec![(
+        tree.root,
+        NodeHint {
+            level: height.saturating_sub(1) as u16,
+            height,
+            mbr: Aabb::EMPTY,
+        },
+    )];
     while let Some((page, hint)) = stack.pop() {
         pages.read_node(page, &hint, &mut buf)?;
         result.pages.push(page);
         let level = hint.level;
         let node = NodeView::parse(&buf).map_err(|w| corrupt(pages.path(), page, w))?;
         if node.level != level {
-            return Err(corrupt(pages.path(), page, format!("node at level {} where level {level} was expected", node.level)));
+            return Err(corrupt(
+                pages.path(),
+                page,
+                format!(
+                    "node at level {} where level {level} was expected",
+                    node.level
+                ),
+            ));
         }
         if node.is_leaf() {
             for i in 0..node.len() {
@@ -62,7 +85,14 @@ fn traverse<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: 
             for i in (0..node.len()).rev() {
                 let child = node.child(i);
                 if sel.descend(&child.mbr) {
-                    stack.push((child.page, NodeHint { level: level - 1, height, mbr: child.mbr }));
+                    stack.push((
+                        child.page,
+                        NodeHint {
+                            level: level - 1,
+                            height,
+                            mbr: child.mbr,
+                        },
+                    ));
                 }
             }
         }

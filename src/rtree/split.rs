@@ -66,7 +66,10 @@ mod tests {
 
     #[test]
     fn splits_two_clusters_apart() {
-        let mbrs: Vec<Aabb> = (0..5).map(|i| b(i as f32, 0.0)).chain((0..5).map(|i| b(i as f32 + 100.0, 0.0))).collect();
+        let mbrs: Vec<Aabb> = (0..5)
+            .map(|i| b(i as f32, 0.0))
+            .chain((0..5).map(|i| b(i as f32 + 100.0, 0.0)))
+            .collect();
         let (l, h) = linear_split(&mbrs, 2);
         assert_eq!(l, vec![0, 1, 2, 3, 4]);
         assert_eq!(h, vec![5, 6, 7, 8, 9]);

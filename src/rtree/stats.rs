@@ -19,7 +19,12 @@ pub struct TreeStats {
 
 pub(crate) fn collect(tree: &RTree, store: &Store) -> Result<TreeStats> {
     let h = tree.height as usize;
-    let mut stats = TreeStats { height: tree.height, nodes: vec![0; h], entries: vec![0; h], fill: 0.0 };
+    let mut stats = TreeStats {
+        height: tree.height,
+        nodes: vec![0; h],
+        entries: vec![0; h],
+        fill: 0.0,
+    };
     let mut capacity = 0u64;
     let mut buf = Vec::new();
     let mut stack = vec![(tree.root, tree.height.saturating_sub(1) as u16)];
@@ -27,7 +32,14 @@ pub(crate) fn collect(tree: &RTree, store: &Store) -> Result<TreeStats> {
         store.read_page_into(page, PageKind::RtreeNode, &mut buf)?;
         let node = NodeView::parse(&buf).map_err(|w| corrupt(store.path(), page, w))?;
         if node.level != level {
-            return Err(corrupt(store.path(), page, format!("node at level {} where level {level} was expected", node.level)));
+            return Err(corrupt(
+                store.path(),
+                page,
+                format!(
+                    "node at level {} where level {level} was expected",
+                    node.level
+                ),
+            ));
         }
         stats.nodes[level as usize] += 1;
         stats.entries[level as usize] += node.len() as u64;
@@ -39,6 +51,10 @@ pub(crate) fn collect(tree: &RTree, store: &Store) -> Result<TreeStats> {
         }
     }
     let used: u64 = stats.entries.iter().sum();
-    stats.fill = if capacity == 0 { 0.0 } else { used as f64 / capacity as f64 };
+    stats.fill = if capacity == 0 {
+        0.0
+    } else {
+        used as f64 / capacity as f64
+    };
     Ok(stats)
 }

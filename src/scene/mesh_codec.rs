@@ -25,7 +25,9 @@ pub fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
     let v = mesh.positions.len();
     let small = v <= u16::MAX as usize + 1;
     let index_len = if small { 2 } else { 4 };
-    let mut out = Vec::with_capacity(HEADER_LEN + v * (POSITION_LEN + NORMAL_LEN) + mesh.indices.len() * index_len);
+    let mut out = Vec::with_capacity(
+        HEADER_LEN + v * (POSITION_LEN + NORMAL_LEN) + mesh.indices.len() * index_len,
+    );
     out.extend_from_slice(&(v as u32).to_le_bytes());
     out.extend_from_slice(&(mesh.indices.len() as u32).to_le_bytes());
     out.extend_from_slice(&(if small { FLAG_U16 } else { 0 }).to_le_bytes());
@@ -51,14 +53,26 @@ pub fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
 /// Decodes and checks a mesh: sizes agree with the bytes, every index names a vertex.
 pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     if bytes.len() < HEADER_LEN {
-        return Err(format!("mesh of {} bytes is shorter than its header", bytes.len()));
+        return Err(format!(
+            "mesh of {} bytes is shorter than its header",
+            bytes.len()
+        ));
     }
     let word = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
-    let (v, n, flags) = (word(VERTEX_COUNT_OFFSET), word(INDEX_COUNT_OFFSET), word(FLAGS_OFFSET) as u32);
+    let (v, n, flags) = (
+        word(VERTEX_COUNT_OFFSET),
+        word(INDEX_COUNT_OFFSET),
+        word(FLAGS_OFFSET) as u32,
+    );
     let index_len = if flags & FLAG_U16 != 0 { 2 } else { 4 };
-    let need = HEADER_LEN as u64 + v as u64 * (POSITION_LEN + NORMAL_LEN) as u64 + n as u64 * index_len as u64;
+    let need = HEADER_LEN as u64
+        + v as u64 * (POSITION_LEN + NORMAL_LEN) as u64
+        + n as u64 * index_len as u64;
     if need != bytes.len() as u64 {
-        return Err(format!("mesh header says {v} vertices and {n} indices ({need} bytes) but {} bytes are stored", bytes.len()));
+        return Err(format!(
+            "mesh header says {v} vertices and {n} indices ({need} bytes) but {} bytes are stored",
+            bytes.len()
+        ));
     }
     if n % 3 != 0 {
         return Err(format!("{n} indices are not whole triangles"));
@@ -67,10 +81,12 @@ pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     let normals_at = positions_at + v * POSITION_LEN;
     let indices_at = normals_at + v * NORMAL_LEN;
     let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
-    let positions: Vec<[f32; 3]> = (0..v).map(|i| {
-        let o = positions_at + i * POSITION_LEN;
-        [f(o), f(o + 4), f(o + 8)]
-    }).collect();
+    let positions: Vec<[f32; 3]> = (0..v)
+        .map(|i| {
+            let o = positions_at + i * POSITION_LEN;
+            [f(o), f(o + 4), f(o + 8)]
+        })
+        .collect();
     if positions.iter().flatten().any(|c| !c.is_finite()) {
         return Err("mesh has a position that is not finite".into());
     }
@@ -89,11 +105,17 @@ pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
             u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap())
         };
         if i as usize >= v {
-            return Err(format!("index {i} at position {k} names no vertex (the mesh has {v})"));
+            return Err(format!(
+                "index {i} at position {k} names no vertex (the mesh has {v})"
+            ));
         }
         indices.push(i);
     }
-    Ok(Mesh { positions, normals, indices })
+    Ok(Mesh {
+        positions,
+        normals,
+        indices,
+    })
 }
 
 #[cfg(test)]
@@ -102,7 +124,12 @@ mod tests {
 
     fn quad() -> Mesh {
         Mesh {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             normals: vec![[0.0, 0.0, 1.0]; 4],
             indices: vec![0, 1, 2, 0, 2, 3],
         }
@@ -120,7 +147,9 @@ mod tests {
     #[test]
     fn damage_is_named() {
         let bytes = encode_mesh(&quad());
-        assert!(decode_mesh(&bytes[..bytes.len() - 1]).unwrap_err().contains("bytes are stored"));
+        assert!(decode_mesh(&bytes[..bytes.len() - 1])
+            .unwrap_err()
+            .contains("bytes are stored"));
         let mut bad = bytes.clone();
         let last = bad.len() - 2;
         bad[last] = 9;

@@ -12,8 +12,16 @@ use crate::scene::Mesh;
 /// Loads the objects of an OBJ file as `(name, mesh)` pairs. Groups without faces are
 /// skipped; a file with none at all, or any malformed content, is an error naming it.
 pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
-    let bad = |what: String| Error::BadInput { path: path.to_path_buf(), what };
-    let options = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
+    let bad = |what: String| Error::BadInput {
+        path: path.to_path_buf(),
+        what,
+    };
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
     let (models, _) = tobj::load_obj(path, &options).map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => bad("cannot open the file".into()),
         e => bad(format!("malformed OBJ: {e}")),
@@ -27,14 +35,26 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
         if m.positions.len() % 3 != 0 {
             return Err(bad(format!("object '{}' has a partial vertex", model.name)));
         }
-        let positions: Vec<[f32; 3]> = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let positions: Vec<[f32; 3]> = m
+            .positions
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
         let normals = if m.normals.len() == m.positions.len() {
-            m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2]).normalize_or_zero().to_array()).collect()
+            m.normals
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]).normalize_or_zero().to_array())
+                .collect()
         } else {
             vertex_normals(&positions, &m.indices)
         };
-        let mesh = Mesh { positions, normals, indices: m.indices.clone() };
-        mesh.validate().map_err(|w| bad(format!("object '{}': {w}", model.name)))?;
+        let mesh = Mesh {
+            positions,
+            normals,
+            indices: m.indices.clone(),
+        };
+        mesh.validate()
+            .map_err(|w| bad(format!("object '{}': {w}", model.name)))?;
         out.push((model.name, mesh));
     }
     if out.is_empty() {
@@ -46,7 +66,11 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
 fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![Vec3::ZERO; positions.len()];
     for t in indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions.get(i as usize).map_or(Vec3::ZERO, |p| Vec3::from(*p)));
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| {
+            positions
+                .get(i as usize)
+                .map_or(Vec3::ZERO, |p| Vec3::from(*p))
+        });
         let n = (b - a).cross(c - a);
         for &i in t {
             if let Some(slot) = acc.get_mut(i as usize) {
@@ -54,5 +78,7 @@ fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
             }
         }
     }
-    acc.into_iter().map(|n| n.normalize_or_zero().to_array()).collect()
+    acc.into_iter()
+        .map(|n| n.normalize_or_zero().to_array())
+        .collect()
 }

@@ -47,7 +47,11 @@ pub struct ObjectBuffer {
 
 impl ObjectBuffer {
     pub fn new(budget: usize) -> ObjectBuffer {
-        ObjectBuffer { objects: HashMap::new(), bytes: 0, budget }
+        ObjectBuffer {
+            objects: HashMap::new(),
+            bytes: 0,
+            budget,
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -76,7 +80,8 @@ impl ObjectBuffer {
 
     /// Adds an object (a second copy of the same id is ignored).
     pub fn insert(&mut self, loaded: Loaded) {
-        if let std::collections::hash_map::Entry::Vacant(slot) = self.objects.entry(loaded.entry.id) {
+        if let std::collections::hash_map::Entry::Vacant(slot) = self.objects.entry(loaded.entry.id)
+        {
             self.bytes += loaded.bytes;
             slot.insert(loaded);
         }
@@ -96,7 +101,8 @@ impl ObjectBuffer {
     /// viewer is in and the one prefetched for it): keeps the objects overlapping any.
     pub fn evict_outside_all(&mut self, cells: &[Aabb], eye: Vec3) -> Eviction {
         let before = self.objects.len();
-        self.objects.retain(|_, o| cells.iter().any(|c| o.entry.bounds.overlaps(c)));
+        self.objects
+            .retain(|_, o| cells.iter().any(|c| o.entry.bounds.overlaps(c)));
         self.bytes = self.objects.values().map(|o| o.bytes).sum();
         let mut overflow = false;
         if self.bytes > self.budget {
@@ -104,7 +110,13 @@ impl ObjectBuffer {
             let mut by_distance: Vec<(f32, u64, usize)> = self
                 .objects
                 .values()
-                .map(|o| (o.entry.bounds.center().distance_squared(eye), o.entry.id, o.bytes))
+                .map(|o| {
+                    (
+                        o.entry.bounds.center().distance_squared(eye),
+                        o.entry.id,
+                        o.bytes,
+                    )
+                })
                 .collect();
             by_distance.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
             for (_, id, bytes) in by_distance {
@@ -115,7 +127,10 @@ impl ObjectBuffer {
                 self.bytes -= bytes;
             }
         }
-        Eviction { evicted: before - self.objects.len(), overflow }
+        Eviction {
+            evicted: before - self.objects.len(),
+            overflow,
+        }
     }
 }
 
@@ -129,7 +144,11 @@ mod tests {
             entry: ObjectEntry {
                 id,
                 bounds: Aabb::new([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0]).unwrap(),
-                mesh: Extent { first_page: 1, page_count: 1, byte_len: 10 },
+                mesh: Extent {
+                    first_page: 1,
+                    page_count: 1,
+                    byte_len: 10,
+                },
                 triangles: 1,
                 kind: 0,
             },

@@ -11,15 +11,21 @@ use crate::geom::Aabb;
 /// spanning the whole height of the city `bounds` so tall objects are not cut.
 pub fn disk_cell(eye: Vec3, size: f32, bounds: &Aabb) -> Result<Aabb> {
     if !(size.is_finite() && size > 0.0) {
-        return Err(Error::Invalid(format!("disk cell size {size} must be a positive number of metres")));
+        return Err(Error::Invalid(format!(
+            "disk cell size {size} must be a positive number of metres"
+        )));
     }
     if !eye.is_finite() {
-        return Err(Error::Invalid(format!("camera position {eye} is not finite")));
+        return Err(Error::Invalid(format!(
+            "camera position {eye} is not finite"
+        )));
     }
     let half = size * 0.5;
     let (lo, hi) = (bounds.min, bounds.max);
     if eye.x < lo.x - half || eye.x > hi.x + half || eye.z < lo.z - half || eye.z > hi.z + half {
-        return Err(Error::Invalid(format!("camera at {eye} is outside the city {bounds}")));
+        return Err(Error::Invalid(format!(
+            "camera at {eye} is outside the city {bounds}"
+        )));
     }
     Aabb::new(
         [eye.x - half, bounds.min.y.min(eye.y), eye.z - half],
@@ -45,7 +51,10 @@ pub fn scaled_cell(bounds: &Aabb, fcell: &Aabb, center: Vec3, sf: f32) -> Aabb {
 
 /// Whether `outer` holds `inner` on the ground plane (x and z).
 pub fn contains_ground(outer: &Aabb, inner: &Aabb) -> bool {
-    outer.min.x <= inner.min.x && outer.min.z <= inner.min.z && inner.max.x <= outer.max.x && inner.max.z <= outer.max.z
+    outer.min.x <= inner.min.x
+        && outer.min.z <= inner.min.z
+        && inner.max.x <= outer.max.x
+        && inner.max.z <= outer.max.z
 }
 
 #[cfg(test)]

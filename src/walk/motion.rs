@@ -80,8 +80,14 @@ pub enum Motion {
 
 impl Motion {
     /// Every pattern, in the order above.
-    pub const ALL: [Motion; 6] =
-        [Motion::Normal, Motion::Fast, Motion::Slow, Motion::Turning, Motion::Backward, Motion::Random];
+    pub const ALL: [Motion; 6] = [
+        Motion::Normal,
+        Motion::Fast,
+        Motion::Slow,
+        Motion::Turning,
+        Motion::Backward,
+        Motion::Random,
+    ];
 
     /// The lowercase name that [`FromStr`] parses.
     pub fn name(self) -> &'static str {
@@ -116,8 +122,16 @@ impl Motion {
         };
         match self {
             Motion::Normal => base,
-            Motion::Fast => Params { speed: Speed::Constant(40.0), yaw_rate: deg(180.0), ..base },
-            Motion::Slow => Params { speed: Speed::Constant(4.0), yaw_rate: deg(60.0), ..base },
+            Motion::Fast => Params {
+                speed: Speed::Constant(40.0),
+                yaw_rate: deg(180.0),
+                ..base
+            },
+            Motion::Slow => Params {
+                speed: Speed::Constant(4.0),
+                yaw_rate: deg(60.0),
+                ..base
+            },
             Motion::Turning => Params {
                 turn_probability: 0.75,
                 yaw_rate: deg(120.0),
@@ -125,10 +139,17 @@ impl Motion {
                 pitch_amplitude: deg(3.0),
                 ..base
             },
-            Motion::Backward => Params { yaw_rate: deg(120.0), backward: true, ..base },
-            Motion::Random => {
-                Params { speed: Speed::Redrawn(2.0, 40.0), yaw_rate: deg(180.0), pitch_amplitude: deg(5.0), ..base }
-            }
+            Motion::Backward => Params {
+                yaw_rate: deg(120.0),
+                backward: true,
+                ..base
+            },
+            Motion::Random => Params {
+                speed: Speed::Redrawn(2.0, 40.0),
+                yaw_rate: deg(180.0),
+                pitch_amplitude: deg(5.0),
+                ..base
+            },
         }
     }
 }
@@ -146,10 +167,16 @@ impl FromStr for Motion {
     /// `backward` or `random`.
     fn from_str(s: &str) -> Result<Motion> {
         let t = s.trim();
-        Motion::ALL.into_iter().find(|m| m.name().eq_ignore_ascii_case(t)).ok_or_else(|| {
-            let names: Vec<&str> = Motion::ALL.iter().map(|m| m.name()).collect();
-            Error::Invalid(format!("unknown motion pattern '{s}': expected one of {}", names.join(", ")))
-        })
+        Motion::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(t))
+            .ok_or_else(|| {
+                let names: Vec<&str> = Motion::ALL.iter().map(|m| m.name()).collect();
+                Error::Invalid(format!(
+                    "unknown motion pattern '{s}': expected one of {}",
+                    names.join(", ")
+                ))
+            })
     }
 }
 
@@ -196,7 +223,8 @@ impl CameraPath {
         }
         let mut prev = None;
         for (i, pose) in self.poses.iter().enumerate() {
-            check_pose(pose, prev).map_err(|what| Error::Invalid(format!("camera path, pose {i}: {what}")))?;
+            check_pose(pose, prev)
+                .map_err(|what| Error::Invalid(format!("camera path, pose {i}: {what}")))?;
             prev = Some(pose.time);
         }
         Ok(())
@@ -241,11 +269,15 @@ impl CameraPath {
 
 /// What makes a pose valid after `prev` (the previous pose's time); the reason if not.
 pub(super) fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(), String> {
-    if !p.time.is_finite() || !p.position.is_finite() || !p.yaw.is_finite() || !p.pitch.is_finite() {
+    if !p.time.is_finite() || !p.position.is_finite() || !p.yaw.is_finite() || !p.pitch.is_finite()
+    {
         return Err("a value is not finite".into());
     }
     if p.pitch.abs() >= FRAC_PI_2 {
-        return Err(format!("pitch {} is not strictly between -pi/2 and pi/2", p.pitch));
+        return Err(format!(
+            "pitch {} is not strictly between -pi/2 and pi/2",
+            p.pitch
+        ));
     }
     if let Some(t) = prev {
         if p.time <= t {
@@ -273,17 +305,29 @@ pub(super) fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(),
 /// assert!(camera.frustum().contains_point(camera.far_center() - camera.forward()));
 /// # Ok(()) }
 /// ```
-pub fn generate(bounds: &Aabb, motion: Motion, frames: usize, fps: f32, seed: u64) -> Result<CameraPath> {
+pub fn generate(
+    bounds: &Aabb,
+    motion: Motion,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+) -> Result<CameraPath> {
     bounds.validate()?;
     let ext = bounds.extent();
     if !(ext.x > 0.0 && ext.z > 0.0) {
-        return Err(Error::Invalid(format!("city {bounds} has no extent on x or z to walk in")));
+        return Err(Error::Invalid(format!(
+            "city {bounds} has no extent on x or z to walk in"
+        )));
     }
     if frames == 0 {
-        return Err(Error::Invalid("a camera path needs at least one frame".into()));
+        return Err(Error::Invalid(
+            "a camera path needs at least one frame".into(),
+        ));
     }
     if !(MIN_FPS..=MAX_FPS).contains(&fps) {
-        return Err(Error::Invalid(format!("frame rate {fps} must be in {MIN_FPS}..={MAX_FPS} frames per second")));
+        return Err(Error::Invalid(format!(
+            "frame rate {fps} must be in {MIN_FPS}..={MAX_FPS} frames per second"
+        )));
     }
     let params = motion.params();
     let margin = Vec2::new((ext.x * 0.05).min(7.0), (ext.z * 0.05).min(7.0));
@@ -293,9 +337,12 @@ pub fn generate(bounds: &Aabb, motion: Motion, frames: usize, fps: f32, seed: u6
     };
     let eye_y = (bounds.min.y + EYE_HEIGHT).min(bounds.max.y);
 
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (motion as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut rng =
+        ChaCha8Rng::seed_from_u64(seed ^ (motion as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let mut mover = match params.speed {
-        Speed::Constant(speed) => Mover::Street(Street::new(area, speed, params.turn_probability, &mut rng)),
+        Speed::Constant(speed) => {
+            Mover::Street(Street::new(area, speed, params.turn_probability, &mut rng))
+        }
         Speed::Redrawn(lo, hi) => Mover::Free(Free::new(area, lo, hi)),
     };
     let pitch_phase = rng.gen_range(0.0..TAU);
@@ -434,7 +481,16 @@ impl Street {
         let blocks = (count(size.x), count(size.y));
         let pitch = Vec2::new(size.x / blocks.0 as f32, size.y / blocks.1 as f32);
         let node = (blocks.0 / 2, blocks.1 / 2);
-        let mut s = Street { origin: area.min, pitch, blocks, node, dir: 0, s: 0.0, speed, turn_probability };
+        let mut s = Street {
+            origin: area.min,
+            pitch,
+            blocks,
+            node,
+            dir: 0,
+            s: 0.0,
+            speed,
+            turn_probability,
+        };
         let open: Vec<usize> = (0..4).filter(|&d| s.open(node, d)).collect();
         s.dir = open[rng.gen_range(0..open.len())];
         s
@@ -454,15 +510,25 @@ impl Street {
     }
 
     fn next_node(&self) -> (i64, i64) {
-        (self.node.0 + DIRS[self.dir].0, self.node.1 + DIRS[self.dir].1)
+        (
+            self.node.0 + DIRS[self.dir].0,
+            self.node.1 + DIRS[self.dir].1,
+        )
     }
 
     fn position(&self) -> Vec2 {
-        let base = self.origin + Vec2::new(self.node.0 as f32 * self.pitch.x, self.node.1 as f32 * self.pitch.y);
+        let base = self.origin
+            + Vec2::new(
+                self.node.0 as f32 * self.pitch.x,
+                self.node.1 as f32 * self.pitch.y,
+            );
         let (dx, dz) = DIRS[self.dir];
         let p = base + Vec2::new(dx as f32, dz as f32) * self.s;
         // Rounding must not carry the viewer past the ring road.
-        p.clamp(self.origin, self.origin + self.pitch * Vec2::new(self.blocks.0 as f32, self.blocks.1 as f32))
+        p.clamp(
+            self.origin,
+            self.origin + self.pitch * Vec2::new(self.blocks.0 as f32, self.blocks.1 as f32),
+        )
     }
 
     /// Moves `step` metres along the streets, turning at intersections. The position
@@ -488,7 +554,10 @@ impl Street {
     /// The way on from `self.node`, arriving along `self.dir`.
     fn choose(&self, rng: &mut ChaCha8Rng) -> usize {
         let d = self.dir;
-        let sides: Vec<usize> = [(d + 1) % 4, (d + 3) % 4].into_iter().filter(|&e| self.open(self.node, e)).collect();
+        let sides: Vec<usize> = [(d + 1) % 4, (d + 3) % 4]
+            .into_iter()
+            .filter(|&e| self.open(self.node, e))
+            .collect();
         let straight = self.open(self.node, d);
         if straight && (sides.is_empty() || !rng.gen_bool(self.turn_probability)) {
             d
@@ -545,7 +614,11 @@ impl Free {
         let at = want.clamp(self.area.min, self.area.max);
         if at != want {
             let home = (self.area.min + self.area.max) * 0.5 - at;
-            let back = if home.length_squared() > 0.0 { home.y.atan2(home.x) } else { self.heading + PI };
+            let back = if home.length_squared() > 0.0 {
+                home.y.atan2(home.x)
+            } else {
+                self.heading + PI
+            };
             // Keep the heading continuous: turn by the wrapped difference.
             self.heading += wrap(back - self.heading) + rng.gen_range(-FRAC_PI_4..FRAC_PI_4);
         }
@@ -566,7 +639,10 @@ mod tests {
         for m in Motion::ALL {
             assert_eq!(m.name().parse::<Motion>().unwrap(), m);
             assert_eq!(m.to_string().to_uppercase().parse::<Motion>().unwrap(), m);
-            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{}\"", m.name()));
+            assert_eq!(
+                serde_json::to_string(&m).unwrap(),
+                format!("\"{}\"", m.name())
+            );
         }
         assert!("sideways".parse::<Motion>().is_err());
     }
@@ -581,7 +657,10 @@ mod tests {
         assert!(generate(&c, Motion::Normal, 10, 1e-30, 1).is_err());
         let flat = Aabb::new([0.0, 0.0, 5.0], [100.0, 10.0, 5.0]).unwrap();
         assert!(generate(&flat, Motion::Random, 10, 30.0, 1).is_err());
-        let nan = Aabb { min: Vec3::splat(f32::NAN), max: Vec3::ONE };
+        let nan = Aabb {
+            min: Vec3::splat(f32::NAN),
+            max: Vec3::ONE,
+        };
         assert!(generate(&nan, Motion::Random, 10, 30.0, 1).is_err());
     }
 
@@ -595,9 +674,15 @@ mod tests {
             for m in Motion::ALL {
                 let p = generate(&bounds, m, 200, 30.0, 9).unwrap();
                 p.validate().unwrap();
-                assert!(p.poses.iter().all(|q| bounds.contains_point(q.position)), "{m} left {bounds}");
+                assert!(
+                    p.poses.iter().all(|q| bounds.contains_point(q.position)),
+                    "{m} left {bounds}"
+                );
                 let (_, max) = m.speed_range();
-                assert!(p.poses.windows(2).all(|w| (w[1].position - w[0].position).length() <= max / 30.0 + 1e-3));
+                assert!(p
+                    .poses
+                    .windows(2)
+                    .all(|w| (w[1].position - w[0].position).length() <= max / 30.0 + 1e-3));
             }
         }
     }
@@ -605,10 +690,18 @@ mod tests {
     #[test]
     fn street_patterns_stay_on_the_grid() {
         let c = city();
-        for m in [Motion::Normal, Motion::Turning, Motion::Backward, Motion::Fast] {
+        for m in [
+            Motion::Normal,
+            Motion::Turning,
+            Motion::Backward,
+            Motion::Fast,
+        ] {
             let p = generate(&c, m, 3000, 30.0, 4).unwrap();
             let s = Street::new(
-                Rect { min: Vec2::splat(7.0), max: Vec2::new(993.0, 593.0) },
+                Rect {
+                    min: Vec2::splat(7.0),
+                    max: Vec2::new(993.0, 593.0),
+                },
                 15.0,
                 0.25,
                 &mut ChaCha8Rng::seed_from_u64(0),
@@ -616,14 +709,23 @@ mod tests {
             for q in &p.poses {
                 let g = (Vec2::new(q.position.x, q.position.z) - s.origin) / s.pitch;
                 let off = (g - g.round()).abs();
-                assert!(off.min_element() < 1e-3, "{m} off the streets at {}", q.position);
+                assert!(
+                    off.min_element() < 1e-3,
+                    "{m} off the streets at {}",
+                    q.position
+                );
             }
         }
     }
 
     #[test]
     fn velocity_by_finite_difference() {
-        let pose = |t: f64, x: f32| Pose { time: t, position: Vec3::new(x, 0.0, 0.0), yaw: 0.0, pitch: 0.0 };
+        let pose = |t: f64, x: f32| Pose {
+            time: t,
+            position: Vec3::new(x, 0.0, 0.0),
+            yaw: 0.0,
+            pitch: 0.0,
+        };
         let one = CameraPath::new(vec![pose(0.0, 1.0)]).unwrap();
         assert_eq!(one.velocity_at(0), Vec3::ZERO);
         assert_eq!(one.duration(), 0.0);
@@ -637,7 +739,10 @@ mod tests {
         assert!(CameraPath::new(vec![]).is_err());
         assert!(CameraPath::new(vec![pose(1.0, 0.0), pose(1.0, 1.0)]).is_err());
         assert!(CameraPath::new(vec![pose(0.0, f32::NAN)]).is_err());
-        let steep = Pose { pitch: 1.6, ..pose(0.0, 0.0) };
+        let steep = Pose {
+            pitch: 1.6,
+            ..pose(0.0, 0.0)
+        };
         assert!(CameraPath::new(vec![steep]).is_err());
         assert!(steep.camera().is_err());
     }

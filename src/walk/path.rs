@@ -19,10 +19,18 @@ pub struct WalkPath {
 
 /// A walk of `steps` steps of `step` metres inside `bounds` (on x and z), turning by a
 /// right angle with probability `1/segment` per step, and at the city's edge.
-pub fn street_walk(bounds: &Aabb, steps: usize, step: f32, segment: usize, seed: u64) -> Result<WalkPath> {
+pub fn street_walk(
+    bounds: &Aabb,
+    steps: usize,
+    step: f32,
+    segment: usize,
+    seed: u64,
+) -> Result<WalkPath> {
     bounds.validate()?;
     if !(step.is_finite() && step > 0.0) {
-        return Err(Error::Invalid(format!("step {step} must be a positive number of metres")));
+        return Err(Error::Invalid(format!(
+            "step {step} must be a positive number of metres"
+        )));
     }
     let (lo, hi) = (bounds.min, bounds.max);
     let margin = (step * 2.0).min((hi.x - lo.x).min(hi.z - lo.z) * 0.25);
@@ -31,7 +39,9 @@ pub fn street_walk(bounds: &Aabb, steps: usize, step: f32, segment: usize, seed:
     let dirs = [Vec3::X, Vec3::Z, -Vec3::X, -Vec3::Z];
     let mut d = rng.gen_range(0..4);
     let mut positions = Vec::with_capacity(steps);
-    let inside = |q: Vec3| q.x >= lo.x + margin && q.x <= hi.x - margin && q.z >= lo.z + margin && q.z <= hi.z - margin;
+    let inside = |q: Vec3| {
+        q.x >= lo.x + margin && q.x <= hi.x - margin && q.z >= lo.z + margin && q.z <= hi.z - margin
+    };
     for _ in 0..steps {
         positions.push(p);
         if rng.gen_range(0..segment.max(1)) == 0 {
@@ -59,6 +69,9 @@ mod tests {
         let a = street_walk(&city, 300, 10.0, 20, 7).unwrap();
         assert_eq!(a, street_walk(&city, 300, 10.0, 20, 7).unwrap());
         assert!(a.positions.iter().all(|p| city.contains_point(*p)));
-        assert!(a.positions.windows(2).all(|w| (w[1] - w[0]).length() <= 10.0 + 1e-3));
+        assert!(a
+            .positions
+            .windows(2)
+            .all(|w| (w[1] - w[0]).length() <= 10.0 + 1e-3));
     }
 }

@@ -42,7 +42,10 @@ impl CameraPath {
     pub fn load_csv(path: impl AsRef<Path>) -> Result<CameraPath> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        parse(&text).map_err(|(line, what)| Error::BadInput { path: path.into(), what: format!("line {line}: {what}") })
+        parse(&text).map_err(|(line, what)| Error::BadInput {
+            path: path.into(),
+            what: format!("line {line}: {what}"),
+        })
     }
 
     /// The CSV text of the path, header included.
@@ -52,8 +55,11 @@ impl CameraPath {
         out.push('\n');
         for p in &self.poses {
             // `{}` on floats prints the shortest decimal that parses back to the same value.
-            let _ =
-                writeln!(out, "{},{},{},{},{},{}", p.time, p.position.x, p.position.y, p.position.z, p.yaw, p.pitch);
+            let _ = writeln!(
+                out,
+                "{},{},{},{},{},{}",
+                p.time, p.position.x, p.position.y, p.position.z, p.yaw, p.pitch
+            );
         }
         out
     }
@@ -62,10 +68,16 @@ impl CameraPath {
 /// Parses CSV text; an error is (line number, what is wrong).
 fn parse(text: &str) -> std::result::Result<CameraPath, (usize, String)> {
     let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
-    let header = lines.next().map(|(_, l)| l.trim_start_matches('\u{feff}')).unwrap_or("");
+    let header = lines
+        .next()
+        .map(|(_, l)| l.trim_start_matches('\u{feff}'))
+        .unwrap_or("");
     let squeezed: String = header.chars().filter(|c| !c.is_whitespace()).collect();
     if !squeezed.eq_ignore_ascii_case(HEADER) {
-        return Err((1, format!("expected the header '{HEADER}', found '{header}'")));
+        return Err((
+            1,
+            format!("expected the header '{HEADER}', found '{header}'"),
+        ));
     }
     let mut poses: Vec<Pose> = Vec::new();
     for (n, line) in lines {
@@ -74,16 +86,35 @@ fn parse(text: &str) -> std::result::Result<CameraPath, (usize, String)> {
         }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         if fields.len() != 6 {
-            return Err((n, format!("expected 6 comma-separated values ({HEADER}), found {}", fields.len())));
+            return Err((
+                n,
+                format!(
+                    "expected 6 comma-separated values ({HEADER}), found {}",
+                    fields.len()
+                ),
+            ));
         }
-        let bad =
-            |k: usize| (n, format!("{} '{}' is not a number", HEADER.split(',').nth(k).unwrap_or("value"), fields[k]));
+        let bad = |k: usize| {
+            (
+                n,
+                format!(
+                    "{} '{}' is not a number",
+                    HEADER.split(',').nth(k).unwrap_or("value"),
+                    fields[k]
+                ),
+            )
+        };
         let time: f64 = fields[0].parse().map_err(|_| bad(0))?;
         let mut v = [0f32; 5];
         for (k, slot) in v.iter_mut().enumerate() {
             *slot = fields[k + 1].parse().map_err(|_| bad(k + 1))?;
         }
-        let pose = Pose { time, position: Vec3::new(v[0], v[1], v[2]), yaw: v[3], pitch: v[4] };
+        let pose = Pose {
+            time,
+            position: Vec3::new(v[0], v[1], v[2]),
+            yaw: v[3],
+            pitch: v[4],
+        };
         check_pose(&pose, poses.last().map(|p| p.time)).map_err(|what| (n, what))?;
         poses.push(pose);
     }
@@ -103,7 +134,10 @@ mod tests {
 
     #[test]
     fn parses_by_hand_files() {
-        let p = parse("\u{feff}Time, X, Y, Z, Yaw, Pitch\r\n0, 1, 2, 3, 0.5, -0.1\r\n\r\n1e-1,1,2,4,0.5,0\n").unwrap();
+        let p = parse(
+            "\u{feff}Time, X, Y, Z, Yaw, Pitch\r\n0, 1, 2, 3, 0.5, -0.1\r\n\r\n1e-1,1,2,4,0.5,0\n",
+        )
+        .unwrap();
         assert_eq!(p.len(), 2);
         assert_eq!(p.poses[1].time, 0.1);
         assert_eq!(p.poses[0].pitch, -0.1);
@@ -118,7 +152,10 @@ mod tests {
         let h = |body: &str| format!("{HEADER}\n0,0,0,0,0,0\n{body}\n");
         assert_eq!(err(&h("1,0,0,0,0")).0, 3);
         assert_eq!(err(&h("1,0,0,0,0,0,0")).0, 3);
-        assert_eq!(err(&h("1,0,zero,0,0,0")), (3, "y 'zero' is not a number".into()));
+        assert_eq!(
+            err(&h("1,0,zero,0,0,0")),
+            (3, "y 'zero' is not a number".into())
+        );
         assert_eq!(err(&h("1,0,NaN,0,0,0")).0, 3);
         assert_eq!(err(&h("1,0,0,inf,0,0")).0, 3);
         assert_eq!(err(&h("0,0,0,0,0,0")).0, 3);

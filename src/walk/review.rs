@@ -147,9 +147,20 @@ impl ReviewConfig {
         };
         match p {
             Preset::Optimal => base,
-            Preset::Nc => ReviewConfig { index_cache: None, ..base },
-            Preset::Np => ReviewConfig { prefetch_k: None, ..base },
-            Preset::Box => ReviewConfig { retrieval: Retrieval::Box, index_cache: None, prefetch_k: None, ..base },
+            Preset::Nc => ReviewConfig {
+                index_cache: None,
+                ..base
+            },
+            Preset::Np => ReviewConfig {
+                prefetch_k: None,
+                ..base
+            },
+            Preset::Box => ReviewConfig {
+                retrieval: Retrieval::Box,
+                index_cache: None,
+                prefetch_k: None,
+                ..base
+            },
         }
     }
 
@@ -173,7 +184,9 @@ impl ReviewConfig {
 
 pub(crate) fn check_pace(pace: f32) -> Result<()> {
     if !(pace.is_finite() && pace > 0.0) {
-        return Err(Error::Invalid(format!("playback speed {pace} must be a positive factor of real time")));
+        return Err(Error::Invalid(format!(
+            "playback speed {pace} must be a positive factor of real time"
+        )));
     }
     Ok(())
 }
@@ -181,28 +194,36 @@ pub(crate) fn check_pace(pace: f32) -> Result<()> {
 /// The checks of a walk's settings, shared with the experiments that sweep them.
 pub(crate) fn check_sf(sf: f32) -> Result<()> {
     if !(sf.is_finite() && sf >= 1.0) {
-        return Err(Error::Invalid(format!("scale factor SF {sf} must be a number of at least 1")));
+        return Err(Error::Invalid(format!(
+            "scale factor SF {sf} must be a number of at least 1"
+        )));
     }
     Ok(())
 }
 
 pub(crate) fn check_k(k: f32) -> Result<()> {
     if !(k.is_finite() && k >= 0.0) {
-        return Err(Error::Invalid(format!("prefetch factor k {k} must be a non-negative number")));
+        return Err(Error::Invalid(format!(
+            "prefetch factor k {k} must be a non-negative number"
+        )));
     }
     Ok(())
 }
 
 pub(crate) fn check_far(far: f32) -> Result<()> {
     if !(far.is_finite() && far > 1.0) {
-        return Err(Error::Invalid(format!("frustum depth {far} must be more than a metre")));
+        return Err(Error::Invalid(format!(
+            "frustum depth {far} must be more than a metre"
+        )));
     }
     Ok(())
 }
 
 pub(crate) fn check_budget(bytes: usize) -> Result<()> {
     if bytes == 0 {
-        return Err(Error::Invalid("the memory budget must be more than 0 bytes".into()));
+        return Err(Error::Invalid(
+            "the memory budget must be more than 0 bytes".into(),
+        ));
     }
     Ok(())
 }
@@ -349,7 +370,12 @@ struct Request {
 }
 
 /// Walks `path` through `db` under `cfg`; `progress` is told each finished frame.
-pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: impl FnMut(usize)) -> Result<WalkReport> {
+pub fn walk(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &ReviewConfig,
+    mut progress: impl FnMut(usize),
+) -> Result<WalkReport> {
     cfg.validate()?;
     if path.poses.is_empty() {
         return Err(Error::Invalid("the camera path has no poses".into()));
@@ -357,7 +383,11 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
     let oracle = Oracle::new(db)?;
     db.reset_io();
     let pool = match &cfg.index_cache {
-        Some((policy, bytes)) => Some(BufferPool::new(db.store(), *bytes, policy_by_name(policy)?)?),
+        Some((policy, bytes)) => Some(BufferPool::new(
+            db.store(),
+            *bytes,
+            policy_by_name(policy)?,
+        )?),
         None => None,
     };
     if let (Some(p), true) = (&pool, cfg.record_trace) {
@@ -404,7 +434,9 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
         let (clock, t0) = (Instant::now(), path.poses[0].time);
         for i in 0..path.poses.len() {
             if let Some(speed) = pace {
-                let due = std::time::Duration::from_secs_f64(((path.poses[i].time - t0) / speed as f64).max(0.0));
+                let due = std::time::Duration::from_secs_f64(
+                    ((path.poses[i].time - t0) / speed as f64).max(0.0),
+                );
                 if let Some(wait) = due.checked_sub(clock.elapsed()) {
                     std::thread::sleep(wait);
                 }
@@ -417,8 +449,16 @@ pub fn walk(db: &Database, path: &CameraPath, cfg: &ReviewConfig, mut progress: 
         Ok((frames, state.counts))
     })?;
     let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
-    let trace = pool.as_ref().filter(|_| cfg.record_trace).map(|p| p.take_trace());
-    Ok(WalkReport { config: cfg.clone(), frames, summary, trace })
+    let trace = pool
+        .as_ref()
+        .filter(|_| cfg.record_trace)
+        .map(|p| p.take_trace());
+    Ok(WalkReport {
+        config: cfg.clone(),
+        frames,
+        summary,
+        trace,
+    })
 }
 
 /// Searches run along a walk, by where their results went.
@@ -454,17 +494,26 @@ struct Walker<'a> {
 impl Walker<'_> {
     fn frame(&mut self, path: &CameraPath, i: usize) -> Result<FrameStats> {
         let pose = path.poses[i];
-        let camera = Camera { far: self.cfg.far, ..Camera::new(pose.position, pose.yaw, pose.pitch)? };
+        let camera = Camera {
+            far: self.cfg.far,
+            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
+        };
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
         let io_before = self.db.io();
         let start = Instant::now();
-        let mut stats = FrameStats { frame: i, time: pose.time, ..Default::default() };
+        let mut stats = FrameStats {
+            frame: i,
+            time: pose.time,
+            ..Default::default()
+        };
 
         self.collect_prefetch(false, camera.position, &mut stats)?;
         if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
             stats.queried = true;
-            if self.prefetched.is_none() && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell)) {
+            if self.prefetched.is_none()
+                && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell))
+            {
                 let t = Instant::now();
                 self.collect_prefetch(true, camera.position, &mut stats)?;
                 stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -495,7 +544,11 @@ impl Walker<'_> {
 
         stats.objects_buffered = self.buffer.len();
         let t = Instant::now();
-        let drawn: Vec<&Loaded> = self.buffer.iter().filter(|o| frustum.overlaps_aabb(&o.entry.bounds)).collect();
+        let drawn: Vec<&Loaded> = self
+            .buffer
+            .iter()
+            .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
+            .collect();
         stats.cull_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
         stats.objects_drawn = drawn.len();
@@ -528,7 +581,12 @@ impl Walker<'_> {
             Retrieval::Box => Default::default(),
             Retrieval::CSearch => self.buffer.iter().map(|o| o.entry.id).collect(),
         };
-        Request { cell, history: history.cells(), epoch: self.epoch, skip }
+        Request {
+            cell,
+            history: history.cells(),
+            epoch: self.epoch,
+            skip,
+        }
     }
 
     /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one.
@@ -564,14 +622,21 @@ impl Walker<'_> {
     }
 
     fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, velocity: Vec3, k: f32) {
-        let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else { return };
+        let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else {
+            return;
+        };
         if self.in_flight.is_some() {
             return;
         }
         // Will the frustum cell leave the disk cell (and the cell already prefetched)
         // within a second?
-        let ahead = Aabb { min: fcell.min.min(fcell.min + velocity), max: fcell.max.max(fcell.max + velocity) };
-        if contains_ground(&disk, &ahead) || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead)) {
+        let ahead = Aabb {
+            min: fcell.min.min(fcell.min + velocity),
+            max: fcell.max.max(fcell.max + velocity),
+        };
+        if contains_ground(&disk, &ahead)
+            || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead))
+        {
             return;
         }
         let predicted = camera.far_center() + velocity * k;
@@ -609,14 +674,24 @@ impl Walker<'_> {
         if self.buffer.over_budget() {
             // Keep the cell the viewer is in as well as the new one (a prefetch lands
             // before the viewer gets there).
-            let keep: Vec<Aabb> = self.disk_cell.filter(|d| *d != cell).into_iter().chain([cell]).collect();
+            let keep: Vec<Aabb> = self
+                .disk_cell
+                .filter(|d| *d != cell)
+                .into_iter()
+                .chain([cell])
+                .collect();
             let e = self.buffer.evict_outside_all(&keep, eye);
             stats.evicted += e.evicted;
             stats.overflow |= e.overflow;
             // Restart the history at the cells whose objects the buffer now holds.
             self.history.clear();
             for c in &keep {
-                let kept: Vec<ObjectEntry> = self.buffer.iter().map(|o| o.entry).filter(|o| o.bounds.overlaps(c)).collect();
+                let kept: Vec<ObjectEntry> = self
+                    .buffer
+                    .iter()
+                    .map(|o| o.entry)
+                    .filter(|o| o.bounds.overlaps(c))
+                    .collect();
                 self.history.record(*c, &kept);
             }
             self.epoch += 1;
@@ -628,11 +703,19 @@ impl Walker<'_> {
 }
 
 /// Runs one query and loads the meshes of what it returned.
-fn fetch(db: &Database, source: &(dyn PageSource + Sync), retrieval: Retrieval, req: &Request) -> Result<Fetched> {
+fn fetch(
+    db: &Database,
+    source: &(dyn PageSource + Sync),
+    retrieval: Retrieval,
+    req: &Request,
+) -> Result<Fetched> {
     let t = Instant::now();
     let result: QueryResult = match retrieval {
         Retrieval::Box => db.tree().range(source, &req.cell)?,
-        Retrieval::CSearch => db.tree().csearch_with(source, &req.cell, &req.history, Coverlap::default())?,
+        Retrieval::CSearch => {
+            db.tree()
+                .csearch_with(source, &req.cell, &req.history, Coverlap::default())?
+        }
     };
     let query_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
@@ -642,10 +725,21 @@ fn fetch(db: &Database, source: &(dyn PageSource + Sync), retrieval: Retrieval, 
             continue;
         }
         let mesh = db.mesh(entry)?;
-        objects.push(Loaded { entry: *entry, bytes: mesh_bytes(&mesh), mesh: std::sync::Arc::new(mesh) });
+        objects.push(Loaded {
+            entry: *entry,
+            bytes: mesh_bytes(&mesh),
+            mesh: std::sync::Arc::new(mesh),
+        });
     }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok(Fetched { cell: req.cell, epoch: req.epoch, objects, retrieved: result.objects, query_ms, load_ms })
+    Ok(Fetched {
+        cell: req.cell,
+        epoch: req.epoch,
+        objects,
+        retrieved: result.objects,
+        query_ms,
+        load_ms,
+    })
 }
 
 /// Ground truth for visual misses: every object's box, in memory, outside the counted
@@ -660,7 +754,15 @@ impl Oracle {
         Ok(Oracle {
             tree: RStar::bulk_load(
                 all.iter()
-                    .map(|o| GeomWithData::new(Rectangle::from_corners(o.bounds.min.to_array(), o.bounds.max.to_array()), o.id))
+                    .map(|o| {
+                        GeomWithData::new(
+                            Rectangle::from_corners(
+                                o.bounds.min.to_array(),
+                                o.bounds.max.to_array(),
+                            ),
+                            o.id,
+                        )
+                    })
                     .collect(),
             ),
         })
@@ -673,7 +775,10 @@ impl Oracle {
             .filter(|g| !buffer.contains(g.data))
             .filter(|g| {
                 let e = g.geom().envelope();
-                frustum.overlaps_aabb(&Aabb { min: Vec3::from(e.lower()), max: Vec3::from(e.upper()) })
+                frustum.overlaps_aabb(&Aabb {
+                    min: Vec3::from(e.lower()),
+                    max: Vec3::from(e.upper()),
+                })
             })
             .count()
     }
@@ -686,13 +791,23 @@ fn summarize(frames: &[FrameStats], counts: Counts, cache: Option<CacheStats>) -
     let queries = counts.sync + counts.adopted + counts.stale;
     let index_pages: u64 = frames.iter().map(|f| f.index_pages).sum();
     let mesh_pages: u64 = frames.iter().map(|f| f.mesh_pages).sum();
-    let per_query = |pages: u64| if queries == 0 { 0.0 } else { pages as f64 / queries as f64 };
+    let per_query = |pages: u64| {
+        if queries == 0 {
+            0.0
+        } else {
+            pages as f64 / queries as f64
+        }
+    };
     WalkSummary {
         frames: frames.len(),
         initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
         mean_frame_ms: mean,
         max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
-        frame_ms_variance: walk.iter().map(|f| (f.frame_ms - mean).powi(2)).sum::<f64>() / n,
+        frame_ms_variance: walk
+            .iter()
+            .map(|f| (f.frame_ms - mean).powi(2))
+            .sum::<f64>()
+            / n,
         frames_over_50ms: walk.iter().filter(|f| f.frame_ms > 50.0).count(),
         queries,
         sync_queries: counts.sync,

@@ -19,7 +19,12 @@ pub fn city(objects: u64, seed: u64, opts: &BuildOptions) -> City {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("city.scene");
     let db = dir.path().join("city.flaneur");
-    let config = citygen::CityConfig { objects, seed, landmarks: 0.0, ..Default::default() };
+    let config = citygen::CityConfig {
+        objects,
+        seed,
+        landmarks: 0.0,
+        ..Default::default()
+    };
     citygen::write_city(&config, &scene, false).unwrap();
     flaneur::build_from_scene(&scene, &db, opts).unwrap();
     let boxes = citygen::SceneReader::open(&scene)
@@ -30,12 +35,22 @@ pub fn city(objects: u64, seed: u64, opts: &BuildOptions) -> City {
             (o.id, Aabb::new(min, max).unwrap())
         })
         .collect();
-    City { dir, scene, db, boxes }
+    City {
+        dir,
+        scene,
+        db,
+        boxes,
+    }
 }
 
 impl City {
     pub fn brute_range(&self, q: &Aabb) -> Vec<u64> {
-        let mut ids: Vec<u64> = self.boxes.iter().filter(|(_, b)| b.overlaps(q)).map(|(id, _)| *id).collect();
+        let mut ids: Vec<u64> = self
+            .boxes
+            .iter()
+            .filter(|(_, b)| b.overlaps(q))
+            .map(|(id, _)| *id)
+            .collect();
         ids.sort_unstable();
         ids
     }

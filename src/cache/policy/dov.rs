@@ -57,20 +57,34 @@ impl PartialOrd for Rank {
 }
 impl Ord for Rank {
     fn cmp(&self, o: &Rank) -> Ordering {
-        self.f.total_cmp(&o.f).then(self.tick.cmp(&o.tick)).then(self.key.cmp(&o.key))
+        self.f
+            .total_cmp(&o.f)
+            .then(self.tick.cmp(&o.tick))
+            .then(self.key.cmp(&o.key))
     }
 }
 
 impl Ranked {
     fn new(kappa: f64) -> Ranked {
-        Ranked { kappa, ..Default::default() }
+        Ranked {
+            kappa,
+            ..Default::default()
+        }
     }
 
     fn touch(&mut self, key: u64, hint: &Hint) {
         self.tick += 1;
         // A DoV that is not a number counts as unknown (0).
-        let dov = if hint.dov.is_nan() { 0.0 } else { f64::from(hint.dov) };
-        let r = Rank { f: dov + self.kappa * self.searches as f64, tick: self.tick, key };
+        let dov = if hint.dov.is_nan() {
+            0.0
+        } else {
+            f64::from(hint.dov)
+        };
+        let r = Rank {
+            f: dov + self.kappa * self.searches as f64,
+            tick: self.tick,
+            key,
+        };
         if let Some(old) = self.rank.insert(key, r) {
             self.order.remove(&old);
         }
@@ -140,7 +154,9 @@ impl DovTime {
     /// DT with weight κ per search of age; κ must be a finite number ≥ 0.
     pub fn new(kappa: f64) -> Result<DovTime> {
         if !(kappa.is_finite() && kappa >= 0.0) {
-            return Err(Error::Invalid(format!("DoV-Time κ = {kappa} must be a finite number ≥ 0")));
+            return Err(Error::Invalid(format!(
+                "DoV-Time κ = {kappa} must be a finite number ≥ 0"
+            )));
         }
         Ok(DovTime(Ranked::new(kappa)))
     }
@@ -202,7 +218,10 @@ mod tests {
     use super::*;
 
     fn dov(d: f32) -> Hint {
-        Hint { dov: d, ..Hint::UNKNOWN }
+        Hint {
+            dov: d,
+            ..Hint::UNKNOWN
+        }
     }
 
     #[test]

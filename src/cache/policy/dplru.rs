@@ -118,12 +118,16 @@ impl DpLru {
 
     fn is_default(&self) -> bool {
         let d = 1.0 / 3.0;
-        [self.alpha, self.beta, self.gamma].iter().all(|w| (w - d).abs() <= WEIGHT_TOLERANCE)
+        [self.alpha, self.beta, self.gamma]
+            .iter()
+            .all(|w| (w - d).abs() <= WEIGHT_TOLERANCE)
     }
 
     /// Level priority: deeper levels larger, leaves largest.
     fn priority(hint: &Hint) -> u32 {
-        hint.height.saturating_sub(1).saturating_sub(u32::from(hint.level))
+        hint.height
+            .saturating_sub(1)
+            .saturating_sub(u32::from(hint.level))
     }
 
     fn remove_entry(&mut self, slot: usize) -> Entry {
@@ -153,7 +157,14 @@ impl DpLru {
         if let Some(i) = pinned_at {
             self.pinned.swap_remove(i);
         }
-        let e = Entry { key, p: Self::priority(hint), mbr: hint.mbr, stamp: self.searches, tick: self.tick, dist: 0.0 };
+        let e = Entry {
+            key,
+            p: Self::priority(hint),
+            mbr: hint.mbr,
+            stamp: self.searches,
+            tick: self.tick,
+            dist: 0.0,
+        };
         match self.index.get(&key) {
             Some(&slot) => self.entries[slot] = e,
             None => {
@@ -169,7 +180,10 @@ impl Policy for DpLru {
         if self.is_default() {
             "dplru".into()
         } else {
-            format!("dplru({},{},{})", self.alpha as f32, self.beta as f32, self.gamma as f32)
+            format!(
+                "dplru({},{},{})",
+                self.alpha as f32, self.beta as f32, self.gamma as f32
+            )
         }
     }
 
@@ -200,11 +214,15 @@ impl Policy for DpLru {
         let wd = scale(self.beta, f64::from(max_d));
         let wq = scale(self.gamma, max_q as f64);
         // Second pass: the highest f, ties by QN, DIST, then the oldest access.
-        let (mut slot, mut bf, mut bq, mut bd, mut bt) = (usize::MAX, f64::NEG_INFINITY, 0u64, 0f32, u64::MAX);
+        let (mut slot, mut bf, mut bq, mut bd, mut bt) =
+            (usize::MAX, f64::NEG_INFINITY, 0u64, 0f32, u64::MAX);
         for (i, e) in self.entries.iter().enumerate() {
             let qn = now.saturating_sub(e.stamp);
             let f = wp * f64::from(e.p) + wd * f64::from(e.dist) + wq * qn as f64;
-            if f > bf || (f == bf && (qn > bq || (qn == bq && (e.dist > bd || (e.dist == bd && e.tick < bt))))) {
+            if f > bf
+                || (f == bf
+                    && (qn > bq || (qn == bq && (e.dist > bd || (e.dist == bd && e.tick < bt)))))
+            {
                 (slot, bf, bq, bd, bt) = (i, f, qn, e.dist, e.tick);
             }
         }
@@ -233,9 +251,19 @@ mod tests {
     use super::*;
 
     fn node(level: u16, x: f32) -> Hint {
-        Hint { level, height: 3, mbr: Aabb::new([x, 0.0, 0.0], [x + 10.0, 10.0, 10.0]).unwrap(), dov: 0.0 }
+        Hint {
+            level,
+            height: 3,
+            mbr: Aabb::new([x, 0.0, 0.0], [x + 10.0, 10.0, 10.0]).unwrap(),
+            dov: 0.0,
+        }
     }
-    const ROOT: Hint = Hint { level: 2, height: 3, mbr: Aabb::EMPTY, dov: 0.0 };
+    const ROOT: Hint = Hint {
+        level: 2,
+        height: 3,
+        mbr: Aabb::EMPTY,
+        dov: 0.0,
+    };
 
     fn q(x: f32) -> Aabb {
         Aabb::new([x, 0.0, 0.0], [x + 10.0, 10.0, 10.0]).unwrap()
@@ -244,7 +272,10 @@ mod tests {
     #[test]
     fn weights_must_sum_to_one() {
         assert!(DpLru::new(0.5, 0.3, 0.2).is_ok());
-        assert!(DpLru::new(0.5, 0.3, 0.20005).is_ok(), "within the tolerance");
+        assert!(
+            DpLru::new(0.5, 0.3, 0.20005).is_ok(),
+            "within the tolerance"
+        );
         assert!(DpLru::new(0.5, 0.3, 0.3).is_err());
         assert!(DpLru::new(1.5, -0.5, 0.0).is_err(), "negative weight");
         assert!(DpLru::new(f32::NAN, 0.5, 0.5).is_err());
@@ -287,12 +318,16 @@ mod tests {
         let mut p = DpLru::new(0.5, 0.0, 0.5).unwrap();
         p.on_insert(1, &node(1, 0.0)); // P = 1
         p.on_insert(2, &node(0, 0.0)); // P = 2, a leaf
-        assert_eq!(p.victim(&q(0.0)), Some(2), "same QN: the leaf has the larger P");
+        assert_eq!(
+            p.victim(&q(0.0)),
+            Some(2),
+            "same QN: the leaf has the larger P"
+        );
         p.on_insert(2, &node(0, 0.0));
         p.end_search();
         p.end_search();
         p.on_hit(2, &node(0, 0.0)); // QN(2) = 0, QN(1) = 2
-        // f(1) = 0.5·0.5 + 0.5·1 = 0.75; f(2) = 0.5·1 + 0 = 0.5.
+                                    // f(1) = 0.5·0.5 + 0.5·1 = 0.75; f(2) = 0.5·1 + 0 = 0.5.
         assert_eq!(p.victim(&q(0.0)), Some(1));
     }
 
@@ -305,9 +340,21 @@ mod tests {
         p.on_insert(2, &node(0, 500.0));
         p.on_insert(3, &node(0, 100.0));
         p.on_insert(4, &node(0, 100.0));
-        assert_eq!(p.victim(&q(0.0)), Some(1), "least recently used: QN 1 against 0");
-        assert_eq!(p.victim(&q(0.0)), Some(2), "equal QN: the greatest block distance");
-        assert_eq!(p.victim(&q(0.0)), Some(3), "equal QN and DIST: the oldest access");
+        assert_eq!(
+            p.victim(&q(0.0)),
+            Some(1),
+            "least recently used: QN 1 against 0"
+        );
+        assert_eq!(
+            p.victim(&q(0.0)),
+            Some(2),
+            "equal QN: the greatest block distance"
+        );
+        assert_eq!(
+            p.victim(&q(0.0)),
+            Some(3),
+            "equal QN and DIST: the oldest access"
+        );
         assert_eq!(p.victim(&q(0.0)), Some(4));
         assert_eq!(p.victim(&q(0.0)), None);
     }
@@ -316,7 +363,10 @@ mod tests {
     fn infinite_boxes_still_yield_a_victim() {
         let mut p = DpLru::default();
         let far = glam::Vec3::splat(f32::NEG_INFINITY);
-        let huge = Hint { mbr: Aabb { min: far, max: far }, ..node(0, 0.0) };
+        let huge = Hint {
+            mbr: Aabb { min: far, max: far },
+            ..node(0, 0.0)
+        };
         p.on_insert(1, &huge);
         p.on_insert(2, &node(0, 0.0));
         assert_eq!(p.victim(&q(0.0)), Some(1));
@@ -338,9 +388,23 @@ mod tests {
     #[test]
     fn a_new_root_is_pinned_and_the_old_one_released() {
         let mut p = DpLru::default();
-        p.on_insert(1, &Hint { level: 1, height: 2, ..ROOT });
+        p.on_insert(
+            1,
+            &Hint {
+                level: 1,
+                height: 2,
+                ..ROOT
+            },
+        );
         // The tree grew: page 1 is now an internal node, page 9 the root.
-        p.on_hit(1, &Hint { level: 1, height: 3, ..ROOT });
+        p.on_hit(
+            1,
+            &Hint {
+                level: 1,
+                height: 3,
+                ..ROOT
+            },
+        );
         p.on_insert(9, &ROOT);
         assert_eq!(p.victim(&Aabb::EMPTY), Some(1));
         assert_eq!(p.victim(&Aabb::EMPTY), None);

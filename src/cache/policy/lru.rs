@@ -14,13 +14,17 @@ pub struct Lru {
 
 impl Default for Lru {
     fn default() -> Lru {
-        Lru { order: LruCache::unbounded() }
+        Lru {
+            order: LruCache::unbounded(),
+        }
     }
 }
 
 impl std::fmt::Debug for Lru {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Lru").field("len", &self.order.len()).finish()
+        f.debug_struct("Lru")
+            .field("len", &self.order.len())
+            .finish()
     }
 }
 

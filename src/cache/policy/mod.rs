@@ -36,11 +36,21 @@ pub struct Hint {
 
 impl Hint {
     /// A hint that says nothing: a leaf-level page of unknown tree, MBR and DoV.
-    pub const UNKNOWN: Hint = Hint { level: 0, height: 0, mbr: Aabb::EMPTY, dov: 0.0 };
+    pub const UNKNOWN: Hint = Hint {
+        level: 0,
+        height: 0,
+        mbr: Aabb::EMPTY,
+        dov: 0.0,
+    };
 
     /// The hint of an R-tree node as the traversal describes it (DoV unknown).
     pub fn node(h: &NodeHint) -> Hint {
-        Hint { level: h.level, height: h.height, mbr: h.mbr, dov: 0.0 }
+        Hint {
+            level: h.level,
+            height: h.height,
+            mbr: h.mbr,
+            dov: 0.0,
+        }
     }
 
     /// True for the root of its tree (`level == height - 1`).
@@ -133,7 +143,11 @@ mod tests {
 
     #[test]
     fn root_detection() {
-        let h = |level, height| Hint { level, height, ..Hint::UNKNOWN };
+        let h = |level, height| Hint {
+            level,
+            height,
+            ..Hint::UNKNOWN
+        };
         assert!(h(2, 3).is_root());
         assert!(!h(1, 3).is_root());
         assert!(!h(0, 0).is_root(), "unknown height: no root");
