@@ -111,7 +111,8 @@ enum Command {
         /// Index cache size in bytes (0: no index cache).
         #[arg(long)]
         cache_bytes: Option<usize>,
-        /// Prefetch factor k (negative: no prefetching).
+        /// Prefetch factor k in seconds: prefetch the cell of the frustum k seconds of
+        /// motion ahead (negative: no prefetching).
         #[arg(long)]
         k: Option<f32>,
         /// Scale factor SF of the disk cell over the frustum cell.

@@ -117,9 +117,12 @@ fn prefetch_k_sweeps_every_pattern() {
         }
         let best = report.best_k(p).unwrap();
         assert!(cfg.ks.contains(&best), "{p:?}: best k {best}");
+        let fewest = report.rows_of(p).find(|r| r.k == best).unwrap().pages();
+        assert!(report.rows_of(p).all(|r| r.pages() >= fewest));
+        let fastest = report.best_frame_k(p).unwrap();
         let best_ms = report
             .rows_of(p)
-            .find(|r| r.k == best)
+            .find(|r| r.k == fastest)
             .unwrap()
             .mean_frame_ms;
         assert!(report.rows_of(p).all(|r| r.mean_frame_ms >= best_ms));
@@ -142,6 +145,7 @@ fn prefetch_k_sweeps_every_pattern() {
     report.plot(&out).unwrap();
     assert!(is_png(&out.join(prefetch_k::FRAME_PLOT_FILE)));
     assert!(is_png(&out.join(prefetch_k::QUERY_PLOT_FILE)));
+    assert!(is_png(&out.join(prefetch_k::PAGES_PLOT_FILE)));
 
     let md = report.markdown();
     for p in THESIS_PATTERNS {

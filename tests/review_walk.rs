@@ -91,6 +91,40 @@ fn prefetching_takes_reads_off_the_viewers_thread() {
 }
 
 #[test]
+fn a_turn_on_the_spot_is_prefetched() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let mid = db.bounds().center() * Vec3::new(1.0, 0.0, 1.0) + Vec3::Y * 1.7;
+    // A quarter turn a second for four seconds: the thesis's F + k·velocity does not move.
+    let turn = CameraPath {
+        poses: (0..120)
+            .map(|i| Pose {
+                time: i as f64 / 30.0,
+                position: mid,
+                yaw: i as f32 / 30.0 * std::f32::consts::FRAC_PI_2,
+                pitch: 0.0,
+            })
+            .collect(),
+    };
+    let optimal = review::walk(&db, &turn, &cfg(Preset::Optimal), |_| {})
+        .unwrap()
+        .summary;
+    let np = review::walk(&db, &turn, &cfg(Preset::Np), |_| {})
+        .unwrap()
+        .summary;
+    assert!(
+        np.sync_queries > 3,
+        "a full turn leaves the cell again and again: {np:?}"
+    );
+    assert!(optimal.prefetches_used > 0, "{optimal:?}");
+    assert!(
+        optimal.sync_queries * 2 <= np.sync_queries,
+        "Optimal {optimal:?}\nNP {np:?}"
+    );
+    assert_eq!(optimal.visual_misses, 0);
+}
+
+#[test]
 fn the_memory_budget_holds_every_frame() {
     let c = city();
     let db = Database::open(&c.db).unwrap();

@@ -7,8 +7,9 @@
 //! returns are loaded into the object buffer (evicting by Fig. 4.8 when over budget).
 //! The buffer is then culled against the frustum (ViewCulling, Fig. 4.15) and the
 //! drawn objects' triangles gathered. With prefetching, a background thread queries
-//! the cell predicted at F' = F + k·velocity (F: centre of the far clip plane, §4.2.5)
-//! before the viewer gets there; index pages go through the index cache when one is
+//! the cell predicted at F' = F + k·velocity (F: centre of the far clip plane, §4.2.5:
+//! the disk cell of the frustum moved by k seconds of the viewer's motion) before the
+//! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
 //! Prefetching follows Fig. 4.11: the prefetched cell C2 is searched (CSearch against
@@ -19,7 +20,10 @@
 //!
 //! Departures, named: a prefetch is started when the frustum cell, grown by one
 //! second of motion, would leave the disk cell (the thesis says "when approaching the
-//! boundary"), and asked again from the same disk cell only when the prediction has
+//! boundary"); the predicted cell holds the frusta from now to k seconds ahead, and
+//! the frusta the viewer turns through on the way when it is turning (the thesis
+//! predicts the translation only, and a turning viewer leaves such a cell every few
+//! degrees); it is asked again from the same disk cell only when the prediction has
 //! moved by a quarter of a cell; a prefetched result is dropped if an eviction happened
 //! since it was asked for (an eviction restarts the CSearch history, so an older
 //! complement could miss objects); BOX reloads every object of its cell (the thesis's
@@ -30,7 +34,7 @@
 //! first cell from nothing and is reported apart from the walk's frame times.
 
 use std::sync::mpsc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
@@ -97,7 +101,9 @@ pub struct ReviewConfig {
     pub retrieval: Retrieval,
     /// Index cache: policy name and budget in bytes.
     pub index_cache: Option<(String, usize)>,
-    /// Prefetch factor k; `None` disables prefetching.
+    /// Prefetch factor k, seconds: the prefetched cell is the disk cell of the frustum
+    /// moved by k·velocity, whose far-plane centre is F' = F + k·velocity (§4.2.5; the
+    /// thesis gives no unit). `None` disables prefetching.
     pub prefetch_k: Option<f32>,
     /// Scale factor SF: the disk cell is SF times the frustum cell on the ground.
     pub sf: f32,
@@ -508,14 +514,14 @@ impl Walker<'_> {
             ..Default::default()
         };
 
-        self.collect_prefetch(false, camera.position, &mut stats)?;
+        self.collect_prefetch(None, camera.position, &mut stats)?;
         if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
             stats.queried = true;
             if self.prefetched.is_none()
                 && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell))
             {
                 let t = Instant::now();
-                self.collect_prefetch(true, camera.position, &mut stats)?;
+                self.collect_prefetch(Some(MAX_PREFETCH_WAIT), camera.position, &mut stats)?;
                 stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
             }
             match self.prefetched.filter(|p| contains_ground(p, &fcell)) {
@@ -532,6 +538,7 @@ impl Walker<'_> {
                     stats.query_ms += f.query_ms;
                     stats.load_ms += f.load_ms;
                     let t = Instant::now();
+                    // The viewer is in this cell whether or not the budget holds all of it.
                     self.adopt(f, camera.position, &mut stats);
                     self.enter(cell);
                     stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
@@ -539,7 +546,15 @@ impl Walker<'_> {
             }
         }
         if let Some(k) = self.cfg.prefetch_k {
-            self.maybe_prefetch(&camera, &fcell, path.velocity_at(i), k);
+            self.maybe_prefetch(
+                &camera,
+                &fcell,
+                ViewerMotion {
+                    velocity: path.velocity_at(i),
+                    yaw_rate: path.yaw_rate_at(i),
+                },
+                k,
+            );
         }
 
         stats.objects_buffered = self.buffer.len();
@@ -589,20 +604,29 @@ impl Walker<'_> {
         }
     }
 
-    /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one.
-    fn collect_prefetch(&mut self, wait: bool, eye: Vec3, stats: &mut FrameStats) -> Result<()> {
+    /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one
+    /// that long at most.
+    fn collect_prefetch(
+        &mut self,
+        wait: Option<Duration>,
+        eye: Vec3,
+        stats: &mut FrameStats,
+    ) -> Result<()> {
         if self.in_flight.is_none() {
             return Ok(());
         }
         let stopped = || Error::Invalid("the prefetch thread stopped".into());
-        let got = if wait {
-            self.res_rx.recv().map_err(|_| stopped())?
-        } else {
-            match self.res_rx.try_recv() {
+        let got = match wait {
+            Some(limit) => match self.res_rx.recv_timeout(limit) {
+                Ok(r) => r,
+                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
+            },
+            None => match self.res_rx.try_recv() {
                 Ok(r) => r,
                 Err(mpsc::TryRecvError::Empty) => return Ok(()),
                 Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
-            }
+            },
         };
         self.in_flight = None;
         let fetched = got?;
@@ -615,13 +639,14 @@ impl Walker<'_> {
         self.counts.adopted += 1;
         stats.prefetch_adopted = true;
         let cell = fetched.cell;
-        self.adopt(fetched, eye, stats);
-        self.prefetched = Some(cell);
+        if self.adopt(fetched, eye, stats) {
+            self.prefetched = Some(cell);
+        }
         stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
 
-    fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, velocity: Vec3, k: f32) {
+    fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, motion: ViewerMotion, k: f32) {
         let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else {
             return;
         };
@@ -629,19 +654,20 @@ impl Walker<'_> {
             return;
         }
         // Will the frustum cell leave the disk cell (and the cell already prefetched)
-        // within a second?
-        let ahead = Aabb {
-            min: fcell.min.min(fcell.min + velocity),
-            max: fcell.max.max(fcell.max + velocity),
-        };
+        // within the look-ahead?
+        let soon = motion.frustum_cell(camera, LOOKAHEAD_S);
+        let ahead = fcell.union(&soon);
         if contains_ground(&disk, &ahead)
             || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead))
         {
             return;
         }
-        let predicted = camera.far_center() + velocity * k;
-        let center = Vec3::new(predicted.x, fcell.center().y, predicted.z);
-        let cell = self.disk_cell_around(fcell, center);
+        // The cell must hold the frustum from when the viewer leaves the disk cell (any
+        // time within the look-ahead) to k seconds on: a cell around the prediction alone
+        // would be missed whenever k·velocity passes the cell's margin.
+        let predicted = fcell.union(&motion.frustum_cell(camera, k));
+        let center = predicted.center();
+        let cell = self.disk_cell_around(&predicted, center);
         // Ask again from the same disk cell only once the prediction has moved by a
         // quarter of the cell: that bounds the prefetches per cell.
         if let Some(last) = self.last_prediction {
@@ -658,8 +684,10 @@ impl Walker<'_> {
     }
 
     /// Takes a query's objects into the buffer and its cell into the history, evicting
-    /// by Fig. 4.8 when over budget.
-    fn adopt(&mut self, fetched: Fetched, eye: Vec3, stats: &mut FrameStats) {
+    /// by Fig. 4.8 when over budget. False if the budget could not hold all of the
+    /// cell's objects beside the viewer's (then the cell is not in the history, so a
+    /// later search fetches what was dropped).
+    fn adopt(&mut self, fetched: Fetched, eye: Vec3, stats: &mut FrameStats) -> bool {
         let cell = fetched.cell;
         if self.cfg.retrieval == Retrieval::Box {
             // BOX keeps exactly its cell.
@@ -680,25 +708,87 @@ impl Walker<'_> {
                 .into_iter()
                 .chain([cell])
                 .collect();
+            let overlapping = |b: &ObjectBuffer, c: &Aabb| -> Vec<ObjectEntry> {
+                b.iter()
+                    .map(|o| o.entry)
+                    .filter(|o| o.bounds.overlaps(c))
+                    .collect()
+            };
+            let whole: Vec<usize> = keep
+                .iter()
+                .map(|c| overlapping(&self.buffer, c).len())
+                .collect();
             let e = self.buffer.evict_outside_all(&keep, eye);
             stats.evicted += e.evicted;
             stats.overflow |= e.overflow;
-            // Restart the history at the cells whose objects the buffer now holds.
+            // Restart the history at the cells whose objects the buffer still holds in
+            // full: a cell that lost some to the budget must not hide them from a search.
             self.history.clear();
-            for c in &keep {
-                let kept: Vec<ObjectEntry> = self
-                    .buffer
-                    .iter()
-                    .map(|o| o.entry)
-                    .filter(|o| o.bounds.overlaps(c))
-                    .collect();
-                self.history.record(*c, &kept);
+            let mut complete = true;
+            for (c, n) in keep.iter().zip(whole) {
+                let kept = overlapping(&self.buffer, c);
+                if kept.len() == n {
+                    self.history.record(*c, &kept);
+                } else if *c == cell {
+                    complete = false;
+                }
             }
             self.epoch += 1;
             if self.prefetched.is_some_and(|p| p != cell) {
                 self.prefetched = None;
             }
+            return complete;
         }
+        true
+    }
+}
+
+/// How far ahead, in seconds of the viewer's motion, a prefetch is started: when the
+/// frustum would leave the disk cell within this time.
+const LOOKAHEAD_S: f32 = 1.0;
+
+/// How long the viewer waits for a prefetch under way that holds its frustum before it
+/// queries for itself: a turn's prefetch can be a whole new cell, longer than a frame
+/// has, where the viewer's own complement against the cells it holds is small.
+const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
+
+/// The largest turn a prefetch foresees, radians: a cell around a wider sweep does not
+/// fit the budget beside the viewer's (on the demo city, 90° overflowed 256 MiB on the
+/// backward walk and read twice the pages; 45° never overflowed).
+const MAX_TURN: f32 = std::f32::consts::FRAC_PI_4;
+
+/// The viewer's motion at a frame, as a prefetcher knows it (finite differences of the
+/// path up to this frame).
+#[derive(Clone, Copy, Debug)]
+struct ViewerMotion {
+    velocity: Vec3,
+    /// Radians per second.
+    yaw_rate: f32,
+}
+
+impl ViewerMotion {
+    /// The box around the frusta the viewer will have `t` seconds ahead: its eye moved by
+    /// t·velocity on the ground (so their far-plane centre is F' = F + t·velocity,
+    /// §4.2.5) and its view at every yaw it turns through on the way. The thesis
+    /// predicts the translation only, and a viewer turning at a corner leaves such a
+    /// cell within a few degrees. The turn is foreseen up to [`MAX_TURN`].
+    fn frustum_cell(&self, camera: &Camera, t: f32) -> Aabb {
+        let eye = camera.position + Vec3::new(self.velocity.x, 0.0, self.velocity.z) * t;
+        let turn = (self.yaw_rate * t).clamp(-MAX_TURN, MAX_TURN);
+        let at = |yaw: f32| {
+            Camera {
+                position: eye,
+                yaw,
+                ..*camera
+            }
+            .frustum()
+            .aabb()
+        };
+        // One frustum every 15° of the turn: the union of their boxes holds the ones between.
+        let steps = (turn.abs() / 15f32.to_radians()).ceil() as usize;
+        (1..=steps).fold(at(camera.yaw), |cell, j| {
+            cell.union(&at(camera.yaw + turn * j as f32 / steps as f32))
+        })
     }
 }
 
