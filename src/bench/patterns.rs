@@ -69,7 +69,7 @@ pub struct PresetIo {
     pub queries: usize,
     pub index_pages: u64,
     pub mesh_pages: u64,
-    /// Pages read by frame 0: the cold load of the first cell.
+    /// Pages read by the cold load of the first cell.
     pub first_load_pages: u64,
     /// Per query after the first cell (see the module's note).
     pub index_per_query: f64,
@@ -85,10 +85,7 @@ pub struct PresetIo {
 impl PresetIo {
     fn from_walk(w: &WalkReport) -> PresetIo {
         let s = &w.summary;
-        let (first_index, first_mesh) = w
-            .frames
-            .first()
-            .map_or((0, 0), |f| (f.index_pages, f.mesh_pages));
+        let (first_index, first_mesh) = s.initial_load_pages;
         let later = s.queries.saturating_sub(1);
         PresetIo {
             queries: s.queries,

@@ -10,12 +10,13 @@
 //! viewer waited for its query: the whole query when it ran on the frame's thread, the
 //! rest of a prefetch otherwise; it is averaged over the frames that queried.
 //!
-//! The best k is named by the disk pages the walk read, the cost the thesis's argument
-//! is about, not by the times: too small a k and the viewer leaves each predicted cell
-//! sooner (more searches, each walking the index again); too large and the predicted
-//! cell overlaps the viewer's less (bigger loads, objects fetched that the viewer never
-//! reaches, evictions under the budget that force reloads). Page counts are exact for a
-//! given run of the walk; the frame times beside them are wall-clock and noisy.
+//! The best k is named by counts, not by the times: first the searches the viewer's
+//! thread ran itself (what a prediction is for: too small a k and the viewer leaves each
+//! predicted cell before the next one is ready), then the disk pages the walk read (too
+//! large a k and the predicted cell overlaps the viewer's less: bigger loads, objects
+//! fetched that the viewer never reaches, evictions under the budget that force
+//! reloads). Counts are exact for a given run of the walk; the frame times beside them
+//! are wall-clock and noisy.
 
 use std::path::Path;
 
@@ -183,15 +184,15 @@ impl PrefetchKReport {
         self.rows.iter().filter(move |r| r.pattern == pattern)
     }
 
-    /// The k whose walk of `pattern` read the fewest disk pages (index and meshes, on
-    /// either thread), ties going to fewer searches on the viewer's thread, then to the
+    /// The k whose walk of `pattern` ran the fewest searches on the viewer's thread, ties
+    /// going to fewer disk pages read (index and meshes, on either thread), then to the
     /// smaller mean frame time; `None` if the pattern was not walked.
     pub fn best_k(&self, pattern: Motion) -> Option<f32> {
         self.best(pattern).map(|r| r.k)
     }
 
-    /// Whether `pattern`'s best k lies inside the sweep, with more pages read on both
-    /// sides: an optimum rather than the end of a slope (or a flat line).
+    /// Whether `pattern`'s best k lies inside the sweep, with a worse k (by the same
+    /// order) on both sides: an optimum rather than the end of a slope (or a flat line).
     pub fn has_interior_optimum(&self, pattern: Motion) -> bool {
         let rows: Vec<&PrefetchKRow> = self.rows_of(pattern).collect();
         let Some(best) = self.best(pattern) else {
@@ -200,7 +201,7 @@ impl PrefetchKReport {
         let Some(i) = rows.iter().position(|r| std::ptr::eq(*r, best)) else {
             return false;
         };
-        let more = |r: &&PrefetchKRow| r.pages() > best.pages();
+        let more = |r: &&PrefetchKRow| rank(r) > rank(best);
         rows[..i].iter().any(more) && rows[i + 1..].iter().any(more)
     }
 
@@ -216,8 +217,8 @@ impl PrefetchKReport {
 
     fn best(&self, pattern: Motion) -> Option<&PrefetchKRow> {
         self.rows_of(pattern).min_by(|a, b| {
-            (a.pages(), a.sync_queries)
-                .cmp(&(b.pages(), b.sync_queries))
+            rank(a)
+                .cmp(&rank(b))
                 .then(a.mean_frame_ms.total_cmp(&b.mean_frame_ms))
                 .then(a.k.total_cmp(&b.k))
         })
@@ -332,7 +333,7 @@ impl PrefetchKReport {
             s.push('\n');
         }
         s.push_str(
-            "| pattern | best k (fewest pages) | pages there | searches | viewer's own | an optimum inside the sweep? | \
+            "| pattern | best k (fewest own searches, then pages) | pages there | searches | viewer's own | an optimum inside the sweep? | \
              best k (frame time) | best k (query time) |\n|---|---|---|---|---|---|---|---|\n",
         );
         for &p in &c.walk.patterns {
@@ -356,18 +357,23 @@ impl PrefetchKReport {
         s.push_str(
             "\nA walk's loads depend on when its prefetches land and on what the budget evicts, so pages read \
              differ by tens of percent between neighbouring k's even where nothing changes systematically: read \
-             the best k as the region where both the pages and the viewer's own searches are low.\n",
+             the best k as the region where both the viewer's own searches and the pages are low.\n",
         );
         s.push_str(&format!(
             "\nThe thesis (Fig. 4.17) finds the smallest mean frame time, and the smallest mean query time, around \
              k = {} for all five sessions (fast, slow, turning, backward, normal), and uses it as its default; it gives no unit \
              for the velocity. Ours is metres per second, so k is in seconds. The best k here is named by the \
-             disk pages read per walk, which are exact; the times are wall-clock on this machine, and differences \
+             viewer's own searches, then the disk pages read, which are exact; the times are wall-clock on this machine, and differences \
              smaller than the run-to-run noise do not rank the k's.\n",
             num(THESIS_BEST_K)
         ));
         s
     }
+}
+
+/// The order [`PrefetchKReport::best_k`] ranks by.
+fn rank(r: &PrefetchKRow) -> (usize, u64) {
+    (r.sync_queries, r.pages())
 }
 
 #[cfg(test)]
@@ -398,14 +404,15 @@ mod tests {
     }
 
     #[test]
-    fn best_k_reads_the_fewest_pages_then_runs_the_fewest_own_searches_then_is_fastest() {
+    fn best_k_runs_the_fewest_own_searches_then_reads_the_fewest_pages_then_is_fastest() {
         let r = report(&[
-            (0.0, 30, 5, 0.1),
+            (0.0, 30, 9, 0.1),
             (1.0, 26, 6, 0.9),
-            (2.0, 26, 5, 0.8),
+            (2.0, 27, 5, 0.8),
+            (3.0, 26, 5, 0.7),
             (4.0, 33, 20, 0.2),
         ]);
-        assert_eq!(r.best_k(Motion::Normal), Some(2.0));
+        assert_eq!(r.best_k(Motion::Normal), Some(3.0));
         assert!(r.has_interior_optimum(Motion::Normal));
         assert_eq!(r.best_frame_k(Motion::Normal), Some(0.0));
         let tie = report(&[(0.0, 30, 5, 0.3), (1.0, 30, 5, 0.2)]);

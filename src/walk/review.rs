@@ -33,7 +33,8 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
-use std::sync::mpsc;
+use std::collections::HashSet;
+use std::sync::{mpsc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
@@ -280,6 +281,9 @@ pub struct WalkSummary {
     pub frames: usize,
     /// Frame 0: the first disk cell, loaded cold.
     pub initial_load_ms: f64,
+    /// Index and mesh pages that frame 0's query read: the cold load alone, without what
+    /// a prefetch started in that frame read beside it.
+    pub initial_load_pages: (u64, u64),
     /// Mean, maximum and variance of the frame time, frames 1 onwards.
     pub mean_frame_ms: f64,
     pub max_frame_ms: f64,
@@ -372,7 +376,7 @@ struct Request {
     cell: Aabb,
     history: Vec<Aabb>,
     epoch: u64,
-    skip: std::collections::HashSet<u64>,
+    skip: HashSet<u64>,
 }
 
 /// Walks `path` through `db` under `cfg`; `progress` is told each finished frame.
@@ -403,13 +407,17 @@ pub fn walk(
         Some(p) => p,
         None => db.store(),
     };
+    // The ids in the object buffer, for the prefetch thread: a prefetch asked for before
+    // the viewer's own query would otherwise read again the meshes that query loaded.
+    let resident = Mutex::new(HashSet::new());
+    let resident = &resident;
     let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
         if cfg.prefetch_k.is_some() {
             scope.spawn(move || {
                 for req in req_rx {
-                    let fetched = fetch(db, source, cfg.retrieval, &req);
+                    let fetched = fetch(db, source, cfg.retrieval, &req, resident);
                     if res_tx.send(fetched).is_err() {
                         break;
                     }
@@ -433,6 +441,7 @@ pub fn walk(
             in_flight: None,
             req_tx: cfg.prefetch_k.map(|_| req_tx),
             res_rx,
+            resident,
             counts: Counts::default(),
         };
         let mut frames = Vec::with_capacity(path.poses.len());
@@ -473,6 +482,8 @@ struct Counts {
     sync: usize,
     adopted: usize,
     stale: usize,
+    /// Index and mesh pages read by frame 0's own query (before any prefetch started).
+    initial_load_pages: (u64, u64),
 }
 
 struct Walker<'a> {
@@ -494,6 +505,8 @@ struct Walker<'a> {
     in_flight: Option<Aabb>,
     req_tx: Option<mpsc::Sender<Request>>,
     res_rx: mpsc::Receiver<Result<Fetched>>,
+    /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
+    resident: &'a Mutex<HashSet<u64>>,
     counts: Counts,
 }
 
@@ -532,7 +545,13 @@ impl Walker<'_> {
                 None => {
                     let cell = self.disk_cell_around(&fcell, fcell.center());
                     let req = self.request(cell);
-                    let f = fetch(self.db, self.source, self.cfg.retrieval, &req)?;
+                    let f = fetch(
+                        self.db,
+                        self.source,
+                        self.cfg.retrieval,
+                        &req,
+                        self.resident,
+                    )?;
                     self.counts.sync += 1;
                     stats.sync_query = true;
                     stats.query_ms += f.query_ms;
@@ -543,6 +562,13 @@ impl Walker<'_> {
                     self.enter(cell);
                     stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
                 }
+            }
+            if i == 0 {
+                let io = self.db.io().since(&io_before);
+                self.counts.initial_load_pages = (
+                    io.reads_of(PageKind::RtreeNode),
+                    io.reads_of(PageKind::Mesh),
+                );
             }
         }
         if let Some(k) = self.cfg.prefetch_k {
@@ -699,6 +725,7 @@ impl Walker<'_> {
         }
         self.history.filter(&cell);
         self.history.record(cell, &fetched.retrieved);
+        let mut complete = true;
         if self.buffer.over_budget() {
             // Keep the cell the viewer is in as well as the new one (a prefetch lands
             // before the viewer gets there).
@@ -724,7 +751,6 @@ impl Walker<'_> {
             // Restart the history at the cells whose objects the buffer still holds in
             // full: a cell that lost some to the budget must not hide them from a search.
             self.history.clear();
-            let mut complete = true;
             for (c, n) in keep.iter().zip(whole) {
                 let kept = overlapping(&self.buffer, c);
                 if kept.len() == n {
@@ -737,9 +763,13 @@ impl Walker<'_> {
             if self.prefetched.is_some_and(|p| p != cell) {
                 self.prefetched = None;
             }
-            return complete;
         }
-        true
+        if self.cfg.retrieval == Retrieval::CSearch {
+            if let Ok(mut ids) = self.resident.lock() {
+                *ids = self.buffer.iter().map(|o| o.entry.id).collect();
+            }
+        }
+        complete
     }
 }
 
@@ -798,6 +828,7 @@ fn fetch(
     source: &(dyn PageSource + Sync),
     retrieval: Retrieval,
     req: &Request,
+    resident: &Mutex<HashSet<u64>>,
 ) -> Result<Fetched> {
     let t = Instant::now();
     let result: QueryResult = match retrieval {
@@ -811,7 +842,8 @@ fn fetch(
     let t = Instant::now();
     let mut objects = Vec::with_capacity(result.objects.len());
     for entry in &result.objects {
-        if req.skip.contains(&entry.id) {
+        let loaded = || resident.lock().is_ok_and(|r| r.contains(&entry.id));
+        if req.skip.contains(&entry.id) || loaded() {
             continue;
         }
         let mesh = db.mesh(entry)?;
@@ -891,6 +923,7 @@ fn summarize(frames: &[FrameStats], counts: Counts, cache: Option<CacheStats>) -
     WalkSummary {
         frames: frames.len(),
         initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
+        initial_load_pages: counts.initial_load_pages,
         mean_frame_ms: mean,
         max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
         frame_ms_variance: walk
