@@ -31,6 +31,7 @@ pub mod cache;
 pub mod database;
 pub mod error;
 pub mod geom;
+pub mod lod;
 pub mod rtree;
 pub mod scene;
 pub mod store;

@@ -1,0 +1,61 @@
+//! The LOD core: progressive meshes built by quadric-ordered half-edge collapses, their
+//! vertex splits in the thesis's implicit-index form, discrete levels cut from them, and
+//! a sampled Hausdorff distance to measure the levels by.
+//!
+//! Zheng 2007 ch. 2 (§2.1.1 the half-edge collapse, §2.1.2 the quadric error metric,
+//! §2.2.1 the progressive mesh) and §3.2 (the vertex split's content, Fig. 3.5). The
+//! choices the thesis leaves open — creases and seams, boundaries, normals, the error's
+//! unit — are named in `pm`'s top comment.
+//!
+//! - [`ProgressiveMesh::build`] simplifies one mesh; [`simplify_all`] many, on all cores.
+//! - [`VertexSplit`] is the record; [`SelectiveMesh`] applies splits and collapses in place.
+//! - [`PmCursor`], [`ProgressiveMesh::mesh_at_triangles`], [`ProgressiveMesh::mesh_at_error`]
+//!   and [`ProgressiveMesh::levels`] give levels as plain meshes.
+//! - [`hausdorff`] compares two meshes.
+//! - [`Dag`] orders the splits by what each needs present (Zheng ch. 3: the legality
+//!   condition, the full-, non- and mini-redundant constructions, the visibility
+//!   attributes of §3.4, a checked byte format); [`dag_stats`] compares the three.
+//! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
+//!   ch. 4: the fronts, the three traversals, the compact selective mesh); [`refine_orbit`]
+//!   runs the thesis's traversal experiment.
+
+mod criteria;
+mod dag;
+mod dag_attrs;
+mod dag_build;
+mod dag_codec;
+mod dag_stats;
+#[cfg(test)]
+mod fixtures;
+mod fronts;
+mod hausdorff;
+mod levels;
+mod mesh_update;
+mod pm;
+mod quadric;
+mod refine;
+mod refine_bench;
+#[cfg(test)]
+mod refine_tests;
+mod topology;
+mod traversal;
+mod vsplit;
+
+pub use criteria::{Criteria, View};
+pub use dag::{Dag, DagConstruction};
+pub use dag_attrs::NodeAttrs;
+pub use dag_codec::{DAG_MAGIC, DAG_VERSION};
+pub use dag_stats::{bumpy_torus, dag_stats, ConstructionStats, DagStats};
+pub use fronts::Fronts;
+pub use hausdorff::hausdorff;
+pub use levels::{Level, PmCursor};
+pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
+pub use pm::{simplify_all, ProgressiveMesh};
+pub use refine::{
+    FrameReport, FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+};
+pub use refine_bench::{
+    orbit_path, refine_orbit, OrbitConfig, OrbitFrame, OrbitReport, TraversalSummary,
+};
+pub use traversal::{PassStats, Traversal};
+pub use vsplit::{SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE};
