@@ -274,3 +274,47 @@ fn walking_experiments_write_their_outputs() {
     let out = flaneur(&["bench", "prefetch-k", db, "--ks", "-1", "--out", d]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("error"));
 }
+
+#[test]
+fn lod_writes_levels_and_measures_a_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = concat!(env!("CARGO_MANIFEST_DIR"), "/data/bunny.obj");
+    let out = dir.path().join("levels");
+    let o = flaneur(&[
+        "lod",
+        bunny,
+        "--out",
+        out.to_str().unwrap(),
+        "--ratio",
+        "0.25",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let first = flaneur::lod::load_merged(&out.join("level-0.obj")).unwrap();
+    let second = flaneur::lod::load_merged(&out.join("level-1.obj")).unwrap();
+    assert_eq!(first.triangle_count(), 3674);
+    assert!(
+        second.triangle_count() <= 3674 / 4 + 2,
+        "{}",
+        second.triangle_count()
+    );
+
+    let o = flaneur(&[
+        "lod", bunny, "--refine", "--eye", "0,5,20", "--look", "0,5,0", "--tau", "0.001",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("of 3674 triangles") && text.contains("Hausdorff"),
+        "{text}"
+    );
+
+    for bad in [
+        &["lod", bunny][..],
+        &["lod", bunny, "--refine", "--eye", "0,5", "--look", "0,5,0"],
+        &["lod", "missing.obj", "--out", "x"],
+    ] {
+        let o = flaneur(bad);
+        assert!(!o.status.success(), "{bad:?} succeeded");
+        assert!(!o.stderr.is_empty(), "{bad:?}: no error message");
+    }
+}
