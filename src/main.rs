@@ -183,9 +183,12 @@ enum Experiment {
         db: PathBuf,
         #[command(flatten)]
         walk: WalkArgs,
-        /// The k values, comma-separated (default 0, 0.2, ..., 2).
+        /// The k values in seconds, comma-separated (default 0, 0.4, 0.8, 1.2, 1.6, 2, 3, 4, 6, 8).
         #[arg(long, value_delimiter = ',')]
         ks: Vec<f32>,
+        /// Walks per pattern and k (the median is reported, with the spread).
+        #[arg(long, default_value_t = 1)]
+        repeats: usize,
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
     },
@@ -447,11 +450,18 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => run_query(&db, &query, &history, backend, json),
         Command::Bench { experiment } => match experiment {
-            Experiment::PrefetchK { db, walk, ks, out } => {
+            Experiment::PrefetchK {
+                db,
+                walk,
+                ks,
+                repeats,
+                out,
+            } => {
                 let d = PrefetchKConfig::default();
                 let cfg = PrefetchKConfig {
                     walk: walk.setup(d.walk),
                     ks: if ks.is_empty() { d.ks } else { ks },
+                    repeats,
                 };
                 let db = Database::open(&db)?;
                 let r = prefetch_k::run(&db, &cfg)?;

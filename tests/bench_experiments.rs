@@ -95,6 +95,7 @@ fn prefetch_k_sweeps_every_pattern() {
     let cfg = PrefetchKConfig {
         walk: walk(FRAMES),
         ks: vec![0.0, 0.8, 1.6],
+        repeats: 1,
     };
     let mut calls = 0;
     let report = prefetch_k::run_with_progress(&db, &cfg, |done, total| {
@@ -288,6 +289,7 @@ fn bad_settings_are_errors() {
     assert!(invalid(k(|c| c.ks = vec![0.4, -0.2])));
     assert!(invalid(k(|c| c.ks = vec![f32::NAN])));
     assert!(invalid(k(|c| c.ks = vec![0.4, 0.4])));
+    assert!(invalid(k(|c| c.repeats = 0)));
     assert!(invalid(k(|c| c.walk.patterns.clear())));
     assert!(invalid(k(|c| c.walk.sf = 0.5)));
     assert!(invalid(k(|c| c.walk.frames = 0)));

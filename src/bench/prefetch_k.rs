@@ -33,6 +33,9 @@ pub struct PrefetchKConfig {
     pub walk: WalkSetup,
     /// The prefetch factors tried, in order.
     pub ks: Vec<f32>,
+    /// Walks per pattern and k; the row kept is the median walk by the ranking's
+    /// order, with the spread of the counts over all of them.
+    pub repeats: usize,
 }
 
 /// The thesis's range of Fig. 4.17 (0 to 2) in steps of 0.4, then on to 8 s: on the demo
@@ -46,6 +49,7 @@ impl Default for PrefetchKConfig {
         PrefetchKConfig {
             walk: WalkSetup::default(),
             ks: default_ks(),
+            repeats: 1,
         }
     }
 }
@@ -54,6 +58,11 @@ impl PrefetchKConfig {
     /// Checks the walk and the sweep.
     pub fn validate(&self) -> Result<()> {
         self.walk.validate()?;
+        if self.repeats == 0 {
+            return Err(Error::Invalid(
+                "prefetch-k: repeats must be at least 1".into(),
+            ));
+        }
         check_sweep("prefetch factor k", &self.ks, check_k)
     }
 
@@ -84,6 +93,10 @@ pub struct PrefetchKRow {
     pub frames_over_50ms: usize,
     pub index_pages: u64,
     pub mesh_pages: u64,
+    /// Smallest and largest viewer's own searches over the repeated walks.
+    pub sync_queries_spread: (usize, usize),
+    /// Smallest and largest pages read over the repeated walks.
+    pub pages_spread: (u64, u64),
 }
 
 impl PrefetchKRow {
@@ -106,6 +119,8 @@ impl PrefetchKRow {
             frames_over_50ms: s.frames_over_50ms,
             index_pages: s.index_pages,
             mesh_pages: s.mesh_pages,
+            sync_queries_spread: (s.sync_queries, s.sync_queries),
+            pages_spread: (s.index_pages + s.mesh_pages, s.index_pages + s.mesh_pages),
         }
     }
 }
@@ -138,14 +153,20 @@ pub fn run_with_progress(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<PrefetchKReport> {
     cfg.validate()?;
-    let total = cfg.walk.patterns.len() * cfg.ks.len();
-    let mut rows = Vec::with_capacity(total);
+    let total = cfg.walk.patterns.len() * cfg.ks.len() * cfg.repeats;
+    let mut rows = Vec::with_capacity(total / cfg.repeats);
+    let mut done = 0;
     for &pattern in &cfg.walk.patterns {
         let path = cfg.walk.path(db, pattern)?;
         for &k in &cfg.ks {
-            let walk = review::walk(db, &path, &cfg.review(k), |_| {})?;
-            rows.push(PrefetchKRow::from_walk(pattern, k, &walk));
-            progress(rows.len(), total);
+            let mut runs = Vec::with_capacity(cfg.repeats);
+            for _ in 0..cfg.repeats {
+                let walk = review::walk(db, &path, &cfg.review(k), |_| {})?;
+                runs.push(PrefetchKRow::from_walk(pattern, k, &walk));
+                done += 1;
+                progress(done, total);
+            }
+            rows.push(median_run(runs));
         }
     }
     Ok(PrefetchKReport {
@@ -281,10 +302,11 @@ impl PrefetchKReport {
         let mut s = String::from("# prefetch-k — frame and query time against the prefetch factor k (Shou 2002, Fig. 4.17)\n\n");
         s.push_str(&format!(
             "Optimal configuration (CSearch, 1 MB distance-priority index cache, prefetching); each pattern: \
-             {}, SF {}; k = {}.\n\n",
+             {}, SF {}; k = {}; {} per k (the median walk by the ranking below is shown).\n\n",
             c.walk.describe(),
             num(c.walk.sf),
-            c.ks.iter().map(|&k| num(k)).collect::<Vec<_>>().join(", ")
+            c.ks.iter().map(|&k| num(k)).collect::<Vec<_>>().join(", "),
+            if c.repeats == 1 { "one walk".to_string() } else { format!("{} walks", c.repeats) }
         ));
         let head = format!(
             "| pattern | {} |\n|---|{}\n",
@@ -332,6 +354,29 @@ impl PrefetchKReport {
             }
             s.push('\n');
         }
+        if c.repeats > 1 {
+            for (title, by) in [
+                (
+                    "The viewer's own searches, smallest–largest",
+                    (|r: &PrefetchKRow| {
+                        format!("{}–{}", r.sync_queries_spread.0, r.sync_queries_spread.1)
+                    }) as fn(&PrefetchKRow) -> String,
+                ),
+                ("Pages read, smallest–largest", |r: &PrefetchKRow| {
+                    format!("{}–{}", r.pages_spread.0, r.pages_spread.1)
+                }),
+            ] {
+                s.push_str(&format!(
+                    "{title}, over {} walks per k:\n\n{head}",
+                    c.repeats
+                ));
+                for &p in &c.walk.patterns {
+                    let cells: Vec<String> = self.rows_of(p).map(by).collect();
+                    s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
+                }
+                s.push('\n');
+            }
+        }
         s.push_str(
             "| pattern | best k (fewest own searches, then pages) | pages there | searches | viewer's own | an optimum inside the sweep? | \
              best k (frame time) | best k (query time) |\n|---|---|---|---|---|---|---|---|\n",
@@ -371,6 +416,19 @@ impl PrefetchKReport {
     }
 }
 
+/// The median of repeated walks by [`rank`], carrying the spread of all of them.
+fn median_run(mut runs: Vec<PrefetchKRow>) -> PrefetchKRow {
+    let sync = runs.iter().map(|r| r.sync_queries);
+    let sync_spread = (sync.clone().min().unwrap_or(0), sync.max().unwrap_or(0));
+    let pages = runs.iter().map(|r| r.pages());
+    let pages_spread = (pages.clone().min().unwrap_or(0), pages.max().unwrap_or(0));
+    runs.sort_by_key(rank);
+    let mut median = runs.swap_remove(runs.len() / 2);
+    median.sync_queries_spread = sync_spread;
+    median.pages_spread = pages_spread;
+    median
+}
+
 /// The order [`PrefetchKReport::best_k`] ranks by.
 fn rank(r: &PrefetchKRow) -> (usize, u64) {
     (r.sync_queries, r.pages())
@@ -395,6 +453,8 @@ mod tests {
                 frames_over_50ms: 0,
                 index_pages: 1,
                 mesh_pages: pages as u64 - 1,
+                sync_queries_spread: (sync_queries, sync_queries),
+                pages_spread: (pages as u64, pages as u64),
             })
             .collect();
         PrefetchKReport {
@@ -418,6 +478,14 @@ mod tests {
         let tie = report(&[(0.0, 30, 5, 0.3), (1.0, 30, 5, 0.2)]);
         assert_eq!(tie.best_k(Motion::Normal), Some(1.0));
         assert_eq!(tie.best_k(Motion::Fast), None);
+    }
+
+    #[test]
+    fn repeated_walks_keep_the_median_and_the_spread() {
+        let rows = report(&[(1.0, 300, 5, 0.1), (1.0, 100, 1, 0.1), (1.0, 900, 9, 0.1)]).rows;
+        let m = median_run(rows);
+        assert_eq!((m.sync_queries, m.pages()), (5, 300));
+        assert_eq!((m.sync_queries_spread, m.pages_spread), ((1, 9), (100, 900)));
     }
 
     #[test]
