@@ -376,7 +376,6 @@ struct Request {
     cell: Aabb,
     history: Vec<Aabb>,
     epoch: u64,
-    skip: HashSet<u64>,
 }
 
 /// Walks `path` through `db` under `cfg`; `progress` is told each finished frame.
@@ -407,8 +406,8 @@ pub fn walk(
         Some(p) => p,
         None => db.store(),
     };
-    // The ids in the object buffer, for the prefetch thread: a prefetch asked for before
-    // the viewer's own query would otherwise read again the meshes that query loaded.
+    // The ids in the object buffer, which no fetch loads again — read when the meshes
+    // are, so a prefetch asked for before the viewer's own query skips what it loaded.
     let resident = Mutex::new(HashSet::new());
     let resident = &resident;
     let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
@@ -618,15 +617,10 @@ impl Walker<'_> {
     fn request(&self, cell: Aabb) -> Request {
         let mut history = self.history.clone();
         history.filter(&cell);
-        let skip = match self.cfg.retrieval {
-            Retrieval::Box => Default::default(),
-            Retrieval::CSearch => self.buffer.iter().map(|o| o.entry.id).collect(),
-        };
         Request {
             cell,
             history: history.cells(),
             epoch: self.epoch,
-            skip,
         }
     }
 
@@ -842,8 +836,7 @@ fn fetch(
     let t = Instant::now();
     let mut objects = Vec::with_capacity(result.objects.len());
     for entry in &result.objects {
-        let loaded = || resident.lock().is_ok_and(|r| r.contains(&entry.id));
-        if req.skip.contains(&entry.id) || loaded() {
+        if resident.lock().is_ok_and(|r| r.contains(&entry.id)) {
             continue;
         }
         let mesh = db.mesh(entry)?;
