@@ -42,7 +42,7 @@ pub use config::{CityConfig, MAX_OBJECTS};
 pub use error::SceneError;
 pub use generate::{generate, write_city};
 pub use mesh::Mesh;
-pub use obj_export::export_obj;
+pub use obj_export::{export_obj, write_mesh_obj};
 pub use object::{ObjectKind, SceneObject};
 pub use recipe::object;
 pub use scene_file::{

@@ -9,6 +9,7 @@ use std::path::Path;
 
 use crate::config::CityConfig;
 use crate::error::SceneError;
+use crate::mesh::Mesh;
 use crate::recipe::object_on;
 
 /// Writes every object of `config` whose bounds overlap the x–z rectangle `region`
@@ -34,16 +35,7 @@ pub fn export_obj(
     let write =
         |w: &mut BufWriter<File>, base: &mut u64, o: &crate::SceneObject| -> std::io::Result<()> {
             writeln!(w, "o object_{}", o.id)?;
-            for p in &o.mesh.positions {
-                writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
-            }
-            for n in &o.mesh.normals {
-                writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
-            }
-            for t in o.mesh.indices.chunks_exact(3) {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as u64 + *base);
-                writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-            }
+            write_mesh_obj(w, &o.mesh, *base)?;
             *base += o.mesh.positions.len() as u64;
             Ok(())
         };
@@ -63,4 +55,20 @@ pub fn export_obj(
     }
     w.flush().map_err(|e| SceneError::io(out, e))?;
     Ok(written)
+}
+
+/// Writes `mesh` as OBJ `v`, `vn` and `f v//vn` lines, its vertex 0 numbered `first` (OBJ
+/// indices are 1-based and count every vertex before them in the file).
+pub fn write_mesh_obj(w: &mut impl Write, mesh: &Mesh, first: u64) -> std::io::Result<()> {
+    for p in &mesh.positions {
+        writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+    }
+    for n in &mesh.normals {
+        writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
+    }
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as u64 + first);
+        writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
+    }
+    Ok(())
 }

@@ -79,16 +79,7 @@ pub fn write_obj(path: &Path, mesh: &Mesh, comment: &str) -> Result<()> {
     let mut w = std::io::BufWriter::new(file);
     let mut body = || -> std::io::Result<()> {
         writeln!(w, "# {comment}")?;
-        for p in &mesh.positions {
-            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
-        }
-        for n in &mesh.normals {
-            writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
-        }
-        for t in mesh.indices.chunks_exact(3) {
-            let [a, b, c] = [t[0] + 1, t[1] + 1, t[2] + 1];
-            writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-        }
+        citygen::write_mesh_obj(&mut w, mesh, 1)?;
         w.flush()
     };
     body().map_err(|e| Error::io(path, e))
