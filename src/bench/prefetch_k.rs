@@ -316,66 +316,46 @@ impl PrefetchKReport {
                 .join(" | "),
             "---|".repeat(c.ks.len())
         );
-        for (title, by) in [
-            (
-                "Mean frame time, ms",
-                (|r: &PrefetchKRow| r.mean_frame_ms) as fn(&PrefetchKRow) -> f64,
-            ),
-            (
-                "Mean query time (frames that queried), ms",
-                |r: &PrefetchKRow| r.mean_query_ms,
-            ),
-        ] {
-            s.push_str(&format!("{title}:\n\n{head}"));
-            for &p in &c.walk.patterns {
-                let cells: Vec<String> = self.rows_of(p).map(|r| format!("{:.3}", by(r))).collect();
-                s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
-            }
-            s.push('\n');
-        }
-        for (title, by) in [
-            (
-                "Index searches per walk (prefetched, dropped or the viewer's own)",
-                (|r: &PrefetchKRow| r.queries) as fn(&PrefetchKRow) -> usize,
-            ),
-            (
-                "Of those, the viewer's own (a prediction that held spares one)",
-                |r: &PrefetchKRow| r.sync_queries,
-            ),
-            ("Disk pages read (index and meshes)", |r: &PrefetchKRow| {
-                r.pages() as usize
+        type Cell = fn(&PrefetchKRow) -> String;
+        let mut tables: Vec<(String, Cell)> = vec![
+            ("Mean frame time, ms".into(), |r| {
+                format!("{:.3}", r.mean_frame_ms)
             }),
-            ("Frames over 50 ms", |r: &PrefetchKRow| r.frames_over_50ms),
-        ] {
+            ("Mean query time (frames that queried), ms".into(), |r| {
+                format!("{:.3}", r.mean_query_ms)
+            }),
+            (
+                "Index searches per walk (prefetched, dropped or the viewer's own)".into(),
+                |r| r.queries.to_string(),
+            ),
+            (
+                "Of those, the viewer's own (a prediction that held spares one)".into(),
+                |r| r.sync_queries.to_string(),
+            ),
+            ("Disk pages read (index and meshes)".into(), |r| {
+                r.pages().to_string()
+            }),
+            ("Frames over 50 ms".into(), |r| {
+                r.frames_over_50ms.to_string()
+            }),
+        ];
+        if c.repeats > 1 {
+            let over = format!(", over {} walks per k", c.repeats);
+            tables.push((
+                format!("The viewer's own searches, smallest–largest{over}"),
+                |r| format!("{}–{}", r.sync_queries_spread.0, r.sync_queries_spread.1),
+            ));
+            tables.push((format!("Pages read, smallest–largest{over}"), |r| {
+                format!("{}–{}", r.pages_spread.0, r.pages_spread.1)
+            }));
+        }
+        for (title, cell) in tables {
             s.push_str(&format!("{title}:\n\n{head}"));
             for &p in &c.walk.patterns {
-                let cells: Vec<String> = self.rows_of(p).map(|r| by(r).to_string()).collect();
+                let cells: Vec<String> = self.rows_of(p).map(cell).collect();
                 s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
             }
             s.push('\n');
-        }
-        if c.repeats > 1 {
-            for (title, by) in [
-                (
-                    "The viewer's own searches, smallest–largest",
-                    (|r: &PrefetchKRow| {
-                        format!("{}–{}", r.sync_queries_spread.0, r.sync_queries_spread.1)
-                    }) as fn(&PrefetchKRow) -> String,
-                ),
-                ("Pages read, smallest–largest", |r: &PrefetchKRow| {
-                    format!("{}–{}", r.pages_spread.0, r.pages_spread.1)
-                }),
-            ] {
-                s.push_str(&format!(
-                    "{title}, over {} walks per k:\n\n{head}",
-                    c.repeats
-                ));
-                for &p in &c.walk.patterns {
-                    let cells: Vec<String> = self.rows_of(p).map(by).collect();
-                    s.push_str(&format!("| {} | {} |\n", p.name(), cells.join(" | ")));
-                }
-                s.push('\n');
-            }
         }
         s.push_str(
             "| pattern | best k (fewest own searches, then pages) | pages there | searches | viewer's own | an optimum inside the sweep? | \
@@ -485,7 +465,10 @@ mod tests {
         let rows = report(&[(1.0, 300, 5, 0.1), (1.0, 100, 1, 0.1), (1.0, 900, 9, 0.1)]).rows;
         let m = median_run(rows);
         assert_eq!((m.sync_queries, m.pages()), (5, 300));
-        assert_eq!((m.sync_queries_spread, m.pages_spread), ((1, 9), (100, 900)));
+        assert_eq!(
+            (m.sync_queries_spread, m.pages_spread),
+            ((1, 9), (100, 900))
+        );
     }
 
     #[test]
