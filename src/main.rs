@@ -12,6 +12,9 @@ use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
 use flaneur::bench::db_size::{self, DbSizeConfig};
 use flaneur::bench::frame_time::{self, FrameTimeConfig};
 use flaneur::bench::index_cache::{self, IndexCacheConfig};
+use flaneur::bench::lod_dag::{self, LodDagConfig};
+use flaneur::bench::lod_parallel::{self, LodParallelConfig};
+use flaneur::bench::lod_refine::{self, LodRefineConfig};
 use flaneur::bench::patterns::{self, PatternsConfig};
 use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
 use flaneur::bench::view_culling::{self, ViewCullingConfig};
@@ -261,6 +264,67 @@ enum Experiment {
         /// Print every query, not just the summary.
         #[arg(long)]
         verbose: bool,
+    },
+    /// DAG edges, build time and bytes per vertex: full-, non- and mini-redundant, on the
+    /// bunny and bumpy tori of the thesis's sizes (Zheng Tables 3.1–3.3). No database.
+    LodDag {
+        /// Triangles of each bumpy torus, comma-separated [default: 69451,1087474].
+        #[arg(long, value_delimiter = ',')]
+        sizes: Vec<usize>,
+        /// The bunny and the 69,451-triangle torus only (under a second).
+        #[arg(long, conflicts_with = "sizes")]
+        quick: bool,
+        /// Build the non-redundant DAG (worst case quadratic) only up to this many
+        /// triangles [default: always].
+        #[arg(long)]
+        non_redundant_max: Option<usize>,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// One large mesh's progressive mesh built on 1 and on all threads: time, speed-up and
+    /// load balance (El-Sana & Varshney Tables 1–2), beside the serial build; and the
+    /// throughput of building many city objects' progressive meshes. No database.
+    LodParallel {
+        /// Triangles of each bumpy torus, comma-separated [default: 250000,1000000].
+        #[arg(long, value_delimiter = ',')]
+        triangles: Vec<usize>,
+        /// Thread counts, comma-separated; the first is the speed-ups' base
+        /// [default: 1 and every core].
+        #[arg(long, value_delimiter = ',')]
+        threads: Vec<usize>,
+        /// Builds per measurement; the median counts.
+        #[arg(long, default_value_t = LodParallelConfig::default().repeats)]
+        repeats: usize,
+        /// City objects for the throughput rows (0: none).
+        #[arg(long, default_value_t = LodParallelConfig::default().objects)]
+        objects: u64,
+        /// Octree leaves hold at most this many triangles on average.
+        #[arg(long, default_value_t = LodParallelConfig::default().options.leaf_triangles)]
+        leaf_triangles: usize,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// Traversal and update time, accuracy and fronts per frame along a scripted orbit:
+    /// priority, linear and constant-time traversals (Zheng Tables 4.1, 4.3, Fig. 4.11,
+    /// 4.12). No database.
+    LodRefine {
+        /// Triangles of the bumpy-torus landmark.
+        #[arg(long, default_value_t = lod_refine::DEFAULT_TRIANGLES)]
+        triangles: usize,
+        #[arg(long, default_value_t = lod_refine::DEFAULT_FRAMES)]
+        frames: usize,
+        /// Screen-space errors τ, fractions of the viewport, comma-separated; one run each
+        /// [default: 0.001 (the thesis's), 0.0003, 0.0001].
+        #[arg(long, value_delimiter = ',')]
+        taus: Vec<f32>,
+        /// Triangle budget (0: none, fidelity alone).
+        #[arg(long, default_value_t = flaneur::lod::THESIS_BUDGET)]
+        budget: usize,
+        /// N: operators per pass (priority, linear) or nodes evaluated (constant-time).
+        #[arg(long, default_value_t = flaneur::lod::THESIS_MAX_WORK)]
+        max_work: usize,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
     },
 }
 
@@ -535,6 +599,91 @@ fn run(cli: Cli) -> Result<()> {
                     sizes,
                 });
                 bench_csearch(&db, &cfg, !packed_only, backend, &out, verbose, walks)
+            }
+            Experiment::LodDag {
+                sizes,
+                quick,
+                non_redundant_max,
+                out,
+            } => {
+                let d = if quick {
+                    LodDagConfig::quick()
+                } else {
+                    LodDagConfig::default()
+                };
+                let cfg = LodDagConfig {
+                    sizes: if sizes.is_empty() { d.sizes } else { sizes },
+                    non_redundant_max,
+                    ..d
+                };
+                let r = with_bar("lod-dag models", |p| lod_dag::run_with_progress(&cfg, p))?;
+                write_experiment(&out, "lod-dag", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
+            }
+            Experiment::LodParallel {
+                triangles,
+                threads,
+                repeats,
+                objects,
+                leaf_triangles,
+                out,
+            } => {
+                let d = LodParallelConfig::default();
+                let cfg = LodParallelConfig {
+                    triangles: if triangles.is_empty() {
+                        d.triangles
+                    } else {
+                        triangles
+                    },
+                    threads: if threads.is_empty() {
+                        d.threads
+                    } else {
+                        threads
+                    },
+                    repeats,
+                    objects,
+                    options: flaneur::lod::ParallelOptions {
+                        leaf_triangles,
+                        ..d.options
+                    },
+                };
+                let r = with_bar("lod-parallel builds", |p| lod_parallel::run(&cfg, p))?;
+                write_experiment(&out, "lod-parallel", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
+            }
+            Experiment::LodRefine {
+                triangles,
+                frames,
+                taus,
+                budget,
+                max_work,
+                out,
+            } => {
+                let d = LodRefineConfig::default();
+                let cfg = LodRefineConfig {
+                    triangles,
+                    frames,
+                    taus: if taus.is_empty() {
+                        d.taus.clone()
+                    } else {
+                        taus
+                    },
+                    orbit: flaneur::lod::OrbitConfig {
+                        budget: (budget > 0).then_some(budget),
+                        max_work,
+                        ..d.orbit
+                    },
+                    ..d
+                };
+                println!(
+                    "lod-refine: a bumpy torus of about {triangles} triangles, {frames} frames"
+                );
+                let r = lod_refine::run(&cfg)?;
+                write_experiment(&out, "lod-refine", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
             }
         },
     }

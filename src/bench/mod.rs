@@ -3,6 +3,8 @@
 //!
 //! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
 //! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
+//! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`crate::lod`) on procedural models,
+//! no database needed.
 
 pub mod cell_size;
 pub mod city_series;
@@ -10,6 +12,9 @@ pub mod csearch;
 pub mod db_size;
 pub mod frame_time;
 pub mod index_cache;
+pub mod lod_dag;
+pub mod lod_parallel;
+pub mod lod_refine;
 pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;

@@ -80,7 +80,13 @@ impl DagStats {
     /// The mini-redundant DAG in memory with its splits, per vertex of the full mesh:
     /// the thesis's "Mem. of Mini." per vertex (about 84 bytes).
     pub fn memory_per_vertex(&self) -> f64 {
-        (self.mini.memory_bytes + self.split_bytes) as f64 / self.vertices.max(1) as f64
+        self.bytes_per_vertex(&self.mini)
+    }
+
+    /// `construction`'s DAG in memory with the splits, per vertex of the full mesh: what
+    /// [`DagStats::memory_per_vertex`] gives for the mini-redundant one.
+    pub fn bytes_per_vertex(&self, construction: &ConstructionStats) -> f64 {
+        (construction.memory_bytes + self.split_bytes) as f64 / self.vertices.max(1) as f64
     }
 
     /// The encoded mini-redundant DAG per vertex of the full mesh, splits not included.

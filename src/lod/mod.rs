@@ -7,7 +7,8 @@
 //! choices the thesis leaves open — creases and seams, boundaries, normals, the error's
 //! unit — are named in `pm`'s top comment.
 //!
-//! - [`ProgressiveMesh::build`] simplifies one mesh; [`simplify_all`] many, on all cores.
+//! - [`ProgressiveMesh::build`] simplifies one mesh; [`simplify_all`] many, on all cores;
+//!   [`ProgressiveMesh::build_parallel`] one large mesh on all cores (El-Sana–Varshney).
 //! - [`VertexSplit`] is the record; [`SelectiveMesh`] applies splits and collapses in place.
 //! - [`PmCursor`], [`ProgressiveMesh::mesh_at_triangles`], [`ProgressiveMesh::mesh_at_error`]
 //!   and [`ProgressiveMesh::levels`] give levels as plain meshes.
@@ -33,6 +34,7 @@ mod inspect;
 mod levels;
 mod mesh_update;
 mod pm;
+mod pm_parallel;
 mod quadric;
 mod refine;
 mod refine_bench;
@@ -53,6 +55,7 @@ pub use inspect::{load_merged, refine_view, write_levels, write_obj, LevelFile, 
 pub use levels::{Level, PmCursor};
 pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
 pub use pm::{simplify_all, ProgressiveMesh};
+pub use pm_parallel::{LevelReport, ParallelOptions, ParallelReport};
 pub use refine::{
     FrameReport, FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };

@@ -121,22 +121,11 @@ impl ProgressiveMesh {
     /// An `Error::Invalid` when the mesh fails `Mesh::validate` (a NaN, an index out of
     /// range), has no triangles, or is too large for 32-bit triangle slots.
     pub fn build(mesh: &Mesh) -> Result<ProgressiveMesh> {
-        mesh.validate()
-            .map_err(|e| Error::Invalid(format!("mesh: {e}")))?;
-        if mesh.indices.is_empty() {
-            return Err(Error::Invalid("mesh: no triangles to simplify".into()));
-        }
-        // Slots run to base + 2 per split, and there are fewer splits than vertices.
-        if mesh.triangle_count() as u64 + 2 * mesh.positions.len() as u64 >= u32::MAX as u64 {
-            return Err(Error::Invalid(format!(
-                "mesh: {} vertices and {} triangles are too many for 32-bit indices",
-                mesh.positions.len(),
-                mesh.triangle_count()
-            )));
-        }
-        let mut s = Simplifier::new(mesh);
+        check_input(mesh)?;
+        let mut s = Simplifier::new(mesh, Setup::of(mesh), Domain::everything());
         s.run();
-        Ok(s.finish())
+        let (collapses, adj) = (s.collapses, s.adj);
+        Ok(assemble(mesh, &collapses, &adj.faces, &adj.alive))
     }
 
     /// The number of vertices of the fully refined mesh (the original's).
@@ -153,6 +142,25 @@ impl ProgressiveMesh {
     pub fn ids(&self, index: usize) -> SplitIds {
         SplitIds::new(index, self.base.positions.len(), self.base.triangle_count())
     }
+}
+
+/// Whether `mesh` can be simplified: valid, with triangles, and small enough for
+/// 32-bit triangle slots.
+pub(super) fn check_input(mesh: &Mesh) -> Result<()> {
+    mesh.validate()
+        .map_err(|e| Error::Invalid(format!("mesh: {e}")))?;
+    if mesh.indices.is_empty() {
+        return Err(Error::Invalid("mesh: no triangles to simplify".into()));
+    }
+    // Slots run to base + 2 per split, and there are fewer splits than vertices.
+    if mesh.triangle_count() as u64 + 2 * mesh.positions.len() as u64 >= u32::MAX as u64 {
+        return Err(Error::Invalid(format!(
+            "mesh: {} vertices and {} triangles are too many for 32-bit indices",
+            mesh.positions.len(),
+            mesh.triangle_count()
+        )));
+    }
+    Ok(())
 }
 
 /// Builds the progressive meshes of many objects on all cores, in the order given.
@@ -222,6 +230,8 @@ enum Reject {
     FoldOverOriginal,
     /// A triangle would land on an existing one.
     Duplicate,
+    /// A moved triangle would have an edge as long as the domain's limit.
+    LongEdge,
 }
 
 /// A checked collapse, ready to apply.
@@ -237,67 +247,62 @@ struct Plan {
 
 /// f_l or f_r of a recorded collapse, in original numbers.
 #[derive(Clone, Copy, Debug)]
-struct RemovedFace {
-    face: u32,
-    pivot: u32,
-    corner: u8,
+pub(super) struct RemovedFace {
+    pub face: u32,
+    pub pivot: u32,
+    pub corner: u8,
 }
 
 /// One wedge's collapse, in original numbers, in collapse order.
 #[derive(Clone, Debug)]
-struct Collapse {
-    v_c: u32,
-    v_p: u32,
-    left: Option<RemovedFace>,
-    right: Option<RemovedFace>,
-    adjusted: Vec<u32>,
-    error: f32,
-    group: u32,
+pub(super) struct Collapse {
+    pub v_c: u32,
+    pub v_p: u32,
+    pub left: Option<RemovedFace>,
+    pub right: Option<RemovedFace>,
+    pub adjusted: Vec<u32>,
+    pub error: f32,
+    pub group: u32,
 }
 
-struct Simplifier<'a> {
-    mesh: &'a Mesh,
-    adj: Adjacency,
-    quadrics: Vec<Quadric>,
+/// What a simplifier starts from besides the mesh: its welded connectivity, each
+/// position's quadric, the positions that never collapse, and the triangles' original
+/// normals. The whole mesh's is computed once (`of`); a part of a mesh simplified on
+/// its own (`pm_parallel`) takes its share of the whole's.
+pub(super) struct Setup {
+    pub adj: Adjacency,
+    pub quadrics: Vec<Quadric>,
     /// Positions that never collapse: a corner of a triangle that names a position twice.
-    locked: Vec<bool>,
-    /// Each position's entry in the heap, and its version: an entry whose stamp is
-    /// not its position's is stale.
-    queued: Vec<Option<(u64, u32)>>,
-    stamps: Vec<u32>,
+    pub locked: Vec<bool>,
     /// Unit normals of the original triangles (zero for degenerate ones).
-    face_normals: Vec<DVec3>,
-    /// Unit vertex normals (zero where the input's is zero).
-    vertex_normals: Vec<DVec3>,
-    heap: BinaryHeap<Reverse<Candidate>>,
-    collapses: Vec<Collapse>,
-    groups: u32,
-    /// Buffers reused by every `queue`.
-    fan: Fan,
-    options: Vec<(u64, u32)>,
-    /// Scratch marks for the link condition, valid where equal to `generation`.
-    marks: Vec<u32>,
-    generation: u32,
+    pub face_normals: Vec<DVec3>,
 }
 
-impl<'a> Simplifier<'a> {
-    fn new(mesh: &'a Mesh) -> Simplifier<'a> {
+impl Setup {
+    pub(super) fn of(mesh: &Mesh) -> Setup {
         let adj = Adjacency::new(mesh);
-        let np = adj.position_count();
-        let mut quadrics = vec![Quadric::default(); np];
-        let mut locked = vec![false; np];
-        let mut face_normals = Vec::with_capacity(adj.faces.len());
-        for f in 0..adj.faces.len() as u32 {
-            let [a, b, c] = adj.corner_coords(f);
-            let q = Quadric::triangle(a, b, c);
-            let pinched = adj.is_pinched(f);
-            for p in adj.corner_positions(f) {
-                quadrics[p as usize] += q;
-                locked[p as usize] |= pinched;
-            }
-            face_normals.push((b - a).cross(c - a).normalize_or_zero());
-        }
-        for (a, b, f) in adj.boundary_edges() {
+        // The boundary's sort and the triangles' quadrics are apart until the end.
+        let (boundary, (mut quadrics, locked, face_normals)) = rayon::join(
+            || adj.boundary_edges(),
+            || {
+                let np = adj.position_count();
+                let mut quadrics = vec![Quadric::default(); np];
+                let mut locked = vec![false; np];
+                let mut face_normals = Vec::with_capacity(adj.faces.len());
+                for f in 0..adj.faces.len() as u32 {
+                    let [a, b, c] = adj.corner_coords(f);
+                    let q = Quadric::triangle(a, b, c);
+                    let pinched = adj.is_pinched(f);
+                    for p in adj.corner_positions(f) {
+                        quadrics[p as usize] += q;
+                        locked[p as usize] |= pinched;
+                    }
+                    face_normals.push((b - a).cross(c - a).normalize_or_zero());
+                }
+                (quadrics, locked, face_normals)
+            },
+        );
+        for (a, b, f) in boundary {
             let q = Quadric::boundary_edge(
                 adj.coords[a as usize],
                 adj.coords[b as usize],
@@ -307,16 +312,80 @@ impl<'a> Simplifier<'a> {
             quadrics[a as usize] += q;
             quadrics[b as usize] += q;
         }
+        Setup {
+            adj,
+            quadrics,
+            locked,
+            face_normals,
+        }
+    }
+}
+
+/// Which collapses a simplifier may make: c → p only where c is `free`, and only when
+/// the edge and every edge the collapse makes are shorter than `max_edge`
+/// (El-Sana & Varshney's rule for an octree cell, §3, extended to the edges made, so
+/// that a cell's reach stays within `max_edge` of it).
+pub(super) struct Domain {
+    /// Per position; `None`: every position.
+    pub free: Option<Vec<bool>>,
+    pub max_edge: f64,
+}
+
+impl Domain {
+    pub(super) fn everything() -> Domain {
+        Domain {
+            free: None,
+            max_edge: f64::INFINITY,
+        }
+    }
+}
+
+pub(super) struct Simplifier {
+    pub adj: Adjacency,
+    pub quadrics: Vec<Quadric>,
+    locked: Vec<bool>,
+    free: Option<Vec<bool>>,
+    max_edge_sq: f64,
+    /// Each position's entry in the heap, and its version: an entry whose stamp is
+    /// not its position's is stale.
+    queued: Vec<Option<(u64, u32)>>,
+    stamps: Vec<u32>,
+    /// Unit normals of the original triangles (zero for degenerate ones).
+    face_normals: Vec<DVec3>,
+    /// Unit vertex normals (zero where the input's is zero).
+    vertex_normals: Vec<DVec3>,
+    heap: BinaryHeap<Reverse<Candidate>>,
+    pub collapses: Vec<Collapse>,
+    pub groups: u32,
+    /// Buffers reused by every `queue`.
+    fan: Fan,
+    options: Vec<(u64, u32)>,
+    /// Scratch marks for the link condition, valid where equal to `generation`.
+    marks: Vec<u32>,
+    generation: u32,
+}
+
+impl Simplifier {
+    /// `mesh` gives the vertex normals; `setup` must be of the same mesh.
+    pub(super) fn new(mesh: &Mesh, setup: Setup, domain: Domain) -> Simplifier {
+        let Setup {
+            adj,
+            quadrics,
+            locked,
+            face_normals,
+        } = setup;
+        let np = adj.position_count();
         let vertex_normals = mesh
             .normals
             .iter()
             .map(|n| DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero())
             .collect();
         Simplifier {
-            mesh,
             adj,
             quadrics,
             locked,
+            free: domain.free,
+            max_edge_sq: domain.max_edge * domain.max_edge,
             queued: vec![None; np],
             stamps: vec![0; np],
             fan: Fan::default(),
@@ -331,7 +400,7 @@ impl<'a> Simplifier<'a> {
         }
     }
 
-    fn run(&mut self) {
+    pub(super) fn run(&mut self) {
         for c in 0..self.adj.position_count() as u32 {
             self.queue(c, false);
         }
@@ -385,11 +454,15 @@ impl<'a> Simplifier<'a> {
         let mut fan = std::mem::take(&mut self.fan);
         let mut options = std::mem::take(&mut self.options);
         options.clear();
-        if !self.locked[c as usize] && self.adj.fan_into(c, &mut fan) {
+        let free = self.free.as_ref().is_none_or(|f| f[c as usize]);
+        if free && !self.locked[c as usize] && self.adj.fan_into(c, &mut fan) {
+            let coords = &self.adj.coords;
+            let near =
+                |p: u32| coords[c as usize].distance_squared(coords[p as usize]) < self.max_edge_sq;
             options.extend(
                 fan.neighbours
                     .iter()
-                    .filter(|&&p| !self.locked[p as usize])
+                    .filter(|&&p| !self.locked[p as usize] && near(p))
                     // A boundary position moves along the boundary only.
                     .filter(|&&p| fan.closed || p == fan.first || p == fan.last)
                     .map(|&p| (self.cost(c, p).to_bits(), p)),
@@ -574,6 +647,9 @@ impl<'a> Simplifier<'a> {
             let before = (pts[1] - pts[0]).cross(pts[2] - pts[0]);
             pts[k] = to;
             let (e1, e2) = (pts[(k + 1) % 3] - to, pts[(k + 2) % 3] - to);
+            if e1.length_squared().max(e2.length_squared()) >= self.max_edge_sq {
+                return Err(Reject::LongEdge);
+            }
             let after = e1.cross(e2);
             if after.length() <= MIN_SINE * e1.length() * e2.length() {
                 return Err(Reject::Degenerate);
@@ -686,81 +762,86 @@ impl<'a> Simplifier<'a> {
             self.queue(t, false);
         }
     }
+}
 
-    /// Renumbers (Fig. 3.5's implicit indices) and turns the collapses into splits.
-    fn finish(self) -> ProgressiveMesh {
-        let mesh = self.mesh;
-        let nv = mesh.positions.len();
-        let nt = mesh.triangle_count();
-        let m = self.collapses.len();
-        // Split i undoes collapse m − 1 − i.
-        let in_split_order = || self.collapses.iter().rev();
+/// Renumbers (Fig. 3.5's implicit indices) and turns the collapses of `mesh`, made in
+/// order, into splits; `faces` and `alive` are the triangles after the last collapse.
+pub(super) fn assemble(
+    mesh: &Mesh,
+    collapses: &[Collapse],
+    faces: &[[u32; 3]],
+    alive: &[bool],
+) -> ProgressiveMesh {
+    let nv = mesh.positions.len();
+    let nt = mesh.triangle_count();
+    let m = collapses.len();
+    // Split i undoes collapse m − 1 − i.
+    let in_split_order = || collapses.iter().rev();
 
-        let mut split_vertex = vec![false; nv];
-        for rec in &self.collapses {
-            split_vertex[rec.v_c as usize] = true;
-        }
-        let mut vertex_map = vec![u32::MAX; nv];
-        let mut base = Mesh::default();
-        for v in (0..nv).filter(|&v| !split_vertex[v]) {
-            vertex_map[v] = base.positions.len() as u32;
-            base.positions.push(mesh.positions[v]);
-            base.normals.push(mesh.normals[v]);
-        }
-        let base_vertices = base.positions.len();
-        for (i, rec) in in_split_order().enumerate() {
-            vertex_map[rec.v_c as usize] = (base_vertices + i) as u32;
-        }
+    let mut split_vertex = vec![false; nv];
+    for rec in collapses {
+        split_vertex[rec.v_c as usize] = true;
+    }
+    let mut vertex_map = vec![u32::MAX; nv];
+    let mut base = Mesh::default();
+    for v in (0..nv).filter(|&v| !split_vertex[v]) {
+        vertex_map[v] = base.positions.len() as u32;
+        base.positions.push(mesh.positions[v]);
+        base.normals.push(mesh.normals[v]);
+    }
+    let base_vertices = base.positions.len();
+    for (i, rec) in in_split_order().enumerate() {
+        vertex_map[rec.v_c as usize] = (base_vertices + i) as u32;
+    }
 
-        let mut triangle_map = vec![u32::MAX; nt];
-        let mut base_triangles = 0u32;
-        for f in (0..nt).filter(|&f| self.adj.alive[f]) {
-            triangle_map[f] = base_triangles;
-            base_triangles += 1;
-            base.indices
-                .extend(self.adj.faces[f].iter().map(|&v| vertex_map[v as usize]));
+    let mut triangle_map = vec![u32::MAX; nt];
+    let mut base_triangles = 0u32;
+    for f in (0..nt).filter(|&f| alive[f]) {
+        triangle_map[f] = base_triangles;
+        base_triangles += 1;
+        base.indices
+            .extend(faces[f].iter().map(|&v| vertex_map[v as usize]));
+    }
+    for (i, rec) in in_split_order().enumerate() {
+        let ids = SplitIds::new(i, base_vertices, base_triangles as usize);
+        if let Some(l) = rec.left {
+            triangle_map[l.face as usize] = ids.f_l;
         }
-        for (i, rec) in in_split_order().enumerate() {
-            let ids = SplitIds::new(i, base_vertices, base_triangles as usize);
-            if let Some(l) = rec.left {
-                triangle_map[l.face as usize] = ids.f_l;
-            }
-            if let Some(r) = rec.right {
-                triangle_map[r.face as usize] = ids.f_r;
-            }
+        if let Some(r) = rec.right {
+            triangle_map[r.face as usize] = ids.f_r;
         }
+    }
 
-        let mut splits = Vec::with_capacity(m);
-        let mut previous_group = None;
-        for rec in in_split_order() {
-            let mut adjusted: Vec<u32> = rec
-                .adjusted
-                .iter()
-                .map(|&f| triangle_map[f as usize])
-                .collect();
-            adjusted.sort_unstable();
-            splits.push(VertexSplit {
-                v_p: vertex_map[rec.v_p as usize],
-                position: mesh.positions[rec.v_c as usize],
-                normal: mesh.normals[rec.v_c as usize],
-                v_l: rec.left.map(|l| vertex_map[l.pivot as usize]),
-                v_r: rec.right.map(|r| vertex_map[r.pivot as usize]),
-                adjusted,
-                corners: [
-                    rec.left.map_or(0, |l| l.corner),
-                    rec.right.map_or(0, |r| r.corner),
-                ],
-                error: rec.error,
-                joins_previous: previous_group == Some(rec.group),
-            });
-            previous_group = Some(rec.group);
-        }
-        ProgressiveMesh {
-            base,
-            splits,
-            vertex_map,
-            triangle_map,
-        }
+    let mut splits = Vec::with_capacity(m);
+    let mut previous_group = None;
+    for rec in in_split_order() {
+        let mut adjusted: Vec<u32> = rec
+            .adjusted
+            .iter()
+            .map(|&f| triangle_map[f as usize])
+            .collect();
+        adjusted.sort_unstable();
+        splits.push(VertexSplit {
+            v_p: vertex_map[rec.v_p as usize],
+            position: mesh.positions[rec.v_c as usize],
+            normal: mesh.normals[rec.v_c as usize],
+            v_l: rec.left.map(|l| vertex_map[l.pivot as usize]),
+            v_r: rec.right.map(|r| vertex_map[r.pivot as usize]),
+            adjusted,
+            corners: [
+                rec.left.map_or(0, |l| l.corner),
+                rec.right.map_or(0, |r| r.corner),
+            ],
+            error: rec.error,
+            joins_previous: previous_group == Some(rec.group),
+        });
+        previous_group = Some(rec.group);
+    }
+    ProgressiveMesh {
+        base,
+        splits,
+        vertex_map,
+        triangle_map,
     }
 }
 

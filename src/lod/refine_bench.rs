@@ -85,6 +85,8 @@ pub struct TraversalSummary {
     pub accuracy: f64,
     /// Mean triangles per frame.
     pub triangles: f64,
+    /// The most triangles after any frame: what a budget must bound.
+    pub max_triangles: usize,
     /// Mean nodes split or collapsed per frame ("Num. Updates").
     pub updates: f64,
     /// Mean |F_s| + |F_c| per frame.
@@ -149,6 +151,12 @@ impl OrbitReport {
                 accuracies.iter().sum::<f64>() / accuracies.len() as f64
             },
             triangles: mean(&|s| s.triangles as f64),
+            max_triangles: self
+                .frames
+                .iter()
+                .map(|fr| fr.stats[i].triangles)
+                .max()
+                .unwrap_or(0),
             updates: mean(&|s| s.updates() as f64),
             front_nodes: mean(&|s| s.front_nodes() as f64),
             max_evaluated_per_pass: self

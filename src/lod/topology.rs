@@ -15,6 +15,7 @@
 use std::collections::HashMap;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use citygen::Mesh;
 
@@ -75,6 +76,14 @@ impl Adjacency {
                 })
             })
             .collect();
+        Adjacency::from_welded(mesh, pos_of, coords)
+    }
+
+    /// The connectivity of `mesh` with its vertices already welded: vertex v at
+    /// position `pos_of[v]`, at `coords`. For a part of a mesh whose welding is known
+    /// (`pm_parallel`), where hashing every vertex again would be wasted.
+    pub(crate) fn from_welded(mesh: &Mesh, pos_of: Vec<u32>, coords: Vec<DVec3>) -> Adjacency {
+        let n = mesh.positions.len();
         let mut wedge_start = vec![0u32; coords.len() + 1];
         for &p in &pos_of {
             wedge_start[p as usize + 1] += 1;
@@ -133,6 +142,16 @@ impl Adjacency {
     /// The positions of triangle `f`'s corners.
     pub(crate) fn corner_positions(&self, f: u32) -> [u32; 3] {
         self.face_pos[f as usize]
+    }
+
+    /// Sets triangle `f`'s corners and whether it is alive, leaving the position lists
+    /// to the caller: for merging back what a part of the mesh did on its own, which
+    /// knows the new lists whole.
+    pub(crate) fn set_face(&mut self, f: u32, corners: [u32; 3], alive: bool) {
+        let fu = f as usize;
+        self.face_pos[fu] = corners.map(|v| self.pos_of[v as usize]);
+        self.faces[fu] = corners;
+        self.alive[fu] = alive;
     }
 
     /// Replaces vertex `from` by `to` among triangle `f`'s corners.
@@ -243,7 +262,7 @@ impl Adjacency {
                 }
             }
         }
-        edges.sort_unstable();
+        edges.par_sort_unstable();
         let mut out = Vec::new();
         let mut i = 0;
         while i < edges.len() {
