@@ -4,6 +4,12 @@
 //! and only its index entry (56 bytes) stays in memory until the R-tree is packed over
 //! all of them. The store writes to a temporary file and renames it into place only
 //! when the build is complete.
+//!
+//! With LODs on (the default), each object is also simplified on the thread pool while
+//! the build reads on, and its coarse levels (and, for large objects, its progressive
+//! mesh and DAG) are appended a batch behind its mesh; the table that finds them by id
+//! is written at the end (`lod::bake`, `lod::table`). Simplifying is most of the time of
+//! such a build.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,6 +19,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::database::{self, KindCounts};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::rtree::{ObjectEntry, RTree, DEFAULT_FILL};
 use crate::scene::{encode_mesh, load_obj, Mesh, SceneReader, KIND_IMPORTED};
 use crate::store::{Extent, PageKind, Store};
@@ -29,6 +36,8 @@ pub struct BuildOptions {
     pub insertion: bool,
     /// Show a progress bar.
     pub progress: bool,
+    /// Store each object's LODs, made this way; `None` stores none (`--no-lod`).
+    pub lod: Option<LodOptions>,
 }
 
 impl Default for BuildOptions {
@@ -38,6 +47,7 @@ impl Default for BuildOptions {
             fill: DEFAULT_FILL,
             insertion: false,
             progress: false,
+            lod: Some(LodOptions::default()),
         }
     }
 }
@@ -47,10 +57,14 @@ impl Default for BuildOptions {
 pub struct BuildSummary {
     pub objects: u64,
     pub triangles: u64,
+    /// Pages of the file, header included.
     pub pages: u64,
     pub bytes: u64,
     pub height: u32,
+    /// Wall-clock seconds of the whole build, LODs included.
     pub seconds: f64,
+    /// What was stored as LODs; `None` when the build stored none.
+    pub lod: Option<LodReport>,
 }
 
 /// Builds a database from a citygen scene file.
@@ -89,6 +103,7 @@ fn build(
     opts: &BuildOptions,
 ) -> Result<BuildSummary> {
     let start = Instant::now();
+    let mut lods = opts.lod.as_ref().map(LodWriter::new).transpose()?;
     let mut store = Store::create(db, opts.page_size)?;
     let bar = progress_bar(opts.progress, total);
     let mut entries = Vec::with_capacity(total.unwrap_or(0).min(10_000_000) as usize);
@@ -102,8 +117,21 @@ fn build(
         triangles += entry.triangles as u64;
         bounds = bounds.union(&entry.bounds);
         entries.push(entry);
-        bar.inc(1);
+        // An object counts as built once its LODs are stored too.
+        match lods.as_mut() {
+            Some(l) => bar.inc(l.push(&mut store, id, entry.mesh, mesh)? as u64),
+            None => bar.inc(1),
+        }
     }
+    let lod = match lods {
+        Some(l) => {
+            let (report, last) = l.finish(&mut store)?;
+            bar.inc(last as u64);
+            kinds.lod = report.stats.pages;
+            Some(report)
+        }
+        None => None,
+    };
     bar.finish_and_clear();
     if entries.is_empty() {
         return Err(Error::Invalid("the input holds no objects".into()));
@@ -132,6 +160,7 @@ fn build(
         bytes: pages * page_size,
         height: tree.height,
         seconds: start.elapsed().as_secs_f64(),
+        lod,
     })
 }
 

@@ -1,11 +1,13 @@
-//! `Database`: one open database file — its store, its R-tree — and the queries a
-//! library user runs on it. No window, no GPU, no global state.
+//! `Database`: one open database file — its store, its R-tree, its LOD table — and the
+//! queries a library user runs on it. No window, no GPU, no global state.
 
 use std::path::Path;
 
 use crate::build::write_object;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::lod::table::LodTable;
+use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::{decode_mesh, Mesh};
 use crate::store::{Backend, IoStats, PageKind, Segment, Store};
@@ -20,6 +22,10 @@ pub struct KindCounts {
     pub rtree: u64,
     pub mesh: u64,
     pub meta: u64,
+    /// LOD pages (chains, progressive meshes, DAGs, the LOD table); 0 in a database
+    /// without LODs. Kept in the LOD table's segment, not in `pagekinds`, so that files
+    /// written before LODs read the same.
+    pub lod: u64,
 }
 
 /// What `flaneur info` prints.
@@ -35,6 +41,9 @@ pub struct DatabaseInfo {
     pub tree: TreeStats,
     pub fanout_leaf: usize,
     pub fanout_internal: usize,
+    /// What the database holds as LODs; `None` when it holds none (built with
+    /// `--no-lod`, or before LODs were stored).
+    pub lod: Option<LodStats>,
 }
 
 /// An open database.
@@ -53,6 +62,7 @@ pub struct Database {
     triangles: u64,
     bounds: Aabb,
     kinds: KindCounts,
+    lod: Option<LodTable>,
 }
 
 impl Database {
@@ -89,10 +99,12 @@ impl Database {
             .segment(KINDS_SEGMENT)
             .ok_or_else(|| missing(KINDS_SEGMENT))?;
         let bounds = unpack_bounds(bounds);
+        let lod = LodTable::open(&store)?;
         let kinds = KindCounts {
             rtree: kinds.a,
             mesh: kinds.b,
             meta: kinds.c,
+            lod: lod.as_ref().map_or(0, LodTable::pages),
         };
         if objects.a != tree.objects {
             return Err(Error::CorruptPage {
@@ -110,6 +122,7 @@ impl Database {
             triangles: objects.b,
             bounds,
             kinds,
+            lod,
             store,
         })
     }
@@ -150,9 +163,114 @@ impl Database {
         })
     }
 
+    /// Whether the database holds LOD data (reads nothing).
+    pub fn has_lods(&self) -> bool {
+        self.lod.is_some()
+    }
+
+    /// What the build stored as LODs, `None` for a database without them. Reads the LOD
+    /// table's head the first time.
+    pub fn lod_stats(&self) -> Result<Option<LodStats>> {
+        self.lod.as_ref().map(|t| t.stats(&self.store)).transpose()
+    }
+
+    /// The levels of detail of object `id`, level 0 (its full mesh, error 0) first,
+    /// each coarser one after: `None` when the object has no LOD data (a database built
+    /// without LODs, an object added by [`Database::insert`], one the simplifier
+    /// refused, or no such object). Reads the LOD table's entry page and the first page
+    /// of the object's chain.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// citygen::write_city(&city, &scene, false)?;
+    /// flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+    ///
+    /// let db = flaneur::Database::open(&path)?;
+    /// let levels = db.lod_levels(0)?.expect("object 0 has LODs");
+    /// assert_eq!(levels[0].error, 0.0);
+    /// assert!(levels.windows(2).all(|w| w[1].triangles < w[0].triangles));
+    /// assert!(db.lod_levels(1_000_000)?.is_none());
+    /// # Ok(()) }
+    /// ```
+    pub fn lod_levels(&self, id: u64) -> Result<Option<Vec<LevelInfo>>> {
+        match self.lod_entry(id)? {
+            Some(e) => Ok(Some(stored::levels(&self.store, &e)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Level `level` of object `id` as a mesh (0: the full mesh). Reads the LOD table's
+    /// entry page, then for a coarse level only the pages of the object's chain that
+    /// hold its directory and that level — the coarser the level, the fewer pages.
+    /// Counted like every read. An `Error::Invalid` when the object has no LOD data or
+    /// no such level; a `CorruptPage` naming the page and the object when the data is
+    /// damaged.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// # citygen::write_city(&city, &scene, false)?;
+    /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+    /// let db = flaneur::Database::open(&path)?;
+    /// let levels = db.lod_levels(0)?.unwrap();
+    /// let coarsest = db.lod_mesh(0, levels.len() - 1)?;
+    /// assert_eq!(coarsest.triangle_count(), levels.last().unwrap().triangles as usize);
+    /// println!("{} pages read", db.io().page_reads);
+    /// # Ok(()) }
+    /// ```
+    pub fn lod_mesh(&self, id: u64, level: usize) -> Result<Mesh> {
+        let e = self.lod_entry(id)?.ok_or_else(|| {
+            Error::Invalid(format!(
+                "{}: object {id} has no LOD data",
+                self.store.path().display()
+            ))
+        })?;
+        stored::level_mesh(&self.store, &e, level)
+    }
+
+    /// The progressive mesh and mini-redundant DAG of object `id`, stored for objects
+    /// above the build's PM threshold (`--pm-threshold`); `None` for the others. Ready
+    /// for [`crate::lod::Refiner::new`]: applying every split gives the object's full
+    /// mesh back.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// # citygen::write_city(&city, &scene, false)?;
+    /// let lod = flaneur::lod::LodOptions { pm_threshold: 0, ..Default::default() };
+    /// let opts = flaneur::BuildOptions { lod: Some(lod), ..Default::default() };
+    /// flaneur::build_from_scene(&scene, &path, &opts)?;
+    /// let db = flaneur::Database::open(&path)?;
+    /// let (pm, dag) = db.progressive(0)?.expect("every object is above 0 triangles");
+    /// let full = pm.cursor_at(pm.splits.len())?;
+    /// assert_eq!(full.triangle_count(), db.lod_levels(0)?.unwrap()[0].triangles as usize);
+    /// flaneur::lod::Refiner::new(&pm, &dag)?;
+    /// # Ok(()) }
+    /// ```
+    pub fn progressive(&self, id: u64) -> Result<Option<(ProgressiveMesh, Dag)>> {
+        match self.lod_entry(id)? {
+            Some(e) => stored::progressive(&self.store, &e),
+            None => Ok(None),
+        }
+    }
+
+    fn lod_entry(&self, id: u64) -> Result<Option<crate::lod::table::LodEntry>> {
+        match &self.lod {
+            Some(t) => t.find(&self.store, id),
+            None => Ok(None),
+        }
+    }
+
     /// Adds an object to an open database (opened with [`Database::open_writable`]):
     /// its mesh is appended and the R-tree grows by insertion. Durable when this
-    /// returns. Not crash-atomic: changed nodes are rewritten in place, so a crash in
+    /// returns. The object gets no LOD data (the LOD table is written once, at build). Not crash-atomic: changed nodes are rewritten in place, so a crash in
     /// the middle of an insert can leave the index inconsistent — every read checks
     /// its page, so that shows as an error naming the page, never as a wrong answer.
     pub fn insert(&mut self, id: u64, mesh: &Mesh) -> Result<ObjectEntry> {
@@ -225,6 +343,7 @@ impl Database {
             tree,
             fanout_leaf: self.tree.fanout.leaf,
             fanout_internal: self.tree.fanout.internal,
+            lod: self.lod_stats()?,
         })
     }
 }

@@ -20,6 +20,7 @@ use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
 use flaneur::bench::view_culling::{self, ViewCullingConfig};
 use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
+use flaneur::lod::{LodOptions, LodReport};
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::{Backend, BuildOptions, Database};
@@ -66,6 +67,13 @@ enum Command {
         /// Build the index by one-by-one insertion (linear split), as the thesis did.
         #[arg(long)]
         insertion: bool,
+        /// Store no LODs: only each object's full mesh (faster, smaller).
+        #[arg(long)]
+        no_lod: bool,
+        /// Objects with more triangles than this also store their progressive mesh and
+        /// DAG, for view-dependent refinement.
+        #[arg(long, value_name = "N", default_value_t = flaneur::lod::DEFAULT_PM_THRESHOLD)]
+        pm_threshold: usize,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -412,6 +420,8 @@ fn run(cli: Cli) -> Result<()> {
             page_size,
             fill,
             insertion,
+            no_lod,
+            pm_threshold,
             quiet,
         } => {
             let opts = BuildOptions {
@@ -419,6 +429,10 @@ fn run(cli: Cli) -> Result<()> {
                 fill,
                 insertion,
                 progress: !quiet,
+                lod: (!no_lod).then(|| LodOptions {
+                    pm_threshold,
+                    ..LodOptions::default()
+                }),
             };
             let summary = build(&inputs, &out, &opts)?;
             println!(
@@ -431,6 +445,7 @@ fn run(cli: Cli) -> Result<()> {
                 summary.height,
                 summary.seconds
             );
+            print_lod_report(summary.lod.as_ref(), summary.bytes);
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
@@ -718,9 +733,34 @@ fn info(path: &Path, json: bool) -> Result<()> {
         info.file_bytes as f64 / (1 << 20) as f64
     );
     println!(
-        "  by kind   header 1, r-tree {}, mesh {}, meta {}",
-        k.rtree, k.mesh, k.meta
+        "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}",
+        k.rtree, k.mesh, k.meta, k.lod
     );
+    match &info.lod {
+        None => println!("lods        none (built with --no-lod, or before LODs were stored)"),
+        Some(l) => {
+            let bytes = l.pages * info.page_size as u64;
+            println!(
+                "lods        {} of {} objects, {} levels coarser than the full meshes, {} pages ({:.1} MiB, {:.1}% of the file)",
+                l.with_levels,
+                info.objects,
+                l.levels,
+                l.pages,
+                bytes as f64 / (1 << 20) as f64,
+                100.0 * bytes as f64 / info.file_bytes.max(1) as f64
+            );
+            println!(
+                "  settings  ratio {}, down to {} triangles; PM + DAG above {} triangles: {} objects",
+                l.ratio, l.min_triangles, l.pm_threshold, l.with_pm
+            );
+            if l.refused > 0 {
+                println!(
+                    "  refused   {} objects the simplifier refused have no LODs",
+                    l.refused
+                );
+            }
+        }
+    }
     let b = info.bounds;
     println!(
         "bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}",
@@ -737,6 +777,37 @@ fn info(path: &Path, json: bool) -> Result<()> {
         println!("  level {level}   {n} nodes, {e} entries");
     }
     Ok(())
+}
+
+/// The LOD lines of a build's summary.
+fn print_lod_report(lod: Option<&LodReport>, file_bytes: u64) {
+    let Some(r) = lod else {
+        println!("  LODs: none (--no-lod)");
+        return;
+    };
+    let s = &r.stats;
+    println!(
+        "  LODs: {} objects simplified, {} with coarse levels ({} levels), {} with PM + DAG (over {} triangles); \
+         {} pages ({:.1} MiB, {:.1}% of the file); {:.1} s of the build ({:.1} s of simplifying tasks on {} threads)",
+        s.objects,
+        s.with_levels,
+        s.levels,
+        s.with_pm,
+        s.pm_threshold,
+        s.pages,
+        r.bytes as f64 / (1 << 20) as f64,
+        100.0 * r.bytes as f64 / file_bytes.max(1) as f64,
+        r.seconds,
+        r.task_seconds,
+        r.threads
+    );
+    if s.refused > 0 {
+        println!(
+            "  LODs: {} objects refused by the simplifier have none (first: {})",
+            s.refused,
+            r.first_refusal.as_deref().unwrap_or("?")
+        );
+    }
 }
 
 fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bool) -> Result<()> {
@@ -1028,6 +1099,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             "  {} pages, tree height {}, {:.1} s",
             b.pages, b.height, b.seconds
         );
+        print_lod_report(b.lod.as_ref(), b.bytes);
     } else {
         println!("using {} (delete it to rebuild)", db_path.display());
     }

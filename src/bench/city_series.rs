@@ -77,6 +77,8 @@ fn build(dir: &Path, db: &Path, objects: u64, seed: u64, page_size: usize) -> Re
         db,
         &BuildOptions {
             page_size,
+            // The search-time walks read index and mesh pages only.
+            lod: None,
             ..Default::default()
         },
     );

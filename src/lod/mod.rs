@@ -19,7 +19,14 @@
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
 //!   ch. 4: the fronts, the three traversals, the compact selective mesh); [`refine_orbit`]
 //!   runs the thesis's traversal experiment.
+//! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels
+//!   ([`encode_chain`], coarsest first so a coarse level reads few pages), and for large
+//!   objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG, found by id
+//!   through a table in the database ([`LodOptions`], [`LodStats`]);
+//!   `Database::lod_levels`, `lod_mesh` and `progressive` read them back.
 
+mod bake;
+mod chain;
 mod criteria;
 mod dag;
 mod dag_attrs;
@@ -34,16 +41,25 @@ mod inspect;
 mod levels;
 mod mesh_update;
 mod pm;
+mod pm_codec;
 mod pm_parallel;
 mod quadric;
 mod refine;
 mod refine_bench;
 #[cfg(test)]
 mod refine_tests;
+pub(crate) mod stored;
+pub(crate) mod table;
 mod topology;
 mod traversal;
 mod vsplit;
 
+pub(crate) use bake::LodWriter;
+pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
+pub use chain::{
+    decode_chain, encode_chain, ChainDirectory, LevelInfo, CHAIN_HEADER_LEN, CHAIN_MAGIC,
+    CHAIN_VERSION,
+};
 pub use criteria::{Criteria, View};
 pub use dag::{Dag, DagConstruction};
 pub use dag_attrs::NodeAttrs;
@@ -55,6 +71,7 @@ pub use inspect::{load_merged, refine_view, write_levels, write_obj, LevelFile, 
 pub use levels::{Level, PmCursor};
 pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
 pub use pm::{simplify_all, ProgressiveMesh};
+pub use pm_codec::{PM_MAGIC, PM_VERSION};
 pub use pm_parallel::{LevelReport, ParallelOptions, ParallelReport};
 pub use refine::{
     FrameReport, FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
@@ -62,5 +79,6 @@ pub use refine::{
 pub use refine_bench::{
     orbit_path, refine_orbit, OrbitConfig, OrbitFrame, OrbitReport, TraversalSummary,
 };
+pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};
 pub use traversal::{PassStats, Traversal};
 pub use vsplit::{SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE};

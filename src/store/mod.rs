@@ -520,6 +520,21 @@ impl Store {
     /// extent itself must be consistent: `byte_len` fills its pages exactly as
     /// `append_extent` writes them (all full but the last), within the database.
     pub fn read_extent(&self, ext: &Extent, kind: PageKind) -> Result<Vec<u8>> {
+        self.read_extent_range(ext, kind, 0, ext.byte_len as usize)
+    }
+
+    /// Reads bytes `start..start + len` of the blob `ext`, reading (and counting) only
+    /// the pages that hold them: a reader that needs the head of a large blob, or one
+    /// record of it, pays for those pages alone. Checked as [`Store::read_extent`]; a
+    /// range past the blob's end is a `CorruptPage` error naming the extent's first page
+    /// (the range came from bytes that describe the blob, and those are wrong).
+    pub fn read_extent_range(
+        &self,
+        ext: &Extent,
+        kind: PageKind,
+        start: usize,
+        len: usize,
+    ) -> Result<Vec<u8>> {
         let payload = self.payload_size();
         let byte_len = ext.byte_len as usize;
         let need = Extent::pages_for(byte_len, payload);
@@ -532,16 +547,30 @@ impl Store {
                 ),
             ));
         }
-        if ext.page_count == 0 {
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= byte_len)
+            .ok_or_else(|| {
+                self.corrupt(
+                    ext.first_page,
+                    format!(
+                        "bytes {start}..{start}+{len} lie beyond an extent of {byte_len} bytes"
+                    ),
+                )
+            })?;
+        if len == 0 {
             return Ok(Vec::new());
         }
         // Check the whole range before allocating for it.
         self.check_range(ext.first_page)?;
         let last = ext.first_page.saturating_add(u64::from(ext.page_count) - 1);
         self.check_range(last)?;
-        let mut out = Vec::with_capacity(byte_len);
+        let (first_index, last_index) = (start / payload, (end - 1) / payload);
+        let skip = start - first_index * payload;
+        let mut out = Vec::with_capacity(len + skip);
         let mut scratch = Vec::new();
-        for (i, page) in (ext.first_page..=last).enumerate() {
+        for i in first_index..=last_index {
+            let page = ext.first_page + i as u64;
             let expect = (byte_len - i * payload).min(payload);
             let got = self.read_append(page, kind, &mut scratch, &mut out)?;
             if got != expect {
@@ -551,6 +580,8 @@ impl Store {
                 ));
             }
         }
+        out.drain(..skip);
+        out.truncate(len);
         Ok(out)
     }
 

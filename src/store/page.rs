@@ -47,7 +47,8 @@ pub const KIND_SLOTS: usize = 16;
 /// use flaneur::store::PageKind;
 /// assert_eq!(PageKind::from_u8(2), Some(PageKind::RtreeNode));
 /// assert_eq!(PageKind::Mesh.name(), "mesh");
-/// assert_eq!(PageKind::ALL.len(), 4);
+/// assert_eq!(PageKind::from_u8(5), Some(PageKind::Lod));
+/// assert_eq!(PageKind::ALL.len(), 5);
 /// ```
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -56,21 +57,26 @@ pub enum PageKind {
     Header = 1,
     /// A node of a disk-resident R-tree.
     RtreeNode = 2,
-    /// Mesh data (objects, LOD levels).
+    /// An object's full-detail mesh.
     Mesh = 3,
     /// Anything else an owner wants to store (metadata blobs, tables).
     Meta = 4,
+    /// Level-of-detail data: an object's chain of coarser levels, its progressive mesh
+    /// and DAG, and the table that finds them by object id. A kind of its own so that
+    /// reads of LOD pages are counted apart from reads of full meshes.
+    Lod = 5,
 }
 
-const _: () = assert!((PageKind::Meta as usize) < KIND_SLOTS);
+const _: () = assert!((PageKind::Lod as usize) < KIND_SLOTS);
 
 impl PageKind {
     /// Every kind, in kind-byte order.
-    pub const ALL: [PageKind; 4] = [
+    pub const ALL: [PageKind; 5] = [
         PageKind::Header,
         PageKind::RtreeNode,
         PageKind::Mesh,
         PageKind::Meta,
+        PageKind::Lod,
     ];
 
     /// The kind stored as byte `b`, if any.
@@ -85,6 +91,7 @@ impl PageKind {
             PageKind::RtreeNode => "rtree-node",
             PageKind::Mesh => "mesh",
             PageKind::Meta => "meta",
+            PageKind::Lod => "lod",
         }
     }
 }

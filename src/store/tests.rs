@@ -753,3 +753,41 @@ fn throughput() {
         bytes as f64 / 1e6 / t.elapsed().as_secs_f64()
     );
 }
+
+#[test]
+fn extent_ranges_read_only_their_pages() {
+    let f = build(PS);
+    let s = Store::open(&f.path, Backend::Mmap).unwrap();
+    let p = s.payload_size();
+    for (e, b) in &f.extents {
+        let n = b.len();
+        let mut ranges = vec![(0, n), (0, 0), (n, 0)];
+        for start in [0, 1, p - 1, p, p + 1, 2 * p + 5] {
+            for len in [1, 2, p - 1, p, p + 1, 2 * p] {
+                if start + len <= n {
+                    ranges.push((start, len));
+                }
+            }
+        }
+        for (start, len) in ranges {
+            s.reset_stats();
+            let got = s.read_extent_range(e, PageKind::Mesh, start, len).unwrap();
+            assert_eq!(got, &b[start..start + len], "{e:?} {start}+{len}");
+            let pages = if len == 0 {
+                0
+            } else {
+                (start + len - 1) / p - start / p + 1
+            };
+            assert_eq!(s.stats().page_reads, pages as u64, "{e:?} {start}+{len}");
+        }
+        for (start, len) in [(n, 1), (0, n + 1), (usize::MAX, 2)] {
+            let err = s
+                .read_extent_range(e, PageKind::Mesh, start, len)
+                .unwrap_err();
+            assert!(
+                matches!(&err, Error::CorruptPage { what, .. } if what.contains("beyond")),
+                "{err}"
+            );
+        }
+    }
+}

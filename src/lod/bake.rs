@@ -1,0 +1,354 @@
+//! The build's side of stored LODs: each object's progressive mesh built as its mesh is
+//! written, its chain of coarse levels stored (`chain`), and above a size threshold its
+//! progressive mesh and mini-redundant DAG too (`pm_codec`, `dag_codec`); at the end,
+//! the table that finds them by id (`table`).
+//!
+//! Objects stream through the build, so they are simplified as they come: each object
+//! is one task on the thread pool (objects are independent), while the build reads and
+//! writes the next meshes; the results are appended in the order the objects came, a
+//! batch behind, so the same input gives the same file whichever thread finishes
+//! first. At most two batches of objects are in flight, so memory stays bounded
+//! whatever the size of the city.
+//!
+//! An object the simplifier refuses (`ProgressiveMesh::build` fails: a mesh of points
+//! and no triangles, say) gets no LOD data: it is counted, and the first refusal's
+//! reason is kept for the build's report. Its full mesh is stored as always.
+
+use std::collections::BTreeMap;
+use std::panic::AssertUnwindSafe;
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender, TryRecvError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use rayon::Yield;
+
+use super::chain::encode_chain;
+use super::dag::{Dag, DagConstruction};
+use super::pm::ProgressiveMesh;
+use super::table::{encode_table, LodEntry, LodStats, LodTable};
+use crate::error::{Error, Result};
+use crate::scene::Mesh;
+use crate::store::{Extent, PageKind, Store};
+
+/// How a build makes and stores LODs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodOptions {
+    /// Triangles of each level over the next finer one's (as `flaneur lod --ratio`).
+    pub ratio: f32,
+    /// A chain stops at this many triangles (as `flaneur lod --min-triangles`).
+    pub min_triangles: usize,
+    /// Objects with more triangles than this also store their progressive mesh and
+    /// mini-redundant DAG, for view-dependent refinement.
+    pub pm_threshold: usize,
+    /// The LODs of each batch of this many objects are written once the next batch has
+    /// been handed to the thread pool: at most two batches are in flight. Bounds the
+    /// build's memory; large enough to keep every core busy.
+    pub batch: usize,
+}
+
+/// Triangles above which a build stores an object's progressive mesh and DAG.
+pub const DEFAULT_PM_THRESHOLD: usize = 20_000;
+
+impl Default for LodOptions {
+    fn default() -> LodOptions {
+        LodOptions {
+            ratio: 0.5,
+            min_triangles: 100,
+            pm_threshold: DEFAULT_PM_THRESHOLD,
+            batch: 128,
+        }
+    }
+}
+
+impl LodOptions {
+    /// An `Error::Invalid` for a ratio not strictly between 0 and 1, a batch of 0, or a
+    /// floor that does not fit 32 bits.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.ratio > 0.0 && self.ratio < 1.0) {
+            return Err(Error::Invalid(format!(
+                "LOD ratio {} is not between 0 and 1",
+                self.ratio
+            )));
+        }
+        if self.batch == 0 {
+            return Err(Error::Invalid("LOD batch of 0 objects".into()));
+        }
+        if u32::try_from(self.min_triangles).is_err() {
+            return Err(Error::Invalid(format!(
+                "LOD floor of {} triangles",
+                self.min_triangles
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What a build stored as LODs, for its summary.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct LodReport {
+    /// The counts the database keeps (`Database::lod_stats`).
+    #[serde(flatten)]
+    pub stats: LodStats,
+    /// Bytes of `lod` pages: `stats.pages` times the page size.
+    pub bytes: u64,
+    /// Wall-clock seconds the build spent on LODs beyond its meshes: waiting for
+    /// simplifications to finish, and writing LOD pages.
+    pub seconds: f64,
+    /// Seconds of simplifying and encoding, summed over the tasks that did it (wall
+    /// clock per task: on a busy machine it counts time the task waited for a core).
+    pub task_seconds: f64,
+    /// Threads of the pool that simplified.
+    pub threads: usize,
+    /// The first refused object and why, when any was.
+    pub first_refusal: Option<String>,
+}
+
+/// One object's LOD data, encoded, before it is written.
+struct Baked {
+    chain: Option<Vec<u8>>,
+    levels: u32,
+    pm_dag: Option<(Vec<u8>, Vec<u8>)>,
+}
+
+/// Simplifies one object and encodes what it stores.
+fn bake(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Baked> {
+    let pm = ProgressiveMesh::build(mesh)?;
+    let levels = pm.levels(opts.ratio, opts.min_triangles)?;
+    // levels[0] is the full mesh, stored already as the object's mesh extent.
+    let coarse = levels.get(1..).unwrap_or(&[]);
+    let chain = if coarse.is_empty() {
+        None
+    } else {
+        Some(encode_chain(id, mesh.triangle_count(), coarse)?)
+    };
+    let pm_dag = if mesh.triangle_count() > opts.pm_threshold {
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+        Some((pm.to_bytes()?, dag.to_bytes()))
+    } else {
+        None
+    };
+    Ok(Baked {
+        chain,
+        levels: coarse.len() as u32,
+        pm_dag,
+    })
+}
+
+/// [`bake`], with a panic turned into an error: a simplifier bug on one odd mesh
+/// should cost that object its LODs, not the build.
+fn bake_caught(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Baked> {
+    std::panic::catch_unwind(AssertUnwindSafe(|| bake(id, mesh, opts))).unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(Error::Invalid(format!("the simplifier panicked: {why}")))
+    })
+}
+
+/// An object whose LODs were made, waiting to be written in the order objects came.
+struct Done {
+    seq: u64,
+    id: u64,
+    mesh_extent: Extent,
+    triangles: u32,
+    baked: Result<Baked>,
+    task_seconds: f64,
+}
+
+/// Takes objects as the build writes their meshes, simplifies them on the thread pool
+/// while the build reads on, and appends their LOD extents in the order the objects
+/// came (so the same input gives the same file); [`LodWriter::finish`] writes the table.
+///
+/// At most two batches (`LodOptions::batch` objects each) are in flight: memory stays
+/// bounded however large the city, and the pool is not left idle while the build reads
+/// the next objects or waits for a batch's slowest one, as it would be with batches in
+/// lockstep.
+pub(crate) struct LodWriter {
+    opts: Arc<LodOptions>,
+    sender: Sender<Done>,
+    receiver: Receiver<Done>,
+    /// Objects handed to the pool, and the next one to write.
+    sent: u64,
+    next: u64,
+    /// Made, not yet written: those behind an object still in flight.
+    ready: BTreeMap<u64, Done>,
+    entries: Vec<LodEntry>,
+    stats: LodStats,
+    first_refusal: Option<String>,
+    seconds: f64,
+    task_seconds: f64,
+}
+
+impl LodWriter {
+    pub(crate) fn new(opts: &LodOptions) -> Result<LodWriter> {
+        opts.validate()?;
+        let (sender, receiver) = channel();
+        Ok(LodWriter {
+            opts: Arc::new(opts.clone()),
+            sender,
+            receiver,
+            sent: 0,
+            next: 0,
+            ready: BTreeMap::new(),
+            entries: Vec::new(),
+            stats: LodStats {
+                ratio: opts.ratio,
+                min_triangles: opts.min_triangles as u32,
+                pm_threshold: opts.pm_threshold as u64,
+                ..LodStats::default()
+            },
+            first_refusal: None,
+            seconds: 0.0,
+            task_seconds: 0.0,
+        })
+    }
+
+    /// Hands an object whose mesh was written at `mesh_extent` to the pool; after every
+    /// batch, writes the LODs of the batch before, waiting for those still in flight.
+    /// Returns how many objects had their LODs written.
+    pub(crate) fn push(
+        &mut self,
+        store: &mut Store,
+        id: u64,
+        mesh_extent: Extent,
+        mesh: Mesh,
+    ) -> Result<usize> {
+        let (seq, sender, opts) = (self.sent, self.sender.clone(), Arc::clone(&self.opts));
+        self.sent += 1;
+        rayon::spawn_fifo(move || {
+            let start = Instant::now();
+            let baked = bake_caught(id, &mesh, &opts);
+            // The build stops listening only when it failed; nothing to do then.
+            let _ = sender.send(Done {
+                seq,
+                id,
+                mesh_extent,
+                triangles: mesh.triangle_count() as u32,
+                baked,
+                task_seconds: start.elapsed().as_secs_f64(),
+            });
+        });
+        // Writes happen at fixed points — after every batch of objects, the LODs of the
+        // batch before it — so that the file's layout never depends on which thread
+        // finished first; the batch in between keeps the pool busy meanwhile.
+        let batch = self.opts.batch as u64;
+        if self.sent % batch != 0 {
+            return Ok(0);
+        }
+        let start = Instant::now();
+        let written = self.write_up_to(store, self.sent.saturating_sub(batch))?;
+        self.seconds += start.elapsed().as_secs_f64();
+        Ok(written)
+    }
+
+    /// Writes, in order, the LODs of every object before `end`, waiting for those still
+    /// in flight.
+    fn write_up_to(&mut self, store: &mut Store, end: u64) -> Result<usize> {
+        let mut written = 0;
+        while self.next < end {
+            let done = match self.ready.remove(&self.next) {
+                Some(done) => done,
+                None => {
+                    let done = self.receive()?;
+                    self.ready.insert(done.seq, done);
+                    continue;
+                }
+            };
+            self.next += 1;
+            written += 1;
+            self.task_seconds += done.task_seconds;
+            self.write(store, done)?;
+        }
+        Ok(written)
+    }
+
+    /// The next object whose LODs are made, in whatever order they finish.
+    fn receive(&self) -> Result<Done> {
+        let gone = || Error::Invalid("LOD build: the thread pool went away".into());
+        loop {
+            match self.receiver.try_recv() {
+                Ok(done) => return Ok(done),
+                Err(TryRecvError::Disconnected) => return Err(gone()),
+                Err(TryRecvError::Empty) => {}
+            }
+            match rayon::yield_now() {
+                // Not a pool thread: block until a task reports.
+                None => return self.receiver.recv().map_err(|_| gone()),
+                // A build run from inside the pool must not block a thread its own
+                // tasks may need: it runs pool work (perhaps those tasks) meanwhile.
+                Some(Yield::Executed) => {}
+                Some(Yield::Idle) => match self.receiver.recv_timeout(Duration::from_millis(1)) {
+                    Ok(done) => return Ok(done),
+                    Err(RecvTimeoutError::Disconnected) => return Err(gone()),
+                    Err(RecvTimeoutError::Timeout) => {}
+                },
+            }
+        }
+    }
+
+    fn write(&mut self, store: &mut Store, done: Done) -> Result<()> {
+        let b = match done.baked {
+            Ok(b) => b,
+            Err(e) => {
+                self.stats.refused += 1;
+                self.first_refusal
+                    .get_or_insert_with(|| format!("object {}: {e}", done.id));
+                return Ok(());
+            }
+        };
+        let mut append = |bytes: &[u8]| -> Result<Extent> {
+            let e = store.append_extent(PageKind::Lod, bytes)?;
+            self.stats.pages += e.page_count as u64;
+            Ok(e)
+        };
+        let chain = match &b.chain {
+            Some(bytes) => append(bytes)?,
+            None => Extent::default(),
+        };
+        let (pm, dag) = match &b.pm_dag {
+            Some((pm, dag)) => (append(pm)?, append(dag)?),
+            None => (Extent::default(), Extent::default()),
+        };
+        self.stats.objects += 1;
+        self.stats.levels += b.levels as u64;
+        self.stats.with_levels += (b.levels > 0) as u64;
+        self.stats.with_pm += b.pm_dag.is_some() as u64;
+        self.entries.push(LodEntry {
+            id: done.id,
+            mesh: done.mesh_extent,
+            chain,
+            pm,
+            dag,
+            triangles: done.triangles,
+            levels: b.levels,
+        });
+        Ok(())
+    }
+
+    /// Writes the LODs of the objects still in flight and the table, and names the
+    /// table in the header. Returns what was stored and how many objects had their LODs
+    /// written by this call.
+    pub(crate) fn finish(mut self, store: &mut Store) -> Result<(LodReport, usize)> {
+        let start = Instant::now();
+        let written = self.write_up_to(store, self.sent)?;
+        self.entries.sort_unstable_by_key(|e| e.id);
+        let bytes = encode_table(&self.entries, &self.stats, store.payload_size())?;
+        let table = store.append_extent(PageKind::Lod, &bytes)?;
+        self.stats.pages += table.page_count as u64;
+        LodTable::save(store, &table, self.stats.pages)?;
+        self.seconds += start.elapsed().as_secs_f64();
+        Ok((
+            LodReport {
+                stats: self.stats,
+                bytes: self.stats.pages * store.page_size() as u64,
+                seconds: self.seconds,
+                task_seconds: self.task_seconds,
+                threads: rayon::current_num_threads(),
+                first_refusal: self.first_refusal,
+            },
+            written,
+        ))
+    }
+}
