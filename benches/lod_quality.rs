@@ -32,8 +32,8 @@ const SHARES: [f64; 3] = [0.5, 0.1, 0.01];
 /// `LOD_QUALITY_SAMPLES` says otherwise. The sampled distance approaches the true one
 /// from below, and slowly where the farthest point is a small region: meshoptimizer's
 /// 50 % level reads 0.308 % of the diagonal at 200,000 samples, 0.334 % at 2 million and
-/// 0.340 % at 8 million (ours: 0.418 % at each), so the ratio at 50 % falls with the
-/// samples. 2 million takes seconds.
+/// 0.340 % at 8 million, so a ratio near the bound depends on the samples. 2 million
+/// takes seconds.
 const SAMPLES: usize = 2_000_000;
 /// Timing runs; the median is kept.
 const RUNS: usize = 5;

@@ -41,7 +41,7 @@
 //! Normals (*): a half-edge collapse creates no vertex, so each surviving triangle takes
 //! the normal of p's wedge it now uses; the quadric holds no normal term.
 //!
-//! Error (*): the quadric is area-weighted and normalised by its total weight, so the
+//! Error (*): the quadric is weighted (`quadric`) and normalised by its total weight, so the
 //! error of a collapse is the root of a weighted mean squared distance, in metres.
 //! Ordering by that mean rather than the sum keeps large flat regions from being
 //! preferred over small curved ones merely for their area, and on the bunny halves the
@@ -60,8 +60,8 @@ use super::topology::{Adjacency, Fan};
 use super::vsplit::{SplitIds, VertexSplit};
 use crate::error::{Error, Result};
 
-/// The weight of a boundary edge's constraint plane per square metre of edge, against a
-/// triangle plane's weight of its area: large, so that a boundary position's error is
+/// The weight of a boundary edge's constraint plane per metre of edge, against a
+/// triangle plane's weight of the root of its area: large, so that a boundary position's error is
 /// mostly its distance off the outline.
 const BOUNDARY_WEIGHT: f64 = 10.0;
 

