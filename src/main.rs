@@ -331,6 +331,9 @@ enum Experiment {
         /// N: operators per pass (priority, linear) or nodes evaluated (constant-time).
         #[arg(long, default_value_t = flaneur::lod::THESIS_MAX_WORK)]
         max_work: usize,
+        /// Runs of each orbit; a frame's times are the shortest over them.
+        #[arg(long, default_value_t = LodRefineConfig::default().repeats)]
+        repeats: usize,
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
     },
@@ -674,6 +677,7 @@ fn run(cli: Cli) -> Result<()> {
                 taus,
                 budget,
                 max_work,
+                repeats,
                 out,
             } => {
                 let d = LodRefineConfig::default();
@@ -690,6 +694,7 @@ fn run(cli: Cli) -> Result<()> {
                         max_work,
                         ..d.orbit
                     },
+                    repeats,
                     ..d
                 };
                 println!(
