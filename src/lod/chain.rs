@@ -35,6 +35,7 @@
 //! the end, triangles and errors ordered, the level's mesh against its entry) — as an
 //! `Error::Invalid`, never a panic, whatever the bytes.
 
+use super::bytes::{self, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 use super::levels::Level;
 use crate::error::{Error, Result};
 use crate::scene::{decode_mesh, encode_mesh, Mesh};
@@ -59,7 +60,6 @@ const ENTRY_OFFSET: usize = ENTRY_ERROR + 4;
 const ENTRY_LENGTH: usize = ENTRY_OFFSET + 4;
 const ENTRY_CRC: usize = ENTRY_LENGTH + 4;
 const ENTRY_LEN: usize = ENTRY_CRC + 4;
-const CRC_LEN: usize = 4;
 
 /// One level of detail of a stored object, as [`Database::lod_levels`] lists it.
 ///
@@ -99,16 +99,6 @@ pub struct ChainDirectory {
 
 fn corrupt(what: String) -> Error {
     Error::Invalid(format!("LOD chain bytes: {what}"))
-}
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    let mut w = [0u8; 8];
-    w.copy_from_slice(&b[at..at + 8]);
-    u64::from_le_bytes(w)
 }
 
 /// Bytes of the header and directory of a chain of `levels` levels, checksum included
@@ -172,8 +162,7 @@ pub fn encode_chain(object: u64, full_triangles: usize, levels: &[Level]) -> Res
         }
         offset += body.len() as u32;
     }
-    let crc = crc32fast::hash(&b);
-    b.extend_from_slice(&crc.to_le_bytes());
+    push_crc(&mut b);
     for body in &bodies {
         b.extend_from_slice(body);
     }
@@ -185,21 +174,14 @@ impl ChainDirectory {
     /// its first [`CHAIN_HEADER_LEN`] bytes (or more) — the length a reader asks the
     /// store for before it decodes the directory.
     pub fn len_from_prefix(prefix: &[u8]) -> Result<usize> {
-        if prefix.len() < CHAIN_HEADER_LEN {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, the header alone takes {CHAIN_HEADER_LEN}",
-                prefix.len()
-            )));
-        }
-        if prefix[MAGIC_OFFSET..VERSION_OFFSET] != CHAIN_MAGIC {
-            return Err(corrupt("not a LOD chain (bad magic)".into()));
-        }
-        let version = u32_at(prefix, VERSION_OFFSET);
-        if version != CHAIN_VERSION {
-            return Err(corrupt(format!(
-                "version {version}, this build reads version {CHAIN_VERSION}"
-            )));
-        }
+        bytes::header(
+            prefix,
+            CHAIN_HEADER_LEN,
+            "a LOD chain",
+            CHAIN_MAGIC,
+            CHAIN_VERSION,
+        )
+        .map_err(corrupt)?;
         let levels = u32_at(prefix, LEVELS_OFFSET);
         Ok(directory_len(levels as u64).min(usize::MAX as u64) as usize)
     }
@@ -209,24 +191,19 @@ impl ChainDirectory {
     pub fn decode(prefix: &[u8], total_len: usize) -> Result<ChainDirectory> {
         let head = ChainDirectory::len_from_prefix(prefix)?;
         let n = u32_at(prefix, LEVELS_OFFSET) as usize;
-        if head as u64 > total_len as u64 {
-            return Err(corrupt(format!(
-                "truncated: {total_len} bytes, a directory of {n} levels takes {head}"
-            )));
-        }
+        bytes::at_least(
+            total_len,
+            head as u64,
+            format_args!("a directory of {n} levels takes"),
+        )
+        .map_err(corrupt)?;
         if prefix.len() < head {
             return Err(corrupt(format!(
                 "truncated: {} bytes read, a directory of {n} levels takes {head}",
                 prefix.len()
             )));
         }
-        let crc_at = head - CRC_LEN;
-        let (stored, actual) = (u32_at(prefix, crc_at), crc32fast::hash(&prefix[..crc_at]));
-        if stored != actual {
-            return Err(corrupt(format!(
-                "directory checksum mismatch (stored {stored:08x}, computed {actual:08x})"
-            )));
-        }
+        bytes::checksum(prefix, head - CRC_LEN).map_err(|w| corrupt(format!("directory {w}")))?;
         if n == 0 {
             return Err(corrupt("a chain of no levels".into()));
         }
@@ -239,7 +216,7 @@ impl ChainDirectory {
             let e = Entry {
                 triangles: u32_at(prefix, at + ENTRY_TRIANGLES),
                 vertices: u32_at(prefix, at + ENTRY_VERTICES),
-                error: f32::from_bits(u32_at(prefix, at + ENTRY_ERROR)),
+                error: f32_at(prefix, at + ENTRY_ERROR),
                 offset: u32_at(prefix, at + ENTRY_OFFSET),
                 length: u32_at(prefix, at + ENTRY_LENGTH),
                 crc: u32_at(prefix, at + ENTRY_CRC),
@@ -345,13 +322,7 @@ impl ChainDirectory {
                 bytes.len()
             )));
         }
-        let actual = crc32fast::hash(bytes);
-        if actual != e.crc {
-            return Err(corrupt(format!(
-                "level {level} checksum mismatch (stored {:08x}, computed {actual:08x})",
-                e.crc
-            )));
-        }
+        crc_matches(e.crc, bytes).map_err(|w| corrupt(format!("level {level} {w}")))?;
         let mesh = decode_mesh(bytes).map_err(|w| corrupt(format!("level {level}: {w}")))?;
         if mesh.triangle_count() != e.triangles as usize
             || mesh.positions.len() != e.vertices as usize
@@ -382,10 +353,8 @@ pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
 
 #[cfg(test)]
 mod tests {
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-
     use super::*;
+    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::building;
     use crate::lod::ProgressiveMesh;
 
@@ -394,11 +363,6 @@ mod tests {
         let levels = pm.levels(0.5, 20).unwrap();
         let bytes = encode_chain(7, mesh.triangle_count(), &levels[1..]).unwrap();
         (levels, bytes)
-    }
-
-    fn reseal(b: &mut [u8], head: usize) {
-        let crc = crc32fast::hash(&b[..head - CRC_LEN]);
-        b[head - CRC_LEN..head].copy_from_slice(&crc.to_le_bytes());
     }
 
     #[test]
@@ -467,7 +431,7 @@ mod tests {
             let mut b = bytes.clone();
             b[at..at + 4].copy_from_slice(&v.to_le_bytes());
             if seal {
-                reseal(&mut b, head);
+                reseal(&mut b[..head]);
             }
             decode_chain(&b).unwrap_err().to_string()
         };
@@ -494,31 +458,19 @@ mod tests {
 
     #[test]
     fn random_bytes_never_panic() {
-        let mut rng = ChaCha8Rng::seed_from_u64(9);
         let (_, good) = chain_of(&building());
-        for round in 0..2000 {
-            let mut b: Vec<u8> = if round % 2 == 0 {
-                let len = rng.gen_range(0..300);
-                (0..len).map(|_| rng.gen()).collect()
-            } else {
-                let mut b = good.clone();
-                for _ in 0..rng.gen_range(1..6) {
-                    let at = rng.gen_range(0..b.len());
-                    b[at] = rng.gen();
-                }
-                b
-            };
-            if round % 4 == 1 && b.len() > CHAIN_HEADER_LEN {
-                b[..4].copy_from_slice(&CHAIN_MAGIC);
-                b[4..8].copy_from_slice(&CHAIN_VERSION.to_le_bytes());
-                let n = (u32_at(&b, LEVELS_OFFSET) % 8) as u64;
-                b[LEVELS_OFFSET..LEVELS_OFFSET + 4].copy_from_slice(&(n as u32).to_le_bytes());
-                let head = directory_len(n) as usize;
-                if head <= b.len() {
-                    reseal(&mut b, head);
-                }
+        let restore = |b: &mut [u8]| {
+            b[..4].copy_from_slice(&CHAIN_MAGIC);
+            b[4..8].copy_from_slice(&CHAIN_VERSION.to_le_bytes());
+            let n = (u32_at(b, LEVELS_OFFSET) % 8) as u64;
+            b[LEVELS_OFFSET..LEVELS_OFFSET + 4].copy_from_slice(&(n as u32).to_le_bytes());
+            let head = directory_len(n) as usize;
+            if head <= b.len() {
+                reseal(&mut b[..head]);
             }
-            let _ = decode_chain(&b);
-        }
+        };
+        mangled(9, 2000, 300, &good, restore, |b| {
+            let _ = decode_chain(b);
+        });
     }
 }

@@ -26,6 +26,7 @@
 //! (runs, offsets, edges pointing backward, finite attributes in range), so that bytes
 //! that pass are a DAG every traversal can walk without an index check failing.
 
+use super::bytes::{self, f32_at, push_crc, u32_at, CRC_LEN};
 use super::dag::{Dag, DagConstruction};
 use super::dag_attrs::NodeAttrs;
 use super::dag_build::Csr;
@@ -44,7 +45,6 @@ const SPLITS_OFFSET: usize = NODES_OFFSET + 4;
 const EDGES_OFFSET: usize = SPLITS_OFFSET + 4;
 const HEADER_LEN: usize = EDGES_OFFSET + 4;
 const ATTR_LEN: usize = 12;
-const CRC_LEN: usize = 4;
 
 /// Where the variable sections begin, for `n` nodes and `e` edges (u64: counts read
 /// from damaged bytes must not overflow before the length check rejects them).
@@ -79,14 +79,6 @@ fn corrupt(what: String) -> Error {
     Error::Invalid(format!("LOD DAG bytes: {what}"))
 }
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn f32_at(b: &[u8], at: usize) -> f32 {
-    f32::from_bits(u32_at(b, at))
-}
-
 impl Dag {
     /// The number of bytes [`to_bytes`](Dag::to_bytes) writes.
     pub fn encoded_len(&self) -> usize {
@@ -119,8 +111,7 @@ impl Dag {
                 b.extend_from_slice(&f.to_le_bytes());
             }
         }
-        let crc = crc32fast::hash(&b);
-        b.extend_from_slice(&crc.to_le_bytes());
+        push_crc(&mut b);
         b
     }
 
@@ -128,46 +119,18 @@ impl Dag {
     /// says what is wrong — too short, not a DAG, another version, a checksum mismatch,
     /// or content no DAG can have — never a panic, whatever the bytes.
     pub fn from_bytes(b: &[u8]) -> Result<Dag> {
-        if b.len() < HEADER_LEN {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, the header alone takes {HEADER_LEN}",
-                b.len()
-            )));
-        }
-        if b[MAGIC_OFFSET..VERSION_OFFSET] != DAG_MAGIC {
-            return Err(corrupt("not a DAG (bad magic)".into()));
-        }
-        let version = u32_at(b, VERSION_OFFSET);
-        if version != DAG_VERSION {
-            return Err(corrupt(format!(
-                "version {version}, this build reads version {DAG_VERSION}"
-            )));
-        }
+        bytes::header(b, HEADER_LEN, "a DAG", DAG_MAGIC, DAG_VERSION).map_err(corrupt)?;
         let n = u32_at(b, NODES_OFFSET) as usize;
         let s = u32_at(b, SPLITS_OFFSET);
         let e = u32_at(b, EDGES_OFFSET) as usize;
         let sec = Sections::new(n as u64, e as u64);
-        if (b.len() as u64) < sec.total {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, {n} nodes and {e} edges take {}",
-                b.len(),
-                sec.total
-            )));
-        }
-        if (b.len() as u64) > sec.total {
-            return Err(corrupt(format!(
-                "{} bytes, {n} nodes and {e} edges take {}: trailing bytes",
-                b.len(),
-                sec.total
-            )));
-        }
-        let crc_at = sec.crc as usize;
-        let (stored, actual) = (u32_at(b, crc_at), crc32fast::hash(&b[..crc_at]));
-        if stored != actual {
-            return Err(corrupt(format!(
-                "checksum mismatch (stored {stored:08x}, computed {actual:08x})"
-            )));
-        }
+        bytes::exactly(
+            b.len(),
+            sec.total,
+            format_args!("{n} nodes and {e} edges take"),
+        )
+        .map_err(corrupt)?;
+        bytes::checksum(b, sec.crc as usize).map_err(corrupt)?;
         let code = u32_at(b, CONSTRUCTION_OFFSET);
         let construction = DagConstruction::from_code(code)
             .ok_or_else(|| corrupt(format!("unknown construction {code}")))?;
@@ -247,18 +210,10 @@ impl Dag {
 
 #[cfg(test)]
 mod tests {
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-
     use super::*;
+    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::building;
     use crate::lod::ProgressiveMesh;
-
-    fn reseal(b: &mut [u8]) {
-        let at = b.len() - CRC_LEN;
-        let crc = crc32fast::hash(&b[..at]);
-        b[at..].copy_from_slice(&crc.to_le_bytes());
-    }
 
     fn building_dag() -> Dag {
         let pm = ProgressiveMesh::build(&building()).unwrap();
@@ -354,25 +309,13 @@ mod tests {
 
     #[test]
     fn random_bytes_never_panic() {
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
         let good = building_dag().to_bytes();
-        for round in 0..2000 {
-            let mut b: Vec<u8> = if round % 2 == 0 {
-                let len = rng.gen_range(0..200);
-                (0..len).map(|_| rng.gen()).collect()
-            } else {
-                let mut b = good.clone();
-                for _ in 0..rng.gen_range(1..6) {
-                    let at = rng.gen_range(0..b.len());
-                    b[at] = rng.gen();
-                }
-                b
-            };
-            if round % 4 == 1 && b.len() > 4 {
-                b[..4].copy_from_slice(&DAG_MAGIC);
-                reseal(&mut b);
-            }
-            let _ = Dag::from_bytes(&b);
-        }
+        let restore = |b: &mut [u8]| {
+            b[..4].copy_from_slice(&DAG_MAGIC);
+            reseal(b);
+        };
+        mangled(5, 2000, 200, &good, restore, |b| {
+            let _ = Dag::from_bytes(b);
+        });
     }
 }

@@ -26,6 +26,7 @@
 //!   `Database::lod_levels`, `lod_mesh` and `progressive` read them back.
 
 mod bake;
+mod bytes;
 mod chain;
 mod criteria;
 mod dag;

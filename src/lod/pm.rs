@@ -850,7 +850,9 @@ mod tests {
     use std::time::Instant;
 
     use super::*;
-    use crate::lod::fixtures::{boundary_length, building, check_exact, cube, flat_cube, grid};
+    use crate::lod::fixtures::{
+        boundary_length, building, check_exact, cube, duplicate_triangles, flat_cube, grid,
+    };
     use crate::lod::topology::Adjacency;
 
     #[test]
@@ -1078,5 +1080,37 @@ mod tests {
         m.append(&lone);
         let pm = ProgressiveMesh::build(&m).unwrap();
         check_exact(&m, &pm);
+    }
+
+    #[test]
+    fn non_manifold_edges_and_duplicate_triangles_stay_put() {
+        // A fin: a third triangle on an interior edge of a grid, standing up from it;
+        // and a triangle given twice. The fin's edge ends stay until the fin itself has
+        // collapsed away (its tip onto an end, along the fin's boundary).
+        let mut m = grid(6);
+        let (a, b) = (8u32, 9u32);
+        m.positions.push([1.5, 2.0, 1.0]);
+        m.normals.push([0.0, 0.0, 1.0]);
+        let top = m.positions.len() as u32 - 1;
+        m.indices.extend_from_slice(&[a, b, top]);
+        let first: Vec<u32> = m.indices[..3].to_vec();
+        m.indices.extend_from_slice(&first);
+        let pm = ProgressiveMesh::build(&m).unwrap();
+        check_exact(&m, &pm);
+        for k in [0, pm.splits.len() / 2, pm.splits.len()] {
+            let level = pm.cursor_at(k).unwrap().to_mesh();
+            level.validate().unwrap();
+            // The input's duplicate is kept; no collapse makes another.
+            assert!(duplicate_triangles(&level) <= 1, "level {k}");
+        }
+        let (pm2, _) = ProgressiveMesh::build_parallel(
+            &m,
+            &crate::lod::ParallelOptions {
+                leaf_triangles: 8,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        check_exact(&m, &pm2);
     }
 }

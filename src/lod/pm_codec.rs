@@ -46,6 +46,7 @@
 //! that pass are a progressive mesh that `PmCursor` and `SelectiveMesh` walk without an
 //! index check failing (those check every operator anyway; this names the damage early).
 
+use super::bytes::{self, f32_at, push_crc, u32_at, CRC_LEN};
 use super::pm::ProgressiveMesh;
 use super::vsplit::VertexSplit;
 use crate::error::{Error, Result};
@@ -79,7 +80,6 @@ const SPLIT_ADJUSTED_END: usize = SPLIT_ERROR + 4;
 const SPLIT_LEN: usize = SPLIT_ADJUSTED_END + 4;
 const FLAG_JOINS_PREVIOUS: u8 = 1;
 const NO_PIVOT: u32 = u32::MAX;
-const CRC_LEN: usize = 4;
 
 /// Where the variable sections begin (u64: counts read from damaged bytes must not
 /// overflow before the length check rejects them).
@@ -132,14 +132,6 @@ impl Sections {
 
 fn corrupt(what: String) -> Error {
     Error::Invalid(format!("progressive mesh bytes: {what}"))
-}
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn f32_at(b: &[u8], at: usize) -> f32 {
-    f32::from_bits(u32_at(b, at))
 }
 
 fn vec3_at(b: &[u8], at: usize) -> [f32; 3] {
@@ -227,8 +219,7 @@ impl ProgressiveMesh {
         {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        let crc = crc32fast::hash(&b);
-        b.extend_from_slice(&crc.to_le_bytes());
+        push_crc(&mut b);
         debug_assert_eq!(b.len() as u64, sec.total);
         Ok(b)
     }
@@ -238,21 +229,8 @@ impl ProgressiveMesh {
     /// another version, a checksum mismatch, or content no progressive mesh can have —
     /// never a panic, whatever the bytes.
     pub fn from_bytes(b: &[u8]) -> Result<ProgressiveMesh> {
-        if b.len() < HEADER_LEN {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, the header alone takes {HEADER_LEN}",
-                b.len()
-            )));
-        }
-        if b[MAGIC_OFFSET..VERSION_OFFSET] != PM_MAGIC {
-            return Err(corrupt("not a progressive mesh (bad magic)".into()));
-        }
-        let version = u32_at(b, VERSION_OFFSET);
-        if version != PM_VERSION {
-            return Err(corrupt(format!(
-                "version {version}, this build reads version {PM_VERSION}"
-            )));
-        }
+        bytes::header(b, HEADER_LEN, "a progressive mesh", PM_MAGIC, PM_VERSION)
+            .map_err(corrupt)?;
         let count = |at: usize| u32_at(b, at) as usize;
         let (nv, nt, s, a, v, t) = (
             count(BASE_VERTICES_OFFSET),
@@ -263,27 +241,8 @@ impl ProgressiveMesh {
             count(TRIANGLE_MAP_OFFSET),
         );
         let sec = Sections::new(nv as u64, nt as u64, s as u64, a as u64, v as u64, t as u64);
-        if (b.len() as u64) < sec.total {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, its counts take {}",
-                b.len(),
-                sec.total
-            )));
-        }
-        if (b.len() as u64) > sec.total {
-            return Err(corrupt(format!(
-                "{} bytes, its counts take {}: trailing bytes",
-                b.len(),
-                sec.total
-            )));
-        }
-        let crc_at = sec.crc as usize;
-        let (stored, actual) = (u32_at(b, crc_at), crc32fast::hash(&b[..crc_at]));
-        if stored != actual {
-            return Err(corrupt(format!(
-                "checksum mismatch (stored {stored:08x}, computed {actual:08x})"
-            )));
-        }
+        bytes::exactly(b.len(), sec.total, "its counts take").map_err(corrupt)?;
+        bytes::checksum(b, sec.crc as usize).map_err(corrupt)?;
         // Slots run to nv + s vertices and nt + 2s triangles: both must fit 32 bits.
         if (nv + s) as u64 >= u32::MAX as u64 || (nt + 2 * s) as u64 >= u32::MAX as u64 {
             return Err(corrupt(format!(
@@ -447,17 +406,9 @@ impl ProgressiveMesh {
 
 #[cfg(test)]
 mod tests {
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-
     use super::*;
+    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::{building, check_exact, grid};
-
-    fn reseal(b: &mut [u8]) {
-        let at = b.len() - CRC_LEN;
-        let crc = crc32fast::hash(&b[..at]);
-        b[at..].copy_from_slice(&crc.to_le_bytes());
-    }
 
     #[test]
     fn round_trips_and_refines_back_exactly() {
@@ -561,34 +512,22 @@ mod tests {
 
     #[test]
     fn random_bytes_never_panic() {
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
         let good = ProgressiveMesh::build(&grid(4))
             .unwrap()
             .to_bytes()
             .unwrap();
-        for round in 0..3000 {
-            let mut b: Vec<u8> = if round % 2 == 0 {
-                let len = rng.gen_range(0..300);
-                (0..len).map(|_| rng.gen()).collect()
-            } else {
-                let mut b = good.clone();
-                for _ in 0..rng.gen_range(1..6) {
-                    let at = rng.gen_range(0..b.len());
-                    b[at] = rng.gen();
-                }
-                b
-            };
-            if round % 4 == 1 && b.len() > HEADER_LEN {
-                b[..4].copy_from_slice(&PM_MAGIC);
-                b[4..8].copy_from_slice(&PM_VERSION.to_le_bytes());
-                reseal(&mut b);
-            }
-            if let Ok(pm) = ProgressiveMesh::from_bytes(&b) {
+        let restore = |b: &mut [u8]| {
+            b[..4].copy_from_slice(&PM_MAGIC);
+            b[4..8].copy_from_slice(&PM_VERSION.to_le_bytes());
+            reseal(b);
+        };
+        mangled(11, 3000, 300, &good, restore, |b| {
+            if let Ok(pm) = ProgressiveMesh::from_bytes(b) {
                 // Whatever passes the checks can be walked without a panic.
                 if let Ok(mut cursor) = pm.cursor() {
                     while let Ok(true) = cursor.refine() {}
                 }
             }
-        }
+        });
     }
 }

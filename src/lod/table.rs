@@ -47,6 +47,7 @@
 
 use std::sync::{Arc, OnceLock};
 
+use super::bytes::{self, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 use crate::error::{Error, Result};
 use crate::store::{Extent, PageKind, Segment, Store};
 
@@ -74,7 +75,6 @@ const RATIO_OFFSET: usize = REFUSED_OFFSET + 8;
 const MIN_TRIANGLES_OFFSET: usize = RATIO_OFFSET + 4;
 const PM_THRESHOLD_OFFSET: usize = MIN_TRIANGLES_OFFSET + 4;
 const FENCE_OFFSET: usize = PM_THRESHOLD_OFFSET + 8;
-const CRC_LEN: usize = 4;
 
 const ID_AT: usize = 0;
 const MESH_AT: usize = ID_AT + 8;
@@ -130,16 +130,6 @@ pub struct LodStats {
 
 fn corrupt(what: String) -> Error {
     Error::Invalid(format!("LOD table: {what}"))
-}
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    let mut w = [0u8; 8];
-    w.copy_from_slice(&b[at..at + 8]);
-    u64::from_le_bytes(w)
 }
 
 fn extent_at(b: &[u8], at: usize) -> Extent {
@@ -254,8 +244,7 @@ pub(crate) fn encode_table(
     for page in entries.chunks(per_page as usize) {
         b.extend_from_slice(&page[0].id.to_le_bytes());
     }
-    let crc = crc32fast::hash(&b);
-    b.extend_from_slice(&crc.to_le_bytes());
+    push_crc(&mut b);
     if n > 0 {
         b.resize(head_pages as usize * payload, 0);
         for page in entries.chunks(per_page as usize) {
@@ -437,22 +426,14 @@ impl LodTable {
         let payload = store.payload_size();
         let total = self.extent.byte_len as usize;
         let mut b = self.read(store, 0, total.min(payload))?;
-        if b.len() < FENCE_OFFSET {
+        if b.len() < FENCE_OFFSET + CRC_LEN {
             return Err(corrupt(format!(
                 "truncated: {} bytes, the head alone takes {}",
                 b.len(),
                 FENCE_OFFSET + CRC_LEN
             )));
         }
-        if b[MAGIC_OFFSET..VERSION_OFFSET] != TABLE_MAGIC {
-            return Err(corrupt("not a LOD table (bad magic)".into()));
-        }
-        let version = u32_at(&b, VERSION_OFFSET);
-        if version != TABLE_VERSION {
-            return Err(corrupt(format!(
-                "version {version}, this build reads version {TABLE_VERSION}"
-            )));
-        }
+        bytes::magic_and_version(&b, "a LOD table", TABLE_MAGIC, TABLE_VERSION).map_err(corrupt)?;
         let entries = u64_at(&b, ENTRIES_OFFSET);
         let (per_page, entry_pages, head_pages) = shape(entries, payload);
         let stored = (
@@ -482,13 +463,7 @@ impl LodTable {
         if len > b.len() {
             b.extend(self.read(store, b.len(), len - b.len())?);
         }
-        let crc_at = len - CRC_LEN;
-        let (stored, actual) = (u32_at(&b, crc_at), crc32fast::hash(&b[..crc_at]));
-        if stored != actual {
-            return Err(corrupt(format!(
-                "head checksum mismatch (stored {stored:08x}, computed {actual:08x})"
-            )));
-        }
+        bytes::checksum(&b, len - CRC_LEN).map_err(|w| corrupt(format!("head {w}")))?;
         let fence: Vec<u64> = (0..entry_pages as usize)
             .map(|k| u64_at(&b, FENCE_OFFSET + 8 * k))
             .collect();
@@ -502,7 +477,7 @@ impl LodTable {
             with_pm: u64_at(&b, WITH_PM_OFFSET),
             refused: u64_at(&b, REFUSED_OFFSET),
             pages: self.pages,
-            ratio: f32::from_bits(u32_at(&b, RATIO_OFFSET)),
+            ratio: f32_at(&b, RATIO_OFFSET),
             min_triangles: u32_at(&b, MIN_TRIANGLES_OFFSET),
             pm_threshold: u64_at(&b, PM_THRESHOLD_OFFSET),
         };
