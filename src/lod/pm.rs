@@ -282,26 +282,30 @@ impl Setup {
     pub(super) fn of(mesh: &Mesh) -> Setup {
         let adj = Adjacency::new(mesh);
         // The boundary's sort and the triangles' quadrics are apart until the end.
-        let (boundary, (mut quadrics, locked, face_normals)) = rayon::join(
+        let (boundary, faces) = rayon::join(
             || adj.boundary_edges(),
             || {
-                let np = adj.position_count();
-                let mut quadrics = vec![Quadric::default(); np];
-                let mut locked = vec![false; np];
-                let mut face_normals = Vec::with_capacity(adj.faces.len());
-                for f in 0..adj.faces.len() as u32 {
-                    let [a, b, c] = adj.corner_coords(f);
-                    let q = Quadric::triangle(a, b, c);
-                    let pinched = adj.is_pinched(f);
-                    for p in adj.corner_positions(f) {
-                        quadrics[p as usize] += q;
-                        locked[p as usize] |= pinched;
-                    }
-                    face_normals.push((b - a).cross(c - a).normalize_or_zero());
-                }
-                (quadrics, locked, face_normals)
+                (0..adj.faces.len() as u32)
+                    .into_par_iter()
+                    .map(|f| {
+                        let [a, b, c] = adj.corner_coords(f);
+                        let normal = (b - a).cross(c - a).normalize_or_zero();
+                        (Quadric::triangle(a, b, c), normal)
+                    })
+                    .collect::<Vec<_>>()
             },
         );
+        let np = adj.position_count();
+        let mut quadrics = vec![Quadric::default(); np];
+        let mut locked = vec![false; np];
+        for (f, (q, _)) in faces.iter().enumerate() {
+            let pinched = adj.is_pinched(f as u32);
+            for p in adj.corner_positions(f as u32) {
+                quadrics[p as usize] += *q;
+                locked[p as usize] |= pinched;
+            }
+        }
+        let face_normals: Vec<DVec3> = faces.into_iter().map(|(_, n)| n).collect();
         for (a, b, f) in boundary {
             let q = Quadric::boundary_edge(
                 adj.coords[a as usize],

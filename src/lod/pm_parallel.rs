@@ -168,12 +168,15 @@ impl ProgressiveMesh {
                 while !pending.is_empty() {
                     let parts: Vec<(Part, Duration, usize)> = pending
                         .par_iter()
+                        // One cell a task, so that a thread out of work steals cells.
+                        .with_max_len(1)
                         .map(|cell| timed(|| Part::extract(&state, cell, max_edge)))
                         .collect();
                     let (run, wait) = state.claim(parts, &pending);
                     lr.deferred += wait.len();
                     let done: Vec<(Done, Duration, usize)> = run
                         .into_par_iter()
+                        .with_max_len(1)
                         .map(|(part, t, thread)| {
                             let (done, t2, _) = timed(|| part.simplify());
                             (done, t + t2, thread)
