@@ -22,7 +22,7 @@ use super::dag::Dag;
 use super::fronts::{Fronts, Pass};
 use super::mesh_update::{CompactMesh, MeshChanges};
 use super::pm::ProgressiveMesh;
-use super::traversal::{manage, Context, Op, PassStats, Traversal};
+use super::traversal::{manage, Context, Op, PassStats, Scratch, Traversal};
 use crate::error::{Error, Result};
 
 /// The screen-space error threshold of the thesis's experiments: 0.1 % of the viewport
@@ -179,7 +179,7 @@ pub struct Refiner<'a> {
     fronts: Fronts,
     mesh: CompactMesh,
     ops: Vec<Op>,
-    heap: Vec<u64>,
+    scratch: Scratch,
 }
 
 impl<'a> Refiner<'a> {
@@ -224,7 +224,7 @@ impl<'a> Refiner<'a> {
             fronts: Fronts::new(dag),
             mesh,
             ops: Vec::new(),
-            heap: Vec::new(),
+            scratch: Scratch::default(),
         })
     }
 
@@ -250,7 +250,7 @@ impl<'a> Refiner<'a> {
             &mut self.fronts,
             self.mesh.triangle_count(),
             &mut self.ops,
-            &mut self.heap,
+            &mut self.scratch,
         );
         let traversal = started.elapsed();
 

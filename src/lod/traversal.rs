@@ -28,9 +28,11 @@
 //!   priority orders every such node before every node that does not (module comment
 //!   of `criteria`), so Fig. 4.7's loop, which stops at the first node that needs none,
 //!   pops exactly these nodes in the same order.
-//! - The linear and constant-time traversals also stop when they have evaluated the
-//!   whole front since their last operator (Fig. 4.8, line 11): the view is the same
-//!   for the whole frame, so evaluating the front again would change nothing.
+//! - The linear traversal evaluates each front member once a pass and stops when all
+//!   have been (Fig. 4.8, line 11, and its O(n) bound): the view is the same for the
+//!   whole frame, so evaluating a member again would change nothing. The constant-time
+//!   traversal, bounded by its evaluations, stops when it has evaluated the whole front
+//!   since its last operator.
 //! - Priority ties break on the lower node number, so a frame is deterministic.
 
 use std::collections::BinaryHeap;
@@ -117,16 +119,43 @@ impl Context<'_> {
     }
 }
 
+/// Buffers a traversal reuses from frame to frame.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Scratch {
+    /// The priority-oriented traversal's heap.
+    heap: Vec<u64>,
+    /// The linear traversal's marks: a node evaluated in the current pass holds `stamp`.
+    seen: Vec<u32>,
+    stamp: u32,
+}
+
+impl Scratch {
+    /// Starts a pass over a DAG of `nodes` nodes: no node seen yet.
+    fn begin(&mut self, nodes: usize) {
+        self.seen.resize(nodes, 0);
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.seen.fill(0);
+            self.stamp = 1;
+        }
+    }
+
+    /// Marks `node` seen in this pass; whether it already was.
+    fn mark(&mut self, node: u32) -> bool {
+        std::mem::replace(&mut self.seen[node as usize], self.stamp) == self.stamp
+    }
+}
+
 /// MANAGE-TRAVERSAL (Fig. 4.6) for a mesh of `triangles`: the collapse pass, then the
 /// split pass, each bounded by N; in budget mode the split pass adds at most what the
-/// budget leaves. Appends the operators to `ops`; `heap` is scratch the caller keeps
+/// budget leaves. Appends the operators to `ops`; `scratch` is kept by the caller
 /// between frames.
 pub(crate) fn manage(
     ctx: &Context,
     fronts: &mut Fronts,
     triangles: usize,
     ops: &mut Vec<Op>,
-    heap: &mut Vec<u64>,
+    heap: &mut Scratch,
 ) -> (PassStats, PassStats) {
     let collapse = traverse(ctx, fronts, Pass::Collapse, usize::MAX, ops, heap);
     let after = triangles.saturating_sub(collapse.triangles);
@@ -142,11 +171,12 @@ fn traverse(
     pass: Pass,
     room: usize,
     ops: &mut Vec<Op>,
-    heap: &mut Vec<u64>,
+    scratch: &mut Scratch,
 ) -> PassStats {
     match ctx.traversal {
-        Traversal::Priority => priority_pass(ctx, fronts, pass, room, ops, heap),
-        Traversal::Linear | Traversal::ConstantTime => fifo_pass(ctx, fronts, pass, room, ops),
+        Traversal::Priority => priority_pass(ctx, fronts, pass, room, ops, &mut scratch.heap),
+        Traversal::Linear => linear_pass(ctx, fronts, pass, room, ops, scratch),
+        Traversal::ConstantTime => fifo_pass(ctx, fronts, pass, room, ops),
     }
 }
 
@@ -269,6 +299,57 @@ fn fifo_pass(
         stats.applied += 1;
         stats.triangles += t;
         idle = 0;
+    }
+    stats
+}
+
+/// LINEAR-TRAVERSAL (Fig. 4.8): the front in FIFO order until N operators, each
+/// member evaluated once a pass. The view is fixed for the pass, so a member found
+/// needing nothing needs nothing until the next frame: it is passed over (kept in its
+/// place in the queue) rather than evaluated again, and the pass ends when every
+/// member, those the pass brought into the front included, has been evaluated — line
+/// 11's "all the front nodes have been traversed", and the thesis's O(n) bound.
+fn linear_pass(
+    ctx: &Context,
+    fronts: &mut Fronts,
+    pass: Pass,
+    room: usize,
+    ops: &mut Vec<Op>,
+    scratch: &mut Scratch,
+) -> PassStats {
+    scratch.begin(ctx.dag.node_count());
+    let mut stats = PassStats::default();
+    // Members not yet evaluated this pass.
+    let mut unseen = fronts.front_len(pass);
+    // Members passed over since the last evaluation: a guard against a miscount.
+    let mut skipped = 0;
+    while stats.applied < ctx.max_work && unseen > 0 && skipped <= fronts.front_len(pass) {
+        let Some(node) = fronts.pop(pass) else { break };
+        if scratch.mark(node) {
+            fronts.requeue(pass, node, true);
+            skipped += 1;
+            continue;
+        }
+        skipped = 0;
+        unseen -= 1;
+        stats.evaluated += 1;
+        let (needs, _) = ctx.needs(pass, node);
+        if !needs {
+            fronts.requeue(pass, node, true);
+            continue;
+        }
+        let t = ctx.added[node as usize] as usize;
+        if pass == Pass::Split && t > room - stats.triangles {
+            fronts.requeue(pass, node, false);
+            break;
+        }
+        let before = fronts.front_len(pass);
+        fronts.apply(ctx.dag, pass, node);
+        // The node left the front; the rest of the change is members it brought in.
+        unseen += (fronts.front_len(pass) + 1).saturating_sub(before);
+        ops.push(Op { node, pass });
+        stats.applied += 1;
+        stats.triangles += t;
     }
     stats
 }
