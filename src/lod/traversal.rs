@@ -155,12 +155,12 @@ pub(crate) fn manage(
     fronts: &mut Fronts,
     triangles: usize,
     ops: &mut Vec<Op>,
-    heap: &mut Scratch,
+    scratch: &mut Scratch,
 ) -> (PassStats, PassStats) {
-    let collapse = traverse(ctx, fronts, Pass::Collapse, usize::MAX, ops, heap);
+    let collapse = traverse(ctx, fronts, Pass::Collapse, usize::MAX, ops, scratch);
     let after = triangles.saturating_sub(collapse.triangles);
     let room = ctx.budget.map_or(usize::MAX, |b| b.saturating_sub(after));
-    let split = traverse(ctx, fronts, Pass::Split, room, ops, heap);
+    let split = traverse(ctx, fronts, Pass::Split, room, ops, scratch);
     (collapse, split)
 }
 
@@ -176,7 +176,7 @@ fn traverse(
     match ctx.traversal {
         Traversal::Priority => priority_pass(ctx, fronts, pass, room, ops, &mut scratch.heap),
         Traversal::Linear => linear_pass(ctx, fronts, pass, room, ops, scratch),
-        Traversal::ConstantTime => fifo_pass(ctx, fronts, pass, room, ops),
+        Traversal::ConstantTime => constant_time_pass(ctx, fronts, pass, room, ops),
     }
 }
 
@@ -210,6 +210,28 @@ fn neighbours(dag: &Dag, pass: Pass, node: u32) -> &[u32] {
     }
 }
 
+/// Applies `node`'s operator and records it in `ops` and `stats`, unless it is a split
+/// that needs more triangles than `room` has left: then `false`, and nothing changes.
+fn apply_within(
+    ctx: &Context,
+    fronts: &mut Fronts,
+    pass: Pass,
+    node: u32,
+    room: usize,
+    ops: &mut Vec<Op>,
+    stats: &mut PassStats,
+) -> bool {
+    let t = ctx.added[node as usize] as usize;
+    if pass == Pass::Split && t > room - stats.triangles {
+        return false;
+    }
+    fronts.apply(ctx.dag, pass, node);
+    ops.push(Op { node, pass });
+    stats.applied += 1;
+    stats.triangles += t;
+    true
+}
+
 /// PRIORITY-ORIENTED-TRAVERSAL (Fig. 4.7).
 fn priority_pass(
     ctx: &Context,
@@ -237,14 +259,9 @@ fn priority_pass(
         if !fronts.in_front(pass, node) {
             continue;
         }
-        let t = ctx.added[node as usize] as usize;
-        if pass == Pass::Split && t > room - stats.triangles {
+        if !apply_within(ctx, fronts, pass, node, room, ops, &mut stats) {
             break;
         }
-        fronts.apply(ctx.dag, pass, node);
-        ops.push(Op { node, pass });
-        stats.applied += 1;
-        stats.triangles += t;
         for &m in neighbours(ctx.dag, pass, node) {
             if fronts.in_front(pass, m) {
                 stats.evaluated += 1;
@@ -259,28 +276,18 @@ fn priority_pass(
     stats
 }
 
-/// LINEAR-TRAVERSAL (Fig. 4.8) and CONSTANT-TIME-TRAVERSAL (Fig. 4.9): they differ
-/// only in what N counts.
-fn fifo_pass(
+/// CONSTANT-TIME-TRAVERSAL (Fig. 4.9): the front in FIFO order until N evaluations.
+fn constant_time_pass(
     ctx: &Context,
     fronts: &mut Fronts,
     pass: Pass,
     room: usize,
     ops: &mut Vec<Op>,
 ) -> PassStats {
-    let by_evaluations = ctx.traversal == Traversal::ConstantTime;
     let mut stats = PassStats::default();
     // Nodes evaluated since the last operator.
     let mut idle = 0;
-    loop {
-        let work = if by_evaluations {
-            stats.evaluated
-        } else {
-            stats.applied
-        };
-        if work >= ctx.max_work || idle >= fronts.front_len(pass) {
-            break;
-        }
+    while stats.evaluated < ctx.max_work && idle < fronts.front_len(pass) {
         let Some(node) = fronts.pop(pass) else { break };
         stats.evaluated += 1;
         let (needs, _) = ctx.needs(pass, node);
@@ -289,15 +296,10 @@ fn fifo_pass(
             idle += 1;
             continue;
         }
-        let t = ctx.added[node as usize] as usize;
-        if pass == Pass::Split && t > room - stats.triangles {
+        if !apply_within(ctx, fronts, pass, node, room, ops, &mut stats) {
             fronts.requeue(pass, node, false);
             break;
         }
-        fronts.apply(ctx.dag, pass, node);
-        ops.push(Op { node, pass });
-        stats.applied += 1;
-        stats.triangles += t;
         idle = 0;
     }
     stats
@@ -338,18 +340,13 @@ fn linear_pass(
             fronts.requeue(pass, node, true);
             continue;
         }
-        let t = ctx.added[node as usize] as usize;
-        if pass == Pass::Split && t > room - stats.triangles {
+        let before = fronts.front_len(pass);
+        if !apply_within(ctx, fronts, pass, node, room, ops, &mut stats) {
             fronts.requeue(pass, node, false);
             break;
         }
-        let before = fronts.front_len(pass);
-        fronts.apply(ctx.dag, pass, node);
         // The node left the front; the rest of the change is members it brought in.
         unseen += (fronts.front_len(pass) + 1).saturating_sub(before);
-        ops.push(Op { node, pass });
-        stats.applied += 1;
-        stats.triangles += t;
     }
     stats
 }
