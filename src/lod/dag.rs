@@ -323,7 +323,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::lod::fixtures::{building, random_patch};
+    use crate::lod::fixtures::{building, check_full_mesh, random_patch};
     use crate::lod::NO_TRIANGLE;
     use citygen::Mesh;
 
@@ -383,31 +383,6 @@ mod tests {
         m
     }
 
-    /// The full mesh equals the original through the renumbering.
-    fn check_original(original: &Mesh, pm: &ProgressiveMesh, mesh: &SelectiveMesh) {
-        assert_eq!(mesh.triangle_count(), original.triangle_count());
-        for (t, tri) in original.indices.chunks_exact(3).enumerate() {
-            let expected = [tri[0], tri[1], tri[2]].map(|v| pm.vertex_map[v as usize]);
-            assert_eq!(
-                mesh.slots()[pm.triangle_map[t] as usize],
-                expected,
-                "triangle {t}"
-            );
-        }
-        for (v, &n) in pm.vertex_map.iter().enumerate() {
-            assert_eq!(
-                mesh.positions()[n as usize],
-                original.positions[v],
-                "vertex {v}"
-            );
-            assert_eq!(
-                mesh.normals()[n as usize],
-                original.normals[v],
-                "vertex {v}"
-            );
-        }
-    }
-
     /// `orders` random topological orders, node by node from the base mesh: every
     /// split legal, every state clean (checked every `every` steps), the end the
     /// original.
@@ -438,7 +413,7 @@ mod tests {
             }
             assert_eq!(step, n, "seed {seed}: some nodes never became ready");
             check_state(dag, pm, &applied, &mesh);
-            check_original(original, pm, &mesh);
+            check_full_mesh(original, pm, &mesh);
         }
     }
 
