@@ -4,6 +4,8 @@
 
 mod common;
 
+use common::flaneur;
+
 use flaneur::bench::cell_size::{self, CellSizeConfig};
 use flaneur::bench::db_size::{self, DbSizeConfig};
 use flaneur::bench::frame_time::{self, FrameTimeConfig};
@@ -604,12 +606,6 @@ fn csearch_command_writes_every_figure() {
             ..Default::default()
         },
     );
-    let flaneur = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))
-            .args(args)
-            .output()
-            .unwrap()
-    };
     let db = c.db.to_str().unwrap();
     let dir = c.dir.path().join("bench");
     let d = dir.to_str().unwrap();

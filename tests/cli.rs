@@ -2,16 +2,9 @@
 
 mod common;
 
-use std::process::Command;
+use common::flaneur;
 
 use flaneur::BuildOptions;
-
-fn flaneur(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_flaneur"))
-        .args(args)
-        .output()
-        .unwrap()
-}
 
 #[test]
 fn build_info_query() {

@@ -4,9 +4,10 @@
 
 mod common;
 
+use common::flaneur;
+
 use std::os::unix::fs::FileExt;
 use std::path::Path;
-use std::process::Command;
 
 use flaneur::lod::{LodOptions, ProgressiveMesh};
 use flaneur::store::{PageKind, PAGE_HEADER_LEN};
@@ -334,13 +335,6 @@ fn inserted_objects_have_no_lods_and_the_others_keep_theirs() {
     assert!(db.lod_levels(1_000).unwrap().is_none());
     let levels = db.lod_levels(3).unwrap().unwrap();
     db.lod_mesh(3, levels.len() - 1).unwrap();
-}
-
-fn flaneur(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_flaneur"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 #[test]

@@ -7,6 +7,14 @@ use std::path::PathBuf;
 use flaneur::geom::Aabb;
 use flaneur::BuildOptions;
 
+/// Runs the `flaneur` binary this test run built, with `args`; its whole output.
+pub fn flaneur(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 pub struct City {
     pub dir: tempfile::TempDir,
     pub scene: PathBuf,
