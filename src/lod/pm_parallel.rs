@@ -101,6 +101,13 @@ pub struct ParallelReport {
 }
 
 impl ParallelReport {
+    /// Counts `t` of work to rayon thread `thread`.
+    fn add_busy(&mut self, thread: usize, t: Duration) {
+        if let Some(b) = self.busy.get_mut(thread) {
+            *b += t;
+        }
+    }
+
     /// The paper's load imbalance: the busiest thread's time over the mean, less one.
     pub fn imbalance(&self) -> f64 {
         let busy: Vec<f64> = self.busy.iter().map(Duration::as_secs_f64).collect();
@@ -172,20 +179,18 @@ impl ProgressiveMesh {
                         .with_max_len(1)
                         .map(|cell| timed(|| Part::extract(&state, cell, max_edge)))
                         .collect();
-                    let (run, wait) = state.claim(parts, &pending);
+                    for (_, t, thread) in &parts {
+                        report.add_busy(*thread, *t);
+                    }
+                    let (run, wait) = state.claim(parts.into_iter().map(|p| p.0), &pending);
                     lr.deferred += wait.len();
                     let done: Vec<(Done, Duration, usize)> = run
                         .into_par_iter()
                         .with_max_len(1)
-                        .map(|(part, t, thread)| {
-                            let (done, t2, _) = timed(|| part.simplify());
-                            (done, t + t2, thread)
-                        })
+                        .map(|part| timed(|| part.simplify()))
                         .collect();
                     for (done, t, thread) in done {
-                        if let Some(b) = report.busy.get_mut(thread) {
-                            *b += t;
-                        }
+                        report.add_busy(thread, t);
                         state.merge(done);
                     }
                     pending = wait;
@@ -363,14 +368,13 @@ impl<'a> State<'a> {
         }
     }
 
-    /// Splits `parts` into those that can run together (their positions disjoint from
-    /// every earlier part's) and the cells that must wait.
-    #[allow(clippy::type_complexity)]
+    /// Splits `parts` (of `cells`, in order) into those that can run together (their
+    /// first rings disjoint from every earlier part's) and the cells that must wait.
     fn claim<'c>(
         &mut self,
-        parts: Vec<(Part, Duration, usize)>,
+        parts: impl IntoIterator<Item = Part>,
         cells: &[&'c Cell],
-    ) -> (Vec<(Part, Duration, usize)>, Vec<&'c Cell>) {
+    ) -> (Vec<Part>, Vec<&'c Cell>) {
         self.generation += 1;
         if self.generation == u32::MAX {
             self.claims.fill(0);
@@ -379,11 +383,11 @@ impl<'a> State<'a> {
         let g = self.generation;
         let (mut run, mut wait) = (Vec::new(), Vec::new());
         for (part, &cell) in parts.into_iter().zip(cells) {
-            if part.0.ring1.iter().any(|&p| self.claims[p as usize] == g) {
+            if part.ring1.iter().any(|&p| self.claims[p as usize] == g) {
                 wait.push(cell);
                 continue;
             }
-            for &p in &part.0.ring1 {
+            for &p in &part.ring1 {
                 self.claims[p as usize] = g;
             }
             run.push(part);
