@@ -335,8 +335,6 @@ struct Part {
     faces: Vec<u32>,
     /// Local position → the mesh's.
     positions: Vec<u32>,
-    /// Local positions whose every triangle is in the copy (ring 1's corners).
-    complete: Vec<bool>,
     /// The mesh's positions that are ring 1's corners: all whose triangles or quadrics
     /// a collapse in the cell can change, and all whose triangles it reads.
     ring1: Vec<u32>,
@@ -479,10 +477,6 @@ impl Part {
             .iter()
             .map(|p| cell.positions.binary_search(p).is_ok())
             .collect();
-        let complete = positions
-            .iter()
-            .map(|p| r1.binary_search(p).is_ok())
-            .collect();
         Part {
             mesh,
             setup,
@@ -493,7 +487,6 @@ impl Part {
             wedges,
             faces,
             positions,
-            complete,
             ring1: r1,
         }
     }
@@ -506,19 +499,20 @@ impl Part {
             wedges,
             faces,
             positions,
-            complete,
-            ring1: _,
+            ring1,
         } = self;
-        let before: Vec<[u32; 3]> = setup.adj.faces.clone();
         let mut s = Simplifier::new(&mesh, setup, domain);
         s.run();
         let (w, f) = (|v: u32| wedges[v as usize], |t: u32| faces[t as usize]);
+        // The copy's mesh keeps the corners the triangles had before.
+        let before = |lf: usize| &mesh.indices[3 * lf..3 * lf + 3];
         let changed = (0..faces.len())
-            .filter(|&lf| !s.adj.alive[lf] || s.adj.faces[lf] != before[lf])
+            .filter(|&lf| !s.adj.alive[lf] || s.adj.faces[lf][..] != *before(lf))
             .map(|lf| (faces[lf], s.adj.faces[lf].map(w), s.adj.alive[lf]))
             .collect();
         let whole = (0..positions.len())
-            .filter(|&lp| complete[lp])
+            // Ring 1's corners: the positions whose every triangle the copy holds.
+            .filter(|&lp| ring1.binary_search(&positions[lp]).is_ok())
             .map(|lp| {
                 let list = s.adj.face_lists[lp].iter().map(|&t| f(t)).collect();
                 (positions[lp], list, s.quadrics[lp])
