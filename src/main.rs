@@ -85,11 +85,11 @@ enum Command {
         /// Write level-0.obj (the original), level-1.obj, … here.
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Triangles of each level over the one before.
-        #[arg(long, default_value_t = 0.5)]
+        /// Triangles of each level over the one before (as `build` stores them).
+        #[arg(long, default_value_t = flaneur::lod::LodOptions::default().ratio)]
         ratio: f32,
         /// Stop the chain of levels at this many triangles.
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, default_value_t = flaneur::lod::LodOptions::default().min_triangles)]
         min_triangles: usize,
         /// Refine view-dependently for one view instead.
         #[arg(long)]
