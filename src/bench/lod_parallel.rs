@@ -165,17 +165,17 @@ pub fn run(
     let mut models = Vec::new();
     for &n in &cfg.triangles {
         let mesh = bumpy_torus(n);
+        let one = pool(1)?;
         let (serial_seconds, serial) = median_of(cfg.repeats, || {
-            in_pool(1, || ProgressiveMesh::build(&mesh))?.map(|pm| (pm, ()))
+            one.install(|| ProgressiveMesh::build(&mesh))
         })?;
         step();
         let mut runs = Vec::new();
         let mut first: Option<ProgressiveMesh> = None;
         for &threads in &cfg.threads {
+            let pool = pool(threads)?;
             let (seconds, (pm, report)) = median_of(cfg.repeats, || {
-                in_pool(threads, || {
-                    ProgressiveMesh::build_parallel(&mesh, &cfg.options)
-                })?
+                pool.install(|| ProgressiveMesh::build_parallel(&mesh, &cfg.options))
             })?;
             step();
             match &first {
@@ -197,7 +197,7 @@ pub fn run(
         models.push(ModelRow {
             triangles: mesh.triangle_count(),
             serial_seconds,
-            serial_base: serial.0.base.triangle_count(),
+            serial_base: serial.base.triangle_count(),
             parallel_base: first.map_or(0, |pm| pm.base.triangle_count()),
             runs,
         });
@@ -214,9 +214,8 @@ pub fn run(
             .collect::<std::result::Result<_, _>>()?;
         let triangles = meshes.iter().map(|m| m.triangle_count() as u64).sum();
         for &threads in &cfg.threads {
-            let (seconds, _) = median_of(cfg.repeats, || {
-                in_pool(threads, || simplify_all(&meshes))?.map(|pms| (pms.len(), ()))
-            })?;
+            let pool = pool(threads)?;
+            let (seconds, _) = median_of(cfg.repeats, || pool.install(|| simplify_all(&meshes)))?;
             step();
             throughput.push(ThroughputRow {
                 threads,
@@ -233,18 +232,17 @@ pub fn run(
     })
 }
 
-/// Runs `f` in a rayon pool of exactly `threads` threads.
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> Result<T> {
-    let pool = rayon::ThreadPoolBuilder::new()
+/// A rayon pool of exactly `threads` threads, made before any timing starts.
+fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| Error::Invalid(format!("lod-parallel: no pool of {threads} threads: {e}")))?;
-    Ok(pool.install(f))
+        .map_err(|e| Error::Invalid(format!("lod-parallel: no pool of {threads} threads: {e}")))
 }
 
 /// Runs `f` `repeats` times; the median time, with the output of the run that took it.
-fn median_of<A, B>(repeats: usize, mut f: impl FnMut() -> Result<(A, B)>) -> Result<(f64, (A, B))> {
-    let mut runs: Vec<(Duration, (A, B))> = Vec::with_capacity(repeats);
+fn median_of<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
+    let mut runs: Vec<(Duration, T)> = Vec::with_capacity(repeats);
     for _ in 0..repeats.max(1) {
         let started = Instant::now();
         let out = f()?;
