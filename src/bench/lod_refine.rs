@@ -547,6 +547,12 @@ mod tests {
         cfg.orbit.max_work = 200;
         let r = run(&cfg).unwrap();
         assert_eq!(r.runs.len(), 2);
+        // Runs that selected different meshes are not merged.
+        let mut best = r.runs[0].orbit.clone();
+        let mut other = best.clone();
+        other.frames[3].stats[1].triangles += 1;
+        let e = keep_fastest(&mut best, &other).unwrap_err().to_string();
+        assert!(e.contains("frame 3"), "{e}");
         let budget = cfg.orbit.budget.unwrap();
         for run in &r.runs {
             assert_eq!(run.orbit.frames.len(), 12);
@@ -590,6 +596,10 @@ mod tests {
         let bad = |cfg: LodRefineConfig| matches!(run(&cfg), Err(Error::Invalid(_)));
         assert!(bad(LodRefineConfig {
             frames: 0,
+            ..d.clone()
+        }));
+        assert!(bad(LodRefineConfig {
+            repeats: 0,
             ..d.clone()
         }));
         assert!(bad(LodRefineConfig {
