@@ -15,6 +15,7 @@
 use std::collections::VecDeque;
 
 use super::dag::Dag;
+use super::prefetch_hint::prefetch;
 
 const SPLIT: u8 = 1;
 const QUEUED_S: u8 = 2;
@@ -162,6 +163,21 @@ impl Fronts {
                 return Some(node);
             }
         }
+    }
+
+    /// The entry `ahead` places behind the head of `pass`'s queue, perhaps stale: the
+    /// node a pass will pop soon, whose data it may prefetch.
+    pub(crate) fn upcoming(&self, pass: Pass, ahead: usize) -> Option<u32> {
+        match pass {
+            Pass::Split => self.queue_s.get(ahead).copied(),
+            Pass::Collapse => self.queue_c.get(ahead).copied(),
+        }
+    }
+
+    /// Prefetches `node`'s status and counter, which popping it reads.
+    pub(crate) fn prefetch_status(&self, node: u32) {
+        prefetch(&self.flags[node as usize]);
+        prefetch(&self.counter[node as usize]);
     }
 
     /// Queues `node` at the back (`back`) or the front of `pass`'s queue, unless it is

@@ -44,6 +44,7 @@ mod mesh_update;
 mod pm;
 mod pm_codec;
 mod pm_parallel;
+mod prefetch_hint;
 mod quadric;
 mod refine;
 mod refine_bench;

@@ -40,6 +40,7 @@ use std::collections::BinaryHeap;
 use super::criteria::{Evaluation, NodeGeometry, ViewTest};
 use super::dag::Dag;
 use super::fronts::{Fronts, Pass};
+use super::prefetch_hint::{self, prefetch};
 
 /// The traversal algorithm (Zheng 2007 §4.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -105,6 +106,15 @@ pub(crate) struct Context<'a> {
 }
 
 impl Context<'_> {
+    /// Prefetches what evaluating the node [`prefetch_hint::DISTANCE`] places down
+    /// `pass`'s queue reads: its geometry and its status.
+    fn prefetch_upcoming(&self, fronts: &Fronts, pass: Pass) {
+        if let Some(node) = fronts.upcoming(pass, prefetch_hint::DISTANCE) {
+            prefetch(&self.nodes[node as usize]);
+            fronts.prefetch_status(node);
+        }
+    }
+
     fn evaluate(&self, node: u32) -> Evaluation {
         self.test.evaluate(&self.nodes[node as usize])
     }
@@ -243,7 +253,11 @@ fn priority_pass(
 ) -> PassStats {
     let mut stats = PassStats::default();
     scratch.clear();
-    for &node in fronts.compact(pass) {
+    let front = fronts.compact(pass);
+    for (i, &node) in front.iter().enumerate() {
+        if let Some(&next) = front.get(i + prefetch_hint::DISTANCE) {
+            prefetch(&ctx.nodes[next as usize]);
+        }
         stats.evaluated += 1;
         let (needs, e) = ctx.needs(pass, node);
         if needs {
@@ -288,6 +302,7 @@ fn constant_time_pass(
     // Nodes evaluated since the last operator.
     let mut idle = 0;
     while stats.evaluated < ctx.max_work && idle < fronts.front_len(pass) {
+        ctx.prefetch_upcoming(fronts, pass);
         let Some(node) = fronts.pop(pass) else { break };
         stats.evaluated += 1;
         let (needs, _) = ctx.needs(pass, node);
@@ -326,6 +341,7 @@ fn linear_pass(
     // Members passed over since the last evaluation: a guard against a miscount.
     let mut skipped = 0;
     while stats.applied < ctx.max_work && unseen > 0 && skipped <= fronts.front_len(pass) {
+        ctx.prefetch_upcoming(fronts, pass);
         let Some(node) = fronts.pop(pass) else { break };
         if scratch.mark(node) {
             fronts.requeue(pass, node, true);
