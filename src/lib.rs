@@ -35,6 +35,7 @@ pub mod lod;
 pub mod rtree;
 pub mod scene;
 pub mod store;
+pub mod visibility;
 pub mod walk;
 
 pub use build::{build_from_obj, build_from_scene, BuildOptions, BuildSummary};

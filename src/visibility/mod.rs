@@ -1,0 +1,8 @@
+//! Precomputed from-region visibility (Shou 2002 §5.5): viewcells, occluders, the
+//! conservative potentially visible set of each cell, and its degree of visibility.
+
+mod intersect;
+mod occluder;
+
+pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
+pub use occluder::occluder_box;
