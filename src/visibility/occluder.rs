@@ -86,7 +86,8 @@ pub fn occluder_box(mesh: &Mesh) -> Option<Aabb> {
     let free = |b: &Aabb| !outside.iter().any(|t| triangle_meets_box(t, b));
     let mut best: Option<(f32, Aabb)> = None;
     for k in 1..=HEIGHTS {
-        let height = size.y * k as f32 / HEIGHTS as f32;
+        // A hair under the level, or a roof lying on it would always meet the box.
+        let height = size.y * k as f32 / HEIGHTS as f32 - SAFETY;
         if height < MIN_HEIGHT {
             continue;
         }
