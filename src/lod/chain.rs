@@ -35,10 +35,12 @@
 //! the end, triangles and errors ordered, the level's mesh against its entry) — as an
 //! `Error::Invalid`, never a panic, whatever the bytes.
 
-use super::bytes::{self, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 use super::levels::Level;
 use crate::error::{Error, Result};
 use crate::scene::{decode_mesh, encode_mesh, Mesh};
+use crate::store::framing::{
+    self as bytes, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN,
+};
 
 /// The first four bytes of an encoded chain.
 pub const CHAIN_MAGIC: [u8; 4] = *b"FLCH";
@@ -354,9 +356,9 @@ pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::building;
     use crate::lod::ProgressiveMesh;
+    use crate::store::framing::{mangled, reseal};
 
     fn chain_of(mesh: &Mesh) -> (Vec<Level>, Vec<u8>) {
         let pm = ProgressiveMesh::build(mesh).unwrap();

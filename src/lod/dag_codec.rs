@@ -26,11 +26,11 @@
 //! (runs, offsets, edges pointing backward, finite attributes in range), so that bytes
 //! that pass are a DAG every traversal can walk without an index check failing.
 
-use super::bytes::{self, f32_at, push_crc, u32_at, CRC_LEN};
 use super::dag::{Dag, DagConstruction};
 use super::dag_attrs::NodeAttrs;
 use super::dag_build::Csr;
 use crate::error::{Error, Result};
+use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 
 /// The first four bytes of an encoded DAG.
 pub const DAG_MAGIC: [u8; 4] = *b"FDAG";
@@ -211,9 +211,9 @@ impl Dag {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::building;
     use crate::lod::ProgressiveMesh;
+    use crate::store::framing::{mangled, reseal};
 
     fn building_dag() -> Dag {
         let pm = ProgressiveMesh::build(&building()).unwrap();

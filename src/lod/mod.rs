@@ -26,7 +26,6 @@
 //!   `Database::lod_levels`, `lod_mesh` and `progressive` read them back.
 
 mod bake;
-mod bytes;
 mod chain;
 mod criteria;
 mod dag;

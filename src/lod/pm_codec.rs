@@ -46,11 +46,11 @@
 //! that pass are a progressive mesh that `PmCursor` and `SelectiveMesh` walk without an
 //! index check failing (those check every operator anyway; this names the damage early).
 
-use super::bytes::{self, f32_at, push_crc, u32_at, CRC_LEN};
 use super::pm::ProgressiveMesh;
 use super::vsplit::VertexSplit;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
+use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 
 /// The first four bytes of an encoded progressive mesh.
 pub const PM_MAGIC: [u8; 4] = *b"FLPM";
@@ -407,8 +407,8 @@ impl ProgressiveMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::bytes::{mangled, reseal};
     use crate::lod::fixtures::{building, check_exact, grid};
+    use crate::store::framing::{mangled, reseal};
 
     #[test]
     fn round_trips_and_refines_back_exactly() {

@@ -47,8 +47,8 @@
 
 use std::sync::{Arc, OnceLock};
 
-use super::bytes::{self, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 use crate::error::{Error, Result};
+use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 use crate::store::{Extent, PageKind, Segment, Store};
 
 /// The header segment that names the LOD table: a = first page, b = byte length,

@@ -19,6 +19,7 @@
 mod backend;
 mod counters;
 mod extent;
+pub(crate) mod framing;
 mod header;
 mod page;
 mod writer;

@@ -1,8 +1,8 @@
-//! What the LOD byte formats share — the chain (`chain`), the progressive mesh
-//! (`pm_codec`), the DAG (`dag_codec`) and the table (`table`): little-endian reads, and
+//! What the byte formats stored in extents share — the LOD chain, progressive mesh, DAG
+//! and table (`lod`), and the visibility table (`visibility`): little-endian reads, and
 //! the frame each of them checks before its content (a four-byte magic at offset 0, a
 //! u32 version at offset 4, a length the header's counts fix, a crc32 of the bytes
-//! before the stored one). One copy of each, so that the four read alike and name the
+//! before the stored one). One copy of each, so that they all read alike and name the
 //! same fault in the same words.
 //!
 //! A check returns its fault as a `String`; each codec wraps it in its own `corrupt`,
@@ -11,34 +11,34 @@
 use std::fmt::Display;
 
 /// Bytes of a stored crc32.
-pub(super) const CRC_LEN: usize = 4;
+pub(crate) const CRC_LEN: usize = 4;
 
 /// Bytes of the magic every format starts with; its version follows.
 const MAGIC_LEN: usize = 4;
 
-pub(super) fn u32_at(b: &[u8], at: usize) -> u32 {
+pub(crate) fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-pub(super) fn u64_at(b: &[u8], at: usize) -> u64 {
+pub(crate) fn u64_at(b: &[u8], at: usize) -> u64 {
     let mut w = [0u8; 8];
     w.copy_from_slice(&b[at..at + 8]);
     u64::from_le_bytes(w)
 }
 
-pub(super) fn f32_at(b: &[u8], at: usize) -> f32 {
+pub(crate) fn f32_at(b: &[u8], at: usize) -> f32 {
     f32::from_bits(u32_at(b, at))
 }
 
 /// Appends the crc32 of every byte of `b` so far.
-pub(super) fn push_crc(b: &mut Vec<u8>) {
+pub(crate) fn push_crc(b: &mut Vec<u8>) {
     let crc = crc32fast::hash(b);
     b.extend_from_slice(&crc.to_le_bytes());
 }
 
 /// The fixed header: at least `header_len` bytes (8 or more), then
 /// [`magic_and_version`].
-pub(super) fn header(
+pub(crate) fn header(
     b: &[u8],
     header_len: usize,
     name: &str,
@@ -51,7 +51,7 @@ pub(super) fn header(
 
 /// The magic, then the version, of bytes that hold at least 8. `name` is what the
 /// bytes should be ("a DAG").
-pub(super) fn magic_and_version(
+pub(crate) fn magic_and_version(
     b: &[u8],
     name: &str,
     magic: [u8; 4],
@@ -71,7 +71,7 @@ pub(super) fn magic_and_version(
 
 /// `len` bytes where `need` are due, at least: `takes` says what takes them ("its
 /// counts take").
-pub(super) fn at_least(len: usize, need: u64, takes: impl Display) -> Result<(), String> {
+pub(crate) fn at_least(len: usize, need: u64, takes: impl Display) -> Result<(), String> {
     if (len as u64) < need {
         return Err(format!("truncated: {len} bytes, {takes} {need}"));
     }
@@ -80,7 +80,7 @@ pub(super) fn at_least(len: usize, need: u64, takes: impl Display) -> Result<(),
 
 /// `len` bytes where exactly `need` are due: truncated as [`at_least`] says, or
 /// trailing bytes.
-pub(super) fn exactly(len: usize, need: u64, takes: impl Display) -> Result<(), String> {
+pub(crate) fn exactly(len: usize, need: u64, takes: impl Display) -> Result<(), String> {
     at_least(len, need, &takes)?;
     if len as u64 > need {
         return Err(format!("{len} bytes, {takes} {need}: trailing bytes"));
@@ -89,12 +89,12 @@ pub(super) fn exactly(len: usize, need: u64, takes: impl Display) -> Result<(), 
 }
 
 /// The crc32 stored at `crc_at` against that of every byte before it.
-pub(super) fn checksum(b: &[u8], crc_at: usize) -> Result<(), String> {
+pub(crate) fn checksum(b: &[u8], crc_at: usize) -> Result<(), String> {
     crc_matches(u32_at(b, crc_at), &b[..crc_at])
 }
 
 /// A crc32 `stored` elsewhere against that of `bytes`.
-pub(super) fn crc_matches(stored: u32, bytes: &[u8]) -> Result<(), String> {
+pub(crate) fn crc_matches(stored: u32, bytes: &[u8]) -> Result<(), String> {
     let actual = crc32fast::hash(bytes);
     if stored != actual {
         return Err(format!(
@@ -107,7 +107,7 @@ pub(super) fn crc_matches(stored: u32, bytes: &[u8]) -> Result<(), String> {
 /// Rewrites the crc32 in the last four bytes of `b` to that of the bytes before it:
 /// damaged bytes that pass the checksum, to reach the content checks.
 #[cfg(test)]
-pub(super) fn reseal(b: &mut [u8]) {
+pub(crate) fn reseal(b: &mut [u8]) {
     let at = b.len() - CRC_LEN;
     let crc = crc32fast::hash(&b[..at]);
     b[at..].copy_from_slice(&crc.to_le_bytes());
@@ -119,7 +119,7 @@ pub(super) fn reseal(b: &mut [u8]) {
 /// decoder checks first (magic, version, checksum) so that the damage reaches the
 /// content checks.
 #[cfg(test)]
-pub(super) fn mangled(
+pub(crate) fn mangled(
     seed: u64,
     rounds: usize,
     max_len: u32,
