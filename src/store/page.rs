@@ -48,7 +48,8 @@ pub const KIND_SLOTS: usize = 16;
 /// assert_eq!(PageKind::from_u8(2), Some(PageKind::RtreeNode));
 /// assert_eq!(PageKind::Mesh.name(), "mesh");
 /// assert_eq!(PageKind::from_u8(5), Some(PageKind::Lod));
-/// assert_eq!(PageKind::ALL.len(), 5);
+/// assert_eq!(PageKind::from_u8(6), Some(PageKind::Visibility));
+/// assert_eq!(PageKind::ALL.len(), 6);
 /// ```
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -65,18 +66,23 @@ pub enum PageKind {
     /// and DAG, and the table that finds them by object id. A kind of its own so that
     /// reads of LOD pages are counted apart from reads of full meshes.
     Lod = 5,
+    /// Precomputed visibility: the viewcells, and each cell's potentially visible set
+    /// with its objects' degrees of visibility. Counted apart, as PVS reads are the
+    /// currency of the PVS prefetcher.
+    Visibility = 6,
 }
 
-const _: () = assert!((PageKind::Lod as usize) < KIND_SLOTS);
+const _: () = assert!((PageKind::Visibility as usize) < KIND_SLOTS);
 
 impl PageKind {
     /// Every kind, in kind-byte order.
-    pub const ALL: [PageKind; 5] = [
+    pub const ALL: [PageKind; 6] = [
         PageKind::Header,
         PageKind::RtreeNode,
         PageKind::Mesh,
         PageKind::Meta,
         PageKind::Lod,
+        PageKind::Visibility,
     ];
 
     /// The kind stored as byte `b`, if any.
@@ -92,6 +98,7 @@ impl PageKind {
             PageKind::Mesh => "mesh",
             PageKind::Meta => "meta",
             PageKind::Lod => "lod",
+            PageKind::Visibility => "visibility",
         }
     }
 }
