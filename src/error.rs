@@ -41,6 +41,11 @@ pub enum Error {
 
     #[error("{0}")]
     Invalid(String),
+
+    /// A viewcell grid, position, PVS table or prefetch setting the PVS prefetcher
+    /// (`prefetch::pvs`) cannot use.
+    #[error("pvs prefetch: {0}")]
+    Pvs(String),
 }
 
 impl Error {

@@ -32,6 +32,7 @@ pub mod database;
 pub mod error;
 pub mod geom;
 pub mod lod;
+pub mod prefetch;
 pub mod rtree;
 pub mod scene;
 pub mod store;

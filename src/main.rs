@@ -17,10 +17,12 @@ use flaneur::bench::lod_parallel::{self, LodParallelConfig};
 use flaneur::bench::lod_refine::{self, LodRefineConfig};
 use flaneur::bench::patterns::{self, PatternsConfig};
 use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
+use flaneur::bench::pvs_prefetch::{self, PvsPrefetchConfig};
 use flaneur::bench::view_culling::{self, ViewCullingConfig};
 use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::lod::{LodOptions, LodReport};
+use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::{Backend, BuildOptions, Database};
@@ -334,6 +336,40 @@ enum Experiment {
         /// Runs of each orbit; a frame's times are the shortest over them.
         #[arg(long, default_value_t = LodRefineConfig::default().repeats)]
         repeats: usize,
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// SNP against PBNP neighbour PVS prefetching on the thesis's synthetic city and its
+    /// two routes: transactions, cache swaps, objects sent, visual misses (Zheng Table
+    /// 7.2, Figs. 7.6–7.8), and PBNP against its region size. No database.
+    PvsPrefetch {
+        /// Buildings along each side of the synthetic city.
+        #[arg(long, default_value_t = SyntheticConfig::default().blocks)]
+        blocks: u32,
+        /// Mean PVS size, a share of the buildings.
+        #[arg(long, default_value_t = SyntheticConfig::default().pvs_share)]
+        share: f64,
+        /// Share of a viewcell's PVS that a side neighbour also sees.
+        #[arg(long, default_value_t = SyntheticConfig::default().overlap)]
+        overlap: f64,
+        /// Steps of each route.
+        #[arg(long, default_value_t = RouteConfig::default().steps)]
+        steps: usize,
+        /// Metres per step.
+        #[arg(long, default_value_t = RouteConfig::default().step)]
+        step: f64,
+        /// PBNP's side and corner regions, a fraction of a cell's side, in (0, 0.5].
+        #[arg(long, default_value_t = PvsPrefetchConfig::default().border)]
+        border: f64,
+        /// Region sizes of PBNP's sweep, comma-separated [default: 0.1, 0.15, … 0.5].
+        #[arg(long, value_delimiter = ',')]
+        borders: Vec<f64>,
+        /// Client cache entries (viewcells); at least 9.
+        #[arg(long, default_value_t = PvsPrefetchConfig::default().capacity)]
+        cache: usize,
+        /// Draws the PVS table and both routes.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
     },
@@ -702,6 +738,44 @@ fn run(cli: Cli) -> Result<()> {
                 );
                 let r = lod_refine::run(&cfg)?;
                 write_experiment(&out, "lod-refine", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
+            }
+            Experiment::PvsPrefetch {
+                blocks,
+                share,
+                overlap,
+                steps,
+                step,
+                border,
+                borders,
+                cache,
+                seed,
+                out,
+            } => {
+                let d = PvsPrefetchConfig::default();
+                let cfg = PvsPrefetchConfig {
+                    city: SyntheticConfig {
+                        blocks,
+                        pvs_share: share,
+                        overlap,
+                        seed,
+                        ..d.city
+                    },
+                    route: RouteConfig { steps, step, seed },
+                    border,
+                    capacity: cache,
+                    borders: if borders.is_empty() {
+                        d.borders
+                    } else {
+                        borders
+                    },
+                };
+                let r = pvs_prefetch::run(&cfg)?;
+                write_experiment(&out, "pvs-prefetch", &r.to_csv(), &r.markdown(), |dir| {
+                    for (name, text) in r.extra_csvs() {
+                        write_file(&dir.join(name), &text)?;
+                    }
                     Ok(r.plot(dir)?)
                 })
             }

@@ -4,7 +4,8 @@
 //! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
 //! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
 //! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`crate::lod`) on procedural models,
-//! no database needed.
+//! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
+//! (`crate::prefetch::pvs`) on a synthetic PVS table, no database either.
 
 pub mod cell_size;
 pub mod city_series;
@@ -18,5 +19,6 @@ pub mod lod_refine;
 pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;
+pub mod pvs_prefetch;
 pub mod view_culling;
 pub mod walk_setup;

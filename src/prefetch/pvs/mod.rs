@@ -1,0 +1,76 @@
+//! Neighbour PVS prefetching for client–server walkthroughs (Zheng 2007, chapter 7).
+//!
+//! The server holds a PVS per viewcell of a uniform grid; the client keeps the PVS
+//! rows and objects of at most nine viewcells and, as the viewer moves, prefetches
+//! those of the neighbours it may enter next. SNP (`snp`, §7.2.1) fetches all eight
+//! neighbours on every cell change; PBNP (`pbnp`, §7.2.2) fetches only those the
+//! viewer leans towards, read from which of nine regions of its cell it stands in
+//! (h(R), Table 7.1). Both send only what the client lacks (`delta`, §7.3) and share
+//! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
+//! transaction, `sim` a whole route (§7.5). `synthetic` and `routes` make the thesis's
+//! simulated city, PVS table and two routes; `stats` measures a table.
+//!
+//! Choices the thesis leaves open, and ours:
+//!
+//! - **Region size** (PBNP): the side and corner regions are bands a fraction
+//!   `border` of the cell's side wide, default 0.25 ([`DEFAULT_BORDER`]): 5 m bands and
+//!   a 10 m middle on 20 m cells. A band at least one step wide means a walker cannot
+//!   step from the middle into the next cell unannounced; `flaneur bench pvs-prefetch`
+//!   sweeps it. Settings in (0, 0.5]; at 0.5 there is no middle region.
+//! - **Cache swap**: one per cell evicted from the cache (its PVS row and the objects
+//!   no kept cell sees); a cell admitted into free room is no swap.
+//! - **Replacement**: entries go only when the 9-entry table is full, only as many as
+//!   the new cells need, and only cells with Dr > 1 or Dc > 1 from the current one;
+//!   among those, the farthest first, then the least recently needed, then the lowest
+//!   (row, column) — deterministic.
+//! - **Transactions**: one whenever the area at a position holds a cell not cached,
+//!   even if every object it sees is already held (its row is still sent). The start-up
+//!   transaction counts, and its objects count in the objects per transaction; it is
+//!   also reported apart, as the thesis does. Transactions complete before the next
+//!   position: the thesis counts them, it does not time them.
+//! - **Delta-transmission**: S_I is everything the client holds when it asks; an
+//!   object that a new cell and an evicted one both see is kept, not dropped and sent
+//!   again.
+//! - **Cells without a viewcell** (inside buildings, off the grid) are never requested
+//!   nor cached; a position in one is an error, as is a position that is not finite or
+//!   lies outside the grid.
+//! - **Visual misses**: on entering a cell after the start, the objects of its PVS the
+//!   client does not hold (none for SNP, whose area always holds every neighbour).
+//! - **When the client looks**: once per position of the route, i.e. per step (the
+//!   thesis checks before every frame; between steps the position does not change).
+//! - **Cache size**: 9 entries as in the thesis; it may be set larger, never smaller,
+//!   since the current cell and its eight neighbours must fit.
+//! - **Orientation**: columns grow east (+x), rows south (+z); (a − 1, b + 1) is
+//!   north-east of (a, b), as in Fig. 7.1.
+//! - **The synthetic table and the routes**: see [`synthetic`] and [`routes`].
+
+mod area;
+mod cache;
+mod client;
+mod delta;
+mod grid;
+mod pbnp;
+pub mod routes;
+mod sim;
+mod snp;
+mod source;
+mod stats;
+pub mod synthetic;
+mod table;
+
+#[cfg(test)]
+mod tests;
+
+pub use area::{Area, PrefetchArea};
+pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
+pub use client::{PvsClient, StepOutcome, Transaction};
+pub use delta::delta;
+pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
+pub use pbnp::{h, Pbnp};
+pub use routes::{random_route, straight_route, RouteConfig, StraightRoute};
+pub use sim::{simulate, SimReport, SimTotals, StepRecord};
+pub use snp::Snp;
+pub use source::{ObjectId, PvsSource};
+pub use stats::{measure, TableStats};
+pub use synthetic::{SyntheticCity, SyntheticConfig};
+pub use table::{PvsTable, MAX_CELLS};

@@ -1,0 +1,403 @@
+//! The two walking routes of Zheng 2007 §7.5 (Fig. 7.6): 3000 steps of 4 m each, the
+//! first random with many back-and-forth movements, the second seven straight lines
+//! joined by six right-angle turns. The thesis shows them only as a picture; how they
+//! are drawn is ours:
+//!
+//! - Both keep to the walkways of the synthetic city, the middle third of each street
+//!   (its middle lane of 20 m viewcells; [`SyntheticCity::on_walkway`]). The thesis's
+//!   SNP swaps say as much: 1797 on route 2 is exactly 3 × 599, three new viewcells at
+//!   every crossing, and 1785 in 585 transactions on route 1 is at least three each;
+//!   a walker in a lane beside the buildings would find only two new viewcells at a
+//!   crossing along it (the third cell is inside a building).
+//! - Route 1 starts at the street crossing nearest the city's centre and keeps a
+//!   heading; before each step it changes it with chance [`TURN_CHANCE`], to the
+//!   opposite heading half of those times (the back-and-forth) and to a uniformly
+//!   random one otherwise. A step that would leave the walkways is redrawn with a
+//!   random heading.
+//! - Route 2's lines each keep a random distance into their walkway, at least
+//!   [`MARGIN`] from its edges, and turn where they cross the next line's street. Its
+//!   first six lines are a random 85–115 % of a seventh of the route each (in whole
+//!   blocks), turning left or right as the city leaves room; the seventh is as long as
+//!   the steps left.
+//! - A route's positions are its start and the point after each step, so a route of n
+//!   steps has n + 1. Steps are measured along the route: the step that rounds a
+//!   corner of route 2 cuts it, its ends a little less than a step apart.
+//! - Both are drawn from a ChaCha8 generator seeded by `seed`.
+
+use std::f64::consts::{PI, TAU};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::grid::Position;
+use super::synthetic::SyntheticCity;
+use crate::error::{Error, Result};
+
+/// The thesis's routes: 3000 steps of 4 m.
+pub const THESIS_STEPS: usize = 3000;
+pub const THESIS_STEP: f64 = 4.0;
+
+/// Route 1's chance of changing heading before a step (half of them reversals): a new
+/// heading every 25 steps (100 m) on average. The thesis gives no figure; at this one
+/// PBNP saves about as large a share of SNP's transactions on route 1 as the thesis's
+/// Table 7.2 shows (17 %), where more frequent turns would make its saving larger.
+pub const TURN_CHANCE: f64 = 0.04;
+
+/// Route 2 keeps at least this far from the edges of its walkways, metres.
+pub const MARGIN: f64 = 0.5;
+
+/// How long a route is and how it is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RouteConfig {
+    pub steps: usize,
+    /// Metres per step.
+    pub step: f64,
+    pub seed: u64,
+}
+
+impl Default for RouteConfig {
+    fn default() -> RouteConfig {
+        RouteConfig {
+            steps: THESIS_STEPS,
+            step: THESIS_STEP,
+            seed: 1,
+        }
+    }
+}
+
+impl RouteConfig {
+    pub fn validate(&self) -> Result<()> {
+        if self.steps == 0 || self.steps > 10_000_000 {
+            return Err(Error::Pvs(format!(
+                "a route needs 1 to 10,000,000 steps, got {}",
+                self.steps
+            )));
+        }
+        if !(self.step.is_finite() && self.step > 0.0) {
+            return Err(Error::Pvs(format!(
+                "step length {} must be a positive number of metres",
+                self.step
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Route 1: a random walk from `start` over the positions `walkable` accepts.
+///
+/// ```
+/// use flaneur::prefetch::pvs::{random_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 4, ..Default::default() })?;
+/// let cfg = RouteConfig { steps: 100, ..Default::default() };
+/// let route = random_route(city.intersection(2, 2), &cfg, |p| Ok(city.on_walkway(p)))?;
+/// assert_eq!(route.len(), 101);
+/// assert!(route.iter().all(|&p| city.on_walkway(p)));
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+pub fn random_route(
+    start: Position,
+    cfg: &RouteConfig,
+    walkable: impl Fn(Position) -> Result<bool>,
+) -> Result<Vec<Position>> {
+    cfg.validate()?;
+    if !start.x.is_finite() || !start.z.is_finite() || !walkable(start)? {
+        return Err(Error::Pvs(format!(
+            "route 1 cannot start at {start}: it is not a walkable position"
+        )));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut heading: f64 = rng.gen_range(0.0..TAU);
+    let mut p = start;
+    let mut route = Vec::with_capacity(cfg.steps + 1);
+    route.push(p);
+    for _ in 0..cfg.steps {
+        if rng.gen_bool(TURN_CHANCE) {
+            heading = if rng.gen_bool(0.5) {
+                (heading + PI) % TAU
+            } else {
+                rng.gen_range(0.0..TAU)
+            };
+        }
+        let mut tries = 0;
+        p = loop {
+            let q = Position::new(
+                p.x + cfg.step * heading.cos(),
+                p.z + cfg.step * heading.sin(),
+            );
+            if walkable(q)? {
+                break q;
+            }
+            tries += 1;
+            if tries > 1000 {
+                return Err(Error::Pvs(format!(
+                    "route 1 is stuck at {p}: no step of {} m from there is walkable",
+                    cfg.step
+                )));
+            }
+            heading = rng.gen_range(0.0..TAU);
+        };
+        route.push(p);
+    }
+    Ok(route)
+}
+
+/// Route 2: its corners (start, six turns, end) and its positions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StraightRoute {
+    pub corners: Vec<Position>,
+    pub positions: Vec<Position>,
+}
+
+/// Lines of route 2.
+const LINES: usize = 7;
+
+/// Route 2: seven straight lines along the streets of `city` with six right-angle
+/// turns, `cfg.steps` steps long.
+///
+/// ```
+/// use flaneur::prefetch::pvs::{straight_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 12, ..Default::default() })?;
+/// let route = straight_route(&city, &RouteConfig { steps: 1000, ..Default::default() })?;
+/// assert_eq!(route.corners.len(), 8);
+/// assert_eq!(route.positions.len(), 1001);
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<StraightRoute> {
+    cfg.validate()?;
+    let street = city.config().street;
+    let (lane_lo, lane_hi) = (street / 3.0 + MARGIN, 2.0 * street / 3.0 - MARGIN);
+    if lane_lo >= lane_hi {
+        return Err(Error::Pvs(format!(
+            "route 2 keeps {MARGIN} m inside the middle third of a street, which a street {street} m wide does not leave room for"
+        )));
+    }
+    let total = cfg.steps as f64 * cfg.step;
+    let blocks = city.config().blocks;
+    let pitch = city.pitch();
+    let per_line = total / LINES as f64 / pitch;
+    let (lo, hi) = (
+        (0.85 * per_line).round().max(1.0) as u32,
+        (1.15 * per_line).round().max(1.0) as u32,
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    // The coordinate across street `i` of a line `o` metres into it.
+    let at = |i: u32, o: f64| f64::from(i) * pitch + o;
+    for _attempt in 0..100 {
+        // Street indices along x (streets running north–south) and z, and the line's
+        // distances into them: a line along x keeps its z street and offset.
+        let (mut ix, mut iz) = (rng.gen_range(0..=blocks), rng.gen_range(0..=blocks));
+        let (mut ox, mut oz) = (
+            rng.gen_range(lane_lo..=lane_hi),
+            rng.gen_range(lane_lo..=lane_hi),
+        );
+        let mut along_x = rng.gen_bool(0.5);
+        let mut corners = vec![Position::new(at(ix, ox), at(iz, oz))];
+        let mut length = 0.0;
+        for _ in 0..LINES - 1 {
+            let from = if along_x { ix } else { iz };
+            let mut k = rng.gen_range(lo..=hi).min(blocks);
+            let fits = |k: u32, up: bool| if up { from + k <= blocks } else { from >= k };
+            let mut dirs: Vec<bool> = [true, false].into_iter().filter(|&u| fits(k, u)).collect();
+            if dirs.is_empty() {
+                k = from.max(blocks - from);
+                dirs = vec![from + k <= blocks];
+            }
+            let up = dirs[rng.gen_range(0..dirs.len())];
+            let to = if up { from + k } else { from - k };
+            let o = rng.gen_range(lane_lo..=lane_hi);
+            if along_x {
+                (ix, ox) = (to, o);
+            } else {
+                (iz, oz) = (to, o);
+            }
+            let c = Position::new(at(ix, ox), at(iz, oz));
+            length += c.distance(*corners.last().expect("the start"));
+            corners.push(c);
+            along_x = !along_x;
+        }
+        let left = total - length;
+        if left <= 0.0 {
+            continue;
+        }
+        let last = *corners.last().expect("the start");
+        let (here, limit) = if along_x {
+            (last.x, city.side())
+        } else {
+            (last.z, city.side())
+        };
+        // The last line runs along its own walkway, which spans the city, so it may go
+        // up to the grid's edge either way.
+        let room_up = limit - MARGIN - here;
+        let room_down = here - MARGIN;
+        let ups: Vec<bool> = [(true, room_up), (false, room_down)]
+            .into_iter()
+            .filter(|&(_, room)| room >= left)
+            .map(|(u, _)| u)
+            .collect();
+        if ups.is_empty() {
+            continue;
+        }
+        let sign = if ups[rng.gen_range(0..ups.len())] {
+            1.0
+        } else {
+            -1.0
+        };
+        let end = if along_x {
+            Position::new(last.x + sign * left, last.z)
+        } else {
+            Position::new(last.x, last.z + sign * left)
+        };
+        corners.push(end);
+        let positions = sample(&corners, cfg.steps, cfg.step);
+        return Ok(StraightRoute { corners, positions });
+    }
+    Err(Error::Pvs(format!(
+        "route 2 of {total} m in seven lines does not fit in a city of {blocks} × {blocks} blocks"
+    )))
+}
+
+/// The start and the point after each of `steps` steps of `step` metres along the
+/// polyline through `corners`.
+fn sample(corners: &[Position], steps: usize, step: f64) -> Vec<Position> {
+    let mut out = Vec::with_capacity(steps + 1);
+    let mut seg = 0;
+    let mut seg_start = 0.0;
+    for k in 0..=steps {
+        let s = k as f64 * step;
+        while seg + 2 < corners.len() && s > seg_start + corners[seg].distance(corners[seg + 1]) {
+            seg_start += corners[seg].distance(corners[seg + 1]);
+            seg += 1;
+        }
+        let (a, b) = (corners[seg], corners[seg + 1]);
+        let len = a.distance(b);
+        let t = if len > 0.0 {
+            ((s - seg_start) / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        out.push(Position::new(a.x + t * (b.x - a.x), a.z + t * (b.z - a.z)));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::prefetch::pvs::SyntheticConfig;
+
+    fn city() -> SyntheticCity {
+        SyntheticCity::generate(&SyntheticConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn route_1_walks_4_m_steps_on_the_streets() {
+        let c = city();
+        let start = c.intersection(15, 15);
+        let walk = |cfg: &RouteConfig| random_route(start, cfg, |p| Ok(c.on_walkway(p)));
+        let r = walk(&RouteConfig::default()).unwrap();
+        assert_eq!(r.len(), THESIS_STEPS + 1);
+        assert_eq!(r[0], start);
+        assert!(r.iter().all(|&p| c.on_walkway(p) && c.is_street(p)));
+        assert!(r
+            .windows(2)
+            .all(|w| (w[0].distance(w[1]) - THESIS_STEP).abs() < 1e-9));
+        // Back and forth: many steps go straight back the way the last one came.
+        let back = r.windows(3).filter(|w| w[0].distance(w[2]) < 1e-9).count();
+        assert!(back > 20, "{back} reversals");
+        assert_eq!(r, walk(&RouteConfig::default()).unwrap());
+        assert_ne!(
+            r,
+            walk(&RouteConfig {
+                seed: 2,
+                ..Default::default()
+            })
+            .unwrap()
+        );
+    }
+
+    #[test]
+    fn route_2_is_seven_lines_with_six_right_angles() {
+        let c = city();
+        for seed in 1..=5 {
+            let r = straight_route(
+                &c,
+                &RouteConfig {
+                    seed,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(r.corners.len(), 8);
+            assert_eq!(r.positions.len(), THESIS_STEPS + 1);
+            assert_eq!(r.positions[0], r.corners[0]);
+            let d: Vec<(f64, f64)> = r
+                .corners
+                .windows(2)
+                .map(|w| (w[1].x - w[0].x, w[1].z - w[0].z))
+                .collect();
+            for (i, &(dx, dz)) in d.iter().enumerate() {
+                assert!(
+                    (dx == 0.0) != (dz == 0.0),
+                    "line {i} is not straight along an axis"
+                );
+                if i > 0 {
+                    let (px, pz) = d[i - 1];
+                    assert!(px * dx + pz * dz == 0.0, "turn {i} is not a right angle");
+                }
+            }
+            let length: f64 = d.iter().map(|(x, z)| x.hypot(*z)).sum();
+            assert!((length - THESIS_STEPS as f64 * THESIS_STEP).abs() < 1e-6);
+            assert!(r.positions.iter().all(|&p| c.on_walkway(p)), "seed {seed}");
+            // Steps of 4 m, but those that cut a corner.
+            let short = r
+                .positions
+                .windows(2)
+                .filter(|w| (w[0].distance(w[1]) - THESIS_STEP).abs() > 1e-6)
+                .count();
+            assert!(short <= 6, "{short}");
+            assert!(r
+                .positions
+                .windows(2)
+                .all(|w| w[0].distance(w[1]) <= THESIS_STEP + 1e-9));
+        }
+    }
+
+    #[test]
+    fn bad_routes_are_errors() {
+        let c = SyntheticCity::generate(&SyntheticConfig {
+            blocks: 2,
+            ..Default::default()
+        })
+        .unwrap();
+        let on = |p: Position| Ok(c.on_walkway(p));
+        let e = random_route(Position::new(110.0, 110.0), &RouteConfig::default(), on)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a walkable position"), "{e}");
+        let e = random_route(Position::new(f64::NAN, 30.0), &RouteConfig::default(), on)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a walkable position"), "{e}");
+        let e = straight_route(&c, &RouteConfig::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("does not fit"), "{e}");
+        for cfg in [
+            RouteConfig {
+                steps: 0,
+                ..Default::default()
+            },
+            RouteConfig {
+                step: 0.0,
+                ..Default::default()
+            },
+            RouteConfig {
+                step: f64::NAN,
+                ..Default::default()
+            },
+        ] {
+            assert!(random_route(c.intersection(0, 0), &cfg, on).is_err());
+            assert!(straight_route(&c, &cfg).is_err());
+        }
+    }
+}
