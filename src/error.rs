@@ -39,6 +39,23 @@ pub enum Error {
     #[error(transparent)]
     Scene(#[from] citygen::SceneError),
 
+    /// A cubic projection's resolution (pixels per face side) out of range.
+    #[error("cubic projection resolution must be 1..={max} pixels per face side, not {n}")]
+    BadResolution { n: u32, max: u32 },
+
+    /// A viewpoint or ray origin that is not a finite point, or a ray direction that is
+    /// not finite and non-zero; the message names which and its value.
+    #[error("{0}")]
+    BadViewpoint(String),
+
+    /// An object's mesh that cannot be ray cast (no triangles, bad indices, NaN).
+    #[error("object {id}: mesh cannot be ray cast: {what}")]
+    BadMesh { id: u64, what: String },
+
+    /// A viewcell box that is not finite, or has no volume.
+    #[error("viewcell {cell}: {what}")]
+    BadViewcell { cell: usize, what: String },
+
     #[error("{0}")]
     Invalid(String),
 

@@ -1,16 +1,70 @@
-//! Precomputed from-region visibility (Shou 2002 §5.5): viewcells, occluders, the
-//! conservative potentially visible set of each cell, and its degree of visibility.
+//! Precomputed from-region visibility — Shou 2002 §5.5 (and §5.2.1, eqs. 5.1–5.2):
+//! viewcells over the walkable city, occluders, each cell's conservative potentially
+//! visible set, and the degree of visibility (DoV) of its objects by cubic projection.
+//!
+//! - [`cells`](ViewcellGrid): the grid of viewcells, the walkable ones.
+//! - `occluder`: a box inside each building's solid, its convex part (paper-notes).
+//! - `conservative`: the occluder belt and the hidden sets of §5.5.1 (a [`Scene`]).
+//! - [`raycast`]: the scene's triangles in one BVH; the first hit of a ray as an object.
+//! - [`cube`]: the cube's faces, pixels and their ΔDoV; the identity buffer.
+//! - [`dov`]: point DoV (the sum of an object's pixels) and cell DoV (the maximum over a
+//!   viewcell's eight corners), for a batch of cells sharing corners.
+//!
+//! The DoV computation's choices (the thesis renders object ids into a z-buffer on the
+//! six faces of a cube; here each pixel casts one ray into a BVH of the scene's
+//! triangles):
+//!
+//! - **Sampling.** One ray per pixel centre, no supersampling: a pixel belongs wholly to
+//!   the first object its centre ray meets. N = 256 pixels per face side by default.
+//! - **ΔDoV.** The pixel's exact solid angle over 4π, of which eq. 5.11 is the midpoint
+//!   value; eq. 5.11 slightly overcounts the sphere, the exact form sums to 1 ([`cube`]).
+//! - **Sky.** A pixel whose ray meets nothing belongs to no object; its share is reported
+//!   as `sky`. The scene is what the caller gives: citygen builds no ground, so rays below
+//!   the horizon that pass between buildings are sky, not ground.
+//! - **Hits.** The first hit at any distance ≥ 0 (a surface through the viewpoint is hit),
+//!   front or back of a triangle (no back-face culling, like a z-buffer without it): a
+//!   viewpoint inside a closed object sees that object's inside in every direction. Two
+//!   surfaces at exactly the same distance (coincident faces) may show either. The
+//!   ray–triangle test is Möller–Trumbore in f32, not watertight: a ray exactly along an
+//!   edge shared by two triangles may pass between them, so a pixel may rarely show what
+//!   lies behind. Zero-area triangles are dropped.
+//! - **Cells.** A viewcell is a box (the eye's height range over a patch of street); its
+//!   sample points are its 8 corners and an object's DoV for it is the maximum of its
+//!   point DoVs there (eq. 5.2). A box with zero size on an axis is refused: its corners
+//!   would not be 8. Corners shared by cells of a batch are cast once, matched by their
+//!   exact coordinates.
+//! - **Zero DoV.** An object no pixel shows has DoV 0 and is left out of the results;
+//!   the precomputation gives the "visible zero-DoV" objects (kept by the conservative
+//!   test, unseen from every corner) DoV_s, [`CubicProjection::zero_dov_floor`], the
+//!   smallest pixel's ΔDoV.
+//! - **Precision.** Pixel weights are f32, each object's sum f64, results f32: the DoVs
+//!   seen from one viewpoint and its sky sum to 1 within about 10⁻⁶.
+//!
+//! Speed (`cargo bench --bench dov`: a 400-object generated city of 235k triangles,
+//! street-height viewpoints, N = 256, two cores of an AMD EPYC): about 13 million rays per
+//! second, 30 ms per viewpoint; a batch of 36 street cells (4.4 distinct corners per
+//! cell) took 0.15 s per cell, and a grid sharing corners down to 2 per cell would take
+//! about 0.06 s. The thesis took 1.02 s per cell on its hardware (§5.8.1).
 
 mod cells;
 mod conservative;
+pub mod cube;
+pub mod dov;
 mod intersect;
 mod occluder;
+pub mod raycast;
 mod table;
+
+#[cfg(test)]
+mod tests;
 
 pub use cells::{corners, Viewcell, ViewcellGrid, DEFAULT_CELL_SIZE, DEFAULT_EYE_RANGE};
 pub use conservative::{hides, BeltOptions, CellVisibility, Scene};
+pub use cube::{CubicProjection, SKY};
+pub use dov::{cell_dovs, point_dov, CellDovs, DovStats, PointDov};
 pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
 pub use occluder::occluder_box;
+pub use raycast::{Hit, RayScene};
 pub use table::{
     CellEntry, CellPvs, TableHead, VisibilitySettings, VisibilityStats, VISIBILITY_SEGMENT,
 };

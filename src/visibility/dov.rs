@@ -1,0 +1,271 @@
+//! Degree of visibility (Shou 2002, §5.2.1 and §5.5.2): an object's point DoV is the
+//! share of the sphere of directions around a viewpoint in which it is the first thing
+//! seen (eq. 5.1), summed over the identity buffer's pixels; its DoV for a viewcell is
+//! the maximum over the cell's eight corners (eq. 5.2).
+//!
+//! A grid of cells shares corners (a cell of a row shares four with each neighbour), so
+//! [`cell_dovs`] takes a batch of cells, casts each distinct corner once, in parallel, and
+//! then takes each cell's maxima: on a large grid that is about two corners per cell
+//! instead of eight. Corners are the same only when their coordinates are bit for bit
+//! the same (−0 and +0 aside): cells cut from one grid by the same arithmetic are.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use super::cube::{CubicProjection, SKY};
+use super::raycast::{check_point, RayScene};
+use crate::error::{Error, Result};
+use crate::geom::Aabb;
+
+/// What one viewpoint sees.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointDov {
+    /// `(object index, DoV)` for every object that at least one pixel shows, by index.
+    /// The DoVs and [`sky`](Self::sky) sum to 1, to float rounding.
+    pub objects: Vec<(u32, f32)>,
+    /// The share of directions that meet nothing.
+    pub sky: f32,
+}
+
+/// The DoV of every object from `point` by cubic projection: 6N² rays, each pixel's
+/// ΔDoV credited to the object its ray meets first.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// use flaneur::visibility::{dov::point_dov, CubicProjection, RayScene};
+/// // Two unit cubes on the x axis, one behind the other as seen from the origin.
+/// let cube = |x: f32| {
+///     let mut m = citygen::Mesh::default();
+///     for i in 0..8 {
+///         let c = |bit: u32| if i & bit == 0 { -0.5 } else { 0.5 };
+///         m.positions.push([x + c(1), c(2), c(4)]);
+///     }
+///     m.normals = vec![[0.0, 1.0, 0.0]; 8];
+///     m.indices = vec![0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+///                      2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5];
+///     m
+/// };
+/// let (near, far) = (cube(3.0), cube(6.0));
+/// let scene = RayScene::new([(10, &near), (20, &far)])?;
+/// let seen = point_dov(&scene, &CubicProjection::new(128)?, [0.0, 0.0, 0.0])?;
+/// // Only the near cube shows: its face, a unit square 2.5 away, covers 1.22 % of the
+/// // sphere (at N = 128, give or take the pixels along its edges).
+/// assert_eq!(seen.objects.len(), 1);
+/// let (object, dov) = seen.objects[0];
+/// assert_eq!(scene.object_id(object), Some(10));
+/// assert!((dov - 0.01224).abs() < 0.0006, "{dov}");
+/// # Ok(()) }
+/// ```
+pub fn point_dov(
+    scene: &RayScene,
+    projection: &CubicProjection,
+    point: [f32; 3],
+) -> Result<PointDov> {
+    check_point("viewpoint", point)?;
+    Ok(point_dov_checked(scene, projection, point))
+}
+
+fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32; 3]) -> PointDov {
+    let n = projection.resolution() as usize;
+    let weights = projection.weights();
+    // Each band of rows sums its pixels into runs of one object, so that all bands of all
+    // faces run in parallel without an identity buffer; sums in f64, because at N = 256 a
+    // DoV adds up to 393,216 terms near 10⁻⁶.
+    let bands: Vec<(Vec<(u32, f64)>, f64)> = (0..projection.bands())
+        .into_par_iter()
+        .map(|k| {
+            let (face, rows) = projection.band_rows(k);
+            let first = rows.start * n;
+            let mut runs: Vec<(u32, f64)> = Vec::new();
+            let mut sky = 0.0f64;
+            projection.cast_rows(scene, point, face, rows, |pixel, id| {
+                let w = weights[first + pixel] as f64;
+                match runs.last_mut() {
+                    _ if id == SKY => sky += w,
+                    Some((last, sum)) if *last == id => *sum += w,
+                    _ => runs.push((id, w)),
+                }
+            });
+            (runs, sky)
+        })
+        .collect();
+    let mut sums = vec![0.0f64; scene.object_count()];
+    let mut seen = Vec::new();
+    let mut sky = 0.0f64;
+    for (runs, band_sky) in bands {
+        sky += band_sky;
+        for (id, w) in runs {
+            let sum = &mut sums[id as usize];
+            // Every weight is positive, so a zero sum is an object not yet seen.
+            if *sum == 0.0 {
+                seen.push(id);
+            }
+            *sum += w;
+        }
+    }
+    seen.sort_unstable();
+    PointDov {
+        objects: seen
+            .into_iter()
+            .map(|o| (o, sums[o as usize] as f32))
+            .collect(),
+        sky: sky as f32,
+    }
+}
+
+/// The DoVs of a batch of viewcells.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellDovs {
+    /// Per cell, in the order given: `(object index, DoV)` for every object that some
+    /// corner sees, by index. A cell's DoVs may sum to more than 1 (each is a maximum
+    /// over corners).
+    pub cells: Vec<Vec<(u32, f32)>>,
+    /// What it cost.
+    pub stats: DovStats,
+}
+
+/// The cost of a [`cell_dovs`] run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DovStats {
+    /// Cells in the batch.
+    pub cells: usize,
+    /// Distinct corners projected (at most 8 per cell).
+    pub corners: usize,
+    /// Rays cast: `corners` × 6N².
+    pub rays: u64,
+    /// Wall-clock time of the whole batch.
+    pub elapsed: Duration,
+}
+
+impl DovStats {
+    /// Rays cast per second of wall-clock time.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.elapsed.as_secs_f64().max(f64::MIN_POSITIVE)
+    }
+
+    /// Wall-clock seconds per cell of the batch.
+    pub fn seconds_per_cell(&self) -> f64 {
+        self.elapsed.as_secs_f64() / self.cells.max(1) as f64
+    }
+
+    /// Distinct corners per cell: 8 for lone cells, towards 2 on a large grid.
+    pub fn corners_per_cell(&self) -> f64 {
+        self.corners as f64 / self.cells.max(1) as f64
+    }
+}
+
+/// The eight corners of a box: bit 0 of the index picks max x, bit 1 max y, bit 2 max z.
+pub fn corners(cell: &Aabb) -> [[f32; 3]; 8] {
+    let (lo, hi) = (cell.min.to_array(), cell.max.to_array());
+    std::array::from_fn(|i| std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] }))
+}
+
+/// The DoV of every object for each of `cells` (eq. 5.2: the maximum of its point DoVs
+/// over the cell's eight corners), casting each corner shared by several cells once.
+///
+/// Errors: a cell with a coordinate that is not finite, or whose max is not greater
+/// than its min on every axis (a flat, empty or inverted box); the error names the cell
+/// by its index in `cells`.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// use flaneur::geom::Aabb;
+/// use flaneur::visibility::{dov::cell_dovs, CubicProjection, RayScene};
+/// let wall = citygen::Mesh {
+///     positions: vec![[-5.0, 0.0, 10.0], [5.0, 0.0, 10.0], [5.0, 6.0, 10.0], [-5.0, 6.0, 10.0]],
+///     normals: vec![[0.0, 0.0, -1.0]; 4],
+///     indices: vec![0, 1, 2, 0, 2, 3],
+/// };
+/// let scene = RayScene::new([(0, &wall)])?;
+/// // Two cells side by side: 12 distinct corners, not 16.
+/// let cells = [
+///     Aabb::new([0.0, 1.2, 0.0], [2.0, 2.0, 2.0])?,
+///     Aabb::new([2.0, 1.2, 0.0], [4.0, 2.0, 2.0])?,
+/// ];
+/// let result = cell_dovs(&scene, &CubicProjection::new(32)?, &cells)?;
+/// assert_eq!(result.stats.corners, 12);
+/// assert!(result.cells.iter().all(|c| c.len() == 1 && c[0].0 == 0 && c[0].1 > 0.0));
+/// # Ok(()) }
+/// ```
+pub fn cell_dovs(
+    scene: &RayScene,
+    projection: &CubicProjection,
+    cells: &[Aabb],
+) -> Result<CellDovs> {
+    let started = Instant::now();
+    for (i, cell) in cells.iter().enumerate() {
+        check_cell(i, cell)?;
+    }
+    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut points: Vec<[f32; 3]> = Vec::new();
+    let cell_corners: Vec<[u32; 8]> = cells
+        .iter()
+        .map(|cell| {
+            corners(cell).map(|p| {
+                // Adding +0 turns −0 into +0, so the two spellings of zero are one corner.
+                let key = p.map(|c| (c + 0.0).to_bits());
+                *index.entry(key).or_insert_with(|| {
+                    points.push(p);
+                    (points.len() - 1) as u32
+                })
+            })
+        })
+        .collect();
+    let seen: Vec<PointDov> = points
+        .par_iter()
+        .map(|&p| point_dov_checked(scene, projection, p))
+        .collect();
+    let dovs = cell_corners
+        .iter()
+        .map(|corner| {
+            let mut all: Vec<(u32, f32)> = corner
+                .iter()
+                .flat_map(|&c| seen[c as usize].objects.iter().copied())
+                .collect();
+            all.sort_unstable_by_key(|&(o, _)| o);
+            all.dedup_by(|later, kept| {
+                let same = later.0 == kept.0;
+                if same {
+                    kept.1 = kept.1.max(later.1);
+                }
+                same
+            });
+            all
+        })
+        .collect();
+    Ok(CellDovs {
+        cells: dovs,
+        stats: DovStats {
+            cells: cells.len(),
+            corners: points.len(),
+            rays: points.len() as u64 * projection.rays_per_point(),
+            elapsed: started.elapsed(),
+        },
+    })
+}
+
+/// A viewcell must be a finite box with volume: its eight corners distinct.
+fn check_cell(cell: usize, b: &Aabb) -> Result<()> {
+    let bad = |what: String| Err(Error::BadViewcell { cell, what });
+    if !b.min.is_finite() || !b.max.is_finite() {
+        return bad(format!(
+            "box {:?}–{:?} has a coordinate that is not finite",
+            b.min.to_array(),
+            b.max.to_array()
+        ));
+    }
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let (lo, hi) = (b.min[k], b.max[k]);
+        if hi < lo {
+            return bad(format!("box is inverted on {axis}: min {lo} > max {hi}"));
+        }
+        if hi == lo {
+            return bad(format!(
+                "box has zero size on {axis} (min = max = {lo}); a viewcell needs volume"
+            ));
+        }
+    }
+    Ok(())
+}
