@@ -22,7 +22,8 @@ use crate::geom::Aabb;
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::rtree::{ObjectEntry, RTree, DEFAULT_FILL};
 use crate::scene::{encode_mesh, load_obj, Mesh, SceneReader, KIND_IMPORTED};
-use crate::store::{Extent, PageKind, Store};
+use crate::store::{Extent, PageKind, Segment, Store};
+use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
 
 /// How to build.
 #[derive(Clone, Debug)]
@@ -38,6 +39,9 @@ pub struct BuildOptions {
     pub progress: bool,
     /// Store each object's LODs, made this way; `None` stores none (`--no-lod`).
     pub lod: Option<LodOptions>,
+    /// Precompute the viewcells' visibility this way; `None` computes none (the
+    /// default: it is the long step of a build).
+    pub visibility: Option<VisibilityOptions>,
 }
 
 impl Default for BuildOptions {
@@ -48,6 +52,7 @@ impl Default for BuildOptions {
             insertion: false,
             progress: false,
             lod: Some(LodOptions::default()),
+            visibility: None,
         }
     }
 }
@@ -65,6 +70,28 @@ pub struct BuildSummary {
     pub seconds: f64,
     /// What was stored as LODs; `None` when the build stored none.
     pub lod: Option<LodReport>,
+    /// What the visibility precomputation made; `None` when it did not run.
+    pub visibility: Option<VisibilityReport>,
+}
+
+/// What `flaneur build --visibility` computed.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VisibilityReport {
+    /// Walkable cells, each with a PVS, of the grid's rows × columns.
+    pub cells: usize,
+    pub rows: u32,
+    pub columns: u32,
+    /// Objects over all PVSs.
+    pub entries: u64,
+    /// Objects with an occluder box.
+    pub occluders: usize,
+    pub rays: u64,
+    pub seconds: f64,
+    /// Objects a corner's rays met that the conservative test had hidden (0 unless
+    /// something is wrong; kept in the PVS).
+    pub rays_past_occluders: u64,
+    /// Pages the table takes.
+    pub pages: u64,
 }
 
 /// Builds a database from a citygen scene file.
@@ -110,9 +137,14 @@ fn build(
     let mut kinds = KindCounts::default();
     let mut triangles = 0u64;
     let mut bounds = Aabb::EMPTY;
+    // The precomputation casts rays at every mesh, so it keeps them all.
+    let mut kept: Vec<(u64, Mesh)> = Vec::new();
     for object in objects {
         let (id, kind, mesh) = object?;
         let entry = write_object(&mut store, id, kind, &mesh)?;
+        if opts.visibility.is_some() {
+            kept.push((id, mesh.clone()));
+        }
         kinds.mesh += entry.mesh.page_count as u64;
         triangles += entry.triangles as u64;
         bounds = bounds.union(&entry.bounds);
@@ -136,6 +168,15 @@ fn build(
     if entries.is_empty() {
         return Err(Error::Invalid("the input holds no objects".into()));
     }
+    let visibility = match &opts.visibility {
+        Some(v) => {
+            let report = store_visibility(&mut store, &kept, v, opts.progress)?;
+            kinds.visibility = report.pages;
+            Some(report)
+        }
+        None => None,
+    };
+    drop(kept);
     let objects = entries.len() as u64;
     let before = store.page_count();
     let tree = if opts.insertion {
@@ -161,6 +202,53 @@ fn build(
         height: tree.height,
         seconds: start.elapsed().as_secs_f64(),
         lod,
+        visibility,
+    })
+}
+
+/// Precomputes the visibility of `objects` and appends its table, with a progress bar
+/// of cells when `progress` is set.
+fn store_visibility(
+    store: &mut Store,
+    objects: &[(u64, Mesh)],
+    opts: &VisibilityOptions,
+    progress: bool,
+) -> Result<VisibilityReport> {
+    let bar = if progress {
+        let bar = ProgressBar::new(0);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "visibility {bar:40} {pos}/{len} cells ({per_sec}, eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let made = precompute(objects, opts, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    let bytes = encode_table(&made.grid, &made.settings, &made.stats, &made.cells)?;
+    let extent = store.append_extent(PageKind::Visibility, &bytes)?;
+    store.set_segment(Segment::new(
+        VISIBILITY_SEGMENT,
+        extent.first_page,
+        extent.byte_len as u64,
+        extent.page_count as u64,
+    ))?;
+    Ok(VisibilityReport {
+        cells: made.cells.len(),
+        rows: made.grid.rows(),
+        columns: made.grid.columns(),
+        entries: made.stats.entries,
+        occluders: made.occluders,
+        rays: made.stats.rays,
+        seconds: made.stats.seconds,
+        rays_past_occluders: made.rays_past_occluders,
+        pages: extent.page_count as u64,
     })
 }
 

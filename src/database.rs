@@ -11,6 +11,7 @@ use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::{decode_mesh, Mesh};
 use crate::store::{Backend, IoStats, PageKind, Segment, Store};
+use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 
 const OBJECTS_SEGMENT: &str = "objects";
 const BOUNDS_SEGMENT: &str = "bounds";
@@ -26,6 +27,9 @@ pub struct KindCounts {
     /// without LODs. Kept in the LOD table's segment, not in `pagekinds`, so that files
     /// written before LODs read the same.
     pub lod: u64,
+    /// Visibility pages (the viewcells' table); 0 in a database without visibility.
+    /// Kept in the table's segment, as the LOD pages are.
+    pub visibility: u64,
 }
 
 /// What `flaneur info` prints.
@@ -44,6 +48,29 @@ pub struct DatabaseInfo {
     /// What the database holds as LODs; `None` when it holds none (built with
     /// `--no-lod`, or before LODs were stored).
     pub lod: Option<LodStats>,
+    /// The precomputed visibility; `None` when the build computed none.
+    pub visibility: Option<VisibilityInfo>,
+}
+
+/// What `flaneur info` reports of the precomputed visibility.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VisibilityInfo {
+    pub rows: u32,
+    pub columns: u32,
+    /// Walkable cells, each with a PVS.
+    pub cells: usize,
+    pub cell_size: f32,
+    pub eye: [f32; 2],
+    pub resolution: u32,
+    /// Mean objects per PVS, and that as a share of the scene's objects.
+    pub mean_pvs: f64,
+    pub mean_share: f64,
+    /// Seconds of the whole precomputation, and per cell.
+    pub seconds: f64,
+    pub seconds_per_cell: f64,
+    /// DoV rays cast, and per second of the precomputation.
+    pub rays: u64,
+    pub rays_per_second: f64,
 }
 
 /// An open database.
@@ -63,6 +90,7 @@ pub struct Database {
     bounds: Aabb,
     kinds: KindCounts,
     lod: Option<LodTable>,
+    visibility: Option<VisibilityTable>,
 }
 
 impl Database {
@@ -100,11 +128,13 @@ impl Database {
             .ok_or_else(|| missing(KINDS_SEGMENT))?;
         let bounds = unpack_bounds(bounds);
         let lod = LodTable::open(&store)?;
+        let visibility = VisibilityTable::open(&store)?;
         let kinds = KindCounts {
             rtree: kinds.a,
             mesh: kinds.b,
             meta: kinds.c,
             lod: lod.as_ref().map_or(0, LodTable::pages),
+            visibility: visibility.as_ref().map_or(0, VisibilityTable::pages),
         };
         if objects.a != tree.objects {
             return Err(Error::CorruptPage {
@@ -123,6 +153,7 @@ impl Database {
             bounds,
             kinds,
             lod,
+            visibility,
             store,
         })
     }
@@ -328,6 +359,90 @@ impl Database {
         self.store.reset_stats()
     }
 
+    /// Whether the database holds precomputed visibility (reads nothing).
+    pub fn has_visibility(&self) -> bool {
+        self.visibility.is_some()
+    }
+
+    /// The viewcell grid, how the visibility was computed, and the walkable cells;
+    /// `None` for a database built without `--visibility`. Reads the table's head the
+    /// first time.
+    pub fn visibility(&self) -> Result<Option<&TableHead>> {
+        self.visibility
+            .as_ref()
+            .map(|t| t.head(&self.store))
+            .transpose()
+    }
+
+    /// The potentially visible set of viewcell `cell`, with each object's degree of
+    /// visibility: `None` when the database has no visibility or the cell is not a
+    /// walkable one. Reads the pages of that cell's record.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// use flaneur::visibility::VisibilityOptions;
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// citygen::write_city(&city, &scene, false)?;
+    /// let opts = flaneur::BuildOptions {
+    ///     lod: None,
+    ///     visibility: Some(VisibilityOptions { resolution: 16, ..Default::default() }),
+    ///     ..Default::default()
+    /// };
+    /// flaneur::build_from_scene(&scene, &path, &opts)?;
+    ///
+    /// let db = flaneur::Database::open(&path)?;
+    /// let head = db.visibility()?.expect("built with visibility");
+    /// let cell = head.cells[0].id;
+    /// let pvs = db.pvs(cell)?.expect("a walkable cell");
+    /// assert!(pvs.dov.iter().all(|&d| d > 0.0 && d <= 1.0));
+    /// assert!(pvs.ids.windows(2).all(|w| w[0] < w[1]));
+    /// # Ok(()) }
+    /// ```
+    pub fn pvs(&self, cell: u32) -> Result<Option<CellPvs>> {
+        match &self.visibility {
+            Some(t) => t.pvs(&self.store, cell),
+            None => Ok(None),
+        }
+    }
+
+    /// The walkable viewcell under `p`, if there is one (and visibility at all).
+    pub fn viewcell_at(&self, p: glam::Vec3) -> Result<Option<u32>> {
+        match &self.visibility {
+            Some(t) => t.cell_at(&self.store, p),
+            None => Ok(None),
+        }
+    }
+
+    /// What `info` reports of the visibility; `None` without one. Reads the head.
+    pub fn visibility_info(&self) -> Result<Option<VisibilityInfo>> {
+        let Some(h) = self.visibility()? else {
+            return Ok(None);
+        };
+        let cells = h.cells.len();
+        let per = |v: f64, n: usize| if n == 0 { 0.0 } else { v / n as f64 };
+        let mean_pvs = per(h.stats.entries as f64, cells);
+        Ok(Some(VisibilityInfo {
+            rows: h.grid.rows(),
+            columns: h.grid.columns(),
+            cells,
+            cell_size: h.grid.size,
+            eye: h.grid.eye,
+            resolution: h.settings.resolution,
+            mean_pvs,
+            mean_share: per(mean_pvs, h.stats.objects as usize),
+            seconds: h.stats.seconds,
+            seconds_per_cell: per(h.stats.seconds, cells),
+            rays: h.stats.rays,
+            rays_per_second: if h.stats.seconds > 0.0 {
+                h.stats.rays as f64 / h.stats.seconds
+            } else {
+                0.0
+            },
+        }))
+    }
+
     /// Objects, triangles, pages by kind, tree shape (walks the whole tree).
     pub fn info(&self) -> Result<DatabaseInfo> {
         let tree = self.tree.stats(&self.store)?;
@@ -344,6 +459,7 @@ impl Database {
             fanout_leaf: self.tree.fanout.leaf,
             fanout_internal: self.tree.fanout.internal,
             lod: self.lod_stats()?,
+            visibility: self.visibility_info()?,
         })
     }
 }

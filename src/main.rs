@@ -23,7 +23,9 @@ use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
+use flaneur::visibility::VisibilityOptions;
 use flaneur::walk::motion::{self, CameraPath, Motion};
+use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::{Backend, BuildOptions, Database};
 
@@ -76,6 +78,16 @@ enum Command {
         /// DAG, for view-dependent refinement.
         #[arg(long, value_name = "N", default_value_t = flaneur::lod::DEFAULT_PM_THRESHOLD)]
         pm_threshold: usize,
+        /// Precompute each viewcell's potentially visible set and its objects' degrees
+        /// of visibility (the long step of a build; see --cell-size).
+        #[arg(long)]
+        visibility: bool,
+        /// Side of a viewcell in metres (with --visibility).
+        #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size)]
+        cell_size: f32,
+        /// Pixels per side of each cube face the DoV is measured on (with --visibility).
+        #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
+        dov_resolution: u32,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -133,15 +145,25 @@ enum Command {
     /// report per-frame figures.
     Walk {
         db: PathBuf,
-        /// `review` (CSearch with index cache and prefetching) or `box` (plain range queries).
+        /// `review` (CSearch with index cache and prefetching), `box` (plain range
+        /// queries) or `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
+        /// database built with --visibility).
         #[arg(long, default_value = "review")]
         mode: String,
         /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
         #[arg(long)]
         config: Option<Preset>,
-        /// A motion pattern (normal, fast, slow, turning, backward, random) or a path CSV file.
-        #[arg(long, default_value = "normal")]
-        path: String,
+        /// A motion pattern (normal, fast, slow, turning, backward, random), `cells` (a
+        /// walk through the walkable viewcells; the default of --mode pvs) or a path CSV
+        /// file. Default: normal.
+        #[arg(long)]
+        path: Option<String>,
+        /// With --mode pvs: which neighbours' PVS the client prefetches, snp or pbnp.
+        #[arg(long, default_value = "pbnp")]
+        prefetch: String,
+        /// With --mode pvs and pbnp: the border regions' width, a share of the cell's side.
+        #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER)]
+        border: f64,
         #[arg(long, default_value_t = 600)]
         frames: usize,
         #[arg(long, default_value_t = 30.0)]
@@ -461,9 +483,17 @@ fn run(cli: Cli) -> Result<()> {
             insertion,
             no_lod,
             pm_threshold,
+            visibility,
+            cell_size,
+            dov_resolution,
             quiet,
         } => {
             let opts = BuildOptions {
+                visibility: visibility.then(|| VisibilityOptions {
+                    cell_size,
+                    resolution: dov_resolution,
+                    ..VisibilityOptions::default()
+                }),
                 page_size,
                 fill,
                 insertion,
@@ -485,6 +515,26 @@ fn run(cli: Cli) -> Result<()> {
                 summary.seconds
             );
             print_lod_report(summary.lod.as_ref(), summary.bytes);
+            if let Some(v) = &summary.visibility {
+                println!(
+                    "  visibility: {} walkable cells of {} × {}, {:.1} objects per PVS, {} occluders; \
+                     {:.1} s ({:.3} s per cell, {:.2} M rays/s)",
+                    v.cells,
+                    v.rows,
+                    v.columns,
+                    v.entries as f64 / v.cells.max(1) as f64,
+                    v.occluders,
+                    v.seconds,
+                    v.seconds / v.cells.max(1) as f64,
+                    v.rays as f64 / v.seconds.max(1e-9) / 1e6
+                );
+                if v.rays_past_occluders > 0 {
+                    eprintln!(
+                        "warning: {} objects seen by DoV rays had been judged hidden; they are kept",
+                        v.rays_past_occluders
+                    );
+                }
+            }
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
@@ -524,13 +574,34 @@ fn run(cli: Cli) -> Result<()> {
             save_path,
             backend,
             quiet,
+            prefetch,
+            border,
         } => {
+            if mode == "pvs" && config.is_none() {
+                let rule = match prefetch.as_str() {
+                    "snp" => PvsPrefetch::Snp,
+                    "pbnp" => PvsPrefetch::Pbnp { border },
+                    other => bail!("unknown prefetch '{other}' (snp, pbnp)"),
+                };
+                return pvs_walk_cmd(
+                    &db,
+                    path.as_deref().unwrap_or("cells"),
+                    frames,
+                    fps,
+                    seed,
+                    rule,
+                    csv.as_deref(),
+                    backend,
+                    quiet,
+                );
+            }
+            let path = path.unwrap_or_else(|| "normal".into());
             let preset = match config {
                 Some(p) => p,
                 None => match mode.as_str() {
                     "review" => Preset::Optimal,
                     "box" => Preset::Box,
-                    other => bail!("unknown mode '{other}' (review, box)"),
+                    other => bail!("unknown mode '{other}' (review, box, pvs)"),
                 },
             };
             let mut cfg = ReviewConfig::preset(preset);
@@ -812,8 +883,8 @@ fn info(path: &Path, json: bool) -> Result<()> {
         info.file_bytes as f64 / (1 << 20) as f64
     );
     println!(
-        "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}",
-        k.rtree, k.mesh, k.meta, k.lod
+        "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}, visibility {}",
+        k.rtree, k.mesh, k.meta, k.lod, k.visibility
     );
     match &info.lod {
         None => println!("lods        none (built with --no-lod, or before LODs were stored)"),
@@ -838,6 +909,28 @@ fn info(path: &Path, json: bool) -> Result<()> {
                     l.refused
                 );
             }
+        }
+    }
+    match &info.visibility {
+        None => println!("visibility  none (built without --visibility)"),
+        Some(v) => {
+            println!(
+                "visibility  {} walkable cells of {} × {} ({} m, eyes {}–{} m), {} pages",
+                v.cells, v.rows, v.columns, v.cell_size, v.eye[0], v.eye[1], k.visibility
+            );
+            println!(
+                "  PVS       {:.1} objects on average, {:.2}% of the scene",
+                v.mean_pvs,
+                100.0 * v.mean_share
+            );
+            println!(
+                "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {} rays, {:.2} M rays/s",
+                v.seconds,
+                v.seconds_per_cell,
+                v.resolution,
+                v.rays,
+                v.rays_per_second / 1e6
+            );
         }
     }
     let b = info.bounds;
@@ -1229,12 +1322,7 @@ fn walk_cmd(
     quiet: bool,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
-    let poses = match camera.parse::<Motion>() {
-        Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
-        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| {
-            format!("'{camera}' is neither a motion pattern nor a readable path file")
-        })?,
-    };
+    let poses = camera_path(&db, camera, frames, fps, seed)?;
     if let Some(p) = save_path {
         poses.save_csv(p)?;
     }
@@ -1249,6 +1337,84 @@ fn walk_cmd(
         std::fs::write(p, report.to_csv()).with_context(|| format!("writing {}", p.display()))?;
     }
     print_walk(&report);
+    Ok(())
+}
+
+/// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.
+fn camera_path(
+    db: &Database,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+) -> Result<CameraPath> {
+    Ok(match camera.parse::<Motion>() {
+        Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
+        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| {
+            format!("'{camera}' is neither a motion pattern nor a readable path file")
+        })?,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn pvs_walk_cmd(
+    path: &Path,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+    rule: PvsPrefetch,
+    csv: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = match camera {
+        // A walker's pace: 1.4 m/s.
+        "cells" => pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+        other => camera_path(&db, other, frames, fps, seed)?,
+    };
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(poses.poses.len() as u64)
+    };
+    let r = pvs_walk::walk_pvs(&db, &poses, rule, |_| bar.inc(1))?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
+        for (i, f) in r.frames.iter().enumerate() {
+            out.push_str(&format!(
+                "{i},{},{},{},{},{},{},{}\n",
+                f.cell.map_or(String::new(), |c| c.to_string()),
+                f.drawn,
+                f.transaction as u8,
+                f.sent,
+                f.swaps,
+                f.visual_misses,
+                f.pages
+            ));
+        }
+        std::fs::write(p, out).with_context(|| format!("writing {}", p.display()))?;
+    }
+    println!(
+        "pvs walk, {} prefetch: {} frames ({} outside any walkable cell), {} cells entered",
+        r.prefetch.name(),
+        r.frames.len(),
+        r.frames_outside,
+        r.cells_entered
+    );
+    println!(
+        "  {} prefetch transactions, {} cache swaps, {:.1} objects per transaction, {} visual misses",
+        r.transactions,
+        r.swaps,
+        r.objects_per_transaction(),
+        r.visual_misses
+    );
+    println!(
+        "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
+        r.mean_drawn, r.pages
+    );
     Ok(())
 }
 

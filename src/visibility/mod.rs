@@ -5,6 +5,8 @@
 //! - [`cells`](ViewcellGrid): the grid of viewcells, the walkable ones.
 //! - `occluder`: a box inside each building's solid, its convex part (paper-notes).
 //! - `conservative`: the occluder belt and the hidden sets of §5.5.1 (a [`Scene`]).
+//! - [`precompute`]: all of it for a city, as `flaneur build --visibility` runs it;
+//!   `table` its bytes, [`VisibilityTable`] their reading through the store.
 //! - [`raycast`]: the scene's triangles in one BVH; the first hit of a ray as an object.
 //! - [`cube`]: the cube's faces, pixels and their ΔDoV; the identity buffer.
 //! - [`dov`]: point DoV (the sum of an object's pixels) and cell DoV (the maximum over a
@@ -52,19 +54,24 @@ pub mod cube;
 pub mod dov;
 mod intersect;
 mod occluder;
+mod precompute;
 pub mod raycast;
+mod stored;
 mod table;
 
 #[cfg(test)]
 mod tests;
 
 pub use cells::{corners, Viewcell, ViewcellGrid, DEFAULT_CELL_SIZE, DEFAULT_EYE_RANGE};
-pub use conservative::{hides, BeltOptions, CellVisibility, Scene};
+pub use conservative::{hidden_in_parts, hides, BeltOptions, CellVisibility, Scene};
 pub use cube::{CubicProjection, SKY};
 pub use dov::{cell_dovs, point_dov, CellDovs, DovStats, PointDov};
 pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
-pub use occluder::occluder_box;
+pub use occluder::occluder_boxes;
+pub use precompute::{precompute, Precomputed, VisibilityOptions};
 pub use raycast::{Hit, RayScene};
+pub use stored::VisibilityTable;
 pub use table::{
-    CellEntry, CellPvs, TableHead, VisibilitySettings, VisibilityStats, VISIBILITY_SEGMENT,
+    encode_table, CellEntry, CellPvs, TableHead, VisibilitySettings, VisibilityStats,
+    VISIBILITY_SEGMENT,
 };

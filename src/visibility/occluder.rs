@@ -23,7 +23,9 @@
 //!   1 m are not worth testing against and give none.
 //! - A mesh with a hole escapes through it: its faces there are outside faces and its
 //!   box, if any, stays clear of the hole's sight lines.
-//! - The box is shrunk by 1 cm at the end, so rounding in the tests that use it cannot
+//! - Up to two more boxes are stacked, each the best that stands on the one below (at
+//!   least 1 m high): the inside of a roof, a setback tier.
+//! - Each box is shrunk by 1 cm at the end, so rounding in the tests that use it cannot
 //!   let it poke out of the solid.
 
 use glam::Vec3;
@@ -39,18 +41,22 @@ const STEPS: u32 = 14;
 /// What the found box is shrunk by, in metres.
 const SAFETY: f32 = 0.01;
 const MIN_HEIGHT: f32 = 2.0;
+/// Boxes stacked on the first (a roof's inside, a setback tier), and the least height
+/// of one.
+const STACKED: usize = 3;
+const MIN_UPPER_HEIGHT: f32 = 1.0;
 const MIN_WIDTH: f32 = 1.0;
 /// How far outside a face its samples are taken, in metres.
 const PROBE: f32 = 1e-3;
 /// Columns of the grids that sort faces for the enclosure rays, per side.
 const COLUMNS: usize = 16;
 
-/// A box inside `mesh`'s solid standing on its footprint, or `None` when there is no
-/// worthwhile one (the mesh is small, flat, open, or does not stand on its bounds'
-/// ground).
+/// Boxes inside `mesh`'s solid: the first standing on its footprint, each next on the
+/// one below; none when there is no worthwhile one (the mesh is small, flat, open, or
+/// does not stand on its bounds' ground).
 ///
 /// ```
-/// use flaneur::visibility::occluder_box;
+/// use flaneur::visibility::occluder_boxes;
 /// // A closed 10 × 6 × 4 m block: its occluder fills it, less the safety margin.
 /// let mut mesh = citygen::Mesh::default();
 /// let p = |x: f32, y: f32, z: f32| [x, y, z];
@@ -63,18 +69,21 @@ const COLUMNS: usize = 16;
 ///     0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6, 0, 4, 5, 0, 5, 1,
 ///     1, 5, 6, 1, 6, 2, 2, 6, 7, 2, 7, 3, 3, 7, 4, 3, 4, 0,
 /// ];
-/// let b = occluder_box(&mesh).unwrap();
+/// let boxes = occluder_boxes(&mesh);
+/// assert_eq!(boxes.len(), 1);
+/// let b = boxes[0];
 /// assert!(b.extent().x > 9.9 && b.extent().y > 5.9 && b.extent().z > 3.9);
 /// ```
-pub fn occluder_box(mesh: &Mesh) -> Option<Aabb> {
+pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
+    let mut boxes = Vec::new();
     if mesh.validate().is_err() || mesh.triangle_count() == 0 {
-        return None;
+        return boxes;
     }
     let (lo, hi) = mesh.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let size = hi - lo;
     if size.y < MIN_HEIGHT || size.x.min(size.z) < MIN_WIDTH {
-        return None;
+        return boxes;
     }
     let solid = Solid::new(mesh, lo, hi);
     let outside: Vec<[Vec3; 3]> = solid
@@ -84,40 +93,56 @@ pub fn occluder_box(mesh: &Mesh) -> Option<Aabb> {
         .copied()
         .collect();
     let free = |b: &Aabb| !outside.iter().any(|t| triangle_meets_box(t, b));
-    let mut best: Option<(f32, Aabb)> = None;
-    for k in 1..=HEIGHTS {
-        // A hair under the level, or a roof lying on it would always meet the box.
-        let height = size.y * k as f32 / HEIGHTS as f32 - SAFETY;
-        if height < MIN_HEIGHT {
-            continue;
-        }
-        let Some(b) = widest_free(lo, hi, height, &free) else {
-            continue;
+    let mut floor = lo.y;
+    while boxes.len() < STACKED {
+        let min_height = if boxes.is_empty() {
+            MIN_HEIGHT
+        } else {
+            MIN_UPPER_HEIGHT
         };
-        let score = (b.max.x - b.min.x + b.max.z - b.min.z) * height;
-        if best.is_none_or(|(s, _)| score > s) {
-            best = Some((score, b));
+        let mut best: Option<(f32, Aabb)> = None;
+        for k in 1..=HEIGHTS {
+            // A hair under the level, or a roof lying on it would always meet the box.
+            let height = (hi.y - floor) * k as f32 / HEIGHTS as f32 - SAFETY;
+            if height < min_height {
+                continue;
+            }
+            let Some(b) = widest_free(lo, hi, floor, height, &free) else {
+                continue;
+            };
+            let score = (b.max.x - b.min.x + b.max.z - b.min.z) * height;
+            if best.is_none_or(|(s, _)| score > s) {
+                best = Some((score, b));
+            }
         }
+        let Some((_, b)) = best else { break };
+        if !solid.encloses(b.center()) {
+            break;
+        }
+        floor = b.max.y;
+        boxes.push(Aabb {
+            min: b.min + Vec3::splat(SAFETY),
+            max: b.max - Vec3::splat(SAFETY),
+        });
     }
-    let (_, b) = best?;
-    if !solid.encloses(b.center()) {
-        return None;
-    }
-    Some(Aabb {
-        min: b.min + Vec3::splat(SAFETY),
-        max: b.max - Vec3::splat(SAFETY),
-    })
+    boxes
 }
 
-/// The footprint box from the ground up `height`, inset by the smallest even margin (to
+/// The footprint box from `floor` up `height`, inset by the smallest even margin (to
 /// a bisection's precision) that leaves it meeting no outside face; `None` when even
 /// the narrowest worthwhile box meets one.
-fn widest_free(lo: Vec3, hi: Vec3, height: f32, free: &impl Fn(&Aabb) -> bool) -> Option<Aabb> {
+fn widest_free(
+    lo: Vec3,
+    hi: Vec3,
+    floor: f32,
+    height: f32,
+    free: &impl Fn(&Aabb) -> bool,
+) -> Option<Aabb> {
     // A floor face would always meet a box standing on it: the boxes tested stand a
-    // hair above the ground.
+    // hair above their floor.
     let candidate = |margin: f32| Aabb {
-        min: Vec3::new(lo.x + margin, lo.y + SAFETY, lo.z + margin),
-        max: Vec3::new(hi.x - margin, lo.y + height, hi.z - margin),
+        min: Vec3::new(lo.x + margin, floor + SAFETY, lo.z + margin),
+        max: Vec3::new(hi.x - margin, floor + height, hi.z - margin),
     };
     let narrowest = 0.5 * ((hi.x - lo.x).min(hi.z - lo.z) - MIN_WIDTH) - SAFETY;
     if narrowest < 0.0 || !free(&candidate(narrowest)) {
@@ -139,7 +164,7 @@ fn widest_free(lo: Vec3, hi: Vec3, height: f32, free: &impl Fn(&Aabb) -> bool) -
         }
     }
     let mut b = candidate(good);
-    b.min.y = lo.y;
+    b.min.y = floor;
     Some(b)
 }
 
@@ -278,44 +303,58 @@ mod tests {
         let objects = city_buildings(60);
         let (mut found, mut total) = (0, 0.0);
         for o in &objects {
-            let Some(b) = occluder_box(&o.mesh) else {
+            let boxes = occluder_boxes(&o.mesh);
+            if boxes.is_empty() {
                 continue;
-            };
+            }
             found += 1;
             let (lo, hi) = o.mesh.bounds();
             let bounds = Aabb::new(lo, hi).unwrap();
-            assert!(bounds.contains(&b), "object {}: {b} outside {bounds}", o.id);
-            // Every point of the box is enclosed, as seen along 26 directions with no
-            // columns: a 5 × 5 × 5 grid over it, corners included.
-            let triangles: Vec<[Vec3; 3]> = o
-                .mesh
-                .indices
-                .chunks_exact(3)
-                .map(|t| [0, 1, 2].map(|k| Vec3::from(o.mesh.positions[t[k] as usize])))
-                .collect();
-            let tilt = Vec3::new(0.0031, 0.0017, 0.0027);
-            let dirs: Vec<Vec3> = (0..27)
-                .filter(|&i| i != 13)
-                .map(|i| Vec3::new((i % 3) as f32, (i / 3 % 3) as f32, (i / 9) as f32) - 1.0)
-                .map(|d| d + tilt)
-                .collect();
-            for i in 0..125 {
-                let f = Vec3::new((i % 5) as f32, (i / 5 % 5) as f32, (i / 25) as f32) / 4.0;
-                let p = b.min + f * b.extent();
-                for d in &dirs {
-                    assert!(
-                        triangles
-                            .iter()
-                            .any(|t| ray_triangle_distance(p, *d, t).is_some()),
-                        "object {}: {p} of {b} sees out along {d}",
-                        o.id
-                    );
+            for w in boxes.windows(2) {
+                assert!(
+                    w[1].min.y >= w[0].max.y,
+                    "object {}: stacked boxes overlap",
+                    o.id
+                );
+            }
+            for b in &boxes {
+                assert!(bounds.contains(b), "object {}: {b} outside {bounds}", o.id);
+                // Every point of the box is enclosed, as seen along 26 directions with no
+                // columns: a 5 × 5 × 5 grid over it, corners included.
+                let triangles: Vec<[Vec3; 3]> = o
+                    .mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|k| Vec3::from(o.mesh.positions[t[k] as usize])))
+                    .collect();
+                let tilt = Vec3::new(0.0031, 0.0017, 0.0027);
+                let dirs: Vec<Vec3> = (0..27)
+                    .filter(|&i| i != 13)
+                    .map(|i| Vec3::new((i % 3) as f32, (i / 3 % 3) as f32, (i / 9) as f32) - 1.0)
+                    .map(|d| d + tilt)
+                    .collect();
+                for i in 0..125 {
+                    let f = Vec3::new((i % 5) as f32, (i / 5 % 5) as f32, (i / 25) as f32) / 4.0;
+                    let p = b.min + f * b.extent();
+                    for d in &dirs {
+                        assert!(
+                            triangles
+                                .iter()
+                                .any(|t| ray_triangle_distance(p, *d, t).is_some()),
+                            "object {}: {p} of {b} sees out along {d}",
+                            o.id
+                        );
+                    }
                 }
             }
             // A worthwhile part of the building (a house under a tall roof keeps the
             // least, about a tenth of its bounds).
-            let share = b.volume() / bounds.volume();
-            assert!(share > 0.05, "object {}: {b} is {share} of {bounds}", o.id);
+            let share = boxes.iter().map(Aabb::volume).sum::<f32>() / bounds.volume();
+            assert!(
+                share > 0.05,
+                "object {}: {boxes:?} is {share} of {bounds}",
+                o.id
+            );
             total += share;
         }
         assert!(
@@ -329,13 +368,13 @@ mod tests {
     #[test]
     fn flat_open_and_broken_meshes_give_none() {
         let mut m = Mesh::default();
-        assert!(occluder_box(&m).is_none());
+        assert!(occluder_boxes(&m).is_empty());
         m.positions = vec![[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0, 10.0]];
         m.normals = vec![[0.0, 1.0, 0.0]; 3];
         m.indices = vec![0, 1, 2];
-        assert!(occluder_box(&m).is_none(), "flat");
+        assert!(occluder_boxes(&m).is_empty(), "flat");
         m.positions[2] = [0.0, 10.0, f32::NAN];
-        assert!(occluder_box(&m).is_none(), "NaN");
+        assert!(occluder_boxes(&m).is_empty(), "NaN");
         // An open box (no top, no bottom) has no inside.
         let p = |x: f32, y: f32, z: f32| [x, y, z];
         m.positions = vec![
@@ -352,6 +391,6 @@ mod tests {
         m.indices = vec![
             0, 4, 5, 0, 5, 1, 1, 5, 6, 1, 6, 2, 2, 6, 7, 2, 7, 3, 3, 7, 4, 3, 4, 0,
         ];
-        assert!(occluder_box(&m).is_none(), "open");
+        assert!(occluder_boxes(&m).is_empty(), "open");
     }
 }

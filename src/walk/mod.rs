@@ -7,6 +7,7 @@ pub mod cells;
 pub mod motion;
 mod path;
 pub mod path_csv;
+pub mod pvs_walk;
 pub mod review;
 
 pub use motion::{CameraPath, Motion, Pose};

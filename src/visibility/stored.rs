@@ -1,0 +1,145 @@
+//! Reading the visibility table through the store, every page counted: its head (read
+//! once per open database) and one cell's PVS record at a time.
+
+use std::sync::OnceLock;
+
+use glam::Vec3;
+
+use super::table::{
+    cell_count, decode_head, decode_record, CellPvs, TableHead, HEAD_FIXED, VISIBILITY_SEGMENT,
+};
+use crate::error::{Error, Result};
+use crate::store::{Extent, PageKind, Store};
+
+/// The visibility table of an open database: where it lies, and its head once read.
+#[derive(Debug)]
+pub struct VisibilityTable {
+    extent: Extent,
+    head: OnceLock<TableHead>,
+}
+
+/// Turns a codec's complaint into an error naming the table's first page.
+fn about(store: &Store, ext: &Extent, e: Error) -> Error {
+    match e {
+        Error::Invalid(what) => Error::CorruptPage {
+            path: store.path().to_path_buf(),
+            page: ext.first_page,
+            what,
+        },
+        other => other,
+    }
+}
+
+impl VisibilityTable {
+    /// The table the header's segment names, `None` when the database has no
+    /// visibility (built without `--visibility`). Reads nothing but checks that the
+    /// extent lies in the file.
+    pub fn open(store: &Store) -> Result<Option<VisibilityTable>> {
+        let Some(seg) = store.header().segment(VISIBILITY_SEGMENT) else {
+            return Ok(None);
+        };
+        let bad = |what: String| Error::CorruptPage {
+            path: store.path().to_path_buf(),
+            page: 0,
+            what: format!("segment {VISIBILITY_SEGMENT:?}: {what}"),
+        };
+        let byte_len = u32::try_from(seg.b)
+            .map_err(|_| bad(format!("a table of {} bytes is too long", seg.b)))?;
+        let extent = Extent {
+            first_page: seg.a,
+            page_count: Extent::pages_for(byte_len as usize, store.payload_size()) as u32,
+            byte_len,
+        };
+        if seg.a == 0
+            || extent.page_count == 0
+            || seg.c != extent.page_count as u64
+            || seg
+                .a
+                .checked_add(seg.c)
+                .is_none_or(|e| e > store.page_count())
+        {
+            return Err(bad(format!(
+                "a table of {} bytes in {} pages from page {} does not fit the file's {} pages",
+                seg.b,
+                seg.c,
+                seg.a,
+                store.page_count()
+            )));
+        }
+        Ok(Some(VisibilityTable {
+            extent,
+            head: OnceLock::new(),
+        }))
+    }
+
+    /// Pages the table takes.
+    pub fn pages(&self) -> u64 {
+        self.extent.page_count as u64
+    }
+
+    /// The head: grid, settings, stats, directory. Read the first time.
+    pub fn head(&self, store: &Store) -> Result<&TableHead> {
+        if let Some(h) = self.head.get() {
+            return Ok(h);
+        }
+        let ext = &self.extent;
+        let len = ext.byte_len as usize;
+        if len < HEAD_FIXED {
+            return Err(about(
+                store,
+                ext,
+                Error::Invalid(format!("a visibility table of {len} bytes has no head")),
+            ));
+        }
+        let fixed = store.read_extent_range(ext, PageKind::Visibility, 0, HEAD_FIXED)?;
+        let n = cell_count(&fixed).map_err(|e| about(store, ext, e))?;
+        let head_len = TableHead::len_for(n);
+        if head_len > len {
+            return Err(about(
+                store,
+                ext,
+                Error::Invalid(format!(
+                    "a head of {n} cells takes {head_len} bytes, the table has {len}"
+                )),
+            ));
+        }
+        let b = store.read_extent_range(ext, PageKind::Visibility, 0, head_len)?;
+        let head = decode_head(&b, ext.byte_len as u64).map_err(|e| about(store, ext, e))?;
+        Ok(self.head.get_or_init(|| head))
+    }
+
+    /// The PVS of cell `id`, `None` when the cell is not walkable or not in the grid.
+    /// Reads the pages of that cell's record.
+    pub fn pvs(&self, store: &Store, id: u32) -> Result<Option<CellPvs>> {
+        let head = self.head(store)?;
+        let Some(c) = head.cell(id) else {
+            return Ok(None);
+        };
+        let b = store.read_extent_range(
+            &self.extent,
+            PageKind::Visibility,
+            c.offset as usize,
+            c.len as usize,
+        )?;
+        decode_record(&b, c.count)
+            .map(Some)
+            .map_err(|e| match about(store, &self.extent, e) {
+                Error::CorruptPage { path, page, what } => Error::CorruptPage {
+                    path,
+                    page,
+                    what: format!("cell {id}: {what}"),
+                },
+                other => other,
+            })
+    }
+
+    /// The walkable cell holding `p` (by its ground square), if any.
+    pub fn cell_at(&self, store: &Store, p: Vec3) -> Result<Option<u32>> {
+        let head = self.head(store)?;
+        Ok(head
+            .grid
+            .locate(p)
+            .map(|(r, c)| head.grid.id(r, c))
+            .filter(|&id| head.cell(id).is_some()))
+    }
+}

@@ -1,0 +1,212 @@
+//! The PVS walk (`flaneur walk DB --mode pvs`): a camera path over a database built with
+//! `--visibility`, the viewer drawing its current viewcell's PVS while a client
+//! prefetches neighbours' PVS rows with SNP or PBNP (Zheng 2007 ch. 7) from the stored
+//! table, every page read counted.
+//!
+//! A pose whose eye is in no walkable cell (above a roof, off the grid) draws nothing
+//! new and asks for nothing: the client keeps what it holds and the frame counts as
+//! outside. That is the walk's choice; the prefetcher itself refuses such positions.
+
+use serde::Serialize;
+
+use crate::database::Database;
+use crate::error::Result;
+use crate::prefetch::pvs::{Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs};
+use crate::walk::motion::CameraPath;
+
+/// Which neighbours the client prefetches.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum PvsPrefetch {
+    /// All eight on every cell change.
+    Snp,
+    /// Those the viewer leans towards; the border band as a share of the cell's side.
+    Pbnp { border: f64 },
+}
+
+impl PvsPrefetch {
+    pub fn name(&self) -> &'static str {
+        match self {
+            PvsPrefetch::Snp => "snp",
+            PvsPrefetch::Pbnp { .. } => "pbnp",
+        }
+    }
+}
+
+/// One frame of a PVS walk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PvsFrame {
+    /// The viewcell the eye is in, if walkable.
+    pub cell: Option<u32>,
+    /// Objects drawn: the current cell's PVS (0 outside cells).
+    pub drawn: usize,
+    /// Whether a prefetch transaction ran, and what it sent and evicted.
+    pub transaction: bool,
+    pub sent: usize,
+    pub swaps: usize,
+    /// On entering a cell, objects of its PVS the client did not hold.
+    pub visual_misses: usize,
+    /// Pages read during the frame (visibility pages included).
+    pub pages: u64,
+}
+
+/// What a PVS walk did, frame by frame and in all.
+#[derive(Clone, Debug, Serialize)]
+pub struct PvsWalkReport {
+    pub prefetch: PvsPrefetch,
+    pub frames: Vec<PvsFrame>,
+    pub frames_outside: usize,
+    pub cells_entered: usize,
+    pub transactions: usize,
+    pub swaps: usize,
+    pub objects_sent: usize,
+    pub visual_misses: usize,
+    pub mean_drawn: f64,
+    pub pages: u64,
+}
+
+impl PvsWalkReport {
+    /// Objects sent per transaction.
+    pub fn objects_per_transaction(&self) -> f64 {
+        self.objects_sent as f64 / self.transactions.max(1) as f64
+    }
+}
+
+/// Walks `path` over `db`'s precomputed visibility with `prefetch`, calling `tick`
+/// after each frame.
+pub fn walk_pvs(
+    db: &Database,
+    path: &CameraPath,
+    prefetch: PvsPrefetch,
+    mut tick: impl FnMut(usize),
+) -> Result<PvsWalkReport> {
+    let source = StoredPvs::new(db)?;
+    let (snp, pbnp);
+    let rule: &dyn PrefetchArea = match prefetch {
+        PvsPrefetch::Snp => {
+            snp = Snp;
+            &snp
+        }
+        PvsPrefetch::Pbnp { border } => {
+            pbnp = Pbnp::new(border)?;
+            &pbnp
+        }
+    };
+    let mut client = PvsClient::new(&source, rule, crate::prefetch::pvs::THESIS_CAPACITY)?;
+    let mut frames = Vec::with_capacity(path.poses.len());
+    for (i, pose) in path.poses.iter().enumerate() {
+        let before = db.io().page_reads;
+        let mut frame = PvsFrame::default();
+        if let Some(id) = db.viewcell_at(pose.position)? {
+            let p = Position::new(pose.position.x as f64, pose.position.z as f64);
+            let out = client.step(p)?;
+            frame.cell = Some(id);
+            frame.drawn = client.cache().pvs(out.cell).map_or(0, |s| s.len());
+            frame.visual_misses = out.visual_misses;
+            if let Some(t) = &out.transaction {
+                frame.transaction = true;
+                frame.sent = t.sent.len();
+                frame.swaps = t.evicted.len();
+            }
+        }
+        frame.pages = db.io().page_reads - before;
+        frames.push(frame);
+        tick(i);
+    }
+    let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
+    let cells_entered = frames
+        .windows(2)
+        .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
+        .count();
+    Ok(PvsWalkReport {
+        prefetch,
+        frames_outside: frames.len() - inside.len(),
+        cells_entered,
+        transactions: frames.iter().filter(|f| f.transaction).count(),
+        swaps: frames.iter().map(|f| f.swaps).sum(),
+        objects_sent: frames.iter().map(|f| f.sent).sum(),
+        visual_misses: frames.iter().map(|f| f.visual_misses).sum(),
+        mean_drawn: inside.iter().map(|f| f.drawn as f64).sum::<f64>() / inside.len().max(1) as f64,
+        pages: frames.iter().map(|f| f.pages).sum(),
+        frames,
+    })
+}
+
+/// A walk through the walkable viewcells of `db`: from a cell's centre to a
+/// neighbouring walkable cell's centre, `step` metres a frame at `fps`, going straight
+/// on where it can (four times in five) and turning or, at a dead end, going back;
+/// deterministic from `seed`. The eye is at the middle of the cells' height range.
+pub fn cell_walk(
+    db: &Database,
+    frames: usize,
+    step: f32,
+    fps: f32,
+    seed: u64,
+) -> Result<CameraPath> {
+    use rand::{Rng, SeedableRng};
+    let head = db.visibility()?.ok_or_else(|| {
+        crate::Error::Invalid(format!(
+            "{} has no precomputed visibility: build it with --visibility",
+            db.store().path().display()
+        ))
+    })?;
+    if !(step.is_finite() && step > 0.0 && fps.is_finite() && fps > 0.0) || frames == 0 {
+        return Err(crate::Error::Invalid(format!(
+            "a cell walk needs frames > 0, a positive step and fps (got {frames}, {step} m, {fps})"
+        )));
+    }
+    let grid = &head.grid;
+    let walkable = |r: i64, c: i64| {
+        r >= 0
+            && c >= 0
+            && (r as u32) < grid.rows()
+            && (c as u32) < grid.columns()
+            && head.cell(grid.id(r as u32, c as u32)).is_some()
+    };
+    let centre = |r: i64, c: i64| grid.cell_bounds(r as u32, c as u32).center();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let start = head.cells[rng.gen_range(0..head.cells.len())].id;
+    let (r0, c0) = grid.place(start);
+    let (mut r, mut c) = (r0 as i64, c0 as i64);
+    let dirs = [(0i64, 1i64), (1, 0), (0, -1), (-1, 0)];
+    let mut d = rng.gen_range(0..4usize);
+    let mut p = centre(r, c);
+    let mut poses = Vec::with_capacity(frames);
+    let mut target = p;
+    for f in 0..frames {
+        if (target - p).length() < 1e-3 {
+            // At a centre: choose the next cell.
+            let open: Vec<usize> = (0..4)
+                .filter(|&k| walkable(r + dirs[k].0, c + dirs[k].1))
+                .collect();
+            if !open.is_empty() {
+                let ahead = open.contains(&d) && rng.gen_bool(0.8);
+                if !ahead {
+                    let turns: Vec<usize> =
+                        open.iter().copied().filter(|&k| k != (d + 2) % 4).collect();
+                    d = if turns.is_empty() {
+                        open[0]
+                    } else {
+                        turns[rng.gen_range(0..turns.len())]
+                    };
+                }
+                r += dirs[d].0;
+                c += dirs[d].1;
+                target = centre(r, c);
+            }
+        }
+        let to = target - p;
+        let yaw = (dirs[d].0 as f32).atan2(dirs[d].1 as f32);
+        if to.length() > step {
+            p += to.normalize() * step;
+        } else {
+            p = target;
+        }
+        poses.push(crate::walk::motion::Pose {
+            time: f as f64 / fps as f64,
+            position: p,
+            yaw,
+            pitch: 0.0,
+        });
+    }
+    CameraPath::new(poses)
+}
