@@ -87,9 +87,6 @@ pub struct VisibilityReport {
     pub occluders: usize,
     pub rays: u64,
     pub seconds: f64,
-    /// Objects a corner's rays met that the conservative test had hidden (0 unless
-    /// something is wrong; kept in the PVS).
-    pub rays_past_occluders: u64,
     /// Pages the table takes.
     pub pages: u64,
 }
@@ -247,7 +244,6 @@ fn store_visibility(
         occluders: made.occluders,
         rays: made.stats.rays,
         seconds: made.stats.seconds,
-        rays_past_occluders: made.rays_past_occluders,
         pages: extent.page_count as u64,
     })
 }

@@ -528,12 +528,6 @@ fn run(cli: Cli) -> Result<()> {
                     v.seconds / v.cells.max(1) as f64,
                     v.rays as f64 / v.seconds.max(1e-9) / 1e6
                 );
-                if v.rays_past_occluders > 0 {
-                    eprintln!(
-                        "warning: {} objects seen by DoV rays had been judged hidden; they are kept",
-                        v.rays_past_occluders
-                    );
-                }
             }
             Ok(())
         }

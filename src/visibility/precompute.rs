@@ -3,11 +3,11 @@
 //! by cubic projection from the cell's corners (§5.5.2), and the table that stores them.
 //!
 //! Choices made here:
-//! - A cell's PVS is its conservative set together with every object a corner's rays
-//!   met (which the conservative set holds already, unless something is wrong: such
-//!   objects are counted, and kept). Objects in the conservative set that no ray met
-//!   are the thesis's visible zero-DoV objects and get DoV_s, the DoV of the smallest
-//!   pixel of the cube (`CubicProjection::zero_dov_floor`).
+//! - The DoV comes first: an object a corner's rays met is visible, so the conservative
+//!   test is told so and spends no time on it (`Scene::visible_from_seen`); those are
+//!   the objects it would spend longest on. Objects in the conservative set that no ray
+//!   met are the thesis's visible zero-DoV objects and get DoV_s, the DoV of the
+//!   smallest pixel of the cube (`CubicProjection::zero_dov_floor`).
 //! - Cells are computed a band of rows at a time, so that neighbouring cells share
 //!   their corners' projections within a band and the progress can be reported.
 
@@ -58,9 +58,6 @@ pub struct Precomputed {
     pub settings: VisibilitySettings,
     pub stats: VisibilityStats,
     pub cells: Vec<(u32, CellPvs)>,
-    /// Objects a corner's rays met that the conservative test had hidden (0 unless
-    /// something is wrong; they are kept in the PVS).
-    pub rays_past_occluders: u64,
     /// Occluders found among the objects.
     pub occluders: usize,
 }
@@ -96,21 +93,18 @@ pub fn precompute(
     let dov_s = projection.zero_dov_floor();
 
     let mut cells = Vec::with_capacity(walkable.len());
-    let (mut cast, mut past) = (0u64, 0u64);
+    let mut cast = 0u64;
     progress(0, walkable.len());
     for band in walkable.chunk_by(|a, b| a.row / BAND_ROWS == b.row / BAND_ROWS) {
         let bounds: Vec<Aabb> = band.iter().map(|c| c.bounds).collect();
         let dovs = cell_dovs(&rays, &projection, &bounds)?;
         cast += dovs.stats.rays;
-        let made: Vec<(u32, CellPvs, u64)> = band
+        let made: Vec<(u32, CellPvs)> = band
             .par_iter()
             .zip(dovs.cells.par_iter())
             .map(|(cell, seen)| cell_pvs(&scene, opts, cell, seen, objects, dov_s))
             .collect::<Result<_>>()?;
-        for (id, pvs, p) in made {
-            past += p;
-            cells.push((id, pvs));
-        }
+        cells.extend(made);
         progress(cells.len(), walkable.len());
     }
     let entries = cells.iter().map(|(_, p)| p.ids.len() as u64).sum();
@@ -128,13 +122,12 @@ pub fn precompute(
             objects: objects.len() as u64,
         },
         cells,
-        rays_past_occluders: past,
         occluders: occluders.iter().filter(|o| !o.is_empty()).count(),
     })
 }
 
 /// One cell's PVS from its conservative set and the DoVs its corners saw (by object
-/// index); also how many seen objects the conservative set lacked.
+/// index).
 fn cell_pvs(
     scene: &Scene,
     opts: &VisibilityOptions,
@@ -142,14 +135,16 @@ fn cell_pvs(
     seen: &[(u32, f32)],
     objects: &[(u64, Mesh)],
     dov_s: f32,
-) -> Result<(u32, CellPvs, u64)> {
-    let visible = scene.visible_from(&cell.bounds, &opts.belt)?.visible;
-    let mut merged: Vec<(u64, f32)> = Vec::with_capacity(visible.len());
-    let mut past = 0;
-    let (mut i, mut j) = (0, 0);
-    // Both lists ascend by object index; an object in both takes its measured DoV.
+) -> Result<(u32, CellPvs)> {
     let mut seen_sorted = seen.to_vec();
     seen_sorted.sort_unstable_by_key(|s| s.0);
+    let seen_ids: Vec<u32> = seen_sorted.iter().map(|s| s.0).collect();
+    let visible = scene
+        .visible_from_seen(&cell.bounds, &opts.belt, &seen_ids)?
+        .visible;
+    let mut merged: Vec<(u64, f32)> = Vec::with_capacity(visible.len());
+    let (mut i, mut j) = (0, 0);
+    // Both lists ascend by object index; an object in both takes its measured DoV.
     while i < visible.len() || j < seen_sorted.len() {
         let v = visible.get(i).copied();
         let s = seen_sorted.get(j).copied();
@@ -169,7 +164,6 @@ fn cell_pvs(
             }
             (_, Some((b, d))) => {
                 j += 1;
-                past += 1;
                 (b, d)
             }
             (None, None) => unreachable!("the loop runs while either has more"),
@@ -183,6 +177,5 @@ fn cell_pvs(
             ids: merged.iter().map(|m| m.0).collect(),
             dov: merged.iter().map(|m| m.1).collect(),
         },
-        past,
     ))
 }
