@@ -143,6 +143,33 @@ fn build_and_info_on_the_command_line() {
         "xyz",
     ]);
     assert!(!out.status.success());
+    // The prefetch experiment over this database's visibility as well.
+    let bench = dir.path().join("bench");
+    let out = flaneur(&[
+        "bench",
+        "pvs-prefetch",
+        "--blocks",
+        "10",
+        "--steps",
+        "300",
+        "--borders",
+        "0.25",
+        "--db",
+        db.to_str().unwrap(),
+        "--out",
+        bench.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("walkable cells, PVS"), "{text}");
+    let json = std::fs::read_to_string(bench.join("pvs-prefetch-db.json")).unwrap();
+    let run: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(run["pbnp"]["transactions"].as_u64().unwrap() >= 1);
+    assert!(run["snp_pages"].as_u64().unwrap() > 0);
     let out = flaneur(&[
         "build",
         scene.to_str().unwrap(),

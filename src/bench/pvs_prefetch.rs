@@ -705,3 +705,64 @@ mod tests {
         assert_eq!(thesis(3, "SNP"), None);
     }
 }
+
+/// SNP and PBNP over a database's precomputed visibility (`flaneur build
+/// --visibility`): route 1's kind of walk, random with back-and-forth, through the
+/// walkable viewcells from the one nearest the city's centre.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DatabaseRun {
+    /// Walkable cells, and their mean PVS as a share of the scene.
+    pub cells: usize,
+    pub mean_pvs_share: f64,
+    pub snp: SimTotals,
+    pub pbnp: SimTotals,
+    /// Pages read by each walk (PVS records and the table's head).
+    pub snp_pages: u64,
+    pub pbnp_pages: u64,
+}
+
+/// Runs SNP and PBNP over `db`'s visibility along a random route of `route`'s steps.
+pub fn run_on_database(
+    db: &crate::Database,
+    route: &RouteConfig,
+    border: f64,
+    capacity: usize,
+) -> Result<DatabaseRun> {
+    use crate::prefetch::pvs::{PvsSource, StoredPvs};
+    let source = StoredPvs::new(db)?;
+    let head = db.visibility()?.expect("StoredPvs checked it");
+    let eye = head.grid.origin.y + 0.5 * (head.grid.eye[0] + head.grid.eye[1]);
+    let centre = db.bounds().center();
+    let start = source
+        .walkable_centres()?
+        .into_iter()
+        .min_by(|a, b| {
+            let d =
+                |p: &Position| (p.x - centre.x as f64).powi(2) + (p.z - centre.z as f64).powi(2);
+            d(a).total_cmp(&d(b))
+        })
+        .ok_or_else(|| Error::Pvs("the database has no walkable viewcell".into()))?;
+    let walkable = |p: Position| {
+        Ok(db
+            .viewcell_at(glam::Vec3::new(p.x as f32, eye, p.z as f32))?
+            .is_some())
+    };
+    let positions = random_route(start, route, walkable)?;
+    let run = |rule: &dyn crate::prefetch::pvs::PrefetchArea| -> Result<(SimTotals, u64)> {
+        let before = db.io().page_reads;
+        let r = simulate(&source, rule, &positions, capacity)?;
+        Ok((r.totals, db.io().page_reads - before))
+    };
+    let (snp, snp_pages) = run(&Snp)?;
+    let (pbnp, pbnp_pages) = run(&Pbnp::new(border)?)?;
+    Ok(DatabaseRun {
+        cells: head.cells.len(),
+        mean_pvs_share: head.stats.entries as f64
+            / head.cells.len().max(1) as f64
+            / source.scene_objects().max(1) as f64,
+        snp,
+        pbnp,
+        snp_pages,
+        pbnp_pages,
+    })
+}

@@ -28,7 +28,7 @@ pub struct StepRecord {
 }
 
 /// A whole route's counts.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SimTotals {
     /// Positions walked (steps + 1, the start included).
     pub positions: usize,
