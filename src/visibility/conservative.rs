@@ -287,7 +287,11 @@ pub fn hidden_in_parts(occluders: &[Aabb], cell: &Aabb, b: &Aabb, splits: u32) -
         .filter(|o| !o.overlaps(b) && o.overlaps(&hull))
         .copied()
         .collect();
-    if near.is_empty() {
+    // A sight line that meets none of them shows the box whatever the halving: say so
+    // now rather than after the last halving (the answer is the same).
+    let target = b.center();
+    let open = |p: Vec3| !near.iter().any(|o| segment_meets_box(p, target, o));
+    if near.is_empty() || open(centre) || corners_c.iter().any(|&p| open(p)) {
         return false;
     }
     let ce = cell.extent();
