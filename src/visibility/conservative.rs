@@ -265,28 +265,12 @@ const SPLITS: u32 = 12;
 /// Whether every point of `b` is hidden from every point of `cell`, each by some one
 /// occluder: either one occluder hides all of `b` from all of `cell` (the thesis's
 /// test), or, halving the wider of the two (the cell across the ground, the box along
-/// its longest side) up to `splits` times, both halves are hidden. Past a bound on its
-/// work (20,000 occluder tests) it gives up and says "not hidden", which is always
-/// safe. A sight line from a
+/// its longest side) up to `splits` times, both halves are hidden. A sight line from a
 /// point of the cell to a point of the box lies between a part of the cell and a part
 /// of the box, and that pair's occluder meets it: the test stays exact and
 /// conservative, and sees what a row of buildings hides together, each building a
 /// part of it.
 pub fn hidden_in_parts(occluders: &[Aabb], cell: &Aabb, b: &Aabb, splits: u32) -> bool {
-    let mut work = WORK;
-    hidden_within(occluders, cell, b, splits, &mut work)
-}
-
-/// How many occluder tests one box may cost before the test gives up and calls it
-/// visible (always safe): the halvings of a box that is visible but that no sample
-/// ray saw would otherwise run to the end of every branch.
-const WORK: usize = 20_000;
-
-fn hidden_within(occluders: &[Aabb], cell: &Aabb, b: &Aabb, splits: u32, work: &mut usize) -> bool {
-    *work = work.saturating_sub(occluders.len());
-    if *work == 0 {
-        return false;
-    }
     let corners_c = corners(cell);
     let centre = cell.center();
     if occluders.iter().any(|o| hides(o, &corners_c, centre, b)) {
@@ -330,11 +314,11 @@ fn hidden_within(occluders: &[Aabb], cell: &Aabb, b: &Aabb, splits: u32, work: &
         let (lo, hi) = halves(b, axis);
         (lo, hi, false)
     };
-    let mut part = |x: &Aabb| {
+    let part = |x: &Aabb| {
         if split_cell {
-            hidden_within(&near, x, b, splits - 1, work)
+            hidden_in_parts(&near, x, b, splits - 1)
         } else {
-            hidden_within(&near, cell, x, splits - 1, work)
+            hidden_in_parts(&near, cell, x, splits - 1)
         }
     };
     part(&a1) && part(&a2)
