@@ -420,24 +420,14 @@ mod city_tests {
 
     use super::*;
     use crate::visibility::cells::{ViewcellGrid, DEFAULT_EYE_RANGE};
-    use crate::visibility::intersect::ray_triangle_distance;
+    use crate::visibility::intersect::{ray_triangle_distance, triangles};
     use crate::visibility::occluder_boxes;
 
     /// Rays from random walkable points of random cells of a small generated city: the
     /// first object each ray meets is in the cell's PVS.
     #[test]
     fn no_object_a_ray_from_inside_the_cell_meets_is_dropped() {
-        let config = citygen::CityConfig {
-            objects: 64,
-            landmarks: 0.0,
-            ..Default::default()
-        };
-        let mut objects = Vec::new();
-        citygen::generate::<crate::Error>(&config, |o| {
-            objects.push(o);
-            Ok(())
-        })
-        .unwrap();
+        let objects = crate::visibility::tests::city(64);
         let boxes: Vec<Aabb> = objects
             .iter()
             .map(|o| {
@@ -446,16 +436,7 @@ mod city_tests {
             })
             .collect();
         let occluders: Vec<Vec<Aabb>> = objects.iter().map(|o| occluder_boxes(&o.mesh)).collect();
-        let triangles: Vec<Vec<[Vec3; 3]>> = objects
-            .iter()
-            .map(|o| {
-                o.mesh
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|k| Vec3::from(o.mesh.positions[t[k] as usize])))
-                    .collect()
-            })
-            .collect();
+        let triangles: Vec<Vec<[Vec3; 3]>> = objects.iter().map(|o| triangles(&o.mesh)).collect();
         let scene = Scene::new(&boxes, &occluders).unwrap();
         let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
         let grid = ViewcellGrid::new(&city, 10.0, DEFAULT_EYE_RANGE).unwrap();

@@ -9,6 +9,15 @@
 use glam::Vec3;
 
 use crate::geom::Aabb;
+use crate::scene::Mesh;
+
+/// `mesh`'s triangles as corner positions, in index order.
+pub(crate) fn triangles(mesh: &Mesh) -> Vec<[Vec3; 3]> {
+    mesh.indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| Vec3::from(mesh.positions[t[k] as usize])))
+        .collect()
+}
 
 /// Whether the triangle `t` meets the closed box `b`: the separating-axis test of
 /// Akenine-Möller (the box's three axes, the triangle's normal, and the nine cross

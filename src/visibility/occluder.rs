@@ -30,7 +30,7 @@
 
 use glam::Vec3;
 
-use super::intersect::{ray_triangle_distance, triangle_meets_box};
+use super::intersect::{ray_triangle_distance, triangle_meets_box, triangles};
 use crate::geom::Aabb;
 use crate::scene::Mesh;
 
@@ -240,11 +240,7 @@ impl Columns {
 
 impl Solid {
     fn new(mesh: &Mesh, lo: Vec3, hi: Vec3) -> Solid {
-        let triangles: Vec<[Vec3; 3]> = mesh
-            .indices
-            .chunks_exact(3)
-            .map(|t| [0, 1, 2].map(|k| Vec3::from(mesh.positions[t[k] as usize])))
-            .collect();
+        let triangles = triangles(mesh);
         let grids = [0, 1, 2].map(|axis| Columns::new(axis, &triangles, lo, hi));
         Solid { triangles, grids }
     }
@@ -283,24 +279,9 @@ impl Solid {
 mod tests {
     use super::*;
 
-    fn city_buildings(n: u64) -> Vec<citygen::SceneObject> {
-        let config = citygen::CityConfig {
-            objects: n,
-            landmarks: 0.0,
-            ..Default::default()
-        };
-        let mut objects = Vec::new();
-        citygen::generate::<crate::Error>(&config, |o| {
-            objects.push(o);
-            Ok(())
-        })
-        .unwrap();
-        objects
-    }
-
     #[test]
     fn buildings_get_an_occluder_inside_them() {
-        let objects = city_buildings(60);
+        let objects = crate::visibility::tests::city(60);
         let (mut found, mut total) = (0, 0.0);
         for o in &objects {
             let boxes = occluder_boxes(&o.mesh);
@@ -321,12 +302,7 @@ mod tests {
                 assert!(bounds.contains(b), "object {}: {b} outside {bounds}", o.id);
                 // Every point of the box is enclosed, as seen along 26 directions with no
                 // columns: a 5 × 5 × 5 grid over it, corners included.
-                let triangles: Vec<[Vec3; 3]> = o
-                    .mesh
-                    .indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|k| Vec3::from(o.mesh.positions[t[k] as usize])))
-                    .collect();
+                let triangles = triangles(&o.mesh);
                 let tilt = Vec3::new(0.0031, 0.0017, 0.0027);
                 let dirs: Vec<Vec3> = (0..27)
                     .filter(|&i| i != 13)

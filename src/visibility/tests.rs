@@ -195,8 +195,8 @@ fn an_object_hidden_behind_a_wall_has_no_dov() {
     assert_eq!(cell_dovs(&open, &cube, &cells).unwrap().cells[0].len(), 1);
 }
 
-/// The objects of a small generated city.
-fn city(objects: u64) -> Vec<citygen::SceneObject> {
+/// The objects of a small generated city (the module tests share it).
+pub(super) fn city(objects: u64) -> Vec<citygen::SceneObject> {
     let config = CityConfig {
         objects,
         landmarks: 0.0,
