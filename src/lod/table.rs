@@ -288,36 +288,23 @@ impl LodTable {
     /// the first lookup. A `CorruptPage` (page 0) when the segment names an extent that
     /// is not inside the file.
     pub(crate) fn open(store: &Store) -> Result<Option<LodTable>> {
-        let Some(seg) = store.header().segment(LOD_SEGMENT) else {
+        let pages_in_file = store.page_count();
+        let found = store.segment_extent(LOD_SEGMENT, |extent, c| {
+            if c < extent.page_count as u64 || c >= pages_in_file {
+                return Err(format!(
+                    "a table of {} bytes at page {} with {c} LOD pages, in a file of \
+                     {pages_in_file} pages",
+                    extent.byte_len, extent.first_page
+                ));
+            }
+            Ok(())
+        })?;
+        let Some((extent, c)) = found else {
             return Ok(None);
         };
-        let bad = |what: String| Error::CorruptPage {
-            path: store.path().to_path_buf(),
-            page: 0,
-            what: format!("segment {LOD_SEGMENT:?}: {what}"),
-        };
-        let byte_len = u32::try_from(seg.b).map_err(|_| bad(format!("length {}", seg.b)))?;
-        let extent = Extent {
-            first_page: seg.a,
-            page_count: Extent::pages_for(byte_len as usize, store.payload_size()) as u32,
-            byte_len,
-        };
-        if extent.page_count == 0
-            || extent.first_page == 0
-            || extent.end_page() > store.page_count()
-            || seg.c < extent.page_count as u64
-            || seg.c >= store.page_count()
-        {
-            return Err(bad(format!(
-                "a table of {byte_len} bytes at page {} with {} LOD pages, in a file of {} pages",
-                seg.a,
-                seg.c,
-                store.page_count()
-            )));
-        }
         Ok(Some(LodTable {
             extent,
-            pages: seg.c,
+            pages: c,
             head: OnceLock::new(),
         }))
     }

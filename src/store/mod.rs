@@ -381,6 +381,42 @@ impl Store {
         &self.header
     }
 
+    /// The extent that segment `name` names as (a = first page, b = byte length), with
+    /// the segment's third value for the caller to check; `None` without the segment.
+    /// A `CorruptPage` (page 0) naming the segment when the extent is empty, starts at
+    /// the header, or does not lie inside the file; `check` adds the caller's own
+    /// conditions on the extent and c (`Err` with what is wrong).
+    pub fn segment_extent(
+        &self,
+        name: &str,
+        check: impl Fn(&Extent, u64) -> std::result::Result<(), String>,
+    ) -> Result<Option<(Extent, u64)>> {
+        let Some(seg) = self.header.segment(name) else {
+            return Ok(None);
+        };
+        let bad = |what: String| Error::CorruptPage {
+            path: self.path.clone(),
+            page: 0,
+            what: format!("segment {name:?}: {what}"),
+        };
+        let byte_len = u32::try_from(seg.b).map_err(|_| bad(format!("length {}", seg.b)))?;
+        let extent = Extent {
+            first_page: seg.a,
+            page_count: Extent::pages_for(byte_len as usize, self.payload_size()) as u32,
+            byte_len,
+        };
+        if extent.page_count == 0 || extent.first_page == 0 || extent.end_page() > self.page_count()
+        {
+            return Err(bad(format!(
+                "{byte_len} bytes at page {} do not lie in a file of {} pages",
+                seg.a,
+                self.page_count()
+            )));
+        }
+        check(&extent, seg.c).map_err(bad)?;
+        Ok(Some((extent, seg.c)))
+    }
+
     /// How this store reads pages (a created store reads with `pread`).
     pub fn backend(&self) -> Backend {
         self.backend

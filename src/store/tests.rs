@@ -791,3 +791,39 @@ fn extent_ranges_read_only_their_pages() {
         }
     }
 }
+
+#[test]
+fn segment_extents_are_checked_against_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("seg.db");
+    let mut s = Store::create(&path, PS).unwrap();
+    let ext = s.append_extent(PageKind::Meta, &blob(3 * PS, 7)).unwrap();
+    let pages = ext.page_count as u64;
+    let len = ext.byte_len as u64;
+    for (name, a, b) in [
+        ("blob", ext.first_page, len),
+        ("far", ext.first_page, len * 10),
+        ("header", 0, 10),
+        ("empty", ext.first_page, 0),
+    ] {
+        s.set_segment(Segment::new(name, a, b, pages)).unwrap();
+    }
+    s.finish().unwrap();
+    let s = Store::open(&path, Backend::Mmap).unwrap();
+    let ok = |_: &Extent, _: u64| Ok(());
+    let (found, c) = s.segment_extent("blob", ok).unwrap().unwrap();
+    assert_eq!((found, c), (ext, pages));
+    assert!(s.segment_extent("none", ok).unwrap().is_none());
+    for name in ["far", "header", "empty"] {
+        match s.segment_extent(name, ok) {
+            Err(Error::CorruptPage { page: 0, what, .. }) => assert!(what.contains(name), "{what}"),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    let refuse = |_: &Extent, c: u64| Err(format!("c is {c}"));
+    let e = s.segment_extent("blob", refuse).unwrap_err().to_string();
+    assert!(
+        e.contains("\"blob\"") && e.contains(&format!("c is {pages}")),
+        "{e}"
+    );
+}

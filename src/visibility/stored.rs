@@ -35,37 +35,18 @@ impl VisibilityTable {
     /// visibility (built without `--visibility`). Reads nothing but checks that the
     /// extent lies in the file.
     pub fn open(store: &Store) -> Result<Option<VisibilityTable>> {
-        let Some(seg) = store.header().segment(VISIBILITY_SEGMENT) else {
+        let found = store.segment_extent(VISIBILITY_SEGMENT, |extent, c| {
+            if c != extent.page_count as u64 {
+                return Err(format!(
+                    "a table of {} bytes takes {} pages, the segment says {c}",
+                    extent.byte_len, extent.page_count
+                ));
+            }
+            Ok(())
+        })?;
+        let Some((extent, _)) = found else {
             return Ok(None);
         };
-        let bad = |what: String| Error::CorruptPage {
-            path: store.path().to_path_buf(),
-            page: 0,
-            what: format!("segment {VISIBILITY_SEGMENT:?}: {what}"),
-        };
-        let byte_len = u32::try_from(seg.b)
-            .map_err(|_| bad(format!("a table of {} bytes is too long", seg.b)))?;
-        let extent = Extent {
-            first_page: seg.a,
-            page_count: Extent::pages_for(byte_len as usize, store.payload_size()) as u32,
-            byte_len,
-        };
-        if seg.a == 0
-            || extent.page_count == 0
-            || seg.c != extent.page_count as u64
-            || seg
-                .a
-                .checked_add(seg.c)
-                .is_none_or(|e| e > store.page_count())
-        {
-            return Err(bad(format!(
-                "a table of {} bytes in {} pages from page {} does not fit the file's {} pages",
-                seg.b,
-                seg.c,
-                seg.a,
-                store.page_count()
-            )));
-        }
         Ok(Some(VisibilityTable {
             extent,
             head: OnceLock::new(),
