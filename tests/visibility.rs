@@ -24,6 +24,36 @@ fn with_visibility() -> BuildOptions {
     }
 }
 
+/// A generated city's scene file in `dir`.
+fn scene_in(dir: &std::path::Path, objects: u64, seed: u64) -> std::path::PathBuf {
+    let scene = dir.join("c.scene");
+    let config = citygen::CityConfig {
+        objects,
+        seed,
+        landmarks: 0.0,
+        ..Default::default()
+    };
+    citygen::write_city(&config, &scene, false).unwrap();
+    scene
+}
+
+/// `flaneur build SCENE -o DB -q` with `extra` arguments.
+fn build_cli(
+    scene: &std::path::Path,
+    db: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "build",
+        scene.to_str().unwrap(),
+        "-o",
+        db.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend(extra);
+    flaneur(&args)
+}
+
 #[test]
 fn every_walkable_cell_has_a_pvs_with_dovs() {
     let city = common::city(80, 5, &with_visibility());
@@ -81,27 +111,20 @@ fn a_database_without_visibility_says_so() {
 #[test]
 fn build_and_info_on_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("c.scene");
+    let scene = scene_in(dir.path(), 40, 1);
     let db = dir.path().join("c.flaneur");
-    let config = citygen::CityConfig {
-        objects: 40,
-        landmarks: 0.0,
-        ..Default::default()
-    };
-    citygen::write_city(&config, &scene, false).unwrap();
-    let out = flaneur(&[
-        "build",
-        scene.to_str().unwrap(),
-        "-o",
-        db.to_str().unwrap(),
-        "--no-lod",
-        "--visibility",
-        "--cell-size",
-        "15",
-        "--dov-resolution",
-        "16",
-        "-q",
-    ]);
+    let out = build_cli(
+        &scene,
+        &db,
+        &[
+            "--no-lod",
+            "--visibility",
+            "--cell-size",
+            "15",
+            "--dov-resolution",
+            "16",
+        ],
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -170,28 +193,12 @@ fn build_and_info_on_the_command_line() {
     let run: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert!(run["pbnp"]["transactions"].as_u64().unwrap() >= 1);
     assert!(run["snp_pages"].as_u64().unwrap() > 0);
-    let out = flaneur(&[
-        "build",
-        scene.to_str().unwrap(),
-        "-o",
-        db.to_str().unwrap(),
-        "--visibility",
-        "--cell-size",
-        "0",
-        "-q",
-    ]);
+    let out = build_cli(&scene, &db, &["--visibility", "--cell-size", "0"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("viewcell size"));
     // A database without visibility cannot walk in PVS mode, and says why.
     let plain = dir.path().join("plain.flaneur");
-    let out = flaneur(&[
-        "build",
-        scene.to_str().unwrap(),
-        "-o",
-        plain.to_str().unwrap(),
-        "--no-lod",
-        "-q",
-    ]);
+    let out = build_cli(&scene, &plain, &["--no-lod"]);
     assert!(out.status.success());
     let out = flaneur(&["walk", plain.to_str().unwrap(), "--mode", "pvs", "-q"]);
     assert!(!out.status.success());
@@ -235,14 +242,7 @@ fn buildings_occlude_and_the_prefetcher_reads_the_table() {
         simulate, Pbnp, Position, Snp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY,
     };
     let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-    let config = citygen::CityConfig {
-        objects: 120,
-        seed: 4,
-        landmarks: 0.0,
-        ..Default::default()
-    };
-    citygen::write_city(&config, &scene, false).unwrap();
+    let (scene, path) = (scene_in(dir.path(), 120, 4), dir.path().join("c.flaneur"));
     let summary = flaneur::build_from_scene(&scene, &path, &with_visibility()).unwrap();
     let v = summary.visibility.unwrap();
     assert!(v.occluders >= 100, "{v:?}");
