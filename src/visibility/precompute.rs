@@ -142,34 +142,17 @@ fn cell_pvs(
     let visible = scene
         .visible_from_seen(&cell.bounds, &opts.belt, &seen_ids)?
         .visible;
-    let mut merged: Vec<(u64, f32)> = Vec::with_capacity(visible.len());
-    let (mut i, mut j) = (0, 0);
-    // Both lists ascend by object index; an object in both takes its measured DoV.
-    while i < visible.len() || j < seen_sorted.len() {
-        let v = visible.get(i).copied();
-        let s = seen_sorted.get(j).copied();
-        let (index, dov) = match (v, s) {
-            (Some(a), Some((b, d))) if a == b => {
-                i += 1;
-                j += 1;
-                (a, d)
-            }
-            (Some(a), Some((b, _))) if a < b => {
-                i += 1;
-                (a, dov_s)
-            }
-            (Some(a), None) => {
-                i += 1;
-                (a, dov_s)
-            }
-            (_, Some((b, d))) => {
-                j += 1;
-                (b, d)
-            }
-            (None, None) => unreachable!("the loop runs while either has more"),
-        };
-        merged.push((objects[index as usize].0, dov.clamp(dov_s, 1.0)));
-    }
+    // What the rays saw is in the conservative set (`visible_from_seen` keeps it), with
+    // its measured DoV; the rest are the visible zero-DoV objects.
+    let mut merged: Vec<(u64, f32)> = visible
+        .iter()
+        .map(|&i| {
+            let dov = seen_sorted
+                .binary_search_by_key(&i, |s| s.0)
+                .map_or(dov_s, |k| seen_sorted[k].1);
+            (objects[i as usize].0, dov.clamp(dov_s, 1.0))
+        })
+        .collect();
     merged.sort_unstable_by_key(|m| m.0);
     Ok((
         cell.id,
