@@ -186,7 +186,7 @@ impl Viewcell {
     }
 }
 
-/// The 8 corners of a box.
+/// The 8 corners of a box: bit 0 of the index picks max x, bit 1 max y, bit 2 max z.
 pub fn corners(b: &Aabb) -> [Vec3; 8] {
     std::array::from_fn(|i| {
         Vec3::new(

@@ -158,8 +158,7 @@ impl DovStats {
 
 /// The eight corners of a box: bit 0 of the index picks max x, bit 1 max y, bit 2 max z.
 pub fn corners(cell: &Aabb) -> [[f32; 3]; 8] {
-    let (lo, hi) = (cell.min.to_array(), cell.max.to_array());
-    std::array::from_fn(|i| std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] }))
+    super::cells::corners(cell).map(|c| c.to_array())
 }
 
 /// The DoV of every object for each of `cells` (eq. 5.2: the maximum of its point DoVs
