@@ -83,6 +83,24 @@ fn every_walkable_cell_has_a_pvs_with_dovs() {
         assert!(db.pvs(id).unwrap().is_none());
     }
     assert!(db.pvs(u32::MAX).unwrap().is_none());
+    // A walk through the cells stays in them; bad settings are errors.
+    use flaneur::walk::pvs_walk::cell_walk;
+    let walk = cell_walk(&db, 600, 0.5, 30.0, 3).unwrap();
+    assert_eq!(walk.poses.len(), 600);
+    for p in &walk.poses {
+        assert!(db.viewcell_at(p.position).unwrap().is_some(), "{p:?}");
+    }
+    for (frames, step, fps) in [
+        (0, 0.5, 30.0),
+        (10, 0.0, 30.0),
+        (10, f32::NAN, 30.0),
+        (10, 0.5, 0.0),
+    ] {
+        assert!(
+            cell_walk(&db, frames, step, fps, 3).is_err(),
+            "{frames} {step} {fps}"
+        );
+    }
     let info = db.info().unwrap().visibility.unwrap();
     assert_eq!(info.cells, head.cells.len());
     assert!(info.rays > 0 && info.seconds > 0.0);
