@@ -62,6 +62,9 @@ pub struct VisibilityInfo {
     pub cell_size: f32,
     pub eye: [f32; 2],
     pub resolution: u32,
+    /// The conservative test's widest sampled patch and occluder radius, in metres.
+    pub sample_spacing: f32,
+    pub occluder_radius: f32,
     /// Mean objects per PVS, and that as a share of the scene's objects.
     pub mean_pvs: f64,
     pub mean_share: f64,
@@ -430,6 +433,8 @@ impl Database {
             cell_size: h.grid.size,
             eye: h.grid.eye,
             resolution: h.settings.resolution,
+            sample_spacing: h.settings.samples.spacing,
+            occluder_radius: h.settings.samples.radius,
             mean_pvs,
             mean_share: per(mean_pvs, h.stats.objects as usize),
             seconds: h.stats.seconds,

@@ -23,7 +23,7 @@ use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
-use flaneur::visibility::VisibilityOptions;
+use flaneur::visibility::{SampleOptions, VisibilityOptions};
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
@@ -88,6 +88,14 @@ enum Command {
         /// Pixels per side of each cube face the DoV is measured on (with --visibility).
         #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
         dov_resolution: u32,
+        /// Widest patch of a viewcell the conservative test samples, in metres (with
+        /// --visibility): smaller is a tighter PVS and a slower build.
+        #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing)]
+        sample_spacing: f32,
+        /// Occluders further than this from a sample point are not used, in metres
+        /// (with --visibility).
+        #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius)]
+        occluder_radius: f32,
         #[arg(long, short)]
         quiet: bool,
     },
@@ -490,12 +498,18 @@ fn run(cli: Cli) -> Result<()> {
             visibility,
             cell_size,
             dov_resolution,
+            sample_spacing,
+            occluder_radius,
             quiet,
         } => {
             let opts = BuildOptions {
                 visibility: visibility.then(|| VisibilityOptions {
                     cell_size,
                     resolution: dov_resolution,
+                    samples: SampleOptions {
+                        spacing: sample_spacing,
+                        radius: occluder_radius,
+                    },
                     ..VisibilityOptions::default()
                 }),
                 page_size,
@@ -948,9 +962,11 @@ fn info(path: &Path, json: bool) -> Result<()> {
                 v.cells, v.rows, v.columns, v.cell_size, v.eye[0], v.eye[1], k.visibility
             );
             println!(
-                "  PVS       {:.1} objects on average, {:.2}% of the scene",
+                "  PVS       {:.1} objects on average, {:.2}% of the scene (patches of {} m, occluders within {} m)",
                 v.mean_pvs,
-                100.0 * v.mean_share
+                100.0 * v.mean_share,
+                v.sample_spacing,
+                v.occluder_radius
             );
             println!(
                 "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {} rays, {:.2} M rays/s",

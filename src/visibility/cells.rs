@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
 /// Default side of a viewcell in metres.
-pub const DEFAULT_CELL_SIZE: f32 = 20.0;
+pub const DEFAULT_CELL_SIZE: f32 = 40.0;
 /// Default eye heights above the ground, in metres.
 pub const DEFAULT_EYE_RANGE: [f32; 2] = [1.2, 2.0];
 

@@ -4,7 +4,8 @@
 //!
 //! - [`cells`](ViewcellGrid): the grid of viewcells, the walkable ones.
 //! - `occluder`: a box inside each building's solid, its convex part (paper-notes).
-//! - `conservative`: the occluder belt and the hidden sets of §5.5.1 (a [`Scene`]).
+//! - `conservative`: the conservative PVS of §5.5.1 (a [`Scene`]), by occluder shrinking
+//!   and the occlusion horizons of sample points (`horizon`).
 //! - [`precompute`]: all of it for a city, as `flaneur build --visibility` runs it;
 //!   `table` its bytes, [`VisibilityTable`] their reading through the store.
 //! - [`raycast`]: the scene's triangles in one BVH; the first hit of a ray as an object.
@@ -52,6 +53,7 @@ mod cells;
 mod conservative;
 pub mod cube;
 pub mod dov;
+mod horizon;
 mod intersect;
 mod occluder;
 mod precompute;
@@ -63,9 +65,10 @@ mod table;
 mod tests;
 
 pub use cells::{corners, Viewcell, ViewcellGrid, DEFAULT_CELL_SIZE, DEFAULT_EYE_RANGE};
-pub use conservative::{hidden_in_parts, hides, BeltOptions, CellVisibility, Scene};
+pub use conservative::{prisms, SampleOptions, Scene};
 pub use cube::{CubicProjection, SKY};
 pub use dov::{cell_dovs, point_dov, CellDovs, DovStats, PointDov};
+pub use horizon::{Horizon, Prism};
 pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
 pub use occluder::occluder_boxes;
 pub use precompute::{precompute, Precomputed, VisibilityOptions};

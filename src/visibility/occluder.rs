@@ -23,8 +23,12 @@
 //!   1 m are not worth testing against and give none.
 //! - A mesh with a hole escapes through it: its faces there are outside faces and its
 //!   box, if any, stays clear of the hole's sight lines.
+//! - Each candidate's sides are then pushed out one at a time as far as they stay
+//!   free, so a notch or recess on one side does not cost the others.
 //! - Up to two more boxes are stacked, each the best that stands on the one below (at
-//!   least 1 m high): the inside of a roof, a setback tier.
+//!   least 1 m high): the inside of a roof, a setback tier. The other ground
+//!   candidates that no taller one covers (a wide plinth under a narrow tower) follow
+//!   them: they hide what their own footprints do.
 //! - Each box is shrunk by 1 cm at the end, so rounding in the tests that use it cannot
 //!   let it poke out of the solid.
 
@@ -52,8 +56,9 @@ const PROBE: f32 = 1e-3;
 const COLUMNS: usize = 16;
 
 /// Boxes inside `mesh`'s solid: the first standing on its footprint, each next on the
-/// one below; none when there is no worthwhile one (the mesh is small, flat, open, or
-/// does not stand on its bounds' ground).
+/// one below, then other boxes standing on the footprint that none of those covers
+/// (wider and lower ones); none when there is no worthwhile one (the mesh is small,
+/// flat, open, or does not stand on its bounds' ground).
 ///
 /// ```
 /// use flaneur::visibility::occluder_boxes;
@@ -94,6 +99,7 @@ pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
         .collect();
     let free = |b: &Aabb| !outside.iter().any(|t| triangle_meets_box(t, b));
     let mut floor = lo.y;
+    let mut extra: Vec<Aabb> = Vec::new();
     while boxes.len() < STACKED {
         let min_height = if boxes.is_empty() {
             MIN_HEIGHT
@@ -101,6 +107,7 @@ pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
             MIN_UPPER_HEIGHT
         };
         let mut best: Option<(f32, Aabb)> = None;
+        let mut ground: Vec<Aabb> = Vec::new();
         for k in 1..=HEIGHTS {
             // A hair under the level, or a roof lying on it would always meet the box.
             let height = (hi.y - floor) * k as f32 / HEIGHTS as f32 - SAFETY;
@@ -110,6 +117,9 @@ pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
             let Some(b) = widest_free(lo, hi, floor, height, &free) else {
                 continue;
             };
+            if boxes.is_empty() {
+                ground.push(b);
+            }
             let score = (b.max.x - b.min.x + b.max.z - b.min.z) * height;
             if best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, b));
@@ -120,17 +130,39 @@ pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
             break;
         }
         floor = b.max.y;
-        boxes.push(Aabb {
+        let inset = |b: &Aabb| Aabb {
             min: b.min + Vec3::splat(SAFETY),
             max: b.max - Vec3::splat(SAFETY),
-        });
+        };
+        boxes.push(inset(&b));
+        // The other boxes standing on the ground that no taller one covers (a wide
+        // plinth beside a narrow tower): each hides what its own footprint does.
+        for (i, g) in ground.iter().enumerate() {
+            let covered = |h: &Aabb| {
+                h.max.y >= g.max.y
+                    && h.min.x <= g.min.x
+                    && h.min.z <= g.min.z
+                    && h.max.x >= g.max.x
+                    && h.max.z >= g.max.z
+            };
+            let dominated = covered(&b)
+                || ground
+                    .iter()
+                    .enumerate()
+                    .any(|(j, h)| j != i && covered(h) && (h != g || j < i));
+            if !dominated && solid.encloses(g.center()) {
+                extra.push(inset(g));
+            }
+        }
     }
+    boxes.extend(extra);
     boxes
 }
 
 /// The footprint box from `floor` up `height`, inset by the smallest even margin (to
-/// a bisection's precision) that leaves it meeting no outside face; `None` when even
-/// the narrowest worthwhile box meets one.
+/// a bisection's precision) that leaves it meeting no outside face, then each side
+/// pushed back out on its own as far as it stays free; `None` when even the narrowest
+/// worthwhile box meets one.
 fn widest_free(
     lo: Vec3,
     hi: Vec3,
@@ -163,7 +195,35 @@ fn widest_free(
             }
         }
     }
+    // Then each side on its own, out from the even margin as far as it stays free: a
+    // footprint with a notch or a recess on one side keeps its other sides.
     let mut b = candidate(good);
+    for side in 0..4 {
+        let (axis, low) = ([0, 0, 2, 2][side], side % 2 == 0);
+        let at = |b: &Aabb, margin: f32| {
+            let mut c = *b;
+            if low {
+                c.min[axis] = lo[axis] + margin;
+            } else {
+                c.max[axis] = hi[axis] - margin;
+            }
+            c
+        };
+        let (mut bad, mut ok) = (0.0f32, good);
+        if free(&at(&b, 0.0)) {
+            ok = 0.0;
+        } else {
+            for _ in 0..STEPS {
+                let mid = 0.5 * (bad + ok);
+                if free(&at(&b, mid)) {
+                    ok = mid;
+                } else {
+                    bad = mid;
+                }
+            }
+        }
+        b = at(&b, ok);
+    }
     b.min.y = floor;
     Some(b)
 }
@@ -291,7 +351,11 @@ mod tests {
             found += 1;
             let (lo, hi) = o.mesh.bounds();
             let bounds = Aabb::new(lo, hi).unwrap();
-            for w in boxes.windows(2) {
+            // The stacked boxes, then the others standing on the ground.
+            let on_ground = |b: &Aabb| b.min.y <= boxes[0].min.y + 1e-4;
+            let stacked = 1 + boxes[1..].iter().take_while(|b| !on_ground(b)).count();
+            assert!(boxes[stacked..].iter().all(on_ground));
+            for w in boxes[..stacked].windows(2) {
                 assert!(
                     w[1].min.y >= w[0].max.y,
                     "object {}: stacked boxes overlap",

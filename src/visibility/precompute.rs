@@ -4,8 +4,7 @@
 //!
 //! Choices made here:
 //! - The DoV comes first: an object a corner's rays met is visible, so the conservative
-//!   test is told so and spends no time on it (`Scene::visible_from_seen`); those are
-//!   the objects it would spend longest on. Objects in the conservative set that no ray
+//!   test is told so and spends no time on it (`Scene::visible_from`). Objects in the conservative set that no ray
 //!   met are the thesis's visible zero-DoV objects and get DoV_s, the DoV of the
 //!   smallest pixel of the cube (`CubicProjection::zero_dov_floor`).
 //! - Cells are computed a band of rows at a time, so that neighbouring cells share
@@ -16,7 +15,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::cells::{Viewcell, ViewcellGrid};
-use super::conservative::{BeltOptions, Scene};
+use super::conservative::{SampleOptions, Scene};
 use super::occluder::occluder_boxes;
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
 use super::{cell_dovs, CubicProjection, RayScene};
@@ -36,8 +35,8 @@ pub struct VisibilityOptions {
     pub eye: [f32; 2],
     /// Pixels per side of a cube face (N).
     pub resolution: u32,
-    /// How occluders are chosen around a cell.
-    pub belt: BeltOptions,
+    /// How the conservative test samples a cell.
+    pub samples: SampleOptions,
 }
 
 impl Default for VisibilityOptions {
@@ -46,7 +45,7 @@ impl Default for VisibilityOptions {
             cell_size: super::cells::DEFAULT_CELL_SIZE,
             eye: super::cells::DEFAULT_EYE_RANGE,
             resolution: 256,
-            belt: BeltOptions::default(),
+            samples: SampleOptions::default(),
         }
     }
 }
@@ -75,7 +74,7 @@ pub fn precompute(
             "visibility of a city with no objects".into(),
         ));
     }
-    opts.belt.validate()?;
+    opts.samples.validate()?;
     let boxes: Vec<Aabb> = objects
         .iter()
         .map(|(id, m)| {
@@ -113,7 +112,8 @@ pub fn precompute(
         settings: VisibilitySettings {
             resolution: opts.resolution,
             dov_s,
-            belt: opts.belt,
+            samples: opts.samples,
+            bins: super::horizon::BINS as u32,
         },
         stats: VisibilityStats {
             seconds: started.elapsed().as_secs_f64(),
@@ -139,10 +139,8 @@ fn cell_pvs(
     let mut seen_sorted = seen.to_vec();
     seen_sorted.sort_unstable_by_key(|s| s.0);
     let seen_ids: Vec<u32> = seen_sorted.iter().map(|s| s.0).collect();
-    let visible = scene
-        .visible_from_seen(&cell.bounds, &opts.belt, &seen_ids)?
-        .visible;
-    // What the rays saw is in the conservative set (`visible_from_seen` keeps it), with
+    let visible = scene.visible_from(&cell.bounds, &opts.samples, &seen_ids)?;
+    // What the rays saw is in the conservative set (`visible_from` keeps it), with
     // its measured DoV; the rest are the visible zero-DoV objects.
     let mut merged: Vec<(u64, f32)> = visible
         .iter()

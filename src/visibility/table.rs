@@ -17,10 +17,10 @@
 //!     36      8  eye range        f32 × 2, metres above the ground
 //!     44      4  resolution       u32, N: pixels per cube-face side for the DoV
 //!     48      4  DoV_s            f32, the DoV given to visible zero-DoV objects
-//!     52      4  belt start       f32, metres
-//!     56      4  belt min         u32, occluders
-//!     60      4  belt max         u32, occluders
-//!     64      4  belt max         f32, thickness in metres
+//!     52      4  sample spacing   f32, metres: the conservative test's widest patch
+//!     56      4  occluder radius  f32, metres
+//!     60      4  horizon bins     u32
+//!     64      4  reserved         u32, 0
 //!     68      8  seconds          f64, the precomputation's wall-clock time
 //!     76      8  rays             u64, rays cast for the DoV
 //!     84      8  entries          u64, objects over all PVSs
@@ -43,7 +43,7 @@ use crate::error::{Error, Result};
 use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
 
 use super::cells::ViewcellGrid;
-use super::conservative::BeltOptions;
+use super::conservative::SampleOptions;
 use glam::Vec3;
 
 /// The header segment that names the visibility table.
@@ -51,7 +51,7 @@ pub const VISIBILITY_SEGMENT: &str = "viewcells";
 /// The first four bytes of the table.
 pub const TABLE_MAGIC: [u8; 4] = *b"FLVS";
 /// The table version this build writes and reads.
-pub const TABLE_VERSION: u32 = 1;
+pub const TABLE_VERSION: u32 = 2;
 /// Bytes of the head before the directory.
 pub const HEAD_FIXED: usize = 100;
 const DIR_ENTRY: usize = 20;
@@ -64,7 +64,9 @@ pub struct VisibilitySettings {
     /// The DoV given to objects in a PVS that no sample ray met.
     pub dov_s: f32,
     #[serde(skip)]
-    pub belt: BeltOptions,
+    pub samples: SampleOptions,
+    /// Angular bins of the occlusion horizons.
+    pub bins: u32,
 }
 
 /// What the precomputation measured, stored with it.
@@ -266,10 +268,10 @@ pub fn encode_table(
     }
     b.extend_from_slice(&settings.resolution.to_le_bytes());
     b.extend_from_slice(&settings.dov_s.to_le_bytes());
-    b.extend_from_slice(&settings.belt.start.to_le_bytes());
-    b.extend_from_slice(&(settings.belt.min as u32).to_le_bytes());
-    b.extend_from_slice(&(settings.belt.max as u32).to_le_bytes());
-    b.extend_from_slice(&settings.belt.max_thickness.to_le_bytes());
+    b.extend_from_slice(&settings.samples.spacing.to_le_bytes());
+    b.extend_from_slice(&settings.samples.radius.to_le_bytes());
+    b.extend_from_slice(&settings.bins.to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
     b.extend_from_slice(&stats.seconds.to_le_bytes());
     for v in [stats.rays, stats.entries, stats.objects] {
         b.extend_from_slice(&v.to_le_bytes());
@@ -330,12 +332,11 @@ pub fn decode_head(b: &[u8], table_len: u64) -> Result<TableHead> {
     let settings = VisibilitySettings {
         resolution: u32_at(b, 44),
         dov_s: f32_at(b, 48),
-        belt: BeltOptions {
-            start: f32_at(b, 52),
-            min: u32_at(b, 56) as usize,
-            max: u32_at(b, 60) as usize,
-            max_thickness: f32_at(b, 64),
+        samples: SampleOptions {
+            spacing: f32_at(b, 52),
+            radius: f32_at(b, 56),
         },
+        bins: u32_at(b, 60),
     };
     let stats = VisibilityStats {
         seconds: f64::from_bits(u64_at(b, 68)),
@@ -392,7 +393,8 @@ mod tests {
         let settings = VisibilitySettings {
             resolution: 64,
             dov_s: 1e-5,
-            belt: BeltOptions::default(),
+            samples: SampleOptions::default(),
+            bins: crate::visibility::horizon::BINS as u32,
         };
         let stats = VisibilityStats {
             seconds: 1.5,
