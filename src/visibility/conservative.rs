@@ -28,7 +28,8 @@
 //! - Occluders are prisms: each building's occluder boxes ([`occluder_boxes`]) that
 //!   stand on the ground, or on such a box within its footprint, taken down to the
 //!   ground. The ground is the city's lowest point; no sight line between an eye and
-//!   an object passes under it.
+//!   an object passes under it. The centimetres between stacked boxes (their safety
+//!   margins) lie inside the same building, and are far thinner than the shrinking.
 //! - A sample's horizon takes the occluders within `radius` of it.
 //! - A sample inside a shrunk occluder is skipped: every point within ε of it is inside
 //!   a building's solid, where no viewer stands.
