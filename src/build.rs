@@ -85,8 +85,11 @@ pub struct VisibilityReport {
     pub entries: u64,
     /// Objects with an occluder box.
     pub occluders: usize,
+    /// DoV rays cast.
     pub rays: u64,
+    /// Seconds of the whole precomputation, and of those, seconds casting DoV rays.
     pub seconds: f64,
+    pub dov_seconds: f64,
     /// Pages the table takes.
     pub pages: u64,
 }
@@ -244,6 +247,7 @@ fn store_visibility(
         occluders: made.occluders,
         rays: made.stats.rays,
         seconds: made.stats.seconds,
+        dov_seconds: made.stats.dov_seconds,
         pages: extent.page_count as u64,
     })
 }

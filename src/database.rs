@@ -71,7 +71,9 @@ pub struct VisibilityInfo {
     /// Seconds of the whole precomputation, and per cell.
     pub seconds: f64,
     pub seconds_per_cell: f64,
-    /// DoV rays cast, and per second of the precomputation.
+    /// Seconds spent casting the DoV's rays, per cell.
+    pub dov_seconds_per_cell: f64,
+    /// DoV rays cast, and per second of casting them.
     pub rays: u64,
     pub rays_per_second: f64,
 }
@@ -439,9 +441,10 @@ impl Database {
             mean_share: per(mean_pvs, h.stats.objects as usize),
             seconds: h.stats.seconds,
             seconds_per_cell: per(h.stats.seconds, cells),
+            dov_seconds_per_cell: per(h.stats.dov_seconds, cells),
             rays: h.stats.rays,
-            rays_per_second: if h.stats.seconds > 0.0 {
-                h.stats.rays as f64 / h.stats.seconds
+            rays_per_second: if h.stats.dov_seconds > 0.0 {
+                h.stats.rays as f64 / h.stats.dov_seconds
             } else {
                 0.0
             },

@@ -536,7 +536,7 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(v) = &summary.visibility {
                 println!(
                     "  visibility: {} walkable cells of {} × {}, {:.1} objects per PVS, {} occluders; \
-                     {:.1} s ({:.3} s per cell, {:.2} M rays/s)",
+                     {:.1} s ({:.3} s per cell, of which DoV {:.3} s at {:.2} M rays/s)",
                     v.cells,
                     v.rows,
                     v.columns,
@@ -544,7 +544,8 @@ fn run(cli: Cli) -> Result<()> {
                     v.occluders,
                     v.seconds,
                     v.seconds / v.cells.max(1) as f64,
-                    v.rays as f64 / v.seconds.max(1e-9) / 1e6
+                    v.dov_seconds / v.cells.max(1) as f64,
+                    v.rays as f64 / v.dov_seconds.max(1e-9) / 1e6
                 );
             }
             Ok(())
@@ -969,10 +970,11 @@ fn info(path: &Path, json: bool) -> Result<()> {
                 v.occluder_radius
             );
             println!(
-                "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {} rays, {:.2} M rays/s",
+                "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {:.3} s per cell, {} rays, {:.2} M rays/s",
                 v.seconds,
                 v.seconds_per_cell,
                 v.resolution,
+                v.dov_seconds_per_cell,
                 v.rays,
                 v.rays_per_second / 1e6
             );

@@ -8,6 +8,8 @@
 //! then takes each cell's maxima: on a large grid that is about two corners per cell
 //! instead of eight. Corners are the same only when their coordinates are bit for bit
 //! the same (−0 and +0 aside): cells cut from one grid by the same arithmetic are.
+//! Batches taken one after another share corners too (the row of corners between two
+//! bands of rows): [`CornerMemo`] keeps the last batch's corners for the next.
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -131,7 +133,7 @@ pub struct CellDovs {
 pub struct DovStats {
     /// Cells in the batch.
     pub cells: usize,
-    /// Distinct corners projected (at most 8 per cell).
+    /// Distinct corners cast (at most 8 per cell; fewer where a batch before cast some).
     pub corners: usize,
     /// Rays cast: `corners` × 6N².
     pub rays: u64,
@@ -154,6 +156,18 @@ impl DovStats {
     pub fn corners_per_cell(&self) -> f64 {
         self.corners as f64 / self.cells.max(1) as f64
     }
+}
+
+/// The point DoVs of the last batch's corners, so that the next batch casts only the
+/// corners it does not share with it. Holds one batch's worth of [`PointDov`]s.
+#[derive(Debug, Default)]
+pub struct CornerMemo {
+    last: HashMap<[u32; 3], PointDov>,
+}
+
+/// A corner's key: its coordinates' bits, with −0 made +0 (adding +0 does that).
+fn corner_key(p: [f32; 3]) -> [u32; 3] {
+    p.map(|c| (c + 0.0).to_bits())
 }
 
 /// The eight corners of a box: bit 0 of the index picks max x, bit 1 max y, bit 2 max z.
@@ -193,6 +207,40 @@ pub fn cell_dovs(
     projection: &CubicProjection,
     cells: &[Aabb],
 ) -> Result<CellDovs> {
+    cell_dovs_after(scene, projection, cells, &mut CornerMemo::default())
+}
+
+/// [`cell_dovs`] for one of a run of batches: corners the last batch (in `memo`) cast
+/// are taken from it, not cast again, and `memo` then holds this batch's corners.
+/// [`DovStats::corners`] counts only the corners cast.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// use flaneur::geom::Aabb;
+/// use flaneur::visibility::{dov::{cell_dovs, cell_dovs_after, CornerMemo}, CubicProjection, RayScene};
+/// let wall = citygen::Mesh {
+///     positions: vec![[-5.0, 0.0, 10.0], [5.0, 0.0, 10.0], [5.0, 6.0, 10.0], [-5.0, 6.0, 10.0]],
+///     normals: vec![[0.0, 0.0, -1.0]; 4],
+///     indices: vec![0, 1, 2, 0, 2, 3],
+/// };
+/// let scene = RayScene::new([(0, &wall)])?;
+/// let cube = CubicProjection::new(32)?;
+/// let first = [Aabb::new([0.0, 1.2, 0.0], [2.0, 2.0, 2.0])?];
+/// let second = [Aabb::new([0.0, 1.2, 2.0], [2.0, 2.0, 4.0])?];
+/// let mut memo = CornerMemo::default();
+/// assert_eq!(cell_dovs_after(&scene, &cube, &first, &mut memo)?.stats.corners, 8);
+/// // The second cell shares four corners with the first.
+/// let next = cell_dovs_after(&scene, &cube, &second, &mut memo)?;
+/// assert_eq!(next.stats.corners, 4);
+/// assert_eq!(next.cells, cell_dovs(&scene, &cube, &second)?.cells);
+/// # Ok(()) }
+/// ```
+pub fn cell_dovs_after(
+    scene: &RayScene,
+    projection: &CubicProjection,
+    cells: &[Aabb],
+    memo: &mut CornerMemo,
+) -> Result<CellDovs> {
     let started = Instant::now();
     for (i, cell) in cells.iter().enumerate() {
         check_cell(i, cell)?;
@@ -203,18 +251,23 @@ pub fn cell_dovs(
         .iter()
         .map(|cell| {
             corners(cell).map(|p| {
-                // Adding +0 turns −0 into +0, so the two spellings of zero are one corner.
-                let key = p.map(|c| (c + 0.0).to_bits());
-                *index.entry(key).or_insert_with(|| {
+                *index.entry(corner_key(p)).or_insert_with(|| {
                     points.push(p);
                     (points.len() - 1) as u32
                 })
             })
         })
         .collect();
+    let mut last = std::mem::take(&mut memo.last);
+    let known: Vec<Option<PointDov>> = points
+        .iter()
+        .map(|&p| last.remove(&corner_key(p)))
+        .collect();
+    let cast = known.iter().filter(|k| k.is_none()).count();
     let seen: Vec<PointDov> = points
         .par_iter()
-        .map(|&p| point_dov_checked(scene, projection, p))
+        .zip(known)
+        .map(|(&p, known)| known.unwrap_or_else(|| point_dov_checked(scene, projection, p)))
         .collect();
     let dovs = cell_corners
         .iter()
@@ -234,12 +287,13 @@ pub fn cell_dovs(
             all
         })
         .collect();
+    memo.last = points.iter().map(|&p| corner_key(p)).zip(seen).collect();
     Ok(CellDovs {
         cells: dovs,
         stats: DovStats {
             cells: cells.len(),
-            corners: points.len(),
-            rays: points.len() as u64 * projection.rays_per_point(),
+            corners: cast,
+            rays: cast as u64 * projection.rays_per_point(),
             elapsed: started.elapsed(),
         },
     })

@@ -67,7 +67,7 @@ mod tests;
 pub use cells::{corners, Viewcell, ViewcellGrid, DEFAULT_CELL_SIZE, DEFAULT_EYE_RANGE};
 pub use conservative::{prisms, SampleOptions, Scene};
 pub use cube::{CubicProjection, SKY};
-pub use dov::{cell_dovs, point_dov, CellDovs, DovStats, PointDov};
+pub use dov::{cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovStats, PointDov};
 pub use horizon::{Horizon, Prism};
 pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
 pub use occluder::occluder_boxes;

@@ -7,8 +7,9 @@
 //!   test is told so and spends no time on it (`Scene::visible_from`). Objects in the conservative set that no ray
 //!   met are the thesis's visible zero-DoV objects and get DoV_s, the DoV of the
 //!   smallest pixel of the cube (`CubicProjection::zero_dov_floor`).
-//! - Cells are computed a band of rows at a time, so that neighbouring cells share
-//!   their corners' projections within a band and the progress can be reported.
+//! - Cells are computed a band of rows at a time, so that the progress can be reported;
+//!   neighbouring cells share their corners' projections, within a band and with the
+//!   band before (`CornerMemo`).
 
 use std::time::Instant;
 
@@ -18,7 +19,7 @@ use super::cells::{Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
 use super::occluder::occluder_boxes;
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
-use super::{cell_dovs, CubicProjection, RayScene};
+use super::{cell_dovs_after, CornerMemo, CubicProjection, RayScene};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::scene::Mesh;
@@ -93,11 +94,14 @@ pub fn precompute(
 
     let mut cells = Vec::with_capacity(walkable.len());
     let mut cast = 0u64;
+    let mut dov_seconds = 0.0;
+    let mut memo = CornerMemo::default();
     progress(0, walkable.len());
     for band in walkable.chunk_by(|a, b| a.row / BAND_ROWS == b.row / BAND_ROWS) {
         let bounds: Vec<Aabb> = band.iter().map(|c| c.bounds).collect();
-        let dovs = cell_dovs(&rays, &projection, &bounds)?;
+        let dovs = cell_dovs_after(&rays, &projection, &bounds, &mut memo)?;
         cast += dovs.stats.rays;
+        dov_seconds += dovs.stats.elapsed.as_secs_f64();
         let made: Vec<(u32, CellPvs)> = band
             .par_iter()
             .zip(dovs.cells.par_iter())
@@ -117,6 +121,7 @@ pub fn precompute(
         },
         stats: VisibilityStats {
             seconds: started.elapsed().as_secs_f64(),
+            dov_seconds,
             rays: cast,
             entries,
             objects: objects.len() as u64,

@@ -25,9 +25,10 @@
 //!     76      8  rays             u64, rays cast for the DoV
 //!     84      8  entries          u64, objects over all PVSs
 //!     92      8  objects          u64, objects in the scene it was computed for
-//!    100    20n  directory        per cell, ids ascending: id u32, offset u64 (of its
+//!    100      8  DoV seconds      f64, the part of `seconds` spent casting DoV rays
+//!    108    20n  directory        per cell, ids ascending: id u32, offset u64 (of its
 //!                                 record, from the table's start), length u32, count u32
-//! 100+20n     4  crc32            of the head's bytes before it
+//! 108+20n     4  crc32            of the head's bytes before it
 //!
 //! record (one per cell):
 //!      0      -  object ids       ascending, LEB128: the first id, then differences
@@ -51,9 +52,9 @@ pub const VISIBILITY_SEGMENT: &str = "viewcells";
 /// The first four bytes of the table.
 pub const TABLE_MAGIC: [u8; 4] = *b"FLVS";
 /// The table version this build writes and reads.
-pub const TABLE_VERSION: u32 = 2;
+pub const TABLE_VERSION: u32 = 3;
 /// Bytes of the head before the directory.
-pub const HEAD_FIXED: usize = 100;
+pub const HEAD_FIXED: usize = 108;
 const DIR_ENTRY: usize = 20;
 
 /// How the visibility was computed, and what it cost.
@@ -72,7 +73,10 @@ pub struct VisibilitySettings {
 /// What the precomputation measured, stored with it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct VisibilityStats {
+    /// Wall-clock seconds of the whole precomputation.
     pub seconds: f64,
+    /// Of those, the seconds spent casting the DoV's rays.
+    pub dov_seconds: f64,
     pub rays: u64,
     pub entries: u64,
     pub objects: u64,
@@ -276,6 +280,7 @@ pub fn encode_table(
     for v in [stats.rays, stats.entries, stats.objects] {
         b.extend_from_slice(&v.to_le_bytes());
     }
+    b.extend_from_slice(&stats.dov_seconds.to_le_bytes());
     debug_assert_eq!(b.len(), HEAD_FIXED);
     for c in &dir {
         b.extend_from_slice(&c.id.to_le_bytes());
@@ -343,6 +348,7 @@ pub fn decode_head(b: &[u8], table_len: u64) -> Result<TableHead> {
         rays: u64_at(b, 76),
         entries: u64_at(b, 84),
         objects: u64_at(b, 92),
+        dov_seconds: f64::from_bits(u64_at(b, 100)),
     };
     let mut cells = Vec::with_capacity(n);
     for k in 0..n {
@@ -398,6 +404,7 @@ mod tests {
         };
         let stats = VisibilityStats {
             seconds: 1.5,
+            dov_seconds: 0.75,
             rays: 123_456,
             entries: 5,
             objects: 1000,

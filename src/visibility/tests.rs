@@ -314,6 +314,13 @@ fn a_cells_dov_is_the_maximum_over_its_corners() {
         (single.stats.corners, &single.cells[0]),
         (8, &result.cells[0])
     );
+    // In batches one after another (bottom row, then top row), the second casts only
+    // the corners it does not share with the first, and the DoVs are the same.
+    let mut memo = CornerMemo::default();
+    let bottom = cell_dovs_after(&scene, &cube, &cells[..2], &mut memo).unwrap();
+    let top = cell_dovs_after(&scene, &cube, &cells[2..], &mut memo).unwrap();
+    assert_eq!((bottom.stats.corners, top.stats.corners), (12, 6));
+    assert_eq!([bottom.cells, top.cells].concat(), result.cells);
 }
 
 #[test]
