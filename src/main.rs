@@ -400,8 +400,9 @@ enum Experiment {
         /// Draws the PVS table and both routes.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Also walk route 1's kind of route over this database's precomputed
-        /// visibility (built with --visibility).
+        /// Also run the experiment, both routes and the region sweep, over this
+        /// database's precomputed visibility (built with --visibility); its files go to
+        /// OUT/pvs-prefetch-db.
         #[arg(long)]
         db: Option<PathBuf>,
         #[arg(long, default_value = "bench-out")]
@@ -865,31 +866,20 @@ fn run(cli: Cli) -> Result<()> {
                 })?;
                 if let Some(path) = db {
                     let db = Database::open(&path)?;
-                    let run = pvs_prefetch::run_on_database(&db, &cfg.route, border, cache)?;
-                    println!(
-                        "\n{}: {} walkable cells, PVS {:.1}% of the scene; a random route of {} steps",
-                        path.display(),
-                        run.cells,
-                        100.0 * run.mean_pvs_share,
-                        cfg.route.steps
-                    );
-                    println!("  algorithm  transactions  swaps  objects/transaction  visual misses  pages");
-                    for (name, t, pages) in [
-                        ("SNP", &run.snp, run.snp_pages),
-                        ("PBNP", &run.pbnp, run.pbnp_pages),
-                    ] {
-                        println!(
-                            "  {name:<9}  {:>12}  {:>5}  {:>19.1}  {:>13}  {:>5}",
-                            t.transactions,
-                            t.swaps,
-                            t.objects_sent as f64 / t.transactions.max(1) as f64,
-                            t.visual_misses,
-                            pages
-                        );
-                    }
-                    write_file(
-                        &out.join("pvs-prefetch-db.json"),
-                        &serde_json::to_string_pretty(&run)?,
+                    let name = path.display().to_string();
+                    let r = pvs_prefetch::run_on_database(&db, &name, &cfg)?;
+                    println!();
+                    write_experiment(
+                        &out.join("pvs-prefetch-db"),
+                        "pvs-prefetch",
+                        &r.to_csv(),
+                        &r.markdown(),
+                        |dir| {
+                            for (name, text) in r.extra_csvs() {
+                                write_file(&dir.join(name), &text)?;
+                            }
+                            Ok(r.plot(dir)?)
+                        },
                     )?;
                 }
                 Ok(())

@@ -206,11 +206,21 @@ fn build_and_info_on_the_command_line() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("walkable cells, PVS"), "{text}");
-    let json = std::fs::read_to_string(bench.join("pvs-prefetch-db.json")).unwrap();
-    let run: serde_json::Value = serde_json::from_str(&json).unwrap();
-    assert!(run["pbnp"]["transactions"].as_u64().unwrap() >= 1);
-    assert!(run["snp_pages"].as_u64().unwrap() > 0);
+    assert!(text.contains("walkable viewcells of"), "{text}");
+    // Table 7.2's CSV, the steps of Figs. 7.7–7.8 and their plots, for the database too.
+    let on_db = bench.join("pvs-prefetch-db");
+    let csv = std::fs::read_to_string(on_db.join("pvs-prefetch.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for row in rows {
+        let transactions: u64 = row.split(',').nth(2).unwrap().parse().unwrap();
+        assert!(transactions >= 1, "{row}");
+    }
+    let steps = std::fs::read_to_string(on_db.join("pvs-prefetch-steps.csv")).unwrap();
+    assert_eq!(steps.lines().count(), 302, "a header and 301 positions");
+    assert!(on_db.join("pvs-prefetch-route2-pbnp.png").exists());
+    let summary = std::fs::read_to_string(on_db.join("pvs-prefetch.md")).unwrap();
+    assert!(summary.contains("| pages read (PVS records)"), "{summary}");
     let out = build_cli(&scene, &db, &["--visibility", "--cell-size", "0"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("viewcell size"));

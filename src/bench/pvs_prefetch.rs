@@ -5,17 +5,20 @@
 //! step, and visual misses; beside them, PBNP swept over its region size, which the
 //! thesis leaves open.
 //!
-//! Everything runs on the synthetic PVS table (`prefetch::pvs::synthetic`, how it is
-//! drawn is named there) and the two routes (`prefetch::pvs::routes`); one seed draws
-//! both. No database: the table and the walks take well under a second.
+//! It runs on the synthetic PVS table (`prefetch::pvs::synthetic`, how it is drawn is
+//! named there) and the two routes (`prefetch::pvs::routes`); one seed draws both. No
+//! database: the table and the walks take well under a second. [`run_on_database`]
+//! runs the same experiment over a database's precomputed visibility, every PVS record
+//! read through the store, with route 2 drawn along the city's walkable cells
+//! (`axis_route`).
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::{
-    check_border, measure, random_route, simulate, straight_route, Pbnp, Position, RouteConfig,
-    SimReport, SimTotals, Snp, SyntheticCity, SyntheticConfig, TableStats, DEFAULT_BORDER,
-    THESIS_CAPACITY,
+    axis_route, check_border, measure, random_route, simulate, straight_route, Pbnp, Position,
+    PvsSource, RouteConfig, SimReport, SimTotals, Snp, StoredPvs, SyntheticCity, SyntheticConfig,
+    TableStats, DEFAULT_BORDER, THESIS_CAPACITY,
 };
 
 /// One column of Zheng 2007 Table 7.2, with §7.5's objects per transaction and in the
@@ -148,6 +151,8 @@ pub struct RouteRun {
     pub positions: Vec<Position>,
     pub snp: SimReport,
     pub pbnp: SimReport,
+    /// Pages SNP's walk and PBNP's read, over a database.
+    pub pages: Option<[u64; 2]>,
 }
 
 impl RouteRun {
@@ -169,10 +174,22 @@ pub struct SweepRow {
     pub totals: SimTotals,
 }
 
+/// Where the experiment ran.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Place {
+    /// What the report's title names: "a synthetic city", or a database.
+    pub name: String,
+    /// A paragraph on the city, its PVS table and the routes.
+    pub description: String,
+    /// A viewcell's side, metres.
+    pub cell: f64,
+}
+
 /// What the experiment measured.
 #[derive(Clone, Debug)]
 pub struct PvsPrefetchReport {
     pub config: PvsPrefetchConfig,
+    pub place: Place,
     pub stats: TableStats,
     /// Route 1, then route 2.
     pub routes: Vec<RouteRun>,
@@ -189,20 +206,138 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
         Ok(city.on_walkway(p))
     })?;
     let route2 = straight_route(&city, &cfg.route)?.positions;
+    let (routes, sweep) = walk(&city, [route1, route2], cfg, || None)?;
+    let c = &cfg.city;
+    let place = Place {
+        name: "a synthetic city".into(),
+        description: format!(
+            "City: {b} × {b} buildings of {} m, streets {} m, viewcells {} m: {} viewcells on a {g} × {g} grid, \
+             PVS table drawn with seed {}. Routes: {} steps of {} m (seed {}); route 1 random from the central \
+             crossing, route 2 seven straight lines with six right-angle turns. Client cache {} entries, \
+             delta-transmission for both; PBNP's side and corner regions {} of a cell's side ({} m). \
+             A cache swap is one cell evicted from the cache.",
+            c.building,
+            c.street,
+            c.cell,
+            stats.viewcells,
+            c.seed,
+            cfg.route.steps,
+            cfg.route.step,
+            cfg.route.seed,
+            cfg.capacity,
+            cfg.border,
+            cfg.border * c.cell,
+            b = c.blocks,
+            g = (f64::from(c.blocks) * (c.building + c.street) + c.street) / c.cell,
+        ),
+        cell: c.cell,
+    };
+    Ok(PvsPrefetchReport {
+        config: cfg.clone(),
+        place,
+        stats,
+        routes,
+        sweep,
+    })
+}
+
+/// Runs the experiment over `db`'s precomputed visibility (`name` says which database
+/// in the report): both routes from the walkable viewcell nearest the city's centre,
+/// route 1 random as on the synthetic city, route 2 along x and z (`axis_route`). The
+/// PVS pages each walk reads are counted. `cfg.city` is not used.
+pub fn run_on_database(
+    db: &crate::Database,
+    name: &str,
+    cfg: &PvsPrefetchConfig,
+) -> Result<PvsPrefetchReport> {
+    cfg.validate()?;
+    let source = StoredPvs::new(db)?;
+    let stats = measure(&source)?;
+    let head = db.visibility()?.expect("StoredPvs checked it");
+    let centre = db.bounds().center();
+    let start = source
+        .walkable_centres()?
+        .into_iter()
+        .min_by(|a, b| {
+            let d =
+                |p: &Position| (p.x - centre.x as f64).powi(2) + (p.z - centre.z as f64).powi(2);
+            d(a).total_cmp(&d(b))
+        })
+        .ok_or_else(|| Error::Pvs("the database has no walkable viewcell".into()))?;
+    // Walkable as the walk will see it: by the prefetcher's grid, whose arithmetic
+    // decides a position exactly on a cell border the same way here and there.
+    let walkable = |p: Position| match source.grid().cell_of(p) {
+        Ok(cell) => source.is_viewcell(cell),
+        Err(_) => Ok(false),
+    };
+    let route1 = random_route(start, &cfg.route, walkable)?;
+    let route2 = axis_route(start, &cfg.route, walkable)?;
+    let (routes, sweep) = walk(&source, [route1, route2], cfg, || Some(db.io().page_reads))?;
+    let cell = source.grid().cell_size();
+    let place = Place {
+        name: name.into(),
+        description: format!(
+            "{name}: {} walkable viewcells of {cell} m on a {} × {} grid, each cell's PVS read from the \
+             database's precomputed visibility through the store; {} objects in the scene. Routes: {} steps \
+             of {} m (seed {}) from the walkable cell nearest the centre; route 1 random, route 2 straight \
+             lines along x and z with right-angle turns (more than seven where buildings cut them short). \
+             Client cache {} entries, delta-transmission for both; PBNP's side and corner regions {} of a \
+             cell's side ({} m). A cache swap is one cell evicted from the cache. The thesis's figures, in \
+             brackets, are for its synthetic city.",
+            stats.viewcells,
+            head.grid.rows(),
+            head.grid.columns(),
+            stats.scene_objects,
+            cfg.route.steps,
+            cfg.route.step,
+            cfg.route.seed,
+            cfg.capacity,
+            cfg.border,
+            cfg.border * cell,
+        ),
+        cell,
+    };
+    Ok(PvsPrefetchReport {
+        config: cfg.clone(),
+        place,
+        stats,
+        routes,
+        sweep,
+    })
+}
+
+/// SNP and PBNP along both routes over `source`, then PBNP at each swept border;
+/// `pages` reads a page counter, if there is one.
+fn walk<S: PvsSource + ?Sized>(
+    source: &S,
+    positions: [Vec<Position>; 2],
+    cfg: &PvsPrefetchConfig,
+    pages: impl Fn() -> Option<u64>,
+) -> Result<(Vec<RouteRun>, Vec<SweepRow>)> {
     let pbnp = Pbnp::new(cfg.border)?;
+    let counted = |rule: &dyn crate::prefetch::pvs::PrefetchArea,
+                   positions: &[Position]|
+     -> Result<(SimReport, Option<u64>)> {
+        let before = pages();
+        let report = simulate(source, rule, positions, cfg.capacity)?;
+        Ok((report, before.zip(pages()).map(|(a, b)| b - a)))
+    };
     let mut routes = Vec::new();
-    let mut sweep = Vec::new();
-    for (route, positions) in [(1, route1), (2, route2)] {
+    for (route, positions) in (1..).zip(positions) {
+        let (snp, snp_pages) = counted(&Snp, &positions)?;
+        let (pbnp, pbnp_pages) = counted(&pbnp, &positions)?;
         routes.push(RouteRun {
             route,
-            snp: simulate(&city, &Snp, &positions, cfg.capacity)?,
-            pbnp: simulate(&city, &pbnp, &positions, cfg.capacity)?,
+            snp,
+            pbnp,
+            pages: snp_pages.zip(pbnp_pages).map(|(a, b)| [a, b]),
             positions,
         });
     }
+    let mut sweep = Vec::new();
     for &border in &cfg.borders {
         for r in &routes {
-            let totals = simulate(&city, &Pbnp::new(border)?, &r.positions, cfg.capacity)?.totals;
+            let totals = simulate(source, &Pbnp::new(border)?, &r.positions, cfg.capacity)?.totals;
             sweep.push(SweepRow {
                 border,
                 route: r.route,
@@ -210,12 +345,7 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
             });
         }
     }
-    Ok(PvsPrefetchReport {
-        config: cfg.clone(),
-        stats,
-        routes,
-        sweep,
-    })
+    Ok((routes, sweep))
 }
 
 /// The change from `from` to `to`, as a percentage of `from`.
@@ -298,7 +428,7 @@ impl PvsPrefetchReport {
 
     /// PBNP against its region border.
     pub fn regions_csv(&self) -> String {
-        let side = self.config.city.cell;
+        let side = self.place.cell;
         let mut s = String::from(
             "border,band_m,route,transactions,cache_swaps,objects_per_transaction,first_transaction_objects,visual_misses,late_entries\n",
         );
@@ -359,33 +489,13 @@ impl PvsPrefetchReport {
     pub fn markdown(&self) -> String {
         let c = &self.config;
         let st = &self.stats;
-        let mut s = String::from(
-            "# pvs-prefetch — SNP against PBNP on a synthetic city (Zheng 2007 Table 7.2, Figs. 7.6–7.8)\n\n",
+        let mut s = format!(
+            "# pvs-prefetch — SNP against PBNP on {} (Zheng 2007 Table 7.2, Figs. 7.6–7.8)\n\n{}\n\n",
+            self.place.name, self.place.description
         );
+        s.push_str("The PVS table, measured, and as the thesis assumes it:\n\n| | ours | thesis |\n|---|---|---|\n");
         s.push_str(&format!(
-            "City: {b} × {b} buildings of {} m, streets {} m, viewcells {} m: {} viewcells on a {g} × {g} grid, \
-             PVS table drawn with seed {}. Routes: {} steps of {} m (seed {}); route 1 random from the central \
-             crossing, route 2 seven straight lines with six right-angle turns. Client cache {} entries, \
-             delta-transmission for both; PBNP's side and corner regions {} of a cell's side ({} m). \
-             A cache swap is one cell evicted from the cache.\n\n",
-            c.city.building,
-            c.city.street,
-            c.city.cell,
-            st.viewcells,
-            c.city.seed,
-            c.route.steps,
-            c.route.step,
-            c.route.seed,
-            c.capacity,
-            c.border,
-            c.border * c.city.cell,
-            b = c.city.blocks,
-            g = (f64::from(c.city.blocks) * (c.city.building + c.city.street) + c.city.street)
-                / c.city.cell,
-        ));
-        s.push_str("The PVS table, as generated and as the thesis assumes it:\n\n| | ours | thesis |\n|---|---|---|\n");
-        s.push_str(&format!(
-            "| PVS, share of the {} buildings | {:.2} % (mean {:.1} objects, {} to {}) | about 5 % |\n",
+            "| PVS, share of the {} objects | {:.2} % (mean {:.1} objects, {} to {}) | about 5 % |\n",
             st.scene_objects,
             100.0 * st.mean_share,
             st.mean_pvs,
@@ -460,6 +570,15 @@ impl PvsPrefetchReport {
             }
             s.push_str(" |\n");
         }
+        if self.routes.iter().all(|r| r.pages.is_some()) {
+            s.push_str("| pages read (PVS records)");
+            for r in &self.routes {
+                for pages in r.pages.into_iter().flatten() {
+                    s.push_str(&format!(" | {pages} (—)"));
+                }
+            }
+            s.push_str(" |\n");
+        }
         s.push_str("\nSNP → PBNP, ours (thesis's):\n\n| | transactions | cache swaps | objects per transaction |\n|---|---|---|---|\n");
         for r in &self.routes {
             let (a, b) = (&r.snp.totals, &r.pbnp.totals);
@@ -490,7 +609,7 @@ impl PvsPrefetchReport {
                 s.push_str(&format!(
                     "| {} | {} | {} | {} | {} | {:.1} | {} |\n",
                     w.border,
-                    w.border * c.city.cell,
+                    w.border * self.place.cell,
                     w.route,
                     t.transactions,
                     t.swaps,
@@ -704,65 +823,4 @@ mod tests {
         assert_eq!(thesis(2, "PBNP").unwrap().transactions, 600);
         assert_eq!(thesis(3, "SNP"), None);
     }
-}
-
-/// SNP and PBNP over a database's precomputed visibility (`flaneur build
-/// --visibility`): route 1's kind of walk, random with back-and-forth, through the
-/// walkable viewcells from the one nearest the city's centre.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct DatabaseRun {
-    /// Walkable cells, and their mean PVS as a share of the scene.
-    pub cells: usize,
-    pub mean_pvs_share: f64,
-    pub snp: SimTotals,
-    pub pbnp: SimTotals,
-    /// Pages read by each walk (PVS records and the table's head).
-    pub snp_pages: u64,
-    pub pbnp_pages: u64,
-}
-
-/// Runs SNP and PBNP over `db`'s visibility along a random route of `route`'s steps.
-pub fn run_on_database(
-    db: &crate::Database,
-    route: &RouteConfig,
-    border: f64,
-    capacity: usize,
-) -> Result<DatabaseRun> {
-    use crate::prefetch::pvs::{PvsSource, StoredPvs};
-    let source = StoredPvs::new(db)?;
-    let head = db.visibility()?.expect("StoredPvs checked it");
-    let eye = head.grid.origin.y + 0.5 * (head.grid.eye[0] + head.grid.eye[1]);
-    let centre = db.bounds().center();
-    let start = source
-        .walkable_centres()?
-        .into_iter()
-        .min_by(|a, b| {
-            let d =
-                |p: &Position| (p.x - centre.x as f64).powi(2) + (p.z - centre.z as f64).powi(2);
-            d(a).total_cmp(&d(b))
-        })
-        .ok_or_else(|| Error::Pvs("the database has no walkable viewcell".into()))?;
-    let walkable = |p: Position| {
-        Ok(db
-            .viewcell_at(glam::Vec3::new(p.x as f32, eye, p.z as f32))?
-            .is_some())
-    };
-    let positions = random_route(start, route, walkable)?;
-    let run = |rule: &dyn crate::prefetch::pvs::PrefetchArea| -> Result<(SimTotals, u64)> {
-        let before = db.io().page_reads;
-        let r = simulate(&source, rule, &positions, capacity)?;
-        Ok((r.totals, db.io().page_reads - before))
-    };
-    let (snp, snp_pages) = run(&Snp)?;
-    let (pbnp, pbnp_pages) = run(&Pbnp::new(border)?)?;
-    Ok(DatabaseRun {
-        cells: head.cells.len(),
-        mean_pvs_share: head.stats.entries as f64
-            / head.cells.len().max(1) as f64
-            / source.scene_objects().max(1) as f64,
-        snp,
-        pbnp,
-        snp_pages,
-        pbnp_pages,
-    })
 }

@@ -69,7 +69,7 @@ pub use client::{PvsClient, StepOutcome, Transaction};
 pub use delta::delta;
 pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
 pub use pbnp::{h, Pbnp};
-pub use routes::{random_route, straight_route, RouteConfig, StraightRoute};
+pub use routes::{axis_route, random_route, straight_route, RouteConfig, StraightRoute};
 pub use sim::{simulate, SimReport, SimTotals, StepRecord};
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};

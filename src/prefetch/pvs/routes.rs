@@ -19,6 +19,9 @@
 //!   first six lines are a random 85–115 % of a seventh of the route each (in whole
 //!   blocks), turning left or right as the city leaves room; the seventh is as long as
 //!   the steps left.
+//! - On a real city (a database's walkable viewcells) route 1 is the same walk, and
+//!   route 2 is [`axis_route`]: lines along x or z that turn early where a building
+//!   is in the way.
 //! - A route's positions are its start and the point after each step, so a route of n
 //!   steps has n + 1. Steps are measured along the route: the step that rounds a
 //!   corner of route 2 cuts it, its ends a little less than a step apart.
@@ -83,6 +86,22 @@ impl RouteConfig {
     }
 }
 
+/// A route's settings, and that it can start at `start`.
+fn check_start(
+    route: u8,
+    start: Position,
+    cfg: &RouteConfig,
+    walkable: &impl Fn(Position) -> Result<bool>,
+) -> Result<()> {
+    cfg.validate()?;
+    if !start.x.is_finite() || !start.z.is_finite() || !walkable(start)? {
+        return Err(Error::Pvs(format!(
+            "route {route} cannot start at {start}: it is not a walkable position"
+        )));
+    }
+    Ok(())
+}
+
 /// Route 1: a random walk from `start` over the positions `walkable` accepts.
 ///
 /// ```
@@ -99,12 +118,7 @@ pub fn random_route(
     cfg: &RouteConfig,
     walkable: impl Fn(Position) -> Result<bool>,
 ) -> Result<Vec<Position>> {
-    cfg.validate()?;
-    if !start.x.is_finite() || !start.z.is_finite() || !walkable(start)? {
-        return Err(Error::Pvs(format!(
-            "route 1 cannot start at {start}: it is not a walkable position"
-        )));
-    }
+    check_start(1, start, cfg, &walkable)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let mut heading: f64 = rng.gen_range(0.0..TAU);
     let mut p = start;
@@ -256,6 +270,88 @@ pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<Straigh
     )))
 }
 
+/// Route 2's kind over any walkable area (a real city's walkable viewcells): straight
+/// lines along x or z joined by right-angle turns, from `start`. Each line is meant to
+/// be a random 85–115 % of a seventh of the route, as on the synthetic city, but a line
+/// that would step off the walkable area turns early, left or right as the area allows
+/// (back the way it came at a dead end), so a real city's route may have more than
+/// seven lines.
+///
+/// ```
+/// use flaneur::prefetch::pvs::{axis_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 6, ..Default::default() })?;
+/// let cfg = RouteConfig { steps: 400, ..Default::default() };
+/// let route = axis_route(city.intersection(3, 3), &cfg, |p| Ok(city.on_walkway(p)))?;
+/// assert_eq!(route.len(), 401);
+/// // Every step is 4 m along x or along z.
+/// assert!(route.windows(2).all(|w| {
+///     let (dx, dz) = ((w[1].x - w[0].x).abs(), (w[1].z - w[0].z).abs());
+///     (dx.min(dz) < 1e-9) && ((dx.max(dz) - 4.0).abs() < 1e-9)
+/// }));
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+pub fn axis_route(
+    start: Position,
+    cfg: &RouteConfig,
+    walkable: impl Fn(Position) -> Result<bool>,
+) -> Result<Vec<Position>> {
+    check_start(2, start, cfg, &walkable)?;
+    const HEADINGS: [(f64, f64); 4] = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+    let per_line = cfg.steps as f64 / LINES as f64;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let line_length =
+        |rng: &mut ChaCha8Rng| (rng.gen_range(0.85..=1.15) * per_line).round().max(1.0) as usize;
+    let next = |p: Position, h: usize| {
+        let (dx, dz) = HEADINGS[h];
+        Position::new(p.x + cfg.step * dx, p.z + cfg.step * dz)
+    };
+    let open: Vec<usize> = (0..4)
+        .filter_map(|h| {
+            walkable(next(start, h))
+                .map(|ok| ok.then_some(h))
+                .transpose()
+        })
+        .collect::<Result<_>>()?;
+    if open.is_empty() {
+        return Err(Error::Pvs(format!(
+            "route 2 is stuck at {start}: no step of {} m along x or z from there is walkable",
+            cfg.step
+        )));
+    }
+    let mut heading = open[rng.gen_range(0..open.len())];
+    let mut left = line_length(&mut rng);
+    let mut p = start;
+    let mut route = Vec::with_capacity(cfg.steps + 1);
+    route.push(p);
+    while route.len() <= cfg.steps {
+        if left == 0 || !walkable(next(p, heading))? {
+            // Turn left or right, whichever the area allows; back at a dead end.
+            let mut turns = [(heading + 1) % 4, (heading + 3) % 4];
+            if rng.gen_bool(0.5) {
+                turns.swap(0, 1);
+            }
+            let mut chosen = None;
+            for h in turns.into_iter().chain([(heading + 2) % 4]) {
+                if walkable(next(p, h))? {
+                    chosen = Some(h);
+                    break;
+                }
+            }
+            heading = chosen.ok_or_else(|| {
+                Error::Pvs(format!(
+                    "route 2 is stuck at {p}: no step of {} m along x or z from there is walkable",
+                    cfg.step
+                ))
+            })?;
+            left = line_length(&mut rng);
+        }
+        p = next(p, heading);
+        route.push(p);
+        left -= 1;
+    }
+    Ok(route)
+}
+
 /// The start and the point after each of `steps` steps of `step` metres along the
 /// polyline through `corners`.
 fn sample(corners: &[Position], steps: usize, step: f64) -> Vec<Position> {
@@ -287,6 +383,37 @@ mod tests {
 
     fn city() -> SyntheticCity {
         SyntheticCity::generate(&SyntheticConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn the_axis_route_turns_where_the_area_ends_and_says_when_stuck() {
+        // A plus of two 8 m wide streets, 200 m long, crossing at the origin.
+        let plus = |p: Position| {
+            Ok((p.x.abs() < 4.0 || p.z.abs() < 4.0) && p.x.abs().max(p.z.abs()) < 100.0)
+        };
+        let cfg = RouteConfig {
+            steps: 1000,
+            ..Default::default()
+        };
+        let r = axis_route(Position::new(0.0, 0.0), &cfg, plus).unwrap();
+        assert_eq!(r.len(), 1001);
+        assert!(r.iter().all(|&p| plus(p).unwrap()));
+        // It reached an end of the plus and came back: more than one line.
+        assert!(r.iter().any(|p| p.x.abs().max(p.z.abs()) > 90.0));
+        let turns = r.windows(3).filter(|w| {
+            let (a, b) = (
+                (w[1].x - w[0].x, w[1].z - w[0].z),
+                (w[2].x - w[1].x, w[2].z - w[1].z),
+            );
+            (a.0 - b.0).abs() + (a.1 - b.1).abs() > 1e-9
+        });
+        assert!(turns.count() >= 5);
+        // A lone spot: nowhere to go.
+        let spot = |p: Position| Ok(p.x.abs() < 1.0 && p.z.abs() < 1.0);
+        let err = axis_route(Position::new(0.0, 0.0), &cfg, spot).unwrap_err();
+        assert!(err.to_string().contains("stuck"), "{err}");
+        let err = axis_route(Position::new(50.0, 50.0), &cfg, plus).unwrap_err();
+        assert!(err.to_string().contains("not a walkable position"), "{err}");
     }
 
     #[test]
