@@ -63,6 +63,9 @@ pub enum Error {
     /// (`prefetch::pvs`) cannot use.
     #[error("pvs prefetch: {0}")]
     Pvs(String),
+    /// The GPU: no adapter, a lost device, a frame that cannot be read back or saved.
+    #[error("rendering: {0}")]
+    Render(String),
 }
 
 impl Error {

@@ -33,6 +33,7 @@ pub mod error;
 pub mod geom;
 pub mod lod;
 pub mod prefetch;
+pub mod render;
 pub mod rtree;
 pub mod scene;
 pub mod store;

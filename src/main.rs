@@ -129,6 +129,26 @@ enum Command {
         #[arg(long, default_value_t = 60.0)]
         fov: f32,
     },
+    /// Render one picture of the city headless (no window): the objects in view at full
+    /// detail, on the GPU or a software adapter.
+    Shot {
+        db: PathBuf,
+        /// The eye: x,y,z in metres.
+        #[arg(long, value_parser = parse_vec3)]
+        at: glam::Vec3,
+        /// Heading and elevation in degrees: yaw,pitch (yaw 0 looks along +x, 90 along
+        /// +z; pitch positive looks up).
+        #[arg(long, value_parser = parse_look, default_value = "0,0")]
+        look: (f32, f32),
+        /// Image size, WIDTHxHEIGHT pixels.
+        #[arg(long, value_parser = parse_size, default_value = "960x540")]
+        size: (u32, u32),
+        /// Vertical field of view, degrees.
+        #[arg(long, default_value_t = 60.0)]
+        fov: f32,
+        #[arg(short, long, default_value = "shot.png")]
+        out: PathBuf,
+    },
     /// Objects, triangles, pages by kind, tree height and fill.
     Info {
         db: PathBuf,
@@ -552,6 +572,37 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
+        Command::Shot {
+            db,
+            at,
+            look,
+            size,
+            fov,
+            out,
+        } => {
+            let db = Database::open(&db)?;
+            let camera = flaneur::geom::Camera::new(at, look.0.to_radians(), look.1.to_radians())?
+                .with_fov(fov.to_radians(), fov.to_radians())?;
+            let gpu = flaneur::render::Gpu::headless()?;
+            let s = flaneur::render::shot(&db, &gpu, &camera, size.0, size.1)?;
+            s.frame.save_png(&out)?;
+            println!(
+                "{}: {} × {} on {} ({:?}); {} objects, {} triangles, {:.1} MiB on the GPU; \
+                 select {:.1} ms, upload {:.1} ms, draw and read back {:.1} ms",
+                out.display(),
+                size.0,
+                size.1,
+                gpu.adapter.name,
+                gpu.adapter.backend,
+                s.objects,
+                s.triangles,
+                s.gpu_bytes as f64 / 1048576.0,
+                s.select.as_secs_f64() * 1e3,
+                s.upload.as_secs_f64() * 1e3,
+                s.draw.as_secs_f64() * 1e3
+            );
+            Ok(())
+        }
         Command::Lod {
             mesh,
             out,
@@ -1578,6 +1629,31 @@ fn lod(
             "give --out DIR for the levels, or --refine with --eye and --look".into(),
         )
         .into()),
+    }
+}
+
+fn parse_look(s: &str) -> std::result::Result<(f32, f32), String> {
+    match s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Vec<_>>()[..]
+    {
+        [Ok(yaw), Ok(pitch)] if yaw.is_finite() && pitch.is_finite() => Ok((yaw, pitch)),
+        _ => Err(format!(
+            "{s:?} is not two finite numbers yaw,pitch (degrees)"
+        )),
+    }
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    match s
+        .split_once(['x', 'X'])
+        .map(|(w, h)| (w.trim().parse(), h.trim().parse()))
+    {
+        Some((Ok(w), Ok(h))) if w > 0 && h > 0 => Ok((w, h)),
+        _ => Err(format!(
+            "{s:?} is not a size WIDTHxHEIGHT in pixels, like 960x540"
+        )),
     }
 }
 

@@ -1,0 +1,76 @@
+//! The GPU device a renderer draws with, found without a window: the best adapter
+//! there is, or a software one (Mesa's lavapipe or llvmpipe) where there is no GPU.
+
+use crate::error::{Error, Result};
+
+/// A device and its queue, and what adapter they came from.
+///
+/// ```no_run
+/// # fn main() -> flaneur::Result<()> {
+/// let gpu = flaneur::render::Gpu::headless()?;
+/// println!("drawing on {} ({:?})", gpu.adapter.name, gpu.adapter.backend);
+/// # Ok(()) }
+/// ```
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::AdapterInfo,
+}
+
+impl Gpu {
+    /// A device for offscreen rendering: a hardware adapter if there is one, else a
+    /// software one. `WGPU_BACKEND` (e.g. `vulkan`, `gl`) narrows the search.
+    pub fn headless() -> Result<Gpu> {
+        // Vulkan (Metal, DX12) first, OpenGL only where none answers: probing GL for a
+        // display it does not need makes some drivers complain on stderr.
+        let chosen = std::env::var_os("WGPU_BACKEND").is_some();
+        let mut tried = Vec::new();
+        for backends in [wgpu::Backends::PRIMARY, wgpu::Backends::GL] {
+            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            if !chosen {
+                desc.backends = backends;
+            }
+            let instance = wgpu::Instance::new(desc);
+            for fallback in [false, true] {
+                let found =
+                    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                        power_preference: wgpu::PowerPreference::HighPerformance,
+                        force_fallback_adapter: fallback,
+                        ..Default::default()
+                    }));
+                match found {
+                    Ok(adapter) => return Gpu::on(adapter),
+                    Err(e) => tried.push(e.to_string()),
+                }
+            }
+            if chosen {
+                break;
+            }
+        }
+        tried.dedup();
+        Err(Error::Render(format!(
+            "no GPU adapter ({}); install a Vulkan or OpenGL driver (on Debian or \
+             Ubuntu, `apt-get install mesa-vulkan-drivers` gives a software one)",
+            tried.join("; ")
+        )))
+    }
+
+    fn on(adapter: wgpu::Adapter) -> Result<Gpu> {
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("flaneur"),
+            required_features: wgpu::Features::empty(),
+            required_limits: wgpu::Limits {
+                max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
+                ..wgpu::Limits::downlevel_defaults()
+            },
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Render(format!("{} ({:?}): {e}", info.name, info.backend)))?;
+        Ok(Gpu {
+            device,
+            queue,
+            adapter: info,
+        })
+    }
+}

@@ -1,0 +1,153 @@
+//! Object meshes resident on the GPU: uploaded when an object comes into view, freed
+//! when it is evicted, each in a slot whose number the id target shows.
+
+use std::collections::HashMap;
+
+use wgpu::util::DeviceExt;
+
+use super::Gpu;
+use crate::error::{Error, Result};
+use crate::scene::Mesh;
+
+/// One vertex as the shader reads it: position, normal, the object's slot.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub slot: u32,
+}
+
+impl Vertex {
+    pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32],
+    };
+}
+
+/// A mesh on the GPU.
+pub struct GpuMesh {
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub index_count: u32,
+    pub slot: u32,
+    pub bytes: u64,
+}
+
+/// The resident meshes, by object id.
+#[derive(Default)]
+pub struct GpuMeshes {
+    by_id: HashMap<u64, GpuMesh>,
+    /// Slot → object id; `None` for a free slot.
+    slots: Vec<Option<u64>>,
+    free: Vec<u32>,
+    bytes: u64,
+}
+
+impl GpuMeshes {
+    /// Uploads `id`'s mesh unless it is resident. A mesh whose normals do not match
+    /// its positions, or whose indices are not whole triangles of live vertices, is an
+    /// error naming the object.
+    pub fn upload(&mut self, gpu: &Gpu, id: u64, mesh: &Mesh) -> Result<()> {
+        if self.by_id.contains_key(&id) {
+            return Ok(());
+        }
+        let (positions, normals, indices) = (&mesh.positions, &mesh.normals, &mesh.indices);
+        if positions.len() != normals.len() || indices.len() % 3 != 0 {
+            return Err(Error::Render(format!(
+                "object {id}: {} positions, {} normals, {} indices",
+                positions.len(),
+                normals.len(),
+                indices.len()
+            )));
+        }
+        if let Some(&i) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(Error::Render(format!(
+                "object {id}: index {i} with {} positions",
+                positions.len()
+            )));
+        }
+        let slot = match self.free.pop() {
+            Some(s) => s,
+            None => {
+                self.slots.push(None);
+                (self.slots.len() - 1) as u32
+            }
+        };
+        let vertices: Vec<Vertex> = positions
+            .iter()
+            .zip(normals)
+            .map(|(&position, &normal)| Vertex {
+                position,
+                normal,
+                slot,
+            })
+            .collect();
+        let vb = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("object vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let ib = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("object indices"),
+                contents: bytemuck::cast_slice(indices.as_slice()),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+        let bytes = vb.size() + ib.size();
+        self.bytes += bytes;
+        self.slots[slot as usize] = Some(id);
+        self.by_id.insert(
+            id,
+            GpuMesh {
+                vertices: vb,
+                indices: ib,
+                index_count: indices.len() as u32,
+                slot,
+                bytes,
+            },
+        );
+        Ok(())
+    }
+
+    /// Frees `id`'s buffers; whether it was resident.
+    pub fn evict(&mut self, id: u64) -> bool {
+        match self.by_id.remove(&id) {
+            Some(m) => {
+                self.bytes -= m.bytes;
+                self.slots[m.slot as usize] = None;
+                self.free.push(m.slot);
+                m.vertices.destroy();
+                m.indices.destroy();
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub fn get(&self, id: u64) -> Option<&GpuMesh> {
+        self.by_id.get(&id)
+    }
+
+    /// The object in `slot`, if any.
+    pub fn object_in(&self, slot: u32) -> Option<u64> {
+        self.slots.get(slot as usize).copied().flatten()
+    }
+
+    pub fn len(&self) -> usize {
+        self.by_id.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.by_id.is_empty()
+    }
+
+    /// GPU memory the resident meshes take, bytes.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+}

@@ -1,0 +1,50 @@
+// One pass draws colour and object ids: flat-shaded by a fixed sun, each object its own
+// tint; the id target holds the draw slot + 1 (0 is the sky).
+struct Globals {
+    view_proj: mat4x4<f32>,
+    sun: vec4<f32>,
+};
+@group(0) @binding(0) var<uniform> globals: Globals;
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) @interpolate(flat) slot: u32,
+};
+
+@vertex
+fn vs(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) slot: u32) -> VertexOut {
+    var out: VertexOut;
+    out.clip = globals.view_proj * vec4<f32>(position, 1.0);
+    out.normal = normal;
+    out.slot = slot;
+    return out;
+}
+
+struct FragmentOut {
+    @location(0) colour: vec4<f32>,
+    @location(1) id: u32,
+};
+
+fn tint(slot: u32) -> vec3<f32> {
+    // A cheap integer hash to a pale colour.
+    var h = slot * 2654435761u;
+    h = h ^ (h >> 15u);
+    let r = f32(h & 255u) / 255.0;
+    let g = f32((h >> 8u) & 255u) / 255.0;
+    let b = f32((h >> 16u) & 255u) / 255.0;
+    return vec3<f32>(0.55, 0.55, 0.55) + 0.35 * vec3<f32>(r, g, b);
+}
+
+@fragment
+fn fs(in: VertexOut, @builtin(front_facing) front: bool) -> FragmentOut {
+    var n = normalize(in.normal);
+    if (!front) {
+        n = -n;
+    }
+    let light = 0.35 + 0.65 * max(dot(n, globals.sun.xyz), 0.0);
+    var out: FragmentOut;
+    out.colour = vec4<f32>(tint(in.slot) * light, 1.0);
+    out.id = in.slot + 1u;
+    return out;
+}

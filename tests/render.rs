@@ -1,0 +1,206 @@
+//! The renderer headless: a small generated city drawn offscreen from a known
+//! viewpoint. The id target must show, pixel for pixel, the object a ray through the
+//! pixel's centre meets first (the CPU ray caster of `visibility` is the judge), and the
+//! colour image must match a stored reference within a tolerance. It needs a GPU
+//! adapter: CI installs Mesa's software one (lavapipe).
+
+use std::collections::HashMap;
+
+use flaneur::geom::Camera;
+use flaneur::render::{fov_x_for, shot, Gpu};
+use flaneur::visibility::RayScene;
+use flaneur::{BuildOptions, Database};
+use glam::Vec3;
+
+const WIDTH: u32 = 192;
+const HEIGHT: u32 = 128;
+const REFERENCE: &str = "tests/data/render-reference.png";
+
+/// A 60-object city, its database, and a camera above its south-west looking across it.
+fn city(dir: &std::path::Path) -> (Database, Camera) {
+    let scene = dir.join("c.scene");
+    let config = citygen::CityConfig {
+        objects: 60,
+        seed: 3,
+        landmarks: 0.0,
+        ..Default::default()
+    };
+    citygen::write_city(&config, &scene, false).unwrap();
+    let db_path = dir.join("c.flaneur");
+    let opts = BuildOptions {
+        lod: None,
+        ..Default::default()
+    };
+    flaneur::build_from_scene(&scene, &db_path, &opts).unwrap();
+    let db = Database::open(&db_path).unwrap();
+    let b = db.bounds();
+    let (centre, extent) = (b.center(), b.extent());
+    let eye = Vec3::new(b.min.x - 0.1 * extent.x, 45.0, b.min.z - 0.1 * extent.z);
+    let to = centre - eye;
+    let yaw = to.z.atan2(to.x);
+    let camera = Camera::new(eye, yaw, -0.35)
+        .unwrap()
+        .with_fov(50f32.to_radians(), 50f32.to_radians())
+        .unwrap();
+    (db, camera)
+}
+
+fn gpu() -> Gpu {
+    Gpu::headless().unwrap_or_else(|e| {
+        panic!("{e}\nthe render tests need a GPU adapter; .ci/run installs Mesa's software one")
+    })
+}
+
+#[test]
+fn the_id_target_shows_what_rays_meet_and_the_image_matches_its_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let (db, camera) = city(dir.path());
+    let gpu = gpu();
+    let picture = shot(&db, &gpu, &camera, WIDTH, HEIGHT).unwrap();
+    let frame = &picture.frame;
+    assert_eq!(frame.objects.len(), (WIDTH * HEIGHT) as usize);
+    assert!(picture.objects > 10 && picture.gpu_bytes > 0, "{picture:?}");
+
+    // The judge: every object's mesh in one ray scene, a ray through each pixel centre.
+    let all = db.range(&db.bounds()).unwrap();
+    let meshes: Vec<(u64, flaneur::scene::Mesh)> = all
+        .objects
+        .iter()
+        .map(|o| (o.id, db.mesh(o).unwrap()))
+        .collect();
+    let rays = RayScene::new(meshes.iter().map(|(id, m)| (*id, m))).unwrap();
+    let aspect = WIDTH as f32 / HEIGHT as f32;
+    let tan_x = (fov_x_for(camera.fov_y, aspect) * 0.5).tan();
+    let tan_y = (camera.fov_y * 0.5).tan();
+    let (f, r, u) = (camera.forward(), camera.right(), camera.up());
+    let (mut agree, mut sky, mut seen) = (0usize, 0usize, HashMap::new());
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            let sx = (x as f32 + 0.5) / WIDTH as f32 * 2.0 - 1.0;
+            let sy = 1.0 - (y as f32 + 0.5) / HEIGHT as f32 * 2.0;
+            let dir = f + r * (sx * tan_x) + u * (sy * tan_y);
+            let hit = rays
+                .first_hit(camera.position.to_array(), dir.to_array())
+                .unwrap()
+                .and_then(|h| rays.object_id(h.object));
+            let drawn = frame.objects[(y * WIDTH + x) as usize];
+            if drawn == hit {
+                agree += 1;
+            }
+            match hit {
+                None => sky += 1,
+                Some(id) => *seen.entry(id).or_insert(0usize) += 1,
+            }
+        }
+    }
+    let pixels = (WIDTH * HEIGHT) as usize;
+    let share = agree as f64 / pixels as f64;
+    assert!(
+        share > 0.99,
+        "the id target agrees with the rays on {:.2} % of pixels",
+        100.0 * share
+    );
+    assert!(
+        sky > pixels / 20 && sky < pixels * 19 / 20,
+        "{sky} sky pixels"
+    );
+    assert!(seen.len() >= 10, "rays meet {} objects", seen.len());
+    // Every object rays see on a dozen pixels or more is drawn on most of them.
+    for (id, n) in seen.iter().filter(|(_, &n)| n >= 12) {
+        let drawn = frame.objects.iter().filter(|o| **o == Some(*id)).count();
+        assert!(
+            drawn * 10 >= n * 9,
+            "object {id}: {drawn} pixels drawn, {n} by rays"
+        );
+    }
+
+    // The colour image against the stored reference (FLANEUR_BLESS=1 rewrites it).
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(REFERENCE);
+    if std::env::var_os("FLANEUR_BLESS").is_some() {
+        frame.save_png(&path).unwrap();
+    }
+    let reference = image::open(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (FLANEUR_BLESS=1 writes it)", path.display()))
+        .to_rgba8();
+    assert_eq!(reference.dimensions(), (WIDTH, HEIGHT));
+    let (mut total, mut far_off) = (0u64, 0usize);
+    for (a, b) in reference
+        .as_raw()
+        .chunks_exact(4)
+        .zip(frame.rgba.chunks_exact(4))
+    {
+        let d: Vec<u32> = (0..3).map(|k| a[k].abs_diff(b[k]) as u32).collect();
+        total += d.iter().sum::<u32>() as u64;
+        if d.iter().any(|&c| c > 24) {
+            far_off += 1;
+        }
+    }
+    let mean = total as f64 / (3 * pixels) as f64;
+    assert!(
+        mean < 2.0,
+        "mean difference from the reference {mean:.2} of 255"
+    );
+    assert!(
+        far_off * 100 < pixels,
+        "{far_off} pixels differ from the reference by more than 24"
+    );
+}
+
+#[test]
+fn bad_sizes_and_unknown_objects_are_errors() {
+    let gpu = gpu();
+    for (w, h) in [(0, 10), (10, 0), (u32::MAX, 4)] {
+        let err = flaneur::render::Offscreen::new(&gpu, w, h).err().unwrap();
+        assert!(err.to_string().contains("pixels"), "{err}");
+    }
+    let target = flaneur::render::Offscreen::new(&gpu, 8, 8).unwrap();
+    let meshes = flaneur::render::GpuMeshes::default();
+    let err = target
+        .render(&gpu, glam::Mat4::IDENTITY, &meshes, &[7])
+        .unwrap_err();
+    assert!(err.to_string().contains("object 7"), "{err}");
+    // A mesh whose indices run past its vertices is refused, naming the object.
+    let mut meshes = flaneur::render::GpuMeshes::default();
+    let bad = flaneur::scene::Mesh {
+        positions: vec![[0.0; 3]; 3],
+        normals: vec![[0.0, 1.0, 0.0]; 3],
+        indices: vec![0, 1, 5],
+    };
+    let err = meshes.upload(&gpu, 9, &bad).unwrap_err();
+    assert!(err.to_string().contains("object 9"), "{err}");
+    assert!(meshes.is_empty() && meshes.bytes() == 0);
+}
+
+#[test]
+fn meshes_come_and_go_and_their_bytes_are_counted() {
+    let gpu = gpu();
+    let mut meshes = flaneur::render::GpuMeshes::default();
+    let quad = |z: f32| flaneur::scene::Mesh {
+        positions: vec![
+            [-1.0, -1.0, z],
+            [1.0, -1.0, z],
+            [1.0, 1.0, z],
+            [-1.0, 1.0, z],
+        ],
+        normals: vec![[0.0, 0.0, 1.0]; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+    };
+    meshes.upload(&gpu, 1, &quad(-5.0)).unwrap();
+    meshes.upload(&gpu, 2, &quad(-3.0)).unwrap();
+    let one = meshes.get(1).unwrap().bytes;
+    assert_eq!(meshes.bytes(), 2 * one);
+    // Drawn: the nearer quad hides the farther one in the middle of the image.
+    let target = flaneur::render::Offscreen::new(&gpu, 32, 32).unwrap();
+    let view_proj = glam::Mat4::perspective_rh(1.0, 1.0, 0.5, 100.0);
+    let frame = target.render(&gpu, view_proj, &meshes, &[1, 2]).unwrap();
+    assert_eq!(frame.objects[16 * 32 + 16], Some(2));
+    assert_eq!(frame.objects[0], None);
+    assert!(meshes.evict(2) && !meshes.evict(2));
+    assert_eq!(meshes.bytes(), one);
+    let frame = target.render(&gpu, view_proj, &meshes, &[1]).unwrap();
+    assert_eq!(frame.objects[16 * 32 + 16], Some(1));
+    // A freed slot is reused, and shows its new object.
+    meshes.upload(&gpu, 3, &quad(-4.0)).unwrap();
+    let frame = target.render(&gpu, view_proj, &meshes, &[1, 3]).unwrap();
+    assert_eq!(frame.objects[16 * 32 + 16], Some(3));
+}
