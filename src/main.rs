@@ -231,6 +231,18 @@ enum Command {
         backend: Backend,
         #[arg(long, short)]
         quiet: bool,
+        /// Draw every frame headless (no window) as the walk selects it, and write them
+        /// as PNGs to --frames-dir (review and box modes).
+        #[arg(long)]
+        render: bool,
+        #[arg(long, default_value = "frames")]
+        frames_dir: PathBuf,
+        /// Rendered image size, WIDTHxHEIGHT; square fits the walk's 45° × 45° view.
+        #[arg(long, value_parser = parse_size, default_value = "512x512")]
+        size: (u32, u32),
+        /// Write every N-th rendered frame (all are drawn and timed).
+        #[arg(long, default_value_t = 1)]
+        every: usize,
     },
     /// Rerun an experiment of the papers on a database.
     Bench {
@@ -641,8 +653,20 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
             prefetch,
             border,
+            render,
+            frames_dir,
+            size,
+            every,
         } => {
+            let render = render.then_some(RenderOpts {
+                dir: frames_dir,
+                size,
+                every,
+            });
             if mode == "pvs" && config.is_none() {
+                if render.is_some() {
+                    bail!("--render draws the review and box modes so far, not pvs");
+                }
                 let rule = match prefetch.as_str() {
                     "snp" => PvsPrefetch::Snp,
                     "pbnp" => PvsPrefetch::Pbnp { border },
@@ -694,6 +718,7 @@ fn run(cli: Cli) -> Result<()> {
                 save_path.as_deref(),
                 backend,
                 quiet,
+                render.as_ref(),
             )
         }
         Command::Query {
@@ -1408,6 +1433,7 @@ fn walk_cmd(
     save_path: Option<&Path>,
     backend: Backend,
     quiet: bool,
+    render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
     let poses = camera_path(&db, camera, frames, fps, seed)?;
@@ -1419,13 +1445,60 @@ fn walk_cmd(
     } else {
         indicatif::ProgressBar::new(poses.poses.len() as u64)
     };
-    let report = review::walk(&db, &poses, cfg, |_| bar.inc(1))?;
+    let (report, times) = match render {
+        None => (review::walk(&db, &poses, cfg, |_| bar.inc(1))?, None),
+        Some(r) => {
+            let gpu = flaneur::render::Gpu::headless()?;
+            let mut writer = flaneur::render::FrameWriter::new(
+                &gpu,
+                r.size,
+                (&db.bounds(), cfg.far),
+                &r.dir,
+                r.every,
+            )?;
+            let report = review::walk_into(&db, &poses, cfg, |_| bar.inc(1), &mut writer)?;
+            (report, Some((gpu.adapter.clone(), writer.times)))
+        }
+    };
     bar.finish_and_clear();
     if let Some(p) = csv {
         std::fs::write(p, report.to_csv()).with_context(|| format!("writing {}", p.display()))?;
     }
     print_walk(&report);
+    if let (Some((adapter, t)), Some(r)) = (times, render) {
+        let stats = |v: &[f64]| {
+            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+            (mean, v.iter().copied().fold(0.0, f64::max))
+        };
+        let ((up, up_max), (draw, draw_max)) = (stats(&t.upload_ms), stats(&t.draw_ms));
+        println!(
+            "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: uploads {:.1} ms a frame \
+             (most {:.1}), drawing and reading back {:.1} ms (most {:.1}); {} uploads, {} frees, \
+             at most {:.1} MiB of meshes on the GPU",
+            t.frames,
+            r.size.0,
+            r.size.1,
+            adapter.name,
+            adapter.backend,
+            t.written,
+            r.dir.display(),
+            up,
+            up_max,
+            draw,
+            draw_max,
+            t.uploads,
+            t.evictions,
+            t.peak_gpu_bytes as f64 / 1048576.0
+        );
+    }
     Ok(())
+}
+
+/// Where and how `walk --render` draws its frames.
+struct RenderOpts {
+    dir: PathBuf,
+    size: (u32, u32),
+    every: usize,
 }
 
 /// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.

@@ -7,8 +7,11 @@
 use std::collections::HashMap;
 
 use flaneur::geom::Camera;
-use flaneur::render::{fov_x_for, shot, Gpu};
+use flaneur::render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
+use flaneur::walk::buffer::{Loaded, ObjectBuffer};
+use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{motion, FrameSink, Motion};
 use flaneur::{BuildOptions, Database};
 use glam::Vec3;
 
@@ -203,4 +206,75 @@ fn meshes_come_and_go_and_their_bytes_are_counted() {
     meshes.upload(&gpu, 3, &quad(-4.0)).unwrap();
     let frame = target.render(&gpu, view_proj, &meshes, &[1, 3]).unwrap();
     assert_eq!(frame.objects[16 * 32 + 16], Some(3));
+}
+
+/// A sink that renders through a [`FrameWriter`] and checks, frame by frame, that the
+/// GPU holds exactly what the object buffer holds of what has been drawn, and that the
+/// frame drew every object the walk selected.
+struct Checked<'a> {
+    writer: FrameWriter<'a>,
+    frames: usize,
+}
+
+impl FrameSink for Checked<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> flaneur::Result<()> {
+        self.writer.frame(index, camera, buffer, drawn)?;
+        let gpu = self.writer.resident();
+        assert!(
+            drawn.iter().all(|o| gpu.get(o.entry.id).is_some()),
+            "frame {index}"
+        );
+        assert!(
+            gpu.ids().all(|id| buffer.contains(id)),
+            "frame {index}: a freed object"
+        );
+        self.frames += 1;
+        Ok(())
+    }
+}
+
+#[test]
+fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let (db, _) = city(dir.path());
+    let gpu = gpu();
+    // A small object buffer, so objects are evicted along the way and freed on the GPU.
+    let cfg = ReviewConfig {
+        memory_budget: 2 << 20,
+        prefetch_k: None,
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let path = motion::generate(&db.bounds(), Motion::Fast, 600, 30.0, 2).unwrap();
+    let frames = dir.path().join("frames");
+    let writer = FrameWriter::new(&gpu, (64, 64), (&db.bounds(), cfg.far), &frames, 200).unwrap();
+    let mut sink = Checked { writer, frames: 0 };
+    let report = review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    assert_eq!(sink.frames, path.poses.len());
+    let t = &sink.writer.times;
+    assert_eq!((t.frames, t.written), (600, 3));
+    assert_eq!(t.draw_ms.len(), 600);
+    let drawn: u64 = report.frames.iter().map(|f| f.triangles_drawn).sum();
+    assert_eq!(
+        t.triangles.iter().sum::<u64>(),
+        drawn,
+        "the walk's triangles, drawn"
+    );
+    assert!(
+        t.uploads > 0 && t.evictions > 0 && t.peak_gpu_bytes > 0,
+        "{} uploads, {} frees, {} bytes",
+        t.uploads,
+        t.evictions,
+        t.peak_gpu_bytes
+    );
+    for k in [0, 200, 400] {
+        assert!(frames.join(format!("frame-{k:05}.png")).exists());
+    }
+    assert!(FrameWriter::new(&gpu, (64, 64), (&db.bounds(), 10.0), &frames, 0).is_err());
 }

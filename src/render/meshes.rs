@@ -129,6 +129,11 @@ impl GpuMeshes {
         }
     }
 
+    /// The resident objects' ids, in no order.
+    pub fn ids(&self) -> impl Iterator<Item = u64> + '_ {
+        self.by_id.keys().copied()
+    }
+
     pub fn get(&self, id: u64) -> Option<&GpuMesh> {
         self.by_id.get(&id)
     }

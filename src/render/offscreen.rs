@@ -6,6 +6,8 @@ use glam::{Mat4, Vec3};
 use super::meshes::{GpuMeshes, Vertex};
 use super::Gpu;
 use crate::error::{Error, Result};
+use crate::geom::Aabb;
+use wgpu::util::DeviceExt;
 
 const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -43,9 +45,13 @@ pub struct Offscreen {
     colour: wgpu::Texture,
     ids: wgpu::Texture,
     depth: wgpu::Texture,
+    ground: Option<wgpu::Buffer>,
     width: u32,
     height: u32,
 }
+
+/// The ground's slot: the id target shows it as the sky, nothing the database holds.
+const GROUND_SLOT: u32 = u32::MAX;
 
 impl Offscreen {
     /// Targets of `width` × `height` pixels.
@@ -149,6 +155,7 @@ impl Offscreen {
                 DEPTH_FORMAT,
                 wgpu::TextureUsages::RENDER_ATTACHMENT,
             ),
+            ground: None,
             width,
             height,
         })
@@ -156,6 +163,34 @@ impl Offscreen {
 
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// Draws a ground under `city`: a plane at its lowest point reaching `margin`
+    /// metres past it on every side (the database holds buildings, not the ground
+    /// between them). The id target shows the ground as the sky.
+    pub fn set_ground(&mut self, gpu: &Gpu, city: &Aabb, margin: f32) {
+        let (lo, hi, y) = (city.min - margin, city.max + margin, city.min.y);
+        let corner = |x: f32, z: f32| Vertex {
+            position: [x, y, z],
+            normal: [0.0, 1.0, 0.0],
+            slot: GROUND_SLOT,
+        };
+        let quad = [
+            corner(lo.x, lo.z),
+            corner(hi.x, hi.z),
+            corner(hi.x, lo.z),
+            corner(lo.x, lo.z),
+            corner(lo.x, hi.z),
+            corner(hi.x, hi.z),
+        ];
+        self.ground = Some(
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("ground"),
+                    contents: bytemuck::cast_slice(&quad),
+                    usage: wgpu::BufferUsages::VERTEX,
+                }),
+        );
     }
 
     /// Draws `draw` (object ids, each resident in `meshes`) with `view_proj` and reads
@@ -214,6 +249,10 @@ impl Offscreen {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
+            if let Some(ground) = &self.ground {
+                pass.set_vertex_buffer(0, ground.slice(..));
+                pass.draw(0..6, 0..1);
+            }
             for id in draw {
                 let m = meshes
                     .get(*id)
@@ -232,7 +271,9 @@ impl Offscreen {
             .chunks_exact(4)
             .map(|b| {
                 let v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-                v.checked_sub(1).and_then(|slot| meshes.object_in(slot))
+                v.checked_sub(1)
+                    .filter(|&slot| slot != GROUND_SLOT)
+                    .and_then(|slot| meshes.object_in(slot))
             })
             .collect();
         Ok(Frame {

@@ -1,5 +1,6 @@
 // One pass draws colour and object ids: flat-shaded by a fixed sun, each object its own
-// tint; the id target holds the draw slot + 1 (0 is the sky).
+// tint; the id target holds the draw slot + 1 (0 is the sky, and the ground, whose slot
+// is the largest u32).
 struct Globals {
     view_proj: mat4x4<f32>,
     sun: vec4<f32>,
@@ -43,8 +44,12 @@ fn fs(in: VertexOut, @builtin(front_facing) front: bool) -> FragmentOut {
         n = -n;
     }
     let light = 0.35 + 0.65 * max(dot(n, globals.sun.xyz), 0.0);
+    var base = tint(in.slot);
+    if (in.slot == 0xffffffffu) {
+        base = vec3<f32>(0.30, 0.32, 0.28);
+    }
     var out: FragmentOut;
-    out.colour = vec4<f32>(tint(in.slot) * light, 1.0);
+    out.colour = vec4<f32>(base * light, 1.0);
     out.id = in.slot + 1u;
     return out;
 }

@@ -45,7 +45,8 @@ pub fn fov_x_for(fov_y: f32, aspect: f32) -> f32 {
 /// # Ok(()) }
 /// ```
 pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) -> Result<Shot> {
-    let target = Offscreen::new(gpu, width, height)?;
+    let mut target = Offscreen::new(gpu, width, height)?;
+    target.set_ground(gpu, &db.bounds(), camera.far);
     let aspect = width as f32 / height as f32;
     let camera = camera.with_fov(fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
     let started = Instant::now();

@@ -9,6 +9,8 @@ mod path;
 pub mod path_csv;
 pub mod pvs_walk;
 pub mod review;
+mod sink;
 
 pub use motion::{CameraPath, Motion, Pose};
 pub use path::{street_walk, WalkPath};
+pub use sink::{FrameSink, NoSink};

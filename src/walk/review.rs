@@ -43,6 +43,7 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::cells::{contains_ground, scaled_cell};
 use super::motion::CameraPath;
+use super::sink::{FrameSink, NoSink};
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -383,7 +384,19 @@ pub fn walk(
     db: &Database,
     path: &CameraPath,
     cfg: &ReviewConfig,
+    progress: impl FnMut(usize),
+) -> Result<WalkReport> {
+    walk_into(db, path, cfg, progress, &mut NoSink)
+}
+
+/// [`walk`], handing each frame's selection to `sink` (a renderer) once the frame's
+/// statistics are taken, so that drawing is not counted in them.
+pub fn walk_into(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &ReviewConfig,
     mut progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
 ) -> Result<WalkReport> {
     cfg.validate()?;
     if path.poses.is_empty() {
@@ -455,7 +468,7 @@ pub fn walk(
                     std::thread::sleep(wait);
                 }
             }
-            frames.push(state.frame(path, i)?);
+            frames.push(state.frame(path, i, sink)?);
             progress(i);
         }
         // Closing the request channel ends the prefetch thread.
@@ -510,7 +523,12 @@ struct Walker<'a> {
 }
 
 impl Walker<'_> {
-    fn frame(&mut self, path: &CameraPath, i: usize) -> Result<FrameStats> {
+    fn frame(
+        &mut self,
+        path: &CameraPath,
+        i: usize,
+        sink: &mut dyn FrameSink,
+    ) -> Result<FrameStats> {
         let pose = path.poses[i];
         let camera = Camera {
             far: self.cfg.far,
@@ -600,6 +618,7 @@ impl Walker<'_> {
         stats.index_pages = io.reads_of(PageKind::RtreeNode);
         stats.mesh_pages = io.reads_of(PageKind::Mesh);
         stats.buffer_bytes = self.buffer.bytes();
+        sink.frame(i, &camera, &self.buffer, &drawn)?;
         Ok(stats)
     }
 

@@ -1,0 +1,130 @@
+//! A walk drawn headless, frame by frame, into PNG files: the objects the walk engine
+//! selected, kept on the GPU as the object buffer holds them (uploaded when an object
+//! is loaded, freed when it is evicted, so a steady walk allocates nothing), with the
+//! time each frame spent on the CPU side (uploads) and on drawing and reading back.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use super::{fov_x_for, Gpu, GpuMeshes, Offscreen};
+use crate::error::{Error, Result};
+use crate::geom::{Aabb, Camera};
+use crate::walk::buffer::{Loaded, ObjectBuffer};
+use crate::walk::FrameSink;
+
+/// What drawing a walk cost.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameTimes {
+    /// Frames drawn, and written as PNGs.
+    pub frames: usize,
+    pub written: usize,
+    /// Per frame: uploads and frees (CPU side), drawing and reading back (GPU side),
+    /// milliseconds.
+    pub upload_ms: Vec<f64>,
+    pub draw_ms: Vec<f64>,
+    pub uploads: usize,
+    pub evictions: usize,
+    /// The most GPU memory the meshes took, bytes.
+    pub peak_gpu_bytes: u64,
+    pub triangles: Vec<u64>,
+}
+
+/// Draws each frame of a walk; writes every `every`-th into `dir` as
+/// `frame-NNNNN.png`.
+pub struct FrameWriter<'a> {
+    gpu: &'a Gpu,
+    target: Offscreen,
+    meshes: GpuMeshes,
+    dir: PathBuf,
+    every: usize,
+    pub times: FrameTimes,
+}
+
+impl<'a> FrameWriter<'a> {
+    /// Frames of `width` × `height` into `dir` (made if missing), every `every`-th
+    /// written (at least 1), with a ground under `city` reaching `margin` metres past it.
+    pub fn new(
+        gpu: &'a Gpu,
+        (width, height): (u32, u32),
+        (city, margin): (&Aabb, f32),
+        dir: &Path,
+        every: usize,
+    ) -> Result<FrameWriter<'a>> {
+        if every == 0 {
+            return Err(Error::Invalid(
+                "write every 0th frame? give 1 or more".into(),
+            ));
+        }
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let mut target = Offscreen::new(gpu, width, height)?;
+        target.set_ground(gpu, city, margin);
+        Ok(FrameWriter {
+            gpu,
+            target,
+            meshes: GpuMeshes::default(),
+            dir: dir.to_path_buf(),
+            every,
+            times: FrameTimes::default(),
+        })
+    }
+
+    /// The meshes on the GPU now.
+    pub fn resident(&self) -> &GpuMeshes {
+        &self.meshes
+    }
+}
+
+impl FrameSink for FrameWriter<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<()> {
+        let started = Instant::now();
+        // The GPU holds what the object buffer holds: free what it evicted...
+        let gone: Vec<u64> = self
+            .meshes
+            .ids()
+            .filter(|id| !buffer.contains(*id))
+            .collect();
+        for id in gone {
+            self.meshes.evict(id);
+            self.times.evictions += 1;
+        }
+        // ...and upload what is drawn for the first time.
+        for o in drawn {
+            if self.meshes.get(o.entry.id).is_none() {
+                self.meshes.upload(self.gpu, o.entry.id, &o.mesh)?;
+                self.times.uploads += 1;
+            }
+        }
+        let upload = started.elapsed();
+        let started = Instant::now();
+        let (w, h) = self.target.size();
+        let aspect = w as f32 / h as f32;
+        let camera = camera.with_fov(fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
+        let ids: Vec<u64> = drawn.iter().map(|o| o.entry.id).collect();
+        let frame = self
+            .target
+            .render(self.gpu, camera.view_proj(aspect)?, &self.meshes, &ids)?;
+        let draw = started.elapsed();
+        let t = &mut self.times;
+        t.frames += 1;
+        t.upload_ms.push(ms(upload));
+        t.draw_ms.push(ms(draw));
+        t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
+        t.triangles
+            .push(drawn.iter().map(|o| o.mesh.triangle_count() as u64).sum());
+        if index % self.every == 0 {
+            frame.save_png(&self.dir.join(format!("frame-{index:05}.png")))?;
+            t.written += 1;
+        }
+        Ok(())
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
