@@ -1418,6 +1418,56 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         }
         print_walk(&report);
     }
+    demo_flight(&db, &cache.join("demo-frames"))
+}
+
+/// The demo's last part: a short flight over the city drawn headless to PNG frames (no
+/// window yet). Without a GPU adapter, it says so and the demo ends well.
+fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
+    let gpu = match flaneur::render::Gpu::headless() {
+        Ok(gpu) => gpu,
+        Err(e) => {
+            println!("no flight drawn: {e}");
+            return Ok(());
+        }
+    };
+    // Four seconds across the city's middle, 120 m up, looking ahead and down.
+    let b = db.bounds();
+    let (c, e) = (b.center(), b.extent());
+    let (from, to) = (
+        glam::Vec3::new(c.x - 0.3 * e.x, b.min.y + 120.0, c.z - 0.3 * e.z),
+        glam::Vec3::new(c.x + 0.1 * e.x, b.min.y + 120.0, c.z + 0.1 * e.z),
+    );
+    let yaw = (to.z - from.z).atan2(to.x - from.x);
+    let frames = 120;
+    let poses = (0..frames)
+        .map(|i| {
+            let t = i as f32 / (frames - 1) as f32;
+            flaneur::walk::Pose {
+                time: i as f64 / 30.0,
+                position: from.lerp(to, t),
+                yaw,
+                pitch: -0.35,
+            }
+        })
+        .collect();
+    let path = CameraPath::new(poses)?;
+    let cfg = ReviewConfig::preset(Preset::Optimal);
+    println!(
+        "drawing a {frames}-frame flight over the city on {} ({:?}), headless",
+        gpu.adapter.name, gpu.adapter.backend
+    );
+    let mut writer = flaneur::render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?;
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
+    bar.finish_and_clear();
+    let t = &writer.times;
+    println!(
+        "  {} frames drawn ({:.0} ms each on average), every tenth written: {}",
+        t.frames,
+        t.draw_ms.iter().sum::<f64>() / t.frames.max(1) as f64,
+        dir.join("frame-*.png").display()
+    );
     Ok(())
 }
 
