@@ -253,6 +253,28 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Experiment {
+    /// Each frame of a walk drawn twice, with the mode's selection and at full detail,
+    /// and compared: PSNR and the share of differing pixels beside triangles drawn
+    /// (the thesis's Figs. 5.26 and 6.6 as numbers). Renders headless.
+    Fidelity {
+        db: PathBuf,
+        /// A motion pattern (normal, fast, slow, turning, backward, random) or a path
+        /// CSV file.
+        #[arg(long, default_value = "normal")]
+        path: String,
+        /// review or box.
+        #[arg(long, default_value = "review")]
+        mode: String,
+        #[arg(long, default_value_t = 300)]
+        frames: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Image size, WIDTHxHEIGHT.
+        #[arg(long, value_parser = parse_size, default_value = "256x256")]
+        size: (u32, u32),
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
     /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
     PrefetchK {
         db: PathBuf,
@@ -865,6 +887,44 @@ fn run(cli: Cli) -> Result<()> {
                 };
                 let r = with_bar("lod-parallel builds", |p| lod_parallel::run(&cfg, p))?;
                 write_experiment(&out, "lod-parallel", &r.to_csv(), &r.markdown(), |dir| {
+                    Ok(r.plot(dir)?)
+                })
+            }
+            Experiment::Fidelity {
+                db,
+                path,
+                mode,
+                frames,
+                seed,
+                size,
+                out,
+            } => {
+                let preset = match mode.as_str() {
+                    "review" => Preset::Optimal,
+                    "box" => Preset::Box,
+                    other => bail!("fidelity draws the review and box modes so far, not '{other}'"),
+                };
+                let db = Database::open(&db)?;
+                let poses = camera_path(&db, &path, frames, 30.0, seed)?;
+                let cfg = ReviewConfig {
+                    pace: None,
+                    ..ReviewConfig::preset(preset)
+                };
+                let gpu = flaneur::render::Gpu::headless()?;
+                println!(
+                    "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice",
+                    poses.poses.len(),
+                    path,
+                    size.0,
+                    size.1
+                );
+                let bar = indicatif::ProgressBar::new(poses.poses.len() as u64);
+                let r =
+                    flaneur::bench::fidelity::run(&db, &gpu, &poses, &cfg, &mode, size, |_| {
+                        bar.inc(1)
+                    })?;
+                bar.finish_and_clear();
+                write_experiment(&out, "fidelity", &r.to_csv(), &r.markdown(), |dir| {
                     Ok(r.plot(dir)?)
                 })
             }

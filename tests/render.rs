@@ -278,3 +278,30 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     }
     assert!(FrameWriter::new(&gpu, (64, 64), (&db.bounds(), 10.0), &frames, 0).is_err());
 }
+
+/// BOX draws what it loaded at full detail, and loads a whole cell before drawing: its
+/// frames must be the full-detail reference's, pixel for pixel, whatever slots the two
+/// renders gave the objects.
+#[test]
+fn fidelity_of_a_full_detail_walk_is_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let (db, _) = city(dir.path());
+    let gpu = gpu();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let path = motion::generate(&db.bounds(), Motion::Turning, 60, 30.0, 4).unwrap();
+    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", (96, 96), |_| {}).unwrap();
+    assert_eq!(r.rows.len(), 60);
+    assert!(r.rows.iter().any(|row| row.triangles > 0));
+    for row in &r.rows {
+        assert_eq!(
+            row.triangles, row.reference_triangles,
+            "frame {}",
+            row.frame
+        );
+        assert!(row.psnr.is_infinite() && row.differ == 0.0, "{row:?}");
+    }
+    assert!(r.to_csv().lines().count() == 61 && r.markdown().contains("60 (100.0 %)"));
+}

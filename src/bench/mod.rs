@@ -11,6 +11,7 @@ pub mod cell_size;
 pub mod city_series;
 pub mod csearch;
 pub mod db_size;
+pub mod fidelity;
 pub mod frame_time;
 pub mod index_cache;
 pub mod lod_dag;

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use super::{fov_x_for, Gpu, GpuMeshes, Offscreen};
+use super::{Frame, Gpu, GpuMeshes, Offscreen};
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
@@ -74,14 +74,15 @@ impl<'a> FrameWriter<'a> {
     }
 }
 
-impl FrameSink for FrameWriter<'_> {
-    fn frame(
+impl FrameWriter<'_> {
+    /// Draws one frame as [`FrameSink::frame`] does, without writing it: the GPU made
+    /// to hold what `buffer` holds of what has been drawn, then `drawn` drawn.
+    pub fn draw(
         &mut self,
-        index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
-    ) -> Result<()> {
+    ) -> Result<Frame> {
         let started = Instant::now();
         // The GPU holds what the object buffer holds: free what it evicted...
         let gone: Vec<u64> = self
@@ -102,13 +103,10 @@ impl FrameSink for FrameWriter<'_> {
         }
         let upload = started.elapsed();
         let started = Instant::now();
-        let (w, h) = self.target.size();
-        let aspect = w as f32 / h as f32;
-        let camera = camera.with_fov(fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
         let ids: Vec<u64> = drawn.iter().map(|o| o.entry.id).collect();
         let frame = self
             .target
-            .render(self.gpu, camera.view_proj(aspect)?, &self.meshes, &ids)?;
+            .render_camera(self.gpu, camera, &self.meshes, &ids)?;
         let draw = started.elapsed();
         let t = &mut self.times;
         t.frames += 1;
@@ -117,9 +115,22 @@ impl FrameSink for FrameWriter<'_> {
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
         t.triangles
             .push(drawn.iter().map(|o| o.mesh.triangle_count() as u64).sum());
+        Ok(frame)
+    }
+}
+
+impl FrameSink for FrameWriter<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<()> {
+        let frame = self.draw(camera, buffer, drawn)?;
         if index % self.every == 0 {
             frame.save_png(&self.dir.join(format!("frame-{index:05}.png")))?;
-            t.written += 1;
+            self.times.written += 1;
         }
         Ok(())
     }

@@ -9,20 +9,28 @@ use super::Gpu;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 
-/// One vertex as the shader reads it: position, normal, the object's slot.
+/// One vertex as the shader reads it: position, normal, the object's slot (what the id
+/// target shows) and the key its tint comes from (its id folded to 32 bits, so that an
+/// object looks the same in whatever slot).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
     pub slot: u32,
+    pub key: u32,
+}
+
+/// An object id folded to the 32 bits of a tint key.
+pub fn tint_key(id: u64) -> u32 {
+    (id ^ (id >> 32)) as u32
 }
 
 impl Vertex {
     pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
         array_stride: std::mem::size_of::<Vertex>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32],
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32, 3 => Uint32],
     };
 }
 
@@ -82,6 +90,7 @@ impl GpuMeshes {
                 position,
                 normal,
                 slot,
+                key: tint_key(id),
             })
             .collect();
         let vb = gpu

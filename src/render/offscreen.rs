@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3};
 use super::meshes::{GpuMeshes, Vertex};
 use super::Gpu;
 use crate::error::{Error, Result};
-use crate::geom::Aabb;
+use crate::geom::{Aabb, Camera};
 use wgpu::util::DeviceExt;
 
 const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -174,6 +174,7 @@ impl Offscreen {
             position: [x, y, z],
             normal: [0.0, 1.0, 0.0],
             slot: GROUND_SLOT,
+            key: 0,
         };
         let quad = [
             corner(lo.x, lo.z),
@@ -191,6 +192,20 @@ impl Offscreen {
                     usage: wgpu::BufferUsages::VERTEX,
                 }),
         );
+    }
+
+    /// Draws `draw` as `camera` sees it, its vertical field of view kept and its
+    /// horizontal one fitted to the image.
+    pub fn render_camera(
+        &self,
+        gpu: &Gpu,
+        camera: &Camera,
+        meshes: &GpuMeshes,
+        draw: &[u64],
+    ) -> Result<Frame> {
+        let aspect = self.width as f32 / self.height as f32;
+        let camera = camera.with_fov(super::fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
+        self.render(gpu, camera.view_proj(aspect)?, meshes, draw)
     }
 
     /// Draws `draw` (object ids, each resident in `meshes`) with `view_proj` and reads

@@ -1,6 +1,6 @@
 // One pass draws colour and object ids: flat-shaded by a fixed sun, each object its own
-// tint; the id target holds the draw slot + 1 (0 is the sky, and the ground, whose slot
-// is the largest u32).
+// tint (from its id, so that it looks the same whatever slot it has); the id target
+// holds the draw slot + 1 (0 is the sky, and the ground, whose slot is the largest u32).
 struct Globals {
     view_proj: mat4x4<f32>,
     sun: vec4<f32>,
@@ -11,14 +11,21 @@ struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) @interpolate(flat) slot: u32,
+    @location(2) @interpolate(flat) key: u32,
 };
 
 @vertex
-fn vs(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) slot: u32) -> VertexOut {
+fn vs(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) slot: u32,
+    @location(3) key: u32,
+) -> VertexOut {
     var out: VertexOut;
     out.clip = globals.view_proj * vec4<f32>(position, 1.0);
     out.normal = normal;
     out.slot = slot;
+    out.key = key;
     return out;
 }
 
@@ -27,9 +34,9 @@ struct FragmentOut {
     @location(1) id: u32,
 };
 
-fn tint(slot: u32) -> vec3<f32> {
+fn tint(key: u32) -> vec3<f32> {
     // A cheap integer hash to a pale colour.
-    var h = slot * 2654435761u;
+    var h = key * 2654435761u;
     h = h ^ (h >> 15u);
     let r = f32(h & 255u) / 255.0;
     let g = f32((h >> 8u) & 255u) / 255.0;
@@ -44,7 +51,7 @@ fn fs(in: VertexOut, @builtin(front_facing) front: bool) -> FragmentOut {
         n = -n;
     }
     let light = 0.35 + 0.65 * max(dot(n, globals.sun.xyz), 0.0);
-    var base = tint(in.slot);
+    var base = tint(in.key);
     if (in.slot == 0xffffffffu) {
         base = vec3<f32>(0.30, 0.32, 0.28);
     }
