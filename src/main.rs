@@ -232,7 +232,7 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
         /// Draw every frame headless (no window) as the walk selects it, and write them
-        /// as PNGs to --frames-dir (review and box modes).
+        /// as PNGs to --frames-dir.
         #[arg(long)]
         render: bool,
         #[arg(long, default_value = "frames")]
@@ -686,9 +686,6 @@ fn run(cli: Cli) -> Result<()> {
                 every,
             });
             if mode == "pvs" && config.is_none() {
-                if render.is_some() {
-                    bail!("--render draws the review and box modes so far, not pvs");
-                }
                 let rule = match prefetch.as_str() {
                     "snp" => PvsPrefetch::Snp,
                     "pbnp" => PvsPrefetch::Pbnp { border },
@@ -704,6 +701,7 @@ fn run(cli: Cli) -> Result<()> {
                     csv.as_deref(),
                     backend,
                     quiet,
+                    render.as_ref(),
                 );
             }
             let path = path.unwrap_or_else(|| "normal".into());
@@ -1576,32 +1574,37 @@ fn walk_cmd(
     }
     print_walk(&report);
     if let (Some((adapter, t)), Some(r)) = (times, render) {
-        let stats = |v: &[f64]| {
-            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-            (mean, v.iter().copied().fold(0.0, f64::max))
-        };
-        let ((up, up_max), (draw, draw_max)) = (stats(&t.upload_ms), stats(&t.draw_ms));
-        println!(
-            "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: uploads {:.1} ms a frame \
-             (most {:.1}), drawing and reading back {:.1} ms (most {:.1}); {} uploads, {} frees, \
-             at most {:.1} MiB of meshes on the GPU",
-            t.frames,
-            r.size.0,
-            r.size.1,
-            adapter.name,
-            adapter.backend,
-            t.written,
-            r.dir.display(),
-            up,
-            up_max,
-            draw,
-            draw_max,
-            t.uploads,
-            t.evictions,
-            t.peak_gpu_bytes as f64 / 1048576.0
-        );
+        print_render(&adapter, &t, r);
     }
     Ok(())
+}
+
+/// What drawing a walk's frames cost.
+fn print_render(adapter: &wgpu::AdapterInfo, t: &flaneur::render::FrameTimes, r: &RenderOpts) {
+    let stats = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        (mean, v.iter().copied().fold(0.0, f64::max))
+    };
+    let ((up, up_max), (draw, draw_max)) = (stats(&t.upload_ms), stats(&t.draw_ms));
+    println!(
+        "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: uploads {:.1} ms a frame \
+             (most {:.1}), drawing and reading back {:.1} ms (most {:.1}); {} uploads, {} frees, \
+             at most {:.1} MiB of meshes on the GPU",
+        t.frames,
+        r.size.0,
+        r.size.1,
+        adapter.name,
+        adapter.backend,
+        t.written,
+        r.dir.display(),
+        up,
+        up_max,
+        draw,
+        draw_max,
+        t.uploads,
+        t.evictions,
+        t.peak_gpu_bytes as f64 / 1048576.0
+    );
 }
 
 /// Where and how `walk --render` draws its frames.
@@ -1638,6 +1641,7 @@ fn pvs_walk_cmd(
     csv: Option<&Path>,
     backend: Backend,
     quiet: bool,
+    render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
     let poses = match camera {
@@ -1650,7 +1654,22 @@ fn pvs_walk_cmd(
     } else {
         indicatif::ProgressBar::new(poses.poses.len() as u64)
     };
-    let r = pvs_walk::walk_pvs(&db, &poses, rule, |_| bar.inc(1))?;
+    let (r, times) = match render {
+        None => (pvs_walk::walk_pvs(&db, &poses, rule, |_| bar.inc(1))?, None),
+        Some(o) => {
+            let gpu = flaneur::render::Gpu::headless()?;
+            let far = flaneur::geom::Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?.far;
+            let mut writer = flaneur::render::FrameWriter::new(
+                &gpu,
+                o.size,
+                (&db.bounds(), far),
+                &o.dir,
+                o.every,
+            )?;
+            let r = pvs_walk::walk_pvs_into(&db, &poses, rule, |_| bar.inc(1), &mut writer)?;
+            (r, Some((gpu.adapter.clone(), writer.times)))
+        }
+    };
     bar.finish_and_clear();
     if let Some(p) = csv {
         let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
@@ -1686,6 +1705,9 @@ fn pvs_walk_cmd(
         "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
         r.mean_drawn, r.pages
     );
+    if let (Some((adapter, t)), Some(o)) = (times, render) {
+        print_render(&adapter, &t, o);
+    }
     Ok(())
 }
 

@@ -19,8 +19,8 @@ const WIDTH: u32 = 192;
 const HEIGHT: u32 = 128;
 const REFERENCE: &str = "tests/data/render-reference.png";
 
-/// A 60-object city, its database, and a camera above its south-west looking across it.
-fn city(dir: &std::path::Path) -> (Database, Camera) {
+/// The test city (60 objects) built with `opts` into `dir`.
+fn build(dir: &std::path::Path, opts: &BuildOptions) -> Database {
     let scene = dir.join("c.scene");
     let config = citygen::CityConfig {
         objects: 60,
@@ -30,12 +30,19 @@ fn city(dir: &std::path::Path) -> (Database, Camera) {
     };
     citygen::write_city(&config, &scene, false).unwrap();
     let db_path = dir.join("c.flaneur");
-    let opts = BuildOptions {
-        lod: None,
-        ..Default::default()
-    };
-    flaneur::build_from_scene(&scene, &db_path, &opts).unwrap();
-    let db = Database::open(&db_path).unwrap();
+    flaneur::build_from_scene(&scene, &db_path, opts).unwrap();
+    Database::open(&db_path).unwrap()
+}
+
+/// The test city, its database, and a camera above its south-west looking across it.
+fn city(dir: &std::path::Path) -> (Database, Camera) {
+    let db = build(
+        dir,
+        &BuildOptions {
+            lod: None,
+            ..Default::default()
+        },
+    );
     let b = db.bounds();
     let (centre, extent) = (b.center(), b.extent());
     let eye = Vec3::new(b.min.x - 0.1 * extent.x, 45.0, b.min.z - 0.1 * extent.z);
@@ -304,4 +311,42 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
         assert!(row.psnr.is_infinite() && row.differ == 0.0, "{row:?}");
     }
     assert!(r.to_csv().lines().count() == 61 && r.markdown().contains("60 (100.0 %)"));
+}
+
+/// The PVS walk drawn: every frame rendered from the objects the client holds, and the
+/// walk's own figures (transactions, misses, pages) the same as when nothing is drawn.
+#[test]
+fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = BuildOptions {
+        lod: None,
+        visibility: Some(flaneur::visibility::VisibilityOptions {
+            cell_size: 12.0,
+            resolution: 16,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let db = build(dir.path(), &opts);
+    let path = flaneur::walk::pvs_walk::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
+    let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
+    let plain = flaneur::walk::pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
+    let gpu = gpu();
+    let frames = dir.path().join("frames");
+    let mut writer =
+        FrameWriter::new(&gpu, (48, 48), (&db.bounds(), 1000.0), &frames, 100).unwrap();
+    let drawn =
+        flaneur::walk::pvs_walk::walk_pvs_into(&db, &path, rule, |_| {}, &mut writer).unwrap();
+    assert_eq!(
+        drawn.frames, plain.frames,
+        "drawing changed the walk's figures"
+    );
+    assert!(
+        plain.cells_entered >= 2,
+        "{} cells entered",
+        plain.cells_entered
+    );
+    let t = &writer.times;
+    assert_eq!((t.frames, t.written), (240, 3));
+    assert!(t.uploads > 0 && t.triangles.iter().any(|&n| n > 0));
 }

@@ -91,6 +91,22 @@ impl ObjectBuffer {
         self.objects.values()
     }
 
+    /// The object `id`, if it is in the buffer.
+    pub fn get(&self, id: u64) -> Option<&Loaded> {
+        self.objects.get(&id)
+    }
+
+    /// Drops object `id`; whether it was there.
+    pub fn remove(&mut self, id: u64) -> bool {
+        match self.objects.remove(&id) {
+            Some(o) => {
+                self.bytes -= o.bytes;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Fig. 4.8: keeps only the objects overlapping `cell`; if they still exceed the
     /// budget, drops the farthest from `eye` until they fit.
     pub fn evict_outside(&mut self, cell: &Aabb, eye: Vec3) -> Eviction {

@@ -6,13 +6,24 @@
 //! A pose whose eye is in no walkable cell (above a roof, off the grid) draws nothing
 //! new and asks for nothing: the client keeps what it holds and the frame counts as
 //! outside. That is the walk's choice; the prefetcher itself refuses such positions.
+//!
+//! Drawn ([`walk_pvs_into`] with a renderer), the objects the client holds are loaded
+//! into an object buffer as they arrive and dropped when it evicts them, and each frame
+//! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
+//! Those mesh reads are the renderer's: a frame's page count is taken before them.
 
 use serde::Serialize;
 
+use std::collections::HashMap;
+use std::sync::Arc;
+
 use crate::database::Database;
-use crate::error::Result;
-use crate::prefetch::pvs::{Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs};
+use crate::error::{Error, Result};
+use crate::prefetch::pvs::{Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs};
+use crate::rtree::ObjectEntry;
+use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::motion::CameraPath;
+use crate::walk::{FrameSink, NoSink};
 
 /// Which neighbours the client prefetches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -77,7 +88,18 @@ pub fn walk_pvs(
     db: &Database,
     path: &CameraPath,
     prefetch: PvsPrefetch,
+    tick: impl FnMut(usize),
+) -> Result<PvsWalkReport> {
+    walk_pvs_into(db, path, prefetch, tick, &mut NoSink)
+}
+
+/// [`walk_pvs`], handing each frame to `sink` (a renderer).
+pub fn walk_pvs_into(
+    db: &Database,
+    path: &CameraPath,
+    prefetch: PvsPrefetch,
     mut tick: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
 ) -> Result<PvsWalkReport> {
     let source = StoredPvs::new(db)?;
     let (snp, pbnp);
@@ -93,12 +115,25 @@ pub fn walk_pvs(
     };
     let mut client = PvsClient::new(&source, rule, crate::prefetch::pvs::THESIS_CAPACITY)?;
     let mut frames = Vec::with_capacity(path.poses.len());
+    // For a renderer: every object's index entry, and what the client holds, loaded.
+    let entries: HashMap<u64, ObjectEntry> = if sink.draws() {
+        db.range(&db.bounds())?
+            .objects
+            .into_iter()
+            .map(|o| (o.id, o))
+            .collect()
+    } else {
+        HashMap::new()
+    };
+    let mut held = ObjectBuffer::new(usize::MAX);
+    let mut shown: Option<Cell> = None;
     for (i, pose) in path.poses.iter().enumerate() {
         let before = db.io().page_reads;
         let mut frame = PvsFrame::default();
         if let Some(id) = db.viewcell_at(pose.position)? {
             let p = Position::new(pose.position.x as f64, pose.position.z as f64);
             let out = client.step(p)?;
+            shown = Some(out.cell);
             frame.cell = Some(id);
             frame.drawn = client.cache().pvs(out.cell).map_or(0, |s| s.len());
             frame.visual_misses = out.visual_misses;
@@ -109,6 +144,9 @@ pub fn walk_pvs(
             }
         }
         frame.pages = db.io().page_reads - before;
+        if sink.draws() {
+            draw_pvs(db, &entries, &client, shown, &mut held, pose, i, sink)?;
+        }
         frames.push(frame);
         tick(i);
     }
@@ -129,6 +167,55 @@ pub fn walk_pvs(
         pages: frames.iter().map(|f| f.pages).sum(),
         frames,
     })
+}
+
+/// Brings `held` to what the client holds (loading new objects' meshes, dropping what
+/// it evicted) and hands `sink` the PVS of `shown` within the frustum.
+#[allow(clippy::too_many_arguments)]
+fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
+    db: &Database,
+    entries: &HashMap<u64, ObjectEntry>,
+    client: &PvsClient<'_, S, A>,
+    shown: Option<Cell>,
+    held: &mut ObjectBuffer,
+    pose: &crate::walk::Pose,
+    index: usize,
+    sink: &mut dyn FrameSink,
+) -> Result<()> {
+    let cache = client.cache();
+    let gone: Vec<u64> = held
+        .iter()
+        .map(|o| o.entry.id)
+        .filter(|&id| !cache.holds(id))
+        .collect();
+    for id in gone {
+        held.remove(id);
+    }
+    for id in cache.objects() {
+        if held.get(id).is_none() {
+            let entry = entries.get(&id).ok_or_else(|| {
+                Error::Invalid(format!(
+                    "object {id} of a PVS is not in the database's index"
+                ))
+            })?;
+            let mesh = db.mesh(entry)?;
+            held.insert(Loaded {
+                entry: entry.clone(),
+                bytes: mesh_bytes(&mesh),
+                mesh: Arc::new(mesh),
+            });
+        }
+    }
+    let camera = pose.camera()?;
+    let frustum = camera.frustum();
+    let drawn: Vec<&Loaded> = shown
+        .and_then(|c| cache.pvs(c))
+        .unwrap_or(&[])
+        .iter()
+        .filter_map(|id| held.get(*id))
+        .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
+        .collect();
+    sink.frame(index, &camera, held, &drawn)
 }
 
 /// A walk through the walkable viewcells of `db`: from a cell's centre to a

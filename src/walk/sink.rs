@@ -16,6 +16,12 @@ pub trait FrameSink {
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
     ) -> Result<()>;
+
+    /// Whether it draws, so that a walk must load the objects' meshes for it (a walk
+    /// that only counts, like the PVS walk, loads none otherwise).
+    fn draws(&self) -> bool {
+        true
+    }
 }
 
 /// A sink that draws nothing.
@@ -25,5 +31,9 @@ pub struct NoSink;
 impl FrameSink for NoSink {
     fn frame(&mut self, _: usize, _: &Camera, _: &ObjectBuffer, _: &[&Loaded]) -> Result<()> {
         Ok(())
+    }
+
+    fn draws(&self) -> bool {
+        false
     }
 }
