@@ -57,7 +57,7 @@ pub struct FidelityReport {
 /// assert_eq!(differ, 0.5);
 /// ```
 pub fn compare(a: &[u8], b: &[u8]) -> Result<(f64, f64)> {
-    if a.len() != b.len() || a.len() % 4 != 0 || a.is_empty() {
+    if a.len() != b.len() || !a.len().is_multiple_of(4) || a.is_empty() {
         return Err(Error::Invalid(format!(
             "images of {} and {} bytes cannot be compared",
             a.len(),

@@ -128,7 +128,7 @@ impl FrameSink for FrameWriter<'_> {
         drawn: &[&Loaded],
     ) -> Result<()> {
         let frame = self.draw(camera, buffer, drawn)?;
-        if index % self.every == 0 {
+        if index.is_multiple_of(self.every) {
             frame.save_png(&self.dir.join(format!("frame-{index:05}.png")))?;
             self.times.written += 1;
         }

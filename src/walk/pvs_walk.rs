@@ -200,7 +200,7 @@ fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
             })?;
             let mesh = db.mesh(entry)?;
             held.insert(Loaded {
-                entry: entry.clone(),
+                entry: *entry,
                 bytes: mesh_bytes(&mesh),
                 mesh: Arc::new(mesh),
             });
