@@ -1574,13 +1574,19 @@ fn walk_cmd(
     }
     print_walk(&report);
     if let (Some((adapter, t)), Some(r)) = (times, render) {
-        print_render(&adapter, &t, r);
+        print_render(&adapter, &t, r)?;
     }
     Ok(())
 }
 
-/// What drawing a walk's frames cost.
-fn print_render(adapter: &wgpu::AdapterInfo, t: &flaneur::render::FrameTimes, r: &RenderOpts) {
+/// What drawing a walk's frames cost, printed and written to `render.csv` beside them.
+fn print_render(
+    adapter: &wgpu::AdapterInfo,
+    t: &flaneur::render::FrameTimes,
+    r: &RenderOpts,
+) -> Result<()> {
+    let csv = r.dir.join("render.csv");
+    std::fs::write(&csv, t.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
     let stats = |v: &[f64]| {
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         (mean, v.iter().copied().fold(0.0, f64::max))
@@ -1605,6 +1611,8 @@ fn print_render(adapter: &wgpu::AdapterInfo, t: &flaneur::render::FrameTimes, r:
         t.evictions,
         t.peak_gpu_bytes as f64 / 1048576.0
     );
+    println!("  per-frame times in {}", csv.display());
+    Ok(())
 }
 
 /// Where and how `walk --render` draws its frames.
@@ -1706,7 +1714,7 @@ fn pvs_walk_cmd(
         r.mean_drawn, r.pages
     );
     if let (Some((adapter, t)), Some(o)) = (times, render) {
-        print_render(&adapter, &t, o);
+        print_render(&adapter, &t, o)?;
     }
     Ok(())
 }

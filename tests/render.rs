@@ -267,6 +267,9 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     let t = &sink.writer.times;
     assert_eq!((t.frames, t.written), (600, 3));
     assert_eq!(t.draw_ms.len(), 600);
+    let csv = t.to_csv();
+    assert_eq!(csv.lines().count(), 601);
+    assert!(csv.starts_with("frame,upload_ms,draw_ms,triangles\n0,"));
     let drawn: u64 = report.frames.iter().map(|f| f.triangles_drawn).sum();
     assert_eq!(
         t.triangles.iter().sum::<u64>(),

@@ -29,6 +29,24 @@ pub struct FrameTimes {
     pub triangles: Vec<u64>,
 }
 
+impl FrameTimes {
+    /// One row per frame drawn: the CPU side (uploads and frees) and the GPU side
+    /// (drawing and reading back), milliseconds, and the triangles drawn.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from("frame,upload_ms,draw_ms,triangles\n");
+        for (i, ((u, d), t)) in self
+            .upload_ms
+            .iter()
+            .zip(&self.draw_ms)
+            .zip(&self.triangles)
+            .enumerate()
+        {
+            s.push_str(&format!("{i},{u:.3},{d:.3},{t}\n"));
+        }
+        s
+    }
+}
+
 /// Draws each frame of a walk; writes every `every`-th into `dir` as
 /// `frame-NNNNN.png`.
 pub struct FrameWriter<'a> {
