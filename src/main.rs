@@ -1553,38 +1553,53 @@ fn walk_cmd(
     } else {
         indicatif::ProgressBar::new(poses.poses.len() as u64)
     };
-    let (report, times) = match render {
-        None => (review::walk(&db, &poses, cfg, |_| bar.inc(1))?, None),
-        Some(r) => {
-            let gpu = flaneur::render::Gpu::headless()?;
-            let mut writer = flaneur::render::FrameWriter::new(
-                &gpu,
-                r.size,
-                (&db.bounds(), cfg.far),
-                &r.dir,
-                r.every,
-            )?;
-            let report = review::walk_into(&db, &poses, cfg, |_| bar.inc(1), &mut writer)?;
-            (report, Some((gpu.adapter.clone(), writer.times)))
-        }
-    };
+    let (report, drawn) = rendered(&db, render, cfg.far, |sink| {
+        review::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
+    })?;
     bar.finish_and_clear();
     if let Some(p) = csv {
         std::fs::write(p, report.to_csv()).with_context(|| format!("writing {}", p.display()))?;
     }
     print_walk(&report);
-    if let (Some((adapter, t)), Some(r)) = (times, render) {
-        print_render(&adapter, &t, r)?;
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
     }
     Ok(())
 }
 
+/// Runs `walk` with a frame writer when `render` asks for one (frames drawn with a
+/// ground reaching `far` past the city), else with no sink; and what drawing cost.
+fn rendered<R>(
+    db: &Database,
+    render: Option<&RenderOpts>,
+    far: f32,
+    walk: impl FnOnce(&mut dyn flaneur::walk::FrameSink) -> flaneur::Result<R>,
+) -> Result<(R, Option<Drawn>)> {
+    let Some(r) = render else {
+        return Ok((walk(&mut flaneur::walk::NoSink)?, None));
+    };
+    let gpu = flaneur::render::Gpu::headless()?;
+    let mut writer =
+        flaneur::render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
+    let result = walk(&mut writer)?;
+    Ok((
+        result,
+        Some(Drawn {
+            adapter: gpu.adapter.clone(),
+            times: writer.times,
+        }),
+    ))
+}
+
+/// What drew a walk, and what it cost.
+struct Drawn {
+    adapter: wgpu::AdapterInfo,
+    times: flaneur::render::FrameTimes,
+}
+
 /// What drawing a walk's frames cost, printed and written to `render.csv` beside them.
-fn print_render(
-    adapter: &wgpu::AdapterInfo,
-    t: &flaneur::render::FrameTimes,
-    r: &RenderOpts,
-) -> Result<()> {
+fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
+    let (adapter, t) = (&drawn.adapter, &drawn.times);
     let csv = r.dir.join("render.csv");
     std::fs::write(&csv, t.to_csv()).with_context(|| format!("writing {}", csv.display()))?;
     let stats = |v: &[f64]| {
@@ -1662,22 +1677,10 @@ fn pvs_walk_cmd(
     } else {
         indicatif::ProgressBar::new(poses.poses.len() as u64)
     };
-    let (r, times) = match render {
-        None => (pvs_walk::walk_pvs(&db, &poses, rule, |_| bar.inc(1))?, None),
-        Some(o) => {
-            let gpu = flaneur::render::Gpu::headless()?;
-            let far = flaneur::geom::Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?.far;
-            let mut writer = flaneur::render::FrameWriter::new(
-                &gpu,
-                o.size,
-                (&db.bounds(), far),
-                &o.dir,
-                o.every,
-            )?;
-            let r = pvs_walk::walk_pvs_into(&db, &poses, rule, |_| bar.inc(1), &mut writer)?;
-            (r, Some((gpu.adapter.clone(), writer.times)))
-        }
-    };
+    // The PVS walk's cameras have the default frustum (`Pose::camera`).
+    let (r, drawn) = rendered(&db, render, flaneur::geom::DEFAULT_FAR, |sink| {
+        pvs_walk::walk_pvs_into(&db, &poses, rule, |_| bar.inc(1), sink)
+    })?;
     bar.finish_and_clear();
     if let Some(p) = csv {
         let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
@@ -1713,8 +1716,8 @@ fn pvs_walk_cmd(
         "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
         r.mean_drawn, r.pages
     );
-    if let (Some((adapter, t)), Some(o)) = (times, render) {
-        print_render(&adapter, &t, o)?;
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
     }
     Ok(())
 }

@@ -106,14 +106,7 @@ impl Twice<'_> {
             .filter(|o| frustum.overlaps_aabb(&o.bounds))
             .collect();
         let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
-        let gone: Vec<u64> = self
-            .resident
-            .ids()
-            .filter(|id| !keep.contains(id))
-            .collect();
-        for id in gone {
-            self.resident.evict(id);
-        }
+        self.resident.retain(|id| keep.contains(&id));
         for o in &inside {
             if self.resident.get(o.id).is_none() {
                 self.resident.upload(self.gpu, o.id, &self.db.mesh(o)?)?;
@@ -160,21 +153,13 @@ pub fn run(
     (width, height): (u32, u32),
     progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
-    let scratch = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
     let bounds = db.bounds();
     let mut reference = Offscreen::new(gpu, width, height)?;
     reference.set_ground(gpu, &bounds, cfg.far);
     let mut sink = Twice {
         db,
         gpu,
-        // Nothing is written: `every` past the path's end.
-        mode: FrameWriter::new(
-            gpu,
-            (width, height),
-            (&bounds, cfg.far),
-            scratch.path(),
-            usize::MAX,
-        )?,
+        mode: FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?,
         reference,
         resident: GpuMeshes::default(),
         rows: Vec::with_capacity(path.poses.len()),

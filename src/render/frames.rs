@@ -48,13 +48,13 @@ impl FrameTimes {
 }
 
 /// Draws each frame of a walk; writes every `every`-th into `dir` as
-/// `frame-NNNNN.png`.
+/// `frame-NNNNN.png`, or none (made by [`FrameWriter::drawing`]).
 pub struct FrameWriter<'a> {
     gpu: &'a Gpu,
     target: Offscreen,
     meshes: GpuMeshes,
-    dir: PathBuf,
-    every: usize,
+    /// Where frames go, and every how many.
+    out: Option<(PathBuf, usize)>,
     pub times: FrameTimes,
 }
 
@@ -74,14 +74,25 @@ impl<'a> FrameWriter<'a> {
             ));
         }
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        Ok(FrameWriter {
+            out: Some((dir.to_path_buf(), every)),
+            ..FrameWriter::drawing(gpu, (width, height), (city, margin))?
+        })
+    }
+
+    /// A writer that draws and times each frame but writes none.
+    pub fn drawing(
+        gpu: &'a Gpu,
+        (width, height): (u32, u32),
+        (city, margin): (&Aabb, f32),
+    ) -> Result<FrameWriter<'a>> {
         let mut target = Offscreen::new(gpu, width, height)?;
         target.set_ground(gpu, city, margin);
         Ok(FrameWriter {
             gpu,
             target,
             meshes: GpuMeshes::default(),
-            dir: dir.to_path_buf(),
-            every,
+            out: None,
             times: FrameTimes::default(),
         })
     }
@@ -102,20 +113,11 @@ impl FrameWriter<'_> {
         drawn: &[&Loaded],
     ) -> Result<Frame> {
         let started = Instant::now();
-        // The GPU holds what the object buffer holds: free what it evicted...
-        let gone: Vec<u64> = self
-            .meshes
-            .ids()
-            .filter(|id| !buffer.contains(*id))
-            .collect();
-        for id in gone {
-            self.meshes.evict(id);
-            self.times.evictions += 1;
-        }
-        // ...and upload what is drawn for the first time.
+        // The GPU holds what the object buffer holds: free what it evicted, and upload
+        // what is drawn for the first time.
+        self.times.evictions += self.meshes.retain(|id| buffer.contains(id));
         for o in drawn {
-            if self.meshes.get(o.entry.id).is_none() {
-                self.meshes.upload(self.gpu, o.entry.id, &o.mesh)?;
+            if self.meshes.upload(self.gpu, o.entry.id, &o.mesh)? {
                 self.times.uploads += 1;
             }
         }
@@ -146,9 +148,11 @@ impl FrameSink for FrameWriter<'_> {
         drawn: &[&Loaded],
     ) -> Result<()> {
         let frame = self.draw(camera, buffer, drawn)?;
-        if index.is_multiple_of(self.every) {
-            frame.save_png(&self.dir.join(format!("frame-{index:05}.png")))?;
-            self.times.written += 1;
+        if let Some((dir, every)) = &self.out {
+            if index.is_multiple_of(*every) {
+                frame.save_png(&dir.join(format!("frame-{index:05}.png")))?;
+                self.times.written += 1;
+            }
         }
         Ok(())
     }

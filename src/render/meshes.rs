@@ -54,12 +54,12 @@ pub struct GpuMeshes {
 }
 
 impl GpuMeshes {
-    /// Uploads `id`'s mesh unless it is resident. A mesh whose normals do not match
-    /// its positions, or whose indices are not whole triangles of live vertices, is an
-    /// error naming the object.
-    pub fn upload(&mut self, gpu: &Gpu, id: u64, mesh: &Mesh) -> Result<()> {
+    /// Uploads `id`'s mesh unless it is resident; whether it uploaded. A mesh whose
+    /// normals do not match its positions, or whose indices are not whole triangles of
+    /// live vertices, is an error naming the object.
+    pub fn upload(&mut self, gpu: &Gpu, id: u64, mesh: &Mesh) -> Result<bool> {
         if self.by_id.contains_key(&id) {
-            return Ok(());
+            return Ok(false);
         }
         let (positions, normals, indices) = (&mesh.positions, &mesh.normals, &mesh.indices);
         if positions.len() != normals.len() || indices.len() % 3 != 0 {
@@ -120,7 +120,16 @@ impl GpuMeshes {
                 bytes,
             },
         );
-        Ok(())
+        Ok(true)
+    }
+
+    /// Frees every resident mesh `keep` says no to; how many.
+    pub fn retain(&mut self, keep: impl Fn(u64) -> bool) -> usize {
+        let gone: Vec<u64> = self.ids().filter(|&id| !keep(id)).collect();
+        for &id in &gone {
+            self.evict(id);
+        }
+        gone.len()
     }
 
     /// Frees `id`'s buffers; whether it was resident.

@@ -44,7 +44,9 @@ pub struct Offscreen {
     bind_group: wgpu::BindGroup,
     colour: wgpu::Texture,
     ids: wgpu::Texture,
-    depth: wgpu::Texture,
+    // Made once with the targets, so that a frame allocates nothing but its commands.
+    views: [wgpu::TextureView; 3],
+    readback: [wgpu::Buffer; 2],
     ground: Option<wgpu::Buffer>,
     width: u32,
     height: u32,
@@ -144,17 +146,30 @@ impl Offscreen {
             })
         };
         let readable = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let colour = target("colour", COLOUR_FORMAT, readable);
+        let ids = target("ids", ID_FORMAT, readable);
+        let depth = target(
+            "depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let views = [&colour, &ids, &depth].map(|t| t.create_view(&Default::default()));
+        let readback = ["colour readback", "id readback"].map(|label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: padded_row(width) as u64 * height as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            })
+        });
         Ok(Offscreen {
             pipeline,
             globals,
             bind_group,
-            colour: target("colour", COLOUR_FORMAT, readable),
-            ids: target("ids", ID_FORMAT, readable),
-            depth: target(
-                "depth",
-                DEPTH_FORMAT,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            ),
+            colour,
+            ids,
+            views,
+            readback,
             ground: None,
             width,
             height,
@@ -203,9 +218,16 @@ impl Offscreen {
         meshes: &GpuMeshes,
         draw: &[u64],
     ) -> Result<Frame> {
-        let aspect = self.width as f32 / self.height as f32;
-        let camera = camera.with_fov(super::fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
+        let (camera, aspect) = self.fitted(camera)?;
         self.render(gpu, camera.view_proj(aspect)?, meshes, draw)
+    }
+
+    /// `camera` with its vertical field of view kept and its horizontal one fitted to
+    /// the image, and the image's aspect (width / height).
+    pub fn fitted(&self, camera: &Camera) -> Result<(Camera, f32)> {
+        let aspect = self.width as f32 / self.height as f32;
+        let fitted = camera.with_fov(super::fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
+        Ok((fitted, aspect))
     }
 
     /// Draws `draw` (object ids, each resident in `meshes`) with `view_proj` and reads
@@ -226,15 +248,14 @@ impl Offscreen {
                 sun: [sun.x, sun.y, sun.z, 0.0],
             }),
         );
-        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (colour, ids, depth) = (view(&self.colour), view(&self.ids), view(&self.depth));
+        let [colour, ids, depth] = &self.views;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("objects"),
                 color_attachments: &[
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &colour,
+                        view: colour,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -243,7 +264,7 @@ impl Offscreen {
                         },
                     }),
                     Some(wgpu::RenderPassColorAttachment {
-                        view: &ids,
+                        view: ids,
                         depth_slice: None,
                         resolve_target: None,
                         ops: wgpu::Operations {
@@ -253,7 +274,7 @@ impl Offscreen {
                     }),
                 ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
+                    view: depth,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Discard,
@@ -277,11 +298,12 @@ impl Offscreen {
                 pass.draw_indexed(0..m.index_count, 0, 0..1);
             }
         }
-        let colour_buf = self.copy_out(gpu, &mut encoder, &self.colour);
-        let id_buf = self.copy_out(gpu, &mut encoder, &self.ids);
+        let [colour_buf, id_buf] = &self.readback;
+        self.copy_out(&mut encoder, &self.colour, colour_buf);
+        self.copy_out(&mut encoder, &self.ids, id_buf);
         gpu.queue.submit([encoder.finish()]);
-        let rgba = self.read(gpu, &colour_buf)?;
-        let raw = self.read(gpu, &id_buf)?;
+        let rgba = self.read(gpu, colour_buf)?;
+        let raw = self.read(gpu, id_buf)?;
         let objects = raw
             .chunks_exact(4)
             .map(|b| {
@@ -299,31 +321,20 @@ impl Offscreen {
         })
     }
 
-    /// Bytes per row in a copy, padded as wgpu requires.
-    fn padded_row(&self) -> u32 {
-        let row = 4 * self.width;
-        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
-    }
-
+    /// Copies `texture` into `buffer`, rows padded as wgpu requires.
     fn copy_out(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         texture: &wgpu::Texture,
-    ) -> wgpu::Buffer {
-        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: self.padded_row() as u64 * self.height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        buffer: &wgpu::Buffer,
+    ) {
         encoder.copy_texture_to_buffer(
             texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
+                buffer,
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
-                    bytes_per_row: Some(self.padded_row()),
+                    bytes_per_row: Some(padded_row(self.width)),
                     rows_per_image: Some(self.height),
                 },
             },
@@ -333,7 +344,6 @@ impl Offscreen {
                 depth_or_array_layers: 1,
             },
         );
-        buffer
     }
 
     /// The buffer's rows without their padding.
@@ -352,7 +362,7 @@ impl Offscreen {
         let data = slice
             .get_mapped_range()
             .map_err(|e| Error::Render(format!("reading the frame back: {e}")))?;
-        let (row, padded) = (4 * self.width as usize, self.padded_row() as usize);
+        let (row, padded) = (4 * self.width as usize, padded_row(self.width) as usize);
         let mut out = Vec::with_capacity(row * self.height as usize);
         for r in 0..self.height as usize {
             out.extend_from_slice(&data[r * padded..r * padded + row]);
@@ -361,4 +371,10 @@ impl Offscreen {
         buffer.unmap();
         Ok(out)
     }
+}
+
+/// Bytes per row of a `width`-pixel image (4 bytes a pixel) in a copy, padded as wgpu
+/// requires.
+fn padded_row(width: u32) -> u32 {
+    (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
 }

@@ -47,8 +47,7 @@ pub fn fov_x_for(fov_y: f32, aspect: f32) -> f32 {
 pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) -> Result<Shot> {
     let mut target = Offscreen::new(gpu, width, height)?;
     target.set_ground(gpu, &db.bounds(), camera.far);
-    let aspect = width as f32 / height as f32;
-    let camera = camera.with_fov(fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
+    let (camera, aspect) = target.fitted(camera)?;
     let started = Instant::now();
     let frustum = camera.frustum();
     let found = db.range(&frustum.aabb())?;
