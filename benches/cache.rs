@@ -22,7 +22,7 @@ const HEIGHT: u32 = 3;
 fn hint(i: u64) -> Hint {
     let level = if i == 0 {
         2
-    } else if i % 32 == 0 {
+    } else if i.is_multiple_of(32) {
         1
     } else {
         0
@@ -88,7 +88,7 @@ fn benches(c: &mut Criterion) {
             b.iter(|| {
                 // A sweep over 32× the capacity: (almost) every get misses and evicts.
                 i = (i + 1) % PAGES;
-                if i % 64 == 0 {
+                if i.is_multiple_of(64) {
                     pool.end_search();
                     pool.begin_search(&query(i / 64));
                 }

@@ -154,7 +154,7 @@ impl RecordHead {
                 self.vertices
             ));
         }
-        if self.indices > MAX_INDICES || self.indices % 3 != 0 {
+        if self.indices > MAX_INDICES || !self.indices.is_multiple_of(3) {
             return Err(format!(
                 "index count {} is not a sane triangle list",
                 self.indices

@@ -234,7 +234,7 @@ impl LodWriter {
         // batch before it — so that the file's layout never depends on which thread
         // finished first; the batch in between keeps the pool busy meanwhile.
         let batch = self.opts.batch as u64;
-        if self.sent % batch != 0 {
+        if !self.sent.is_multiple_of(batch) {
             return Ok(0);
         }
         let start = Instant::now();

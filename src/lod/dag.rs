@@ -348,7 +348,7 @@ mod tests {
         for (slot, t) in mesh.slots().iter().enumerate() {
             let expected = slot < base_t || {
                 let j = (slot - base_t) / 2;
-                let made = if (slot - base_t) % 2 == 0 {
+                let made = if (slot - base_t).is_multiple_of(2) {
                     pm.splits[j].v_l
                 } else {
                     pm.splits[j].v_r

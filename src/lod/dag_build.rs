@@ -145,7 +145,7 @@ pub(crate) fn potentials(pm: &ProgressiveMesh, run_starts: &[u32]) -> Result<Csr
                 }
                 if t as usize >= base_t {
                     let j = (t as usize - base_t) / 2;
-                    let left = (t as usize - base_t) % 2 == 0;
+                    let left = (t as usize - base_t).is_multiple_of(2);
                     depend_on(j, &|| format!("triangle {t}"))?;
                     let made = if left {
                         pm.splits[j].v_l

@@ -22,7 +22,7 @@ use super::dag::Dag;
 use super::fronts::{Fronts, Pass};
 use super::mesh_update::{CompactMesh, MeshChanges};
 use super::pm::ProgressiveMesh;
-use super::traversal::{manage, Context, Op, PassStats, Scratch, Traversal};
+use super::traversal::{manage, Context, FrontNode, Op, PassStats, Scratch, Traversal};
 use crate::error::{Error, Result};
 
 /// The screen-space error threshold of the thesis's experiments: 0.1 % of the viewport
@@ -174,8 +174,7 @@ pub struct FrameReport {
 pub struct Refiner<'a> {
     pm: &'a ProgressiveMesh,
     dag: &'a Dag,
-    nodes: Vec<NodeGeometry>,
-    added: Vec<u32>,
+    nodes: Vec<FrontNode>,
     fronts: Fronts,
     mesh: CompactMesh,
     ops: Vec<Op>,
@@ -196,31 +195,29 @@ impl<'a> Refiner<'a> {
         }
         let mesh = CompactMesh::new(pm)?;
         let mut nodes = Vec::with_capacity(dag.node_count());
-        let mut added = Vec::with_capacity(dag.node_count());
         for k in 0..dag.node_count() as u32 {
             let run = dag.splits(k);
             // The sphere's centre and the cone's axis are the run's first v_c (dag_attrs).
             let head = &pm.splits[run.start];
             let a = dag.attrs(k);
-            nodes.push(NodeGeometry {
-                centre: Vec3::from(head.position),
-                radius: a.radius,
-                axis: Vec3::from(head.normal).normalize_or_zero(),
-                cone_sin: a.cone_sin,
-                error: a.error,
-            });
-            added.push(
-                pm.splits[run]
+            nodes.push(FrontNode {
+                geometry: NodeGeometry {
+                    centre: Vec3::from(head.position),
+                    radius: a.radius,
+                    axis: Vec3::from(head.normal).normalize_or_zero(),
+                    cone_sin: a.cone_sin,
+                    error: a.error,
+                },
+                added: pm.splits[run]
                     .iter()
                     .map(|s| s.added_triangles() as u32)
                     .sum(),
-            );
+            });
         }
         Ok(Refiner {
             pm,
             dag,
             nodes,
-            added,
             fronts: Fronts::new(dag),
             mesh,
             ops: Vec::new(),
@@ -237,7 +234,6 @@ impl<'a> Refiner<'a> {
         let ctx = Context {
             dag: self.dag,
             nodes: &self.nodes,
-            added: &self.added,
             test: ViewTest::new(view, params.tau, params.criteria),
             traversal: params.traversal,
             max_work: params.max_work,
@@ -303,7 +299,7 @@ impl<'a> Refiner<'a> {
 
     #[cfg(test)]
     pub(crate) fn node_geometry(&self, node: u32) -> NodeGeometry {
-        self.nodes[node as usize]
+        self.nodes[node as usize].geometry
     }
 
     /// The selective mesh.

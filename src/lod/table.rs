@@ -500,12 +500,12 @@ mod tests {
             id,
             mesh: ext(first, 3000),
             chain: ext(first + 3, 1500),
-            pm: if id % 7 == 0 {
+            pm: if id.is_multiple_of(7) {
                 ext(first + 5, 2000)
             } else {
                 Extent::default()
             },
-            dag: if id % 7 == 0 {
+            dag: if id.is_multiple_of(7) {
                 ext(first + 7, 100)
             } else {
                 Extent::default()

@@ -523,7 +523,7 @@ impl Street {
     }
 
     fn block_len(&self) -> f32 {
-        if self.dir % 2 == 0 {
+        if self.dir.is_multiple_of(2) {
             self.pitch.x
         } else {
             self.pitch.y
