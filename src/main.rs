@@ -243,6 +243,10 @@ enum Command {
         /// Write every N-th rendered frame (all are drawn and timed).
         #[arg(long, default_value_t = 1)]
         every: usize,
+        /// LOD selection's screen-space error, a fraction of the viewport: each object
+        /// drawn at the coarsest stored level under it (0: full detail).
+        #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+        lod_tau: f32,
     },
     /// Rerun an experiment of the papers on a database.
     Bench {
@@ -272,6 +276,10 @@ enum Experiment {
         /// Image size, WIDTHxHEIGHT.
         #[arg(long, value_parser = parse_size, default_value = "256x256")]
         size: (u32, u32),
+        /// LOD selection's screen-space error for the mode's pictures, a fraction of the
+        /// viewport (0: the mode's objects at full detail).
+        #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+        lod_tau: f32,
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
     },
@@ -679,11 +687,13 @@ fn run(cli: Cli) -> Result<()> {
             frames_dir,
             size,
             every,
+            lod_tau,
         } => {
             let render = render.then_some(RenderOpts {
                 dir: frames_dir,
                 size,
                 every,
+                lod_tau: (lod_tau != 0.0).then_some(lod_tau),
             });
             if mode == "pvs" && config.is_none() {
                 let rule = match prefetch.as_str() {
@@ -895,6 +905,7 @@ fn run(cli: Cli) -> Result<()> {
                 frames,
                 seed,
                 size,
+                lod_tau,
                 out,
             } => {
                 let preset = match mode.as_str() {
@@ -917,10 +928,20 @@ fn run(cli: Cli) -> Result<()> {
                     size.1
                 );
                 let bar = indicatif::ProgressBar::new(poses.poses.len() as u64);
-                let r =
-                    flaneur::bench::fidelity::run(&db, &gpu, &poses, &cfg, &mode, size, |_| {
-                        bar.inc(1)
-                    })?;
+                let drawing = flaneur::bench::fidelity::Drawing {
+                    width: size.0,
+                    height: size.1,
+                    lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+                };
+                let r = flaneur::bench::fidelity::run(
+                    &db,
+                    &gpu,
+                    &poses,
+                    &cfg,
+                    &mode,
+                    &drawing,
+                    |_| bar.inc(1),
+                )?;
                 bar.finish_and_clear();
                 write_experiment(&out, "fidelity", &r.to_csv(), &r.markdown(), |dir| {
                     Ok(r.plot(dir)?)
@@ -1515,15 +1536,18 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
         "drawing a {frames}-frame flight over the city on {} ({:?}), headless",
         gpu.adapter.name, gpu.adapter.backend
     );
-    let mut writer = flaneur::render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?;
+    let mut writer = flaneur::render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
+        .with_lods(db, flaneur::walk::lod_select::DEFAULT_TAU)?;
     let bar = indicatif::ProgressBar::new(frames as u64);
     review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
     bar.finish_and_clear();
     let t = &writer.times;
     println!(
-        "  {} frames drawn ({:.0} ms each on average), every tenth written: {}",
+        "  {} frames drawn ({:.0} ms each on average, {:.0} triangles, {:.0} objects at a coarse level), every tenth written: {}",
         t.frames,
         t.draw_ms.iter().sum::<f64>() / t.frames.max(1) as f64,
+        t.triangles.iter().sum::<u64>() as f64 / t.frames.max(1) as f64,
+        t.coarse.iter().sum::<usize>() as f64 / t.frames.max(1) as f64,
         dir.join("frame-*.png").display()
     );
     Ok(())
@@ -1581,6 +1605,9 @@ fn rendered<R>(
     let gpu = flaneur::render::Gpu::headless()?;
     let mut writer =
         flaneur::render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
+    if let Some(tau) = r.lod_tau {
+        writer = writer.with_lods(db, tau)?;
+    }
     let result = walk(&mut writer)?;
     Ok((
         result,
@@ -1626,6 +1653,12 @@ fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
         t.evictions,
         t.peak_gpu_bytes as f64 / 1048576.0
     );
+    if let Some(c) = t.lod {
+        println!(
+            "  LOD selection: {} draws coarser than full detail, {} levels read ({} pages)",
+            c.coarse_draws, c.levels_read, c.pages
+        );
+    }
     println!("  per-frame times in {}", csv.display());
     Ok(())
 }
@@ -1635,6 +1668,7 @@ struct RenderOpts {
     dir: PathBuf,
     size: (u32, u32),
     every: usize,
+    lod_tau: Option<f32>,
 }
 
 /// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.

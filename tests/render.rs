@@ -166,7 +166,7 @@ fn bad_sizes_and_unknown_objects_are_errors() {
     let target = flaneur::render::Offscreen::new(&gpu, 8, 8).unwrap();
     let meshes = flaneur::render::GpuMeshes::default();
     let err = target
-        .render(&gpu, glam::Mat4::IDENTITY, &meshes, &[7])
+        .render(&gpu, glam::Mat4::IDENTITY, &meshes, &[(7, 0)])
         .unwrap_err();
     assert!(err.to_string().contains("object 7"), "{err}");
     // A mesh whose indices run past its vertices is refused, naming the object.
@@ -176,7 +176,7 @@ fn bad_sizes_and_unknown_objects_are_errors() {
         normals: vec![[0.0, 1.0, 0.0]; 3],
         indices: vec![0, 1, 5],
     };
-    let err = meshes.upload(&gpu, 9, &bad).unwrap_err();
+    let err = meshes.upload(&gpu, (9, 0), &bad).unwrap_err();
     assert!(err.to_string().contains("object 9"), "{err}");
     assert!(meshes.is_empty() && meshes.bytes() == 0);
 }
@@ -195,23 +195,27 @@ fn meshes_come_and_go_and_their_bytes_are_counted() {
         normals: vec![[0.0, 0.0, 1.0]; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
     };
-    meshes.upload(&gpu, 1, &quad(-5.0)).unwrap();
-    meshes.upload(&gpu, 2, &quad(-3.0)).unwrap();
-    let one = meshes.get(1).unwrap().bytes;
+    meshes.upload(&gpu, (1, 0), &quad(-5.0)).unwrap();
+    meshes.upload(&gpu, (2, 0), &quad(-3.0)).unwrap();
+    let one = meshes.get((1, 0)).unwrap().bytes;
     assert_eq!(meshes.bytes(), 2 * one);
     // Drawn: the nearer quad hides the farther one in the middle of the image.
     let target = flaneur::render::Offscreen::new(&gpu, 32, 32).unwrap();
     let view_proj = glam::Mat4::perspective_rh(1.0, 1.0, 0.5, 100.0);
-    let frame = target.render(&gpu, view_proj, &meshes, &[1, 2]).unwrap();
+    let frame = target
+        .render(&gpu, view_proj, &meshes, &[(1, 0), (2, 0)])
+        .unwrap();
     assert_eq!(frame.objects[16 * 32 + 16], Some(2));
     assert_eq!(frame.objects[0], None);
-    assert!(meshes.evict(2) && !meshes.evict(2));
+    assert!(meshes.evict((2, 0)) && !meshes.evict((2, 0)));
     assert_eq!(meshes.bytes(), one);
-    let frame = target.render(&gpu, view_proj, &meshes, &[1]).unwrap();
+    let frame = target.render(&gpu, view_proj, &meshes, &[(1, 0)]).unwrap();
     assert_eq!(frame.objects[16 * 32 + 16], Some(1));
     // A freed slot is reused, and shows its new object.
-    meshes.upload(&gpu, 3, &quad(-4.0)).unwrap();
-    let frame = target.render(&gpu, view_proj, &meshes, &[1, 3]).unwrap();
+    meshes.upload(&gpu, (3, 0), &quad(-4.0)).unwrap();
+    let frame = target
+        .render(&gpu, view_proj, &meshes, &[(1, 0), (3, 0)])
+        .unwrap();
     assert_eq!(frame.objects[16 * 32 + 16], Some(3));
 }
 
@@ -234,11 +238,11 @@ impl FrameSink for Checked<'_> {
         self.writer.frame(index, camera, buffer, drawn)?;
         let gpu = self.writer.resident();
         assert!(
-            drawn.iter().all(|o| gpu.get(o.entry.id).is_some()),
+            drawn.iter().all(|o| gpu.get((o.entry.id, 0)).is_some()),
             "frame {index}"
         );
         assert!(
-            gpu.ids().all(|id| buffer.contains(id)),
+            gpu.keys().all(|(id, _)| buffer.contains(id)),
             "frame {index}: a freed object"
         );
         self.frames += 1;
@@ -269,7 +273,7 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     assert_eq!(t.draw_ms.len(), 600);
     let csv = t.to_csv();
     assert_eq!(csv.lines().count(), 601);
-    assert!(csv.starts_with("frame,upload_ms,draw_ms,triangles\n0,"));
+    assert!(csv.starts_with("frame,upload_ms,draw_ms,triangles,coarse_objects\n0,"));
     let drawn: u64 = report.frames.iter().map(|f| f.triangles_drawn).sum();
     assert_eq!(
         t.triangles.iter().sum::<u64>(),
@@ -302,7 +306,12 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
         ..ReviewConfig::preset(Preset::Box)
     };
     let path = motion::generate(&db.bounds(), Motion::Turning, 60, 30.0, 4).unwrap();
-    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", (96, 96), |_| {}).unwrap();
+    let drawing = flaneur::bench::fidelity::Drawing {
+        width: 96,
+        height: 96,
+        lod_tau: None,
+    };
+    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
     assert_eq!(r.rows.len(), 60);
     assert!(r.rows.iter().any(|row| row.triangles > 0));
     for row in &r.rows {
@@ -352,4 +361,113 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let t = &writer.times;
     assert_eq!((t.frames, t.written), (240, 3));
     assert!(t.uploads > 0 && t.triangles.iter().any(|&n| n > 0));
+}
+
+/// A sink that draws at the levels LOD selection chooses and checks each frame: every
+/// object drawn is resident at the level chosen, and no object has two levels on the
+/// GPU.
+struct AtLevels<'a> {
+    writer: FrameWriter<'a>,
+    /// Per frame: the triangles of the objects drawn at full detail.
+    full: Vec<u64>,
+}
+
+impl FrameSink for AtLevels<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> flaneur::Result<()> {
+        let (_, selected) = self.writer.draw(camera, buffer, drawn)?;
+        assert_eq!(selected.len(), drawn.len(), "frame {index}");
+        let gpu = self.writer.resident();
+        for (d, o) in selected.iter().zip(drawn) {
+            assert_eq!(d.id, o.entry.id);
+            assert!(gpu.get((d.id, d.level)).is_some(), "frame {index}");
+            if d.level == 0 {
+                assert_eq!(d.mesh.triangle_count(), o.mesh.triangle_count());
+            } else {
+                assert!(d.mesh.triangle_count() < o.mesh.triangle_count());
+            }
+        }
+        let mut ids: Vec<u64> = gpu.keys().map(|(id, _)| id).collect();
+        let n = ids.len();
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(ids.len(), n, "frame {index}: an object at two levels");
+        self.full
+            .push(drawn.iter().map(|o| o.mesh.triangle_count() as u64).sum());
+        Ok(())
+    }
+}
+
+/// Drawn with LOD selection, a walk's far objects come from the database's coarse
+/// levels: fewer triangles than full detail, the same where nothing is coarse, and
+/// pictures close to the full-detail reference.
+#[test]
+fn a_walk_drawn_at_its_levels_of_detail() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = build(dir.path(), &BuildOptions::default());
+    assert!(db.has_lods());
+    let gpu = gpu();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let path = motion::generate(&db.bounds(), Motion::Normal, 120, 30.0, 5).unwrap();
+    // A coarse threshold (5 % of the viewport), so that a small city has far objects.
+    let tau = 0.05;
+    let writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
+        .unwrap()
+        .with_lods(&db, tau)
+        .unwrap();
+    let mut sink = AtLevels {
+        writer,
+        full: Vec::new(),
+    };
+    review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    let t = &sink.writer.times;
+    let lod = t.lod.unwrap();
+    assert!(
+        lod.coarse_draws > 0 && lod.levels_read > 0 && lod.pages > 0,
+        "{lod:?}"
+    );
+    for (i, ((&drawn, &full), &coarse)) in t
+        .triangles
+        .iter()
+        .zip(&sink.full)
+        .zip(&t.coarse)
+        .enumerate()
+    {
+        if coarse == 0 {
+            assert_eq!(drawn, full, "frame {i}");
+        } else {
+            assert!(drawn < full, "frame {i}: {drawn} of {full}");
+        }
+    }
+    // The same walk through the fidelity experiment: coarse, yet close to full detail.
+    let drawing = flaneur::bench::fidelity::Drawing {
+        width: 64,
+        height: 64,
+        lod_tau: Some(tau),
+    };
+    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
+    assert!(r.rows.iter().any(|row| row.coarse > 0));
+    assert!(r
+        .rows
+        .iter()
+        .all(|row| row.triangles <= row.reference_triangles));
+    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    assert!(
+        mean_differ < 0.05,
+        "{:.1} % of pixels differ",
+        100.0 * mean_differ
+    );
+    assert!(r.markdown().contains("τ = 0.05"));
+    assert!(FrameWriter::drawing(&gpu, (8, 8), (&db.bounds(), 10.0))
+        .unwrap()
+        .with_lods(&db, 0.0)
+        .is_err());
 }

@@ -5,8 +5,10 @@
 //! compared: PSNR over the RGB channels and the share of pixels that differ, beside the
 //! triangles each drew.
 //!
-//! REVIEW and BOX draw the objects they loaded at full detail, so their pictures differ
-//! from the reference only where an object in view was not yet loaded (a visual miss).
+//! With LOD selection (`lod_tau`), each object the mode drew is at the level the walk's
+//! LOD selection chose ([`crate::walk::lod_select`]); without it, REVIEW and BOX draw
+//! what they loaded at full detail, and their pictures differ from the reference only
+//! where an object in view was not yet loaded (a visual miss).
 
 use std::path::Path;
 
@@ -16,6 +18,7 @@ use crate::error::{Error, Result};
 use crate::geom::Camera;
 use crate::render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
+use crate::walk::lod_select::LodCounts;
 use crate::walk::review::{self, ReviewConfig};
 use crate::walk::{CameraPath, FrameSink};
 
@@ -31,6 +34,17 @@ pub struct FidelityRow {
     pub psnr: f64,
     /// Share of pixels whose colour differs.
     pub differ: f64,
+    /// Objects the mode drew coarser than full detail.
+    pub coarse: usize,
+}
+
+/// How the experiment draws: the image size, and the LOD selection's threshold (a
+/// fraction of the viewport; `None`: the mode's objects at full detail).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drawing {
+    pub width: u32,
+    pub height: u32,
+    pub lod_tau: Option<f32>,
 }
 
 /// What the experiment measured.
@@ -40,6 +54,9 @@ pub struct FidelityReport {
     pub width: u32,
     pub height: u32,
     pub adapter: String,
+    pub lod_tau: Option<f32>,
+    /// What LOD selection read, when it ran.
+    pub lod: Option<LodCounts>,
     pub rows: Vec<FidelityRow>,
 }
 
@@ -106,13 +123,14 @@ impl Twice<'_> {
             .filter(|o| frustum.overlaps_aabb(&o.bounds))
             .collect();
         let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
-        self.resident.retain(|id| keep.contains(&id));
+        self.resident.retain(|(id, _)| keep.contains(&id));
         for o in &inside {
-            if self.resident.get(o.id).is_none() {
-                self.resident.upload(self.gpu, o.id, &self.db.mesh(o)?)?;
+            if self.resident.get((o.id, 0)).is_none() {
+                self.resident
+                    .upload(self.gpu, (o.id, 0), &self.db.mesh(o)?)?;
             }
         }
-        let ids: Vec<u64> = inside.iter().map(|o| o.id).collect();
+        let ids: Vec<_> = inside.iter().map(|o| (o.id, 0)).collect();
         let frame = self
             .reference
             .render_camera(self.gpu, camera, &self.resident, &ids)?;
@@ -128,7 +146,7 @@ impl FrameSink for Twice<'_> {
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
     ) -> Result<()> {
-        let mine = self.mode.draw(camera, buffer, drawn)?;
+        let (mine, _) = self.mode.draw(camera, buffer, drawn)?;
         let (reference, reference_triangles) = self.reference(camera)?;
         let (psnr, differ) = compare(&mine.rgba, &reference.rgba)?;
         self.rows.push(FidelityRow {
@@ -137,29 +155,35 @@ impl FrameSink for Twice<'_> {
             reference_triangles,
             psnr,
             differ,
+            coarse: *self.mode.times.coarse.last().unwrap_or(&0),
         });
         Ok(())
     }
 }
 
 /// Walks `path` through `db` under `cfg` (`mode` names it in the report), drawing each
-/// frame twice at `width` × `height` on `gpu`.
+/// frame twice on `gpu` as `drawing` says.
 pub fn run(
     db: &Database,
     gpu: &Gpu,
     path: &CameraPath,
     cfg: &ReviewConfig,
     mode: &str,
-    (width, height): (u32, u32),
+    drawing: &Drawing,
     progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
+    let (width, height) = (drawing.width, drawing.height);
     let bounds = db.bounds();
     let mut reference = Offscreen::new(gpu, width, height)?;
     reference.set_ground(gpu, &bounds, cfg.far);
     let mut sink = Twice {
         db,
         gpu,
-        mode: FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?,
+        mode: match drawing.lod_tau {
+            Some(tau) => FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?
+                .with_lods(db, tau)?,
+            None => FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?,
+        },
         reference,
         resident: GpuMeshes::default(),
         rows: Vec::with_capacity(path.poses.len()),
@@ -170,16 +194,20 @@ pub fn run(
         width,
         height,
         adapter: format!("{} ({:?})", gpu.adapter.name, gpu.adapter.backend),
+        lod_tau: drawing.lod_tau,
+        lod: sink.mode.times.lod,
         rows: sink.rows,
     })
 }
 
 impl FidelityReport {
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("frame,triangles,reference_triangles,psnr_db,differing_pixels\n");
+        let mut s = String::from(
+            "frame,triangles,reference_triangles,psnr_db,differing_pixels,coarse_objects\n",
+        );
         for r in &self.rows {
             s.push_str(&format!(
-                "{},{},{},{},{:.6}\n",
+                "{},{},{},{},{:.6},{}\n",
                 r.frame,
                 r.triangles,
                 r.reference_triangles,
@@ -188,7 +216,8 @@ impl FidelityReport {
                 } else {
                     "inf".into()
                 },
-                r.differ
+                r.differ,
+                r.coarse
             ));
         }
         s
@@ -222,6 +251,15 @@ impl FidelityReport {
             self.height,
             self.adapter
         );
+        let lod = match (self.lod_tau, self.lod) {
+            (Some(tau), Some(c)) => format!(
+                "The mode's objects are drawn at the level LOD selection chose under τ = {tau} \
+                 of the viewport: {} draws coarser than full detail, {} levels read ({} pages).\n\n",
+                c.coarse_draws, c.levels_read, c.pages
+            ),
+            _ => "The mode's objects are drawn at full detail.\n\n".into(),
+        };
+        s.push_str(&lod);
         s.push_str("| | value |\n|---|---|\n");
         s.push_str(&format!(
             "| frames identical to the reference | {same} ({:.1} %) |\n",

@@ -1,15 +1,18 @@
 //! A walk drawn headless, frame by frame, into PNG files: the objects the walk engine
-//! selected, kept on the GPU as the object buffer holds them (uploaded when an object
-//! is loaded, freed when it is evicted, so a steady walk allocates nothing), with the
-//! time each frame spent on the CPU side (uploads) and on drawing and reading back.
+//! selected, each at the level of detail its LOD selection chose, kept on the GPU as
+//! the object buffer holds them (uploaded when an object is loaded or changes level,
+//! freed when it is evicted, so a steady walk allocates nothing), with the time each
+//! frame spent on the CPU side (LOD selection, uploads) and on drawing and reading back.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::{Frame, Gpu, GpuMeshes, Offscreen};
+use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
+use crate::walk::lod_select::{Drawn, LodCounts, LodSelector};
 use crate::walk::FrameSink;
 
 /// What drawing a walk cost.
@@ -18,30 +21,36 @@ pub struct FrameTimes {
     /// Frames drawn, and written as PNGs.
     pub frames: usize,
     pub written: usize,
-    /// Per frame: uploads and frees (CPU side), drawing and reading back (GPU side),
-    /// milliseconds.
+    /// Per frame: LOD selection, uploads and frees (CPU side), drawing and reading back
+    /// (GPU side), milliseconds.
     pub upload_ms: Vec<f64>,
     pub draw_ms: Vec<f64>,
     pub uploads: usize,
     pub evictions: usize,
     /// The most GPU memory the meshes took, bytes.
     pub peak_gpu_bytes: u64,
+    /// Per frame: triangles drawn, and objects drawn coarser than full detail.
     pub triangles: Vec<u64>,
+    pub coarse: Vec<usize>,
+    /// What LOD selection read, `None` when the frames are drawn at full detail.
+    pub lod: Option<LodCounts>,
 }
 
 impl FrameTimes {
-    /// One row per frame drawn: the CPU side (uploads and frees) and the GPU side
-    /// (drawing and reading back), milliseconds, and the triangles drawn.
+    /// One row per frame drawn: the CPU side (LOD selection, uploads and frees) and
+    /// the GPU side (drawing and reading back), milliseconds, the triangles drawn and
+    /// the objects drawn coarser than full detail.
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("frame,upload_ms,draw_ms,triangles\n");
-        for (i, ((u, d), t)) in self
+        let mut s = String::from("frame,upload_ms,draw_ms,triangles,coarse_objects\n");
+        for (i, (((u, d), t), c)) in self
             .upload_ms
             .iter()
             .zip(&self.draw_ms)
             .zip(&self.triangles)
+            .zip(&self.coarse)
             .enumerate()
         {
-            s.push_str(&format!("{i},{u:.3},{d:.3},{t}\n"));
+            s.push_str(&format!("{i},{u:.3},{d:.3},{t},{c}\n"));
         }
         s
     }
@@ -55,6 +64,8 @@ pub struct FrameWriter<'a> {
     meshes: GpuMeshes,
     /// Where frames go, and every how many.
     out: Option<(PathBuf, usize)>,
+    /// The walk's LOD selection; `None`: every object at full detail.
+    lods: Option<LodSelector<'a>>,
     pub times: FrameTimes,
 }
 
@@ -93,7 +104,22 @@ impl<'a> FrameWriter<'a> {
             target,
             meshes: GpuMeshes::default(),
             out: None,
+            lods: None,
             times: FrameTimes::default(),
+        })
+    }
+
+    /// The same writer drawing each object at the level of detail LOD selection
+    /// chooses under `tau` (a fraction of the viewport; see
+    /// [`crate::walk::lod_select`]), coarse levels read from `db`.
+    pub fn with_lods(self, db: &'a Database, tau: f32) -> Result<FrameWriter<'a>> {
+        Ok(FrameWriter {
+            lods: Some(LodSelector::new(db, tau)?),
+            times: FrameTimes {
+                lod: Some(LodCounts::default()),
+                ..self.times
+            },
+            ..self
         })
     }
 
@@ -104,37 +130,74 @@ impl<'a> FrameWriter<'a> {
 }
 
 impl FrameWriter<'_> {
-    /// Draws one frame as [`FrameSink::frame`] does, without writing it: the GPU made
-    /// to hold what `buffer` holds of what has been drawn, then `drawn` drawn.
+    /// Draws one frame as [`FrameSink::frame`] does, without writing it: each object
+    /// of `drawn` at its level, the GPU made to hold what `buffer` holds of what has
+    /// been drawn; the selection returned beside the image.
     pub fn draw(
         &mut self,
         camera: &Camera,
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
+    ) -> Result<(Frame, Vec<Drawn>)> {
+        let started = Instant::now();
+        let selected = match &mut self.lods {
+            Some(lods) => {
+                let s = lods.select(camera, buffer, drawn)?;
+                self.times.lod = Some(lods.counts);
+                s
+            }
+            None => drawn.iter().map(|o| Drawn::full(o)).collect(),
+        };
+        let select = started.elapsed();
+        let frame = self.draw_selected(camera, buffer, &selected)?;
+        // The selection's time is the CPU side's too.
+        if let Some(u) = self.times.upload_ms.last_mut() {
+            *u += ms(select);
+        }
+        Ok((frame, selected))
+    }
+
+    /// Draws `selected` as chosen: the GPU made to hold what `buffer` holds of what has
+    /// been drawn, at the level last drawn.
+    pub fn draw_selected(
+        &mut self,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        selected: &[Drawn],
     ) -> Result<Frame> {
         let started = Instant::now();
-        // The GPU holds what the object buffer holds: free what it evicted, and upload
-        // what is drawn for the first time.
-        self.times.evictions += self.meshes.retain(|id| buffer.contains(id));
-        for o in drawn {
-            if self.meshes.upload(self.gpu, o.entry.id, &o.mesh)? {
+        // Free what the buffer evicted, and the other levels of an object drawn at a
+        // new one; upload what is drawn for the first time at its level.
+        let level: std::collections::HashMap<u64, usize> =
+            selected.iter().map(|d| (d.id, d.level)).collect();
+        self.times.evictions += self
+            .meshes
+            .retain(|(id, l)| buffer.contains(id) && level.get(&id).is_none_or(|&now| now == l));
+        for d in selected {
+            if self.meshes.upload(self.gpu, (d.id, d.level), &d.mesh)? {
                 self.times.uploads += 1;
             }
         }
         let upload = started.elapsed();
         let started = Instant::now();
-        let ids: Vec<u64> = drawn.iter().map(|o| o.entry.id).collect();
+        let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
         let frame = self
             .target
-            .render_camera(self.gpu, camera, &self.meshes, &ids)?;
+            .render_camera(self.gpu, camera, &self.meshes, &keys)?;
         let draw = started.elapsed();
         let t = &mut self.times;
         t.frames += 1;
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
-        t.triangles
-            .push(drawn.iter().map(|o| o.mesh.triangle_count() as u64).sum());
+        t.triangles.push(
+            selected
+                .iter()
+                .map(|d| d.mesh.triangle_count() as u64)
+                .sum(),
+        );
+        t.coarse
+            .push(selected.iter().filter(|d| d.level > 0).count());
         Ok(frame)
     }
 }
@@ -147,7 +210,7 @@ impl FrameSink for FrameWriter<'_> {
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
     ) -> Result<()> {
-        let frame = self.draw(camera, buffer, drawn)?;
+        let (frame, _) = self.draw(camera, buffer, drawn)?;
         if let Some((dir, every)) = &self.out {
             if index.is_multiple_of(*every) {
                 frame.save_png(&dir.join(format!("frame-{index:05}.png")))?;

@@ -1,5 +1,6 @@
-//! Object meshes resident on the GPU: uploaded when an object comes into view, freed
-//! when it is evicted, each in a slot whose number the id target shows.
+//! Object meshes resident on the GPU: uploaded when an object comes into view (or
+//! into view at another level of detail), freed when it is evicted, each in a slot
+//! whose number the id target shows.
 
 use std::collections::HashMap;
 
@@ -43,10 +44,13 @@ pub struct GpuMesh {
     pub bytes: u64,
 }
 
-/// The resident meshes, by object id.
+/// A resident mesh's key: an object and its level of detail (0: full detail).
+pub type MeshKey = (u64, usize);
+
+/// The resident meshes, by object and level.
 #[derive(Default)]
 pub struct GpuMeshes {
-    by_id: HashMap<u64, GpuMesh>,
+    by_id: HashMap<MeshKey, GpuMesh>,
     /// Slot → object id; `None` for a free slot.
     slots: Vec<Option<u64>>,
     free: Vec<u32>,
@@ -54,11 +58,11 @@ pub struct GpuMeshes {
 }
 
 impl GpuMeshes {
-    /// Uploads `id`'s mesh unless it is resident; whether it uploaded. A mesh whose
-    /// normals do not match its positions, or whose indices are not whole triangles of
-    /// live vertices, is an error naming the object.
-    pub fn upload(&mut self, gpu: &Gpu, id: u64, mesh: &Mesh) -> Result<bool> {
-        if self.by_id.contains_key(&id) {
+    /// Uploads level `level` of object `id` unless it is resident; whether it
+    /// uploaded. A mesh whose normals do not match its positions, or whose indices are
+    /// not whole triangles of live vertices, is an error naming the object.
+    pub fn upload(&mut self, gpu: &Gpu, (id, level): MeshKey, mesh: &Mesh) -> Result<bool> {
+        if self.by_id.contains_key(&(id, level)) {
             return Ok(false);
         }
         let (positions, normals, indices) = (&mesh.positions, &mesh.normals, &mesh.indices);
@@ -111,7 +115,7 @@ impl GpuMeshes {
         self.bytes += bytes;
         self.slots[slot as usize] = Some(id);
         self.by_id.insert(
-            id,
+            (id, level),
             GpuMesh {
                 vertices: vb,
                 indices: ib,
@@ -124,17 +128,17 @@ impl GpuMeshes {
     }
 
     /// Frees every resident mesh `keep` says no to; how many.
-    pub fn retain(&mut self, keep: impl Fn(u64) -> bool) -> usize {
-        let gone: Vec<u64> = self.ids().filter(|&id| !keep(id)).collect();
-        for &id in &gone {
-            self.evict(id);
+    pub fn retain(&mut self, keep: impl Fn(MeshKey) -> bool) -> usize {
+        let gone: Vec<MeshKey> = self.keys().filter(|&k| !keep(k)).collect();
+        for &k in &gone {
+            self.evict(k);
         }
         gone.len()
     }
 
-    /// Frees `id`'s buffers; whether it was resident.
-    pub fn evict(&mut self, id: u64) -> bool {
-        match self.by_id.remove(&id) {
+    /// Frees a mesh's buffers; whether it was resident.
+    pub fn evict(&mut self, key: MeshKey) -> bool {
+        match self.by_id.remove(&key) {
             Some(m) => {
                 self.bytes -= m.bytes;
                 self.slots[m.slot as usize] = None;
@@ -147,13 +151,13 @@ impl GpuMeshes {
         }
     }
 
-    /// The resident objects' ids, in no order.
-    pub fn ids(&self) -> impl Iterator<Item = u64> + '_ {
+    /// The resident meshes' keys, in no order.
+    pub fn keys(&self) -> impl Iterator<Item = MeshKey> + '_ {
         self.by_id.keys().copied()
     }
 
-    pub fn get(&self, id: u64) -> Option<&GpuMesh> {
-        self.by_id.get(&id)
+    pub fn get(&self, key: MeshKey) -> Option<&GpuMesh> {
+        self.by_id.get(&key)
     }
 
     /// The object in `slot`, if any.

@@ -14,6 +14,6 @@ mod shot;
 
 pub use frames::{FrameTimes, FrameWriter};
 pub use gpu::Gpu;
-pub use meshes::{GpuMesh, GpuMeshes, Vertex};
+pub use meshes::{GpuMesh, GpuMeshes, MeshKey, Vertex};
 pub use offscreen::{Frame, Offscreen};
 pub use shot::{fov_x_for, shot, Shot};

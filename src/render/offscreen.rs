@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 
-use super::meshes::{GpuMeshes, Vertex};
+use super::meshes::{GpuMeshes, MeshKey, Vertex};
 use super::Gpu;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
@@ -216,7 +216,7 @@ impl Offscreen {
         gpu: &Gpu,
         camera: &Camera,
         meshes: &GpuMeshes,
-        draw: &[u64],
+        draw: &[MeshKey],
     ) -> Result<Frame> {
         let (camera, aspect) = self.fitted(camera)?;
         self.render(gpu, camera.view_proj(aspect)?, meshes, draw)
@@ -230,14 +230,14 @@ impl Offscreen {
         Ok((fitted, aspect))
     }
 
-    /// Draws `draw` (object ids, each resident in `meshes`) with `view_proj` and reads
-    /// the image back.
+    /// Draws `draw` (objects at a level, each resident in `meshes`) with `view_proj`
+    /// and reads the image back.
     pub fn render(
         &self,
         gpu: &Gpu,
         view_proj: Mat4,
         meshes: &GpuMeshes,
-        draw: &[u64],
+        draw: &[MeshKey],
     ) -> Result<Frame> {
         let sun = Vec3::new(0.4, 0.8, 0.3).normalize();
         gpu.queue.write_buffer(
@@ -289,10 +289,10 @@ impl Offscreen {
                 pass.set_vertex_buffer(0, ground.slice(..));
                 pass.draw(0..6, 0..1);
             }
-            for id in draw {
-                let m = meshes
-                    .get(*id)
-                    .ok_or_else(|| Error::Invalid(format!("object {id} is not on the GPU")))?;
+            for &(id, level) in draw {
+                let m = meshes.get((id, level)).ok_or_else(|| {
+                    Error::Invalid(format!("object {id} at level {level} is not on the GPU"))
+                })?;
                 pass.set_vertex_buffer(0, m.vertices.slice(..));
                 pass.set_index_buffer(m.indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..m.index_count, 0, 0..1);

@@ -63,11 +63,11 @@ pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) 
     let started = Instant::now();
     let mut resident = GpuMeshes::default();
     for (id, mesh) in &meshes {
-        resident.upload(gpu, *id, mesh)?;
+        resident.upload(gpu, (*id, 0), mesh)?;
     }
     let upload = started.elapsed();
     let started = Instant::now();
-    let ids: Vec<u64> = meshes.iter().map(|m| m.0).collect();
+    let ids: Vec<_> = meshes.iter().map(|m| (m.0, 0)).collect();
     let frame = target.render(gpu, camera.view_proj(aspect)?, &resident, &ids)?;
     Ok(Shot {
         frame,

@@ -4,6 +4,7 @@
 
 pub mod buffer;
 pub mod cells;
+pub mod lod_select;
 pub mod motion;
 mod path;
 pub mod path_csv;

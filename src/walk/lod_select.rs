@@ -1,0 +1,226 @@
+//! LOD selection, the walk's last stage before drawing: each object in view drawn at the
+//! coarsest of its stored levels whose simplification error, seen from the eye, stays
+//! under a screen-space threshold.
+//!
+//! The criterion is the one the LOD core's refinement uses (Zheng 2007 §3.4): a level of
+//! error ε (metres) is fine enough at distance d when ε < 2τ·tan(α)·d, with α half the
+//! vertical field of view and τ a fraction of the viewport (the thesis's 0.1 %). d is
+//! the distance from the eye to the object's box, so an object the eye is inside, or
+//! touching, is drawn at full detail.
+//!
+//! Level 0 is the mesh the walk loaded into its object buffer; the coarser ones are read
+//! from the database's LOD chains when first chosen (only the pages of that level), and
+//! kept while the object stays in the buffer. A database without LODs, or an object
+//! without them, is drawn at full detail. The pages read are counted apart from the
+//! walk's own figures: the walk reports what its retrieval method reads.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::geom::{Aabb, Camera};
+use crate::lod::LevelInfo;
+use crate::scene::Mesh;
+
+use super::buffer::{Loaded, ObjectBuffer};
+
+/// The thesis's screen-space error: 0.1 % of the viewport.
+pub const DEFAULT_TAU: f32 = 0.001;
+
+/// One object as a frame draws it: at which level, and that level's mesh.
+#[derive(Clone, Debug)]
+pub struct Drawn {
+    pub id: u64,
+    pub bounds: Aabb,
+    /// 0: full detail; each higher level is coarser.
+    pub level: usize,
+    pub mesh: Arc<Mesh>,
+}
+
+impl Drawn {
+    /// An object drawn at full detail, as the walk loaded it.
+    pub fn full(o: &Loaded) -> Drawn {
+        Drawn {
+            id: o.entry.id,
+            bounds: o.entry.bounds,
+            level: 0,
+            mesh: o.mesh.clone(),
+        }
+    }
+}
+
+/// The level of `levels` (finest first) to draw at `distance` metres under `tau` for a
+/// vertical field of view `fov_y` (radians): the coarsest whose error is below the
+/// threshold, 0 when none but the full mesh is.
+///
+/// ```
+/// use flaneur::lod::LevelInfo;
+/// use flaneur::walk::lod_select::level_for;
+/// let levels: Vec<LevelInfo> = [(0, 1000, 0.0), (1, 500, 0.01), (2, 250, 0.2)]
+///     .iter()
+///     .map(|&(level, triangles, error)| LevelInfo { level, triangles, error })
+///     .collect();
+/// let fov = 60f32.to_radians();
+/// assert_eq!(level_for(&levels, 0.0, fov, 0.001), 0); // touching it: full detail
+/// assert_eq!(level_for(&levels, 50.0, fov, 0.001), 1);
+/// assert_eq!(level_for(&levels, 1000.0, fov, 0.001), 2);
+/// ```
+pub fn level_for(levels: &[LevelInfo], distance: f32, fov_y: f32, tau: f32) -> usize {
+    let threshold = 2.0 * tau * (fov_y * 0.5).tan() * distance.max(0.0);
+    levels
+        .iter()
+        .rposition(|l| l.error < threshold)
+        .unwrap_or(0)
+}
+
+/// The distance from `p` to the nearest point of `b`, 0 inside it.
+fn distance_to(b: &Aabb, p: glam::Vec3) -> f32 {
+    (b.min - p).max(p - b.max).max(glam::Vec3::ZERO).length()
+}
+
+/// What LOD selection read and chose over a walk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LodCounts {
+    /// Objects drawn at a coarser level than full detail, summed over frames.
+    pub coarse_draws: u64,
+    /// Levels read from the database.
+    pub levels_read: u64,
+    /// Pages those reads (and the level directories) took.
+    pub pages: u64,
+}
+
+/// The stored levels of the objects a walk has drawn.
+struct ObjectLevels {
+    levels: Vec<LevelInfo>,
+    /// Level k's mesh once read; level 0 is never read (the buffer holds it).
+    meshes: Vec<Option<Arc<Mesh>>>,
+}
+
+/// Chooses each drawn object's level, and keeps the coarse levels read so far.
+pub struct LodSelector<'a> {
+    db: &'a Database,
+    tau: f32,
+    objects: HashMap<u64, ObjectLevels>,
+    pub counts: LodCounts,
+}
+
+impl<'a> LodSelector<'a> {
+    /// A selector for `db` under `tau` (a fraction of the viewport, above 0 and below 1).
+    pub fn new(db: &'a Database, tau: f32) -> Result<LodSelector<'a>> {
+        if !(tau > 0.0 && tau < 1.0) {
+            return Err(Error::Invalid(format!(
+                "LOD threshold τ = {tau}: give a fraction of the viewport above 0 and below 1 (the thesis's is {DEFAULT_TAU})"
+            )));
+        }
+        Ok(LodSelector {
+            db,
+            tau,
+            objects: HashMap::new(),
+            counts: LodCounts::default(),
+        })
+    }
+
+    pub fn tau(&self) -> f32 {
+        self.tau
+    }
+
+    /// `drawn` (the objects of `buffer` in view of `camera`), each at its level. Forgets
+    /// the levels of objects `buffer` no longer holds.
+    pub fn select(
+        &mut self,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<Vec<Drawn>> {
+        self.objects.retain(|id, _| buffer.contains(*id));
+        if !self.db.has_lods() {
+            return Ok(drawn.iter().map(|o| Drawn::full(o)).collect());
+        }
+        let before = self.db.io().page_reads;
+        let mut out = Vec::with_capacity(drawn.len());
+        for o in drawn {
+            let id = o.entry.id;
+            let levels = match self.objects.entry(id) {
+                std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                std::collections::hash_map::Entry::Vacant(v) => {
+                    let levels = self.db.lod_levels(id)?.unwrap_or_default();
+                    v.insert(ObjectLevels {
+                        meshes: vec![None; levels.len()],
+                        levels,
+                    })
+                }
+            };
+            let d = distance_to(&o.entry.bounds, camera.position);
+            let level = level_for(&levels.levels, d, camera.fov_y, self.tau);
+            let mesh = if level == 0 {
+                o.mesh.clone()
+            } else {
+                self.counts.coarse_draws += 1;
+                match &levels.meshes[level] {
+                    Some(m) => m.clone(),
+                    None => {
+                        let m = Arc::new(self.db.lod_mesh(id, level)?);
+                        self.counts.levels_read += 1;
+                        levels.meshes[level] = Some(m.clone());
+                        m
+                    }
+                }
+            };
+            out.push(Drawn {
+                id,
+                bounds: o.entry.bounds,
+                level,
+                mesh,
+            });
+        }
+        self.counts.pages += self.db.io().page_reads - before;
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn levels(errors: &[f32]) -> Vec<LevelInfo> {
+        errors
+            .iter()
+            .enumerate()
+            .map(|(level, &error)| LevelInfo {
+                level,
+                triangles: 1000 >> level,
+                error,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn farther_is_coarser_and_inside_is_full() {
+        let l = levels(&[0.0, 0.01, 0.05, 0.3]);
+        let fov = 60f32.to_radians();
+        let chosen: Vec<usize> = [0.0, 1.0, 20.0, 100.0, 500.0, 1e5]
+            .iter()
+            .map(|&d| level_for(&l, d, fov, DEFAULT_TAU))
+            .collect();
+        assert_eq!(chosen[0], 0);
+        assert!(chosen.windows(2).all(|w| w[0] <= w[1]), "{chosen:?}");
+        assert_eq!(*chosen.last().unwrap(), 3);
+        // Each choice meets the criterion, and the next coarser level would not.
+        for (&d, &k) in [0.0f32, 1.0, 20.0, 100.0, 500.0].iter().zip(&chosen) {
+            let threshold = 2.0 * DEFAULT_TAU * (fov * 0.5).tan() * d;
+            assert!(k == 0 || l[k].error < threshold);
+            if k + 1 < l.len() {
+                assert!(l[k + 1].error >= threshold, "d {d}: level {k}");
+            }
+        }
+        assert_eq!(level_for(&[], 100.0, fov, DEFAULT_TAU), 0);
+    }
+
+    #[test]
+    fn distance_is_to_the_box() {
+        let b = Aabb::new([0.0, 0.0, 0.0], [10.0, 10.0, 10.0]).unwrap();
+        assert_eq!(distance_to(&b, glam::Vec3::splat(5.0)), 0.0);
+        assert_eq!(distance_to(&b, glam::Vec3::new(13.0, 5.0, 14.0)), 5.0);
+    }
+}
