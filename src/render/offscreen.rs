@@ -176,6 +176,11 @@ impl Offscreen {
         })
     }
 
+    /// The colour target's format (what an overlay's pipeline must draw into).
+    pub fn colour_format(&self) -> wgpu::TextureFormat {
+        COLOUR_FORMAT
+    }
+
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }
@@ -239,6 +244,20 @@ impl Offscreen {
         meshes: &GpuMeshes,
         draw: &[MeshKey],
     ) -> Result<Frame> {
+        self.render_then(gpu, view_proj, meshes, draw, |_, _| Ok(()))
+    }
+
+    /// [`render`](Offscreen::render), with `overlay` encoding more drawing onto the
+    /// colour target (its view given) before the image is read back: a heads-up
+    /// display, bounding boxes.
+    pub fn render_then(
+        &self,
+        gpu: &Gpu,
+        view_proj: Mat4,
+        meshes: &GpuMeshes,
+        draw: &[MeshKey],
+        overlay: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView) -> Result<()>,
+    ) -> Result<Frame> {
         let sun = Vec3::new(0.4, 0.8, 0.3).normalize();
         gpu.queue.write_buffer(
             &self.globals,
@@ -298,6 +317,7 @@ impl Offscreen {
                 pass.draw_indexed(0..m.index_count, 0, 0..1);
             }
         }
+        overlay(&mut encoder, colour)?;
         let [colour_buf, id_buf] = &self.readback;
         self.copy_out(&mut encoder, &self.colour, colour_buf);
         self.copy_out(&mut encoder, &self.ids, id_buf);
