@@ -23,6 +23,7 @@ use flaneur::bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
+use flaneur::render::{Change, ViewMode};
 use flaneur::visibility::{SampleOptions, VisibilityOptions};
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
@@ -148,6 +149,40 @@ enum Command {
         fov: f32,
         #[arg(short, long, default_value = "shot.png")]
         out: PathBuf,
+    },
+    /// Walk a city in a window: W A S D and the mouse (click to capture it), Shift to
+    /// run, F to fly; the walk engine selects, the window draws its selection at the
+    /// chosen LODs, with a heads-up display. Opens on the city's busiest street.
+    View {
+        db: PathBuf,
+        /// review (CSearch, index cache, prefetching), box (plain range queries) or pvs
+        /// (the current viewcell's PVS, PBNP prefetching; a database built with
+        /// --visibility); 1, 2 and 3 switch while walking.
+        #[arg(long, default_value = "review")]
+        mode: String,
+        /// Window size, WIDTHxHEIGHT pixels (the walk's 45° view is its centred square).
+        #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+        size: (u32, u32),
+        /// LOD selection's screen-space error, a fraction of the viewport (0: full
+        /// detail); [ and ] halve and double it while walking.
+        #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+        lod_tau: f32,
+        /// Start here (x,y,z metres) instead of the busiest street.
+        #[arg(long, value_parser = parse_vec3)]
+        at: Option<glam::Vec3>,
+        /// Heading and elevation at the start, degrees (with --at).
+        #[arg(long, value_parser = parse_look, default_value = "0,0")]
+        look: (f32, f32),
+        /// Save the poses walked as a path CSV when the window closes.
+        #[arg(long)]
+        record: Option<PathBuf>,
+        /// Play a path CSV (from --record, --save-path or by hand) instead of steering.
+        #[arg(long)]
+        play: Option<PathBuf>,
+        /// GPU memory the meshes may take, MiB (0: as much as the walk's buffer holds);
+        /// meshes not drawn are freed to make room, largest first.
+        #[arg(long, default_value_t = 256.0)]
+        gpu_budget_mb: f64,
     },
     /// Objects, triangles, pages by kind, tree height and fill.
     Info {
@@ -614,6 +649,52 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Info { db, json } => info(&db, json),
+        Command::View {
+            db,
+            mode,
+            size,
+            lod_tau,
+            at,
+            look,
+            record,
+            play,
+            gpu_budget_mb,
+        } => {
+            let mode = match mode.as_str() {
+                "review" => ViewMode::Review,
+                "box" => ViewMode::Box,
+                "pvs" => ViewMode::Pvs,
+                other => {
+                    bail!("the window shows the review, box and pvs modes so far, not '{other}'")
+                }
+            };
+            let db = Database::open(&db)?;
+            let start = match at {
+                Some(p) => flaneur::walk::Pose {
+                    time: 0.0,
+                    position: p,
+                    yaw: look.0.to_radians(),
+                    pitch: look.1.to_radians(),
+                },
+                None => flaneur::walk::start::busiest_street(&db)?,
+            };
+            let play = play
+                .map(|p| {
+                    CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display()))
+                })
+                .transpose()?;
+            let opts = flaneur::render::ViewOptions {
+                size,
+                lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+                start,
+                ground: db.bounds().min.y,
+                city: db.bounds(),
+                margin: flaneur::geom::DEFAULT_FAR,
+                play,
+                gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
+            };
+            view(&db, opts, mode, record.as_deref())
+        }
         Command::Shot {
             db,
             at,
@@ -1497,11 +1578,142 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         }
         print_walk(&report);
     }
+    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+    if display {
+        println!(
+            "opening a window on the city's busiest street (close it or press Q to end the demo)"
+        );
+        let opts = flaneur::render::ViewOptions {
+            size: (1024, 768),
+            lod_tau: Some(flaneur::walk::lod_select::DEFAULT_TAU),
+            start: flaneur::walk::start::busiest_street(&db)?,
+            ground: db.bounds().min.y,
+            city: db.bounds(),
+            margin: flaneur::geom::DEFAULT_FAR,
+            play: None,
+            gpu_budget: Some(256 << 20),
+        };
+        match view(&db, opts, ViewMode::Review, None) {
+            Ok(()) => return Ok(()),
+            Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
+        }
+    }
     demo_flight(&db, &cache.join("demo-frames"))
 }
 
-/// The demo's last part: a short flight over the city drawn headless to PNG frames (no
-/// window yet). Without a GPU adapter, it says so and the demo ends well.
+/// A session at the window: walks run one after another from where the viewer stands
+/// (a key changed the mode or the budget, or the walk failed), until the window closes.
+fn view(
+    db: &Database,
+    opts: flaneur::render::ViewOptions,
+    mode: ViewMode,
+    record: Option<&Path>,
+) -> Result<()> {
+    let start = opts.start;
+    let preset = |m: ViewMode| ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(match m {
+            ViewMode::Box => Preset::Box,
+            _ => Preset::Optimal,
+        })
+    };
+    let mut mode = mode;
+    let mut cfg = preset(mode);
+    let mut window = flaneur::render::WalkWindow::open(db, opts, mode)?;
+    if let Some(a) = window.adapter() {
+        println!("drawing on {} ({:?})", a.name, a.backend);
+    }
+    let p = start.position;
+    println!(
+        "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
+         Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
+        p.x,
+        p.y,
+        p.z,
+        mode.name()
+    );
+    let mut failures = 0;
+    loop {
+        let walked = match mode {
+            ViewMode::Pvs if !db.has_visibility() => {
+                window.report(format!(
+                    "{} has no visibility data (build it with --visibility): showing REVIEW",
+                    db.store().path().display()
+                ));
+                mode = ViewMode::Review;
+                window.mode = mode;
+                continue;
+            }
+            ViewMode::Pvs => {
+                let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
+                flaneur::walk::pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut window).map(|_| ())
+            }
+            _ => review::walk_live(db, &cfg, |_| {}, &mut window).map(|_| ()),
+        };
+        match walked {
+            Ok(()) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                window.report(format!(
+                    "the walk stopped: {e}; going on from where you stand"
+                ));
+                if failures >= 5 {
+                    bail!("the walk failed five times running; last: {e}");
+                }
+            }
+        }
+        if window.closed() {
+            break;
+        }
+        match window.change {
+            Some(Change::Mode(m)) => {
+                cfg = ReviewConfig {
+                    memory_budget: cfg.memory_budget,
+                    ..preset(m)
+                };
+                mode = m;
+                window.mode = m;
+            }
+            Some(Change::Budget(f)) => {
+                cfg.memory_budget = ((cfg.memory_budget as f32 * f) as usize).max(1 << 20);
+                window.report(format!(
+                    "object buffer budget {:.0} MiB",
+                    cfg.memory_budget as f64 / 1048576.0
+                ));
+            }
+            None => {}
+        }
+        window.resume();
+    }
+    let s = &window.summary;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{} frames drawn: CPU (LOD selection, uploads) {:.1} ms a frame (worst {:.1}), GPU {:.1} ms (worst {:.1}); at most {:.1} MiB of meshes on the GPU ({} frames over its budget); {} problems met",
+        s.frames,
+        mean(&s.cpu_ms),
+        worst(&s.cpu_ms),
+        mean(&s.gpu_ms),
+        worst(&s.gpu_ms),
+        s.peak_gpu_bytes as f64 / 1048576.0,
+        s.over_budget,
+        s.problems.len()
+    );
+    if let Some(r) = record {
+        flaneur::render::save_recording(&window.recorded, &r.to_path_buf())?;
+        println!(
+            "{} poses recorded to {}",
+            window.recorded.len(),
+            r.display()
+        );
+    }
+    Ok(())
+}
+
+/// The demo's last part where there is no display: a short flight over the city drawn
+/// headless to PNG frames. Without a GPU adapter, it says so and the demo ends well.
 fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
     let gpu = match flaneur::render::Gpu::headless() {
         Ok(gpu) => gpu,

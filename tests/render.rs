@@ -471,3 +471,40 @@ fn a_walk_drawn_at_its_levels_of_detail() {
         .with_lods(&db, 0.0)
         .is_err());
 }
+
+/// Under a GPU budget, meshes a frame does not draw make room for those it does; a frame
+/// whose own meshes do not fit is drawn anyway and says so.
+#[test]
+fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
+    use flaneur::walk::lod_select::Drawn;
+    use std::sync::Arc;
+    let gpu = gpu();
+    let quad = |id: u64| Drawn {
+        id,
+        bounds: flaneur::geom::Aabb::new([0.0; 3], [1.0; 3]).unwrap(),
+        level: 0,
+        mesh: Arc::new(flaneur::scene::Mesh {
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 4],
+            indices: vec![0, 1, 2, 0, 2, 3],
+        }),
+    };
+    let one = flaneur::render::gpu_bytes(&quad(0).mesh);
+    let mut meshes = flaneur::render::GpuMeshes::default();
+    meshes.set_budget(Some(2 * one));
+    let all = |_| true;
+    let f = meshes.follow(&gpu, all, &[quad(1), quad(2)]).unwrap();
+    assert_eq!((f.uploads, f.freed, f.over_budget), (2, 0, false));
+    let f = meshes.follow(&gpu, all, &[quad(3)]).unwrap();
+    assert_eq!((f.uploads, f.freed, f.over_budget), (1, 1, false));
+    assert!(meshes.bytes() <= 2 * one && meshes.get((3, 0)).is_some());
+    let f = meshes
+        .follow(&gpu, all, &[quad(1), quad(2), quad(3)])
+        .unwrap();
+    assert!(f.over_budget);
+    assert!((1..=3).all(|id| meshes.get((id, 0)).is_some()));
+    // Without a budget nothing is freed but what the buffer dropped.
+    meshes.set_budget(None);
+    let f = meshes.follow(&gpu, |id| id != 2, &[quad(1)]).unwrap();
+    assert_eq!((f.freed, f.over_budget), (1, false));
+}

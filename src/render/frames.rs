@@ -166,18 +166,11 @@ impl FrameWriter<'_> {
         selected: &[Drawn],
     ) -> Result<Frame> {
         let started = Instant::now();
-        // Free what the buffer evicted, and the other levels of an object drawn at a
-        // new one; upload what is drawn for the first time at its level.
-        let level: std::collections::HashMap<u64, usize> =
-            selected.iter().map(|d| (d.id, d.level)).collect();
-        self.times.evictions += self
+        let f = self
             .meshes
-            .retain(|(id, l)| buffer.contains(id) && level.get(&id).is_none_or(|&now| now == l));
-        for d in selected {
-            if self.meshes.upload(self.gpu, (d.id, d.level), &d.mesh)? {
-                self.times.uploads += 1;
-            }
-        }
+            .follow(self.gpu, |id| buffer.contains(id), selected)?;
+        self.times.uploads += f.uploads;
+        self.times.evictions += f.freed;
         let upload = started.elapsed();
         let started = Instant::now();
         let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();

@@ -55,11 +55,39 @@ impl Gpu {
         )))
     }
 
+    /// A device that can draw to `surface` (a window's), and its adapter (which the
+    /// surface's configuration needs): a hardware adapter if one can, else a software one.
+    pub fn for_surface(
+        instance: &wgpu::Instance,
+        surface: &wgpu::Surface<'_>,
+    ) -> Result<(Gpu, wgpu::Adapter)> {
+        let mut tried = Vec::new();
+        for fallback in [false, true] {
+            let found =
+                pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    force_fallback_adapter: fallback,
+                    compatible_surface: Some(surface),
+                    ..Default::default()
+                }));
+            match found {
+                Ok(adapter) => return Ok((Gpu::on(adapter.clone())?, adapter)),
+                Err(e) => tried.push(e.to_string()),
+            }
+        }
+        tried.dedup();
+        Err(Error::Render(format!(
+            "no GPU adapter can draw to the window ({})",
+            tried.join("; ")
+        )))
+    }
+
     fn on(adapter: wgpu::Adapter) -> Result<Gpu> {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("flaneur"),
-            required_features: wgpu::Features::empty(),
+            // Wireframe where the adapter has it; nothing else beyond the baseline.
+            required_features: adapter.features() & wgpu::Features::POLYGON_MODE_LINE,
             required_limits: wgpu::Limits {
                 max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
                 ..wgpu::Limits::downlevel_defaults()

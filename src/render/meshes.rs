@@ -9,6 +9,7 @@ use wgpu::util::DeviceExt;
 use super::Gpu;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
+use crate::walk::lod_select::Drawn;
 
 /// One vertex as the shader reads it: position, normal, the object's slot (what the id
 /// target shows) and the key its tint comes from (its id folded to 32 bits, so that an
@@ -55,6 +56,21 @@ pub struct GpuMeshes {
     slots: Vec<Option<u64>>,
     free: Vec<u32>,
     bytes: u64,
+    budget: Option<u64>,
+}
+
+/// What making the GPU follow a frame did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Followed {
+    pub uploads: usize,
+    pub freed: usize,
+    /// The frame's own meshes took more than the budget.
+    pub over_budget: bool,
+}
+
+/// Bytes `mesh` takes on the GPU: its vertices and its indices.
+pub fn gpu_bytes(mesh: &Mesh) -> u64 {
+    (mesh.positions.len() * std::mem::size_of::<Vertex>() + mesh.indices.len() * 4) as u64
 }
 
 impl GpuMeshes {
@@ -125,6 +141,64 @@ impl GpuMeshes {
             },
         );
         Ok(true)
+    }
+
+    /// Makes the GPU hold what a frame draws: frees what `holds` (the walk's buffer)
+    /// no longer holds and the other levels of an object drawn at a new one; under a
+    /// budget, frees meshes this frame does not draw (largest first) to make room;
+    /// then uploads what `selected` draws for the first time at its level.
+    pub fn follow(
+        &mut self,
+        gpu: &Gpu,
+        holds: impl Fn(u64) -> bool,
+        selected: &[Drawn],
+    ) -> Result<Followed> {
+        let level: HashMap<u64, usize> = selected.iter().map(|d| (d.id, d.level)).collect();
+        let mut freed =
+            self.retain(|(id, l)| holds(id) && level.get(&id).is_none_or(|&now| now == l));
+        if let Some(budget) = self.budget {
+            let needed: u64 = selected
+                .iter()
+                .filter(|d| !self.by_id.contains_key(&(d.id, d.level)))
+                .map(|d| gpu_bytes(&d.mesh))
+                .sum();
+            if self.bytes + needed > budget {
+                let mut idle: Vec<(u64, MeshKey)> = self
+                    .by_id
+                    .iter()
+                    .filter(|(k, _)| level.get(&k.0) != Some(&k.1))
+                    .map(|(&k, m)| (m.bytes, k))
+                    .collect();
+                idle.sort_unstable_by(|a, b| b.cmp(a));
+                for (_, k) in idle {
+                    if self.bytes + needed <= budget {
+                        break;
+                    }
+                    self.evict(k);
+                    freed += 1;
+                }
+            }
+        }
+        let mut uploads = 0;
+        for d in selected {
+            uploads += self.upload(gpu, (d.id, d.level), &d.mesh)? as usize;
+        }
+        Ok(Followed {
+            uploads,
+            freed,
+            over_budget: self.budget.is_some_and(|b| self.bytes > b),
+        })
+    }
+
+    /// Sets the GPU memory the meshes may take, bytes (`None`: no limit). A frame
+    /// whose own meshes do not fit is drawn anyway, and [`Followed::over_budget`]
+    /// says so.
+    pub fn set_budget(&mut self, bytes: Option<u64>) {
+        self.budget = bytes;
+    }
+
+    pub fn budget(&self) -> Option<u64> {
+        self.budget
     }
 
     /// Frees every resident mesh `keep` says no to; how many.

@@ -4,16 +4,23 @@
 //! counted), and offscreen frames ([`Offscreen`]) that draw colour and, in the same
 //! pass, the object each pixel shows, read back for PNGs and for tests. [`shot`] puts
 //! them together for one viewpoint of a database; [`FrameWriter`] draws a walk frame by
-//! frame as the walk engine selects it.
+//! frame as the walk engine selects it. [`Hud`] blends a heads-up display (text and a
+//! frame-time graph, [`rasterise`]d on the CPU) onto a frame or a window.
 
 mod frames;
 mod gpu;
+mod hud;
 mod meshes;
 mod offscreen;
+mod scene;
 mod shot;
+mod window;
 
 pub use frames::{FrameTimes, FrameWriter};
 pub use gpu::Gpu;
-pub use meshes::{GpuMesh, GpuMeshes, MeshKey, Vertex};
+pub use hud::{rasterise, Hud, HudContent};
+pub use meshes::{gpu_bytes, Followed, GpuMesh, GpuMeshes, MeshKey, Vertex};
 pub use offscreen::{Frame, Offscreen};
+pub use scene::{ScenePass, SceneView};
 pub use shot::{fov_x_for, shot, Shot};
+pub use window::{save_recording, Change, ViewMode, ViewOptions, ViewSummary, WalkWindow};

@@ -11,7 +11,9 @@ pub mod path_csv;
 pub mod pvs_walk;
 pub mod review;
 mod sink;
+pub mod start;
+pub mod steer;
 
 pub use motion::{CameraPath, Motion, Pose};
 pub use path::{street_walk, WalkPath};
-pub use sink::{FrameSink, NoSink};
+pub use sink::{FrameFigures, FrameSink, NoSink, Viewer};

@@ -23,7 +23,8 @@ use crate::prefetch::pvs::{Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, S
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::motion::CameraPath;
-use crate::walk::{FrameSink, NoSink};
+use crate::walk::sink::Played;
+use crate::walk::{FrameFigures, FrameSink, NoSink, Viewer};
 
 /// Which neighbours the client prefetches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -98,9 +99,21 @@ pub fn walk_pvs_into(
     db: &Database,
     path: &CameraPath,
     prefetch: PvsPrefetch,
-    mut tick: impl FnMut(usize),
+    tick: impl FnMut(usize),
     sink: &mut dyn FrameSink,
 ) -> Result<PvsWalkReport> {
+    walk_pvs_live(db, prefetch, tick, &mut Played { path, sink })
+}
+
+/// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
+/// window), until it has no more.
+pub fn walk_pvs_live(
+    db: &Database,
+    prefetch: PvsPrefetch,
+    mut tick: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<PvsWalkReport> {
+    let sink = &mut *viewer;
     let source = StoredPvs::new(db)?;
     let (snp, pbnp);
     let rule: &dyn PrefetchArea = match prefetch {
@@ -114,7 +127,7 @@ pub fn walk_pvs_into(
         }
     };
     let mut client = PvsClient::new(&source, rule, crate::prefetch::pvs::THESIS_CAPACITY)?;
-    let mut frames = Vec::with_capacity(path.poses.len());
+    let mut frames = Vec::new();
     // For a renderer: every object's index entry, and what the client holds, loaded.
     let entries: HashMap<u64, ObjectEntry> = if sink.draws() {
         db.range(&db.bounds())?
@@ -127,7 +140,11 @@ pub fn walk_pvs_into(
     };
     let mut held = ObjectBuffer::new(usize::MAX);
     let mut shown: Option<Cell> = None;
-    for (i, pose) in path.poses.iter().enumerate() {
+    for i in 0.. {
+        let Some(pose) = sink.next_pose(i)? else {
+            break;
+        };
+        let pose = &pose;
         let before = db.io().page_reads;
         let mut frame = PvsFrame::default();
         if let Some(id) = db.viewcell_at(pose.position)? {
@@ -147,6 +164,17 @@ pub fn walk_pvs_into(
         if sink.draws() {
             draw_pvs(db, &entries, &client, shown, &mut held, pose, i, sink)?;
         }
+        sink.figures(&FrameFigures {
+            pages: frame.pages,
+            objects_buffered: held.len(),
+            objects_drawn: frame.drawn,
+            visual_misses: frame.visual_misses,
+            cell: frame.cell.map_or_else(
+                || "outside every viewcell".into(),
+                |c| format!("viewcell {c}"),
+            ),
+            ..Default::default()
+        });
         frames.push(frame);
         tick(i);
     }

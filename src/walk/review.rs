@@ -43,7 +43,7 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::cells::{contains_ground, scaled_cell};
 use super::motion::CameraPath;
-use super::sink::{FrameSink, NoSink};
+use super::sink::{FrameFigures, FrameSink, NoSink, Played, Viewer};
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -395,13 +395,25 @@ pub fn walk_into(
     db: &Database,
     path: &CameraPath,
     cfg: &ReviewConfig,
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
     sink: &mut dyn FrameSink,
 ) -> Result<WalkReport> {
-    cfg.validate()?;
     if path.poses.is_empty() {
         return Err(Error::Invalid("the camera path has no poses".into()));
     }
+    walk_live(db, cfg, progress, &mut Played { path, sink })
+}
+
+/// [`walk_into`] with the poses coming from `viewer` frame by frame (a person at a
+/// window), until it has no more. Poses must come in time order, as a path's do.
+pub fn walk_live(
+    db: &Database,
+    cfg: &ReviewConfig,
+    mut progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<WalkReport> {
+    cfg.validate()?;
+    let mut path = CameraPath { poses: Vec::new() };
     let oracle = Oracle::new(db)?;
     db.reset_io();
     let pool = match &cfg.index_cache {
@@ -456,20 +468,52 @@ pub fn walk_into(
             resident,
             counts: Counts::default(),
         };
-        let mut frames = Vec::with_capacity(path.poses.len());
+        let mut frames = Vec::new();
         let pace = cfg.pace.filter(|_| cfg.prefetch_k.is_some());
-        let (clock, t0) = (Instant::now(), path.poses[0].time);
-        for i in 0..path.poses.len() {
+        let clock = Instant::now();
+        for i in 0.. {
+            let Some(pose) = viewer.next_pose(i)? else {
+                break;
+            };
+            if let Some(last) = path.poses.last() {
+                if pose.time.partial_cmp(&last.time) != Some(std::cmp::Ordering::Greater) {
+                    return Err(Error::Invalid(format!(
+                        "frame {i}: pose at {} s after one at {} s; poses must come in time order",
+                        pose.time, last.time
+                    )));
+                }
+            }
+            path.poses.push(pose);
             if let Some(speed) = pace {
                 let due = std::time::Duration::from_secs_f64(
-                    ((path.poses[i].time - t0) / speed as f64).max(0.0),
+                    ((pose.time - path.poses[0].time) / speed as f64).max(0.0),
                 );
                 if let Some(wait) = due.checked_sub(clock.elapsed()) {
                     std::thread::sleep(wait);
                 }
             }
-            frames.push(state.frame(path, i, sink)?);
+            let f = state.frame(&path, i, viewer)?;
+            viewer.figures(&FrameFigures {
+                pages: f.index_pages + f.mesh_pages,
+                objects_buffered: f.objects_buffered,
+                objects_drawn: f.objects_drawn,
+                triangles: f.triangles_drawn,
+                visual_misses: f.visual_misses,
+                prefetch_queue: state.in_flight.is_some() as usize,
+                cache_hit_rate: pool.as_ref().map(|p| p.stats().hit_rate()),
+                cell: state.disk_cell.map_or_else(String::new, |c| {
+                    format!(
+                        "disk cell x {:.0}..{:.0}, z {:.0}..{:.0}",
+                        c.min.x, c.max.x, c.min.z, c.max.z
+                    )
+                }),
+                walk_ms: f.frame_ms,
+            });
+            frames.push(f);
             progress(i);
+        }
+        if frames.is_empty() {
+            return Err(Error::Invalid("the walk had no poses".into()));
         }
         // Closing the request channel ends the prefetch thread.
         state.req_tx = None;

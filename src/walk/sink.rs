@@ -37,3 +37,61 @@ impl FrameSink for NoSink {
         false
     }
 }
+
+/// A walk's viewer: where each frame's pose comes from (a person at a window, a
+/// recorded path), and what draws the frame the walk selects for it.
+pub trait Viewer: FrameSink {
+    /// The pose of frame `frame`, or `None` when the walk ends.
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>>;
+
+    /// What the frame just drawn cost the walk, for a display beside the picture.
+    fn figures(&mut self, _figures: &FrameFigures) {}
+}
+
+/// What one frame of a walk did, for a live display beside the picture.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameFigures {
+    /// Pages the walk read on this frame (index and meshes, prefetches included).
+    pub pages: u64,
+    pub objects_buffered: usize,
+    pub objects_drawn: usize,
+    /// Triangles of the objects drawn, at full detail.
+    pub triangles: u64,
+    pub visual_misses: usize,
+    /// Searches running ahead of the viewer (prefetches in flight).
+    pub prefetch_queue: usize,
+    /// The index cache's hit rate so far, when the walk has one.
+    pub cache_hit_rate: Option<f64>,
+    /// Where the walk stands (its disk cell, or its viewcell), in words.
+    pub cell: String,
+    /// The walk's own time for the frame (retrieval, loading, culling), ms.
+    pub walk_ms: f64,
+}
+
+/// A recorded path played to a sink: the viewer of a walk along a fixed path.
+pub(crate) struct Played<'a> {
+    pub path: &'a super::CameraPath,
+    pub sink: &'a mut dyn FrameSink,
+}
+
+impl FrameSink for Played<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<()> {
+        self.sink.frame(index, camera, buffer, drawn)
+    }
+
+    fn draws(&self) -> bool {
+        self.sink.draws()
+    }
+}
+
+impl Viewer for Played<'_> {
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>> {
+        Ok(self.path.poses.get(frame).copied())
+    }
+}
