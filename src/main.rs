@@ -183,6 +183,11 @@ enum Command {
         /// meshes not drawn are freed to make room, largest first.
         #[arg(long, default_value_t = 256.0)]
         gpu_budget_mb: f64,
+        /// Start with the bounding boxes on (B), and seen from above (T).
+        #[arg(long)]
+        boxes: bool,
+        #[arg(long)]
+        top_view: bool,
     },
     /// Objects, triangles, pages by kind, tree height and fill.
     Info {
@@ -659,6 +664,8 @@ fn run(cli: Cli) -> Result<()> {
             record,
             play,
             gpu_budget_mb,
+            boxes,
+            top_view,
         } => {
             let mode = match mode.as_str() {
                 "review" => ViewMode::Review,
@@ -693,7 +700,7 @@ fn run(cli: Cli) -> Result<()> {
                 play,
                 gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
             };
-            view(&db, opts, mode, record.as_deref())
+            view(&db, opts, mode, (boxes, top_view), record.as_deref())
         }
         Command::Shot {
             db,
@@ -1595,7 +1602,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             play: None,
             gpu_budget: Some(256 << 20),
         };
-        match view(&db, opts, ViewMode::Review, None) {
+        match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }
@@ -1609,6 +1616,7 @@ fn view(
     db: &Database,
     opts: flaneur::render::ViewOptions,
     mode: ViewMode,
+    (boxes, top_view): (bool, bool),
     record: Option<&Path>,
 ) -> Result<()> {
     let start = opts.start;
@@ -1622,6 +1630,8 @@ fn view(
     let mut mode = mode;
     let mut cfg = preset(mode);
     let mut window = flaneur::render::WalkWindow::open(db, opts, mode)?;
+    window.boxes = boxes;
+    window.top_view = top_view;
     if let Some(a) = window.adapter() {
         println!("drawing on {} ({:?})", a.name, a.backend);
     }

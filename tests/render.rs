@@ -508,3 +508,42 @@ fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
     let f = meshes.follow(&gpu, |id| id != 2, &[quad(1)]).unwrap();
     assert_eq!((f.freed, f.over_budget), (1, false));
 }
+
+/// Boxes drawn over a frame in their Fig. 6.3 colours: a culled box in front of the
+/// camera shows green lines, the frustum white ones, and nothing else changes.
+#[test]
+fn boxes_are_drawn_in_their_colours() {
+    use flaneur::render::boxes::{lines, Boxes, CULLED};
+    let gpu = gpu();
+    let target = flaneur::render::Offscreen::new(&gpu, 64, 64).unwrap();
+    let meshes = flaneur::render::GpuMeshes::default();
+    let camera = Camera::new(Vec3::ZERO, 0.0, 0.0).unwrap();
+    let view_proj = camera.view_proj(1.0).unwrap();
+    let held = [flaneur::geom::Aabb::new([8.0, -2.0, -2.0], [12.0, 2.0, 2.0]).unwrap()];
+    let plain = target.render(&gpu, view_proj, &meshes, &[]).unwrap();
+    let mut boxes = Boxes::new(&gpu, target.colour_format());
+    let l = lines(&camera.frustum(), &[], &held);
+    let drawn = target
+        .render_then(&gpu, view_proj, &meshes, &[], |enc, view| {
+            boxes.draw(&gpu, enc, view, view_proj, None, &l)
+        })
+        .unwrap();
+    let green = |p: &[u8]| p[1] > 150 && p[0] < 120 && p[2] < 140;
+    let changed: Vec<&[u8]> = drawn
+        .rgba
+        .chunks_exact(4)
+        .zip(plain.rgba.chunks_exact(4))
+        .filter(|(a, b)| a != b)
+        .map(|(a, _)| a)
+        .collect();
+    // The box in green; the frustum's own edges (white) run along the image's border.
+    let white = |p: &[u8]| p[..3].iter().all(|&c| c > 230);
+    let greens = changed.iter().filter(|p| green(p)).count();
+    assert!(greens > 20, "{greens} green pixels");
+    assert!(
+        changed.iter().all(|p| green(p) || white(p)),
+        "{} pixels neither green nor white",
+        changed.iter().filter(|p| !green(p) && !white(p)).count()
+    );
+    assert_eq!(CULLED[3], 1.0);
+}

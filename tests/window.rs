@@ -111,6 +111,9 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
         gpu_budget: Some(4 << 20),
     };
     let mut window = WalkWindow::open(&db, opts, ViewMode::Box).unwrap();
+    // Boxes over the view from above: their drawing must not fail either.
+    window.boxes = true;
+    window.top_view = true;
     assert_eq!(window.drawn_size(), Some((256, 192)));
     let cfg = ReviewConfig {
         pace: None,

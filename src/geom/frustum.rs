@@ -33,7 +33,7 @@ use super::Aabb;
 
 /// The 12 edges of a frustum or box whose corner `i` has bit 0 = right/max x, bit 1 =
 /// top/max y, bit 2 = far/max z: the pairs of corners that differ in one bit.
-const EDGES: [(usize, usize); 12] = [
+pub(crate) const EDGES: [(usize, usize); 12] = [
     (0, 1),
     (2, 3),
     (4, 5),

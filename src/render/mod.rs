@@ -7,6 +7,7 @@
 //! frame as the walk engine selects it. [`Hud`] blends a heads-up display (text and a
 //! frame-time graph, [`rasterise`]d on the CPU) onto a frame or a window.
 
+pub mod boxes;
 mod frames;
 mod gpu;
 mod hud;

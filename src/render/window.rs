@@ -13,7 +13,9 @@
 //! Keys: W A S D move, Shift runs, Space and C climb and sink when flying, F flies or
 //! walks, 1, 2 and 3 choose REVIEW, BOX or PVS, the brackets halve or double the LOD threshold
 //! τ, minus and equals halve or double the walk's memory budget, H hides the HUD, G
-//! draws lines, a click captures the mouse to look around, Esc frees it (or quits), Q
+//! draws lines, B draws bounding boxes coloured as the thesis's Fig. 6.3 (red drawn at
+//! full detail, yellow drawn coarse, green held but culled, white the frustum), T looks
+//! from 400 m above, a click captures the mouse to look around, Esc frees it (or quits), Q
 //! quits.
 
 use std::collections::VecDeque;
@@ -29,6 +31,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::platform::pump_events::EventLoopExtPumpEvents;
 use winit::window::{CursorGrabMode, Window, WindowId};
 
+use super::boxes::{lines, Boxes};
 use super::hud::{Hud, HudContent};
 use super::meshes::GpuMeshes;
 use super::scene::{target, ScenePass, SceneView, DEPTH_FORMAT, ID_FORMAT};
@@ -179,6 +182,7 @@ struct Surfaced {
     config: wgpu::SurfaceConfiguration,
     scene: ScenePass,
     hud: Hud,
+    boxes: Boxes,
     meshes: GpuMeshes,
     /// The id and depth targets, the window's size.
     targets: [wgpu::TextureView; 2],
@@ -220,6 +224,7 @@ impl Surfaced {
         let mut scene = ScenePass::new(&gpu, format);
         scene.set_ground(&gpu, &opts.city, opts.margin);
         let hud = Hud::new(&gpu, format)?;
+        let boxes = Boxes::new(&gpu, format);
         let targets = window_targets(&gpu, (config.width, config.height));
         let mut s = Surfaced {
             gpu,
@@ -227,6 +232,7 @@ impl Surfaced {
             config,
             scene,
             hud,
+            boxes,
             meshes: GpuMeshes::default(),
             targets,
             lost,
@@ -273,6 +279,9 @@ pub struct WalkWindow<'a> {
     captured: bool,
     pub show_hud: bool,
     pub wireframe: bool,
+    /// Bounding boxes coloured as the thesis's Fig. 6.3, and the view from above.
+    pub boxes: bool,
+    pub top_view: bool,
     /// The mode shown, and a change a key asked for.
     pub mode: ViewMode,
     pub change: Option<Change>,
@@ -355,6 +364,8 @@ impl<'a> WalkWindow<'a> {
             captured: false,
             show_hud: true,
             wireframe: false,
+            boxes: false,
+            top_view: false,
             mode,
             change: None,
             clock: Instant::now(),
@@ -439,6 +450,8 @@ impl<'a> WalkWindow<'a> {
                 KeyCode::KeyF => self.steer.fly = !self.steer.fly,
                 KeyCode::KeyH => self.show_hud = !self.show_hud,
                 KeyCode::KeyG => self.wireframe = !self.wireframe,
+                KeyCode::KeyB => self.boxes = !self.boxes,
+                KeyCode::KeyT => self.top_view = !self.top_view,
                 KeyCode::Digit1 => self.change = Some(Change::Mode(ViewMode::Review)),
                 KeyCode::Digit2 => self.change = Some(Change::Mode(ViewMode::Box)),
                 KeyCode::Digit3 => self.change = Some(Change::Mode(ViewMode::Pvs)),
@@ -558,6 +571,11 @@ impl<'a> WalkWindow<'a> {
         let side = w.min(h) as f32;
         let viewport = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
         let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
+        let view_proj = if self.top_view {
+            top_view(camera)
+        } else {
+            camera.view_proj(1.0)?
+        };
         let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
         s.scene.encode(
             &s.gpu,
@@ -566,11 +584,22 @@ impl<'a> WalkWindow<'a> {
             &s.meshes,
             &keys,
             &SceneView {
-                view_proj: camera.view_proj(1.0)?,
+                view_proj,
                 viewport: Some(viewport),
                 wireframe: self.wireframe,
             },
         )?;
+        if self.boxes {
+            let drawn: std::collections::HashSet<u64> = selected.iter().map(|d| d.id).collect();
+            let culled: Vec<Aabb> = buffer
+                .iter()
+                .filter(|o| !drawn.contains(&o.entry.id))
+                .map(|o| o.entry.bounds)
+                .collect();
+            let l = lines(&camera.frustum(), selected, &culled);
+            s.boxes
+                .draw(&s.gpu, &mut encoder, &view, view_proj, Some(viewport), &l)?;
+        }
         if self.show_hud {
             let content = hud_content(
                 &self.figures,
@@ -720,6 +749,16 @@ impl Viewer for WalkWindow<'_> {
     }
 }
 
+/// The view from 400 m above the viewer, looking down, the viewer's heading up the
+/// picture: where the boxes show what the walk held, drew and culled.
+fn top_view(camera: &Camera) -> glam::Mat4 {
+    let (sin, cos) = camera.yaw.sin_cos();
+    let heading = glam::Vec3::new(cos, 0.0, sin);
+    let eye = camera.position + glam::Vec3::Y * 400.0;
+    glam::Mat4::perspective_rh(60f32.to_radians(), 1.0, 1.0, 5000.0)
+        * glam::Mat4::look_at_rh(eye, camera.position, heading)
+}
+
 /// The HUD's lines.
 #[allow(clippy::too_many_arguments)]
 fn hud_content(
@@ -771,7 +810,7 @@ fn hud_content(
         ),
         format!("{} at {:.0}, {:.1}, {:.0}", f.cell, p.x, p.y, p.z),
         format!(
-            "WASD shift F fly  1 review 2 box 3 pvs  [ ] tau  - = budget  H hud{}  Q quit",
+            "WASD shift F fly  1 review 2 box 3 pvs  [ ] tau  - = budget  H hud  B boxes  T top{}  Q quit",
             if wireframe { "  G lines" } else { "" }
         ),
     ];
