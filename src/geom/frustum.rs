@@ -230,7 +230,7 @@ fn usable(b: &Aabb) -> bool {
 
 /// The eight vertices of a box, numbered like the frustum's corners (bit 0 = max x,
 /// bit 1 = max y, bit 2 = max z) so that [`EDGES`] serves both.
-fn box_corners(b: &Aabb) -> [Vec3; 8] {
+pub(crate) fn box_corners(b: &Aabb) -> [Vec3; 8] {
     std::array::from_fn(|i| {
         Vec3::new(
             if i & 1 != 0 { b.max.x } else { b.min.x },

@@ -9,5 +9,5 @@ mod plane;
 pub use aabb::Aabb;
 pub use camera::{Camera, DEFAULT_FAR, DEFAULT_FOV, DEFAULT_NEAR};
 pub use frustum::Frustum;
-pub(crate) use frustum::EDGES;
+pub(crate) use frustum::{box_corners, EDGES};
 pub use plane::Plane;

@@ -6,9 +6,10 @@
 
 use glam::{Mat4, Vec3};
 
+use super::scene::{overlay_pass, uniform};
 use super::Gpu;
 use crate::error::Result;
-use crate::geom::{Aabb, Frustum, EDGES};
+use crate::geom::{box_corners, Aabb, Frustum, EDGES};
 use crate::walk::lod_select::Drawn;
 
 /// Line colours (linear RGBA).
@@ -59,17 +60,6 @@ pub fn lines(frustum: &Frustum, drawn: &[Drawn], culled: &[Aabb]) -> Vec<LineVer
     out
 }
 
-/// A box's corners in the frustum's numbering (bit 0 max x, bit 1 max y, bit 2 max z).
-fn box_corners(b: &Aabb) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 != 0 { b.max.x } else { b.min.x },
-            if i & 2 != 0 { b.max.y } else { b.min.y },
-            if i & 4 != 0 { b.max.z } else { b.min.z },
-        )
-    })
-}
-
 /// The line pipeline and a vertex buffer it reuses while the lines fit.
 pub struct Boxes {
     pipeline: wgpu::RenderPipeline,
@@ -83,33 +73,8 @@ impl Boxes {
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Boxes {
         let device = &gpu.device;
         let shader = device.create_shader_module(wgpu::include_wgsl!("boxes.wgsl"));
-        let globals = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("boxes globals"),
-            size: 64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("boxes"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("boxes"),
-            layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
-        });
+        let (globals, layout, bind_group) =
+            uniform(device, "boxes", 64, wgpu::ShaderStages::VERTEX);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("boxes"),
             bind_group_layouts: &[Some(&layout)],
@@ -186,19 +151,7 @@ impl Boxes {
             0,
             bytemuck::cast_slice(&view_proj.to_cols_array()),
         );
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("boxes"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
+        let mut pass = overlay_pass(encoder, target, "boxes");
         if let Some([x, y, w, h]) = viewport {
             pass.set_viewport(x, y, w, h, 0.0, 1.0);
         }

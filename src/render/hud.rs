@@ -4,6 +4,7 @@
 
 use image::{Rgba, RgbaImage};
 
+use super::scene::overlay_pass;
 use super::Gpu;
 use crate::error::{Error, Result};
 
@@ -297,19 +298,7 @@ impl Hud {
         };
         gpu.queue
             .write_buffer(&self.quad, 0, bytemuck::bytes_of(&quad));
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("hud"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
+        let mut pass = overlay_pass(encoder, target, "hud");
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &upload.bind_group, &[]);
         pass.draw(0..6, 0..1);
