@@ -2,7 +2,7 @@
 //!
 //! The database holds buildings, not streets, so "busiest street" is found from them: on
 //! a grid of points at eye height over the city, a point is on a street when no object
-//! box holds it, and its street's direction is the axis along which the view runs
+//! box comes within [`CLEARANCE`] of it, and its street's direction is the axis along which the view runs
 //! farthest before meeting a box. A point's business is the number of objects whose
 //! boxes lie within [`NEIGHBOURHOOD`] metres of it; the busiest free point wins, ties to
 //! the one nearest the city's centre, looking down its street. Range queries only: the
@@ -18,6 +18,9 @@ use crate::geom::Aabb;
 
 /// The half-side of the box around a point whose objects count as its neighbours, metres.
 pub const NEIGHBOURHOOD: f32 = 60.0;
+/// How far a point on a street is from every object, metres (citygen's streets are
+/// 14 m wide by default).
+pub const CLEARANCE: f32 = 3.0;
 /// Grid points per side.
 const GRID: usize = 48;
 /// How far the view along a street is probed, metres.
@@ -35,8 +38,9 @@ const PROBE: f32 = 120.0;
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
 /// let db = flaneur::Database::open(&path)?;
 /// let start = flaneur::walk::start::busiest_street(&db)?;
-/// let inside = db.range(&flaneur::geom::Aabb::around(start.position, glam::Vec3::splat(0.01)))?;
-/// assert!(inside.objects.iter().all(|o| !o.bounds.contains_point(start.position)));
+/// let around = glam::Vec3::new(2.9, 0.5, 2.9);
+/// let near = db.range(&flaneur::geom::Aabb::around(start.position, around))?;
+/// assert!(near.objects.is_empty(), "a street, clear of every building");
 /// # Ok(()) }
 /// ```
 pub fn busiest_street(db: &Database) -> Result<Pose> {
@@ -55,7 +59,9 @@ pub fn busiest_street(db: &Database) -> Result<Pose> {
                 p,
                 Vec3::new(NEIGHBOURHOOD, b.max.y - b.min.y + 1.0, NEIGHBOURHOOD),
             ))?;
-            if near.objects.iter().any(|o| o.bounds.contains_point(p)) {
+            // A street, not a gap between two lots: nothing within a few metres.
+            let clear = Aabb::around(p, Vec3::new(CLEARANCE, 0.5, CLEARANCE));
+            if near.objects.iter().any(|o| o.bounds.overlaps(&clear)) {
                 continue;
             }
             let from_centre = (p - b.center()).length();

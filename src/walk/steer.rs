@@ -18,6 +18,8 @@ pub const WALK_SPEED: f32 = 1.4;
 pub const RUN_FACTOR: f32 = 4.0;
 /// Radians of turn per pixel of mouse motion.
 pub const MOUSE_SENSITIVITY: f32 = 0.0025;
+/// The longest move tested against the walls at once, metres.
+const MAX_STEP: f32 = 0.25;
 /// How close to straight up or down the view may pitch, radians short of 90°.
 const PITCH_MARGIN: f32 = 0.02;
 
@@ -143,12 +145,18 @@ impl Steer {
             p.y = p.y.max(self.ground + 0.5);
         } else {
             p.y = self.ground + EYE_HEIGHT;
-            // Axis by axis, so that a blocked axis leaves the other to slide along.
-            for axis in [0, 2] {
-                let mut q = p;
-                q[axis] += delta[axis];
-                if !obstacles.iter().any(|b| blocks(b, q)) {
-                    p = q;
+            // In short steps, so that a long frame does not pass through a wall; axis
+            // by axis, so that a blocked axis leaves the other to slide along. A box
+            // the eye is already in (it started there) does not hold it.
+            let steps = (delta.length() / MAX_STEP).ceil().max(1.0) as usize;
+            let step = delta / steps as f32;
+            for _ in 0..steps {
+                for axis in [0, 2] {
+                    let mut q = p;
+                    q[axis] += step[axis];
+                    if !obstacles.iter().any(|b| blocks(b, q) && !blocks(b, p)) {
+                        p = q;
+                    }
                 }
             }
         }
@@ -198,6 +206,21 @@ mod tests {
         // Blocked on x, it slid along the wall on z (left of +x is −z).
         assert!(last.position.z < -5.0, "{}", last.position);
         assert!((last.time - 10.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_walker_starting_against_a_wall_can_leave_it() {
+        let mut s = start();
+        // The eye is 0.2 m from the wall: inside it grown by the body radius.
+        let wall = Aabb::new([0.2, 0.0, -5.0], [5.0, 30.0, 5.0]).unwrap();
+        s.key(Move::Back, true);
+        let p = s.step(1.0, &[wall]).unwrap().position;
+        assert!(p.x < -1.0, "{p}");
+        // Walking back into it stops at its grown face.
+        s.key(Move::Back, false);
+        s.key(Move::Forward, true);
+        let p = s.step(5.0, &[wall]).unwrap().position;
+        assert!(p.x <= 0.2 - BODY_RADIUS + 1e-4, "{p}");
     }
 
     #[test]
