@@ -1877,8 +1877,8 @@ fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
     );
     if let Some(c) = t.lod {
         println!(
-            "  LOD selection: {} draws coarser than full detail, {} levels read ({} pages)",
-            c.coarse_draws, c.levels_read, c.pages
+            "  LOD selection: {} draws coarser than full detail, {} levels read; {} draws refined view by view ({} vertex splits and edge collapses); {} pages",
+            c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.pages
         );
     }
     println!("  per-frame times in {}", csv.display());

@@ -386,10 +386,13 @@ impl FrameSink for AtLevels<'_> {
         for (d, o) in selected.iter().zip(drawn) {
             assert_eq!(d.id, o.entry.id);
             assert!(gpu.get((d.id, d.level)).is_some(), "frame {index}");
-            if d.level == 0 {
-                assert_eq!(d.mesh.triangle_count(), o.mesh.triangle_count());
-            } else {
-                assert!(d.mesh.triangle_count() < o.mesh.triangle_count());
+            match d.level {
+                0 => assert_eq!(d.triangles, o.mesh.triangle_count()),
+                // Refined view by view: at most the full mesh.
+                flaneur::walk::lod_select::REFINED => {
+                    assert!(d.triangles <= o.mesh.triangle_count())
+                }
+                _ => assert!(d.triangles < o.mesh.triangle_count()),
             }
         }
         let mut ids: Vec<u64> = gpu.keys().map(|(id, _)| id).collect();
@@ -483,6 +486,7 @@ fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
         id,
         bounds: flaneur::geom::Aabb::new([0.0; 3], [1.0; 3]).unwrap(),
         level: 0,
+        triangles: 2,
         mesh: Arc::new(flaneur::scene::Mesh {
             positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
             normals: vec![[0.0, 0.0, 1.0]; 4],
@@ -493,19 +497,19 @@ fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
     let mut meshes = flaneur::render::GpuMeshes::default();
     meshes.set_budget(Some(2 * one));
     let all = |_| true;
-    let f = meshes.follow(&gpu, all, &[quad(1), quad(2)]).unwrap();
+    let f = meshes.follow(&gpu, all, &[quad(1), quad(2)], None).unwrap();
     assert_eq!((f.uploads, f.freed, f.over_budget), (2, 0, false));
-    let f = meshes.follow(&gpu, all, &[quad(3)]).unwrap();
+    let f = meshes.follow(&gpu, all, &[quad(3)], None).unwrap();
     assert_eq!((f.uploads, f.freed, f.over_budget), (1, 1, false));
     assert!(meshes.bytes() <= 2 * one && meshes.get((3, 0)).is_some());
     let f = meshes
-        .follow(&gpu, all, &[quad(1), quad(2), quad(3)])
+        .follow(&gpu, all, &[quad(1), quad(2), quad(3)], None)
         .unwrap();
     assert!(f.over_budget);
     assert!((1..=3).all(|id| meshes.get((id, 0)).is_some()));
     // Without a budget nothing is freed but what the buffer dropped.
     meshes.set_budget(None);
-    let f = meshes.follow(&gpu, |id| id != 2, &[quad(1)]).unwrap();
+    let f = meshes.follow(&gpu, |id| id != 2, &[quad(1)], None).unwrap();
     assert_eq!((f.freed, f.over_budget), (1, false));
 }
 
@@ -546,4 +550,73 @@ fn boxes_are_drawn_in_their_colours() {
         changed.iter().filter(|p| !green(p) && !white(p)).count()
     );
     assert_eq!(CULLED[3], 1.0);
+}
+
+/// Objects the build stored a progressive mesh for are refined view by view as the
+/// walk goes: drawn from the refiner's selective mesh, whose changed ranges reach the
+/// GPU frame by frame, and the pictures stay close to full detail.
+#[test]
+fn large_objects_are_refined_view_by_view() {
+    use flaneur::walk::lod_select::REFINED;
+    let dir = tempfile::tempdir().unwrap();
+    // Every building above 1,000 triangles gets its progressive mesh and DAG.
+    let lod = flaneur::lod::LodOptions {
+        pm_threshold: 1_000,
+        ..Default::default()
+    };
+    let opts = BuildOptions {
+        lod: Some(lod),
+        ..Default::default()
+    };
+    let db = build(dir.path(), &opts);
+    let gpu = gpu();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let path = motion::generate(&db.bounds(), Motion::Normal, 90, 30.0, 5).unwrap();
+    let writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
+        .unwrap()
+        .with_lods(&db, 0.001)
+        .unwrap();
+    let mut sink = AtLevels {
+        writer,
+        full: Vec::new(),
+    };
+    review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    let lod = sink.writer.times.lod.unwrap();
+    assert!(lod.refined_draws > 0 && lod.refine_ops > 0, "{lod:?}");
+    let refined: Vec<_> = sink
+        .writer
+        .resident()
+        .keys()
+        .filter(|k| k.1 == REFINED)
+        .collect();
+    assert!(!refined.is_empty());
+    // What the GPU holds of each is the refiner's selective mesh, after a walk of
+    // incremental uploads.
+    let lods = sink.writer.lods().unwrap();
+    for key in &refined {
+        let mesh = lods.refined_mesh(key.0).unwrap();
+        let (vertices, indices) = sink.writer.resident().read_back(&gpu, *key).unwrap();
+        assert_eq!(indices, mesh.indices(), "object {}", key.0);
+        for &i in &indices {
+            let v = vertices[i as usize];
+            assert_eq!(v.position, mesh.positions()[i as usize], "object {}", key.0);
+            assert_eq!(v.normal, mesh.normals()[i as usize]);
+        }
+    }
+    // The same walk against full detail.
+    let drawing = flaneur::bench::fidelity::Drawing {
+        width: 64,
+        height: 64,
+        lod_tau: Some(0.001),
+    };
+    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
+    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    assert!(
+        mean_differ < 0.05,
+        "{:.1} % of pixels differ",
+        100.0 * mean_differ
+    );
 }

@@ -254,8 +254,9 @@ impl FidelityReport {
         let lod = match (self.lod_tau, self.lod) {
             (Some(tau), Some(c)) => format!(
                 "The mode's objects are drawn at the level LOD selection chose under τ = {tau} \
-                 of the viewport: {} draws coarser than full detail, {} levels read ({} pages).\n\n",
-                c.coarse_draws, c.levels_read, c.pages
+                 of the viewport: {} draws coarser than full detail, {} levels read; {} draws \
+                 refined view by view ({} vertex splits and edge collapses); {} pages.\n\n",
+                c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.pages
             ),
             _ => "The mode's objects are drawn at full detail.\n\n".into(),
         };

@@ -13,6 +13,7 @@
 //! frame is undone — arrays and fronts — and the error returned: a refiner is never
 //! left with fronts that disagree with its mesh.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
@@ -172,8 +173,8 @@ pub struct FrameReport {
 /// ```
 #[derive(Clone, Debug)]
 pub struct Refiner<'a> {
-    pm: &'a ProgressiveMesh,
-    dag: &'a Dag,
+    pm: Held<'a, ProgressiveMesh>,
+    dag: Held<'a, Dag>,
     nodes: Vec<FrontNode>,
     fronts: Fronts,
     mesh: CompactMesh,
@@ -186,45 +187,86 @@ impl<'a> Refiner<'a> {
     /// `dag` was not built from `pm` (its split count differs) or `pm`'s base is not a
     /// valid mesh.
     pub fn new(pm: &'a ProgressiveMesh, dag: &'a Dag) -> Result<Refiner<'a>> {
-        if pm.splits.len() != dag.split_count() {
-            return Err(Error::Invalid(format!(
-                "refinement: a DAG of {} splits with a progressive mesh of {}",
-                dag.split_count(),
-                pm.splits.len()
-            )));
-        }
-        let mesh = CompactMesh::new(pm)?;
-        let mut nodes = Vec::with_capacity(dag.node_count());
-        for k in 0..dag.node_count() as u32 {
-            let run = dag.splits(k);
-            // The sphere's centre and the cone's axis are the run's first v_c (dag_attrs).
-            let head = &pm.splits[run.start];
-            let a = dag.attrs(k);
-            nodes.push(FrontNode {
-                geometry: NodeGeometry {
-                    centre: Vec3::from(head.position),
-                    radius: a.radius,
-                    axis: Vec3::from(head.normal).normalize_or_zero(),
-                    cone_sin: a.cone_sin,
-                    error: a.error,
-                },
-                added: pm.splits[run]
-                    .iter()
-                    .map(|s| s.added_triangles() as u32)
-                    .sum(),
-            });
-        }
+        Refiner::holding(Held::Borrowed(pm), Held::Borrowed(dag))
+    }
+
+    fn holding(pm: Held<'a, ProgressiveMesh>, dag: Held<'a, Dag>) -> Result<Refiner<'a>> {
+        let (p, d) = (&*pm, &*dag);
+        let nodes = front_nodes(p, d)?;
+        let mesh = CompactMesh::new(p)?;
+        let fronts = Fronts::new(d);
         Ok(Refiner {
             pm,
             dag,
             nodes,
-            fronts: Fronts::new(dag),
+            fronts,
             mesh,
             ops: Vec::new(),
             scratch: Scratch::default(),
         })
     }
+}
 
+impl Refiner<'static> {
+    /// A refiner that shares its progressive mesh and DAG rather than borrowing them,
+    /// for one that outlives the code that loaded them (a walk's refined objects).
+    pub fn shared(pm: Arc<ProgressiveMesh>, dag: Arc<Dag>) -> Result<Refiner<'static>> {
+        Refiner::holding(Held::Shared(pm), Held::Shared(dag))
+    }
+}
+
+/// How a refiner holds its progressive mesh and DAG.
+#[derive(Clone, Debug)]
+enum Held<'a, T> {
+    Borrowed(&'a T),
+    Shared(Arc<T>),
+}
+
+impl<T> std::ops::Deref for Held<'_, T> {
+    type Target = T;
+
+    fn deref(&self) -> &T {
+        match self {
+            Held::Borrowed(t) => t,
+            Held::Shared(t) => t,
+        }
+    }
+}
+
+/// Each DAG node's geometry and the triangles its splits add. An `Err` when `dag` was
+/// not built from `pm` (its split count differs).
+fn front_nodes(pm: &ProgressiveMesh, dag: &Dag) -> Result<Vec<FrontNode>> {
+    if pm.splits.len() != dag.split_count() {
+        return Err(Error::Invalid(format!(
+            "refinement: a DAG of {} splits with a progressive mesh of {}",
+            dag.split_count(),
+            pm.splits.len()
+        )));
+    }
+    let mut nodes = Vec::with_capacity(dag.node_count());
+    for k in 0..dag.node_count() as u32 {
+        let run = dag.splits(k);
+        // The sphere's centre and the cone's axis are the run's first v_c (dag_attrs).
+        let head = &pm.splits[run.start];
+        let a = dag.attrs(k);
+        nodes.push(FrontNode {
+            geometry: NodeGeometry {
+                centre: Vec3::from(head.position),
+                radius: a.radius,
+                axis: Vec3::from(head.normal).normalize_or_zero(),
+                cone_sin: a.cone_sin,
+                error: a.error,
+            },
+            added: pm.splits[run]
+                .iter()
+                .map(|s| s.added_triangles() as u32)
+                .sum(),
+        });
+    }
+    Ok(nodes)
+}
+
+impl Refiner<'_> {
     /// Runs one frame for `view`: the traversal, then the mesh update. An `Err` on an
     /// invalid view or parameters, or when an operator does not apply; the fronts and
     /// the mesh are then as they were (the arrays perhaps laid out otherwise).
@@ -232,7 +274,7 @@ impl<'a> Refiner<'a> {
         view.validate()?;
         params.validate()?;
         let ctx = Context {
-            dag: self.dag,
+            dag: &self.dag,
             nodes: &self.nodes,
             test: ViewTest::new(view, params.tau, params.criteria),
             traversal: params.traversal,
@@ -254,8 +296,8 @@ impl<'a> Refiner<'a> {
         let mut failed = None;
         for (i, op) in self.ops.iter().enumerate() {
             let applied = match op.pass {
-                Pass::Split => self.mesh.split_node(self.dag, self.pm, op.node),
-                Pass::Collapse => self.mesh.collapse_node(self.dag, self.pm, op.node),
+                Pass::Split => self.mesh.split_node(&self.dag, &self.pm, op.node),
+                Pass::Collapse => self.mesh.collapse_node(&self.dag, &self.pm, op.node),
             };
             if let Err(e) = applied {
                 failed = Some((i, e));
@@ -287,12 +329,12 @@ impl<'a> Refiner<'a> {
         for op in self.ops[..applied].iter().rev() {
             // Each inverse undoes an operator that just applied, so it applies.
             let _ = match op.pass {
-                Pass::Split => self.mesh.collapse_node(self.dag, self.pm, op.node),
-                Pass::Collapse => self.mesh.split_node(self.dag, self.pm, op.node),
+                Pass::Split => self.mesh.collapse_node(&self.dag, &self.pm, op.node),
+                Pass::Collapse => self.mesh.split_node(&self.dag, &self.pm, op.node),
             };
         }
         for op in self.ops.iter().rev() {
-            self.fronts.undo(self.dag, op.pass, op.node);
+            self.fronts.undo(&self.dag, op.pass, op.node);
         }
         self.ops.clear();
     }
@@ -313,12 +355,12 @@ impl<'a> Refiner<'a> {
     }
 
     /// The progressive mesh.
-    pub fn progressive_mesh(&self) -> &'a ProgressiveMesh {
-        self.pm
+    pub fn progressive_mesh(&self) -> &ProgressiveMesh {
+        &self.pm
     }
 
     /// The DAG.
-    pub fn dag(&self) -> &'a Dag {
-        self.dag
+    pub fn dag(&self) -> &Dag {
+        &self.dag
     }
 }

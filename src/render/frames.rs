@@ -12,7 +12,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
-use crate::walk::lod_select::{Drawn, LodCounts, LodSelector};
+use crate::walk::lod_select::{Drawn, LodCounts, LodSelector, REFINED};
 use crate::walk::FrameSink;
 
 /// What drawing a walk cost.
@@ -123,6 +123,11 @@ impl<'a> FrameWriter<'a> {
         })
     }
 
+    /// The walk's LOD selection, when the frames are drawn at its levels.
+    pub fn lods(&self) -> Option<&LodSelector<'a>> {
+        self.lods.as_ref()
+    }
+
     /// The meshes on the GPU now.
     pub fn resident(&self) -> &GpuMeshes {
         &self.meshes
@@ -166,9 +171,12 @@ impl FrameWriter<'_> {
         selected: &[Drawn],
     ) -> Result<Frame> {
         let started = Instant::now();
-        let f = self
-            .meshes
-            .follow(self.gpu, |id| buffer.contains(id), selected)?;
+        let f = self.meshes.follow(
+            self.gpu,
+            |id| buffer.contains(id),
+            selected,
+            self.lods.as_mut(),
+        )?;
         self.times.uploads += f.uploads;
         self.times.evictions += f.freed;
         let upload = started.elapsed();
@@ -183,14 +191,14 @@ impl FrameWriter<'_> {
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
-        t.triangles.push(
+        t.triangles
+            .push(selected.iter().map(|d| d.triangles as u64).sum());
+        t.coarse.push(
             selected
                 .iter()
-                .map(|d| d.mesh.triangle_count() as u64)
-                .sum(),
+                .filter(|d| d.level > 0 && d.level != REFINED)
+                .count(),
         );
-        t.coarse
-            .push(selected.iter().filter(|d| d.level > 0).count());
         Ok(frame)
     }
 }

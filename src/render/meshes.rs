@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use super::Gpu;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
-use crate::walk::lod_select::Drawn;
+use crate::walk::lod_select::{Drawn, LodSelector, RefinedObject, REFINED};
 
 /// One vertex as the shader reads it: position, normal, the object's slot (what the id
 /// target shows) and the key its tint comes from (its id folded to 32 bits, so that an
@@ -96,36 +96,21 @@ impl GpuMeshes {
                 positions.len()
             )));
         }
-        let slot = match self.free.pop() {
-            Some(s) => s,
-            None => {
-                self.slots.push(None);
-                (self.slots.len() - 1) as u32
-            }
-        };
-        let vertices: Vec<Vertex> = positions
-            .iter()
-            .zip(normals)
-            .map(|(&position, &normal)| Vertex {
-                position,
-                normal,
-                slot,
-                key: tint_key(id),
-            })
-            .collect();
+        let slot = self.take_slot();
+        let vertices = vertices_of(positions, normals, slot, id);
         let vb = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("object vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
             });
         let ib = gpu
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("object indices"),
                 contents: bytemuck::cast_slice(indices.as_slice()),
-                usage: wgpu::BufferUsages::INDEX,
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
             });
         let bytes = vb.size() + ib.size();
         self.bytes += bytes;
@@ -143,6 +128,163 @@ impl GpuMeshes {
         Ok(true)
     }
 
+    /// What the GPU holds of a resident mesh, read back: its vertices, and the indices
+    /// it draws. For checking that incremental uploads kept it whole.
+    pub fn read_back(&self, gpu: &Gpu, key: MeshKey) -> Result<(Vec<Vertex>, Vec<u32>)> {
+        let m = self.by_id.get(&key).ok_or_else(|| {
+            Error::Invalid(format!(
+                "object {} at level {} is not on the GPU",
+                key.0, key.1
+            ))
+        })?;
+        let read = |buffer: &wgpu::Buffer, bytes: u64| -> Result<Vec<u8>> {
+            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("mesh readback"),
+                size: bytes.max(4),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes.max(4));
+            gpu.queue.submit([encoder.finish()]);
+            let slice = staging.slice(..);
+            let (tx, rx) = std::sync::mpsc::channel();
+            slice.map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+            gpu.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?;
+            rx.recv()
+                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?
+                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?;
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?
+                .to_vec();
+            Ok(data[..bytes as usize].to_vec())
+        };
+        let vertices = read(&m.vertices, m.vertices.size())?;
+        let indices = read(&m.indices, m.index_count as u64 * 4)?;
+        Ok((
+            bytemuck::pod_collect_to_vec(&vertices),
+            bytemuck::pod_collect_to_vec(&indices),
+        ))
+    }
+
+    /// A free slot, or a new one.
+    fn take_slot(&mut self) -> u32 {
+        match self.free.pop() {
+            Some(s) => s,
+            None => {
+                self.slots.push(None);
+                (self.slots.len() - 1) as u32
+            }
+        }
+    }
+
+    /// Brings object `id`'s refined mesh up to date on the GPU: the first time, buffers
+    /// sized for the full mesh (so that refinement never reallocates them) filled with
+    /// the selective mesh; after that, only the ranges that changed. Whether it
+    /// allocated.
+    pub fn upload_refined(&mut self, gpu: &Gpu, id: u64, r: &mut RefinedObject) -> Result<bool> {
+        let key = (id, REFINED);
+        let pending = std::mem::take(&mut r.pending);
+        let mesh = r.refiner.mesh();
+        let (positions, normals, indices) = (mesh.positions(), mesh.normals(), mesh.indices());
+        let (vertex_cap, triangle_cap) = r.capacity;
+        if positions.len() > vertex_cap || indices.len() > 3 * triangle_cap {
+            return Err(Error::Render(format!(
+                "object {id}: a selective mesh of {} vertices and {} triangles outgrows its \
+                 full mesh's {vertex_cap} and {triangle_cap}",
+                positions.len(),
+                indices.len() / 3
+            )));
+        }
+        let created = !self.by_id.contains_key(&key);
+        if created {
+            let slot = self.take_slot();
+            let buffer = |label, size: usize, usage| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: size.max(4) as u64,
+                    usage: usage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            let vb = buffer(
+                "refined vertices",
+                vertex_cap * std::mem::size_of::<Vertex>(),
+                wgpu::BufferUsages::VERTEX,
+            );
+            let ib = buffer(
+                "refined indices",
+                triangle_cap * 12,
+                wgpu::BufferUsages::INDEX,
+            );
+            let bytes = vb.size() + ib.size();
+            self.bytes += bytes;
+            self.slots[slot as usize] = Some(id);
+            self.by_id.insert(
+                key,
+                GpuMesh {
+                    vertices: vb,
+                    indices: ib,
+                    index_count: 0,
+                    slot,
+                    bytes,
+                },
+            );
+        }
+        let m = self.by_id.get_mut(&key).expect("inserted above");
+        // All of it the first time (one range; `[0..n]` would read as a typo).
+        let whole = [std::ops::Range {
+            start: 0,
+            end: positions.len() as u32,
+        }];
+        let vertex_ranges = if created {
+            &whole[..]
+        } else {
+            &pending.vertices[..]
+        };
+        for range in vertex_ranges {
+            let (a, b) = (
+                range.start as usize,
+                (range.end as usize).min(positions.len()),
+            );
+            if a < b {
+                let v = vertices_of(&positions[a..b], &normals[a..b], m.slot, id);
+                let offset = (a * std::mem::size_of::<Vertex>()) as u64;
+                gpu.queue
+                    .write_buffer(&m.vertices, offset, bytemuck::cast_slice(&v));
+            }
+        }
+        let whole = [std::ops::Range {
+            start: 0,
+            end: indices.len() as u32,
+        }];
+        let index_ranges = if created {
+            &whole[..]
+        } else {
+            &pending.indices[..]
+        };
+        for range in index_ranges {
+            let (a, b) = (
+                range.start as usize,
+                (range.end as usize).min(indices.len()),
+            );
+            if a < b {
+                gpu.queue.write_buffer(
+                    &m.indices,
+                    (a * 4) as u64,
+                    bytemuck::cast_slice(&indices[a..b]),
+                );
+            }
+        }
+        m.index_count = indices.len() as u32;
+        Ok(created)
+    }
+
     /// Makes the GPU hold what a frame draws: frees what `holds` (the walk's buffer)
     /// no longer holds and the other levels of an object drawn at a new one; under a
     /// budget, frees meshes this frame does not draw (largest first) to make room;
@@ -152,6 +294,7 @@ impl GpuMeshes {
         gpu: &Gpu,
         holds: impl Fn(u64) -> bool,
         selected: &[Drawn],
+        mut lods: Option<&mut LodSelector<'_>>,
     ) -> Result<Followed> {
         let level: HashMap<u64, usize> = selected.iter().map(|d| (d.id, d.level)).collect();
         let mut freed =
@@ -181,7 +324,16 @@ impl GpuMeshes {
         }
         let mut uploads = 0;
         for d in selected {
-            uploads += self.upload(gpu, (d.id, d.level), &d.mesh)? as usize;
+            uploads += match (d.level, lods.as_deref_mut().and_then(|l| l.refined(d.id))) {
+                (REFINED, Some(r)) => self.upload_refined(gpu, d.id, r)?,
+                (REFINED, None) => {
+                    return Err(Error::Render(format!(
+                        "object {} is drawn refined, but no refinement was given",
+                        d.id
+                    )))
+                }
+                _ => self.upload(gpu, (d.id, d.level), &d.mesh)?,
+            } as usize;
         }
         Ok(Followed {
             uploads,
@@ -251,4 +403,18 @@ impl GpuMeshes {
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
+}
+
+/// The vertices the shader reads for `positions` and `normals` of object `id` in `slot`.
+fn vertices_of(positions: &[[f32; 3]], normals: &[[f32; 3]], slot: u32, id: u64) -> Vec<Vertex> {
+    positions
+        .iter()
+        .zip(normals)
+        .map(|(&position, &normal)| Vertex {
+            position,
+            normal,
+            slot,
+            key: tint_key(id),
+        })
+        .collect()
 }

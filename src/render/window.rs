@@ -40,7 +40,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
-use crate::walk::lod_select::{Drawn, LodSelector};
+use crate::walk::lod_select::{Drawn, LodSelector, REFINED};
 use crate::walk::steer::{Move, Steer};
 use crate::walk::{CameraPath, FrameFigures, FrameSink, Pose, Viewer};
 
@@ -532,9 +532,12 @@ impl<'a> WalkWindow<'a> {
         }
         let started = Instant::now();
         s.meshes.set_budget(self.opts.gpu_budget);
-        let followed = s
-            .meshes
-            .follow(&s.gpu, |id| buffer.contains(id), selected)?;
+        let followed = s.meshes.follow(
+            &s.gpu,
+            |id| buffer.contains(id),
+            selected,
+            self.lods.as_mut(),
+        )?;
         self.summary.over_budget += followed.over_budget as usize;
         self.summary.peak_gpu_bytes = self.summary.peak_gpu_bytes.max(s.meshes.bytes());
         let cpu = started.elapsed();
@@ -773,8 +776,12 @@ fn hud_content(
 ) -> HudContent {
     let last = frame_ms.back().copied().unwrap_or(0.0);
     let worst = frame_ms.iter().copied().fold(0.0, f32::max);
-    let triangles: usize = selected.iter().map(|d| d.mesh.triangle_count()).sum();
-    let coarse = selected.iter().filter(|d| d.level > 0).count();
+    let triangles: usize = selected.iter().map(|d| d.triangles).sum();
+    let coarse = selected
+        .iter()
+        .filter(|d| d.level > 0 && d.level != REFINED)
+        .count();
+    let refined = selected.iter().filter(|d| d.level == REFINED).count();
     let mut lines = vec![
         format!(
             "frame {last:5.1} ms (worst {worst:.1} of the last {})",
@@ -787,7 +794,7 @@ fn hud_content(
             tau.map_or("off (full detail)".into(), |t| format!("{t}"))
         ),
         format!(
-            "triangles {triangles}, objects drawn {} ({coarse} coarse)",
+            "triangles {triangles}, objects drawn {} ({coarse} coarse, {refined} refined)",
             selected.len()
         ),
         format!(

@@ -13,6 +13,12 @@
 //! kept while the object stays in the buffer. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
 //! walk's own figures: the walk reports what its retrieval method reads.
+//!
+//! Large objects, those the build stored a progressive mesh and DAG for, are refined
+//! view by view instead ([`REFINED`]): the LOD core's constant-time traversal under the
+//! same τ, the thesis's N = 500 and a 60,000-triangle budget each, its selective mesh
+//! kept in compact arrays whose changed ranges a renderer uploads
+//! ([`LodSelector::refined`]).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -20,22 +26,28 @@ use std::sync::Arc;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
-use crate::lod::LevelInfo;
+use crate::lod::{LevelInfo, MeshChanges, RefineParams, Refiner, Traversal, View, THESIS_BUDGET};
 use crate::scene::Mesh;
 
 use super::buffer::{Loaded, ObjectBuffer};
 
 /// The thesis's screen-space error: 0.1 % of the viewport.
 pub const DEFAULT_TAU: f32 = 0.001;
+/// The level of an object refined view by view: its mesh is the refiner's.
+pub const REFINED: usize = usize::MAX;
 
 /// One object as a frame draws it: at which level, and that level's mesh.
 #[derive(Clone, Debug)]
 pub struct Drawn {
     pub id: u64,
     pub bounds: Aabb,
-    /// 0: full detail; each higher level is coarser.
+    /// 0: full detail; each higher level is coarser; [`REFINED`]: refined view by
+    /// view (the mesh is then the full one the buffer holds, the triangles the
+    /// selective mesh's).
     pub level: usize,
     pub mesh: Arc<Mesh>,
+    /// Triangles drawn.
+    pub triangles: usize,
 }
 
 impl Drawn {
@@ -46,6 +58,7 @@ impl Drawn {
             bounds: o.entry.bounds,
             level: 0,
             mesh: o.mesh.clone(),
+            triangles: o.mesh.triangle_count(),
         }
     }
 }
@@ -88,6 +101,10 @@ pub struct LodCounts {
     pub levels_read: u64,
     /// Pages those reads (and the level directories) took.
     pub pages: u64,
+    /// Objects drawn refined view by view, summed over frames, and the vertex splits
+    /// and edge collapses their refinement applied.
+    pub refined_draws: u64,
+    pub refine_ops: u64,
 }
 
 /// The stored levels of the objects a walk has drawn.
@@ -97,11 +114,20 @@ struct ObjectLevels {
     meshes: Vec<Option<Arc<Mesh>>>,
 }
 
+/// A large object refined view by view, and the changes not yet uploaded.
+pub struct RefinedObject {
+    pub refiner: Refiner<'static>,
+    pub pending: MeshChanges,
+    /// The arrays' largest sizes: every vertex and triangle of the full mesh.
+    pub capacity: (usize, usize),
+}
+
 /// Chooses each drawn object's level, and keeps the coarse levels read so far.
 pub struct LodSelector<'a> {
     db: &'a Database,
     tau: f32,
     objects: HashMap<u64, ObjectLevels>,
+    refined: HashMap<u64, RefinedObject>,
     pub counts: LodCounts,
 }
 
@@ -117,6 +143,7 @@ impl<'a> LodSelector<'a> {
             db,
             tau,
             objects: HashMap::new(),
+            refined: HashMap::new(),
             counts: LodCounts::default(),
         })
     }
@@ -134,6 +161,7 @@ impl<'a> LodSelector<'a> {
         drawn: &[&Loaded],
     ) -> Result<Vec<Drawn>> {
         self.objects.retain(|id, _| buffer.contains(*id));
+        self.refined.retain(|id, _| buffer.contains(*id));
         if !self.db.has_lods() {
             return Ok(drawn.iter().map(|o| Drawn::full(o)).collect());
         }
@@ -141,6 +169,10 @@ impl<'a> LodSelector<'a> {
         let mut out = Vec::with_capacity(drawn.len());
         for o in drawn {
             let id = o.entry.id;
+            if let Some(d) = self.refine(camera, o)? {
+                out.push(d);
+                continue;
+            }
             let levels = match self.objects.entry(id) {
                 std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
                 std::collections::hash_map::Entry::Vacant(v) => {
@@ -171,11 +203,79 @@ impl<'a> LodSelector<'a> {
                 id,
                 bounds: o.entry.bounds,
                 level,
+                triangles: mesh.triangle_count(),
                 mesh,
             });
         }
         self.counts.pages += self.db.io().page_reads - before;
         Ok(out)
+    }
+}
+
+impl LodSelector<'_> {
+    /// `o` refined for `camera`, when the build stored its progressive mesh (read the
+    /// first time it is drawn); `None` for an object drawn at discrete levels.
+    fn refine(&mut self, camera: &Camera, o: &Loaded) -> Result<Option<Drawn>> {
+        let id = o.entry.id;
+        if !self.refined.contains_key(&id) {
+            if self.objects.contains_key(&id) {
+                return Ok(None);
+            }
+            let Some((pm, dag)) = self.db.progressive(id)? else {
+                return Ok(None);
+            };
+            let added: usize = pm.splits.iter().map(|s| s.added_triangles()).sum();
+            let capacity = (
+                pm.base.positions.len() + pm.splits.len(),
+                pm.base.triangle_count() + added,
+            );
+            let refiner = Refiner::shared(Arc::new(pm), Arc::new(dag))?;
+            self.refined.insert(
+                id,
+                RefinedObject {
+                    refiner,
+                    pending: MeshChanges::default(),
+                    capacity,
+                },
+            );
+        }
+        let r = self.refined.get_mut(&id).expect("inserted above");
+        let view = View::new(
+            camera.position,
+            camera.forward(),
+            camera.fov_x.max(camera.fov_y),
+        )?;
+        let params = RefineParams {
+            tau: self.tau,
+            budget: Some(THESIS_BUDGET),
+            ..RefineParams::thesis(Traversal::ConstantTime)
+        };
+        let frame = r.refiner.refine(&view, &params)?;
+        self.counts.refined_draws += 1;
+        self.counts.refine_ops += frame.stats.updates() as u64;
+        let c = frame.changes;
+        r.pending.vertices.extend(c.vertices);
+        r.pending.indices.extend(c.indices);
+        r.pending.vertex_len = c.vertex_len;
+        r.pending.index_len = c.index_len;
+        Ok(Some(Drawn {
+            id,
+            bounds: o.entry.bounds,
+            level: REFINED,
+            mesh: o.mesh.clone(),
+            triangles: r.refiner.mesh().triangle_count(),
+        }))
+    }
+
+    /// Object `id`'s selective mesh, when it is refined view by view.
+    pub fn refined_mesh(&self, id: u64) -> Option<&crate::lod::CompactMesh> {
+        self.refined.get(&id).map(|r| r.refiner.mesh())
+    }
+
+    /// Object `id`'s refinement, when it is drawn refined: its selective mesh and the
+    /// changes since the last call took them.
+    pub fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
+        self.refined.get_mut(&id)
     }
 }
 
