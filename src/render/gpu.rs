@@ -82,6 +82,31 @@ impl Gpu {
         )))
     }
 
+    /// Maps `buffer` (MAP_READ, its copies submitted) once the GPU is done, and hands
+    /// its bytes to `read`; `what` names it in errors.
+    pub(crate) fn read_mapped<R>(
+        &self,
+        buffer: &wgpu::Buffer,
+        what: &str,
+        read: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R> {
+        let fail = |e: &dyn std::fmt::Display| Error::Render(format!("reading {what} back: {e}"));
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| fail(&e))?;
+        rx.recv().map_err(|e| fail(&e))?.map_err(|e| fail(&e))?;
+        let data = slice.get_mapped_range().map_err(|e| fail(&e))?;
+        let out = read(&data);
+        drop(data);
+        buffer.unmap();
+        Ok(out)
+    }
+
     fn on(adapter: wgpu::Adapter) -> Result<Gpu> {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -147,22 +147,7 @@ impl GpuMeshes {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes.max(4));
             gpu.queue.submit([encoder.finish()]);
-            let slice = staging.slice(..);
-            let (tx, rx) = std::sync::mpsc::channel();
-            slice.map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx.send(r);
-            });
-            gpu.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?;
-            rx.recv()
-                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?
-                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?;
-            let data = slice
-                .get_mapped_range()
-                .map_err(|e| Error::Render(format!("reading a mesh back: {e}")))?
-                .to_vec();
-            Ok(data[..bytes as usize].to_vec())
+            gpu.read_mapped(&staging, "a mesh", |data| data[..bytes as usize].to_vec())
         };
         let vertices = read(&m.vertices, m.vertices.size())?;
         let indices = read(&m.indices, m.index_count as u64 * 4)?;

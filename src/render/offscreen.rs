@@ -201,28 +201,14 @@ impl Offscreen {
 
     /// The buffer's rows without their padding.
     fn read(&self, gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Render(format!("waiting for the frame: {e}")))?;
-        rx.recv()
-            .map_err(|e| Error::Render(format!("reading the frame back: {e}")))?
-            .map_err(|e| Error::Render(format!("reading the frame back: {e}")))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Render(format!("reading the frame back: {e}")))?;
         let (row, padded) = (4 * self.width as usize, padded_row(self.width) as usize);
-        let mut out = Vec::with_capacity(row * self.height as usize);
-        for r in 0..self.height as usize {
-            out.extend_from_slice(&data[r * padded..r * padded + row]);
-        }
-        drop(data);
-        buffer.unmap();
-        Ok(out)
+        gpu.read_mapped(buffer, "the frame", |data| {
+            let mut out = Vec::with_capacity(row * self.height as usize);
+            for r in 0..self.height as usize {
+                out.extend_from_slice(&data[r * padded..r * padded + row]);
+            }
+            out
+        })
     }
 }
 
