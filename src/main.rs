@@ -183,6 +183,9 @@ enum Command {
         /// meshes not drawn are freed to make room, largest first.
         #[arg(long, default_value_t = 256.0)]
         gpu_budget_mb: f64,
+        /// Walking speed, m/s (Shift runs at four times it).
+        #[arg(long, default_value_t = flaneur::walk::steer::WALK_SPEED)]
+        speed: f32,
         /// Start with the bounding boxes on (B), and seen from above (T).
         #[arg(long)]
         boxes: bool,
@@ -664,6 +667,7 @@ fn run(cli: Cli) -> Result<()> {
             record,
             play,
             gpu_budget_mb,
+            speed,
             boxes,
             top_view,
         } => {
@@ -699,6 +703,7 @@ fn run(cli: Cli) -> Result<()> {
                 margin: flaneur::geom::DEFAULT_FAR,
                 play,
                 gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
+                speed,
             };
             view(&db, opts, mode, (boxes, top_view), record.as_deref())
         }
@@ -1601,6 +1606,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             margin: flaneur::geom::DEFAULT_FAR,
             play: None,
             gpu_budget: Some(256 << 20),
+            speed: flaneur::walk::steer::WALK_SPEED,
         };
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),

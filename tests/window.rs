@@ -109,6 +109,7 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
         margin: 1000.0,
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
+        speed: 1.4,
     };
     let mut window = WalkWindow::open(&db, opts, ViewMode::Box).unwrap();
     // Boxes over the view from above: their drawing must not fail either.

@@ -95,6 +95,8 @@ pub struct ViewOptions {
     pub play: Option<CameraPath>,
     /// GPU memory the meshes may take, bytes; `None`: what the walk's buffer holds.
     pub gpu_budget: Option<u64>,
+    /// Walking speed, m/s (running is four times it, flying the same).
+    pub speed: f32,
 }
 
 /// What a session at the window drew.
@@ -310,6 +312,12 @@ impl<'a> WalkWindow<'a> {
         if w == 0 || h == 0 {
             return Err(Error::Invalid(format!("a window of {w} × {h} pixels")));
         }
+        if !(opts.speed.is_finite() && opts.speed > 0.0) {
+            return Err(Error::Invalid(format!(
+                "a walking speed of {} m/s: give a positive number",
+                opts.speed
+            )));
+        }
         let mut builder = EventLoop::builder();
         #[cfg(target_os = "linux")]
         {
@@ -358,7 +366,11 @@ impl<'a> WalkWindow<'a> {
             instance,
             surfaced: Some(surfaced),
             last_try: Instant::now(),
-            steer: Steer::new(opts.start, opts.ground)?,
+            steer: {
+                let mut steer = Steer::new(opts.start, opts.ground)?;
+                steer.speed = opts.speed;
+                steer
+            },
             opts,
             lods,
             captured: false,
