@@ -297,7 +297,7 @@ impl Database {
         }
     }
 
-    fn lod_entry(&self, id: u64) -> Result<Option<crate::lod::table::LodEntry>> {
+    pub(crate) fn lod_entry(&self, id: u64) -> Result<Option<crate::lod::table::LodEntry>> {
         match &self.lod {
             Some(t) => t.find(&self.store, id),
             None => Ok(None),

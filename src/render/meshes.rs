@@ -222,49 +222,19 @@ impl GpuMeshes {
             );
         }
         let m = self.by_id.get_mut(&key).expect("inserted above");
-        // All of it the first time (one range; `[0..n]` would read as a typo).
-        let whole = [std::ops::Range {
-            start: 0,
-            end: positions.len() as u32,
-        }];
-        let vertex_ranges = if created {
-            &whole[..]
-        } else {
-            &pending.vertices[..]
-        };
-        for range in vertex_ranges {
-            let (a, b) = (
-                range.start as usize,
-                (range.end as usize).min(positions.len()),
-            );
-            if a < b {
-                let v = vertices_of(&positions[a..b], &normals[a..b], m.slot, id);
-                let offset = (a * std::mem::size_of::<Vertex>()) as u64;
-                gpu.queue
-                    .write_buffer(&m.vertices, offset, bytemuck::cast_slice(&v));
-            }
+        // All of it the first time; after that, what changed.
+        for (a, b) in spans(created, &pending.vertices, positions.len()) {
+            let v = vertices_of(&positions[a..b], &normals[a..b], m.slot, id);
+            let offset = (a * std::mem::size_of::<Vertex>()) as u64;
+            gpu.queue
+                .write_buffer(&m.vertices, offset, bytemuck::cast_slice(&v));
         }
-        let whole = [std::ops::Range {
-            start: 0,
-            end: indices.len() as u32,
-        }];
-        let index_ranges = if created {
-            &whole[..]
-        } else {
-            &pending.indices[..]
-        };
-        for range in index_ranges {
-            let (a, b) = (
-                range.start as usize,
-                (range.end as usize).min(indices.len()),
+        for (a, b) in spans(created, &pending.indices, indices.len()) {
+            gpu.queue.write_buffer(
+                &m.indices,
+                (a * 4) as u64,
+                bytemuck::cast_slice(&indices[a..b]),
             );
-            if a < b {
-                gpu.queue.write_buffer(
-                    &m.indices,
-                    (a * 4) as u64,
-                    bytemuck::cast_slice(&indices[a..b]),
-                );
-            }
         }
         m.index_count = indices.len() as u32;
         Ok(created)
@@ -401,5 +371,19 @@ fn vertices_of(positions: &[[f32; 3]], normals: &[[f32; 3]], slot: u32, id: u64)
             slot,
             key: tint_key(id),
         })
+        .collect()
+}
+
+/// The non-empty spans of an array of `len` to upload: all of it when `whole`, else
+/// `changed` cut to the array's length (changes gathered over frames may reach past an
+/// array that has since shrunk).
+fn spans(whole: bool, changed: &[std::ops::Range<u32>], len: usize) -> Vec<(usize, usize)> {
+    if whole {
+        return if len > 0 { vec![(0, len)] } else { Vec::new() };
+    }
+    changed
+        .iter()
+        .map(|r| (r.start as usize, (r.end as usize).min(len)))
+        .filter(|(a, b)| a < b)
         .collect()
 }

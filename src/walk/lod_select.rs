@@ -26,8 +26,11 @@ use std::sync::Arc;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
+use crate::lod::stored;
+use crate::lod::table::LodEntry;
 use crate::lod::{LevelInfo, MeshChanges, RefineParams, Refiner, Traversal, View, THESIS_BUDGET};
 use crate::scene::Mesh;
+use crate::store::PageKind;
 
 use super::buffer::{Loaded, ObjectBuffer};
 
@@ -109,6 +112,8 @@ pub struct LodCounts {
 
 /// The stored levels of the objects a walk has drawn.
 struct ObjectLevels {
+    /// Where its LOD data lies, looked up once; `None` for an object without any.
+    entry: Option<LodEntry>,
     levels: Vec<LevelInfo>,
     /// Level k's mesh once read; level 0 is never read (the buffer holds it).
     meshes: Vec<Option<Arc<Mesh>>>,
@@ -165,24 +170,20 @@ impl<'a> LodSelector<'a> {
         if !self.db.has_lods() {
             return Ok(drawn.iter().map(|o| Drawn::full(o)).collect());
         }
-        let before = self.db.io().page_reads;
+        // The walk's prefetching may read index and mesh pages meanwhile; LOD pages
+        // are this selection's alone.
+        let before = self.db.io().reads_of(PageKind::Lod);
         let mut out = Vec::with_capacity(drawn.len());
         for o in drawn {
             let id = o.entry.id;
+            if !self.objects.contains_key(&id) && !self.refined.contains_key(&id) {
+                self.first_sight(o)?;
+            }
             if let Some(d) = self.refine(camera, o)? {
                 out.push(d);
                 continue;
             }
-            let levels = match self.objects.entry(id) {
-                std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-                std::collections::hash_map::Entry::Vacant(v) => {
-                    let levels = self.db.lod_levels(id)?.unwrap_or_default();
-                    v.insert(ObjectLevels {
-                        meshes: vec![None; levels.len()],
-                        levels,
-                    })
-                }
-            };
+            let levels = self.objects.get_mut(&id).expect("seen above");
             let d = distance_to(&o.entry.bounds, camera.position);
             let level = level_for(&levels.levels, d, camera.fov_y, self.tau);
             let mesh = if level == 0 {
@@ -192,7 +193,11 @@ impl<'a> LodSelector<'a> {
                 match &levels.meshes[level] {
                     Some(m) => m.clone(),
                     None => {
-                        let m = Arc::new(self.db.lod_mesh(id, level)?);
+                        let entry = levels
+                            .entry
+                            .as_ref()
+                            .expect("an object with levels has data");
+                        let m = Arc::new(stored::level_mesh(self.db.store(), entry, level)?);
                         self.counts.levels_read += 1;
                         levels.meshes[level] = Some(m.clone());
                         m
@@ -207,23 +212,25 @@ impl<'a> LodSelector<'a> {
                 mesh,
             });
         }
-        self.counts.pages += self.db.io().page_reads - before;
+        self.counts.pages += self.db.io().reads_of(PageKind::Lod) - before;
         Ok(out)
     }
 }
 
 impl LodSelector<'_> {
-    /// `o` refined for `camera`, when the build stored its progressive mesh (read the
-    /// first time it is drawn); `None` for an object drawn at discrete levels.
-    fn refine(&mut self, camera: &Camera, o: &Loaded) -> Result<Option<Drawn>> {
+    /// An object drawn for the first time: its LOD entry looked up once, then its
+    /// progressive mesh and DAG read when the build stored them (it is refined from
+    /// now on), or else its levels.
+    fn first_sight(&mut self, o: &Loaded) -> Result<()> {
         let id = o.entry.id;
-        if !self.refined.contains_key(&id) {
-            if self.objects.contains_key(&id) {
-                return Ok(None);
-            }
-            let Some((pm, dag)) = self.db.progressive(id)? else {
-                return Ok(None);
-            };
+        let entry = self.db.lod_entry(id)?;
+        let store = self.db.store();
+        if let Some((pm, dag)) = entry
+            .as_ref()
+            .map(|e| stored::progressive(store, e))
+            .transpose()?
+            .flatten()
+        {
             let added: usize = pm.splits.iter().map(|s| s.added_triangles()).sum();
             let capacity = (
                 pm.base.positions.len() + pm.splits.len(),
@@ -238,8 +245,30 @@ impl LodSelector<'_> {
                     capacity,
                 },
             );
+            return Ok(());
         }
-        let r = self.refined.get_mut(&id).expect("inserted above");
+        let levels = match &entry {
+            Some(e) => stored::levels(store, e)?,
+            None => Vec::new(),
+        };
+        self.objects.insert(
+            id,
+            ObjectLevels {
+                entry,
+                meshes: vec![None; levels.len()],
+                levels,
+            },
+        );
+        Ok(())
+    }
+
+    /// `o` refined for `camera`, when it is refined view by view; `None` for an object
+    /// drawn at discrete levels.
+    fn refine(&mut self, camera: &Camera, o: &Loaded) -> Result<Option<Drawn>> {
+        let id = o.entry.id;
+        let Some(r) = self.refined.get_mut(&id) else {
+            return Ok(None);
+        };
         let view = View::new(
             camera.position,
             camera.forward(),
