@@ -305,11 +305,13 @@ enum Experiment {
     /// (the thesis's Figs. 5.26 and 6.6 as numbers). Renders headless.
     Fidelity {
         db: PathBuf,
-        /// A motion pattern (normal, fast, slow, turning, backward, random) or a path
-        /// CSV file.
-        #[arg(long, default_value = "normal")]
-        path: String,
-        /// review or box.
+        /// A motion pattern (normal, fast, slow, turning, backward, random), a path
+        /// CSV file, or (pvs mode) cells: a walk along the walkable viewcells [default:
+        /// normal; cells in pvs mode].
+        #[arg(long)]
+        path: Option<String>,
+        /// review, box, or pvs (the viewcell's PVS with PBNP prefetching; the database
+        /// must have been built with --visibility).
         #[arg(long, default_value = "review")]
         mode: String,
         #[arg(long, default_value_t = 300)]
@@ -1002,15 +1004,37 @@ fn run(cli: Cli) -> Result<()> {
                 out,
             } => {
                 let preset = match mode.as_str() {
-                    "review" => Preset::Optimal,
-                    "box" => Preset::Box,
-                    other => bail!("fidelity draws the review and box modes so far, not '{other}'"),
+                    "review" => Some(Preset::Optimal),
+                    "box" => Some(Preset::Box),
+                    "pvs" => None,
+                    other => bail!("fidelity draws the review, box and pvs modes, not '{other}'"),
                 };
                 let db = Database::open(&db)?;
-                let poses = camera_path(&db, &path, frames, 30.0, seed)?;
+                if preset.is_none() && !db.has_visibility() {
+                    bail!(
+                        "{} has no precomputed visibility for the pvs mode (build it with --visibility)",
+                        db.store().path().display()
+                    );
+                }
+                let fps = 30.0;
+                let path = path.unwrap_or_else(|| {
+                    if preset.is_some() { "normal" } else { "cells" }.to_string()
+                });
+                let poses = match path.as_str() {
+                    "cells" if preset.is_none() => {
+                        pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?
+                    }
+                    other => camera_path(&db, other, frames, fps, seed)?,
+                };
                 let cfg = ReviewConfig {
                     pace: None,
-                    ..ReviewConfig::preset(preset)
+                    ..ReviewConfig::preset(preset.unwrap_or(Preset::Optimal))
+                };
+                let walk = match preset {
+                    Some(_) => flaneur::bench::fidelity::ModeWalk::Review(&cfg),
+                    None => flaneur::bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
+                        border: PvsPrefetchConfig::default().border,
+                    }),
                 };
                 let gpu = flaneur::render::Gpu::headless()?;
                 println!(
@@ -1030,7 +1054,7 @@ fn run(cli: Cli) -> Result<()> {
                     &db,
                     &gpu,
                     &poses,
-                    &cfg,
+                    walk,
                     &mode,
                     &drawing,
                     |_| bar.inc(1),
@@ -1663,7 +1687,9 @@ fn view(
                 continue;
             }
             ViewMode::Pvs => {
-                let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
+                let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp {
+                    border: PvsPrefetchConfig::default().border,
+                };
                 flaneur::walk::pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut window).map(|_| ())
             }
             _ => review::walk_live(db, &cfg, |_| {}, &mut window).map(|_| ()),
@@ -1861,11 +1887,12 @@ fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         (mean, v.iter().copied().fold(0.0, f64::max))
     };
-    let ((up, up_max), (draw, draw_max)) = (stats(&t.upload_ms), stats(&t.draw_ms));
+    let ((select, select_max), (up, up_max), (draw, draw_max)) =
+        (stats(&t.select_ms), stats(&t.upload_ms), stats(&t.draw_ms));
     println!(
-        "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: uploads {:.1} ms a frame \
-             (most {:.1}), drawing and reading back {:.1} ms (most {:.1}); {} uploads, {} frees, \
-             at most {:.1} MiB of meshes on the GPU",
+        "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: LOD selection {:.1} ms a \
+             frame (most {:.1}), uploads {:.1} ms (most {:.1}), drawing and reading back {:.1} ms \
+             (most {:.1}); {} uploads, {} frees, at most {:.1} MiB of meshes on the GPU",
         t.frames,
         r.size.0,
         r.size.1,
@@ -1873,6 +1900,8 @@ fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
         adapter.backend,
         t.written,
         r.dir.display(),
+        select,
+        select_max,
         up,
         up_max,
         draw,
@@ -1883,8 +1912,8 @@ fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
     );
     if let Some(c) = t.lod {
         println!(
-            "  LOD selection: {} draws coarser than full detail, {} levels read; {} draws refined view by view ({} vertex splits and edge collapses); {} pages",
-            c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.pages
+            "  LOD selection: {} draws coarser than full detail, {} levels read; {} draws refined view by view ({} vertex splits and edge collapses), {} progressive meshes decoded off the frame's thread ({} draws at discrete levels meanwhile); {} pages",
+            c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.decoded, c.drawn_while_decoding, c.pages
         );
     }
     println!("  per-frame times in {}", csv.display());

@@ -427,3 +427,87 @@ fn builds_are_deterministic_and_finish_inside_a_one_thread_pool() {
     let db = Database::open(&b).unwrap();
     assert_eq!(db.lod_stats().unwrap().unwrap().objects, 30);
 }
+
+/// A large object is drawn at its discrete levels in the frames its progressive mesh and
+/// DAG spend decoding on the thread pool, and refined from the frame after they are
+/// done; the frame that first sees it reads them, and never waits for them.
+#[test]
+fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
+    use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+    use flaneur::walk::lod_select::{LodSelector, REFINED};
+    use std::sync::Arc;
+    let city = common::city(
+        30,
+        5,
+        &with_lods(LodOptions {
+            pm_threshold: 1_000,
+            ..Default::default()
+        }),
+    );
+    let db = Database::open(&city.db).unwrap();
+    let mut buffer = ObjectBuffer::new(usize::MAX);
+    let mut large = Vec::new();
+    for o in all_objects(&db) {
+        let mesh = db.mesh(&o).unwrap();
+        if db.progressive(o.id).unwrap().is_some() {
+            large.push(o.id);
+        }
+        buffer.insert(Loaded {
+            entry: o,
+            bytes: mesh_bytes(&mesh),
+            mesh: Arc::new(mesh),
+        });
+    }
+    assert!(!large.is_empty(), "no object above 1,000 triangles");
+    let drawn: Vec<&Loaded> = buffer.iter().collect();
+    // Far above the city, looking down at it: every object small on screen.
+    let b = db.bounds();
+    let camera = flaneur::geom::Camera::new(
+        b.center() + glam::Vec3::new(0.0, 3.0 * b.extent().max_element(), 0.0),
+        0.0,
+        -1.5,
+    )
+    .unwrap();
+    let mut lods = LodSelector::new(&db, 0.001).unwrap();
+    let pages = db.io().reads_of(PageKind::Lod);
+    let first = lods.select(&camera, &buffer, &drawn).unwrap();
+    assert!(
+        db.io().reads_of(PageKind::Lod) > pages,
+        "the first frame reads the LODs"
+    );
+    for d in first.iter().filter(|d| large.contains(&d.id)) {
+        assert_ne!(
+            d.level, REFINED,
+            "object {} refined before it was decoded",
+            d.id
+        );
+    }
+    assert_eq!(lods.counts.drawn_while_decoding, large.len() as u64);
+    lods.settle().unwrap();
+    assert_eq!(lods.counts.decoded, large.len() as u64);
+    let pages = db.io().reads_of(PageKind::Lod);
+    let second = lods.select(&camera, &buffer, &drawn).unwrap();
+    for d in &second {
+        assert_eq!(d.level == REFINED, large.contains(&d.id), "object {}", d.id);
+        if d.level == REFINED {
+            let mesh = lods.refined_mesh(d.id).unwrap();
+            assert_eq!(d.triangles, mesh.triangle_count());
+            assert!(d.triangles < buffer.get(d.id).unwrap().mesh.triangle_count());
+        }
+    }
+    assert_eq!(
+        db.io().reads_of(PageKind::Lod),
+        pages,
+        "nothing read again once decoded"
+    );
+    assert_eq!(lods.counts.drawn_while_decoding, large.len() as u64);
+    // An object evicted while its decoding runs is forgotten, not refined.
+    let mut lods = LodSelector::new(&db, 0.001).unwrap();
+    lods.select(&camera, &buffer, &drawn).unwrap();
+    buffer.remove(large[0]);
+    let drawn: Vec<&Loaded> = buffer.iter().collect();
+    lods.select(&camera, &buffer, &drawn).unwrap();
+    lods.settle().unwrap();
+    assert_eq!(lods.counts.decoded, large.len() as u64 - 1);
+    assert!(lods.refined_mesh(large[0]).is_none());
+}

@@ -6,6 +6,7 @@
 
 use std::collections::HashMap;
 
+use flaneur::bench::fidelity::ModeWalk;
 use flaneur::geom::Camera;
 use flaneur::render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
@@ -53,6 +54,24 @@ fn city(dir: &std::path::Path) -> (Database, Camera) {
         .with_fov(50f32.to_radians(), 50f32.to_radians())
         .unwrap();
     (db, camera)
+}
+
+/// The fidelity experiment over `path` with `walk` (named `mode`), square pictures of
+/// `size` pixels drawn under `lod_tau`.
+fn fidelity(
+    db: &Database,
+    gpu: &Gpu,
+    path: &flaneur::walk::CameraPath,
+    walk: ModeWalk<'_>,
+    mode: &str,
+    (size, lod_tau): (u32, Option<f32>),
+) -> flaneur::bench::fidelity::FidelityReport {
+    let drawing = flaneur::bench::fidelity::Drawing {
+        width: size,
+        height: size,
+        lod_tau,
+    };
+    flaneur::bench::fidelity::run(db, gpu, path, walk, mode, &drawing, |_| {}).unwrap()
 }
 
 fn gpu() -> Gpu {
@@ -273,7 +292,7 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     assert_eq!(t.draw_ms.len(), 600);
     let csv = t.to_csv();
     assert_eq!(csv.lines().count(), 601);
-    assert!(csv.starts_with("frame,upload_ms,draw_ms,triangles,coarse_objects\n0,"));
+    assert!(csv.starts_with("frame,select_ms,upload_ms,draw_ms,triangles,coarse_objects\n0,"));
     let drawn: u64 = report.frames.iter().map(|f| f.triangles_drawn).sum();
     assert_eq!(
         t.triangles.iter().sum::<u64>(),
@@ -306,12 +325,7 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
         ..ReviewConfig::preset(Preset::Box)
     };
     let path = motion::generate(&db.bounds(), Motion::Turning, 60, 30.0, 4).unwrap();
-    let drawing = flaneur::bench::fidelity::Drawing {
-        width: 96,
-        height: 96,
-        lod_tau: None,
-    };
-    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
+    let r = fidelity(&db, &gpu, &path, ModeWalk::Review(&cfg), "box", (96, None));
     assert_eq!(r.rows.len(), 60);
     assert!(r.rows.iter().any(|row| row.triangles > 0));
     for row in &r.rows {
@@ -325,11 +339,8 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
     assert!(r.to_csv().lines().count() == 61 && r.markdown().contains("60 (100.0 %)"));
 }
 
-/// The PVS walk drawn: every frame rendered from the objects the client holds, and the
-/// walk's own figures (transactions, misses, pages) the same as when nothing is drawn.
-#[test]
-fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
-    let dir = tempfile::tempdir().unwrap();
+/// The test city with small viewcells' visibility and no LODs, built into `dir`.
+fn with_visibility(dir: &std::path::Path) -> Database {
     let opts = BuildOptions {
         lod: None,
         visibility: Some(flaneur::visibility::VisibilityOptions {
@@ -339,7 +350,15 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
         }),
         ..Default::default()
     };
-    let db = build(dir.path(), &opts);
+    build(dir, &opts)
+}
+
+/// The PVS walk drawn: every frame rendered from the objects the client holds, and the
+/// walk's own figures (transactions, misses, pages) the same as when nothing is drawn.
+#[test]
+fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = with_visibility(dir.path());
     let path = flaneur::walk::pvs_walk::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
     let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
     let plain = flaneur::walk::pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
@@ -361,6 +380,38 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let t = &writer.times;
     assert_eq!((t.frames, t.written), (240, 3));
     assert!(t.uploads > 0 && t.triangles.iter().any(|&n| n > 0));
+}
+
+/// The PVS walk's fidelity: it draws its viewcell's PVS of what the client holds, a
+/// subset of the objects in view, so never more triangles than the reference; it leaves
+/// out hidden objects, and the pictures stay close (the precomputation misses little).
+#[test]
+fn fidelity_of_the_pvs_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = with_visibility(dir.path());
+    let path = flaneur::walk::pvs_walk::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
+    let gpu = gpu();
+    let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
+    let r = fidelity(&db, &gpu, &path, ModeWalk::Pvs(rule), "pvs", (96, None));
+    assert_eq!(r.rows.len(), 120);
+    for row in &r.rows {
+        assert!(row.triangles <= row.reference_triangles, "{row:?}");
+        if row.triangles == row.reference_triangles {
+            assert!(row.psnr.is_infinite() && row.differ == 0.0, "{row:?}");
+        }
+    }
+    // Hidden objects left out: fewer triangles than the reference, the same picture
+    // nearly everywhere.
+    let drawn: u64 = r.rows.iter().map(|row| row.triangles).sum();
+    let reference: u64 = r.rows.iter().map(|row| row.reference_triangles).sum();
+    assert!(drawn < reference, "{drawn} triangles against {reference}");
+    let same = r.rows.iter().filter(|row| row.differ == 0.0).count();
+    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    assert!(
+        same > 0 && mean_differ < 0.05,
+        "{same} frames the same, {:.2} % of pixels differ",
+        100.0 * mean_differ
+    );
 }
 
 /// A sink that draws at the levels LOD selection chooses and checks each frame: every
@@ -451,12 +502,14 @@ fn a_walk_drawn_at_its_levels_of_detail() {
         }
     }
     // The same walk through the fidelity experiment: coarse, yet close to full detail.
-    let drawing = flaneur::bench::fidelity::Drawing {
-        width: 64,
-        height: 64,
-        lod_tau: Some(tau),
-    };
-    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
+    let r = fidelity(
+        &db,
+        &gpu,
+        &path,
+        ModeWalk::Review(&cfg),
+        "box",
+        (64, Some(tau)),
+    );
     assert!(r.rows.iter().any(|row| row.coarse > 0));
     assert!(r
         .rows
@@ -607,12 +660,14 @@ fn large_objects_are_refined_view_by_view() {
         }
     }
     // The same walk against full detail.
-    let drawing = flaneur::bench::fidelity::Drawing {
-        width: 64,
-        height: 64,
-        lod_tau: Some(0.001),
-    };
-    let r = flaneur::bench::fidelity::run(&db, &gpu, &path, &cfg, "box", &drawing, |_| {}).unwrap();
+    let r = fidelity(
+        &db,
+        &gpu,
+        &path,
+        ModeWalk::Review(&cfg),
+        "box",
+        (64, Some(0.001)),
+    );
     let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
     assert!(
         mean_differ < 0.05,

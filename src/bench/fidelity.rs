@@ -8,7 +8,9 @@
 //! With LOD selection (`lod_tau`), each object the mode drew is at the level the walk's
 //! LOD selection chose ([`crate::walk::lod_select`]); without it, REVIEW and BOX draw
 //! what they loaded at full detail, and their pictures differ from the reference only
-//! where an object in view was not yet loaded (a visual miss).
+//! where an object in view was not yet loaded (a visual miss). The PVS walk draws its
+//! current viewcell's PVS: its pictures also lose what the precomputation judged
+//! hidden (and got wrong), and everything while the eye is outside every cell.
 
 use std::path::Path;
 
@@ -19,8 +21,29 @@ use crate::geom::Camera;
 use crate::render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::lod_select::LodCounts;
+use crate::walk::pvs_walk::{self, PvsPrefetch};
 use crate::walk::review::{self, ReviewConfig};
 use crate::walk::{CameraPath, FrameSink};
+
+/// The walk whose frames are compared.
+#[derive(Clone, Copy, Debug)]
+pub enum ModeWalk<'a> {
+    /// REVIEW (or BOX) under this configuration.
+    Review(&'a ReviewConfig),
+    /// The PVS walk over the database's precomputed visibility, with this prefetcher.
+    Pvs(PvsPrefetch),
+}
+
+impl ModeWalk<'_> {
+    /// The depth of the walk's view frustum, metres.
+    fn far(&self) -> f32 {
+        match self {
+            ModeWalk::Review(cfg) => cfg.far,
+            // The PVS walk's cameras have the default frustum (`Pose::camera`).
+            ModeWalk::Pvs(_) => crate::geom::DEFAULT_FAR,
+        }
+    }
+}
 
 /// One frame's comparison.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -161,34 +184,43 @@ impl FrameSink for Twice<'_> {
     }
 }
 
-/// Walks `path` through `db` under `cfg` (`mode` names it in the report), drawing each
+/// Walks `path` through `db` with `walk` (`mode` names it in the report), drawing each
 /// frame twice on `gpu` as `drawing` says.
 pub fn run(
     db: &Database,
     gpu: &Gpu,
     path: &CameraPath,
-    cfg: &ReviewConfig,
+    walk: ModeWalk<'_>,
     mode: &str,
     drawing: &Drawing,
     progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
     let (width, height) = (drawing.width, drawing.height);
     let bounds = db.bounds();
+    let far = walk.far();
     let mut reference = Offscreen::new(gpu, width, height)?;
-    reference.set_ground(gpu, &bounds, cfg.far);
+    reference.set_ground(gpu, &bounds, far);
     let mut sink = Twice {
         db,
         gpu,
         mode: match drawing.lod_tau {
-            Some(tau) => FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?
-                .with_lods(db, tau)?,
-            None => FrameWriter::drawing(gpu, (width, height), (&bounds, cfg.far))?,
+            Some(tau) => {
+                FrameWriter::drawing(gpu, (width, height), (&bounds, far))?.with_lods(db, tau)?
+            }
+            None => FrameWriter::drawing(gpu, (width, height), (&bounds, far))?,
         },
         reference,
         resident: GpuMeshes::default(),
         rows: Vec::with_capacity(path.poses.len()),
     };
-    review::walk_into(db, path, cfg, progress, &mut sink)?;
+    match walk {
+        ModeWalk::Review(cfg) => {
+            review::walk_into(db, path, cfg, progress, &mut sink)?;
+        }
+        ModeWalk::Pvs(prefetch) => {
+            pvs_walk::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
+        }
+    }
     Ok(FidelityReport {
         mode: mode.into(),
         width,

@@ -7,6 +7,8 @@
 //! codec's complaint about bytes that passed their page checksums is reported against
 //! the extent's first page.
 
+use std::path::{Path, PathBuf};
+
 use citygen::Mesh;
 
 use super::chain::{ChainDirectory, LevelInfo};
@@ -20,6 +22,11 @@ use crate::store::{Extent, PageKind, Store};
 /// Puts `what` (which data of which object) in front of an error about `ext`'s bytes;
 /// a codec's `Invalid` becomes a `CorruptPage` naming the extent's first page.
 fn about(store: &Store, ext: &Extent, what: &str, e: Error) -> Error {
+    about_at(store.path(), ext, what, e)
+}
+
+/// [`about`] for bytes read from the database at `path`.
+fn about_at(path: &Path, ext: &Extent, what: &str, e: Error) -> Error {
     match e {
         Error::CorruptPage {
             path,
@@ -35,7 +42,7 @@ fn about(store: &Store, ext: &Extent, what: &str, e: Error) -> Error {
             what: format!("{what}: {w}"),
         },
         Error::Invalid(w) => Error::CorruptPage {
-            path: store.path().to_path_buf(),
+            path: path.to_path_buf(),
             page: ext.first_page,
             what: format!("{what}: {w}"),
         },
@@ -148,52 +155,87 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
 /// The progressive mesh and DAG of the object of `e`, when it has them; checked against
 /// each other so that refinement can start from them.
 pub(crate) fn progressive(store: &Store, e: &LodEntry) -> Result<Option<(ProgressiveMesh, Dag)>> {
+    read_progressive(store, e)?.map(|b| b.decode()).transpose()
+}
+
+/// An object's progressive mesh and DAG as read from their pages (counted, checksums
+/// checked), not yet decoded. Decoding takes a few times longer than reading and needs
+/// nothing of the store, so a walk can do it on another thread.
+pub(crate) struct ProgressiveBytes {
+    path: PathBuf,
+    id: u64,
+    triangles: u32,
+    pm: (Extent, Vec<u8>),
+    dag: (Extent, Vec<u8>),
+}
+
+/// The bytes of the progressive mesh and DAG of the object of `e`, when it has them.
+pub(crate) fn read_progressive(store: &Store, e: &LodEntry) -> Result<Option<ProgressiveBytes>> {
     if e.pm.is_empty() {
         return Ok(None);
     }
-    let what = format!("progressive mesh of object {}", e.id);
-    let pm = store
-        .read_extent(&e.pm, PageKind::Lod)
-        .and_then(|b| ProgressiveMesh::from_bytes(&b))
-        .map_err(|err| about(store, &e.pm, &what, err))?;
-    if pm.triangle_map.len() != e.triangles as usize {
-        return Err(about(
-            store,
-            &e.pm,
-            &what,
-            Error::Invalid(format!(
-                "it refines to {} triangles, the object has {}",
-                pm.triangle_map.len(),
-                e.triangles
-            )),
-        ));
+    let read = |ext: &Extent, what: &str| {
+        store
+            .read_extent(ext, PageKind::Lod)
+            .map_err(|err| about(store, ext, &format!("{what} of object {}", e.id), err))
+    };
+    Ok(Some(ProgressiveBytes {
+        path: store.path().to_path_buf(),
+        id: e.id,
+        triangles: e.triangles,
+        pm: (e.pm, read(&e.pm, "progressive mesh")?),
+        dag: (e.dag, read(&e.dag, "LOD DAG")?),
+    }))
+}
+
+impl ProgressiveBytes {
+    /// The object these bytes belong to.
+    pub(crate) fn id(&self) -> u64 {
+        self.id
     }
-    let what = format!("LOD DAG of object {}", e.id);
-    let dag = store
-        .read_extent(&e.dag, PageKind::Lod)
-        .and_then(|b| Dag::from_bytes(&b))
-        .map_err(|err| about(store, &e.dag, &what, err))?;
-    // The DAG's nodes are the PM's position splits, in order.
-    let runs_match = dag.split_count() == pm.splits.len()
-        && (0..dag.node_count() as u32).all(|k| {
-            let run = dag.splits(k);
-            !pm.splits[run.start].joins_previous
-                && pm.splits[run.start + 1..run.end]
-                    .iter()
-                    .all(|s| s.joins_previous)
-        });
-    if !runs_match {
-        return Err(about(
-            store,
-            &e.dag,
-            &what,
-            Error::Invalid(format!(
-                "its {} nodes over {} splits are not the runs of the progressive mesh's {} splits",
-                dag.node_count(),
-                dag.split_count(),
-                pm.splits.len()
-            )),
-        ));
+
+    /// The progressive mesh and DAG, checked against each other and the object.
+    pub(crate) fn decode(self) -> Result<(ProgressiveMesh, Dag)> {
+        let (path, (pm_ext, pm_bytes), (dag_ext, dag_bytes)) = (&self.path, &self.pm, &self.dag);
+        let what = format!("progressive mesh of object {}", self.id);
+        let pm = ProgressiveMesh::from_bytes(pm_bytes)
+            .map_err(|err| about_at(path, pm_ext, &what, err))?;
+        if pm.triangle_map.len() != self.triangles as usize {
+            return Err(about_at(
+                path,
+                pm_ext,
+                &what,
+                Error::Invalid(format!(
+                    "it refines to {} triangles, the object has {}",
+                    pm.triangle_map.len(),
+                    self.triangles
+                )),
+            ));
+        }
+        let what = format!("LOD DAG of object {}", self.id);
+        let dag = Dag::from_bytes(dag_bytes).map_err(|err| about_at(path, dag_ext, &what, err))?;
+        // The DAG's nodes are the PM's position splits, in order.
+        let runs_match = dag.split_count() == pm.splits.len()
+            && (0..dag.node_count() as u32).all(|k| {
+                let run = dag.splits(k);
+                !pm.splits[run.start].joins_previous
+                    && pm.splits[run.start + 1..run.end]
+                        .iter()
+                        .all(|s| s.joins_previous)
+            });
+        if !runs_match {
+            return Err(about_at(
+                path,
+                dag_ext,
+                &what,
+                Error::Invalid(format!(
+                    "its {} nodes over {} splits are not the runs of the progressive mesh's {} splits",
+                    dag.node_count(),
+                    dag.split_count(),
+                    pm.splits.len()
+                )),
+            ));
+        }
+        Ok((pm, dag))
     }
-    Ok(Some((pm, dag)))
 }

@@ -21,8 +21,9 @@ pub struct FrameTimes {
     /// Frames drawn, and written as PNGs.
     pub frames: usize,
     pub written: usize,
-    /// Per frame: LOD selection, uploads and frees (CPU side), drawing and reading back
-    /// (GPU side), milliseconds.
+    /// Per frame, milliseconds: LOD selection, and uploads and frees (the CPU side);
+    /// drawing and reading back (the GPU side).
+    pub select_ms: Vec<f64>,
     pub upload_ms: Vec<f64>,
     pub draw_ms: Vec<f64>,
     pub uploads: usize,
@@ -37,20 +38,21 @@ pub struct FrameTimes {
 }
 
 impl FrameTimes {
-    /// One row per frame drawn: the CPU side (LOD selection, uploads and frees) and
+    /// One row per frame drawn: the CPU side (LOD selection; uploads and frees) and
     /// the GPU side (drawing and reading back), milliseconds, the triangles drawn and
     /// the objects drawn coarser than full detail.
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("frame,upload_ms,draw_ms,triangles,coarse_objects\n");
-        for (i, (((u, d), t), c)) in self
-            .upload_ms
+        let mut s = String::from("frame,select_ms,upload_ms,draw_ms,triangles,coarse_objects\n");
+        for (i, ((((l, u), d), t), c)) in self
+            .select_ms
             .iter()
+            .zip(&self.upload_ms)
             .zip(&self.draw_ms)
             .zip(&self.triangles)
             .zip(&self.coarse)
             .enumerate()
         {
-            s.push_str(&format!("{i},{u:.3},{d:.3},{t},{c}\n"));
+            s.push_str(&format!("{i},{l:.3},{u:.3},{d:.3},{t},{c}\n"));
         }
         s
     }
@@ -155,9 +157,8 @@ impl FrameWriter<'_> {
         };
         let select = started.elapsed();
         let frame = self.draw_selected(camera, buffer, &selected)?;
-        // The selection's time is the CPU side's too.
-        if let Some(u) = self.times.upload_ms.last_mut() {
-            *u += ms(select);
+        if let Some(l) = self.times.select_ms.last_mut() {
+            *l = ms(select);
         }
         Ok((frame, selected))
     }
@@ -188,6 +189,8 @@ impl FrameWriter<'_> {
         let draw = started.elapsed();
         let t = &mut self.times;
         t.frames += 1;
+        // Drawn as chosen elsewhere: no selection here.
+        t.select_ms.push(0.0);
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());

@@ -18,9 +18,13 @@
 //! view by view instead ([`REFINED`]): the LOD core's constant-time traversal under the
 //! same τ, the thesis's N = 500 and a 60,000-triangle budget each, its selective mesh
 //! kept in compact arrays whose changed ranges a renderer uploads
-//! ([`LodSelector::refined`]).
+//! ([`LodSelector::refined`]). Their progressive mesh and DAG are read when the object
+//! is first drawn, but decoded on the thread pool: decoding a landmark's takes tens of
+//! milliseconds, which would stall the frame. Until it is done the object is drawn at
+//! its discrete levels like any other.
 
 use std::collections::HashMap;
+use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 
 use crate::database::Database;
@@ -108,6 +112,10 @@ pub struct LodCounts {
     /// and edge collapses their refinement applied.
     pub refined_draws: u64,
     pub refine_ops: u64,
+    /// Objects whose progressive mesh and DAG were decoded off the frame's thread, and
+    /// draws at discrete levels while theirs was being decoded.
+    pub decoded: u64,
+    pub drawn_while_decoding: u64,
 }
 
 /// The stored levels of the objects a walk has drawn.
@@ -127,12 +135,19 @@ pub struct RefinedObject {
     pub capacity: (usize, usize),
 }
 
+/// A large object's refiner as its decoding on the thread pool left it.
+type Decoded = (u64, Result<RefinedObject>);
+
 /// Chooses each drawn object's level, and keeps the coarse levels read so far.
 pub struct LodSelector<'a> {
     db: &'a Database,
     tau: f32,
     objects: HashMap<u64, ObjectLevels>,
     refined: HashMap<u64, RefinedObject>,
+    /// Objects whose progressive mesh and DAG are being decoded, and where the thread
+    /// pool sends them.
+    decoding: std::collections::HashSet<u64>,
+    decoded: (Sender<Decoded>, Receiver<Decoded>),
     pub counts: LodCounts,
 }
 
@@ -149,6 +164,8 @@ impl<'a> LodSelector<'a> {
             tau,
             objects: HashMap::new(),
             refined: HashMap::new(),
+            decoding: Default::default(),
+            decoded: channel(),
             counts: LodCounts::default(),
         })
     }
@@ -167,9 +184,13 @@ impl<'a> LodSelector<'a> {
     ) -> Result<Vec<Drawn>> {
         self.objects.retain(|id, _| buffer.contains(*id));
         self.refined.retain(|id, _| buffer.contains(*id));
+        // An object evicted while decoding is forgotten; its result, when it comes, is
+        // dropped.
+        self.decoding.retain(|id| buffer.contains(*id));
         if !self.db.has_lods() {
             return Ok(drawn.iter().map(|o| Drawn::full(o)).collect());
         }
+        self.take_decoded()?;
         // The walk's prefetching may read index and mesh pages meanwhile; LOD pages
         // are this selection's alone.
         let before = self.db.io().reads_of(PageKind::Lod);
@@ -184,6 +205,9 @@ impl<'a> LodSelector<'a> {
                 continue;
             }
             let levels = self.objects.get_mut(&id).expect("seen above");
+            if self.decoding.contains(&id) {
+                self.counts.drawn_while_decoding += 1;
+            }
             let d = distance_to(&o.entry.bounds, camera.position);
             let level = level_for(&levels.levels, d, camera.fov_y, self.tau);
             let mesh = if level == 0 {
@@ -219,33 +243,25 @@ impl<'a> LodSelector<'a> {
 
 impl LodSelector<'_> {
     /// An object drawn for the first time: its LOD entry looked up once, then its
-    /// progressive mesh and DAG read when the build stored them (it is refined from
-    /// now on), or else its levels.
+    /// levels read, and its progressive mesh and DAG when the build stored them (handed
+    /// to the thread pool to decode; it is refined once they are).
     fn first_sight(&mut self, o: &Loaded) -> Result<()> {
         let id = o.entry.id;
         let entry = self.db.lod_entry(id)?;
         let store = self.db.store();
-        if let Some((pm, dag)) = entry
+        if let Some(bytes) = entry
             .as_ref()
-            .map(|e| stored::progressive(store, e))
+            .map(|e| stored::read_progressive(store, e))
             .transpose()?
             .flatten()
         {
-            let added: usize = pm.splits.iter().map(|s| s.added_triangles()).sum();
-            let capacity = (
-                pm.base.positions.len() + pm.splits.len(),
-                pm.base.triangle_count() + added,
-            );
-            let refiner = Refiner::shared(Arc::new(pm), Arc::new(dag))?;
-            self.refined.insert(
-                id,
-                RefinedObject {
-                    refiner,
-                    pending: MeshChanges::default(),
-                    capacity,
-                },
-            );
-            return Ok(());
+            self.decoding.insert(id);
+            let to = self.decoded.0.clone();
+            rayon::spawn(move || {
+                let id = bytes.id();
+                // The selector may be gone by now: nobody wants the result then.
+                let _ = to.send((id, refined_object(bytes)));
+            });
         }
         let levels = match &entry {
             Some(e) => stored::levels(store, e)?,
@@ -259,6 +275,40 @@ impl LodSelector<'_> {
                 levels,
             },
         );
+        Ok(())
+    }
+
+    /// Makes refined the objects whose decoding has finished (and are still wanted); a
+    /// progressive mesh or DAG that failed to decode is the frame's error.
+    fn take_decoded(&mut self) -> Result<()> {
+        // The selector holds a sender, so the channel is never disconnected.
+        while let Ok((id, result)) = self.decoded.1.try_recv() {
+            self.adopt(id, result)?;
+        }
+        Ok(())
+    }
+
+    /// Waits until every object being decoded is refined (for a walk that must be the
+    /// same from run to run, whatever the threads' timing).
+    pub fn settle(&mut self) -> Result<()> {
+        while !self.decoding.is_empty() {
+            let (id, result) = self
+                .decoded
+                .1
+                .recv()
+                .map_err(|_| Error::Invalid("the LOD decoding threads stopped".into()))?;
+            self.adopt(id, result)?;
+        }
+        Ok(())
+    }
+
+    /// Object `id` refined from now on, if it is still wanted.
+    fn adopt(&mut self, id: u64, result: Result<RefinedObject>) -> Result<()> {
+        if self.decoding.remove(&id) {
+            self.refined.insert(id, result?);
+            self.objects.remove(&id);
+            self.counts.decoded += 1;
+        }
         Ok(())
     }
 
@@ -306,6 +356,21 @@ impl LodSelector<'_> {
     pub fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
         self.refined.get_mut(&id)
     }
+}
+
+/// A refiner over the decoded `bytes`, its arrays sized for the full mesh.
+fn refined_object(bytes: stored::ProgressiveBytes) -> Result<RefinedObject> {
+    let (pm, dag) = bytes.decode()?;
+    let added: usize = pm.splits.iter().map(|s| s.added_triangles()).sum();
+    let capacity = (
+        pm.base.positions.len() + pm.splits.len(),
+        pm.base.triangle_count() + added,
+    );
+    Ok(RefinedObject {
+        refiner: Refiner::shared(Arc::new(pm), Arc::new(dag))?,
+        pending: MeshChanges::default(),
+        capacity,
+    })
 }
 
 #[cfg(test)]
