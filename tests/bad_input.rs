@@ -148,3 +148,124 @@ fn a_scene_file_cut_short_fails_the_build_and_leaves_no_database() {
     assert!(err.to_string().contains("city.scene"), "{err}");
     assert!(!out.exists());
 }
+
+/// Plays a path, walking on past damaged objects when `skip` says so, and keeps what
+/// the figures told of them and the ids the walk held.
+struct Walker<'p> {
+    path: &'p flaneur::walk::CameraPath,
+    skip: bool,
+    damaged: Vec<String>,
+    held: std::collections::HashSet<u64>,
+}
+
+impl<'p> Walker<'p> {
+    fn new(path: &'p flaneur::walk::CameraPath, skip: bool) -> Walker<'p> {
+        Walker {
+            path,
+            skip,
+            damaged: Vec::new(),
+            held: Default::default(),
+        }
+    }
+}
+
+impl flaneur::walk::FrameSink for Walker<'_> {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &flaneur::geom::Camera,
+        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        _: &[&flaneur::walk::buffer::Loaded],
+    ) -> flaneur::Result<()> {
+        self.held.extend(buffer.iter().map(|o| o.entry.id));
+        Ok(())
+    }
+}
+
+impl flaneur::walk::Viewer for Walker<'_> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::Pose>> {
+        Ok(self.path.poses.get(frame).copied())
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.damaged.extend(figures.damaged.iter().cloned());
+    }
+
+    fn skips_damaged(&self) -> bool {
+        self.skip
+    }
+}
+
+/// Walks `c` whole, damages the first mesh page of an object the walk held, and walks
+/// again: a walk for measuring stops with the page named; one whose viewer would rather
+/// walk on goes all `frames` without that object, told of once. `walk(db, skip)` walks
+/// and says how many frames it went.
+fn damaged_mesh_met_by<'p>(
+    c: &common::City,
+    frames: usize,
+    walk: impl Fn(&Database, bool) -> (flaneur::Result<usize>, Walker<'p>),
+) {
+    let db = Database::open(&c.db).unwrap();
+    let (whole, w) = walk(&db, false);
+    assert!(w.damaged.is_empty() && whole.unwrap() == frames);
+    // An object the walk loads, somewhere along it.
+    let all = db.range(&c.bounds()).unwrap().objects;
+    let victim = *all
+        .iter()
+        .filter(|o| w.held.contains(&o.id))
+        .nth(w.held.len() / 2)
+        .unwrap();
+    let page_size = db.store().page_size() as u64;
+    drop(db);
+    flip(&c.db, victim.mesh.first_page * page_size + 30);
+    let db = Database::open(&c.db).unwrap();
+
+    let err = walk(&db, false).0.unwrap_err();
+    assert!(
+        matches!(err, Error::CorruptPage { page, .. } if page == victim.mesh.first_page),
+        "{err}"
+    );
+    let (walked, w) = walk(&db, true);
+    assert_eq!(walked.unwrap(), frames, "the walk went on");
+    assert!(!w.held.contains(&victim.id));
+    assert_eq!(w.damaged.len(), 1, "{:?}", w.damaged);
+    let said = &w.damaged[0];
+    assert!(
+        said.contains(&format!("object {} left out", victim.id))
+            && said.contains(&format!("page {}", victim.mesh.first_page)),
+        "{said}"
+    );
+}
+
+/// A mesh page damaged in the middle of a REVIEW walk.
+#[test]
+fn a_walk_meets_a_damaged_mesh() {
+    use flaneur::walk::review::{self, Preset, ReviewConfig};
+    use flaneur::walk::{motion, Motion};
+    let c = city();
+    let bounds = c.bounds();
+    let path = motion::generate(&bounds, Motion::Normal, 90, 30.0, 1).unwrap();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Optimal)
+    };
+    damaged_mesh_met_by(&c, 90, |db, skip| {
+        let mut w = Walker::new(&path, skip);
+        let r = review::walk_live(db, &cfg, |_| {}, &mut w).map(|r| r.frames.len());
+        (r, w)
+    });
+}
+
+/// The PVS walk meeting a damaged mesh when it draws, as the REVIEW walk does.
+#[test]
+fn a_pvs_walk_meets_a_damaged_mesh() {
+    use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+    let c = common::city(60, 3, &common::with_visibility());
+    let path = pvs_walk::cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();
+    let rule = PvsPrefetch::Pbnp { border: 0.25 };
+    damaged_mesh_met_by(&c, 120, |db, skip| {
+        let mut w = Walker::new(&path, skip);
+        let r = pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut w).map(|r| r.frames.len());
+        (r, w)
+    });
+}

@@ -243,6 +243,15 @@ fn chain_page(db: &Path, id: u64) -> u64 {
     page as u64
 }
 
+/// Damages the first page of object `id`'s chain, past its header; that page.
+fn damage_chain(db: &Path, id: u64) -> u64 {
+    let page = chain_page(db, id);
+    let file = std::fs::OpenOptions::new().write(true).open(db).unwrap();
+    file.write_all_at(&[0x77], page * PAGE as u64 + PAGE_HEADER_LEN as u64 + 200)
+        .unwrap();
+    page
+}
+
 #[test]
 fn a_damaged_lod_page_is_an_error_naming_the_page_and_the_object() {
     let city = common::city(30, 4, &BuildOptions::default());
@@ -251,14 +260,7 @@ fn a_damaged_lod_page_is_an_error_naming_the_page_and_the_object() {
     let victim = objects[5];
     let coarsest = db.lod_levels(victim.id).unwrap().unwrap().len() - 1;
     drop(db);
-    let page = chain_page(&city.db, victim.id);
-    let file = std::fs::OpenOptions::new()
-        .write(true)
-        .open(&city.db)
-        .unwrap();
-    file.write_all_at(&[0x77], page * PAGE as u64 + PAGE_HEADER_LEN as u64 + 200)
-        .unwrap();
-    drop(file);
+    let page = damage_chain(&city.db, victim.id);
 
     let db = Database::open(&city.db).unwrap();
     for e in [
@@ -431,11 +433,37 @@ fn builds_are_deterministic_and_finish_inside_a_one_thread_pool() {
 /// A large object is drawn at its discrete levels in the frames its progressive mesh and
 /// DAG spend decoding on the thread pool, and refined from the frame after they are
 /// done; the frame that first sees it reads them, and never waits for them.
+/// Every object of `db` loaded into an object buffer, as a walk would hold them.
+fn all_loaded(db: &Database) -> flaneur::walk::buffer::ObjectBuffer {
+    use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+    let mut buffer = ObjectBuffer::new(usize::MAX);
+    for o in all_objects(db) {
+        let mesh = db.mesh(&o).unwrap();
+        buffer.insert(Loaded {
+            entry: o,
+            bytes: mesh_bytes(&mesh),
+            mesh: std::sync::Arc::new(mesh),
+        });
+    }
+    buffer
+}
+
+/// A camera far above `db`'s city looking down at it: every object small on screen,
+/// drawn as coarse as it can be.
+fn far_above(db: &Database) -> flaneur::geom::Camera {
+    let b = db.bounds();
+    flaneur::geom::Camera::new(
+        b.center() + glam::Vec3::new(0.0, 3.0 * b.extent().max_element(), 0.0),
+        0.0,
+        -1.5,
+    )
+    .unwrap()
+}
+
 #[test]
 fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
-    use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+    use flaneur::walk::buffer::Loaded;
     use flaneur::walk::lod_select::{LodSelector, REFINED};
-    use std::sync::Arc;
     let city = common::city(
         30,
         5,
@@ -445,29 +473,15 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
         }),
     );
     let db = Database::open(&city.db).unwrap();
-    let mut buffer = ObjectBuffer::new(usize::MAX);
-    let mut large = Vec::new();
-    for o in all_objects(&db) {
-        let mesh = db.mesh(&o).unwrap();
-        if db.progressive(o.id).unwrap().is_some() {
-            large.push(o.id);
-        }
-        buffer.insert(Loaded {
-            entry: o,
-            bytes: mesh_bytes(&mesh),
-            mesh: Arc::new(mesh),
-        });
-    }
+    let mut buffer = all_loaded(&db);
+    let large: Vec<u64> = all_objects(&db)
+        .iter()
+        .filter(|o| db.progressive(o.id).unwrap().is_some())
+        .map(|o| o.id)
+        .collect();
     assert!(!large.is_empty(), "no object above 1,000 triangles");
     let drawn: Vec<&Loaded> = buffer.iter().collect();
-    // Far above the city, looking down at it: every object small on screen.
-    let b = db.bounds();
-    let camera = flaneur::geom::Camera::new(
-        b.center() + glam::Vec3::new(0.0, 3.0 * b.extent().max_element(), 0.0),
-        0.0,
-        -1.5,
-    )
-    .unwrap();
+    let camera = far_above(&db);
     let mut lods = LodSelector::new(&db, 0.001).unwrap();
     let pages = db.io().reads_of(PageKind::Lod);
     let first = lods.select(&camera, &buffer, &drawn).unwrap();
@@ -510,4 +524,53 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
     lods.settle().unwrap();
     assert_eq!(lods.counts.decoded, large.len() as u64 - 1);
     assert!(lods.refined_mesh(large[0]).is_none());
+}
+
+/// LOD selection meeting a damaged chain page: the frame's error, naming the page; or,
+/// tolerating damage, the object drawn at full detail from then on, told of once.
+#[test]
+fn lod_selection_meets_a_damaged_lod_page() {
+    use flaneur::walk::buffer::Loaded;
+    use flaneur::walk::lod_select::LodSelector;
+    let city = common::city(30, 4, &BuildOptions::default());
+    let db = Database::open(&city.db).unwrap();
+    let victim = all_objects(&db)[5];
+    drop(db);
+    let page = damage_chain(&city.db, victim.id);
+    let db = Database::open(&city.db).unwrap();
+    let buffer = all_loaded(&db);
+    let drawn: Vec<&Loaded> = buffer.iter().collect();
+    let camera = far_above(&db);
+    let err = LodSelector::new(&db, 0.001)
+        .unwrap()
+        .select(&camera, &buffer, &drawn)
+        .unwrap_err();
+    assert!(
+        matches!(err, Error::CorruptPage { page: p, .. } if p == page),
+        "{err}"
+    );
+    let mut lods = LodSelector::new(&db, 0.001).unwrap().tolerating_damage();
+    for frame in 0..2 {
+        let chosen = lods.select(&camera, &buffer, &drawn).unwrap();
+        assert_eq!(chosen.len(), drawn.len());
+        for d in &chosen {
+            assert_eq!(
+                d.level == 0,
+                d.id == victim.id,
+                "frame {frame}: object {}",
+                d.id
+            );
+        }
+        let told = lods.take_damaged();
+        if frame == 0 {
+            assert_eq!(told.len(), 1, "{told:?}");
+            assert!(
+                told[0].contains(&format!("object {}", victim.id))
+                    && told[0].contains(&format!("page {page}")),
+                "{told:?}"
+            );
+        } else {
+            assert!(told.is_empty(), "told again: {told:?}");
+        }
+    }
 }

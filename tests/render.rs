@@ -4,6 +4,8 @@
 //! colour image must match a stored reference within a tolerance. It needs a GPU
 //! adapter: CI installs Mesa's software one (lavapipe).
 
+mod common;
+
 use std::collections::HashMap;
 
 use flaneur::bench::fidelity::ModeWalk;
@@ -341,16 +343,7 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
 
 /// The test city with small viewcells' visibility and no LODs, built into `dir`.
 fn with_visibility(dir: &std::path::Path) -> Database {
-    let opts = BuildOptions {
-        lod: None,
-        visibility: Some(flaneur::visibility::VisibilityOptions {
-            cell_size: 12.0,
-            resolution: 16,
-            ..Default::default()
-        }),
-        ..Default::default()
-    };
-    build(dir, &opts)
+    build(dir, &common::with_visibility())
 }
 
 /// The PVS walk drawn: every frame rendered from the objects the client holds, and the

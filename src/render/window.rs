@@ -189,6 +189,9 @@ struct Surfaced {
     /// The id and depth targets, the window's size.
     targets: [wgpu::TextureView; 2],
     lost: Arc<AtomicBool>,
+    /// Errors the device met outside any error scope (wgpu panics on them unless told
+    /// where to put them): reported, not fatal.
+    errors: Arc<std::sync::Mutex<Vec<String>>>,
 }
 
 impl Surfaced {
@@ -223,6 +226,14 @@ impl Surfaced {
         let flag = lost.clone();
         gpu.device
             .set_device_lost_callback(move |_, _| flag.store(true, Ordering::SeqCst));
+        let errors = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let to = errors.clone();
+        gpu.device
+            .on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                if let Ok(mut v) = to.lock() {
+                    v.push(e.to_string());
+                }
+            }));
         let mut scene = ScenePass::new(&gpu, format);
         scene.set_ground(&gpu, &opts.city, opts.margin);
         let hud = Hud::new(&gpu, format)?;
@@ -238,6 +249,7 @@ impl Surfaced {
             meshes: GpuMeshes::default(),
             targets,
             lost,
+            errors,
         };
         s.configure();
         Ok(s)
@@ -293,6 +305,8 @@ pub struct WalkWindow<'a> {
     /// Poses given so far (what `--record` saves), and the played path's next pose.
     pub recorded: Vec<Pose>,
     played: usize,
+    /// A played path's clock: the time of the pose played when it started, and when.
+    play_clock: Option<(f64, Instant)>,
     quit: bool,
     last_frame: Option<Instant>,
     frame_ms: VecDeque<f32>,
@@ -357,7 +371,7 @@ impl<'a> WalkWindow<'a> {
         let surfaced = Surfaced::new(&instance, &window, &opts)?;
         let lods = opts
             .lod_tau
-            .map(|tau| LodSelector::new(db, tau))
+            .map(|tau| LodSelector::new(db, tau).map(LodSelector::tolerating_damage))
             .transpose()?;
         Ok(WalkWindow {
             db,
@@ -384,6 +398,7 @@ impl<'a> WalkWindow<'a> {
             last_pose: None,
             recorded: Vec::new(),
             played: 0,
+            play_clock: None,
             quit: false,
             last_frame: None,
             frame_ms: VecDeque::with_capacity(GRAPH_FRAMES),
@@ -399,6 +414,15 @@ impl<'a> WalkWindow<'a> {
     pub fn request_size(&self, (width, height): (u32, u32)) {
         if let Some(w) = &self.events.window {
             let _ = w.request_inner_size(winit::dpi::PhysicalSize::new(width, height));
+        }
+    }
+
+    /// Destroys the GPU device the window draws with, as a driver reset or a GPU taken
+    /// away would: the window then recovers as from any lost device (an embedder's way
+    /// to check that its walk survives one).
+    pub fn lose_device(&self) {
+        if let Some(s) = &self.surfaced {
+            s.gpu.device.destroy();
         }
     }
 
@@ -428,12 +452,21 @@ impl<'a> WalkWindow<'a> {
     pub fn resume(&mut self) {
         self.change = None;
         self.last_pose = None;
+        self.play_clock = None;
         self.clock = Instant::now();
         self.steer.restart_clock();
     }
 
-    /// Shows `what` on the HUD for a while, and on stderr.
+    /// Shows `what` on the HUD for a while, and on stderr. The same problem met frame
+    /// after frame is said again only once it has been on the HUD its while.
     pub fn report(&mut self, what: String) {
+        if self
+            .message
+            .as_ref()
+            .is_some_and(|(m, at)| *m == what && at.elapsed() < MESSAGE_FOR)
+        {
+            return;
+        }
         eprintln!("{what}");
         self.summary.problems.push(what.clone());
         self.message = Some((what, Instant::now()));
@@ -475,7 +508,9 @@ impl<'a> WalkWindow<'a> {
                     };
                     if let Some(l) = &self.lods {
                         let tau = (l.tau() * factor).clamp(1e-5, 0.5);
-                        self.lods = LodSelector::new(self.db, tau).ok();
+                        self.lods = LodSelector::new(self.db, tau)
+                            .map(LodSelector::tolerating_damage)
+                            .ok();
                     }
                 }
                 KeyCode::Minus => self.change = Some(Change::Budget(0.5)),
@@ -530,6 +565,19 @@ impl<'a> WalkWindow<'a> {
         selected: &[Drawn],
     ) -> Result<Option<(f64, f64)>> {
         let pages_per_s = self.pages_per_second();
+        let Some(s) = &mut self.surfaced else {
+            return Ok(None);
+        };
+        // The device tells of its loss (the lost callback) only when polled.
+        let _ = s.gpu.device.poll(wgpu::PollType::Poll);
+        let errors: Vec<String> = s
+            .errors
+            .lock()
+            .map(|mut v| v.drain(..).collect())
+            .unwrap_or_default();
+        for e in errors {
+            self.report(format!("the GPU device reported an error: {e}"));
+        }
         let Some(s) = &mut self.surfaced else {
             return Ok(None);
         };
@@ -681,13 +729,16 @@ impl FrameSink for WalkWindow<'_> {
         );
         let started = Instant::now();
         let selected = match &mut self.lods {
-            Some(l) => match l.select(camera, buffer, drawn) {
-                Ok(s) => s,
-                Err(e) => {
+            Some(l) => {
+                let chosen = l.select(camera, buffer, drawn);
+                for what in l.take_damaged() {
+                    self.report(format!("LOD selection: {what}"));
+                }
+                chosen.unwrap_or_else(|e| {
                     self.report(format!("LOD selection: {e}; drawing full detail"));
                     drawn.iter().map(|o| Drawn::full(o)).collect()
-                }
-            },
+                })
+            }
             None => drawn.iter().map(|o| Drawn::full(o)).collect(),
         };
         let select = started.elapsed().as_secs_f64() * 1e3;
@@ -735,6 +786,13 @@ impl Viewer for WalkWindow<'_> {
             Some(path) => match path.poses.get(self.played) {
                 Some(&p) => {
                     self.played += 1;
+                    // Played at the pace it was walked: a frame drawn early waits for
+                    // its pose's time; a late one does not catch up.
+                    let (t0, started) = *self.play_clock.get_or_insert((p.time, Instant::now()));
+                    let due = Duration::from_secs_f64((p.time - t0).max(0.0));
+                    if let Some(wait) = due.checked_sub(started.elapsed()) {
+                        std::thread::sleep(wait);
+                    }
                     p
                 }
                 None => {
@@ -760,7 +818,14 @@ impl Viewer for WalkWindow<'_> {
     }
 
     fn figures(&mut self, figures: &FrameFigures) {
+        for what in &figures.damaged {
+            self.report(what.clone());
+        }
         self.figures = figures.clone();
+    }
+
+    fn skips_damaged(&self) -> bool {
+        true
     }
 }
 

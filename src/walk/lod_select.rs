@@ -127,6 +127,17 @@ struct ObjectLevels {
     meshes: Vec<Option<Arc<Mesh>>>,
 }
 
+impl ObjectLevels {
+    /// An object drawn at full detail only.
+    fn full_only() -> ObjectLevels {
+        ObjectLevels {
+            entry: None,
+            levels: Vec::new(),
+            meshes: Vec::new(),
+        }
+    }
+}
+
 /// A large object refined view by view, and the changes not yet uploaded.
 pub struct RefinedObject {
     pub refiner: Refiner<'static>,
@@ -148,6 +159,10 @@ pub struct LodSelector<'a> {
     /// pool sends them.
     decoding: std::collections::HashSet<u64>,
     decoded: (Sender<Decoded>, Receiver<Decoded>),
+    /// Whether an object whose LOD data cannot be read is drawn at full detail rather
+    /// than the frame failing, and what was found so since [`LodSelector::take_damaged`].
+    tolerant: bool,
+    damaged: Vec<String>,
     pub counts: LodCounts,
 }
 
@@ -166,8 +181,37 @@ impl<'a> LodSelector<'a> {
             refined: HashMap::new(),
             decoding: Default::default(),
             decoded: channel(),
+            tolerant: false,
+            damaged: Vec::new(),
             counts: LodCounts::default(),
         })
+    }
+
+    /// The same selector drawing an object at full detail from the frame its LOD data
+    /// turns out unreadable (a damaged page), instead of failing the frame; what it
+    /// found is told by [`LodSelector::take_damaged`]. For a viewer that would rather
+    /// walk on.
+    pub fn tolerating_damage(self) -> LodSelector<'a> {
+        LodSelector {
+            tolerant: true,
+            ..self
+        }
+    }
+
+    /// The objects whose LOD data was found unreadable since the last call, each with
+    /// why (only when [tolerating damage](LodSelector::tolerating_damage)).
+    pub fn take_damaged(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.damaged)
+    }
+
+    /// `e` about object `id`: the frame's error, or (tolerating damage) told of as
+    /// object `id` being drawn `how` from now on.
+    fn damage(&mut self, id: u64, e: Error, how: &str) -> Result<()> {
+        if !self.tolerant {
+            return Err(e);
+        }
+        self.damaged.push(format!("object {id} drawn {how}: {e}"));
+        Ok(())
     }
 
     pub fn tau(&self) -> f32 {
@@ -198,7 +242,11 @@ impl<'a> LodSelector<'a> {
         for o in drawn {
             let id = o.entry.id;
             if !self.objects.contains_key(&id) && !self.refined.contains_key(&id) {
-                self.first_sight(o)?;
+                if let Err(e) = self.first_sight(o) {
+                    self.damage(id, e, "at full detail")?;
+                    self.decoding.remove(&id);
+                    self.objects.insert(id, ObjectLevels::full_only());
+                }
             }
             if let Some(d) = self.refine(camera, o)? {
                 out.push(d);
@@ -221,10 +269,21 @@ impl<'a> LodSelector<'a> {
                             .entry
                             .as_ref()
                             .expect("an object with levels has data");
-                        let m = Arc::new(stored::level_mesh(self.db.store(), entry, level)?);
-                        self.counts.levels_read += 1;
-                        levels.meshes[level] = Some(m.clone());
-                        m
+                        match stored::level_mesh(self.db.store(), entry, level) {
+                            Ok(m) => {
+                                let m = Arc::new(m);
+                                self.counts.levels_read += 1;
+                                levels.meshes[level] = Some(m.clone());
+                                m
+                            }
+                            Err(e) => {
+                                *levels = ObjectLevels::full_only();
+                                self.counts.coarse_draws -= 1;
+                                self.damage(id, e, "at full detail")?;
+                                out.push(Drawn::full(o));
+                                continue;
+                            }
+                        }
                     }
                 }
             };
@@ -302,12 +361,18 @@ impl LodSelector<'_> {
         Ok(())
     }
 
-    /// Object `id` refined from now on, if it is still wanted.
+    /// Object `id` refined from now on, if it is still wanted (and, tolerating damage,
+    /// at its discrete levels still when its data did not decode).
     fn adopt(&mut self, id: u64, result: Result<RefinedObject>) -> Result<()> {
         if self.decoding.remove(&id) {
-            self.refined.insert(id, result?);
-            self.objects.remove(&id);
-            self.counts.decoded += 1;
+            match result {
+                Ok(r) => {
+                    self.refined.insert(id, r);
+                    self.objects.remove(&id);
+                    self.counts.decoded += 1;
+                }
+                Err(e) => self.damage(id, e, "at its discrete levels, not refined")?,
+            }
         }
         Ok(())
     }

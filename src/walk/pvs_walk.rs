@@ -139,6 +139,10 @@ pub fn walk_pvs_live(
         HashMap::new()
     };
     let mut held = ObjectBuffer::new(usize::MAX);
+    let mut left_out = LeftOut {
+        skip: sink.skips_damaged(),
+        ..Default::default()
+    };
     let mut shown: Option<Cell> = None;
     for i in 0.. {
         let Some(pose) = sink.next_pose(i)? else {
@@ -162,7 +166,12 @@ pub fn walk_pvs_live(
         }
         frame.pages = db.io().page_reads - before;
         if sink.draws() {
-            draw_pvs(db, &entries, &client, shown, &mut held, pose, i, sink)?;
+            let at = Drawing {
+                shown,
+                pose,
+                index: i,
+            };
+            draw_pvs(db, &entries, &client, &mut held, &mut left_out, &at, sink)?;
         }
         sink.figures(&FrameFigures {
             pages: frame.pages,
@@ -173,6 +182,7 @@ pub fn walk_pvs_live(
                 || "outside every viewcell".into(),
                 |c| format!("viewcell {c}"),
             ),
+            damaged: std::mem::take(&mut left_out.new),
             ..Default::default()
         });
         frames.push(frame);
@@ -197,17 +207,32 @@ pub fn walk_pvs_live(
     })
 }
 
+/// Objects whose meshes could not be read, when the viewer walks on without them
+/// ([`crate::walk::Viewer::skips_damaged`]): not read again, and told of once.
+#[derive(Default)]
+struct LeftOut {
+    skip: bool,
+    ids: std::collections::HashSet<u64>,
+    /// Those not yet in a frame's figures, each with why.
+    new: Vec<String>,
+}
+
+/// What a frame draws: the PVS of `shown`, from `pose`.
+struct Drawing<'p> {
+    shown: Option<Cell>,
+    pose: &'p crate::walk::Pose,
+    index: usize,
+}
+
 /// Brings `held` to what the client holds (loading new objects' meshes, dropping what
-/// it evicted) and hands `sink` the PVS of `shown` within the frustum.
-#[allow(clippy::too_many_arguments)]
+/// it evicted) and hands `sink` the PVS of `at.shown` within the frustum.
 fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
     db: &Database,
     entries: &HashMap<u64, ObjectEntry>,
     client: &PvsClient<'_, S, A>,
-    shown: Option<Cell>,
     held: &mut ObjectBuffer,
-    pose: &crate::walk::Pose,
-    index: usize,
+    left_out: &mut LeftOut,
+    at: &Drawing<'_>,
     sink: &mut dyn FrameSink,
 ) -> Result<()> {
     let cache = client.cache();
@@ -220,13 +245,21 @@ fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
         held.remove(id);
     }
     for id in cache.objects() {
-        if held.get(id).is_none() {
+        if held.get(id).is_none() && !left_out.ids.contains(&id) {
             let entry = entries.get(&id).ok_or_else(|| {
                 Error::Invalid(format!(
                     "object {id} of a PVS is not in the database's index"
                 ))
             })?;
-            let mesh = db.mesh(entry)?;
+            let mesh = match db.mesh(entry) {
+                Ok(m) => m,
+                Err(e) if left_out.skip => {
+                    left_out.ids.insert(id);
+                    left_out.new.push(format!("object {id} left out: {e}"));
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
             held.insert(Loaded {
                 entry: *entry,
                 bytes: mesh_bytes(&mesh),
@@ -234,16 +267,17 @@ fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
             });
         }
     }
-    let camera = pose.camera()?;
+    let camera = at.pose.camera()?;
     let frustum = camera.frustum();
-    let drawn: Vec<&Loaded> = shown
+    let drawn: Vec<&Loaded> = at
+        .shown
         .and_then(|c| cache.pvs(c))
         .unwrap_or(&[])
         .iter()
         .filter_map(|id| held.get(*id))
         .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
         .collect();
-    sink.frame(index, &camera, held, &drawn)
+    sink.frame(at.index, &camera, held, &drawn)
 }
 
 /// A walk through the walkable viewcells of `db`: from a cell's centre to a

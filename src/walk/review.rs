@@ -373,6 +373,16 @@ struct Fetched {
     load_ms: f64,
 }
 
+/// Objects whose meshes could not be read, left out of a walk whose viewer walks on
+/// without them: never read again, and told of once.
+#[derive(Default)]
+struct LeftOut {
+    ids: HashSet<u64>,
+    /// Those not yet in a frame's figures, each with why (a prefetch that finds one may
+    /// be dropped as stale).
+    untold: Vec<String>,
+}
+
 struct Request {
     cell: Aabb,
     history: Vec<Aabb>,
@@ -435,13 +445,19 @@ pub fn walk_live(
     // are, so a prefetch asked for before the viewer's own query skips what it loaded.
     let resident = Mutex::new(HashSet::new());
     let resident = &resident;
+    // Objects whose meshes could not be read, when the viewer walks on without them:
+    // never read again.
+    let left_out = viewer
+        .skips_damaged()
+        .then(|| Mutex::new(LeftOut::default()));
+    let left_out = left_out.as_ref();
     let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
         if cfg.prefetch_k.is_some() {
             scope.spawn(move || {
                 for req in req_rx {
-                    let fetched = fetch(db, source, cfg.retrieval, &req, resident);
+                    let fetched = fetch(db, source, cfg.retrieval, &req, (resident, left_out));
                     if res_tx.send(fetched).is_err() {
                         break;
                     }
@@ -466,6 +482,7 @@ pub fn walk_live(
             req_tx: cfg.prefetch_k.map(|_| req_tx),
             res_rx,
             resident,
+            left_out,
             counts: Counts::default(),
         };
         let mut frames = Vec::new();
@@ -508,6 +525,9 @@ pub fn walk_live(
                     )
                 }),
                 walk_ms: f.frame_ms,
+                damaged: left_out
+                    .and_then(|l| l.lock().ok().map(|mut l| std::mem::take(&mut l.untold)))
+                    .unwrap_or_default(),
             });
             frames.push(f);
             progress(i);
@@ -563,6 +583,8 @@ struct Walker<'a> {
     res_rx: mpsc::Receiver<Result<Fetched>>,
     /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
     resident: &'a Mutex<HashSet<u64>>,
+    /// With a viewer that walks on past unreadable objects, those left out.
+    left_out: Option<&'a Mutex<LeftOut>>,
     counts: Counts,
 }
 
@@ -611,7 +633,7 @@ impl Walker<'_> {
                         self.source,
                         self.cfg.retrieval,
                         &req,
-                        self.resident,
+                        (self.resident, self.left_out),
                     )?;
                     self.counts.sync += 1;
                     stats.sync_query = true;
@@ -885,7 +907,7 @@ fn fetch(
     source: &(dyn PageSource + Sync),
     retrieval: Retrieval,
     req: &Request,
-    resident: &Mutex<HashSet<u64>>,
+    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
 ) -> Result<Fetched> {
     let t = Instant::now();
     let result: QueryResult = match retrieval {
@@ -899,10 +921,22 @@ fn fetch(
     let t = Instant::now();
     let mut objects = Vec::with_capacity(result.objects.len());
     for entry in &result.objects {
-        if resident.lock().is_ok_and(|r| r.contains(&entry.id)) {
+        if resident.lock().is_ok_and(|r| r.contains(&entry.id))
+            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.ids.contains(&entry.id)))
+        {
             continue;
         }
-        let mesh = db.mesh(entry)?;
+        let mesh = match (db.mesh(entry), left_out) {
+            (Ok(m), _) => m,
+            (Err(e), Some(l)) => {
+                if let Ok(mut l) = l.lock() {
+                    l.ids.insert(entry.id);
+                    l.untold.push(format!("object {} left out: {e}", entry.id));
+                }
+                continue;
+            }
+            (Err(e), None) => return Err(e),
+        };
         objects.push(Loaded {
             entry: *entry,
             bytes: mesh_bytes(&mesh),

@@ -46,6 +46,14 @@ pub trait Viewer: FrameSink {
 
     /// What the frame just drawn cost the walk, for a display beside the picture.
     fn figures(&mut self, _figures: &FrameFigures) {}
+
+    /// Whether the walk should go on without an object whose mesh cannot be read (a
+    /// damaged page, a failing disk), telling of it in [`FrameFigures::damaged`],
+    /// rather than stop with the error. A person at a window would rather walk on; an
+    /// experiment would rather stop than measure something else than it says.
+    fn skips_damaged(&self) -> bool {
+        false
+    }
 }
 
 /// What one frame of a walk did, for a live display beside the picture.
@@ -66,6 +74,9 @@ pub struct FrameFigures {
     pub cell: String,
     /// The walk's own time for the frame (retrieval, loading, culling), ms.
     pub walk_ms: f64,
+    /// Objects found unreadable on this frame and left out, each with why (only when
+    /// the viewer [skips damaged ones](Viewer::skips_damaged)).
+    pub damaged: Vec<String>,
 }
 
 /// A recorded path played to a sink: the viewer of a walk along a fixed path.

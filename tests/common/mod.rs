@@ -23,6 +23,20 @@ pub struct City {
     pub boxes: Vec<(u64, Aabb)>,
 }
 
+/// Build options for a small city's visibility: 12 m viewcells, a coarse DoV, no LODs
+/// (seconds for 60 objects).
+pub fn with_visibility() -> BuildOptions {
+    BuildOptions {
+        lod: None,
+        visibility: Some(flaneur::visibility::VisibilityOptions {
+            cell_size: 12.0,
+            resolution: 16,
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
+}
+
 pub fn city(objects: u64, seed: u64, opts: &BuildOptions) -> City {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("city.scene");

@@ -1,0 +1,108 @@
+//! The window tests' shared parts: an X display to draw on, a player that plays a path
+//! through the window and disturbs it on cue, and the window's options. A process can
+//! open one window event loop only, so each window test is a test binary of its own.
+
+use std::process::{Child, Command};
+
+use flaneur::render::{ViewOptions, WalkWindow};
+use flaneur::walk::{FrameSink, Pose, Viewer};
+use flaneur::Database;
+
+/// An X server to draw on: `None` when the session has a display already.
+pub struct Display(Option<Child>);
+
+impl Drop for Display {
+    fn drop(&mut self) {
+        if let Some(c) = &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+pub fn display() -> Option<Display> {
+    if std::env::var_os("DISPLAY").is_some() {
+        return Some(Display(None));
+    }
+    // Xvfb picks a free display and writes its number on stdout once it takes clients.
+    let child = Command::new("Xvfb")
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "800x600x24",
+            "-nolisten",
+            "tcp",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    // Killed when dropped, on the way out below too.
+    let mut server = Display(Some(child));
+    let mut line = String::new();
+    let out = server.0.as_mut()?.stdout.take()?;
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(out), &mut line).ok()?;
+    let n: u32 = line.trim().parse().ok()?;
+    std::env::set_var("DISPLAY", format!(":{n}"));
+    std::env::remove_var("WAYLAND_DISPLAY");
+    Some(server)
+}
+
+/// Plays the window's path through it, asking for a new size at frame `resize_at`, and
+/// destroying its GPU device at frame `lose_at`.
+pub struct Player<'w, 'a> {
+    pub window: &'w mut WalkWindow<'a>,
+    pub resize_at: Option<usize>,
+    pub lose_at: Option<usize>,
+    pub frames: usize,
+}
+
+impl FrameSink for Player<'_, '_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &flaneur::geom::Camera,
+        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        drawn: &[&flaneur::walk::buffer::Loaded],
+    ) -> flaneur::Result<()> {
+        self.frames += 1;
+        if Some(index) == self.resize_at {
+            self.window.request_size((320, 200));
+        }
+        if Some(index) == self.lose_at {
+            self.window.lose_device();
+        }
+        self.window.frame(index, camera, buffer, drawn)
+    }
+}
+
+impl Viewer for Player<'_, '_> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<Pose>> {
+        self.window.next_pose(frame)
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.window.figures(figures)
+    }
+
+    fn skips_damaged(&self) -> bool {
+        self.window.skips_damaged()
+    }
+}
+
+/// A small window over `db` playing `poses`, with a GPU budget of 4 MiB.
+pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions {
+    ViewOptions {
+        size: (256, 192),
+        lod_tau: Some(0.001),
+        start: flaneur::walk::start::busiest_street(db).unwrap(),
+        ground: db.bounds().min.y,
+        city: db.bounds(),
+        margin: 1000.0,
+        play: Some(poses.clone()),
+        gpu_budget: Some(4 << 20),
+        speed: 1.4,
+    }
+}
