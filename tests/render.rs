@@ -314,6 +314,46 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     assert!(FrameWriter::new(&gpu, (64, 64), (&db.bounds(), 10.0), &frames, 0).is_err());
 }
 
+/// The GPU in steady state: a viewer standing still is drawn from what the first frame
+/// uploaded, with no upload or free after it (at the levels LOD selection chose).
+#[test]
+fn a_viewer_standing_still_allocates_nothing_after_the_first_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = build(dir.path(), &BuildOptions::default());
+    let gpu = gpu();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Optimal)
+    };
+    let walked = motion::generate(&db.bounds(), Motion::Normal, 30, 30.0, 2).unwrap();
+    let standing = |frames: usize| flaneur::walk::CameraPath {
+        poses: (0..frames)
+            .map(|i| flaneur::walk::Pose {
+                time: i as f64 / 30.0,
+                ..walked.poses[15]
+            })
+            .collect(),
+    };
+    let counts = |frames: usize| {
+        let mut writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
+            .unwrap()
+            .with_lods(&db, 0.001)
+            .unwrap();
+        review::walk_into(&db, &standing(frames), &cfg, |_| {}, &mut writer).unwrap();
+        let t = writer.times;
+        assert!(t.triangles.iter().all(|&n| n == t.triangles[0]));
+        (
+            t.uploads,
+            t.evictions,
+            t.peak_gpu_bytes,
+            t.lod.unwrap().levels_read,
+        )
+    };
+    let first = counts(1);
+    assert!(first.0 > 0, "the first frame uploads");
+    assert_eq!(counts(60), first, "uploads, frees, GPU bytes, levels read");
+}
+
 /// BOX draws what it loaded at full detail, and loads a whole cell before drawing: its
 /// frames must be the full-detail reference's, pixel for pixel, whatever slots the two
 /// renders gave the objects.

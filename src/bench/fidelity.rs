@@ -138,13 +138,7 @@ impl Twice<'_> {
     /// The full-detail picture: every object whose box meets the frustum, read from the
     /// database; the GPU keeps only the current frame's.
     fn reference(&mut self, camera: &Camera) -> Result<(Frame, u64)> {
-        let frustum = camera.frustum();
-        let found = self.db.range(&frustum.aabb())?;
-        let inside: Vec<_> = found
-            .objects
-            .iter()
-            .filter(|o| frustum.overlaps_aabb(&o.bounds))
-            .collect();
+        let inside = crate::render::in_view(self.db, camera)?;
         let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
         self.resident.retain(|(id, _)| keep.contains(&id));
         for o in &inside {

@@ -23,5 +23,5 @@ pub use hud::{rasterise, Hud, HudContent};
 pub use meshes::{gpu_bytes, Followed, GpuMesh, GpuMeshes, MeshKey, Vertex};
 pub use offscreen::{Frame, Offscreen};
 pub use scene::{ScenePass, SceneView};
-pub use shot::{fov_x_for, shot, Shot};
+pub use shot::{fov_x_for, in_view, shot, Shot};
 pub use window::{save_recording, Change, ViewMode, ViewOptions, ViewSummary, WalkWindow};

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use super::{Frame, Gpu, GpuMeshes, Offscreen};
 use crate::error::{Error, Result};
 use crate::geom::Camera;
-use crate::Database;
+use crate::{Database, ObjectEntry};
 
 /// What [`shot`] drew.
 #[derive(Clone, Debug)]
@@ -31,6 +31,15 @@ pub fn fov_x_for(fov_y: f32, aspect: f32) -> f32 {
     2.0 * ((fov_y * 0.5).tan() * aspect).atan()
 }
 
+/// The objects of `db` whose boxes meet `camera`'s view frustum: a range query over the
+/// frustum's box, then the frustum test. What a full-detail picture draws.
+pub fn in_view(db: &Database, camera: &Camera) -> Result<Vec<ObjectEntry>> {
+    let frustum = camera.frustum();
+    let mut found = db.range(&frustum.aabb())?.objects;
+    found.retain(|o| frustum.overlaps_aabb(&o.bounds));
+    Ok(found)
+}
+
 /// Renders `db` as `camera` sees it (its vertical field of view kept, its horizontal
 /// one fitted to the image) into a `width` × `height` frame.
 ///
@@ -49,15 +58,9 @@ pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) 
     target.set_ground(gpu, &db.bounds(), camera.far);
     let (camera, aspect) = target.fitted(camera)?;
     let started = Instant::now();
-    let frustum = camera.frustum();
-    let found = db.range(&frustum.aabb())?;
     let mut meshes = Vec::new();
-    for o in found
-        .objects
-        .iter()
-        .filter(|o| frustum.overlaps_aabb(&o.bounds))
-    {
-        meshes.push((o.id, db.mesh(o)?));
+    for o in in_view(db, &camera)? {
+        meshes.push((o.id, db.mesh(&o)?));
     }
     let select = started.elapsed();
     let started = Instant::now();
