@@ -443,6 +443,11 @@ impl<'a> WalkWindow<'a> {
         self.quit || self.events.closed
     }
 
+    /// LOD selection's threshold now (`[` and `]` change it), `None` at full detail.
+    pub fn lod_tau(&self) -> Option<f32> {
+        self.lods.as_ref().map(|l| l.tau())
+    }
+
     /// Where the viewer stands now.
     pub fn pose(&self) -> Pose {
         self.steer.pose()

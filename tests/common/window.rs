@@ -1,6 +1,7 @@
 //! The window tests' shared parts: an X display to draw on, a player that plays a path
 //! through the window and disturbs it on cue, and the window's options. A process can
 //! open one window event loop only, so each window test is a test binary of its own.
+#![allow(dead_code)]
 
 use std::process::{Child, Command};
 
