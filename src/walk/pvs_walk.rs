@@ -23,7 +23,7 @@ use crate::prefetch::pvs::{Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, S
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::motion::CameraPath;
-use crate::walk::sink::Played;
+use crate::walk::sink::{LeftOut, Played};
 use crate::walk::{FrameFigures, FrameSink, NoSink, Viewer};
 
 /// Which neighbours the client prefetches.
@@ -139,10 +139,8 @@ pub fn walk_pvs_live(
         HashMap::new()
     };
     let mut held = ObjectBuffer::new(usize::MAX);
-    let mut left_out = LeftOut {
-        skip: sink.skips_damaged(),
-        ..Default::default()
-    };
+    // Objects whose meshes could not be read, when the viewer walks on without them.
+    let mut left_out = sink.skips_damaged().then(LeftOut::default);
     let mut shown: Option<Cell> = None;
     for i in 0.. {
         let Some(pose) = sink.next_pose(i)? else {
@@ -182,7 +180,10 @@ pub fn walk_pvs_live(
                 || "outside every viewcell".into(),
                 |c| format!("viewcell {c}"),
             ),
-            damaged: std::mem::take(&mut left_out.new),
+            damaged: left_out
+                .as_mut()
+                .map(LeftOut::take_untold)
+                .unwrap_or_default(),
             ..Default::default()
         });
         frames.push(frame);
@@ -207,16 +208,6 @@ pub fn walk_pvs_live(
     })
 }
 
-/// Objects whose meshes could not be read, when the viewer walks on without them
-/// ([`crate::walk::Viewer::skips_damaged`]): not read again, and told of once.
-#[derive(Default)]
-struct LeftOut {
-    skip: bool,
-    ids: std::collections::HashSet<u64>,
-    /// Those not yet in a frame's figures, each with why.
-    new: Vec<String>,
-}
-
 /// What a frame draws: the PVS of `shown`, from `pose`.
 struct Drawing<'p> {
     shown: Option<Cell>,
@@ -225,13 +216,14 @@ struct Drawing<'p> {
 }
 
 /// Brings `held` to what the client holds (loading new objects' meshes, dropping what
-/// it evicted) and hands `sink` the PVS of `at.shown` within the frustum.
+/// it evicted; leaving out, when `left_out` is kept, those that cannot be read) and
+/// hands `sink` the PVS of `at.shown` within the frustum.
 fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
     db: &Database,
     entries: &HashMap<u64, ObjectEntry>,
     client: &PvsClient<'_, S, A>,
     held: &mut ObjectBuffer,
-    left_out: &mut LeftOut,
+    left_out: &mut Option<LeftOut>,
     at: &Drawing<'_>,
     sink: &mut dyn FrameSink,
 ) -> Result<()> {
@@ -245,20 +237,19 @@ fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
         held.remove(id);
     }
     for id in cache.objects() {
-        if held.get(id).is_none() && !left_out.ids.contains(&id) {
+        if held.get(id).is_none() && !left_out.as_ref().is_some_and(|l| l.contains(id)) {
             let entry = entries.get(&id).ok_or_else(|| {
                 Error::Invalid(format!(
                     "object {id} of a PVS is not in the database's index"
                 ))
             })?;
-            let mesh = match db.mesh(entry) {
-                Ok(m) => m,
-                Err(e) if left_out.skip => {
-                    left_out.ids.insert(id);
-                    left_out.new.push(format!("object {id} left out: {e}"));
+            let mesh = match (db.mesh(entry), left_out.as_mut()) {
+                (Ok(m), _) => m,
+                (Err(e), Some(l)) => {
+                    l.leave_out(id, &e);
                     continue;
                 }
-                Err(e) => return Err(e),
+                (Err(e), None) => return Err(e),
             };
             held.insert(Loaded {
                 entry: *entry,

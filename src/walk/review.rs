@@ -43,7 +43,7 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::cells::{contains_ground, scaled_cell};
 use super::motion::CameraPath;
-use super::sink::{FrameFigures, FrameSink, NoSink, Played, Viewer};
+use super::sink::{FrameFigures, FrameSink, LeftOut, NoSink, Played, Viewer};
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -373,16 +373,6 @@ struct Fetched {
     load_ms: f64,
 }
 
-/// Objects whose meshes could not be read, left out of a walk whose viewer walks on
-/// without them: never read again, and told of once.
-#[derive(Default)]
-struct LeftOut {
-    ids: HashSet<u64>,
-    /// Those not yet in a frame's figures, each with why (a prefetch that finds one may
-    /// be dropped as stale).
-    untold: Vec<String>,
-}
-
 struct Request {
     cell: Aabb,
     history: Vec<Aabb>,
@@ -445,8 +435,9 @@ pub fn walk_live(
     // are, so a prefetch asked for before the viewer's own query skips what it loaded.
     let resident = Mutex::new(HashSet::new());
     let resident = &resident;
-    // Objects whose meshes could not be read, when the viewer walks on without them:
-    // never read again.
+    // Objects whose meshes could not be read, when the viewer walks on without them;
+    // shared with the prefetch thread, and told of from here (a prefetch that finds
+    // one may be dropped as stale).
     let left_out = viewer
         .skips_damaged()
         .then(|| Mutex::new(LeftOut::default()));
@@ -526,7 +517,7 @@ pub fn walk_live(
                 }),
                 walk_ms: f.frame_ms,
                 damaged: left_out
-                    .and_then(|l| l.lock().ok().map(|mut l| std::mem::take(&mut l.untold)))
+                    .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
                     .unwrap_or_default(),
             });
             frames.push(f);
@@ -922,7 +913,7 @@ fn fetch(
     let mut objects = Vec::with_capacity(result.objects.len());
     for entry in &result.objects {
         if resident.lock().is_ok_and(|r| r.contains(&entry.id))
-            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.ids.contains(&entry.id)))
+            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id)))
         {
             continue;
         }
@@ -930,8 +921,7 @@ fn fetch(
             (Ok(m), _) => m,
             (Err(e), Some(l)) => {
                 if let Ok(mut l) = l.lock() {
-                    l.ids.insert(entry.id);
-                    l.untold.push(format!("object {} left out: {e}", entry.id));
+                    l.leave_out(entry.id, &e);
                 }
                 continue;
             }

@@ -106,3 +106,30 @@ impl Viewer for Played<'_> {
         Ok(self.path.poses.get(frame).copied())
     }
 }
+
+/// Objects whose meshes could not be read, left out of a walk whose viewer
+/// [skips damaged ones](Viewer::skips_damaged): never read again, and told of once in
+/// [`FrameFigures::damaged`].
+#[derive(Debug, Default)]
+pub(crate) struct LeftOut {
+    ids: std::collections::HashSet<u64>,
+    /// Those not yet told of, each with why.
+    untold: Vec<String>,
+}
+
+impl LeftOut {
+    pub fn contains(&self, id: u64) -> bool {
+        self.ids.contains(&id)
+    }
+
+    /// Object `id` left out, reading its mesh having failed with `e`.
+    pub fn leave_out(&mut self, id: u64, e: &crate::Error) {
+        self.ids.insert(id);
+        self.untold.push(format!("object {id} left out: {e}"));
+    }
+
+    /// Those left out since the last call, each with why.
+    pub fn take_untold(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.untold)
+    }
+}
