@@ -12,7 +12,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
-use crate::walk::lod_select::{Drawn, LodCounts, LodSelector, REFINED};
+use crate::walk::lod_select::{Drawn, LodCounts, LodSelector};
 use crate::walk::FrameSink;
 
 /// What drawing a walk cost.
@@ -156,20 +156,18 @@ impl FrameWriter<'_> {
             None => drawn.iter().map(|o| Drawn::full(o)).collect(),
         };
         let select = started.elapsed();
-        let frame = self.draw_selected(camera, buffer, &selected)?;
-        if let Some(l) = self.times.select_ms.last_mut() {
-            *l = ms(select);
-        }
+        let frame = self.draw_selected(camera, buffer, &selected, select)?;
         Ok((frame, selected))
     }
 
-    /// Draws `selected` as chosen: the GPU made to hold what `buffer` holds of what has
-    /// been drawn, at the level last drawn.
-    pub fn draw_selected(
+    /// Draws `selected` (chosen in `select`): the GPU made to hold what `buffer` holds
+    /// of what has been drawn, at the level last drawn.
+    fn draw_selected(
         &mut self,
         camera: &Camera,
         buffer: &ObjectBuffer,
         selected: &[Drawn],
+        select: Duration,
     ) -> Result<Frame> {
         let started = Instant::now();
         let f = self.meshes.follow(
@@ -189,19 +187,14 @@ impl FrameWriter<'_> {
         let draw = started.elapsed();
         let t = &mut self.times;
         t.frames += 1;
-        // Drawn as chosen elsewhere: no selection here.
-        t.select_ms.push(0.0);
+        t.select_ms.push(ms(select));
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
         t.triangles
             .push(selected.iter().map(|d| d.triangles as u64).sum());
-        t.coarse.push(
-            selected
-                .iter()
-                .filter(|d| d.level > 0 && d.level != REFINED)
-                .count(),
-        );
+        t.coarse
+            .push(selected.iter().filter(|d| d.is_coarse()).count());
         Ok(frame)
     }
 }

@@ -859,10 +859,7 @@ fn hud_content(
     let last = frame_ms.back().copied().unwrap_or(0.0);
     let worst = frame_ms.iter().copied().fold(0.0, f32::max);
     let triangles: usize = selected.iter().map(|d| d.triangles).sum();
-    let coarse = selected
-        .iter()
-        .filter(|d| d.level > 0 && d.level != REFINED)
-        .count();
+    let coarse = selected.iter().filter(|d| d.is_coarse()).count();
     let refined = selected.iter().filter(|d| d.level == REFINED).count();
     let mut lines = vec![
         format!(

@@ -58,6 +58,12 @@ pub struct Drawn {
 }
 
 impl Drawn {
+    /// Whether it is drawn at one of its coarser stored levels (not at full detail,
+    /// nor refined view by view).
+    pub fn is_coarse(&self) -> bool {
+        self.level > 0 && self.level != REFINED
+    }
+
     /// An object drawn at full detail, as the walk loaded it.
     pub fn full(o: &Loaded) -> Drawn {
         Drawn {
@@ -135,6 +141,18 @@ impl ObjectLevels {
             levels: Vec::new(),
             meshes: Vec::new(),
         }
+    }
+
+    /// Coarse level `level`'s mesh: kept, or read from `db` (counted in `reads`).
+    fn mesh(&mut self, db: &Database, level: usize, reads: &mut u64) -> Result<Arc<Mesh>> {
+        if let Some(m) = &self.meshes[level] {
+            return Ok(m.clone());
+        }
+        let entry = self.entry.as_ref().expect("an object with levels has data");
+        let m = Arc::new(stored::level_mesh(db.store(), entry, level)?);
+        *reads += 1;
+        self.meshes[level] = Some(m.clone());
+        Ok(m)
     }
 }
 
@@ -261,29 +279,16 @@ impl<'a> LodSelector<'a> {
             let mesh = if level == 0 {
                 o.mesh.clone()
             } else {
-                self.counts.coarse_draws += 1;
-                match &levels.meshes[level] {
-                    Some(m) => m.clone(),
-                    None => {
-                        let entry = levels
-                            .entry
-                            .as_ref()
-                            .expect("an object with levels has data");
-                        match stored::level_mesh(self.db.store(), entry, level) {
-                            Ok(m) => {
-                                let m = Arc::new(m);
-                                self.counts.levels_read += 1;
-                                levels.meshes[level] = Some(m.clone());
-                                m
-                            }
-                            Err(e) => {
-                                *levels = ObjectLevels::full_only();
-                                self.counts.coarse_draws -= 1;
-                                self.damage(id, e, "at full detail")?;
-                                out.push(Drawn::full(o));
-                                continue;
-                            }
-                        }
+                match levels.mesh(self.db, level, &mut self.counts.levels_read) {
+                    Ok(m) => {
+                        self.counts.coarse_draws += 1;
+                        m
+                    }
+                    Err(e) => {
+                        *levels = ObjectLevels::full_only();
+                        self.damage(id, e, "at full detail")?;
+                        out.push(Drawn::full(o));
+                        continue;
                     }
                 }
             };
