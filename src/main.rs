@@ -699,13 +699,10 @@ fn run(cli: Cli) -> Result<()> {
             let opts = flaneur::render::ViewOptions {
                 size,
                 lod_tau: (lod_tau != 0.0).then_some(lod_tau),
-                start,
-                ground: db.bounds().min.y,
-                city: db.bounds(),
-                margin: flaneur::geom::DEFAULT_FAR,
                 play,
                 gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
                 speed,
+                ..flaneur::render::ViewOptions::new(&db, start)
             };
             view(&db, opts, mode, (boxes, top_view), record.as_deref())
         }
@@ -1621,17 +1618,8 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         println!(
             "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
-        let opts = flaneur::render::ViewOptions {
-            size: (1024, 768),
-            lod_tau: Some(flaneur::walk::lod_select::DEFAULT_TAU),
-            start: flaneur::walk::start::busiest_street(&db)?,
-            ground: db.bounds().min.y,
-            city: db.bounds(),
-            margin: flaneur::geom::DEFAULT_FAR,
-            play: None,
-            gpu_budget: Some(256 << 20),
-            speed: flaneur::walk::steer::WALK_SPEED,
-        };
+        let start = flaneur::walk::start::busiest_street(&db)?;
+        let opts = flaneur::render::ViewOptions::new(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
@@ -1745,7 +1733,7 @@ fn view(
         s.problems.len()
     );
     if let Some(r) = record {
-        flaneur::render::save_recording(&window.recorded, &r.to_path_buf())?;
+        flaneur::render::save_recording(&window.recorded, r)?;
         println!(
             "{} poses recorded to {}",
             window.recorded.len(),

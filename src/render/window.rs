@@ -19,7 +19,7 @@
 //! quits.
 
 use std::collections::VecDeque;
-use std::path::PathBuf;
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -97,6 +97,25 @@ pub struct ViewOptions {
     pub gpu_budget: Option<u64>,
     /// Walking speed, m/s (running is four times it, flying the same).
     pub speed: f32,
+}
+
+impl ViewOptions {
+    /// Walking `db` from `start`: a 1024 × 768 window, LODs under the thesis's τ, a
+    /// 256 MiB GPU budget, a walker's pace, and the ground reaching the default
+    /// frustum's depth past the city.
+    pub fn new(db: &Database, start: Pose) -> ViewOptions {
+        ViewOptions {
+            size: (1024, 768),
+            lod_tau: Some(crate::walk::lod_select::DEFAULT_TAU),
+            start,
+            ground: db.bounds().min.y,
+            city: db.bounds(),
+            margin: crate::geom::DEFAULT_FAR,
+            play: None,
+            gpu_budget: Some(256 << 20),
+            speed: crate::walk::steer::WALK_SPEED,
+        }
+    }
 }
 
 /// What a session at the window drew.
@@ -561,6 +580,33 @@ impl<'a> WalkWindow<'a> {
         }
     }
 
+    /// Polls the device: reports the errors it raised, and lets it go when it is lost
+    /// (it tells of that only when polled). Whether there is a device to draw with.
+    fn device_answers(&mut self) -> bool {
+        let Some(s) = &self.surfaced else {
+            return false;
+        };
+        let _ = s.gpu.device.poll(wgpu::PollType::Poll);
+        let errors: Vec<String> = s
+            .errors
+            .lock()
+            .map(|mut v| v.drain(..).collect())
+            .unwrap_or_default();
+        let lost = s.lost.load(Ordering::SeqCst);
+        for e in errors {
+            self.report(format!("the GPU device reported an error: {e}"));
+        }
+        if lost {
+            self.surfaced = None;
+            self.last_try = Instant::now();
+            self.report(
+                "the GPU device was lost; the walk goes on undrawn while a new one is sought"
+                    .into(),
+            );
+        }
+        !lost
+    }
+
     /// Draws `selected` as `camera` sees it; `Ok(None)` when nothing could be drawn
     /// this frame (minimised, occluded, surface being configured again).
     fn draw(
@@ -570,31 +616,12 @@ impl<'a> WalkWindow<'a> {
         selected: &[Drawn],
     ) -> Result<Option<(f64, f64)>> {
         let pages_per_s = self.pages_per_second();
-        let Some(s) = &mut self.surfaced else {
+        if !self.device_answers() {
             return Ok(None);
-        };
-        // The device tells of its loss (the lost callback) only when polled.
-        let _ = s.gpu.device.poll(wgpu::PollType::Poll);
-        let errors: Vec<String> = s
-            .errors
-            .lock()
-            .map(|mut v| v.drain(..).collect())
-            .unwrap_or_default();
-        for e in errors {
-            self.report(format!("the GPU device reported an error: {e}"));
         }
         let Some(s) = &mut self.surfaced else {
             return Ok(None);
         };
-        if s.lost.load(Ordering::SeqCst) {
-            self.surfaced = None;
-            self.last_try = Instant::now();
-            self.report(
-                "the GPU device was lost; the walk goes on undrawn while a new one is sought"
-                    .into(),
-            );
-            return Ok(None);
-        }
         let started = Instant::now();
         s.meshes.set_budget(self.opts.gpu_budget);
         let followed = s.meshes.follow(
@@ -911,7 +938,7 @@ fn hud_content(
 
 /// Where `--record` writes a session's poses: a path CSV that `--play` (and `flaneur
 /// walk --path`) read back.
-pub fn save_recording(poses: &[Pose], path: &PathBuf) -> Result<()> {
+pub fn save_recording(poses: &[Pose], path: &Path) -> Result<()> {
     // Restarts after a change begin a new clock: renumber times so they increase.
     let mut out = Vec::with_capacity(poses.len());
     let mut t = 0.0;

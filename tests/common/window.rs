@@ -93,17 +93,14 @@ impl Viewer for Player<'_, '_> {
     }
 }
 
-/// A small window over `db` playing `poses`, with a GPU budget of 4 MiB.
+/// A small window over `db` playing `poses` from its busiest street, with LODs and a
+/// GPU budget of 4 MiB.
 pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions {
     ViewOptions {
         size: (256, 192),
         lod_tau: Some(0.001),
-        start: flaneur::walk::start::busiest_street(db).unwrap(),
-        ground: db.bounds().min.y,
-        city: db.bounds(),
-        margin: 1000.0,
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
-        speed: 1.4,
+        ..ViewOptions::new(db, flaneur::walk::start::busiest_street(db).unwrap())
     }
 }
