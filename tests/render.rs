@@ -439,7 +439,7 @@ fn fidelity_of_the_pvs_walk() {
     let reference: u64 = r.rows.iter().map(|row| row.reference_triangles).sum();
     assert!(drawn < reference, "{drawn} triangles against {reference}");
     let same = r.rows.iter().filter(|row| row.differ == 0.0).count();
-    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    let mean_differ = r.mean_differ();
     assert!(
         same > 0 && mean_differ < 0.05,
         "{same} frames the same, {:.2} % of pixels differ",
@@ -548,7 +548,7 @@ fn a_walk_drawn_at_its_levels_of_detail() {
         .rows
         .iter()
         .all(|row| row.triangles <= row.reference_triangles));
-    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    let mean_differ = r.mean_differ();
     assert!(
         mean_differ < 0.05,
         "{:.1} % of pixels differ",
@@ -701,7 +701,7 @@ fn large_objects_are_refined_view_by_view() {
         "box",
         (64, Some(0.001)),
     );
-    let mean_differ = r.rows.iter().map(|row| row.differ).sum::<f64>() / r.rows.len() as f64;
+    let mean_differ = r.mean_differ();
     assert!(
         mean_differ < 0.05,
         "{:.1} % of pixels differ",

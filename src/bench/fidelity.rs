@@ -249,6 +249,12 @@ impl FidelityReport {
         s
     }
 
+    /// The mean share of pixels that differ from the reference over the frames (0
+    /// when there are none).
+    pub fn mean_differ(&self) -> f64 {
+        self.rows.iter().map(|r| r.differ).sum::<f64>() / self.rows.len().max(1) as f64
+    }
+
     pub fn markdown(&self) -> String {
         let n = self.rows.len().max(1) as f64;
         let same = self.rows.iter().filter(|r| r.psnr.is_infinite()).count();
@@ -259,7 +265,7 @@ impl FidelityReport {
             .filter(|p| p.is_finite())
             .collect();
         let worst = finite.iter().copied().fold(f64::INFINITY, f64::min);
-        let mean_differ = self.rows.iter().map(|r| r.differ).sum::<f64>() / n;
+        let mean_differ = self.mean_differ();
         let max_differ = self.rows.iter().map(|r| r.differ).fold(0.0, f64::max);
         let tri = self.rows.iter().map(|r| r.triangles as f64).sum::<f64>() / n;
         let ref_tri = self
