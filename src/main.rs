@@ -7,23 +7,27 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 
-use flaneur::bench::cell_size::{self, CellSizeConfig};
-use flaneur::bench::csearch::{self, CsearchConfig, CsearchReport};
-use flaneur::bench::db_size::{self, DbSizeConfig};
-use flaneur::bench::frame_time::{self, FrameTimeConfig};
-use flaneur::bench::index_cache::{self, IndexCacheConfig};
-use flaneur::bench::lod_dag::{self, LodDagConfig};
-use flaneur::bench::lod_parallel::{self, LodParallelConfig};
-use flaneur::bench::lod_refine::{self, LodRefineConfig};
-use flaneur::bench::patterns::{self, PatternsConfig};
-use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
-use flaneur::bench::pvs_prefetch::{self, PvsPrefetchConfig};
-use flaneur::bench::view_culling::{self, ViewCullingConfig};
-use flaneur::bench::walk_setup::{self, WalkSetup};
+mod cli;
+use cli::bars::Bars;
+use flaneur::progress::{Progress, Silent};
+
+use flaneur_bench::cell_size::{self, CellSizeConfig};
+use flaneur_bench::csearch::{self, CsearchConfig, CsearchReport};
+use flaneur_bench::db_size::{self, DbSizeConfig};
+use flaneur_bench::frame_time::{self, FrameTimeConfig};
+use flaneur_bench::index_cache::{self, IndexCacheConfig};
+use flaneur_bench::lod_dag::{self, LodDagConfig};
+use flaneur_bench::lod_parallel::{self, LodParallelConfig};
+use flaneur_bench::lod_refine::{self, LodRefineConfig};
+use flaneur_bench::patterns::{self, PatternsConfig};
+use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
+use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig};
+use flaneur_bench::view_culling::{self, ViewCullingConfig};
+use flaneur_bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
-use flaneur::render::{Change, ViewMode};
+use flaneur_render::{Change, ViewMode};
 use flaneur::visibility::{SampleOptions, VisibilityOptions};
 use flaneur::walk::motion::{self, CameraPath, Motion};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
@@ -623,13 +627,12 @@ fn run(cli: Cli) -> Result<()> {
                 page_size,
                 fill,
                 insertion,
-                progress: !quiet,
                 lod: (!no_lod).then(|| LodOptions {
                     pm_threshold,
                     ..LodOptions::default()
                 }),
             };
-            let summary = build(&inputs, &out, &opts)?;
+            let summary = build(&inputs, &out, &opts, !quiet)?;
             println!(
                 "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, {:.1} s",
                 out.display(),
@@ -696,13 +699,13 @@ fn run(cli: Cli) -> Result<()> {
                     CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display()))
                 })
                 .transpose()?;
-            let opts = flaneur::render::ViewOptions {
+            let opts = flaneur_render::ViewOptions {
                 size,
                 lod_tau: (lod_tau != 0.0).then_some(lod_tau),
                 play,
                 gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
                 speed,
-                ..flaneur::render::ViewOptions::new(&db, start)
+                ..flaneur_render::ViewOptions::new(&db, start)
             };
             view(&db, opts, mode, (boxes, top_view), record.as_deref())
         }
@@ -717,8 +720,8 @@ fn run(cli: Cli) -> Result<()> {
             let db = Database::open(&db)?;
             let camera = flaneur::geom::Camera::new(at, look.0.to_radians(), look.1.to_radians())?
                 .with_fov(fov.to_radians(), fov.to_radians())?;
-            let gpu = flaneur::render::Gpu::headless()?;
-            let s = flaneur::render::shot(&db, &gpu, &camera, size.0, size.1)?;
+            let gpu = flaneur_render::Gpu::headless()?;
+            let s = flaneur_render::shot(&db, &gpu, &camera, size.0, size.1)?;
             s.frame.save_png(&out)?;
             println!(
                 "{}: {} × {} on {} ({:?}); {} objects, {} triangles, {:.1} MiB on the GPU; \
@@ -1028,12 +1031,12 @@ fn run(cli: Cli) -> Result<()> {
                     ..ReviewConfig::preset(preset.unwrap_or(Preset::Optimal))
                 };
                 let walk = match preset {
-                    Some(_) => flaneur::bench::fidelity::ModeWalk::Review(&cfg),
-                    None => flaneur::bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
+                    Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
+                    None => flaneur_bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
                         border: PvsPrefetchConfig::default().border,
                     }),
                 };
-                let gpu = flaneur::render::Gpu::headless()?;
+                let gpu = flaneur_render::Gpu::headless()?;
                 println!(
                     "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice",
                     poses.poses.len(),
@@ -1042,12 +1045,12 @@ fn run(cli: Cli) -> Result<()> {
                     size.1
                 );
                 let bar = indicatif::ProgressBar::new(poses.poses.len() as u64);
-                let drawing = flaneur::bench::fidelity::Drawing {
+                let drawing = flaneur_bench::fidelity::Drawing {
                     width: size.0,
                     height: size.1,
                     lod_tau: (lod_tau != 0.0).then_some(lod_tau),
                 };
-                let r = flaneur::bench::fidelity::run(
+                let r = flaneur_bench::fidelity::run(
                     &db,
                     &gpu,
                     &poses,
@@ -1157,12 +1160,18 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-fn build(inputs: &[PathBuf], out: &Path, opts: &BuildOptions) -> Result<flaneur::BuildSummary> {
+fn build(
+    inputs: &[PathBuf],
+    out: &Path,
+    opts: &BuildOptions,
+    bars: bool,
+) -> Result<flaneur::BuildSummary> {
     let is_obj = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let progress: &dyn Progress = if bars { &Bars::default() } else { &Silent };
     if inputs.iter().all(is_obj) {
-        Ok(flaneur::build_from_obj(inputs, out, opts)?)
+        Ok(flaneur::build_from_obj_with_progress(inputs, out, opts, progress)?)
     } else if inputs.len() == 1 {
-        Ok(flaneur::build_from_scene(&inputs[0], out, opts)?)
+        Ok(flaneur::build_from_scene_with_progress(&inputs[0], out, opts, progress)?)
     } else {
         bail!("give one scene file, or OBJ files only")
     }
@@ -1565,13 +1574,11 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             );
         }
         println!("building {}", db_path.display());
-        let b = flaneur::build_from_scene(
+        let b = flaneur::build_from_scene_with_progress(
             &scene,
             &db_path,
-            &BuildOptions {
-                progress: true,
-                ..Default::default()
-            },
+            &BuildOptions::default(),
+            &Bars::default(),
         )?;
         println!(
             "  {} pages, tree height {}, {:.1} s",
@@ -1619,7 +1626,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
         let start = flaneur::walk::start::busiest_street(&db)?;
-        let opts = flaneur::render::ViewOptions::new(&db, start);
+        let opts = flaneur_render::ViewOptions::new(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
@@ -1632,7 +1639,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
 /// (a key changed the mode or the budget, or the walk failed), until the window closes.
 fn view(
     db: &Database,
-    opts: flaneur::render::ViewOptions,
+    opts: flaneur_render::ViewOptions,
     mode: ViewMode,
     (boxes, top_view): (bool, bool),
     record: Option<&Path>,
@@ -1647,7 +1654,7 @@ fn view(
     };
     let mut mode = mode;
     let mut cfg = preset(mode);
-    let mut window = flaneur::render::WalkWindow::open(db, opts, mode)?;
+    let mut window = flaneur_render::WalkWindow::open(db, opts, mode)?;
     window.boxes = boxes;
     window.top_view = top_view;
     if let Some(a) = window.adapter() {
@@ -1733,7 +1740,7 @@ fn view(
         s.problems.len()
     );
     if let Some(r) = record {
-        flaneur::render::save_recording(&window.recorded, r)?;
+        flaneur_render::save_recording(&window.recorded, r)?;
         println!(
             "{} poses recorded to {}",
             window.recorded.len(),
@@ -1746,7 +1753,7 @@ fn view(
 /// The demo's last part where there is no display: a short flight over the city drawn
 /// headless to PNG frames. Without a GPU adapter, it says so and the demo ends well.
 fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
-    let gpu = match flaneur::render::Gpu::headless() {
+    let gpu = match flaneur_render::Gpu::headless() {
         Ok(gpu) => gpu,
         Err(e) => {
             println!("no flight drawn: {e}");
@@ -1779,7 +1786,7 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
         "drawing a {frames}-frame flight over the city on {} ({:?}), headless",
         gpu.adapter.name, gpu.adapter.backend
     );
-    let mut writer = flaneur::render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
+    let mut writer = flaneur_render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
         .with_lods(db, flaneur::walk::lod_select::DEFAULT_TAU)?;
     let bar = indicatif::ProgressBar::new(frames as u64);
     review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
@@ -1845,9 +1852,9 @@ fn rendered<R>(
     let Some(r) = render else {
         return Ok((walk(&mut flaneur::walk::NoSink)?, None));
     };
-    let gpu = flaneur::render::Gpu::headless()?;
+    let gpu = flaneur_render::Gpu::headless()?;
     let mut writer =
-        flaneur::render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
+        flaneur_render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
     if let Some(tau) = r.lod_tau {
         writer = writer.with_lods(db, tau)?;
     }
@@ -1863,8 +1870,8 @@ fn rendered<R>(
 
 /// What drew a walk, and what it cost.
 struct Drawn {
-    adapter: wgpu::AdapterInfo,
-    times: flaneur::render::FrameTimes,
+    adapter: flaneur_render::AdapterInfo,
+    times: flaneur_render::FrameTimes,
 }
 
 /// What drawing a walk's frames cost, printed and written to `render.csv` beside them.

@@ -6,13 +6,13 @@ mod common;
 
 use common::flaneur;
 
-use flaneur::bench::cell_size::{self, CellSizeConfig};
-use flaneur::bench::db_size::{self, DbSizeConfig};
-use flaneur::bench::frame_time::{self, FrameTimeConfig};
-use flaneur::bench::patterns::{self, PatternsConfig};
-use flaneur::bench::prefetch_k::{self, PrefetchKConfig};
-use flaneur::bench::view_culling::{self, BufferModel, ViewCullingConfig};
-use flaneur::bench::walk_setup::{WalkSetup, THESIS_PATTERNS};
+use flaneur_bench::cell_size::{self, CellSizeConfig};
+use flaneur_bench::db_size::{self, DbSizeConfig};
+use flaneur_bench::frame_time::{self, FrameTimeConfig};
+use flaneur_bench::patterns::{self, PatternsConfig};
+use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
+use flaneur_bench::view_culling::{self, BufferModel, ViewCullingConfig};
+use flaneur_bench::walk_setup::{WalkSetup, THESIS_PATTERNS};
 use flaneur::walk::review::Preset;
 use flaneur::walk::Motion;
 use flaneur::{BuildOptions, Database, Error};

@@ -4,7 +4,7 @@
 
 mod common;
 
-use flaneur::bench::csearch::{self, CsearchConfig};
+use flaneur_bench::csearch::{self, CsearchConfig};
 use flaneur::rtree::History;
 use flaneur::walk::{cells::disk_cell, street_walk};
 use flaneur::{BuildOptions, Database};

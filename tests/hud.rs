@@ -2,7 +2,7 @@
 //! bars coloured by frame time), and the same image blended onto an offscreen frame by
 //! the GPU (needs an adapter: CI installs Mesa's software one, lavapipe).
 
-use flaneur::render::{rasterise, Gpu, GpuMeshes, Hud, HudContent, Offscreen};
+use flaneur_render::{rasterise, Gpu, GpuMeshes, Hud, HudContent, Offscreen};
 use glam::Mat4;
 use image::RgbaImage;
 

@@ -6,7 +6,7 @@ mod common;
 
 use common::flaneur;
 
-use flaneur::bench::pvs_prefetch::{
+use flaneur_bench::pvs_prefetch::{
     cumulative_plot, steps_plot, MISSES_PLOT, REGIONS_CSV, REGIONS_PLOT, ROUTES_CSV, ROUTES_PLOT,
     STEPS_CSV,
 };

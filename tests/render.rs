@@ -8,9 +8,9 @@ mod common;
 
 use std::collections::HashMap;
 
-use flaneur::bench::fidelity::ModeWalk;
+use flaneur_bench::fidelity::ModeWalk;
 use flaneur::geom::Camera;
-use flaneur::render::{fov_x_for, shot, FrameWriter, Gpu};
+use flaneur_render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
 use flaneur::walk::buffer::{Loaded, ObjectBuffer};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
@@ -67,13 +67,13 @@ fn fidelity(
     walk: ModeWalk<'_>,
     mode: &str,
     (size, lod_tau): (u32, Option<f32>),
-) -> flaneur::bench::fidelity::FidelityReport {
-    let drawing = flaneur::bench::fidelity::Drawing {
+) -> flaneur_bench::fidelity::FidelityReport {
+    let drawing = flaneur_bench::fidelity::Drawing {
         width: size,
         height: size,
         lod_tau,
     };
-    flaneur::bench::fidelity::run(db, gpu, path, walk, mode, &drawing, |_| {}).unwrap()
+    flaneur_bench::fidelity::run(db, gpu, path, walk, mode, &drawing, |_| {}).unwrap()
 }
 
 fn gpu() -> Gpu {
@@ -181,17 +181,17 @@ fn the_id_target_shows_what_rays_meet_and_the_image_matches_its_reference() {
 fn bad_sizes_and_unknown_objects_are_errors() {
     let gpu = gpu();
     for (w, h) in [(0, 10), (10, 0), (u32::MAX, 4)] {
-        let err = flaneur::render::Offscreen::new(&gpu, w, h).err().unwrap();
+        let err = flaneur_render::Offscreen::new(&gpu, w, h).err().unwrap();
         assert!(err.to_string().contains("pixels"), "{err}");
     }
-    let target = flaneur::render::Offscreen::new(&gpu, 8, 8).unwrap();
-    let meshes = flaneur::render::GpuMeshes::default();
+    let target = flaneur_render::Offscreen::new(&gpu, 8, 8).unwrap();
+    let meshes = flaneur_render::GpuMeshes::default();
     let err = target
         .render(&gpu, glam::Mat4::IDENTITY, &meshes, &[(7, 0)])
         .unwrap_err();
     assert!(err.to_string().contains("object 7"), "{err}");
     // A mesh whose indices run past its vertices is refused, naming the object.
-    let mut meshes = flaneur::render::GpuMeshes::default();
+    let mut meshes = flaneur_render::GpuMeshes::default();
     let bad = flaneur::scene::Mesh {
         positions: vec![[0.0; 3]; 3],
         normals: vec![[0.0, 1.0, 0.0]; 3],
@@ -205,7 +205,7 @@ fn bad_sizes_and_unknown_objects_are_errors() {
 #[test]
 fn meshes_come_and_go_and_their_bytes_are_counted() {
     let gpu = gpu();
-    let mut meshes = flaneur::render::GpuMeshes::default();
+    let mut meshes = flaneur_render::GpuMeshes::default();
     let quad = |z: f32| flaneur::scene::Mesh {
         positions: vec![
             [-1.0, -1.0, z],
@@ -221,7 +221,7 @@ fn meshes_come_and_go_and_their_bytes_are_counted() {
     let one = meshes.get((1, 0)).unwrap().bytes;
     assert_eq!(meshes.bytes(), 2 * one);
     // Drawn: the nearer quad hides the farther one in the middle of the image.
-    let target = flaneur::render::Offscreen::new(&gpu, 32, 32).unwrap();
+    let target = flaneur_render::Offscreen::new(&gpu, 32, 32).unwrap();
     let view_proj = glam::Mat4::perspective_rh(1.0, 1.0, 0.5, 100.0);
     let frame = target
         .render(&gpu, view_proj, &meshes, &[(1, 0), (2, 0)])
@@ -579,8 +579,8 @@ fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
             indices: vec![0, 1, 2, 0, 2, 3],
         }),
     };
-    let one = flaneur::render::gpu_bytes(&quad(0).mesh);
-    let mut meshes = flaneur::render::GpuMeshes::default();
+    let one = flaneur_render::gpu_bytes(&quad(0).mesh);
+    let mut meshes = flaneur_render::GpuMeshes::default();
     meshes.set_budget(Some(2 * one));
     let all = |_| true;
     let f = meshes.follow(&gpu, all, &[quad(1), quad(2)], None).unwrap();
@@ -603,10 +603,10 @@ fn the_gpu_budget_frees_what_a_frame_does_not_draw() {
 /// camera shows green lines, the frustum white ones, and nothing else changes.
 #[test]
 fn boxes_are_drawn_in_their_colours() {
-    use flaneur::render::boxes::{lines, Boxes, CULLED};
+    use flaneur_render::boxes::{lines, Boxes, CULLED};
     let gpu = gpu();
-    let target = flaneur::render::Offscreen::new(&gpu, 64, 64).unwrap();
-    let meshes = flaneur::render::GpuMeshes::default();
+    let target = flaneur_render::Offscreen::new(&gpu, 64, 64).unwrap();
+    let meshes = flaneur_render::GpuMeshes::default();
     let camera = Camera::new(Vec3::ZERO, 0.0, 0.0).unwrap();
     let view_proj = camera.view_proj(1.0).unwrap();
     let held = [flaneur::geom::Aabb::new([8.0, -2.0, -2.0], [12.0, 2.0, 2.0]).unwrap()];

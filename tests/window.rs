@@ -6,7 +6,7 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur::render::{ViewMode, WalkWindow};
+use flaneur_render::{ViewMode, WalkWindow};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{motion, Motion};
 use flaneur::{BuildOptions, Database};
@@ -54,7 +54,7 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
     );
     // What it recorded reads back as a path.
     let rec = city.dir.path().join("rec.csv");
-    flaneur::render::save_recording(&window.recorded, &rec).unwrap();
+    flaneur_render::save_recording(&window.recorded, &rec).unwrap();
     let back = flaneur::walk::CameraPath::load_csv(&rec).unwrap();
     assert_eq!(back.poses.len(), 40);
 }

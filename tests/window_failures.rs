@@ -6,7 +6,7 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur::render::{ViewMode, WalkWindow};
+use flaneur_render::{ViewMode, WalkWindow};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{motion, Motion};
 use flaneur::{BuildOptions, Database};

@@ -9,7 +9,7 @@ mod window;
 
 use std::process::Command;
 
-use flaneur::render::{Change, ViewMode, WalkWindow};
+use flaneur_render::{Change, ViewMode, WalkWindow};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{FrameSink, Pose, Viewer};
 use flaneur::{BuildOptions, Database};
@@ -67,7 +67,7 @@ fn keys_and_the_mouse_steer_the_window() {
     };
     let city = common::city(60, 3, &BuildOptions::default());
     let db = Database::open(&city.db).unwrap();
-    let opts = flaneur::render::ViewOptions {
+    let opts = flaneur_render::ViewOptions {
         play: None,
         ..options(&db, &flaneur::walk::CameraPath { poses: Vec::new() })
     };

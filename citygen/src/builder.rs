@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use crate::mesh::Mesh;
+use flaneur_scene::Mesh;
 
 /// Accumulates flat-shaded faces into a [`Mesh`].
 #[derive(Default)]

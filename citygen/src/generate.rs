@@ -10,10 +10,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::config::CityConfig;
-use crate::error::SceneError;
-use crate::object::SceneObject;
+use flaneur_scene::SceneError;
+use flaneur_scene::SceneObject;
 use crate::recipe::{checked_layout, object_on};
-use crate::scene_file::{SceneSummary, SceneWriter};
+use flaneur_scene::{SceneSummary, SceneWriter};
 
 /// Objects built together in one parallel batch.
 const CHUNK: u64 = 256;

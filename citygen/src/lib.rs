@@ -25,27 +25,21 @@
 
 mod archetypes;
 mod builder;
-mod bunny;
+mod bunny_landmark;
 mod config;
-mod error;
 mod generate;
 mod layout;
-mod mesh;
 mod obj_export;
-mod object;
 mod recipe;
-mod scene_file;
 mod sculpture;
 
-pub use bunny::bunny;
 pub use config::{CityConfig, MAX_OBJECTS};
-pub use error::SceneError;
 pub use generate::{generate, write_city};
-pub use mesh::Mesh;
-pub use obj_export::{export_obj, write_mesh_obj};
-pub use object::{ObjectKind, SceneObject};
+pub use obj_export::export_obj;
 pub use recipe::object;
-pub use scene_file::{
-    dequantize_normal, quantize_snorm8, SceneReader, SceneSummary, SceneWriter, MAX_INDICES,
-    MAX_VERTICES,
+// The scene types are the engine's (`flaneur-scene`); they are named here too so that a
+// generator user has one crate to import.
+pub use flaneur_scene::{
+    bunny, dequantize_normal, quantize_snorm8, write_mesh_obj, Mesh, ObjectKind, SceneError,
+    SceneObject, SceneReader, SceneSummary, SceneWriter, MAX_INDICES, MAX_VERTICES,
 };

@@ -8,8 +8,8 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use crate::config::CityConfig;
-use crate::error::SceneError;
-use crate::mesh::Mesh;
+use flaneur_scene::SceneError;
+use flaneur_scene::write_mesh_obj;
 use crate::recipe::object_on;
 
 /// Writes every object of `config` whose bounds overlap the x–z rectangle `region`
@@ -55,20 +55,4 @@ pub fn export_obj(
     }
     w.flush().map_err(|e| SceneError::io(out, e))?;
     Ok(written)
-}
-
-/// Writes `mesh` as OBJ `v`, `vn` and `f v//vn` lines, its vertex 0 numbered `first` (OBJ
-/// indices are 1-based and count every vertex before them in the file).
-pub fn write_mesh_obj(w: &mut impl Write, mesh: &Mesh, first: u64) -> std::io::Result<()> {
-    for p in &mesh.positions {
-        writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
-    }
-    for n in &mesh.normals {
-        writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
-    }
-    for t in mesh.indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as u64 + first);
-        writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-    }
-    Ok(())
 }

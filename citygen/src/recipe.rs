@@ -8,11 +8,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::archetypes::building;
-use crate::bunny::bunny_landmark;
+use crate::bunny_landmark::bunny_landmark;
 use crate::config::CityConfig;
-use crate::error::SceneError;
+use flaneur_scene::SceneError;
 use crate::layout::Layout;
-use crate::object::{ObjectKind, SceneObject};
+use flaneur_scene::{ObjectKind, SceneObject};
 use crate::sculpture::sculpture;
 
 /// Salts that keep the independent per-id draws apart.

@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::archetypes::place;
 use crate::builder::MeshBuilder;
 use crate::layout::Lot;
-use crate::mesh::Mesh;
+use flaneur_scene::Mesh;
 
 /// Height of the plinth every sculpture stands on, in metres.
 const PLINTH: f32 = 1.0;

@@ -5,7 +5,7 @@
 
 use std::process::{Child, Command};
 
-use flaneur::render::{ViewOptions, WalkWindow};
+use flaneur_render::{ViewOptions, WalkWindow};
 use flaneur::walk::{FrameSink, Pose, Viewer};
 use flaneur::Database;
 

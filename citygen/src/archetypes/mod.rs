@@ -13,8 +13,8 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::builder::MeshBuilder;
 use crate::layout::Lot;
-use crate::mesh::Mesh;
-use crate::object::ObjectKind;
+use flaneur_scene::Mesh;
+use flaneur_scene::ObjectKind;
 
 /// A building for `lot`: the archetype is drawn first from `rng`, then its parameters.
 /// Shares: houses 55 %, terraces 25 %, towers 20 %.

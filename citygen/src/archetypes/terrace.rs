@@ -11,7 +11,7 @@ use super::facade::{bays_across, facade, Bay, Wall};
 use super::{place, roof, RoofStyle};
 use crate::builder::MeshBuilder;
 use crate::layout::Lot;
-use crate::mesh::Mesh;
+use flaneur_scene::Mesh;
 
 /// Metres the body keeps clear of its lot edge (room for eaves and pilasters).
 const CLEARANCE: f32 = 0.5;

@@ -14,7 +14,7 @@ use super::facade::{bays_across, facade, Bay, Wall};
 use super::place;
 use crate::builder::MeshBuilder;
 use crate::layout::Lot;
-use crate::mesh::Mesh;
+use flaneur_scene::Mesh;
 
 /// Metres the base tier keeps clear of its lot edge (room for ledges and fins).
 const CLEARANCE: f32 = 0.6;

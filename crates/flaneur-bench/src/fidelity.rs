@@ -1,0 +1,384 @@
+//! How faithful a walk mode's pictures are (the thesis's Figs. 5.26 and 6.6, as
+//! numbers): each frame of a walk is drawn twice, once with what the mode selected (its
+//! object buffer after culling, at the detail it chose) and once at full detail with
+//! every object in the view frustum read from the database, and the two images are
+//! compared: PSNR over the RGB channels and the share of pixels that differ, beside the
+//! triangles each drew.
+//!
+//! With LOD selection (`lod_tau`), each object the mode drew is at the level the walk's
+//! LOD selection chose ([`flaneur::walk::lod_select`]); without it, REVIEW and BOX draw
+//! what they loaded at full detail, and their pictures differ from the reference only
+//! where an object in view was not yet loaded (a visual miss). The PVS walk draws its
+//! current viewcell's PVS: its pictures also lose what the precomputation judged
+//! hidden (and got wrong), and everything while the eye is outside every cell.
+
+use std::path::Path;
+
+use crate::plot::{line_plot, LinePlot, Series};
+use flaneur::database::Database;
+use flaneur::error::{Error, Result};
+use flaneur::geom::Camera;
+use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
+use flaneur::walk::buffer::{Loaded, ObjectBuffer};
+use flaneur::walk::lod_select::LodCounts;
+use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::review::{self, ReviewConfig};
+use flaneur::walk::{CameraPath, FrameSink};
+
+/// The walk whose frames are compared.
+#[derive(Clone, Copy, Debug)]
+pub enum ModeWalk<'a> {
+    /// REVIEW (or BOX) under this configuration.
+    Review(&'a ReviewConfig),
+    /// The PVS walk over the database's precomputed visibility, with this prefetcher.
+    Pvs(PvsPrefetch),
+}
+
+impl ModeWalk<'_> {
+    /// The depth of the walk's view frustum, metres.
+    fn far(&self) -> f32 {
+        match self {
+            ModeWalk::Review(cfg) => cfg.far,
+            // The PVS walk's cameras have the default frustum (`Pose::camera`).
+            ModeWalk::Pvs(_) => flaneur::geom::DEFAULT_FAR,
+        }
+    }
+}
+
+/// One frame's comparison.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FidelityRow {
+    pub frame: usize,
+    /// Triangles the mode drew, and the full-detail reference.
+    pub triangles: u64,
+    pub reference_triangles: u64,
+    /// Peak signal to noise ratio of the mode's image against the reference, dB;
+    /// infinite where they are the same.
+    pub psnr: f64,
+    /// Share of pixels whose colour differs.
+    pub differ: f64,
+    /// Objects the mode drew coarser than full detail.
+    pub coarse: usize,
+}
+
+/// How the experiment draws: the image size, and the LOD selection's threshold (a
+/// fraction of the viewport; `None`: the mode's objects at full detail).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drawing {
+    pub width: u32,
+    pub height: u32,
+    pub lod_tau: Option<f32>,
+}
+
+/// What the experiment measured.
+#[derive(Clone, Debug)]
+pub struct FidelityReport {
+    pub mode: String,
+    pub width: u32,
+    pub height: u32,
+    pub adapter: String,
+    pub lod_tau: Option<f32>,
+    /// What LOD selection read, when it ran.
+    pub lod: Option<LodCounts>,
+    pub rows: Vec<FidelityRow>,
+}
+
+/// PSNR (dB) and the share of differing pixels of RGBA images `a` and `b` of the same
+/// size; alpha is not compared.
+///
+/// ```
+/// use flaneur::bench::fidelity::compare;
+/// let a = [10u8, 20, 30, 255, 0, 0, 0, 255];
+/// let (psnr, differ) = compare(&a, &a).unwrap();
+/// assert!(psnr.is_infinite() && differ == 0.0);
+/// let b = [10u8, 20, 31, 255, 0, 0, 0, 255];
+/// let (psnr, differ) = compare(&a, &b).unwrap();
+/// assert!((psnr - 10.0 * (255f64.powi(2) / (1.0 / 6.0)).log10()).abs() < 1e-9);
+/// assert_eq!(differ, 0.5);
+/// ```
+pub fn compare(a: &[u8], b: &[u8]) -> Result<(f64, f64)> {
+    if a.len() != b.len() || !a.len().is_multiple_of(4) || a.is_empty() {
+        return Err(Error::Invalid(format!(
+            "images of {} and {} bytes cannot be compared",
+            a.len(),
+            b.len()
+        )));
+    }
+    let (mut squares, mut differ) = (0f64, 0usize);
+    for (p, q) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        let mut any = false;
+        for k in 0..3 {
+            let d = p[k] as f64 - q[k] as f64;
+            squares += d * d;
+            any |= d != 0.0;
+        }
+        differ += any as usize;
+    }
+    let pixels = a.len() / 4;
+    let mse = squares / (3 * pixels) as f64;
+    let psnr = if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255f64 * 255.0 / mse).log10()
+    };
+    Ok((psnr, differ as f64 / pixels as f64))
+}
+
+/// The sink that draws each frame twice and compares.
+struct Twice<'a> {
+    db: &'a Database,
+    gpu: &'a Gpu,
+    mode: FrameWriter<'a>,
+    reference: Offscreen,
+    resident: GpuMeshes,
+    rows: Vec<FidelityRow>,
+}
+
+impl Twice<'_> {
+    /// The full-detail picture: every object whose box meets the frustum, read from the
+    /// database; the GPU keeps only the current frame's.
+    fn reference(&mut self, camera: &Camera) -> Result<(Frame, u64)> {
+        let inside = flaneur_render::in_view(self.db, camera)?;
+        let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
+        self.resident.retain(|(id, _)| keep.contains(&id));
+        for o in &inside {
+            if self.resident.get((o.id, 0)).is_none() {
+                self.resident
+                    .upload(self.gpu, (o.id, 0), &self.db.mesh(o)?)?;
+            }
+        }
+        let ids: Vec<_> = inside.iter().map(|o| (o.id, 0)).collect();
+        let frame = self
+            .reference
+            .render_camera(self.gpu, camera, &self.resident, &ids)?;
+        Ok((frame, inside.iter().map(|o| o.triangles as u64).sum()))
+    }
+}
+
+impl FrameSink for Twice<'_> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<()> {
+        let (mine, _) = self.mode.draw(camera, buffer, drawn)?;
+        let (reference, reference_triangles) = self.reference(camera)?;
+        let (psnr, differ) = compare(&mine.rgba, &reference.rgba)?;
+        self.rows.push(FidelityRow {
+            frame: index,
+            triangles: *self.mode.times.triangles.last().unwrap_or(&0),
+            reference_triangles,
+            psnr,
+            differ,
+            coarse: *self.mode.times.coarse.last().unwrap_or(&0),
+        });
+        Ok(())
+    }
+}
+
+/// Walks `path` through `db` with `walk` (`mode` names it in the report), drawing each
+/// frame twice on `gpu` as `drawing` says.
+pub fn run(
+    db: &Database,
+    gpu: &Gpu,
+    path: &CameraPath,
+    walk: ModeWalk<'_>,
+    mode: &str,
+    drawing: &Drawing,
+    progress: impl FnMut(usize),
+) -> Result<FidelityReport> {
+    let (width, height) = (drawing.width, drawing.height);
+    let bounds = db.bounds();
+    let far = walk.far();
+    let mut reference = Offscreen::new(gpu, width, height)?;
+    reference.set_ground(gpu, &bounds, far);
+    let mut sink = Twice {
+        db,
+        gpu,
+        mode: match drawing.lod_tau {
+            Some(tau) => {
+                FrameWriter::drawing(gpu, (width, height), (&bounds, far))?.with_lods(db, tau)?
+            }
+            None => FrameWriter::drawing(gpu, (width, height), (&bounds, far))?,
+        },
+        reference,
+        resident: GpuMeshes::default(),
+        rows: Vec::with_capacity(path.poses.len()),
+    };
+    match walk {
+        ModeWalk::Review(cfg) => {
+            review::walk_into(db, path, cfg, progress, &mut sink)?;
+        }
+        ModeWalk::Pvs(prefetch) => {
+            pvs_walk::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
+        }
+    }
+    Ok(FidelityReport {
+        mode: mode.into(),
+        width,
+        height,
+        adapter: format!("{} ({:?})", gpu.adapter.name, gpu.adapter.backend),
+        lod_tau: drawing.lod_tau,
+        lod: sink.mode.times.lod,
+        rows: sink.rows,
+    })
+}
+
+impl FidelityReport {
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "frame,triangles,reference_triangles,psnr_db,differing_pixels,coarse_objects\n",
+        );
+        for r in &self.rows {
+            s.push_str(&format!(
+                "{},{},{},{},{:.6},{}\n",
+                r.frame,
+                r.triangles,
+                r.reference_triangles,
+                if r.psnr.is_finite() {
+                    format!("{:.3}", r.psnr)
+                } else {
+                    "inf".into()
+                },
+                r.differ,
+                r.coarse
+            ));
+        }
+        s
+    }
+
+    /// The mean share of pixels that differ from the reference over the frames (0
+    /// when there are none).
+    pub fn mean_differ(&self) -> f64 {
+        self.rows.iter().map(|r| r.differ).sum::<f64>() / self.rows.len().max(1) as f64
+    }
+
+    pub fn markdown(&self) -> String {
+        let n = self.rows.len().max(1) as f64;
+        let same = self.rows.iter().filter(|r| r.psnr.is_infinite()).count();
+        let finite: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|r| r.psnr)
+            .filter(|p| p.is_finite())
+            .collect();
+        let worst = finite.iter().copied().fold(f64::INFINITY, f64::min);
+        let mean_differ = self.mean_differ();
+        let max_differ = self.rows.iter().map(|r| r.differ).fold(0.0, f64::max);
+        let tri = self.rows.iter().map(|r| r.triangles as f64).sum::<f64>() / n;
+        let ref_tri = self
+            .rows
+            .iter()
+            .map(|r| r.reference_triangles as f64)
+            .sum::<f64>()
+            / n;
+        let mut s = format!(
+            "# fidelity — {} against full detail\n\n{} frames of {} × {} on {}; each drawn with the \
+             mode's selection and with every object in the frustum at full detail.\n\n",
+            self.mode,
+            self.rows.len(),
+            self.width,
+            self.height,
+            self.adapter
+        );
+        let lod = match (self.lod_tau, self.lod) {
+            (Some(tau), Some(c)) => format!(
+                "The mode's objects are drawn at the level LOD selection chose under τ = {tau} \
+                 of the viewport: {} draws coarser than full detail, {} levels read; {} draws \
+                 refined view by view ({} vertex splits and edge collapses); {} pages.\n\n",
+                c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.pages
+            ),
+            _ => "The mode's objects are drawn at full detail.\n\n".into(),
+        };
+        s.push_str(&lod);
+        s.push_str("| | value |\n|---|---|\n");
+        s.push_str(&format!(
+            "| frames identical to the reference | {same} ({:.1} %) |\n",
+            100.0 * same as f64 / n
+        ));
+        if finite.is_empty() {
+            s.push_str("| PSNR of the others, mean / worst | — |\n");
+        } else {
+            s.push_str(&format!(
+                "| PSNR of the others, mean / worst | {:.1} / {:.1} dB |\n",
+                finite.iter().sum::<f64>() / finite.len() as f64,
+                worst
+            ));
+        }
+        s.push_str(&format!(
+            "| pixels that differ, mean / most | {:.3} % / {:.3} % |\n",
+            100.0 * mean_differ,
+            100.0 * max_differ
+        ));
+        s.push_str(&format!(
+            "| triangles drawn, mean: mode / reference | {tri:.0} / {ref_tri:.0} |\n"
+        ));
+        s
+    }
+
+    /// PSNR per frame (identical frames at the plot's top), and the differing pixels
+    /// beside the triangles drawn.
+    pub fn plot(&self, dir: &Path) -> Result<()> {
+        let cap = self
+            .rows
+            .iter()
+            .map(|r| r.psnr)
+            .filter(|p| p.is_finite())
+            .fold(40.0, f64::max)
+            + 10.0;
+        line_plot(
+            &dir.join("fidelity-psnr.png"),
+            &LinePlot {
+                title: format!(
+                    "PSNR against full detail, {} (identical frames drawn at {cap:.0} dB)",
+                    self.mode
+                ),
+                x_label: "frame".into(),
+                y_label: "PSNR (dB)".into(),
+                series: vec![Series {
+                    name: self.mode.clone(),
+                    points: self
+                        .rows
+                        .iter()
+                        .map(|r| (r.frame as f64, r.psnr.min(cap)))
+                        .collect(),
+                }],
+            },
+        )?;
+        let most = self
+            .rows
+            .iter()
+            .map(|r| r.reference_triangles)
+            .max()
+            .unwrap_or(1)
+            .max(1) as f64;
+        line_plot(
+            &dir.join("fidelity-pixels.png"),
+            &LinePlot {
+                title: format!("Pixels that differ and triangles drawn, {}", self.mode),
+                x_label: "frame".into(),
+                y_label: "share".into(),
+                series: vec![
+                    Series {
+                        name: "pixels that differ".into(),
+                        points: self
+                            .rows
+                            .iter()
+                            .map(|r| (r.frame as f64, r.differ))
+                            .collect(),
+                    },
+                    Series {
+                        name: format!("triangles drawn / {most:.0}"),
+                        points: self
+                            .rows
+                            .iter()
+                            .map(|r| (r.frame as f64, r.triangles as f64 / most))
+                            .collect(),
+                    },
+                ],
+            },
+        )
+    }
+}

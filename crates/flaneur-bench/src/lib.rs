@@ -1,0 +1,25 @@
+//! The papers' experiments as library code: `flaneur bench` and the criterion benches
+//! call these and only print or plot what they return.
+//!
+//! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
+//! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
+//! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on procedural models,
+//! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
+//! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either.
+
+pub mod cell_size;
+pub mod city_series;
+pub mod csearch;
+pub mod db_size;
+pub mod fidelity;
+pub mod frame_time;
+pub mod index_cache;
+pub mod lod_dag;
+pub mod lod_parallel;
+pub mod lod_refine;
+pub mod patterns;
+pub mod plot;
+pub mod prefetch_k;
+pub mod pvs_prefetch;
+pub mod view_culling;
+pub mod walk_setup;

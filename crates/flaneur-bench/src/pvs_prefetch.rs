@@ -1,0 +1,826 @@
+//! The `pvs-prefetch` experiment (Zheng 2007 §7.5, Table 7.2, Figs. 7.6–7.8): SNP
+//! against PBNP on the thesis's synthetic city, a 9-entry client cache and
+//! delta-transmission for both, along a random route and a route of straight lines —
+//! prefetching transactions, cache swaps, objects sent per transaction and at each
+//! step, and visual misses; beside them, PBNP swept over its region size, which the
+//! thesis leaves open.
+//!
+//! It runs on the synthetic PVS table (`prefetch::pvs::synthetic`, how it is drawn is
+//! named there) and the two routes (`prefetch::pvs::routes`); one seed draws both. No
+//! database: the table and the walks take well under a second. [`run_on_database`]
+//! runs the same experiment over a database's precomputed visibility, every PVS record
+//! read through the store, with route 2 drawn along the city's walkable cells
+//! (`axis_route`).
+
+use std::path::Path;
+
+use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::{
+    axis_route, check_border, measure, random_route, simulate, straight_route, Pbnp, Position,
+    PvsSource, RouteConfig, SimReport, SimTotals, Snp, StoredPvs, SyntheticCity, SyntheticConfig,
+    TableStats, DEFAULT_BORDER, THESIS_CAPACITY,
+};
+
+/// One column of Zheng 2007 Table 7.2, with §7.5's objects per transaction and in the
+/// first transaction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThesisColumn {
+    /// 1 (random) or 2 (straight lines).
+    pub route: u8,
+    pub algorithm: &'static str,
+    pub transactions: usize,
+    pub swaps: usize,
+    pub objects_per_transaction: f64,
+    pub first_transaction_objects: usize,
+}
+
+/// Table 7.2 and §7.5, column by column.
+pub const THESIS: [ThesisColumn; 4] = [
+    ThesisColumn {
+        route: 1,
+        algorithm: "SNP",
+        transactions: 585,
+        swaps: 1785,
+        objects_per_transaction: 30.0,
+        first_transaction_objects: 158,
+    },
+    ThesisColumn {
+        route: 1,
+        algorithm: "PBNP",
+        transactions: 487,
+        swaps: 876,
+        objects_per_transaction: 16.0,
+        first_transaction_objects: 87,
+    },
+    ThesisColumn {
+        route: 2,
+        algorithm: "SNP",
+        transactions: 600,
+        swaps: 1797,
+        objects_per_transaction: 29.0,
+        first_transaction_objects: 153,
+    },
+    ThesisColumn {
+        route: 2,
+        algorithm: "PBNP",
+        transactions: 600,
+        swaps: 828,
+        objects_per_transaction: 16.0,
+        first_transaction_objects: 51,
+    },
+];
+
+/// The thesis's column for `route` and `algorithm`.
+pub fn thesis(route: u8, algorithm: &str) -> Option<&'static ThesisColumn> {
+    THESIS
+        .iter()
+        .find(|t| t.route == route && t.algorithm == algorithm)
+}
+
+/// The region sizes swept by default, fractions of a cell's side.
+pub const DEFAULT_BORDERS: [f64; 9] = [0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5];
+
+/// The main CSV's extra companions, and the plots.
+pub const STEPS_CSV: &str = "pvs-prefetch-steps.csv";
+pub const REGIONS_CSV: &str = "pvs-prefetch-regions.csv";
+pub const ROUTES_CSV: &str = "pvs-prefetch-routes.csv";
+pub const ROUTES_PLOT: &str = "pvs-prefetch-routes.png";
+pub const REGIONS_PLOT: &str = "pvs-prefetch-regions.png";
+pub const MISSES_PLOT: &str = "pvs-prefetch-regions-misses.png";
+
+/// The PNG of the objects sent at each step along `route` by `algorithm` (Figs. 7.7,
+/// 7.8), and of the objects sent so far by both.
+pub fn steps_plot(route: u8, algorithm: &str) -> String {
+    format!("pvs-prefetch-route{route}-{}.png", algorithm.to_lowercase())
+}
+
+pub fn cumulative_plot(route: u8) -> String {
+    format!("pvs-prefetch-route{route}-cumulative.png")
+}
+
+/// The settings of the experiment; the defaults are the thesis's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PvsPrefetchConfig {
+    pub city: SyntheticConfig,
+    /// Both routes' length; its seed draws them.
+    pub route: RouteConfig,
+    /// PBNP's region border, a fraction of the cell's side.
+    pub border: f64,
+    /// Client cache entries.
+    pub capacity: usize,
+    /// PBNP's region borders to sweep (none: no sweep).
+    pub borders: Vec<f64>,
+}
+
+impl Default for PvsPrefetchConfig {
+    fn default() -> PvsPrefetchConfig {
+        PvsPrefetchConfig {
+            city: SyntheticConfig::default(),
+            route: RouteConfig::default(),
+            border: DEFAULT_BORDER,
+            capacity: THESIS_CAPACITY,
+            borders: DEFAULT_BORDERS.to_vec(),
+        }
+    }
+}
+
+impl PvsPrefetchConfig {
+    /// A clear error for settings the experiment cannot run.
+    pub fn validate(&self) -> Result<()> {
+        self.city.validate()?;
+        self.route.validate()?;
+        check_border(self.border)?;
+        for &b in &self.borders {
+            check_border(b)?;
+        }
+        if self.capacity < THESIS_CAPACITY {
+            return Err(Error::Pvs(format!(
+                "a client cache of {} entries is too small: it must hold the current cell and its 8 neighbours ({THESIS_CAPACITY})",
+                self.capacity
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Both algorithms along one route.
+#[derive(Clone, Debug)]
+pub struct RouteRun {
+    /// 1 (random) or 2 (straight lines).
+    pub route: u8,
+    pub positions: Vec<Position>,
+    pub snp: SimReport,
+    pub pbnp: SimReport,
+    /// Pages SNP's walk and PBNP's read, over a database.
+    pub pages: Option<[u64; 2]>,
+}
+
+impl RouteRun {
+    pub fn name(&self) -> String {
+        format!("route {}", self.route)
+    }
+
+    /// SNP's report, then PBNP's.
+    pub fn reports(&self) -> [&SimReport; 2] {
+        [&self.snp, &self.pbnp]
+    }
+}
+
+/// PBNP with one region border along one route.
+#[derive(Clone, Debug)]
+pub struct SweepRow {
+    pub border: f64,
+    pub route: u8,
+    pub totals: SimTotals,
+}
+
+/// Where the experiment ran.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Place {
+    /// What the report's title names: "a synthetic city", or a database.
+    pub name: String,
+    /// A paragraph on the city, its PVS table and the routes.
+    pub description: String,
+    /// A viewcell's side, metres.
+    pub cell: f64,
+}
+
+/// What the experiment measured.
+#[derive(Clone, Debug)]
+pub struct PvsPrefetchReport {
+    pub config: PvsPrefetchConfig,
+    pub place: Place,
+    pub stats: TableStats,
+    /// Route 1, then route 2.
+    pub routes: Vec<RouteRun>,
+    pub sweep: Vec<SweepRow>,
+}
+
+/// Draws the city and the routes and walks them.
+pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
+    cfg.validate()?;
+    let city = SyntheticCity::generate(&cfg.city)?;
+    let stats = measure(&city)?;
+    let middle = cfg.city.blocks.div_ceil(2);
+    let route1 = random_route(city.intersection(middle, middle), &cfg.route, |p| {
+        Ok(city.on_walkway(p))
+    })?;
+    let route2 = straight_route(&city, &cfg.route)?.positions;
+    let (routes, sweep) = walk(&city, [route1, route2], cfg, || None)?;
+    let c = &cfg.city;
+    let place = Place {
+        name: "a synthetic city".into(),
+        description: format!(
+            "City: {b} × {b} buildings of {} m, streets {} m, viewcells {} m: {} viewcells on a {g} × {g} grid, \
+             PVS table drawn with seed {}. Routes: {} steps of {} m (seed {}); route 1 random from the central \
+             crossing, route 2 seven straight lines with six right-angle turns. Client cache {} entries, \
+             delta-transmission for both; PBNP's side and corner regions {} of a cell's side ({} m). \
+             A cache swap is one cell evicted from the cache.",
+            c.building,
+            c.street,
+            c.cell,
+            stats.viewcells,
+            c.seed,
+            cfg.route.steps,
+            cfg.route.step,
+            cfg.route.seed,
+            cfg.capacity,
+            cfg.border,
+            cfg.border * c.cell,
+            b = c.blocks,
+            g = (f64::from(c.blocks) * (c.building + c.street) + c.street) / c.cell,
+        ),
+        cell: c.cell,
+    };
+    Ok(PvsPrefetchReport {
+        config: cfg.clone(),
+        place,
+        stats,
+        routes,
+        sweep,
+    })
+}
+
+/// Runs the experiment over `db`'s precomputed visibility (`name` says which database
+/// in the report): both routes from the walkable viewcell nearest the city's centre,
+/// route 1 random as on the synthetic city, route 2 along x and z (`axis_route`). The
+/// PVS pages each walk reads are counted. `cfg.city` is not used.
+pub fn run_on_database(
+    db: &flaneur::Database,
+    name: &str,
+    cfg: &PvsPrefetchConfig,
+) -> Result<PvsPrefetchReport> {
+    cfg.validate()?;
+    let source = StoredPvs::new(db)?;
+    let stats = measure(&source)?;
+    let head = db.visibility()?.expect("StoredPvs checked it");
+    let centre = db.bounds().center();
+    let start = source
+        .walkable_centres()?
+        .into_iter()
+        .min_by(|a, b| {
+            let d =
+                |p: &Position| (p.x - centre.x as f64).powi(2) + (p.z - centre.z as f64).powi(2);
+            d(a).total_cmp(&d(b))
+        })
+        .ok_or_else(|| Error::Pvs("the database has no walkable viewcell".into()))?;
+    // Walkable as the walk will see it: by the prefetcher's grid, whose arithmetic
+    // decides a position exactly on a cell border the same way here and there.
+    let walkable = |p: Position| match source.grid().cell_of(p) {
+        Ok(cell) => source.is_viewcell(cell),
+        Err(_) => Ok(false),
+    };
+    let route1 = random_route(start, &cfg.route, walkable)?;
+    let route2 = axis_route(start, &cfg.route, walkable)?;
+    let (routes, sweep) = walk(&source, [route1, route2], cfg, || Some(db.io().page_reads))?;
+    let cell = source.grid().cell_size();
+    let place = Place {
+        name: name.into(),
+        description: format!(
+            "{name}: {} walkable viewcells of {cell} m on a {} × {} grid, each cell's PVS read from the \
+             database's precomputed visibility through the store; {} objects in the scene. Routes: {} steps \
+             of {} m (seed {}) from the walkable cell nearest the centre; route 1 random, route 2 straight \
+             lines along x and z with right-angle turns (more than seven where buildings cut them short). \
+             Client cache {} entries, delta-transmission for both; PBNP's side and corner regions {} of a \
+             cell's side ({} m). A cache swap is one cell evicted from the cache. The thesis's figures, in \
+             brackets, are for its synthetic city.",
+            stats.viewcells,
+            head.grid.rows(),
+            head.grid.columns(),
+            stats.scene_objects,
+            cfg.route.steps,
+            cfg.route.step,
+            cfg.route.seed,
+            cfg.capacity,
+            cfg.border,
+            cfg.border * cell,
+        ),
+        cell,
+    };
+    Ok(PvsPrefetchReport {
+        config: cfg.clone(),
+        place,
+        stats,
+        routes,
+        sweep,
+    })
+}
+
+/// SNP and PBNP along both routes over `source`, then PBNP at each swept border;
+/// `pages` reads a page counter, if there is one.
+fn walk<S: PvsSource + ?Sized>(
+    source: &S,
+    positions: [Vec<Position>; 2],
+    cfg: &PvsPrefetchConfig,
+    pages: impl Fn() -> Option<u64>,
+) -> Result<(Vec<RouteRun>, Vec<SweepRow>)> {
+    let pbnp = Pbnp::new(cfg.border)?;
+    let counted = |rule: &dyn flaneur::prefetch::pvs::PrefetchArea,
+                   positions: &[Position]|
+     -> Result<(SimReport, Option<u64>)> {
+        let before = pages();
+        let report = simulate(source, rule, positions, cfg.capacity)?;
+        Ok((report, before.zip(pages()).map(|(a, b)| b - a)))
+    };
+    let mut routes = Vec::new();
+    for (route, positions) in (1..).zip(positions) {
+        let (snp, snp_pages) = counted(&Snp, &positions)?;
+        let (pbnp, pbnp_pages) = counted(&pbnp, &positions)?;
+        routes.push(RouteRun {
+            route,
+            snp,
+            pbnp,
+            pages: snp_pages.zip(pbnp_pages).map(|(a, b)| [a, b]),
+            positions,
+        });
+    }
+    let mut sweep = Vec::new();
+    for &border in &cfg.borders {
+        for r in &routes {
+            let totals = simulate(source, &Pbnp::new(border)?, &r.positions, cfg.capacity)?.totals;
+            sweep.push(SweepRow {
+                border,
+                route: r.route,
+                totals,
+            });
+        }
+    }
+    Ok((routes, sweep))
+}
+
+/// The change from `from` to `to`, as a percentage of `from`.
+fn change(from: f64, to: f64) -> String {
+    if from == 0.0 {
+        "—".into()
+    } else {
+        format!("{:+.0} %", 100.0 * (to - from) / from)
+    }
+}
+
+impl PvsPrefetchReport {
+    /// Table 7.2's figures, one row per route and algorithm, the thesis's beside.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "route,algorithm,transactions,cache_swaps,objects_sent,objects_per_transaction,first_transaction_objects,objects_per_later_transaction,cells_requested,visual_misses,late_entries,cells_entered,peak_held_objects,thesis_transactions,thesis_cache_swaps,thesis_objects_per_transaction,thesis_first_transaction_objects\n",
+        );
+        for r in &self.routes {
+            for rep in r.reports() {
+                let t = &rep.totals;
+                let th = thesis(r.route, rep.algorithm);
+                s.push_str(&format!(
+                    "{},{},{},{},{},{:.2},{},{:.2},{},{},{},{},{},{},{},{},{}\n",
+                    r.route,
+                    rep.algorithm,
+                    t.transactions,
+                    t.swaps,
+                    t.objects_sent,
+                    t.objects_per_transaction(),
+                    t.first_transaction_objects,
+                    t.objects_per_later_transaction(),
+                    t.cells_requested,
+                    t.visual_misses,
+                    t.late_entries,
+                    t.cells_entered,
+                    t.peak_held_objects,
+                    th.map_or(String::new(), |x| x.transactions.to_string()),
+                    th.map_or(String::new(), |x| x.swaps.to_string()),
+                    th.map_or(String::new(), |x| x.objects_per_transaction.to_string()),
+                    th.map_or(String::new(), |x| x.first_transaction_objects.to_string()),
+                ));
+            }
+        }
+        s
+    }
+
+    /// Objects sent at each step (Figs. 7.7, 7.8): one column per route and algorithm.
+    pub fn steps_csv(&self) -> String {
+        let mut s = String::from("step");
+        for r in &self.routes {
+            for rep in r.reports() {
+                s.push_str(&format!(
+                    ",route{}_{}",
+                    r.route,
+                    rep.algorithm.to_lowercase()
+                ));
+            }
+        }
+        s.push('\n');
+        let n = self
+            .routes
+            .iter()
+            .map(|r| r.positions.len())
+            .max()
+            .unwrap_or(0);
+        for i in 0..n {
+            s.push_str(&i.to_string());
+            for r in &self.routes {
+                for rep in r.reports() {
+                    match rep.steps.get(i) {
+                        Some(st) => s.push_str(&format!(",{}", st.objects_sent)),
+                        None => s.push(','),
+                    }
+                }
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// PBNP against its region border.
+    pub fn regions_csv(&self) -> String {
+        let side = self.place.cell;
+        let mut s = String::from(
+            "border,band_m,route,transactions,cache_swaps,objects_per_transaction,first_transaction_objects,visual_misses,late_entries\n",
+        );
+        for w in &self.sweep {
+            let t = &w.totals;
+            s.push_str(&format!(
+                "{},{},{},{},{},{:.2},{},{},{}\n",
+                w.border,
+                w.border * side,
+                w.route,
+                t.transactions,
+                t.swaps,
+                t.objects_per_transaction(),
+                t.first_transaction_objects,
+                t.visual_misses,
+                t.late_entries
+            ));
+        }
+        s
+    }
+
+    /// The routes' positions (Fig. 7.6).
+    pub fn routes_csv(&self) -> String {
+        let mut s = String::from("step");
+        for r in &self.routes {
+            s.push_str(&format!(",route{0}_x,route{0}_z", r.route));
+        }
+        s.push('\n');
+        let n = self
+            .routes
+            .iter()
+            .map(|r| r.positions.len())
+            .max()
+            .unwrap_or(0);
+        for i in 0..n {
+            s.push_str(&i.to_string());
+            for r in &self.routes {
+                match r.positions.get(i) {
+                    Some(p) => s.push_str(&format!(",{:.3},{:.3}", p.x, p.z)),
+                    None => s.push_str(",,"),
+                }
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// The CSVs besides [`to_csv`](Self::to_csv)'s: (file name, text).
+    pub fn extra_csvs(&self) -> Vec<(&'static str, String)> {
+        vec![
+            (STEPS_CSV, self.steps_csv()),
+            (REGIONS_CSV, self.regions_csv()),
+            (ROUTES_CSV, self.routes_csv()),
+        ]
+    }
+
+    /// Table 7.2 beside the thesis's, the table's statistics, and the region sweep.
+    pub fn markdown(&self) -> String {
+        let c = &self.config;
+        let st = &self.stats;
+        let mut s = format!(
+            "# pvs-prefetch — SNP against PBNP on {} (Zheng 2007 Table 7.2, Figs. 7.6–7.8)\n\n{}\n\n",
+            self.place.name, self.place.description
+        );
+        s.push_str("The PVS table, measured, and as the thesis assumes it:\n\n| | ours | thesis |\n|---|---|---|\n");
+        s.push_str(&format!(
+            "| PVS, share of the {} objects | {:.2} % (mean {:.1} objects, {} to {}) | about 5 % |\n",
+            st.scene_objects,
+            100.0 * st.mean_share,
+            st.mean_pvs,
+            st.min_pvs,
+            st.max_pvs
+        ));
+        s.push_str(&format!(
+            "| share of a PVS that a side neighbour sees too | {:.1} % (over {} pairs) | about 60 % |\n",
+            100.0 * st.side_overlap,
+            st.side_pairs
+        ));
+        s.push_str(&format!(
+            "| the same as intersection over union | {:.1} % | — |\n| diagonal neighbours; cells two apart | {:.1} %; {:.1} % | — |\n\n",
+            100.0 * st.side_jaccard,
+            100.0 * st.diagonal_overlap,
+            100.0 * st.two_apart_overlap
+        ));
+
+        s.push_str("Table 7.2 and §7.5, ours (thesis's):\n\n|");
+        for r in &self.routes {
+            for rep in r.reports() {
+                s.push_str(&format!(" | {} {}", r.name(), rep.algorithm));
+            }
+        }
+        s.push_str(" |\n|---|---|---|---|---|\n");
+        type Cell = fn(&SimTotals, Option<&ThesisColumn>) -> String;
+        let rows: [(&str, Cell); 6] = [
+            ("prefetch transactions", |t, th| {
+                format!(
+                    "{} ({})",
+                    t.transactions,
+                    th.map_or("—".into(), |x| x.transactions.to_string())
+                )
+            }),
+            ("cache swaps", |t, th| {
+                format!(
+                    "{} ({})",
+                    t.swaps,
+                    th.map_or("—".into(), |x| x.swaps.to_string())
+                )
+            }),
+            ("objects per transaction", |t, th| {
+                format!(
+                    "{:.1} ({})",
+                    t.objects_per_transaction(),
+                    th.map_or("—".into(), |x| x.objects_per_transaction.to_string())
+                )
+            }),
+            ("objects in the first transaction", |t, th| {
+                format!(
+                    "{} ({})",
+                    t.first_transaction_objects,
+                    th.map_or("—".into(), |x| x.first_transaction_objects.to_string())
+                )
+            }),
+            ("visual misses (objects; cells entered late)", |t, _| {
+                format!("{}; {} (—)", t.visual_misses, t.late_entries)
+            }),
+            ("PVS rows requested", |t, _| {
+                format!("{} (—)", t.cells_requested)
+            }),
+        ];
+        for (name, cell) in rows {
+            s.push_str(&format!("| {name}"));
+            for r in &self.routes {
+                for rep in r.reports() {
+                    s.push_str(&format!(
+                        " | {}",
+                        cell(&rep.totals, thesis(r.route, rep.algorithm))
+                    ));
+                }
+            }
+            s.push_str(" |\n");
+        }
+        if self.routes.iter().all(|r| r.pages.is_some()) {
+            s.push_str("| pages read (PVS records)");
+            for r in &self.routes {
+                for pages in r.pages.into_iter().flatten() {
+                    s.push_str(&format!(" | {pages} (—)"));
+                }
+            }
+            s.push_str(" |\n");
+        }
+        s.push_str("\nSNP → PBNP, ours (thesis's):\n\n| | transactions | cache swaps | objects per transaction |\n|---|---|---|---|\n");
+        for r in &self.routes {
+            let (a, b) = (&r.snp.totals, &r.pbnp.totals);
+            let (ta, tb) = (thesis(r.route, "SNP"), thesis(r.route, "PBNP"));
+            let th = |f: fn(&ThesisColumn) -> f64| match (ta, tb) {
+                (Some(x), Some(y)) => change(f(x), f(y)),
+                _ => "—".into(),
+            };
+            s.push_str(&format!(
+                "| {} | {} ({}) | {} ({}) | {} ({}) |\n",
+                r.name(),
+                change(a.transactions as f64, b.transactions as f64),
+                th(|x| x.transactions as f64),
+                change(a.swaps as f64, b.swaps as f64),
+                th(|x| x.swaps as f64),
+                change(a.objects_per_transaction(), b.objects_per_transaction()),
+                th(|x| x.objects_per_transaction),
+            ));
+        }
+        if !self.sweep.is_empty() {
+            s.push_str(&format!(
+                "\nPBNP against its region size (the thesis gives none; a band at least one {} m step wide leaves no visual misses):\n\n\
+                 | border (of the side) | band (m) | route | transactions | cache swaps | objects per transaction | visual misses |\n|---|---|---|---|---|---|---|\n",
+                c.route.step
+            ));
+            for w in &self.sweep {
+                let t = &w.totals;
+                s.push_str(&format!(
+                    "| {} | {} | {} | {} | {} | {:.1} | {} |\n",
+                    w.border,
+                    w.border * self.place.cell,
+                    w.route,
+                    t.transactions,
+                    t.swaps,
+                    t.objects_per_transaction(),
+                    t.visual_misses
+                ));
+            }
+        }
+        s
+    }
+
+    /// Objects sent at each step per route and algorithm (Figs. 7.7, 7.8), the objects
+    /// sent so far, the routes seen from above (Fig. 7.6), and the region sweep.
+    pub fn plot(&self, dir: &Path) -> Result<()> {
+        use super::plot::{line_plot, LinePlot, Series};
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        for r in &self.routes {
+            for rep in r.reports() {
+                let fig = if r.route == 1 { "7.7" } else { "7.8" };
+                line_plot(
+                    &dir.join(steps_plot(r.route, rep.algorithm)),
+                    &LinePlot {
+                        title: format!(
+                            "Objects sent at each step, {} {} (cf. Fig. {fig})",
+                            r.name(),
+                            rep.algorithm
+                        ),
+                        x_label: "step".into(),
+                        y_label: "objects transmitted".into(),
+                        series: vec![Series {
+                            name: rep.algorithm.into(),
+                            points: rep
+                                .steps
+                                .iter()
+                                .map(|s| (s.step as f64, s.objects_sent as f64))
+                                .collect(),
+                        }],
+                    },
+                )?;
+            }
+            line_plot(
+                &dir.join(cumulative_plot(r.route)),
+                &LinePlot {
+                    title: format!("Objects sent so far, {}", r.name()),
+                    x_label: "step".into(),
+                    y_label: "objects transmitted".into(),
+                    series: r
+                        .reports()
+                        .iter()
+                        .map(|rep| Series {
+                            name: rep.algorithm.into(),
+                            points: rep
+                                .steps
+                                .iter()
+                                .scan(0usize, |sum, s| {
+                                    *sum += s.objects_sent;
+                                    Some((s.step as f64, *sum as f64))
+                                })
+                                .collect(),
+                        })
+                        .collect(),
+                },
+            )?;
+        }
+        line_plot(
+            &dir.join(ROUTES_PLOT),
+            &LinePlot {
+                title: "The two routes seen from above (cf. Fig. 7.6)".into(),
+                x_label: "x (m, east)".into(),
+                y_label: "z (m, south)".into(),
+                series: self
+                    .routes
+                    .iter()
+                    .map(|r| Series {
+                        name: r.name(),
+                        points: r.positions.iter().map(|p| (p.x, p.z)).collect(),
+                    })
+                    .collect(),
+            },
+        )?;
+        if self.sweep.is_empty() {
+            return Ok(());
+        }
+        let sweep = |route: u8, f: fn(&SimTotals) -> f64| -> Vec<(f64, f64)> {
+            self.sweep
+                .iter()
+                .filter(|w| w.route == route)
+                .map(|w| (w.border, f(&w.totals)))
+                .collect()
+        };
+        let mut counts = Vec::new();
+        let mut misses = Vec::new();
+        for r in &self.routes {
+            counts.push(Series {
+                name: format!("{}: transactions", r.name()),
+                points: sweep(r.route, |t| t.transactions as f64),
+            });
+            counts.push(Series {
+                name: format!("{}: cache swaps", r.name()),
+                points: sweep(r.route, |t| t.swaps as f64),
+            });
+            misses.push(Series {
+                name: r.name(),
+                points: sweep(r.route, |t| t.visual_misses as f64),
+            });
+        }
+        line_plot(
+            &dir.join(REGIONS_PLOT),
+            &LinePlot {
+                title: "PBNP: transactions and cache swaps against region size".into(),
+                x_label: "region border (fraction of the cell side)".into(),
+                y_label: "count along the route".into(),
+                series: counts,
+            },
+        )?;
+        line_plot(
+            &dir.join(MISSES_PLOT),
+            &LinePlot {
+                title: "PBNP: visual misses against region size".into(),
+                x_label: "region border (fraction of the cell side)".into(),
+                y_label: "objects missing on entering a cell".into(),
+                series: misses,
+            },
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> PvsPrefetchConfig {
+        PvsPrefetchConfig {
+            city: SyntheticConfig {
+                blocks: 10,
+                ..Default::default()
+            },
+            route: RouteConfig {
+                steps: 400,
+                ..Default::default()
+            },
+            borders: vec![0.1, 0.25, 0.5],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn small_run_writes_every_figure() {
+        let r = run(&small()).unwrap();
+        assert_eq!(r.routes.len(), 2);
+        assert_eq!(r.sweep.len(), 6);
+        for route in &r.routes {
+            assert_eq!(route.positions.len(), 401);
+            assert!(route.pbnp.totals.swaps <= route.snp.totals.swaps);
+            assert_eq!(route.snp.totals.visual_misses, 0);
+        }
+        // A 2 m band is narrower than a 4 m step: PBNP is sometimes late.
+        let narrow: usize = r
+            .sweep
+            .iter()
+            .filter(|w| w.border == 0.1)
+            .map(|w| w.totals.visual_misses)
+            .sum();
+        assert!(narrow > 0);
+        assert_eq!(r.to_csv().lines().count(), 5);
+        assert_eq!(r.steps_csv().lines().count(), 402);
+        assert_eq!(r.regions_csv().lines().count(), 7);
+        assert_eq!(r.routes_csv().lines().count(), 402);
+        let md = r.markdown();
+        for word in [
+            "Table 7.2",
+            "585",
+            "1785",
+            "876",
+            "route 2 PBNP",
+            "| 0.25 | 5 |",
+        ] {
+            assert!(md.contains(word), "{word} missing from\n{md}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        r.plot(dir.path()).unwrap();
+        for route in [1, 2] {
+            for alg in ["SNP", "PBNP"] {
+                assert!(dir.path().join(steps_plot(route, alg)).exists());
+            }
+            assert!(dir.path().join(cumulative_plot(route)).exists());
+        }
+        for f in [ROUTES_PLOT, REGIONS_PLOT, MISSES_PLOT] {
+            assert!(dir.path().join(f).exists(), "{f}");
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_named() {
+        let err = |f: fn(&mut PvsPrefetchConfig)| {
+            let mut c = small();
+            f(&mut c);
+            run(&c).unwrap_err().to_string()
+        };
+        assert!(err(|c| c.border = 0.0).contains("region border"));
+        assert!(err(|c| c.borders = vec![0.2, 0.8]).contains("region border"));
+        assert!(err(|c| c.capacity = 4).contains("too small"));
+        assert!(err(|c| c.route.steps = 0).contains("steps"));
+        assert!(err(|c| c.city.cell = 0.0).contains("viewcell size"));
+        assert!(err(|c| c.city.overlap = 1.0).contains("overlap"));
+    }
+
+    #[test]
+    fn thesis_columns_are_table_7_2() {
+        assert_eq!(thesis(1, "SNP").unwrap().swaps, 1785);
+        assert_eq!(thesis(2, "PBNP").unwrap().transactions, 600);
+        assert_eq!(thesis(3, "SNP"), None);
+    }
+}

@@ -1,0 +1,283 @@
+//! `flaneur build`: a scene file or OBJ files in, one database file out.
+//!
+//! Objects stream through: each mesh is written as an extent as soon as it is read,
+//! and only its index entry (56 bytes) stays in memory until the R-tree is packed over
+//! all of them. The store writes to a temporary file and renames it into place only
+//! when the build is complete.
+//!
+//! With LODs on (the default), each object is also simplified on the thread pool while
+//! the build reads on, and its coarse levels (and, for large objects, its progressive
+//! mesh and DAG) are appended a batch behind its mesh; the table that finds them by id
+//! is written at the end (`lod::bake`, `lod::table`). Simplifying is most of the time of
+//! such a build.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::database::{self, KindCounts};
+use crate::error::{Error, Result};
+use crate::geom::Aabb;
+use crate::lod::{LodOptions, LodReport, LodWriter};
+use crate::progress::{Progress, Silent, Step};
+use crate::rtree::{ObjectEntry, RTree, DEFAULT_FILL};
+use crate::scene::{encode_mesh, load_obj, Mesh, SceneReader, KIND_IMPORTED};
+use crate::store::{Extent, PageKind, Segment, Store};
+use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
+
+/// How to build.
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    /// Page size in bytes (power of two, 1 KiB to 64 KiB).
+    pub page_size: usize,
+    /// Share of a node's fan-out that bulk loading fills.
+    pub fill: f32,
+    /// Build the index by one-by-one insertion with the linear split (the thesis's
+    /// setting) instead of packing it.
+    pub insertion: bool,
+    /// Store each object's LODs, made this way; `None` stores none (`--no-lod`).
+    pub lod: Option<LodOptions>,
+    /// Precompute the viewcells' visibility this way; `None` computes none (the
+    /// default: it is the long step of a build).
+    pub visibility: Option<VisibilityOptions>,
+}
+
+impl Default for BuildOptions {
+    fn default() -> BuildOptions {
+        BuildOptions {
+            page_size: 4096,
+            fill: DEFAULT_FILL,
+            insertion: false,
+            lod: Some(LodOptions::default()),
+            visibility: None,
+        }
+    }
+}
+
+/// What a build wrote.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BuildSummary {
+    pub objects: u64,
+    pub triangles: u64,
+    /// Pages of the file, header included.
+    pub pages: u64,
+    pub bytes: u64,
+    pub height: u32,
+    /// Wall-clock seconds of the whole build, LODs included.
+    pub seconds: f64,
+    /// What was stored as LODs; `None` when the build stored none.
+    pub lod: Option<LodReport>,
+    /// What the visibility precomputation made; `None` when it did not run.
+    pub visibility: Option<VisibilityReport>,
+}
+
+/// What `flaneur build --visibility` computed.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VisibilityReport {
+    /// Walkable cells, each with a PVS, of the grid's rows × columns.
+    pub cells: usize,
+    pub rows: u32,
+    pub columns: u32,
+    /// Objects over all PVSs.
+    pub entries: u64,
+    /// Objects with an occluder box.
+    pub occluders: usize,
+    /// DoV rays cast.
+    pub rays: u64,
+    /// Seconds of the whole precomputation, and of those, seconds casting DoV rays.
+    pub seconds: f64,
+    pub dov_seconds: f64,
+    /// Pages the table takes.
+    pub pages: u64,
+}
+
+/// Builds a database from a citygen scene file.
+pub fn build_from_scene(scene: &Path, db: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
+    build_from_scene_with_progress(scene, db, opts, &Silent)
+}
+
+/// [`build_from_scene`], telling `progress` how many objects (then viewcells) are done.
+pub fn build_from_scene_with_progress(
+    scene: &Path,
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<BuildSummary> {
+    let reader = SceneReader::open(scene)?;
+    let total = reader.object_count();
+    let objects = reader.map(|r| {
+        r.map(|o| (o.id, o.kind.as_u8(), o.mesh))
+            .map_err(Error::from)
+    });
+    build(objects, Some(total), db, opts, progress)
+}
+
+/// Builds a database from OBJ files: every object or group becomes an object, with
+/// ids in file order.
+pub fn build_from_obj(files: &[PathBuf], db: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
+    build_from_obj_with_progress(files, db, opts, &Silent)
+}
+
+/// [`build_from_obj`], telling `progress` how many objects (then viewcells) are done.
+pub fn build_from_obj_with_progress(
+    files: &[PathBuf],
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<BuildSummary> {
+    if files.is_empty() {
+        return Err(Error::Invalid("no OBJ file to build from".into()));
+    }
+    let mut meshes = Vec::new();
+    for f in files {
+        meshes.extend(load_obj(f)?.into_iter().map(|(_, m)| m));
+    }
+    let total = meshes.len() as u64;
+    let objects = meshes
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| Ok((i as u64, KIND_IMPORTED, m)));
+    build(objects, Some(total), db, opts, progress)
+}
+
+fn build(
+    objects: impl Iterator<Item = Result<(u64, u8, Mesh)>>,
+    total: Option<u64>,
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<BuildSummary> {
+    let start = Instant::now();
+    let mut lods = opts.lod.as_ref().map(LodWriter::new).transpose()?;
+    let mut store = Store::create(db, opts.page_size)?;
+    // Objects count as built once their LODs are stored too, which may be a batch later.
+    let mut built = 0u64;
+    let mut advance = |n: u64| {
+        built += n;
+        progress.update(Step::Objects, built, total);
+    };
+    let mut entries = Vec::with_capacity(total.unwrap_or(0).min(10_000_000) as usize);
+    let mut kinds = KindCounts::default();
+    let mut triangles = 0u64;
+    let mut bounds = Aabb::EMPTY;
+    // The precomputation casts rays at every mesh, so it keeps them all.
+    let mut kept: Vec<(u64, Mesh)> = Vec::new();
+    for object in objects {
+        let (id, kind, mesh) = object?;
+        let entry = write_object(&mut store, id, kind, &mesh)?;
+        if opts.visibility.is_some() {
+            kept.push((id, mesh.clone()));
+        }
+        kinds.mesh += entry.mesh.page_count as u64;
+        triangles += entry.triangles as u64;
+        bounds = bounds.union(&entry.bounds);
+        entries.push(entry);
+        // An object counts as built once its LODs are stored too.
+        match lods.as_mut() {
+            Some(l) => advance(l.push(&mut store, id, entry.mesh, mesh)? as u64),
+            None => advance(1),
+        }
+    }
+    let lod = match lods {
+        Some(l) => {
+            let (report, last) = l.finish(&mut store)?;
+            advance(last as u64);
+            kinds.lod = report.stats.pages;
+            Some(report)
+        }
+        None => None,
+    };
+    progress.finish(Step::Objects);
+    if entries.is_empty() {
+        return Err(Error::Invalid("the input holds no objects".into()));
+    }
+    let visibility = match &opts.visibility {
+        Some(v) => {
+            let report = store_visibility(&mut store, &kept, v, progress)?;
+            kinds.visibility = report.pages;
+            Some(report)
+        }
+        None => None,
+    };
+    drop(kept);
+    let objects = entries.len() as u64;
+    let before = store.page_count();
+    let tree = if opts.insertion {
+        let mut tree = RTree::bulk_load(&mut store, Vec::new(), opts.fill)?;
+        for e in entries {
+            tree.insert(&mut store, e)?;
+        }
+        tree
+    } else {
+        RTree::bulk_load(&mut store, entries, opts.fill)?
+    };
+    kinds.rtree = store.page_count() - before;
+    tree.save(&mut store)?;
+    database::save_meta(&mut store, objects, triangles, &bounds, &kinds)?;
+    let pages = store.page_count();
+    let page_size = store.page_size() as u64;
+    store.finish()?;
+    Ok(BuildSummary {
+        objects,
+        triangles,
+        pages,
+        bytes: pages * page_size,
+        height: tree.height,
+        seconds: start.elapsed().as_secs_f64(),
+        lod,
+        visibility,
+    })
+}
+
+/// Precomputes the visibility of `objects` and appends its table, telling `progress`
+/// the cells done.
+fn store_visibility(
+    store: &mut Store,
+    objects: &[(u64, Mesh)],
+    opts: &VisibilityOptions,
+    progress: &dyn Progress,
+) -> Result<VisibilityReport> {
+    let made = precompute(objects, opts, &|done, total| {
+        progress.update(Step::Visibility, done as u64, Some(total as u64));
+    })?;
+    progress.finish(Step::Visibility);
+    let bytes = encode_table(&made.grid, &made.settings, &made.stats, &made.cells)?;
+    let extent = store.append_extent(PageKind::Visibility, &bytes)?;
+    store.set_segment(Segment::new(
+        VISIBILITY_SEGMENT,
+        extent.first_page,
+        extent.byte_len as u64,
+        extent.page_count as u64,
+    ))?;
+    Ok(VisibilityReport {
+        cells: made.cells.len(),
+        rows: made.grid.rows(),
+        columns: made.grid.columns(),
+        entries: made.stats.entries,
+        occluders: made.occluders,
+        rays: made.stats.rays,
+        seconds: made.stats.seconds,
+        dov_seconds: made.stats.dov_seconds,
+        pages: extent.page_count as u64,
+    })
+}
+
+/// Writes one object's mesh and returns its index entry.
+pub(crate) fn write_object(
+    store: &mut Store,
+    id: u64,
+    kind: u8,
+    mesh: &Mesh,
+) -> Result<ObjectEntry> {
+    mesh.validate()
+        .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
+    let (min, max) = mesh.bounds();
+    let bounds = Aabb::new(min, max).map_err(|e| Error::Invalid(format!("object {id}: {e}")))?;
+    let mesh_extent: Extent = store.append_extent(PageKind::Mesh, &encode_mesh(mesh))?;
+    Ok(ObjectEntry {
+        id,
+        bounds,
+        mesh: mesh_extent,
+        triangles: mesh.triangle_count() as u32,
+        kind,
+    })
+}

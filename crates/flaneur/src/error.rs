@@ -1,0 +1,79 @@
+//! The one error type of the library. Every variant names what is wrong and where
+//! (file, page, object), so that a user can act on it.
+
+use std::path::PathBuf;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    /// The file is not a flaneur database, or a different version of one.
+    #[error("{path}: not a flaneur database: {what}")]
+    NotADatabase { path: PathBuf, what: String },
+
+    /// A page failed its checks: checksum, kind, length or content.
+    #[error("{path}: page {page} is corrupt: {what}")]
+    CorruptPage {
+        path: PathBuf,
+        page: u64,
+        what: String,
+    },
+
+    /// The file is shorter than its header says.
+    #[error("{path}: truncated: {what}")]
+    Truncated { path: PathBuf, what: String },
+
+    #[error("bad box: {0}")]
+    BadBox(String),
+
+    /// A scene or model file that cannot be read (scene file, OBJ).
+    #[error("{path}: {what}")]
+    BadInput { path: PathBuf, what: String },
+
+    #[error(transparent)]
+    Scene(#[from] flaneur_scene::SceneError),
+
+    /// A cubic projection's resolution (pixels per face side) out of range.
+    #[error("cubic projection resolution must be 1..={max} pixels per face side, not {n}")]
+    BadResolution { n: u32, max: u32 },
+
+    /// A viewpoint or ray origin that is not a finite point, or a ray direction that is
+    /// not finite and non-zero; the message names which and its value.
+    #[error("{0}")]
+    BadViewpoint(String),
+
+    /// An object's mesh that cannot be ray cast (no triangles, bad indices, NaN).
+    #[error("object {id}: mesh cannot be ray cast: {what}")]
+    BadMesh { id: u64, what: String },
+
+    /// A viewcell box that is not finite, or has no volume.
+    #[error("viewcell {cell}: {what}")]
+    BadViewcell { cell: usize, what: String },
+
+    #[error("{0}")]
+    Invalid(String),
+
+    /// A viewcell grid, position, PVS table or prefetch setting the PVS prefetcher
+    /// (`prefetch::pvs`) cannot use.
+    #[error("pvs prefetch: {0}")]
+    Pvs(String),
+    /// The GPU: no adapter, a lost device, a frame that cannot be read back or saved.
+    #[error("rendering: {0}")]
+    Render(String),
+}
+
+impl Error {
+    /// An I/O error on `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,478 @@
+//! An object's chain of discrete levels of detail as flat bytes, for one extent of the
+//! database: the levels [`ProgressiveMesh::levels`](super::ProgressiveMesh::levels) cuts,
+//! without the full-detail mesh (level 0), which the database already holds as the
+//! object's mesh extent.
+//!
+//! Levels are numbered as `flaneur lod` numbers its files: 0 is the original, each
+//! higher number coarser. They are stored **coarsest first**, behind a directory, so
+//! that the coarse levels a distant object needs sit in the extent's first page with the
+//! directory: reading level n costs the directory's page(s) and that level's pages,
+//! never the finer levels' (`Store::read_extent_range`).
+//!
+//! ```text
+//! offset        width  field
+//! ------------  -----  ------------------------------------------------------------
+//!            0      4  magic            b"FLCH"
+//!            4      4  version          u32, CHAIN_VERSION
+//!            8      8  object id        u64
+//!           16      4  full triangles   u32, level 0's (the object's mesh extent)
+//!           20      4  levels           u32, n >= 1: levels 1..=n are stored
+//!           24    24n  directory        one entry per level, coarsest (level n) first:
+//!                        +0   4  triangles  u32, strictly fewer than the next finer
+//!                        +4   4  vertices   u32
+//!                        +8   4  error      f32, metres, never below the next finer's
+//!                        +12  4  offset     u32, of the level's bytes in the chain
+//!                        +16  4  length     u32
+//!                        +20  4  crc32      of the level's bytes
+//!     24 + 24n      4  crc32            of every byte before it
+//!     28 + 24n      …  level bytes      coarsest first, back to back, each a mesh in
+//!                                       the database's mesh codec (`scene::encode_mesh`)
+//! ```
+//!
+//! The directory carries its own checksum and each level its own, so a reader checks
+//! exactly the bytes it read. Reading names the first failure — too short, magic,
+//! version, counts against the length, checksum, then content (offsets back to back to
+//! the end, triangles and errors ordered, the level's mesh against its entry) — as an
+//! `Error::Invalid`, never a panic, whatever the bytes.
+
+use super::levels::Level;
+use crate::error::{Error, Result};
+use crate::scene::{decode_mesh, encode_mesh, Mesh};
+use crate::store::framing::{
+    self as bytes, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN,
+};
+
+/// The first four bytes of an encoded chain.
+pub const CHAIN_MAGIC: [u8; 4] = *b"FLCH";
+/// The encoding version this build writes and reads.
+pub const CHAIN_VERSION: u32 = 1;
+
+const MAGIC_OFFSET: usize = 0;
+const VERSION_OFFSET: usize = MAGIC_OFFSET + CHAIN_MAGIC.len();
+const OBJECT_OFFSET: usize = VERSION_OFFSET + 4;
+const FULL_TRIANGLES_OFFSET: usize = OBJECT_OFFSET + 8;
+const LEVELS_OFFSET: usize = FULL_TRIANGLES_OFFSET + 4;
+/// Bytes before the directory: enough to learn how long the directory is.
+pub const CHAIN_HEADER_LEN: usize = LEVELS_OFFSET + 4;
+
+const ENTRY_TRIANGLES: usize = 0;
+const ENTRY_VERTICES: usize = ENTRY_TRIANGLES + 4;
+const ENTRY_ERROR: usize = ENTRY_VERTICES + 4;
+const ENTRY_OFFSET: usize = ENTRY_ERROR + 4;
+const ENTRY_LENGTH: usize = ENTRY_OFFSET + 4;
+const ENTRY_CRC: usize = ENTRY_LENGTH + 4;
+const ENTRY_LEN: usize = ENTRY_CRC + 4;
+
+/// One level of detail of a stored object, as [`Database::lod_levels`] lists it.
+///
+/// [`Database::lod_levels`]: crate::Database::lod_levels
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LevelInfo {
+    /// 0 is the full-detail mesh; each higher level is coarser.
+    pub level: usize,
+    pub triangles: u32,
+    /// The largest error of the collapses that made it from the original, in metres
+    /// (0 for level 0).
+    pub error: f32,
+}
+
+/// A stored level's directory entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry {
+    triangles: u32,
+    vertices: u32,
+    error: f32,
+    offset: u32,
+    length: u32,
+    crc: u32,
+}
+
+/// The header and directory of an encoded chain: what a reader needs to find and check
+/// one level's bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainDirectory {
+    /// The object the chain belongs to.
+    pub object: u64,
+    /// Triangles of level 0, the object's full mesh.
+    pub full_triangles: u32,
+    /// Stored levels, coarsest first (storage order).
+    entries: Vec<Entry>,
+}
+
+fn corrupt(what: String) -> Error {
+    Error::Invalid(format!("LOD chain bytes: {what}"))
+}
+
+/// Bytes of the header and directory of a chain of `levels` levels, checksum included
+/// (u64: a count read from damaged bytes must not overflow).
+fn directory_len(levels: u64) -> u64 {
+    (CHAIN_HEADER_LEN + CRC_LEN) as u64 + ENTRY_LEN as u64 * levels
+}
+
+/// Encodes the levels of one object coarser than its full mesh. `levels` are finest
+/// first, as [`ProgressiveMesh::levels`](super::ProgressiveMesh::levels) returns them
+/// after level 0 (`levels[0]` is level 1). An `Error::Invalid` when there is no level,
+/// when they are not strictly coarser one after the other (triangles) or their errors
+/// decrease coarse-ward, or when the chain would pass 4 GiB.
+pub fn encode_chain(object: u64, full_triangles: usize, levels: &[Level]) -> Result<Vec<u8>> {
+    let refuse = |what: String| Error::Invalid(format!("LOD chain of object {object}: {what}"));
+    if levels.is_empty() {
+        return Err(refuse("no level to store".into()));
+    }
+    let full =
+        u32::try_from(full_triangles).map_err(|_| refuse(format!("{full_triangles} triangles")))?;
+    let mut finer = (full, 0.0f32);
+    for (i, l) in levels.iter().enumerate() {
+        let t = l.mesh.triangle_count() as u32;
+        if t >= finer.0 || !l.error.is_finite() || l.error < finer.1 {
+            return Err(refuse(format!(
+                "level {} ({t} triangles, error {}) is not coarser than the level before \
+                 ({} triangles, error {})",
+                i + 1,
+                l.error,
+                finer.0,
+                finer.1
+            )));
+        }
+        finer = (t, l.error);
+    }
+    let bodies: Vec<Vec<u8>> = levels.iter().rev().map(|l| encode_mesh(&l.mesh)).collect();
+    let head = directory_len(levels.len() as u64);
+    let total = head + bodies.iter().map(|b| b.len() as u64).sum::<u64>();
+    if total > u32::MAX as u64 {
+        return Err(refuse(format!(
+            "{total} bytes are over the 4 GiB an extent holds"
+        )));
+    }
+    let mut b = Vec::with_capacity(total as usize);
+    b.extend_from_slice(&CHAIN_MAGIC);
+    b.extend_from_slice(&CHAIN_VERSION.to_le_bytes());
+    b.extend_from_slice(&object.to_le_bytes());
+    b.extend_from_slice(&full.to_le_bytes());
+    b.extend_from_slice(&(levels.len() as u32).to_le_bytes());
+    let mut offset = head as u32;
+    for (l, body) in levels.iter().rev().zip(&bodies) {
+        for field in [
+            l.mesh.triangle_count() as u32,
+            l.mesh.positions.len() as u32,
+            l.error.to_bits(),
+            offset,
+            body.len() as u32,
+            crc32fast::hash(body),
+        ] {
+            b.extend_from_slice(&field.to_le_bytes());
+        }
+        offset += body.len() as u32;
+    }
+    push_crc(&mut b);
+    for body in &bodies {
+        b.extend_from_slice(body);
+    }
+    Ok(b)
+}
+
+impl ChainDirectory {
+    /// How many bytes from the start of a chain hold its header and directory, read from
+    /// its first [`CHAIN_HEADER_LEN`] bytes (or more) — the length a reader asks the
+    /// store for before it decodes the directory.
+    pub fn len_from_prefix(prefix: &[u8]) -> Result<usize> {
+        bytes::header(
+            prefix,
+            CHAIN_HEADER_LEN,
+            "a LOD chain",
+            CHAIN_MAGIC,
+            CHAIN_VERSION,
+        )
+        .map_err(corrupt)?;
+        let levels = u32_at(prefix, LEVELS_OFFSET);
+        Ok(directory_len(levels as u64).min(usize::MAX as u64) as usize)
+    }
+
+    /// Decodes and checks the header and directory of a chain of `total_len` bytes from
+    /// its first bytes (`prefix`, at least [`ChainDirectory::len_from_prefix`] of them).
+    pub fn decode(prefix: &[u8], total_len: usize) -> Result<ChainDirectory> {
+        let head = ChainDirectory::len_from_prefix(prefix)?;
+        let n = u32_at(prefix, LEVELS_OFFSET) as usize;
+        bytes::at_least(
+            total_len,
+            head as u64,
+            format_args!("a directory of {n} levels takes"),
+        )
+        .map_err(corrupt)?;
+        if prefix.len() < head {
+            return Err(corrupt(format!(
+                "truncated: {} bytes read, a directory of {n} levels takes {head}",
+                prefix.len()
+            )));
+        }
+        bytes::checksum(prefix, head - CRC_LEN).map_err(|w| corrupt(format!("directory {w}")))?;
+        if n == 0 {
+            return Err(corrupt("a chain of no levels".into()));
+        }
+        let object = u64_at(prefix, OBJECT_OFFSET);
+        let full_triangles = u32_at(prefix, FULL_TRIANGLES_OFFSET);
+        let mut entries = Vec::with_capacity(n);
+        let mut next_offset = head as u64;
+        for j in 0..n {
+            let at = CHAIN_HEADER_LEN + ENTRY_LEN * j;
+            let e = Entry {
+                triangles: u32_at(prefix, at + ENTRY_TRIANGLES),
+                vertices: u32_at(prefix, at + ENTRY_VERTICES),
+                error: f32_at(prefix, at + ENTRY_ERROR),
+                offset: u32_at(prefix, at + ENTRY_OFFSET),
+                length: u32_at(prefix, at + ENTRY_LENGTH),
+                crc: u32_at(prefix, at + ENTRY_CRC),
+            };
+            let level = n - j;
+            if e.offset as u64 != next_offset {
+                return Err(corrupt(format!(
+                    "level {level} starts at byte {}, expected {next_offset}",
+                    e.offset
+                )));
+            }
+            next_offset += e.length as u64;
+            if !(e.error >= 0.0 && e.error.is_finite()) {
+                return Err(corrupt(format!("level {level} has error {}", e.error)));
+            }
+            if let Some(coarser) = entries.last() {
+                let coarser: &Entry = coarser;
+                if e.triangles <= coarser.triangles || e.error > coarser.error {
+                    return Err(corrupt(format!(
+                        "level {level} ({} triangles, error {}) is not finer than level {} \
+                         ({} triangles, error {})",
+                        e.triangles,
+                        e.error,
+                        level + 1,
+                        coarser.triangles,
+                        coarser.error
+                    )));
+                }
+            }
+            entries.push(e);
+        }
+        if next_offset != total_len as u64 {
+            return Err(corrupt(format!(
+                "the levels end at byte {next_offset}, the chain is {total_len} bytes"
+            )));
+        }
+        let finest = entries[n - 1].triangles;
+        if finest >= full_triangles {
+            return Err(corrupt(format!(
+                "level 1 has {finest} triangles, the full mesh {full_triangles}"
+            )));
+        }
+        Ok(ChainDirectory {
+            object,
+            full_triangles,
+            entries,
+        })
+    }
+
+    /// Levels stored (level 0 is not): levels `1..=count` can be read.
+    pub fn stored_levels(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Every level, level 0 (the full mesh, error 0) first.
+    pub fn levels(&self) -> Vec<LevelInfo> {
+        let full = LevelInfo {
+            level: 0,
+            triangles: self.full_triangles,
+            error: 0.0,
+        };
+        std::iter::once(full)
+            .chain((1..=self.entries.len()).map(|level| {
+                let e = self.entry(level);
+                LevelInfo {
+                    level,
+                    triangles: e.triangles,
+                    error: e.error,
+                }
+            }))
+            .collect()
+    }
+
+    /// The entry of stored level `level` (1..=n).
+    fn entry(&self, level: usize) -> &Entry {
+        &self.entries[self.entries.len() - level]
+    }
+
+    /// Where stored level `level` (1..=`stored_levels`) lies in the chain, as (offset,
+    /// length). An `Error::Invalid` for any other level.
+    pub fn level_range(&self, level: usize) -> Result<(usize, usize)> {
+        if level == 0 || level > self.entries.len() {
+            return Err(Error::Invalid(format!(
+                "object {} has LOD levels 0..={} (0 is its full mesh), not {level}",
+                self.object,
+                self.entries.len()
+            )));
+        }
+        let e = self.entry(level);
+        Ok((e.offset as usize, e.length as usize))
+    }
+
+    /// Decodes stored level `level` from its bytes (as [`level_range`] places them) and
+    /// checks them against the directory: checksum, triangles and vertices.
+    ///
+    /// [`level_range`]: ChainDirectory::level_range
+    pub fn decode_level(&self, level: usize, bytes: &[u8]) -> Result<Mesh> {
+        let (_, length) = self.level_range(level)?;
+        let e = self.entry(level);
+        if bytes.len() != length {
+            return Err(corrupt(format!(
+                "level {level} is {} bytes, the directory says {length}",
+                bytes.len()
+            )));
+        }
+        crc_matches(e.crc, bytes).map_err(|w| corrupt(format!("level {level} {w}")))?;
+        let mesh = decode_mesh(bytes).map_err(|w| corrupt(format!("level {level}: {w}")))?;
+        if mesh.triangle_count() != e.triangles as usize
+            || mesh.positions.len() != e.vertices as usize
+        {
+            return Err(corrupt(format!(
+                "level {level} holds {} triangles and {} vertices, the directory says {} and {}",
+                mesh.triangle_count(),
+                mesh.positions.len(),
+                e.triangles,
+                e.vertices
+            )));
+        }
+        Ok(mesh)
+    }
+}
+
+/// Decodes a whole chain: its directory and every stored level, level 1 first.
+pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
+    let dir = ChainDirectory::decode(bytes, bytes.len())?;
+    let meshes = (1..=dir.stored_levels())
+        .map(|level| {
+            let (offset, length) = dir.level_range(level)?;
+            dir.decode_level(level, &bytes[offset..offset + length])
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((dir, meshes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lod::fixtures::building;
+    use crate::lod::ProgressiveMesh;
+    use crate::store::framing::{mangled, reseal};
+
+    fn chain_of(mesh: &Mesh) -> (Vec<Level>, Vec<u8>) {
+        let pm = ProgressiveMesh::build(mesh).unwrap();
+        let levels = pm.levels(0.5, 20).unwrap();
+        let bytes = encode_chain(7, mesh.triangle_count(), &levels[1..]).unwrap();
+        (levels, bytes)
+    }
+
+    #[test]
+    fn round_trips_coarsest_first() {
+        let bunny = crate::scene::bunny();
+        let (levels, bytes) = chain_of(&bunny);
+        assert!(levels.len() >= 5);
+        let (dir, meshes) = decode_chain(&bytes).unwrap();
+        assert_eq!((dir.object, dir.full_triangles), (7, 3674));
+        assert_eq!(dir.stored_levels(), levels.len() - 1);
+        let infos = dir.levels();
+        for (i, level) in levels.iter().enumerate() {
+            assert_eq!(infos[i].level, i);
+            assert_eq!(infos[i].triangles as usize, level.mesh.triangle_count());
+            assert_eq!(infos[i].error, level.error);
+            if i > 0 {
+                let m = &meshes[i - 1];
+                assert_eq!(m.indices, level.mesh.indices);
+                assert_eq!(m.positions, level.mesh.positions);
+            }
+        }
+        // The coarsest level comes right after the directory.
+        let coarsest = dir.stored_levels();
+        let (offset, _) = dir.level_range(coarsest).unwrap();
+        assert_eq!(offset, directory_len(coarsest as u64) as usize);
+        assert!(dir.level_range(0).is_err());
+        assert!(dir.level_range(coarsest + 1).is_err());
+    }
+
+    #[test]
+    fn refuses_what_is_no_chain() {
+        let bunny = crate::scene::bunny();
+        let pm = ProgressiveMesh::build(&bunny).unwrap();
+        let levels = pm.levels(0.5, 20).unwrap();
+        assert!(encode_chain(1, 3674, &[]).is_err());
+        // Level 0 itself is not coarser than the full mesh.
+        assert!(encode_chain(1, 3674, &levels).is_err());
+        let mut swapped = levels[1..].to_vec();
+        swapped.swap(0, 1);
+        assert!(encode_chain(1, 3674, &swapped).is_err());
+    }
+
+    #[test]
+    fn every_truncation_and_every_flipped_byte_is_an_error() {
+        let (_, bytes) = chain_of(&building());
+        for len in 0..bytes.len() {
+            assert!(decode_chain(&bytes[..len]).is_err(), "{len}");
+        }
+        for at in 0..bytes.len() {
+            let mut b = bytes.clone();
+            b[at] ^= 0x5a;
+            assert!(decode_chain(&b).is_err(), "byte {at}");
+        }
+        let mut longer = bytes.clone();
+        longer.push(0);
+        let e = decode_chain(&longer).unwrap_err().to_string();
+        assert!(e.contains("end at byte"), "{e}");
+    }
+
+    #[test]
+    fn faults_are_named() {
+        let (_, bytes) = chain_of(&crate::scene::bunny());
+        let n = u32_at(&bytes, LEVELS_OFFSET) as usize;
+        let head = directory_len(n as u64) as usize;
+        let with = |at: usize, v: u32, seal: bool| {
+            let mut b = bytes.clone();
+            b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+            if seal {
+                reseal(&mut b[..head]);
+            }
+            decode_chain(&b).unwrap_err().to_string()
+        };
+        assert!(with(MAGIC_OFFSET, 0, false).contains("magic"));
+        assert!(with(VERSION_OFFSET, 2, false).contains("version 2"));
+        assert!(with(LEVELS_OFFSET, u32::MAX, false).contains("truncated"));
+        assert!(with(OBJECT_OFFSET, 3, false).contains("checksum"));
+        let first = CHAIN_HEADER_LEN;
+        let second = first + ENTRY_LEN;
+        assert!(with(first + ENTRY_OFFSET, 0, true).contains("starts at byte"));
+        assert!(with(first + ENTRY_LENGTH, 1, true).contains("starts at byte"));
+        assert!(with(second + ENTRY_TRIANGLES, 1, true).contains("not finer"));
+        assert!(with(second + ENTRY_ERROR, 1e6f32.to_bits(), true).contains("not finer"));
+        assert!(with(first + ENTRY_ERROR, f32::NAN.to_bits(), true).contains("error NaN"));
+        assert!(with(FULL_TRIANGLES_OFFSET, 10, true).contains("full mesh"));
+        // A level whose bytes rotted, or whose entry lies about its mesh.
+        let mut b = bytes.clone();
+        b[head + 20] ^= 1;
+        let e = decode_chain(&b).unwrap_err().to_string();
+        assert!(e.contains(&format!("level {n} checksum")), "{e}");
+        let e = with(first + ENTRY_VERTICES, 1, true);
+        assert!(e.contains("the directory says"), "{e}");
+    }
+
+    #[test]
+    fn random_bytes_never_panic() {
+        let (_, good) = chain_of(&building());
+        let restore = |b: &mut [u8]| {
+            b[..4].copy_from_slice(&CHAIN_MAGIC);
+            b[4..8].copy_from_slice(&CHAIN_VERSION.to_le_bytes());
+            let n = (u32_at(b, LEVELS_OFFSET) % 8) as u64;
+            b[LEVELS_OFFSET..LEVELS_OFFSET + 4].copy_from_slice(&(n as u32).to_le_bytes());
+            let head = directory_len(n) as usize;
+            if head <= b.len() {
+                reseal(&mut b[..head]);
+            }
+        };
+        mangled(9, 2000, 300, &good, restore, |b| {
+            let _ = decode_chain(b);
+        });
+    }
+}

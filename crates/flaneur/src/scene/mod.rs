@@ -1,0 +1,16 @@
+//! Objects and meshes as the engine reads them: the scene types and the scene file
+//! (the `flaneur-scene` crate, shared with the generator), OBJ import, and the mesh
+//! codec of the database.
+
+mod mesh_codec;
+mod obj;
+
+pub use flaneur_scene::{
+    bunny, write_mesh_obj, Mesh, ObjectKind, SceneError, SceneObject, SceneReader, SceneSummary,
+    SceneWriter,
+};
+pub use mesh_codec::{decode_mesh, encode_mesh};
+pub use obj::load_obj;
+
+/// The kind byte of objects that did not come from citygen (OBJ imports).
+pub const KIND_IMPORTED: u8 = 255;

@@ -1,0 +1,44 @@
+//! Progress bars on standard error, drawn from the engine's progress reports (the engine
+//! never draws them itself).
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use flaneur::progress::{Progress, Step};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// One bar per step of a long job, made when the step first reports.
+#[derive(Default)]
+pub struct Bars {
+    bars: Mutex<HashMap<Step, ProgressBar>>,
+}
+
+impl Progress for Bars {
+    fn update(&self, step: Step, done: u64, total: Option<u64>) {
+        let mut bars = self.bars.lock().unwrap_or_else(|e| e.into_inner());
+        let bar = bars.entry(step).or_insert_with(|| {
+            let bar = ProgressBar::new(total.unwrap_or(0));
+            let template = format!(
+                "{} {{bar:40}} {{pos}}/{{len}} {} ({{per_sec}}, eta {{eta}})",
+                step.name(),
+                step.unit()
+            );
+            bar.set_style(
+                ProgressStyle::with_template(&template)
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            bar
+        });
+        if let Some(total) = total {
+            bar.set_length(total);
+        }
+        bar.set_position(done);
+    }
+
+    fn finish(&self, step: Step) {
+        let bars = self.bars.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(bar) = bars.get(&step) {
+            bar.finish_and_clear();
+        }
+    }
+}
