@@ -87,7 +87,7 @@ pub struct FidelityReport {
 /// size; alpha is not compared.
 ///
 /// ```
-/// use flaneur::bench::fidelity::compare;
+/// use flaneur_bench::fidelity::compare;
 /// let a = [10u8, 20, 30, 255, 0, 0, 0, 255];
 /// let (psnr, differ) = compare(&a, &a).unwrap();
 /// assert!(psnr.is_infinite() && differ == 0.0);

@@ -29,7 +29,7 @@ pub struct LineVertex {
 ///
 /// ```
 /// use flaneur::geom::{Aabb, Camera};
-/// use flaneur::render::boxes::{lines, CULLED};
+/// use flaneur_render::boxes::{lines, CULLED};
 /// let camera = Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?;
 /// let held = [Aabb::new([-20.0, 0.0, -1.0], [-19.0, 1.0, 1.0])?]; // behind the eye
 /// let v = lines(&camera.frustum(), &[], &held);

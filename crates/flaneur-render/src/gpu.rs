@@ -7,7 +7,7 @@ use flaneur::error::{Error, Result};
 ///
 /// ```no_run
 /// # fn main() -> flaneur::Result<()> {
-/// let gpu = flaneur::render::Gpu::headless()?;
+/// let gpu = flaneur_render::Gpu::headless()?;
 /// println!("drawing on {} ({:?})", gpu.adapter.name, gpu.adapter.backend);
 /// # Ok(()) }
 /// ```

@@ -49,7 +49,7 @@ pub struct HudContent {
 /// at 50 ms.
 ///
 /// ```
-/// use flaneur::render::{rasterise, HudContent};
+/// use flaneur_render::{rasterise, HudContent};
 ///
 /// let content = HudContent {
 ///     lines: vec!["12.5 ms".into()],

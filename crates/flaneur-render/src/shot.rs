@@ -45,7 +45,8 @@ pub fn in_view(db: &Database, camera: &Camera) -> Result<Vec<ObjectEntry>> {
 ///
 /// ```no_run
 /// # fn main() -> flaneur::Result<()> {
-/// use flaneur::{geom::Camera, render::{shot, Gpu}, Database};
+/// use flaneur::{geom::Camera, Database};
+/// use flaneur_render::{shot, Gpu};
 /// let db = Database::open("city.flaneur".as_ref())?;
 /// let camera = Camera::new(glam::Vec3::new(100.0, 1.7, 80.0), 0.0, 0.0)?;
 /// let picture = shot(&db, &Gpu::headless()?, &camera, 640, 480)?;
