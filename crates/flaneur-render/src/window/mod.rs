@@ -274,13 +274,7 @@ impl Viewer for WalkWindow<'_> {
             Some(path) => match path.poses.get(self.played) {
                 Some(&p) => {
                     self.played += 1;
-                    // Played at the pace it was walked: a frame drawn early waits for
-                    // its pose's time; a late one does not catch up.
-                    let (t0, started) = *self.play_clock.get_or_insert((p.time, Instant::now()));
-                    let due = Duration::from_secs_f64((p.time - t0).max(0.0));
-                    if let Some(wait) = due.checked_sub(started.elapsed()) {
-                        std::thread::sleep(wait);
-                    }
+                    self.wait_for(&p);
                     p
                 }
                 None => {

@@ -1,10 +1,27 @@
-//! Recorded paths: what `--record` saves of a session's poses. Apart because it is
-//! the window's one way out to a file, and what it writes must read back as a path.
+//! Recorded paths: what `--record` saves of a session's poses, and the pace a path
+//! given to `--play` goes at. Apart from steering because a played path replaces the
+//! person, and what is saved must play back as it was walked.
 
 use std::path::Path;
+use std::time::{Duration, Instant};
 
+use super::WalkWindow;
 use flaneur::error::Result;
 use flaneur::walk::{CameraPath, Pose};
+
+impl WalkWindow<'_> {
+    /// Holds the played pose `p` back until its time, counted from the first pose
+    /// played since the walk (re)started.
+    pub(super) fn wait_for(&mut self, p: &Pose) {
+        // Played at the pace it was walked: a frame drawn early waits for
+        // its pose's time; a late one does not catch up.
+        let (t0, started) = *self.play_clock.get_or_insert((p.time, Instant::now()));
+        let due = Duration::from_secs_f64((p.time - t0).max(0.0));
+        if let Some(wait) = due.checked_sub(started.elapsed()) {
+            std::thread::sleep(wait);
+        }
+    }
+}
 
 /// Where `--record` writes a session's poses: a path CSV that `--play` (and `flaneur
 /// walk --path`) read back.
