@@ -1,0 +1,200 @@
+//! A walk frame in the window: the frame's times and the walker's obstacles noted,
+//! LOD selection, the meshes followed onto the GPU, then the scene, the boxes and the
+//! HUD drawn into the surface's texture and presented. Apart because it is the one
+//! thing the window does each frame once the walk has chosen what to draw.
+
+use std::time::{Duration, Instant};
+
+use super::hud_lines::{hud_content, GRAPH_FRAMES};
+use super::{WalkWindow, MESSAGE_FOR};
+use crate::boxes::lines;
+use crate::scene::SceneView;
+use flaneur::error::Result;
+use flaneur::geom::{Aabb, Camera};
+use flaneur::walk::buffer::{Loaded, ObjectBuffer};
+use flaneur::walk::lod_select::Drawn;
+use flaneur::walk::FrameSink;
+
+impl WalkWindow<'_> {
+    /// Draws `selected` as `camera` sees it; `Ok(None)` when nothing could be drawn
+    /// this frame (minimised, occluded, surface being configured again).
+    fn draw(
+        &mut self,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        selected: &[Drawn],
+    ) -> Result<Option<(f64, f64)>> {
+        let pages_per_s = self.pages_per_second();
+        if !self.device_answers() {
+            return Ok(None);
+        }
+        let Some(s) = &mut self.surfaced else {
+            return Ok(None);
+        };
+        let started = Instant::now();
+        s.meshes.set_budget(self.opts.gpu_budget);
+        let followed = s.meshes.follow(
+            &s.gpu,
+            |id| buffer.contains(id),
+            selected,
+            self.lods.as_mut(),
+        )?;
+        self.summary.over_budget += followed.over_budget as usize;
+        self.summary.peak_gpu_bytes = self.summary.peak_gpu_bytes.max(s.meshes.bytes());
+        let cpu = started.elapsed();
+        let (w, h) = (s.config.width, s.config.height);
+        let texture = match s.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t) => t,
+            wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+                drop(t);
+                s.configure();
+                return Ok(None);
+            }
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(None)
+            }
+            wgpu::CurrentSurfaceTexture::Outdated => {
+                s.configure();
+                return Ok(None);
+            }
+            wgpu::CurrentSurfaceTexture::Lost => {
+                // The surface, not the device: make the surface again.
+                self.surfaced = None;
+                self.last_try = Instant::now() - Duration::from_secs(1);
+                self.report("the window's surface was lost; making it again".into());
+                return Ok(None);
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                self.report("the window's surface refused a frame".into());
+                return Ok(None);
+            }
+        };
+        let started = Instant::now();
+        let view = texture.texture.create_view(&Default::default());
+        // The walk's square view, centred.
+        let side = w.min(h) as f32;
+        let viewport = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
+        let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
+        let view_proj = if self.top_view {
+            top_view(camera)
+        } else {
+            camera.view_proj(1.0)?
+        };
+        let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
+        s.scene.encode(
+            &s.gpu,
+            &mut encoder,
+            [&view, &s.targets[0], &s.targets[1]],
+            &s.meshes,
+            &keys,
+            &SceneView {
+                view_proj,
+                viewport: Some(viewport),
+                wireframe: self.wireframe,
+            },
+        )?;
+        if self.boxes {
+            let drawn: std::collections::HashSet<u64> = selected.iter().map(|d| d.id).collect();
+            let culled: Vec<Aabb> = buffer
+                .iter()
+                .filter(|o| !drawn.contains(&o.entry.id))
+                .map(|o| o.entry.bounds)
+                .collect();
+            let l = lines(&camera.frustum(), selected, &culled);
+            s.boxes
+                .draw(&s.gpu, &mut encoder, &view, view_proj, Some(viewport), &l)?;
+        }
+        if self.show_hud {
+            let content = hud_content(
+                &self.figures,
+                self.mode,
+                self.lods.as_ref().map(|l| l.tau()),
+                (selected, &s.meshes),
+                (self.steer.fly, camera.position, pages_per_s),
+                self.message
+                    .as_ref()
+                    .filter(|m| m.1.elapsed() < MESSAGE_FOR)
+                    .map(|m| m.0.as_str()),
+                &self.frame_ms,
+                s.scene.has_wireframe(),
+            );
+            s.hud.draw(
+                &s.gpu,
+                &mut encoder,
+                &view,
+                (w, h),
+                &content,
+                if h >= 900 { 2 } else { 1 },
+            )?;
+        }
+        s.gpu.queue.submit([encoder.finish()]);
+        // Waiting for the GPU here makes the GPU's share of the frame measurable.
+        let _ = s.gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        s.gpu.queue.present(texture);
+        Ok(Some((
+            cpu.as_secs_f64() * 1e3,
+            started.elapsed().as_secs_f64() * 1e3,
+        )))
+    }
+}
+
+impl FrameSink for WalkWindow<'_> {
+    fn frame(
+        &mut self,
+        _: usize,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        drawn: &[&Loaded],
+    ) -> Result<()> {
+        let now = Instant::now();
+        if let Some(last) = self.last_frame.replace(now) {
+            if self.frame_ms.len() == GRAPH_FRAMES {
+                self.frame_ms.pop_front();
+            }
+            self.frame_ms.push_back((now - last).as_secs_f32() * 1e3);
+        }
+        let p = camera.position;
+        self.obstacles.clear();
+        self.obstacles.extend(
+            buffer
+                .iter()
+                .map(|o| o.entry.bounds)
+                .filter(|b| (b.center() - p).length() < 0.5 * b.extent().length() + 20.0),
+        );
+        let started = Instant::now();
+        let selected = match &mut self.lods {
+            Some(l) => {
+                let chosen = l.select(camera, buffer, drawn);
+                for what in l.take_damaged() {
+                    self.report(format!("LOD selection: {what}"));
+                }
+                chosen.unwrap_or_else(|e| {
+                    self.report(format!("LOD selection: {e}; drawing full detail"));
+                    drawn.iter().map(|o| Drawn::full(o)).collect()
+                })
+            }
+            None => drawn.iter().map(|o| Drawn::full(o)).collect(),
+        };
+        let select = started.elapsed().as_secs_f64() * 1e3;
+        match self.draw(camera, buffer, &selected) {
+            Ok(Some((cpu, gpu))) => {
+                self.summary.frames += 1;
+                self.summary.cpu_ms.push(select + cpu);
+                self.summary.gpu_ms.push(gpu);
+            }
+            Ok(None) => {}
+            Err(e) => self.report(format!("drawing: {e}")),
+        }
+        Ok(())
+    }
+}
+
+/// The view from 400 m above the viewer, looking down, the viewer's heading up the
+/// picture: where the boxes show what the walk held, drew and culled.
+fn top_view(camera: &Camera) -> glam::Mat4 {
+    let (sin, cos) = camera.yaw.sin_cos();
+    let heading = glam::Vec3::new(cos, 0.0, sin);
+    let eye = camera.position + glam::Vec3::Y * 400.0;
+    glam::Mat4::perspective_rh(60f32.to_radians(), 1.0, 1.0, 5000.0)
+        * glam::Mat4::look_at_rh(eye, camera.position, heading)
+}
