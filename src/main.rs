@@ -1654,7 +1654,8 @@ fn view(
     };
     let mut mode = mode;
     let mut cfg = preset(mode);
-    let mut window = flaneur_render::WalkWindow::open(db, opts, mode)?;
+    let mut window =
+        flaneur_render::WalkWindow::open(db, opts, mode)?.telling(|m| eprintln!("{m}"));
     window.boxes = boxes;
     window.top_view = top_view;
     if let Some(a) = window.adapter() {

@@ -144,7 +144,7 @@ impl WalkWindow<'_> {
                 self.surfaced = Some(s);
                 self.report("drawing again on a new device".into());
             }
-            Err(e) => eprintln!("no new device yet: {e}"),
+            Err(e) => (self.tell)(&format!("no new device yet: {e}")),
         }
     }
 

@@ -89,6 +89,9 @@ pub struct WalkWindow<'a> {
     /// Boxes the walker may not enter: the buffered objects near the eye.
     obstacles: Vec<Aabb>,
     message: Option<(String, Instant)>,
+    /// Where problems are told as they happen (the HUD shows them too); the library
+    /// never prints, so by default nowhere.
+    tell: Box<dyn FnMut(&str)>,
     pub summary: ViewSummary,
 }
 
@@ -173,6 +176,7 @@ impl<'a> WalkWindow<'a> {
             recorded: Vec::new(),
             played: 0,
             play_clock: None,
+            tell: Box::new(|_| {}),
             quit: false,
             last_frame: None,
             frame_ms: VecDeque::with_capacity(GRAPH_FRAMES),
@@ -227,8 +231,16 @@ impl<'a> WalkWindow<'a> {
         self.steer.restart_clock();
     }
 
-    /// Shows `what` on the HUD for a while, and on stderr. The same problem met frame
-    /// after frame is said again only once it has been on the HUD its while.
+    /// Tells `tell` each problem as it happens (a lost device, a damaged object, a walk
+    /// that failed and restarted): the CLI prints them on stderr.
+    pub fn telling(mut self, tell: impl FnMut(&str) + 'static) -> Self {
+        self.tell = Box::new(tell);
+        self
+    }
+
+    /// Shows `what` on the HUD for a while, and tells it (see [`WalkWindow::telling`]).
+    /// The same problem met frame after frame is said again only once it has been on
+    /// the HUD its while.
     pub fn report(&mut self, what: String) {
         if self
             .message
@@ -237,7 +249,7 @@ impl<'a> WalkWindow<'a> {
         {
             return;
         }
-        eprintln!("{what}");
+        (self.tell)(&what);
         self.summary.problems.push(what.clone());
         self.message = Some((what, Instant::now()));
     }
