@@ -12,7 +12,7 @@ use cli::bars::Bars;
 use flaneur::progress::{Progress, Silent};
 
 use flaneur_bench::cell_size::{self, CellSizeConfig};
-use flaneur_bench::csearch::{self, CsearchConfig, CsearchReport};
+use flaneur_bench::csearch::{self, CsearchConfig, CsearchReport, CsearchReports};
 use flaneur_bench::db_size::{self, DbSizeConfig};
 use flaneur_bench::frame_time::{self, FrameTimeConfig};
 use flaneur_bench::index_cache::{self, IndexCacheConfig};
@@ -22,6 +22,7 @@ use flaneur_bench::lod_refine::{self, LodRefineConfig};
 use flaneur_bench::patterns::{self, PatternsConfig};
 use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
 use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig};
+use flaneur_bench::report::Report;
 use flaneur_bench::view_culling::{self, ViewCullingConfig};
 use flaneur_bench::walk_setup::{self, WalkSetup};
 use flaneur::geom::Aabb;
@@ -869,9 +870,7 @@ fn run(cli: Cli) -> Result<()> {
                 };
                 let db = Database::open(&db)?;
                 let r = prefetch_k::run(&db, &cfg)?;
-                write_experiment(&out, "prefetch-k", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::ViewCulling { db, walk, sfs, out } => {
                 let d = ViewCullingConfig::default();
@@ -882,9 +881,7 @@ fn run(cli: Cli) -> Result<()> {
                 };
                 let db = Database::open(&db)?;
                 let r = view_culling::run(&db, &cfg)?;
-                write_experiment(&out, "view-culling", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::Patterns { db, walk, out } => {
                 let d = PatternsConfig::default();
@@ -894,9 +891,7 @@ fn run(cli: Cli) -> Result<()> {
                 };
                 let db = Database::open(&db)?;
                 let r = patterns::run(&db, &cfg)?;
-                write_experiment(&out, "patterns", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::IndexCache {
                 db,
@@ -957,9 +952,7 @@ fn run(cli: Cli) -> Result<()> {
                     ..d
                 };
                 let r = with_bar("lod-dag models", |p| lod_dag::run_with_progress(&cfg, p))?;
-                write_experiment(&out, "lod-dag", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::LodParallel {
                 triangles,
@@ -989,9 +982,7 @@ fn run(cli: Cli) -> Result<()> {
                     },
                 };
                 let r = with_bar("lod-parallel builds", |p| lod_parallel::run(&cfg, p))?;
-                write_experiment(&out, "lod-parallel", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::Fidelity {
                 db,
@@ -1060,9 +1051,7 @@ fn run(cli: Cli) -> Result<()> {
                     |_| bar.inc(1),
                 )?;
                 bar.finish_and_clear();
-                write_experiment(&out, "fidelity", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::LodRefine {
                 triangles,
@@ -1094,9 +1083,7 @@ fn run(cli: Cli) -> Result<()> {
                     "lod-refine: a bumpy torus of about {triangles} triangles, {frames} frames"
                 );
                 let r = lod_refine::run(&cfg)?;
-                write_experiment(&out, "lod-refine", &r.to_csv(), &r.markdown(), |dir| {
-                    Ok(r.plot(dir)?)
-                })
+                write_experiment(&out, &r)
             }
             Experiment::PvsPrefetch {
                 blocks,
@@ -1130,29 +1117,13 @@ fn run(cli: Cli) -> Result<()> {
                     },
                 };
                 let r = pvs_prefetch::run(&cfg)?;
-                write_experiment(&out, "pvs-prefetch", &r.to_csv(), &r.markdown(), |dir| {
-                    for (name, text) in r.extra_csvs() {
-                        write_file(&dir.join(name), &text)?;
-                    }
-                    Ok(r.plot(dir)?)
-                })?;
+                write_experiment(&out, &r)?;
                 if let Some(path) = db {
                     let db = Database::open(&path)?;
                     let name = path.display().to_string();
                     let r = pvs_prefetch::run_on_database(&db, &name, &cfg)?;
                     println!();
-                    write_experiment(
-                        &out.join("pvs-prefetch-db"),
-                        "pvs-prefetch",
-                        &r.to_csv(),
-                        &r.markdown(),
-                        |dir| {
-                            for (name, text) in r.extra_csvs() {
-                                write_file(&dir.join(name), &text)?;
-                            }
-                            Ok(r.plot(dir)?)
-                        },
-                    )?;
+                    write_experiment(&out.join("pvs-prefetch-db"), &r)?;
                 }
                 Ok(())
             }
@@ -1380,42 +1351,25 @@ fn bench_csearch(
         .map(|w| w.figures(db.store().page_size()))
         .transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut reports = vec![csearch::run(&db, cfg)?];
+    let mut runs = CsearchReports {
+        config: cfg.clone(),
+        reports: vec![csearch::run(&db, cfg)?],
+    };
     if insertion {
-        reports.push(csearch::run_insertion_tree(
+        runs.reports.push(csearch::run_insertion_tree(
             &db,
             cfg,
             &out.join("insertion-tree.flaneur"),
         )?);
     }
-    let csv: String = reports
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let s = r.to_csv();
-            if i == 0 {
-                s
-            } else {
-                s.lines().skip(1).map(|l| format!("{l}\n")).collect()
-            }
-        })
-        .collect();
-    let csv_path = out.join("csearch.csv");
-    write_file(&csv_path, &csv)?;
-    for (r, name) in reports
-        .iter()
-        .zip(["csearch-pages.png", "csearch-pages-insertion.png"])
-    {
-        csearch::plot(r, &out.join(name))?;
-    }
-    let md_path = out.join("csearch.md");
-    let mut md = csearch::markdown(&reports, cfg);
-    write_file(&md_path, &md)?;
+    let mut md = runs.markdown();
+    write_report_files(out, &runs, Some(&md))?;
+    let (csv_path, md_path) = (report_file(out, &runs, "csv"), report_file(out, &runs, "md"));
     println!(
         "csearch: {} queries, cell {} m, step {} m, history ≤ {}",
         cfg.steps, cfg.cell, cfg.step, cfg.history_len
     );
-    for r in &reports {
+    for r in &runs.reports {
         print_report(r, verbose);
     }
     println!(
@@ -1452,26 +1406,19 @@ fn csearch_walks(
     let r = with_bar("cell size (Fig. 4.19, 4.20)", |p| {
         cell_size::run_with_progress(db, &f.cell, p)
     })?;
-    write_figure(
-        out,
-        "csearch-cell-size",
-        &r.to_csv(),
-        |dir| Ok(r.plot(dir)?),
-    )?;
+    write_report_files(out, &r, None)?;
     section(r.markdown())?;
 
     let r = with_bar("time per frame (Fig. 4.21)", |p| {
         frame_time::run_with_progress(db, &f.frames, p)
     })?;
-    write_figure(out, "csearch-frame-time", &r.to_csv(), |dir| {
-        Ok(r.plot(dir)?)
-    })?;
+    write_report_files(out, &r, None)?;
     section(r.markdown())?;
 
     let r = with_bar("database size (Fig. 4.22)", |p| {
         db_size::run_with_progress(&out.join("cities"), &f.sizes, p)
     })?;
-    write_figure(out, "csearch-db-size", &r.to_csv(), |dir| Ok(r.plot(dir)?))?;
+    write_report_files(out, &r, None)?;
     section(r.markdown())
 }
 
@@ -1495,15 +1442,21 @@ fn with_bar<T>(
     Ok(result?)
 }
 
-/// Writes a figure's CSV (`name`.csv) and plots into `out`.
-fn write_figure(
-    out: &Path,
-    name: &str,
-    csv: &str,
-    plot: impl FnOnce(&Path) -> Result<()>,
-) -> Result<()> {
-    write_file(&out.join(format!("{name}.csv")), csv)?;
-    plot(out)
+/// Writes a report's CSVs, its summary when given, and its plots into `out`.
+fn write_report_files(out: &Path, r: &dyn Report, markdown: Option<&str>) -> Result<()> {
+    write_file(&report_file(out, r, "csv"), &r.to_csv())?;
+    if let Some(md) = markdown {
+        write_file(&report_file(out, r, "md"), md)?;
+    }
+    for (name, text) in r.extra_csvs() {
+        write_file(&out.join(name), &text)?;
+    }
+    Ok(r.plot(out)?)
+}
+
+/// The report's file with extension `ext` in `out`.
+fn report_file(out: &Path, r: &dyn Report, ext: &str) -> PathBuf {
+    out.join(format!("{}.{ext}", r.name()))
 }
 
 fn write_file(path: &Path, text: &str) -> Result<()> {
@@ -2056,24 +2009,15 @@ fn print_walk(r: &WalkReport) {
 fn bench_index_cache(path: &Path, cfg: &IndexCacheConfig, out: &Path) -> Result<()> {
     let db = Database::open(path)?;
     let r = index_cache::run(&db, cfg)?;
-    write_experiment(out, "index-cache", &r.to_csv(), &r.markdown(), |dir| {
-        Ok(r.plot(dir)?)
-    })
+    write_experiment(out, &r)
 }
 
-/// Writes an experiment's CSV, markdown summary and plots into `out`, and prints the summary.
-fn write_experiment(
-    out: &Path,
-    name: &str,
-    csv: &str,
-    markdown: &str,
-    plot: impl FnOnce(&Path) -> Result<()>,
-) -> Result<()> {
+/// Writes an experiment's report into `out` (its CSVs, markdown summary and plots), and
+/// prints the summary.
+fn write_experiment(out: &Path, r: &dyn Report) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    for (ext, text) in [("csv", csv), ("md", markdown)] {
-        write_file(&out.join(format!("{name}.{ext}")), text)?;
-    }
-    plot(out)?;
+    let markdown = r.markdown();
+    write_report_files(out, r, Some(&markdown))?;
     print!("{markdown}");
     println!("\nCSV, summary and plots in {}", out.display());
     Ok(())
