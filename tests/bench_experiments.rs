@@ -11,6 +11,7 @@ use flaneur_bench::db_size::{self, DbSizeConfig};
 use flaneur_bench::frame_time::{self, FrameTimeConfig};
 use flaneur_bench::patterns::{self, PatternsConfig};
 use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
+use flaneur_bench::report::Report;
 use flaneur_bench::view_culling::{self, BufferModel, ViewCullingConfig};
 use flaneur_bench::walk_setup::{WalkSetup, THESIS_PATTERNS};
 use flaneur::walk::review::Preset;

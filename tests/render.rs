@@ -9,6 +9,7 @@ mod common;
 use std::collections::HashMap;
 
 use flaneur_bench::fidelity::ModeWalk;
+use flaneur_bench::report::Report;
 use flaneur::geom::Camera;
 use flaneur_render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;

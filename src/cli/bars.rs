@@ -4,6 +4,7 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
+use anyhow::Result;
 use flaneur::progress::{Progress, Step};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -41,4 +42,24 @@ impl Progress for Bars {
             bar.finish_and_clear();
         }
     }
+}
+
+/// Runs `f` under a progress bar that its `progress(done, total)` moves.
+pub fn with_bar<T>(
+    what: &str,
+    f: impl FnOnce(&mut dyn FnMut(usize, usize)) -> flaneur::Result<T>,
+) -> Result<T> {
+    let bar = indicatif::ProgressBar::new(1);
+    bar.set_message(what.to_string());
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg}: [{bar:30}] {pos}/{len} ({elapsed})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    let result = f(&mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    Ok(result?)
 }

@@ -1,3 +1,22 @@
 //! The `flaneur` command's parts: one file per command, and what they share.
 
+pub mod args;
 pub mod bars;
+pub mod bench;
+pub mod build;
+pub mod demo;
+pub mod info;
+pub mod lod;
+pub mod query;
+pub mod shot;
+pub mod view;
+pub mod walk;
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+
+/// Writes `text` to `path`, the path named in the error.
+pub fn write_file(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}

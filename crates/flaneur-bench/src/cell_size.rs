@@ -13,6 +13,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use crate::view_culling::THESIS_SFS;
 use crate::walk_setup::{
     check_sf, check_sweep, describe_review, label, mean_query_ms, num, per_query, WalkSetup,
@@ -157,8 +158,61 @@ impl CellSizeReport {
         self.rows.iter().filter(move |r| r.preset == preset)
     }
 
+    /// How the measured figures compare, counted over the sweep, and the cell sizes at
+    /// which the first disk cell held the whole walk.
+    fn comparison(&self) -> String {
+        let n = self.config.sfs.len();
+        let one_cell: Vec<String> = self
+            .config
+            .sfs
+            .iter()
+            .filter(|&&sf| {
+                self.rows
+                    .iter()
+                    .filter(|r| r.sf == sf)
+                    .all(|r| r.queries <= 1)
+            })
+            .map(|&sf| num(sf))
+            .collect();
+        let count = |by: Figure| {
+            self.config
+                .sfs
+                .iter()
+                .filter(
+                    |&&sf| match (self.row(sf, Preset::Box), self.row(sf, Preset::Optimal)) {
+                        (Some(b), Some(o)) => by(b) > by(o),
+                        _ => false,
+                    },
+                )
+                .count()
+        };
+        let mut s = format!(
+            "Here BOX's mean frame time is above Optimal's at {} of {n} cell sizes, its variance at {}, its longest \
+             frame at {}, and its index pages per query at {}.",
+            count(|r| r.mean_frame_ms),
+            count(|r| r.frame_ms_variance),
+            count(|r| r.max_frame_ms),
+            count(|r| r.index_per_query)
+        );
+        if !one_cell.is_empty() {
+            s.push_str(&format!(
+                " At SF {} the first disk cell held the whole walk: no configuration queried again, so the figures \
+                 there say nothing about retrieval.",
+                one_cell.join(", ")
+            ));
+        }
+        s.push('\n');
+        s
+    }
+}
+
+impl Report for CellSizeReport {
+    fn name(&self) -> &'static str {
+        "csearch-cell-size"
+    }
+
     /// One line per configuration and scale factor.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "sf,configuration,mean_frame_ms,frame_ms_variance,max_frame_ms,frames_over_50ms,queries,mean_query_ms,index_pages,mesh_pages,index_per_query,io_per_query\n",
         );
@@ -185,7 +239,7 @@ impl CellSizeReport {
     /// Fig. 4.19 (mean frame time), Fig. 4.20 (its variance) and index pages per query,
     /// each against SF with a line per configuration; written to [`FRAME_PLOT_FILE`],
     /// [`VARIANCE_PLOT_FILE`] and [`PAGES_PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |by: Figure| -> Vec<Series> {
@@ -238,7 +292,7 @@ impl CellSizeReport {
 
     /// The tables beside the thesis's Fig. 4.19 and 4.20, described in words (the thesis
     /// gives them as plots only).
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from("## Frame time against cell size, four configurations (Shou 2002, Fig. 4.19 and 4.20)\n\n");
         s.push_str(&format!(
@@ -304,53 +358,6 @@ impl CellSizeReport {
              figure; compare the shapes. Our frame is headless (query, load, cull and draw preparation, no \
              rendering), so our times are smaller than the thesis's and BOX's pauses are mostly mesh loading.\n",
         );
-        s
-    }
-
-    /// How the measured figures compare, counted over the sweep, and the cell sizes at
-    /// which the first disk cell held the whole walk.
-    fn comparison(&self) -> String {
-        let n = self.config.sfs.len();
-        let one_cell: Vec<String> = self
-            .config
-            .sfs
-            .iter()
-            .filter(|&&sf| {
-                self.rows
-                    .iter()
-                    .filter(|r| r.sf == sf)
-                    .all(|r| r.queries <= 1)
-            })
-            .map(|&sf| num(sf))
-            .collect();
-        let count = |by: Figure| {
-            self.config
-                .sfs
-                .iter()
-                .filter(
-                    |&&sf| match (self.row(sf, Preset::Box), self.row(sf, Preset::Optimal)) {
-                        (Some(b), Some(o)) => by(b) > by(o),
-                        _ => false,
-                    },
-                )
-                .count()
-        };
-        let mut s = format!(
-            "Here BOX's mean frame time is above Optimal's at {} of {n} cell sizes, its variance at {}, its longest \
-             frame at {}, and its index pages per query at {}.",
-            count(|r| r.mean_frame_ms),
-            count(|r| r.frame_ms_variance),
-            count(|r| r.max_frame_ms),
-            count(|r| r.index_per_query)
-        );
-        if !one_cell.is_empty() {
-            s.push_str(&format!(
-                " At SF {} the first disk cell held the whole walk: no configuration queried again, so the figures \
-                 there say nothing about retrieval.",
-                one_cell.join(", ")
-            ));
-        }
-        s.push('\n');
         s
     }
 }

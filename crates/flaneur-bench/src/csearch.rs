@@ -10,6 +10,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::Error;
 use flaneur::error::Result;
@@ -211,7 +212,7 @@ impl CsearchReport {
 
 /// Pages read per query along the walk, BOX against CSearch (both COverlap rules), one
 /// plot per tree.
-pub fn plot(report: &CsearchReport, path: &Path) -> Result<()> {
+fn plot_pages(report: &CsearchReport, path: &Path) -> Result<()> {
     use super::plot::{line_plot, LinePlot, Series};
     let series = |name: &str, f: fn(&CsearchRow) -> usize| Series {
         name: name.into(),
@@ -236,29 +237,73 @@ pub fn plot(report: &CsearchReport, path: &Path) -> Result<()> {
     )
 }
 
-/// A short summary that sets the figures beside the thesis's.
-pub fn markdown(reports: &[CsearchReport], cfg: &CsearchConfig) -> String {
-    let mut s = String::from("# csearch — pages read by BOX and CSearch along a walk\n\n");
-    s.push_str(&format!(
-        "{} queries, a disk cell of {} m every {} m along a generated street walk (seed {}), history of at most {} cells.\n\n",
-        cfg.steps, cfg.cell, cfg.step, cfg.seed, cfg.history_len
-    ));
-    s.push_str("| tree | BOX pages | CSearch pages | share | CSearch (thesis COverlap) | share |\n|---|---|---|---|---|---|\n");
-    for r in reports {
-        s.push_str(&format!(
-            "| {} | {} | {} | {:.1}% | {} | {:.1}% |\n",
-            r.tree,
-            r.box_pages,
-            r.csearch_pages,
-            r.ratio * 100.0,
-            r.thesis_pages,
-            r.thesis_ratio * 100.0
-        ));
+/// The walk on each tree benched, reported together: one CSV, one plot per tree, one
+/// summary.
+#[derive(Clone, Debug)]
+pub struct CsearchReports {
+    /// The walk and the cells every tree was walked with.
+    pub config: CsearchConfig,
+    /// The database's own tree first, then the insertion-built copy when it ran.
+    pub reports: Vec<CsearchReport>,
+}
+
+/// The pages plot of each tree of [`CsearchReports`], in the order of its reports.
+pub const PAGES_PLOT_FILES: [&str; 2] = ["csearch-pages.png", "csearch-pages-insertion.png"];
+
+impl Report for CsearchReports {
+    fn name(&self) -> &'static str {
+        "csearch"
     }
-    s.push_str(
-        "\nThe thesis (Shou 2002, Table 4.1) reports 9–21 % of BOX's disk I/Os per query for its Optimal \
-         configuration: CSearch with a 1 MB index cache and prefetching. The figures above are CSearch alone, \
-         with no index cache: every query reads the root again.\n",
-    );
-    s
+
+    /// Every tree's rows under one header.
+    fn to_csv(&self) -> String {
+        self.reports
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let s = r.to_csv();
+                if i == 0 {
+                    s
+                } else {
+                    s.lines().skip(1).map(|l| format!("{l}\n")).collect()
+                }
+            })
+            .collect()
+    }
+
+    /// A short summary that sets the figures beside the thesis's.
+    fn markdown(&self) -> String {
+        let (reports, cfg) = (&self.reports, &self.config);
+        let mut s = String::from("# csearch — pages read by BOX and CSearch along a walk\n\n");
+        s.push_str(&format!(
+            "{} queries, a disk cell of {} m every {} m along a generated street walk (seed {}), history of at most {} cells.\n\n",
+            cfg.steps, cfg.cell, cfg.step, cfg.seed, cfg.history_len
+        ));
+        s.push_str("| tree | BOX pages | CSearch pages | share | CSearch (thesis COverlap) | share |\n|---|---|---|---|---|---|\n");
+        for r in reports {
+            s.push_str(&format!(
+                "| {} | {} | {} | {:.1}% | {} | {:.1}% |\n",
+                r.tree,
+                r.box_pages,
+                r.csearch_pages,
+                r.ratio * 100.0,
+                r.thesis_pages,
+                r.thesis_ratio * 100.0
+            ));
+        }
+        s.push_str(
+            "\nThe thesis (Shou 2002, Table 4.1) reports 9–21 % of BOX's disk I/Os per query for its Optimal \
+             configuration: CSearch with a 1 MB index cache and prefetching. The figures above are CSearch alone, \
+             with no index cache: every query reads the root again.\n",
+        );
+        s
+    }
+
+    /// [`PAGES_PLOT_FILES`] in `dir`, one per tree.
+    fn plot(&self, dir: &Path) -> Result<()> {
+        for (r, name) in self.reports.iter().zip(PAGES_PLOT_FILES) {
+            plot_pages(r, &dir.join(name))?;
+        }
+        Ok(())
+    }
 }

@@ -17,6 +17,7 @@
 use std::path::Path;
 
 use crate::city_series::{self, SeriesCity};
+use crate::report::Report;
 use crate::walk_setup::{
     check_sweep, describe_review, label, mean_query_ms, mean_search_ms, num, per_query,
     searches_timed, WalkSetup,
@@ -170,9 +171,15 @@ impl DbSizeReport {
             .iter()
             .find(|r| r.objects == objects && r.preset == preset)
     }
+}
+
+impl Report for DbSizeReport {
+    fn name(&self) -> &'static str {
+        "csearch-db-size"
+    }
 
     /// One line per city and configuration.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "objects,configuration,db_pages,tree_height,queries,searches_timed,mean_search_ms,mean_query_ms,index_pages,index_per_query,io_per_query,mean_frame_ms\n",
         );
@@ -199,7 +206,7 @@ impl DbSizeReport {
     /// Fig. 4.22 (mean search time) and index pages per query, each against the number
     /// of objects with a line per configuration; written to [`TIME_PLOT_FILE`] and
     /// [`PAGES_PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |by: fn(&DbSizeRow) -> f64| -> Vec<Series> {
@@ -237,7 +244,7 @@ impl DbSizeReport {
     }
 
     /// The figures beside the thesis's Fig. 4.22, described in words (it gives no numbers).
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from(
             "## Search time against database size, Optimal against BOX (Shou 2002, Fig. 4.22)\n\n",

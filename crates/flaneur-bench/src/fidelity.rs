@@ -15,6 +15,7 @@
 use std::path::Path;
 
 use crate::plot::{line_plot, LinePlot, Series};
+use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
@@ -227,7 +228,19 @@ pub fn run(
 }
 
 impl FidelityReport {
-    pub fn to_csv(&self) -> String {
+    /// The mean share of pixels that differ from the reference over the frames (0
+    /// when there are none).
+    pub fn mean_differ(&self) -> f64 {
+        self.rows.iter().map(|r| r.differ).sum::<f64>() / self.rows.len().max(1) as f64
+    }
+}
+
+impl Report for FidelityReport {
+    fn name(&self) -> &'static str {
+        "fidelity"
+    }
+
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "frame,triangles,reference_triangles,psnr_db,differing_pixels,coarse_objects\n",
         );
@@ -249,13 +262,7 @@ impl FidelityReport {
         s
     }
 
-    /// The mean share of pixels that differ from the reference over the frames (0
-    /// when there are none).
-    pub fn mean_differ(&self) -> f64 {
-        self.rows.iter().map(|r| r.differ).sum::<f64>() / self.rows.len().max(1) as f64
-    }
-
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let n = self.rows.len().max(1) as f64;
         let same = self.rows.iter().filter(|r| r.psnr.is_infinite()).count();
         let finite: Vec<f64> = self
@@ -320,7 +327,7 @@ impl FidelityReport {
 
     /// PSNR per frame (identical frames at the plot's top), and the differing pixels
     /// beside the triangles drawn.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         let cap = self
             .rows
             .iter()

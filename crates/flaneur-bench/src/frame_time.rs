@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use crate::walk_setup::{describe_review, label, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -126,9 +127,13 @@ fn rows(optimal: &WalkReport, boxed: &WalkReport) -> Result<Vec<FrameTimeRow>> {
         .collect())
 }
 
-impl FrameTimeReport {
+impl Report for FrameTimeReport {
+    fn name(&self) -> &'static str {
+        "csearch-frame-time"
+    }
+
     /// One line per frame.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from("frame,time,optimal_ms,box_ms,optimal_queried,box_queried\n");
         for r in &self.rows {
             s.push_str(&format!(
@@ -146,7 +151,7 @@ impl FrameTimeReport {
 
     /// Fig. 4.21: time per frame along the path, a line per configuration, frame 0 left
     /// out; written to [`PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |name: &str, by: fn(&FrameTimeRow) -> f64| Series {
@@ -170,7 +175,7 @@ impl FrameTimeReport {
     }
 
     /// The figures beside the thesis's Fig. 4.21, described in words (it gives no numbers).
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from(
             "## Time per frame along one path, Optimal against BOX (Shou 2002, Fig. 4.21)\n\n",

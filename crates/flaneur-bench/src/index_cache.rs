@@ -11,6 +11,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use crate::walk_setup::{check_sweep, num, WalkSetup};
 use flaneur::cache::{belady, policy_by_name, CacheStats, Trace};
 use flaneur::database::Database;
@@ -128,7 +129,27 @@ fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Tra
 }
 
 impl IndexCacheReport {
-    pub fn to_csv(&self) -> String {
+    /// Patterns on which DPLRU's hit rate beats LRU's at some size below the working set.
+    pub fn dplru_wins(&self) -> Vec<Motion> {
+        self.traces
+            .iter()
+            .filter(|t| {
+                self.rows
+                    .iter()
+                    .filter(|r| r.pattern == t.pattern && r.pages < t.working_set)
+                    .any(|r| r.dplru.hit_rate() > r.lru.hit_rate())
+            })
+            .map(|t| t.pattern)
+            .collect()
+    }
+}
+
+impl Report for IndexCacheReport {
+    fn name(&self) -> &'static str {
+        "index-cache"
+    }
+
+    fn to_csv(&self) -> String {
         let mut s = String::from("pattern,pages,bytes,lru_hit_rate,dplru_hit_rate,belady_hit_rate,lru_misses,dplru_misses,belady_misses\n");
         for r in &self.rows {
             s.push_str(&format!(
@@ -147,22 +168,8 @@ impl IndexCacheReport {
         s
     }
 
-    /// Patterns on which DPLRU's hit rate beats LRU's at some size below the working set.
-    pub fn dplru_wins(&self) -> Vec<Motion> {
-        self.traces
-            .iter()
-            .filter(|t| {
-                self.rows
-                    .iter()
-                    .filter(|r| r.pattern == t.pattern && r.pages < t.working_set)
-                    .any(|r| r.dplru.hit_rate() > r.lru.hit_rate())
-            })
-            .map(|t| t.pattern)
-            .collect()
-    }
-
     /// One PNG per pattern: hit rate against cache size for LRU, DPLRU and Belady.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         for t in &self.traces {
             let rows: Vec<&IndexCacheRow> = self
@@ -198,7 +205,7 @@ impl IndexCacheReport {
         Ok(())
     }
 
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let mut s = String::from("# index-cache — hit rate against cache size (Fig. 4.18)\n\n");
         let w = &self.config.walk;
         s.push_str(&format!(

@@ -2,7 +2,8 @@
 //! call these and only print or plot what they return.
 //!
 //! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
-//! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
+//! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs;
+//! `report` is what every experiment's report gives the command that writes it.
 //! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on procedural models,
 //! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
 //! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either.
@@ -21,5 +22,6 @@ pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;
 pub mod pvs_prefetch;
+pub mod report;
 pub mod view_culling;
 pub mod walk_setup;

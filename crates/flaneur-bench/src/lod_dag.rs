@@ -23,6 +23,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::lod::{
     bumpy_torus, dag_stats, ConstructionStats, DagConstruction, DagStats, ProgressiveMesh,
@@ -263,9 +264,13 @@ fn ms(d: Duration) -> f64 {
 /// The file [`LodDagReport::plot`] writes.
 pub const TIME_PLOT_FILE: &str = "lod-dag-build-time.png";
 
-impl LodDagReport {
+impl Report for LodDagReport {
+    fn name(&self) -> &'static str {
+        "lod-dag"
+    }
+
     /// One line per model and construction.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "model,vertices,triangles,splits,nodes,pm_build_s,attributes_s,construction,edges,build_s,\
              memory_bytes,memory_bytes_per_vertex,encoded_bytes,encoded_bytes_per_vertex,redundant_removed\n",
@@ -303,7 +308,7 @@ impl LodDagReport {
     /// claim of linear time for the full- and mini-redundant ones, Table 3.2), into
     /// [`TIME_PLOT_FILE`] in `dir` (created if missing); the non-redundant line has the
     /// models it was built for.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let mut rows: Vec<&LodDagRow> = self.rows.iter().collect();
@@ -335,7 +340,7 @@ impl LodDagReport {
     }
 
     /// Our figures beside Tables 3.2 and 3.3 of the thesis.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let mut s = String::from(
             "# lod-dag — the DAG of vertex splits: full-, non- and mini-redundant (Zheng 2007 Tables 3.1–3.3)\n\n",
         );

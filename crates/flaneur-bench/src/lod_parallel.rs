@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use citygen::{CityConfig, Mesh};
 
+use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::lod::{bumpy_torus, simplify_all, ParallelOptions, ParallelReport, ProgressiveMesh};
 
@@ -282,9 +283,13 @@ pub fn paper_two_processor_speedup() -> (f64, f64, f64) {
     (mean, lo, hi)
 }
 
-impl LodParallelReport {
+impl Report for LodParallelReport {
+    fn name(&self) -> &'static str {
+        "lod-parallel"
+    }
+
     /// One row per mesh and thread count, then one per throughput run.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "kind,triangles,threads,seconds,speedup,serial_seconds,speedup_over_serial,busy_min_s,busy_max_s,busy_mean_s,imbalance,depth,leaf_cells,triangles_per_s\n",
         );
@@ -322,7 +327,7 @@ impl LodParallelReport {
     }
 
     /// The tables, beside the paper's.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from(
             "# lod-parallel — one large mesh's progressive mesh on several threads (El-Sana & Varshney, Tables 1–2)\n\n",
@@ -376,7 +381,7 @@ impl LodParallelReport {
     }
 
     /// Speed-up against threads, ours per mesh and the paper's per model.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let mut series: Vec<Series> = self

@@ -27,6 +27,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use crate::report::Report;
 use crate::walk_setup::{check_sweep, num};
 use flaneur::error::{Error, Result};
 use flaneur::lod::{
@@ -407,10 +408,14 @@ impl TauRun {
     }
 }
 
-impl LodRefineReport {
+impl Report for LodRefineReport {
+    fn name(&self) -> &'static str {
+        "lod-refine"
+    }
+
     /// One line per τ, frame and traversal; the accuracy only on the frames it was
     /// measured.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "tau,frame,traversal,traversal_ms,update_ms,triangles,front_nodes,updates,evaluated,accuracy\n",
         );
@@ -442,7 +447,7 @@ impl LodRefineReport {
     /// (accuracy against the priority-oriented traversal on the measured frames) and
     /// the triangles per frame, into `dir` (created if missing) as [`plot_file`] names
     /// them.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for r in &self.runs {
@@ -486,7 +491,7 @@ impl LodRefineReport {
     }
 
     /// Our figures beside Tables 4.1 and 4.3 of the thesis, one section per τ.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let o = &c.orbit;
         let mut s = String::from(

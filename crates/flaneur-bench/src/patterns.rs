@@ -17,6 +17,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use crate::walk_setup::{check_k, num, per_query, WalkSetup, PATTERN_FRAMES};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -187,8 +188,19 @@ pub fn run_with_progress(
 }
 
 impl PatternsReport {
+    /// The row of `pattern`, if it was walked.
+    pub fn row(&self, pattern: Motion) -> Option<&PatternRow> {
+        self.rows.iter().find(|r| r.pattern == pattern)
+    }
+}
+
+impl Report for PatternsReport {
+    fn name(&self) -> &'static str {
+        "patterns"
+    }
+
     /// One line per pattern and configuration.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "pattern,configuration,queries,index_pages,mesh_pages,first_load_pages,index_per_query,mesh_per_query,io_per_query,io_per_query_with_first,mean_frame_ms,ratio_to_box\n",
         );
@@ -214,15 +226,10 @@ impl PatternsReport {
         s
     }
 
-    /// The row of `pattern`, if it was walked.
-    pub fn row(&self, pattern: Motion) -> Option<&PatternRow> {
-        self.rows.iter().find(|r| r.pattern == pattern)
-    }
-
     /// Disk I/Os per query against the pattern (x = its position in the report, from 1),
     /// a line per configuration, index pages alone and index + mesh pages; written to
     /// [`PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |name: &str, f: fn(&PatternRow) -> f64| Series {
@@ -257,7 +264,7 @@ impl PatternsReport {
     }
 
     /// The figures beside the thesis's Table 4.1.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from(
             "# patterns — disk I/Os per query, Optimal against BOX (Shou 2002, Table 4.1)\n\n",

@@ -20,6 +20,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use crate::walk_setup::{check_k, check_sweep, mean_query_ms, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -176,30 +177,6 @@ pub fn run_with_progress(
 }
 
 impl PrefetchKReport {
-    /// One line per walk.
-    pub fn to_csv(&self) -> String {
-        let mut s = String::from(
-            "pattern,k,mean_frame_ms,frame_ms_variance,mean_query_ms,queries,prefetches_used,sync_queries,frames_over_50ms,index_pages,mesh_pages\n",
-        );
-        for r in &self.rows {
-            s.push_str(&format!(
-                "{},{},{:.4},{:.4},{:.4},{},{},{},{},{},{}\n",
-                r.pattern.name(),
-                r.k,
-                r.mean_frame_ms,
-                r.frame_ms_variance,
-                r.mean_query_ms,
-                r.queries,
-                r.prefetches_used,
-                r.sync_queries,
-                r.frames_over_50ms,
-                r.index_pages,
-                r.mesh_pages
-            ));
-        }
-        s
-    }
-
     /// The rows of `pattern`, in the order of the sweep.
     pub fn rows_of(&self, pattern: Motion) -> impl Iterator<Item = &PrefetchKRow> {
         self.rows.iter().filter(move |r| r.pattern == pattern)
@@ -249,11 +226,41 @@ impl PrefetchKReport {
         self.rows_of(pattern)
             .min_by(|a, b| by(a).total_cmp(&by(b)).then(a.k.total_cmp(&b.k)))
     }
+}
+
+impl Report for PrefetchKReport {
+    fn name(&self) -> &'static str {
+        "prefetch-k"
+    }
+
+    /// One line per walk.
+    fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "pattern,k,mean_frame_ms,frame_ms_variance,mean_query_ms,queries,prefetches_used,sync_queries,frames_over_50ms,index_pages,mesh_pages\n",
+        );
+        for r in &self.rows {
+            s.push_str(&format!(
+                "{},{},{:.4},{:.4},{:.4},{},{},{},{},{},{}\n",
+                r.pattern.name(),
+                r.k,
+                r.mean_frame_ms,
+                r.frame_ms_variance,
+                r.mean_query_ms,
+                r.queries,
+                r.prefetches_used,
+                r.sync_queries,
+                r.frames_over_50ms,
+                r.index_pages,
+                r.mesh_pages
+            ));
+        }
+        s
+    }
 
     /// Fig. 4.17: (a) mean frame time and (b) mean query time against k, one line per
     /// pattern, and (c) disk pages read per walk; written to [`FRAME_PLOT_FILE`],
     /// [`QUERY_PLOT_FILE`] and [`PAGES_PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let series = |by: fn(&PrefetchKRow) -> f64| -> Vec<Series> {
@@ -297,7 +304,7 @@ impl PrefetchKReport {
     }
 
     /// The best k per pattern beside the thesis's.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from("# prefetch-k — frame and query time against the prefetch factor k (Shou 2002, Fig. 4.17)\n\n");
         s.push_str(&format!(

@@ -14,6 +14,7 @@
 
 use std::path::Path;
 
+use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{
     axis_route, check_border, measure, random_route, simulate, straight_route, Pbnp, Position,
@@ -358,40 +359,6 @@ fn change(from: f64, to: f64) -> String {
 }
 
 impl PvsPrefetchReport {
-    /// Table 7.2's figures, one row per route and algorithm, the thesis's beside.
-    pub fn to_csv(&self) -> String {
-        let mut s = String::from(
-            "route,algorithm,transactions,cache_swaps,objects_sent,objects_per_transaction,first_transaction_objects,objects_per_later_transaction,cells_requested,visual_misses,late_entries,cells_entered,peak_held_objects,thesis_transactions,thesis_cache_swaps,thesis_objects_per_transaction,thesis_first_transaction_objects\n",
-        );
-        for r in &self.routes {
-            for rep in r.reports() {
-                let t = &rep.totals;
-                let th = thesis(r.route, rep.algorithm);
-                s.push_str(&format!(
-                    "{},{},{},{},{},{:.2},{},{:.2},{},{},{},{},{},{},{},{},{}\n",
-                    r.route,
-                    rep.algorithm,
-                    t.transactions,
-                    t.swaps,
-                    t.objects_sent,
-                    t.objects_per_transaction(),
-                    t.first_transaction_objects,
-                    t.objects_per_later_transaction(),
-                    t.cells_requested,
-                    t.visual_misses,
-                    t.late_entries,
-                    t.cells_entered,
-                    t.peak_held_objects,
-                    th.map_or(String::new(), |x| x.transactions.to_string()),
-                    th.map_or(String::new(), |x| x.swaps.to_string()),
-                    th.map_or(String::new(), |x| x.objects_per_transaction.to_string()),
-                    th.map_or(String::new(), |x| x.first_transaction_objects.to_string()),
-                ));
-            }
-        }
-        s
-    }
-
     /// Objects sent at each step (Figs. 7.7, 7.8): one column per route and algorithm.
     pub fn steps_csv(&self) -> String {
         let mut s = String::from("step");
@@ -475,9 +442,49 @@ impl PvsPrefetchReport {
         }
         s
     }
+}
+
+impl Report for PvsPrefetchReport {
+    fn name(&self) -> &'static str {
+        "pvs-prefetch"
+    }
+
+    /// Table 7.2's figures, one row per route and algorithm, the thesis's beside.
+    fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "route,algorithm,transactions,cache_swaps,objects_sent,objects_per_transaction,first_transaction_objects,objects_per_later_transaction,cells_requested,visual_misses,late_entries,cells_entered,peak_held_objects,thesis_transactions,thesis_cache_swaps,thesis_objects_per_transaction,thesis_first_transaction_objects\n",
+        );
+        for r in &self.routes {
+            for rep in r.reports() {
+                let t = &rep.totals;
+                let th = thesis(r.route, rep.algorithm);
+                s.push_str(&format!(
+                    "{},{},{},{},{},{:.2},{},{:.2},{},{},{},{},{},{},{},{},{}\n",
+                    r.route,
+                    rep.algorithm,
+                    t.transactions,
+                    t.swaps,
+                    t.objects_sent,
+                    t.objects_per_transaction(),
+                    t.first_transaction_objects,
+                    t.objects_per_later_transaction(),
+                    t.cells_requested,
+                    t.visual_misses,
+                    t.late_entries,
+                    t.cells_entered,
+                    t.peak_held_objects,
+                    th.map_or(String::new(), |x| x.transactions.to_string()),
+                    th.map_or(String::new(), |x| x.swaps.to_string()),
+                    th.map_or(String::new(), |x| x.objects_per_transaction.to_string()),
+                    th.map_or(String::new(), |x| x.first_transaction_objects.to_string()),
+                ));
+            }
+        }
+        s
+    }
 
     /// The CSVs besides [`to_csv`](Self::to_csv)'s: (file name, text).
-    pub fn extra_csvs(&self) -> Vec<(&'static str, String)> {
+    fn extra_csvs(&self) -> Vec<(&'static str, String)> {
         vec![
             (STEPS_CSV, self.steps_csv()),
             (REGIONS_CSV, self.regions_csv()),
@@ -486,7 +493,7 @@ impl PvsPrefetchReport {
     }
 
     /// Table 7.2 beside the thesis's, the table's statistics, and the region sweep.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let st = &self.stats;
         let mut s = format!(
@@ -623,7 +630,7 @@ impl PvsPrefetchReport {
 
     /// Objects sent at each step per route and algorithm (Figs. 7.7, 7.8), the objects
     /// sent so far, the routes seen from above (Fig. 7.6), and the region sweep.
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for r in &self.routes {

@@ -30,6 +30,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use crate::report::Report;
 use crate::walk_setup::{check_sf, check_sweep, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -373,9 +374,13 @@ impl Batch {
     }
 }
 
-impl ViewCullingReport {
+impl Report for ViewCullingReport {
+    fn name(&self) -> &'static str {
+        "view-culling"
+    }
+
     /// One line per scale factor.
-    pub fn to_csv(&self) -> String {
+    fn to_csv(&self) -> String {
         let mut s = String::from(
             "sf,frames,queries,objects_removed_pct,time_removed_pct,mean_buffered,mean_drawn,mean_prep_all_us,mean_cull_us,mean_prep_drawn_us,overflow_queries\n",
         );
@@ -400,7 +405,7 @@ impl ViewCullingReport {
 
     /// Shares of objects and of time removed against SF, with the thesis's Table 4.2 as
     /// two more lines; written to [`PLOT_FILE`] in `dir` (created if missing).
-    pub fn plot(&self, dir: &Path) -> Result<()> {
+    fn plot(&self, dir: &Path) -> Result<()> {
         use super::plot::{line_plot, LinePlot, Series};
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let ours = |name: &str, f: fn(&ViewCullingRow) -> f64| Series {
@@ -435,7 +440,7 @@ impl ViewCullingReport {
     }
 
     /// The figures beside the thesis's Table 4.2.
-    pub fn markdown(&self) -> String {
+    fn markdown(&self) -> String {
         let c = &self.config;
         let mut s = String::from("# view-culling — objects and time removed by frustum culling (Shou 2002, Table 4.2)\n\n");
         s.push_str(&format!(

@@ -1,0 +1,106 @@
+//! `flaneur bench fidelity`: each frame of a walk drawn with the mode's selection and
+//! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers).
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+
+use super::report::write_report;
+use crate::cli::args::parse_size;
+use crate::cli::walk::camera_path;
+use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::Database;
+use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
+
+/// `flaneur bench fidelity`'s arguments.
+#[derive(clap::Args)]
+pub struct FidelityArgs {
+    db: PathBuf,
+    /// A motion pattern (normal, fast, slow, turning, backward, random), a path
+    /// CSV file, or (pvs mode) cells: a walk along the walkable viewcells [default:
+    /// normal; cells in pvs mode].
+    #[arg(long)]
+    path: Option<String>,
+    /// review, box, or pvs (the viewcell's PVS with PBNP prefetching; the database
+    /// must have been built with --visibility).
+    #[arg(long, default_value = "review")]
+    mode: String,
+    #[arg(long, default_value_t = 300)]
+    frames: usize,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "256x256")]
+    size: (u32, u32),
+    /// LOD selection's screen-space error for the mode's pictures, a fraction of the
+    /// viewport (0: the mode's objects at full detail).
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    lod_tau: f32,
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+impl FidelityArgs {
+    /// Draws every frame twice, compares them and writes the report.
+    pub fn run(self) -> Result<()> {
+        let FidelityArgs {
+            db,
+            path,
+            mode,
+            frames,
+            seed,
+            size,
+            lod_tau,
+            out,
+        } = self;
+        let preset = match mode.as_str() {
+            "review" => Some(Preset::Optimal),
+            "box" => Some(Preset::Box),
+            "pvs" => None,
+            other => bail!("fidelity draws the review, box and pvs modes, not '{other}'"),
+        };
+        let db = Database::open(&db)?;
+        if preset.is_none() && !db.has_visibility() {
+            bail!(
+                "{} has no precomputed visibility for the pvs mode (build it with --visibility)",
+                db.store().path().display()
+            );
+        }
+        let fps = 30.0;
+        let path =
+            path.unwrap_or_else(|| if preset.is_some() { "normal" } else { "cells" }.to_string());
+        let poses = match path.as_str() {
+            "cells" if preset.is_none() => pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+            other => camera_path(&db, other, frames, fps, seed)?,
+        };
+        let cfg = ReviewConfig {
+            pace: None,
+            ..ReviewConfig::preset(preset.unwrap_or(Preset::Optimal))
+        };
+        let walk = match preset {
+            Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
+            None => flaneur_bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
+                border: PvsPrefetchConfig::default().border,
+            }),
+        };
+        let gpu = flaneur_render::Gpu::headless()?;
+        println!(
+            "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice",
+            poses.poses.len(),
+            path,
+            size.0,
+            size.1
+        );
+        let bar = indicatif::ProgressBar::new(poses.poses.len() as u64);
+        let drawing = flaneur_bench::fidelity::Drawing {
+            width: size.0,
+            height: size.1,
+            lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+        };
+        let r =
+            flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &mode, &drawing, |_| bar.inc(1))?;
+        bar.finish_and_clear();
+        write_report(&out, &r)
+    }
+}

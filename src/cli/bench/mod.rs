@@ -1,0 +1,80 @@
+//! `flaneur bench`: the papers' experiments, one file each. Every experiment builds its
+//! configuration from the arguments, runs it in `flaneur_bench`, and hands the report to
+//! [`report::write_report`].
+
+mod csearch;
+mod fidelity;
+mod index_cache;
+mod lod_dag;
+mod lod_parallel;
+mod lod_refine;
+mod patterns;
+mod prefetch_k;
+mod pvs_prefetch;
+mod report;
+mod view_culling;
+mod walk_setup;
+
+use anyhow::Result;
+use clap::Subcommand;
+
+/// `flaneur bench`'s arguments: the experiment to run.
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    experiment: Experiment,
+}
+
+#[derive(Subcommand)]
+enum Experiment {
+    /// Each frame of a walk drawn twice, with the mode's selection and at full detail,
+    /// and compared: PSNR and the share of differing pixels beside triangles drawn
+    /// (the thesis's Figs. 5.26 and 6.6 as numbers). Renders headless.
+    Fidelity(fidelity::FidelityArgs),
+    /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
+    PrefetchK(prefetch_k::PrefetchKArgs),
+    /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
+    ViewCulling(view_culling::ViewCullingArgs),
+    /// Disk I/Os per query, Optimal against BOX, on the five motion patterns (Table 4.1).
+    Patterns(patterns::PatternsArgs),
+    /// Index cache hit rate against cache size: LRU, DPLRU and Belady (Fig. 4.18).
+    IndexCache(index_cache::IndexCacheArgs),
+    /// Pages read by BOX against CSearch along a walk of overlapping disk cells; then
+    /// REVIEW walks: frame time and variance against cell size, Optimal / NC / NP / BOX
+    /// (Fig. 4.19, 4.20), time per frame, Optimal against BOX (Fig. 4.21), and search
+    /// time against database size on generated cities (Fig. 4.22).
+    Csearch(csearch::CsearchArgs),
+    /// DAG edges, build time and bytes per vertex: full-, non- and mini-redundant, on the
+    /// bunny and bumpy tori of the thesis's sizes (Zheng Tables 3.1–3.3). No database.
+    LodDag(lod_dag::LodDagArgs),
+    /// One large mesh's progressive mesh built on 1 and on all threads: time, speed-up and
+    /// load balance (El-Sana & Varshney Tables 1–2), beside the serial build; and the
+    /// throughput of building many city objects' progressive meshes. No database.
+    LodParallel(lod_parallel::LodParallelArgs),
+    /// Traversal and update time, accuracy and fronts per frame along a scripted orbit:
+    /// priority, linear and constant-time traversals (Zheng Tables 4.1, 4.3, Fig. 4.11,
+    /// 4.12). No database.
+    LodRefine(lod_refine::LodRefineArgs),
+    /// SNP against PBNP neighbour PVS prefetching on the thesis's synthetic city and its
+    /// two routes: transactions, cache swaps, objects sent, visual misses (Zheng Table
+    /// 7.2, Figs. 7.6–7.8), and PBNP against its region size. No database.
+    PvsPrefetch(pvs_prefetch::PvsPrefetchArgs),
+}
+
+impl BenchArgs {
+    /// Runs the experiment, writes its report and prints its summary.
+    pub fn run(self) -> Result<()> {
+        match self.experiment {
+            Experiment::Fidelity(a) => a.run(),
+            Experiment::PrefetchK(a) => a.run(),
+            Experiment::ViewCulling(a) => a.run(),
+            Experiment::Patterns(a) => a.run(),
+            Experiment::IndexCache(a) => a.run(),
+            Experiment::Csearch(a) => a.run(),
+            Experiment::LodDag(a) => a.run(),
+            Experiment::LodParallel(a) => a.run(),
+            Experiment::LodRefine(a) => a.run(),
+            Experiment::PvsPrefetch(a) => a.run(),
+        }
+    }
+}

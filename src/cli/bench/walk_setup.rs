@@ -1,0 +1,63 @@
+//! The walk settings every walking experiment takes, as arguments.
+
+use flaneur::walk::motion::Motion;
+use flaneur::walk::review;
+use flaneur_bench::walk_setup::{self, WalkSetup};
+
+use crate::cli::args::{or_default, pace};
+
+/// The walk every walking experiment takes (`bench::walk_setup::WalkSetup`).
+#[derive(clap::Args)]
+pub struct WalkSetupArgs {
+    #[arg(long, help = frames_help())]
+    frames: Option<usize>,
+    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS)]
+    fps: f32,
+    // Also seeds bench csearch's street walk.
+    #[arg(long, default_value_t = walk_setup::DEFAULT_SEED)]
+    pub(super) seed: u64,
+    /// Frustum depth, metres.
+    #[arg(long, default_value_t = review::DEFAULT_FAR)]
+    far: f32,
+    /// Scale factor SF of the disk cell (not used where SF is swept).
+    #[arg(long, default_value_t = review::DEFAULT_SF)]
+    sf: f32,
+    /// Object buffer budget, MiB.
+    #[arg(long, default_value_t = review::DEFAULT_MEMORY_BUDGET >> 20)]
+    budget_mb: usize,
+    /// Motion patterns, comma-separated (default: the thesis's five; normal where one
+    /// path is walked).
+    #[arg(long, value_delimiter = ',')]
+    patterns: Vec<Motion>,
+    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
+    /// to back; the prefetch thread then rarely finishes in time).
+    #[arg(long, default_value_t = review::DEFAULT_PACE)]
+    speed: f32,
+}
+
+/// `--frames`'s help, with the defaults as the library has them.
+fn frames_help() -> String {
+    format!(
+        "Frames of each walk [default: {}; {} for bench patterns; {} for bench csearch's figures, which walk once per configuration and cell size or city]",
+        walk_setup::DEFAULT_FRAMES,
+        walk_setup::PATTERN_FRAMES,
+        walk_setup::SHORT_FRAMES
+    )
+}
+
+impl WalkSetupArgs {
+    /// The experiment's walk: these settings over `base`, the experiment's default,
+    /// which gives the frames and the patterns when they are not given.
+    pub fn setup(self, base: WalkSetup) -> WalkSetup {
+        WalkSetup {
+            frames: self.frames.unwrap_or(base.frames),
+            fps: self.fps,
+            seed: self.seed,
+            far: self.far,
+            sf: self.sf,
+            memory_budget: self.budget_mb.saturating_mul(1 << 20),
+            patterns: or_default(self.patterns, base.patterns),
+            pace: pace(self.speed),
+        }
+    }
+}

@@ -1,0 +1,177 @@
+//! `flaneur build`: a database from a citygen scene file or OBJ files, and what went
+//! into it.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+
+use super::bars::Bars;
+use flaneur::lod::{LodOptions, LodReport};
+use flaneur::progress::{Progress, Silent};
+use flaneur::visibility::{SampleOptions, VisibilityOptions};
+use flaneur::BuildOptions;
+
+/// `flaneur build`'s arguments.
+#[derive(clap::Args)]
+pub struct BuildArgs {
+    /// A `.scene` file from citygen, or one or more `.obj` files.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// The database file to write.
+    #[arg(long, short)]
+    out: PathBuf,
+    #[arg(long, default_value_t = 4096)]
+    page_size: usize,
+    /// Share of each R-tree node that bulk loading fills.
+    #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL)]
+    fill: f32,
+    /// Build the index by one-by-one insertion (linear split), as the thesis did.
+    #[arg(long)]
+    insertion: bool,
+    /// Store no LODs: only each object's full mesh (faster, smaller).
+    #[arg(long)]
+    no_lod: bool,
+    /// Objects with more triangles than this also store their progressive mesh and
+    /// DAG, for view-dependent refinement.
+    #[arg(long, value_name = "N", default_value_t = flaneur::lod::DEFAULT_PM_THRESHOLD)]
+    pm_threshold: usize,
+    /// Precompute each viewcell's potentially visible set and its objects' degrees
+    /// of visibility (the long step of a build; see --cell-size).
+    #[arg(long)]
+    visibility: bool,
+    /// Side of a viewcell in metres (with --visibility).
+    #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size)]
+    cell_size: f32,
+    /// Pixels per side of each cube face the DoV is measured on (with --visibility).
+    #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
+    dov_resolution: u32,
+    /// Widest patch of a viewcell the conservative test samples, in metres (with
+    /// --visibility): smaller is a tighter PVS and a slower build.
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing)]
+    sample_spacing: f32,
+    /// Occluders further than this from a sample point are not used, in metres
+    /// (with --visibility).
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius)]
+    occluder_radius: f32,
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+impl BuildArgs {
+    /// Builds the database, with bars unless quiet, and prints its summary.
+    pub fn run(self) -> Result<()> {
+        let BuildArgs {
+            inputs,
+            out,
+            page_size,
+            fill,
+            insertion,
+            no_lod,
+            pm_threshold,
+            visibility,
+            cell_size,
+            dov_resolution,
+            sample_spacing,
+            occluder_radius,
+            quiet,
+        } = self;
+        let opts = BuildOptions {
+            visibility: visibility.then(|| VisibilityOptions {
+                cell_size,
+                resolution: dov_resolution,
+                samples: SampleOptions {
+                    spacing: sample_spacing,
+                    radius: occluder_radius,
+                },
+                ..VisibilityOptions::default()
+            }),
+            page_size,
+            fill,
+            insertion,
+            lod: (!no_lod).then(|| LodOptions {
+                pm_threshold,
+                ..LodOptions::default()
+            }),
+        };
+        let summary = build(&inputs, &out, &opts, !quiet)?;
+        println!(
+            "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, {:.1} s",
+            out.display(),
+            summary.objects,
+            summary.triangles,
+            summary.pages,
+            summary.bytes as f64 / (1 << 20) as f64,
+            summary.height,
+            summary.seconds
+        );
+        print_lod_report(summary.lod.as_ref(), summary.bytes);
+        if let Some(v) = &summary.visibility {
+            println!(
+                "  visibility: {} walkable cells of {} × {}, {:.1} objects per PVS, {} occluders; \
+                 {:.1} s ({:.3} s per cell, of which DoV {:.3} s at {:.2} M rays/s)",
+                v.cells,
+                v.rows,
+                v.columns,
+                v.entries as f64 / v.cells.max(1) as f64,
+                v.occluders,
+                v.seconds,
+                v.seconds / v.cells.max(1) as f64,
+                v.dov_seconds / v.cells.max(1) as f64,
+                v.rays as f64 / v.dov_seconds.max(1e-9) / 1e6
+            );
+        }
+        Ok(())
+    }
+}
+
+fn build(
+    inputs: &[PathBuf],
+    out: &Path,
+    opts: &BuildOptions,
+    bars: bool,
+) -> Result<flaneur::BuildSummary> {
+    let is_obj = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let progress: &dyn Progress = if bars { &Bars::default() } else { &Silent };
+    if inputs.iter().all(is_obj) {
+        Ok(flaneur::build_from_obj_with_progress(
+            inputs, out, opts, progress,
+        )?)
+    } else if inputs.len() == 1 {
+        Ok(flaneur::build_from_scene_with_progress(
+            &inputs[0], out, opts, progress,
+        )?)
+    } else {
+        bail!("give one scene file, or OBJ files only")
+    }
+}
+
+/// The LOD lines of a build's summary.
+pub fn print_lod_report(lod: Option<&LodReport>, file_bytes: u64) {
+    let Some(r) = lod else {
+        println!("  LODs: none (--no-lod)");
+        return;
+    };
+    let s = &r.stats;
+    println!(
+        "  LODs: {} objects simplified, {} with coarse levels ({} levels), {} with PM + DAG (over {} triangles); \
+         {} pages ({:.1} MiB, {:.1}% of the file); {:.1} s of the build ({:.1} s of simplifying tasks on {} threads)",
+        s.objects,
+        s.with_levels,
+        s.levels,
+        s.with_pm,
+        s.pm_threshold,
+        s.pages,
+        r.bytes as f64 / (1 << 20) as f64,
+        100.0 * r.bytes as f64 / file_bytes.max(1) as f64,
+        r.seconds,
+        r.task_seconds,
+        r.threads
+    );
+    if s.refused > 0 {
+        println!(
+            "  LODs: {} objects refused by the simplifier have none (first: {})",
+            s.refused,
+            r.first_refusal.as_deref().unwrap_or("?")
+        );
+    }
+}

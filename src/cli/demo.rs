@@ -1,0 +1,174 @@
+//! `flaneur demo`: a default city generated, built and walked, then shown in a window
+//! or, with no display, flown over headless.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+use super::bars::Bars;
+use super::build::print_lod_report;
+use super::view::view;
+use super::walk::print_walk;
+use flaneur::walk::motion::{self, CameraPath, Motion};
+use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::{BuildOptions, Database};
+use flaneur_render::ViewMode;
+
+/// `flaneur demo`'s arguments.
+#[derive(clap::Args)]
+pub struct DemoArgs {
+    /// Objects in the generated city.
+    #[arg(long, default_value_t = 20_000)]
+    objects: u64,
+    /// Where the city and its database are kept between runs.
+    #[arg(long, env = "FLANEUR_CACHE", default_value = "cache")]
+    cache: PathBuf,
+    /// Frames of the walk (30 per second).
+    #[arg(long, default_value_t = 1800)]
+    frames: usize,
+}
+
+impl DemoArgs {
+    /// Runs the demo in the cache folder.
+    pub fn run(self) -> Result<()> {
+        demo(self.objects, &self.cache, self.frames)
+    }
+}
+
+fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
+    std::fs::create_dir_all(cache)
+        .with_context(|| format!("creating cache folder {}", cache.display()))?;
+    let scene = cache.join(format!("demo-{objects}.scene"));
+    let db_path = cache.join(format!("demo-{objects}.flaneur"));
+    let city = citygen::CityConfig {
+        objects,
+        ..Default::default()
+    };
+    if !db_path.exists() {
+        if !scene.exists() {
+            println!(
+                "generating a city of {objects} objects into {}",
+                scene.display()
+            );
+            let s = citygen::write_city(&city, &scene, true)?;
+            println!(
+                "  {} objects, {} triangles, {:.1} MiB",
+                s.objects,
+                s.triangles,
+                s.bytes as f64 / (1 << 20) as f64
+            );
+        }
+        println!("building {}", db_path.display());
+        let b = flaneur::build_from_scene_with_progress(
+            &scene,
+            &db_path,
+            &BuildOptions::default(),
+            &Bars::default(),
+        )?;
+        println!(
+            "  {} pages, tree height {}, {:.1} s",
+            b.pages, b.height, b.seconds
+        );
+        print_lod_report(b.lod.as_ref(), b.bytes);
+    } else {
+        println!("using {} (delete it to rebuild)", db_path.display());
+    }
+    let db = Database::open(&db_path)?;
+    let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
+    println!(
+        "walking {frames} frames ({:.0} s of path, played {}x faster) of the 'normal' pattern in REVIEW mode, then with plain BOX queries",
+        frames as f64 / 30.0,
+        review::DEFAULT_PACE
+    );
+    for preset in [Preset::Optimal, Preset::Box] {
+        let bar = indicatif::ProgressBar::new(frames as u64);
+        let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
+        bar.finish_and_clear();
+        println!("{}:", preset.name());
+        for f in report
+            .frames
+            .iter()
+            .filter(|f| f.queried || f.prefetch_adopted)
+        {
+            let what = match (f.sync_query, f.prefetch_used, f.prefetch_adopted) {
+                (true, ..) => "queried",
+                (false, true, _) => "entered a prefetched cell",
+                (false, false, true) => "prefetch arrived",
+                _ => "waited for a prefetch",
+            };
+            println!(
+                "  frame {:>4}: {what}, {} objects loaded, {} index + {} mesh pages read, {:.1} ms",
+                f.frame, f.objects_loaded, f.index_pages, f.mesh_pages, f.frame_ms
+            );
+        }
+        print_walk(&report);
+    }
+    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+    if display {
+        println!(
+            "opening a window on the city's busiest street (close it or press Q to end the demo)"
+        );
+        let start = flaneur::walk::start::busiest_street(&db)?;
+        let opts = flaneur_render::ViewOptions::new(&db, start);
+        match view(&db, opts, ViewMode::Review, (false, false), None) {
+            Ok(()) => return Ok(()),
+            Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
+        }
+    }
+    demo_flight(&db, &cache.join("demo-frames"))
+}
+
+/// The demo's last part where there is no display: a short flight over the city drawn
+/// headless to PNG frames. Without a GPU adapter, it says so and the demo ends well.
+fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
+    let gpu = match flaneur_render::Gpu::headless() {
+        Ok(gpu) => gpu,
+        Err(e) => {
+            println!("no flight drawn: {e}");
+            return Ok(());
+        }
+    };
+    // Four seconds across the city's middle, 120 m up, looking ahead and down.
+    let b = db.bounds();
+    let (c, e) = (b.center(), b.extent());
+    let (from, to) = (
+        glam::Vec3::new(c.x - 0.3 * e.x, b.min.y + 120.0, c.z - 0.3 * e.z),
+        glam::Vec3::new(c.x + 0.1 * e.x, b.min.y + 120.0, c.z + 0.1 * e.z),
+    );
+    let yaw = (to.z - from.z).atan2(to.x - from.x);
+    let frames = 120;
+    let poses = (0..frames)
+        .map(|i| {
+            let t = i as f32 / (frames - 1) as f32;
+            flaneur::walk::Pose {
+                time: i as f64 / 30.0,
+                position: from.lerp(to, t),
+                yaw,
+                pitch: -0.35,
+            }
+        })
+        .collect();
+    let path = CameraPath::new(poses)?;
+    let cfg = ReviewConfig::preset(Preset::Optimal);
+    println!(
+        "drawing a {frames}-frame flight over the city on {} ({:?}), headless",
+        gpu.adapter.name, gpu.adapter.backend
+    );
+    let mut writer = flaneur_render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
+        .with_lods(db, flaneur::walk::lod_select::DEFAULT_TAU)?;
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
+    bar.finish_and_clear();
+    let t = &writer.times;
+    println!(
+        "  {} frames drawn ({:.0} ms each on average, {:.0} triangles, {:.0} objects at a coarse level), every tenth written: {}",
+        t.frames,
+        t.draw_ms.iter().sum::<f64>() / t.frames.max(1) as f64,
+        t.triangles.iter().sum::<u64>() as f64 / t.frames.max(1) as f64,
+        t.coarse.iter().sum::<usize>() as f64 / t.frames.max(1) as f64,
+        dir.join("frame-*.png").display()
+    );
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! `flaneur info`: what a database holds, as text or JSON.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+
+use flaneur::Database;
+
+/// `flaneur info`'s arguments.
+#[derive(clap::Args)]
+pub struct InfoArgs {
+    db: PathBuf,
+    #[arg(long)]
+    json: bool,
+}
+
+impl InfoArgs {
+    /// Prints the database's figures.
+    pub fn run(self) -> Result<()> {
+        info(&self.db, self.json)
+    }
+}
+
+fn info(path: &Path, json: bool) -> Result<()> {
+    let db = Database::open(path)?;
+    let info = db.info()?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+        return Ok(());
+    }
+    let k = &info.pages_by_kind;
+    println!("database    {}", path.display());
+    println!("objects     {}", info.objects);
+    println!("triangles   {}", info.triangles);
+    println!(
+        "pages       {} of {} bytes ({:.1} MiB)",
+        info.pages,
+        info.page_size,
+        info.file_bytes as f64 / (1 << 20) as f64
+    );
+    println!(
+        "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}, visibility {}",
+        k.rtree, k.mesh, k.meta, k.lod, k.visibility
+    );
+    match &info.lod {
+        None => println!("lods        none (built with --no-lod, or before LODs were stored)"),
+        Some(l) => {
+            let bytes = l.pages * info.page_size as u64;
+            println!(
+                "lods        {} of {} objects, {} levels coarser than the full meshes, {} pages ({:.1} MiB, {:.1}% of the file)",
+                l.with_levels,
+                info.objects,
+                l.levels,
+                l.pages,
+                bytes as f64 / (1 << 20) as f64,
+                100.0 * bytes as f64 / info.file_bytes.max(1) as f64
+            );
+            println!(
+                "  settings  ratio {}, down to {} triangles; PM + DAG above {} triangles: {} objects",
+                l.ratio, l.min_triangles, l.pm_threshold, l.with_pm
+            );
+            if l.refused > 0 {
+                println!(
+                    "  refused   {} objects the simplifier refused have no LODs",
+                    l.refused
+                );
+            }
+        }
+    }
+    match &info.visibility {
+        None => println!("visibility  none (built without --visibility)"),
+        Some(v) => {
+            println!(
+                "visibility  {} walkable cells of {} × {} ({} m, eyes {}–{} m), {} pages",
+                v.cells, v.rows, v.columns, v.cell_size, v.eye[0], v.eye[1], k.visibility
+            );
+            println!(
+                "  PVS       {:.1} objects on average, {:.2}% of the scene (patches of {} m, occluders within {} m)",
+                v.mean_pvs,
+                100.0 * v.mean_share,
+                v.sample_spacing,
+                v.occluder_radius
+            );
+            println!(
+                "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {:.3} s per cell, {} rays, {:.2} M rays/s",
+                v.seconds,
+                v.seconds_per_cell,
+                v.resolution,
+                v.dov_seconds_per_cell,
+                v.rays,
+                v.rays_per_second / 1e6
+            );
+        }
+    }
+    let b = info.bounds;
+    println!(
+        "bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}",
+        b[0], b[3], b[1], b[4], b[2], b[5]
+    );
+    println!(
+        "r-tree      height {}, fan-out {} (leaf) / {} (internal), fill {:.1}%",
+        info.tree.height,
+        info.fanout_leaf,
+        info.fanout_internal,
+        info.tree.fill * 100.0
+    );
+    for (level, (n, e)) in info.tree.nodes.iter().zip(&info.tree.entries).enumerate() {
+        println!("  level {level}   {n} nodes, {e} entries");
+    }
+    Ok(())
+}

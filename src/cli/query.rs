@@ -1,0 +1,68 @@
+//! `flaneur query`: one range query (BOX), or CSearch against history cells, with the
+//! pages it read and its time.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Result;
+
+use flaneur::geom::Aabb;
+use flaneur::{Backend, Database};
+
+/// `flaneur query`'s arguments.
+#[derive(clap::Args)]
+pub struct QueryArgs {
+    db: PathBuf,
+    /// The query box: x0,y0,z0,x1,y1,z1.
+    #[arg(long = "box", value_name = "BOX")]
+    query: Aabb,
+    /// History cells for CSearch (repeatable).
+    #[arg(long, value_name = "BOX")]
+    history: Vec<Aabb>,
+    #[arg(long, default_value = "mmap")]
+    backend: Backend,
+    #[arg(long)]
+    json: bool,
+}
+
+impl QueryArgs {
+    /// Runs the query and prints its objects, pages and time.
+    pub fn run(self) -> Result<()> {
+        run_query(
+            &self.db,
+            &self.query,
+            &self.history,
+            self.backend,
+            self.json,
+        )
+    }
+}
+
+fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bool) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let t = Instant::now();
+    let result = if history.is_empty() {
+        db.range(q)?
+    } else {
+        db.csearch(q, history)?
+    };
+    let us = t.elapsed().as_secs_f64() * 1e6;
+    let io = db.io();
+    if json {
+        let v = serde_json::json!({
+            "query": if history.is_empty() { "box" } else { "csearch" },
+            "ids": result.ids(),
+            "pages": result.pages,
+            "page_reads": io.page_reads,
+            "micros": us,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    let ids: Vec<String> = result.ids().iter().map(u64::to_string).collect();
+    println!("{} objects: {}", ids.len(), ids.join(" "));
+    let pages: Vec<String> = result.pages.iter().map(u64::to_string).collect();
+    println!("{} pages read: {}", pages.len(), pages.join(" "));
+    println!("{:.0} µs", us);
+    Ok(())
+}

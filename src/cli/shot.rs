@@ -1,0 +1,65 @@
+//! `flaneur shot`: one picture of the city drawn headless.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::args::{parse_look, parse_size, parse_vec3};
+use flaneur::Database;
+
+/// `flaneur shot`'s arguments.
+#[derive(clap::Args)]
+pub struct ShotArgs {
+    db: PathBuf,
+    /// The eye: x,y,z in metres.
+    #[arg(long, value_parser = parse_vec3)]
+    at: glam::Vec3,
+    /// Heading and elevation in degrees: yaw,pitch (yaw 0 looks along +x, 90 along
+    /// +z; pitch positive looks up).
+    #[arg(long, value_parser = parse_look, default_value = "0,0")]
+    look: (f32, f32),
+    /// Image size, WIDTHxHEIGHT pixels.
+    #[arg(long, value_parser = parse_size, default_value = "960x540")]
+    size: (u32, u32),
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 60.0)]
+    fov: f32,
+    #[arg(short, long, default_value = "shot.png")]
+    out: PathBuf,
+}
+
+impl ShotArgs {
+    /// Draws the picture, saves it as PNG and prints what it cost.
+    pub fn run(self) -> Result<()> {
+        let ShotArgs {
+            db,
+            at,
+            look,
+            size,
+            fov,
+            out,
+        } = self;
+        let db = Database::open(&db)?;
+        let camera = flaneur::geom::Camera::new(at, look.0.to_radians(), look.1.to_radians())?
+            .with_fov(fov.to_radians(), fov.to_radians())?;
+        let gpu = flaneur_render::Gpu::headless()?;
+        let s = flaneur_render::shot(&db, &gpu, &camera, size.0, size.1)?;
+        s.frame.save_png(&out)?;
+        println!(
+            "{}: {} × {} on {} ({:?}); {} objects, {} triangles, {:.1} MiB on the GPU; \
+             select {:.1} ms, upload {:.1} ms, draw and read back {:.1} ms",
+            out.display(),
+            size.0,
+            size.1,
+            gpu.adapter.name,
+            gpu.adapter.backend,
+            s.objects,
+            s.triangles,
+            s.gpu_bytes as f64 / 1048576.0,
+            s.select.as_secs_f64() * 1e3,
+            s.upload.as_secs_f64() * 1e3,
+            s.draw.as_secs_f64() * 1e3
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,221 @@
+//! `flaneur view`: a walk through the city in a window, restarted from where the viewer
+//! stands whenever a key changes its mode or budget.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use super::args::{parse_look, parse_size, parse_vec3};
+use flaneur::walk::motion::CameraPath;
+use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::Database;
+use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
+use flaneur_render::{Change, ViewMode};
+
+/// `flaneur view`'s arguments.
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    db: PathBuf,
+    /// review (CSearch, index cache, prefetching), box (plain range queries) or pvs
+    /// (the current viewcell's PVS, PBNP prefetching; a database built with
+    /// --visibility); 1, 2 and 3 switch while walking.
+    #[arg(long, default_value = "review")]
+    mode: String,
+    /// Window size, WIDTHxHEIGHT pixels (the walk's 45° view is its centred square).
+    #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+    size: (u32, u32),
+    /// LOD selection's screen-space error, a fraction of the viewport (0: full
+    /// detail); [ and ] halve and double it while walking.
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    lod_tau: f32,
+    /// Start here (x,y,z metres) instead of the busiest street.
+    #[arg(long, value_parser = parse_vec3)]
+    at: Option<glam::Vec3>,
+    /// Heading and elevation at the start, degrees (with --at).
+    #[arg(long, value_parser = parse_look, default_value = "0,0")]
+    look: (f32, f32),
+    /// Save the poses walked as a path CSV when the window closes.
+    #[arg(long)]
+    record: Option<PathBuf>,
+    /// Play a path CSV (from --record, --save-path or by hand) instead of steering.
+    #[arg(long)]
+    play: Option<PathBuf>,
+    /// GPU memory the meshes may take, MiB (0: as much as the walk's buffer holds);
+    /// meshes not drawn are freed to make room, largest first.
+    #[arg(long, default_value_t = 256.0)]
+    gpu_budget_mb: f64,
+    /// Walking speed, m/s (Shift runs at four times it).
+    #[arg(long, default_value_t = flaneur::walk::steer::WALK_SPEED)]
+    speed: f32,
+    /// Start with the bounding boxes on (B), and seen from above (T).
+    #[arg(long)]
+    boxes: bool,
+    #[arg(long)]
+    top_view: bool,
+}
+
+impl ViewArgs {
+    /// Opens the window on the start and walks until it closes.
+    pub fn run(self) -> Result<()> {
+        let ViewArgs {
+            db,
+            mode,
+            size,
+            lod_tau,
+            at,
+            look,
+            record,
+            play,
+            gpu_budget_mb,
+            speed,
+            boxes,
+            top_view,
+        } = self;
+        let mode = match mode.as_str() {
+            "review" => ViewMode::Review,
+            "box" => ViewMode::Box,
+            "pvs" => ViewMode::Pvs,
+            other => {
+                bail!("the window shows the review, box and pvs modes so far, not '{other}'")
+            }
+        };
+        let db = Database::open(&db)?;
+        let start = match at {
+            Some(p) => flaneur::walk::Pose {
+                time: 0.0,
+                position: p,
+                yaw: look.0.to_radians(),
+                pitch: look.1.to_radians(),
+            },
+            None => flaneur::walk::start::busiest_street(&db)?,
+        };
+        let play = play
+            .map(|p| CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display())))
+            .transpose()?;
+        let opts = flaneur_render::ViewOptions {
+            size,
+            lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+            play,
+            gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
+            speed,
+            ..flaneur_render::ViewOptions::new(&db, start)
+        };
+        view(&db, opts, mode, (boxes, top_view), record.as_deref())
+    }
+}
+
+/// A session at the window: walks run one after another from where the viewer stands
+/// (a key changed the mode or the budget, or the walk failed), until the window closes.
+pub fn view(
+    db: &Database,
+    opts: flaneur_render::ViewOptions,
+    mode: ViewMode,
+    (boxes, top_view): (bool, bool),
+    record: Option<&Path>,
+) -> Result<()> {
+    let start = opts.start;
+    let preset = |m: ViewMode| ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(match m {
+            ViewMode::Box => Preset::Box,
+            _ => Preset::Optimal,
+        })
+    };
+    let mut mode = mode;
+    let mut cfg = preset(mode);
+    let mut window =
+        flaneur_render::WalkWindow::open(db, opts, mode)?.telling(|m| eprintln!("{m}"));
+    window.boxes = boxes;
+    window.top_view = top_view;
+    if let Some(a) = window.adapter() {
+        println!("drawing on {} ({:?})", a.name, a.backend);
+    }
+    let p = start.position;
+    println!(
+        "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
+         Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
+        p.x,
+        p.y,
+        p.z,
+        mode.name()
+    );
+    let mut failures = 0;
+    loop {
+        let walked = match mode {
+            ViewMode::Pvs if !db.has_visibility() => {
+                window.report(format!(
+                    "{} has no visibility data (build it with --visibility): showing REVIEW",
+                    db.store().path().display()
+                ));
+                mode = ViewMode::Review;
+                window.mode = mode;
+                continue;
+            }
+            ViewMode::Pvs => {
+                let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp {
+                    border: PvsPrefetchConfig::default().border,
+                };
+                flaneur::walk::pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut window).map(|_| ())
+            }
+            _ => review::walk_live(db, &cfg, |_| {}, &mut window).map(|_| ()),
+        };
+        match walked {
+            Ok(()) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                window.report(format!(
+                    "the walk stopped: {e}; going on from where you stand"
+                ));
+                if failures >= 5 {
+                    bail!("the walk failed five times running; last: {e}");
+                }
+            }
+        }
+        if window.closed() {
+            break;
+        }
+        match window.change {
+            Some(Change::Mode(m)) => {
+                cfg = ReviewConfig {
+                    memory_budget: cfg.memory_budget,
+                    ..preset(m)
+                };
+                mode = m;
+                window.mode = m;
+            }
+            Some(Change::Budget(f)) => {
+                cfg.memory_budget = ((cfg.memory_budget as f32 * f) as usize).max(1 << 20);
+                window.report(format!(
+                    "object buffer budget {:.0} MiB",
+                    cfg.memory_budget as f64 / 1048576.0
+                ));
+            }
+            None => {}
+        }
+        window.resume();
+    }
+    let s = &window.summary;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{} frames drawn: CPU (LOD selection, uploads) {:.1} ms a frame (worst {:.1}; {:.1} after the cold first frame), GPU {:.1} ms (worst {:.1}); at most {:.1} MiB of meshes on the GPU ({} frames over its budget); {} problems met",
+        s.frames,
+        mean(&s.cpu_ms),
+        worst(&s.cpu_ms),
+        worst(s.cpu_ms.get(1..).unwrap_or_default()),
+        mean(&s.gpu_ms),
+        worst(&s.gpu_ms),
+        s.peak_gpu_bytes as f64 / 1048576.0,
+        s.over_budget,
+        s.problems.len()
+    );
+    if let Some(r) = record {
+        flaneur_render::save_recording(&window.recorded, r)?;
+        println!(
+            "{} poses recorded to {}",
+            window.recorded.len(),
+            r.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,440 @@
+//! `flaneur walk`: a headless walk along a camera path (REVIEW, Shou 2002 ch. 4, or
+//! the viewcells' PVS), its per-frame figures, and its frames drawn when asked.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use super::args::{pace, parse_size};
+use super::write_file;
+use flaneur::walk::motion::{self, CameraPath, Motion};
+use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::{Backend, Database};
+
+/// `flaneur walk`'s arguments.
+#[derive(clap::Args)]
+pub struct WalkArgs {
+    db: PathBuf,
+    /// `review` (CSearch with index cache and prefetching), `box` (plain range
+    /// queries) or `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
+    /// database built with --visibility).
+    #[arg(long, default_value = "review")]
+    mode: String,
+    /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
+    #[arg(long)]
+    config: Option<Preset>,
+    /// A motion pattern (normal, fast, slow, turning, backward, random), `cells` (a
+    /// walk through the walkable viewcells; the default of --mode pvs) or a path CSV
+    /// file. Default: normal.
+    #[arg(long)]
+    path: Option<String>,
+    /// With --mode pvs: which neighbours' PVS the client prefetches, snp or pbnp.
+    #[arg(long, default_value = "pbnp")]
+    prefetch: String,
+    /// With --mode pvs and pbnp: the border regions' width, a share of the cell's side.
+    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER)]
+    border: f64,
+    #[arg(long, default_value_t = 600)]
+    frames: usize,
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Index cache policy: lru, dplru, dov, dovtime.
+    #[arg(long)]
+    policy: Option<String>,
+    /// Index cache size in bytes (0: no index cache).
+    #[arg(long)]
+    cache_bytes: Option<usize>,
+    /// Prefetch factor k in seconds: prefetch the cell of the frustum k seconds of
+    /// motion ahead (negative: no prefetching).
+    #[arg(long)]
+    k: Option<f32>,
+    /// Scale factor SF of the disk cell over the frustum cell.
+    #[arg(long)]
+    sf: Option<f32>,
+    /// Frustum depth, metres.
+    #[arg(long)]
+    far: Option<f32>,
+    /// Object buffer budget, MiB.
+    #[arg(long)]
+    budget_mb: Option<usize>,
+    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
+    /// to back; the prefetch thread then rarely finishes in time).
+    #[arg(long, default_value_t = review::DEFAULT_PACE)]
+    speed: f32,
+    /// Write one row per frame here.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Save the camera path as CSV (time, x, y, z, yaw, pitch).
+    #[arg(long)]
+    save_path: Option<PathBuf>,
+    #[arg(long, default_value = "mmap")]
+    backend: Backend,
+    #[arg(long, short)]
+    quiet: bool,
+    /// Draw every frame headless (no window) as the walk selects it, and write them
+    /// as PNGs to --frames-dir.
+    #[arg(long)]
+    render: bool,
+    #[arg(long, default_value = "frames")]
+    frames_dir: PathBuf,
+    /// Rendered image size, WIDTHxHEIGHT; square fits the walk's 45° × 45° view.
+    #[arg(long, value_parser = parse_size, default_value = "512x512")]
+    size: (u32, u32),
+    /// Write every N-th rendered frame (all are drawn and timed).
+    #[arg(long, default_value_t = 1)]
+    every: usize,
+    /// LOD selection's screen-space error, a fraction of the viewport: each object
+    /// drawn at the coarsest stored level under it (0: full detail).
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    lod_tau: f32,
+}
+
+impl WalkArgs {
+    /// Walks the path in the mode asked and prints the walk's figures.
+    pub fn run(self) -> Result<()> {
+        let WalkArgs {
+            db,
+            mode,
+            config,
+            path,
+            frames,
+            fps,
+            seed,
+            policy,
+            cache_bytes,
+            k,
+            sf,
+            far,
+            budget_mb,
+            speed,
+            csv,
+            save_path,
+            backend,
+            quiet,
+            prefetch,
+            border,
+            render,
+            frames_dir,
+            size,
+            every,
+            lod_tau,
+        } = self;
+        let render = render.then_some(RenderOpts {
+            dir: frames_dir,
+            size,
+            every,
+            lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+        });
+        if mode == "pvs" && config.is_none() {
+            let rule = match prefetch.as_str() {
+                "snp" => PvsPrefetch::Snp,
+                "pbnp" => PvsPrefetch::Pbnp { border },
+                other => bail!("unknown prefetch '{other}' (snp, pbnp)"),
+            };
+            return pvs_walk_cmd(
+                &db,
+                path.as_deref().unwrap_or("cells"),
+                frames,
+                fps,
+                seed,
+                rule,
+                csv.as_deref(),
+                backend,
+                quiet,
+                render.as_ref(),
+            );
+        }
+        let path = path.unwrap_or_else(|| "normal".into());
+        let preset = match config {
+            Some(p) => p,
+            None => match mode.as_str() {
+                "review" => Preset::Optimal,
+                "box" => Preset::Box,
+                other => bail!("unknown mode '{other}' (review, box, pvs)"),
+            },
+        };
+        let mut cfg = ReviewConfig::preset(preset);
+        if let Some(bytes) = cache_bytes {
+            cfg.index_cache =
+                (bytes > 0).then(|| (policy.clone().unwrap_or_else(|| "dplru".into()), bytes));
+        } else if let (Some(p), Some(c)) = (&policy, &mut cfg.index_cache) {
+            c.0 = p.clone();
+        }
+        if let Some(k) = k {
+            cfg.prefetch_k = (k >= 0.0).then_some(k);
+        }
+        cfg.sf = sf.unwrap_or(cfg.sf);
+        cfg.far = far.unwrap_or(cfg.far);
+        cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
+        cfg.pace = pace(speed);
+        walk_cmd(
+            &db,
+            &cfg,
+            &path,
+            frames,
+            fps,
+            seed,
+            csv.as_deref(),
+            save_path.as_deref(),
+            backend,
+            quiet,
+            render.as_ref(),
+        )
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn walk_cmd(
+    path: &Path,
+    cfg: &ReviewConfig,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+    csv: Option<&Path>,
+    save_path: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+    render: Option<&RenderOpts>,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = camera_path(&db, camera, frames, fps, seed)?;
+    if let Some(p) = save_path {
+        poses.save_csv(p)?;
+    }
+    let bar = frame_bar(&poses, quiet);
+    let (report, drawn) = rendered(&db, render, cfg.far, |sink| {
+        review::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
+    })?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        write_file(p, &report.to_csv())?;
+    }
+    print_walk(&report);
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
+    }
+    Ok(())
+}
+
+/// A bar counting the walk's frames, hidden when quiet.
+fn frame_bar(poses: &CameraPath, quiet: bool) -> indicatif::ProgressBar {
+    if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(poses.poses.len() as u64)
+    }
+}
+
+/// Runs `walk` with a frame writer when `render` asks for one (frames drawn with a
+/// ground reaching `far` past the city), else with no sink; and what drawing cost.
+fn rendered<R>(
+    db: &Database,
+    render: Option<&RenderOpts>,
+    far: f32,
+    walk: impl FnOnce(&mut dyn flaneur::walk::FrameSink) -> flaneur::Result<R>,
+) -> Result<(R, Option<Drawn>)> {
+    let Some(r) = render else {
+        return Ok((walk(&mut flaneur::walk::NoSink)?, None));
+    };
+    let gpu = flaneur_render::Gpu::headless()?;
+    let mut writer =
+        flaneur_render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
+    if let Some(tau) = r.lod_tau {
+        writer = writer.with_lods(db, tau)?;
+    }
+    let result = walk(&mut writer)?;
+    Ok((
+        result,
+        Some(Drawn {
+            adapter: gpu.adapter.clone(),
+            times: writer.times,
+        }),
+    ))
+}
+
+/// What drew a walk, and what it cost.
+struct Drawn {
+    adapter: flaneur_render::AdapterInfo,
+    times: flaneur_render::FrameTimes,
+}
+
+/// What drawing a walk's frames cost, printed and written to `render.csv` beside them.
+fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
+    let (adapter, t) = (&drawn.adapter, &drawn.times);
+    let csv = r.dir.join("render.csv");
+    write_file(&csv, &t.to_csv())?;
+    let stats = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        (mean, v.iter().copied().fold(0.0, f64::max))
+    };
+    let ((select, select_max), (up, up_max), (draw, draw_max)) =
+        (stats(&t.select_ms), stats(&t.upload_ms), stats(&t.draw_ms));
+    println!(
+        "rendered {} frames of {} × {} on {} ({:?}), {} written to {}: LOD selection {:.1} ms a \
+             frame (most {:.1}), uploads {:.1} ms (most {:.1}), drawing and reading back {:.1} ms \
+             (most {:.1}); {} uploads, {} frees, at most {:.1} MiB of meshes on the GPU",
+        t.frames,
+        r.size.0,
+        r.size.1,
+        adapter.name,
+        adapter.backend,
+        t.written,
+        r.dir.display(),
+        select,
+        select_max,
+        up,
+        up_max,
+        draw,
+        draw_max,
+        t.uploads,
+        t.evictions,
+        t.peak_gpu_bytes as f64 / 1048576.0
+    );
+    if let Some(c) = t.lod {
+        println!(
+            "  LOD selection: {} draws coarser than full detail, {} levels read; {} draws refined view by view ({} vertex splits and edge collapses), {} progressive meshes decoded off the frame's thread ({} draws at discrete levels meanwhile); {} pages",
+            c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.decoded, c.drawn_while_decoding, c.pages
+        );
+    }
+    println!("  per-frame times in {}", csv.display());
+    Ok(())
+}
+
+/// Where and how `walk --render` draws its frames.
+struct RenderOpts {
+    dir: PathBuf,
+    size: (u32, u32),
+    every: usize,
+    lod_tau: Option<f32>,
+}
+
+/// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.
+pub fn camera_path(
+    db: &Database,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+) -> Result<CameraPath> {
+    Ok(match camera.parse::<Motion>() {
+        Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
+        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| {
+            format!("'{camera}' is neither a motion pattern nor a readable path file")
+        })?,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn pvs_walk_cmd(
+    path: &Path,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+    rule: PvsPrefetch,
+    csv: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+    render: Option<&RenderOpts>,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = match camera {
+        // A walker's pace: 1.4 m/s.
+        "cells" => pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+        other => camera_path(&db, other, frames, fps, seed)?,
+    };
+    let bar = frame_bar(&poses, quiet);
+    // The PVS walk's cameras have the default frustum (`Pose::camera`).
+    let (r, drawn) = rendered(&db, render, flaneur::geom::DEFAULT_FAR, |sink| {
+        pvs_walk::walk_pvs_into(&db, &poses, rule, |_| bar.inc(1), sink)
+    })?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
+        for (i, f) in r.frames.iter().enumerate() {
+            out.push_str(&format!(
+                "{i},{},{},{},{},{},{},{}\n",
+                f.cell.map_or(String::new(), |c| c.to_string()),
+                f.drawn,
+                f.transaction as u8,
+                f.sent,
+                f.swaps,
+                f.visual_misses,
+                f.pages
+            ));
+        }
+        write_file(p, &out)?;
+    }
+    println!(
+        "pvs walk, {} prefetch: {} frames ({} outside any walkable cell), {} cells entered",
+        r.prefetch.name(),
+        r.frames.len(),
+        r.frames_outside,
+        r.cells_entered
+    );
+    println!(
+        "  {} prefetch transactions, {} cache swaps, {:.1} objects per transaction, {} visual misses",
+        r.transactions,
+        r.swaps,
+        r.objects_per_transaction(),
+        r.visual_misses
+    );
+    println!(
+        "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
+        r.mean_drawn, r.pages
+    );
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
+    }
+    Ok(())
+}
+
+/// A walk's summary: its settings, then its frames, queries, pages, misses and index
+/// cache.
+pub fn print_walk(r: &WalkReport) {
+    let s = &r.summary;
+    let c = &r.config;
+    let cache = c
+        .index_cache
+        .as_ref()
+        .map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
+    let k = c
+        .prefetch_k
+        .map_or("off".to_string(), |k| format!("k = {k}"));
+    let pace = match (c.prefetch_k, c.pace) {
+        (Some(_), Some(p)) => format!(", played {p}x real time"),
+        (Some(_), None) => ", unpaced".to_string(),
+        _ => String::new(),
+    };
+    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}{pace}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
+    println!(
+        "  frames {}   first (cold) load {:.1} ms   then mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}",
+        s.frames, s.initial_load_ms, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms
+    );
+    println!(
+        "  queries {} ({} on the viewer's thread, {} prefetched, {} prefetches dropped)   cells entered {} ({} prefetched)",
+        s.queries, s.sync_queries, s.prefetches_adopted, s.prefetches_stale, s.cell_changes, s.prefetches_used
+    );
+    println!(
+        "  pages read: {} index + {} mesh, {:.1} per query ({:.1} index)",
+        s.index_pages, s.mesh_pages, s.io_per_query, s.index_pages_per_query
+    );
+    println!(
+        "  visual misses {}   peak buffer {:.1} MiB   frames over budget {}",
+        s.visual_misses,
+        s.peak_buffer_bytes as f64 / (1 << 20) as f64,
+        s.overflow_frames
+    );
+    if let Some(cs) = &s.index_cache {
+        println!(
+            "  index cache: {} hits, {} misses, hit rate {:.1}%",
+            cs.hits,
+            cs.misses,
+            cs.hit_rate() * 100.0
+        );
+    }
+}
