@@ -3,7 +3,7 @@
 //! of the REVIEW system) and §5.7 (the DoV and DoV-Time node caches of the HDoV-tree).
 //!
 //! One idea per file:
-//! - `pool.rs`: [`BufferPool`], the cache itself, a [`PageSource`](crate::rtree::PageSource)
+//! - `pool.rs`: [`BufferPool`], the cache itself, a [`PageSource`](crate::store::PageSource)
 //!   the R-tree reads through;
 //! - `policy/`: the [`Policy`] trait and [`Lru`], [`DpLru`], [`Dov`], [`DovTime`];
 //! - `distance.rs`: [`block_distance`], the DIST of §4.2.4;

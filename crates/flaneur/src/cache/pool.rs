@@ -27,8 +27,7 @@ use super::stats::CacheStats;
 use super::trace::{Access, Trace};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::rtree::{NodeHint, PageSource};
-use crate::store::{PageKind, Store};
+use crate::store::{NodeHint, PageKind, PageSource, Store};
 
 /// Resident entries, their policy and counts: the pool's logic, with values `V`
 /// (payloads in the pool, nothing in a replay).
