@@ -5,7 +5,8 @@
 //! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs.
 //! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on procedural models,
 //! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
-//! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either.
+//! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either, and
+//! `pvs_stats` measures the PVS tables it runs on.
 
 pub mod cell_size;
 pub mod city_series;
@@ -21,5 +22,6 @@ pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;
 pub mod pvs_prefetch;
+pub mod pvs_stats;
 pub mod view_culling;
 pub mod walk_setup;
