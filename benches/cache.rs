@@ -9,8 +9,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use flaneur::cache::{policy_by_name, BufferPool, DpLru, Hint, Policy, POLICY_NAMES};
 use flaneur::geom::Aabb;
-use flaneur::rtree::PageSource;
-use flaneur::store::{Backend, PageKind, Store};
+use flaneur::store::{Backend, PageKind, PageSource, Store};
 
 const PAGE: usize = 1024;
 const PAGES: u64 = 8192;

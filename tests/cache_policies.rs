@@ -7,7 +7,8 @@ mod common;
 
 use flaneur::cache::{belady, policy_by_name, BufferPool, CacheStats, Trace, POLICY_NAMES};
 use flaneur::geom::Aabb;
-use flaneur::rtree::{Coverlap, History, PageSource, QueryResult};
+use flaneur::rtree::{Coverlap, History, QueryResult};
+use flaneur::store::PageSource;
 use flaneur::walk::{cells::disk_cell, street_walk};
 use flaneur::{BuildOptions, Database};
 

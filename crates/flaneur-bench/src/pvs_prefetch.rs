@@ -17,10 +17,12 @@ use std::path::Path;
 use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{
-    axis_route, check_border, measure, random_route, simulate, straight_route, Pbnp, Position,
-    PvsSource, RouteConfig, SimReport, SimTotals, Snp, StoredPvs, SyntheticCity, SyntheticConfig,
-    TableStats, DEFAULT_BORDER, THESIS_CAPACITY,
+    axis_route, check_border, random_route, simulate, straight_route, Pbnp, Position, PvsSource,
+    RouteConfig, SimReport, SimTotals, Snp, StoredPvs, SyntheticCity, SyntheticConfig,
+    DEFAULT_BORDER, THESIS_CAPACITY,
 };
+
+use crate::pvs_stats::{measure, TableStats};
 
 /// One column of Zheng 2007 Table 7.2, with §7.5's objects per transaction and in the
 /// first transaction.

@@ -14,14 +14,14 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::database::{self, KindCounts};
+use crate::catalog::{save_meta, write_object, KindCounts};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::progress::{Progress, Silent, Step};
-use crate::rtree::{ObjectEntry, RTree, DEFAULT_FILL};
-use crate::scene::{encode_mesh, load_obj, Mesh, SceneReader, KIND_IMPORTED};
-use crate::store::{Extent, PageKind, Segment, Store};
+use crate::rtree::{RTree, DEFAULT_FILL};
+use crate::scene::{load_obj, Mesh, SceneReader, KIND_IMPORTED};
+use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
 
 /// How to build.
@@ -212,7 +212,7 @@ fn build(
     };
     kinds.rtree = store.page_count() - before;
     tree.save(&mut store)?;
-    database::save_meta(&mut store, objects, triangles, &bounds, &kinds)?;
+    save_meta(&mut store, objects, triangles, &bounds, &kinds)?;
     let pages = store.page_count();
     let page_size = store.page_size() as u64;
     store.finish()?;
@@ -258,26 +258,5 @@ fn store_visibility(
         seconds: made.stats.seconds,
         dov_seconds: made.stats.dov_seconds,
         pages: extent.page_count as u64,
-    })
-}
-
-/// Writes one object's mesh and returns its index entry.
-pub(crate) fn write_object(
-    store: &mut Store,
-    id: u64,
-    kind: u8,
-    mesh: &Mesh,
-) -> Result<ObjectEntry> {
-    mesh.validate()
-        .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
-    let (min, max) = mesh.bounds();
-    let bounds = Aabb::new(min, max).map_err(|e| Error::Invalid(format!("object {id}: {e}")))?;
-    let mesh_extent: Extent = store.append_extent(PageKind::Mesh, &encode_mesh(mesh))?;
-    Ok(ObjectEntry {
-        id,
-        bounds,
-        mesh: mesh_extent,
-        triangles: mesh.triangle_count() as u32,
-        kind,
     })
 }

@@ -3,34 +3,17 @@
 
 use std::path::Path;
 
-use crate::build::write_object;
+use crate::catalog::{load_meta, save_meta, write_object};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::lod::table::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::{decode_mesh, Mesh};
-use crate::store::{Backend, IoStats, PageKind, Segment, Store};
+use crate::store::{Backend, IoStats, PageKind, Store};
 use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 
-const OBJECTS_SEGMENT: &str = "objects";
-const BOUNDS_SEGMENT: &str = "bounds";
-const KINDS_SEGMENT: &str = "pagekinds";
-
-/// Pages written per kind, kept in the header so `info` need not scan the file.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct KindCounts {
-    pub rtree: u64,
-    pub mesh: u64,
-    pub meta: u64,
-    /// LOD pages (chains, progressive meshes, DAGs, the LOD table); 0 in a database
-    /// without LODs. Kept in the LOD table's segment, not in `pagekinds`, so that files
-    /// written before LODs read the same.
-    pub lod: u64,
-    /// Visibility pages (the viewcells' table); 0 in a database without visibility.
-    /// Kept in the table's segment, as the LOD pages are.
-    pub visibility: u64,
-}
+pub use crate::catalog::KindCounts;
 
 /// What `flaneur info` prints.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -116,46 +99,29 @@ impl Database {
 
     fn from_store(store: Store) -> Result<Database> {
         let tree = RTree::load(&store)?;
-        let missing = |name: &str| Error::NotADatabase {
-            path: store.path().to_path_buf(),
-            what: format!("it has no '{name}' segment"),
-        };
-        let h = store.header();
-        let objects = h
-            .segment(OBJECTS_SEGMENT)
-            .ok_or_else(|| missing(OBJECTS_SEGMENT))?
-            .clone();
-        let bounds = h
-            .segment(BOUNDS_SEGMENT)
-            .ok_or_else(|| missing(BOUNDS_SEGMENT))?;
-        let kinds = h
-            .segment(KINDS_SEGMENT)
-            .ok_or_else(|| missing(KINDS_SEGMENT))?;
-        let bounds = unpack_bounds(bounds);
+        let meta = load_meta(&store)?;
         let lod = LodTable::open(&store)?;
         let visibility = VisibilityTable::open(&store)?;
         let kinds = KindCounts {
-            rtree: kinds.a,
-            mesh: kinds.b,
-            meta: kinds.c,
             lod: lod.as_ref().map_or(0, LodTable::pages),
             visibility: visibility.as_ref().map_or(0, VisibilityTable::pages),
+            ..meta.kinds
         };
-        if objects.a != tree.objects {
+        if meta.objects != tree.objects {
             return Err(Error::CorruptPage {
                 path: store.path().to_path_buf(),
                 page: 0,
                 what: format!(
                     "header counts {} objects but the R-tree {}",
-                    objects.a, tree.objects
+                    meta.objects, tree.objects
                 ),
             });
         }
         Ok(Database {
             tree,
-            objects: objects.a,
-            triangles: objects.b,
-            bounds,
+            objects: meta.objects,
+            triangles: meta.triangles,
+            bounds: meta.bounds,
             kinds,
             lod,
             visibility,
@@ -470,45 +436,4 @@ impl Database {
             visibility: self.visibility_info()?,
         })
     }
-}
-
-pub(crate) fn save_meta(
-    store: &mut Store,
-    objects: u64,
-    triangles: u64,
-    bounds: &Aabb,
-    kinds: &KindCounts,
-) -> Result<()> {
-    store.set_segment(Segment {
-        name: OBJECTS_SEGMENT.into(),
-        a: objects,
-        b: triangles,
-        c: 0,
-    })?;
-    let [a, b, c] = pack_bounds(bounds);
-    store.set_segment(Segment {
-        name: BOUNDS_SEGMENT.into(),
-        a,
-        b,
-        c,
-    })?;
-    store.set_segment(Segment {
-        name: KINDS_SEGMENT.into(),
-        a: kinds.rtree,
-        b: kinds.mesh,
-        c: kinds.meta,
-    })
-}
-
-fn pack_bounds(b: &Aabb) -> [u64; 3] {
-    let bytes = b.to_le_bytes();
-    [0, 1, 2].map(|i| u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap()))
-}
-
-fn unpack_bounds(seg: &Segment) -> Aabb {
-    let mut bytes = [0u8; 24];
-    for (i, v) in [seg.a, seg.b, seg.c].into_iter().enumerate() {
-        bytes[i * 8..i * 8 + 8].copy_from_slice(&v.to_le_bytes());
-    }
-    Aabb::from_le_bytes(&bytes)
 }

@@ -27,6 +27,7 @@
 
 pub mod build;
 pub mod cache;
+mod catalog;
 pub mod database;
 pub mod error;
 pub mod geom;

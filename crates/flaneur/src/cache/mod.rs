@@ -3,8 +3,10 @@
 //! of the REVIEW system) and §5.7 (the DoV and DoV-Time node caches of the HDoV-tree).
 //!
 //! One idea per file:
-//! - `pool.rs`: [`BufferPool`], the cache itself, a [`PageSource`](crate::rtree::PageSource)
+//! - `pool.rs`: [`BufferPool`], the cache itself, a [`PageSource`](crate::store::PageSource)
 //!   the R-tree reads through;
+//! - `frames.rs`: the resident set, policy and counts, shared by the pool and a
+//!   trace's replay;
 //! - `policy/`: the [`Policy`] trait and [`Lru`], [`DpLru`], [`Dov`], [`DovTime`];
 //! - `distance.rs`: [`block_distance`], the DIST of §4.2.4;
 //! - `trace.rs`: [`Trace`], recorded accesses, their CSV file and their replay;
@@ -40,6 +42,7 @@
 
 pub mod belady;
 mod distance;
+mod frames;
 pub mod policy;
 mod pool;
 mod stats;

@@ -14,119 +14,20 @@
 //!   can share one pool; a failed read changes nothing (no count, no entry). Two
 //!   threads missing the same page at once both read it and both count a miss.
 //!
-//! The bookkeeping (`Frames`) is shared with [`Trace::replay`](super::Trace::replay),
-//! which runs it without bytes, so a replay of a recorded single-threaded access
-//! sequence reproduces the live pool's counts exactly.
+//! The bookkeeping (`Frames`, `frames.rs`) is shared with
+//! [`Trace::replay`](super::Trace::replay), which runs it without bytes, so a replay of
+//! a recorded single-threaded access sequence reproduces the live pool's counts exactly.
 
-use std::collections::HashMap;
 use std::path::Path;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
+use super::frames::Frames;
 use super::policy::{Hint, Policy};
 use super::stats::CacheStats;
 use super::trace::{Access, Trace};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::rtree::{NodeHint, PageSource};
-use crate::store::{PageKind, Store};
-
-/// Resident entries, their policy and counts: the pool's logic, with values `V`
-/// (payloads in the pool, nothing in a replay).
-pub(super) struct Frames<V> {
-    policy: Box<dyn Policy>,
-    capacity: usize,
-    map: HashMap<u64, V>,
-    stats: CacheStats,
-    /// The box of the current search (DIST is measured against it).
-    query: Aabb,
-    /// Searches ended so far.
-    searches: u64,
-}
-
-impl<V> Frames<V> {
-    pub(super) fn new(policy: Box<dyn Policy>, capacity: usize) -> Frames<V> {
-        Frames {
-            policy,
-            capacity,
-            map: HashMap::with_capacity(capacity.min(1 << 16)),
-            stats: CacheStats::default(),
-            query: Aabb::EMPTY,
-            searches: 0,
-        }
-    }
-
-    pub(super) fn peek(&self, key: u64) -> Option<&V> {
-        self.map.get(&key)
-    }
-
-    /// An access served from the cache.
-    pub(super) fn hit(&mut self, key: u64, hint: &Hint) {
-        self.stats.hits += 1;
-        self.policy.on_hit(key, hint);
-    }
-
-    /// An access that was loaded from below: makes room, then admits the page with
-    /// the value `make` builds (from an evicted value, to reuse its allocation).
-    pub(super) fn install(&mut self, key: u64, hint: &Hint, make: impl FnOnce(Option<V>) -> V) {
-        self.stats.misses += 1;
-        if self.map.contains_key(&key) {
-            // Another thread loaded it meanwhile.
-            self.policy.on_hit(key, hint);
-            return;
-        }
-        let mut spare = None;
-        // A policy that names keys the pool does not hold gets as many tries as there
-        // are entries; then the page is served uncached rather than looping.
-        let mut tries = self.map.len() + 1;
-        while self.map.len() >= self.capacity {
-            if tries == 0 {
-                return;
-            }
-            tries -= 1;
-            let Some(victim) = self.policy.victim(&self.query) else {
-                return;
-            };
-            if let Some(v) = self.map.remove(&victim) {
-                self.stats.evictions += 1;
-                spare = Some(v);
-            }
-        }
-        self.map.insert(key, make(spare));
-        self.policy.on_insert(key, hint);
-    }
-
-    pub(super) fn begin_search(&mut self, query: &Aabb) {
-        self.query = *query;
-    }
-
-    pub(super) fn end_search(&mut self) {
-        self.searches += 1;
-        self.policy.end_search();
-    }
-
-    pub(super) fn searches(&self) -> u64 {
-        self.searches
-    }
-
-    pub(super) fn query(&self) -> Aabb {
-        self.query
-    }
-
-    pub(super) fn stats(&self) -> CacheStats {
-        self.stats
-    }
-
-    fn len(&self) -> usize {
-        self.map.len()
-    }
-
-    fn clear(&mut self) {
-        for key in self.map.keys() {
-            self.policy.on_remove(*key);
-        }
-        self.map.clear();
-    }
-}
+use crate::store::{NodeHint, PageKind, PageSource, Store};
 
 /// One cached page: its verified payload and the kind it was verified as.
 struct Frame {
@@ -274,7 +175,7 @@ impl<'s> BufferPool<'s> {
     }
 
     pub fn reset_stats(&self) {
-        self.lock().frames.stats = CacheStats::default();
+        self.lock().frames.reset_stats();
     }
 
     /// Drops every cached page (the counts stay).
@@ -310,7 +211,7 @@ impl<'s> BufferPool<'s> {
     }
 
     pub fn policy_name(&self) -> String {
-        self.lock().frames.policy.name()
+        self.lock().frames.policy_name()
     }
 
     pub fn store(&self) -> &'s Store {

@@ -16,8 +16,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+use super::frames::Frames;
 use super::policy::{Hint, Policy};
-use super::pool::Frames;
 use super::stats::CacheStats;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;

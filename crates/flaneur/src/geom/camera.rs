@@ -12,6 +12,7 @@ use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 use glam::{Mat4, Vec3};
 
 use super::frustum::Frustum;
+use super::plane::Plane;
 use crate::error::{Error, Result};
 
 /// Default horizontal and vertical field of view: 45° (Shou 2002 §4.4).
@@ -144,7 +145,32 @@ impl Camera {
 
     /// The view frustum: six inward planes, eight corners.
     pub fn frustum(&self) -> Frustum {
-        Frustum::from_camera(self)
+        let (p, f, r, u) = (self.position, self.forward(), self.right(), self.up());
+        let (hx, hy) = (self.fov_x * 0.5, self.fov_y * 0.5);
+        let (sx, cx) = hx.sin_cos();
+        let (sy, cy) = hy.sin_cos();
+        // Unit normals by construction (f, r, u orthonormal); no validation needed.
+        let through = |n: Vec3, q: Vec3| Plane {
+            normal: n,
+            d: -n.dot(q),
+        };
+        let planes = [
+            through(f, p + f * self.near),
+            through(-f, p + f * self.far),
+            through(r * cx + f * sx, p),
+            through(-r * cx + f * sx, p),
+            through(u * cy + f * sy, p),
+            through(-u * cy + f * sy, p),
+        ];
+        let (tx, ty) = (hx.tan(), hy.tan());
+        let corners = std::array::from_fn(|i| {
+            let dist = if i & 4 != 0 { self.far } else { self.near };
+            let sx = if i & 1 != 0 { 1.0 } else { -1.0 };
+            let sy = if i & 2 != 0 { 1.0 } else { -1.0 };
+            p + f * dist + r * (sx * dist * tx) + u * (sy * dist * ty)
+        });
+        let scale = self.far.max(self.position.abs().max_element()).max(1.0);
+        Frustum::from_parts(planes, corners, scale)
     }
 
     /// F of §4.2.5: the centre of the far clip plane, `far` metres along [`forward`](Self::forward).

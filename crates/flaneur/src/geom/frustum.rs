@@ -27,7 +27,6 @@
 
 use glam::Vec3;
 
-use super::camera::Camera;
 use super::plane::Plane;
 use super::Aabb;
 
@@ -50,9 +49,9 @@ pub const EDGES: [(usize, usize); 12] = [
 
 /// A view frustum: six planes whose inside is the frustum, and its eight corners.
 ///
-/// Build one with [`Camera::frustum`]. Corner `i` is on the right when bit 0 of `i` is
-/// set (left otherwise), on the top for bit 1, on the far plane for bit 2. Planes are
-/// ordered near, far, left, right, bottom, top.
+/// Build one with [`Camera::frustum`](super::Camera::frustum). Corner `i` is on the
+/// right when bit 0 of `i` is set (left otherwise), on the top for bit 1, on the far
+/// plane for bit 2. Planes are ordered near, far, left, right, bottom, top.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
     planes: [Plane; 6],
@@ -62,32 +61,10 @@ pub struct Frustum {
 }
 
 impl Frustum {
-    pub(super) fn from_camera(c: &Camera) -> Frustum {
-        let (p, f, r, u) = (c.position, c.forward(), c.right(), c.up());
-        let (hx, hy) = (c.fov_x * 0.5, c.fov_y * 0.5);
-        let (sx, cx) = hx.sin_cos();
-        let (sy, cy) = hy.sin_cos();
-        // Unit normals by construction (f, r, u orthonormal); no validation needed.
-        let through = |n: Vec3, q: Vec3| Plane {
-            normal: n,
-            d: -n.dot(q),
-        };
-        let planes = [
-            through(f, p + f * c.near),
-            through(-f, p + f * c.far),
-            through(r * cx + f * sx, p),
-            through(-r * cx + f * sx, p),
-            through(u * cy + f * sy, p),
-            through(-u * cy + f * sy, p),
-        ];
-        let (tx, ty) = (hx.tan(), hy.tan());
-        let corners = std::array::from_fn(|i| {
-            let dist = if i & 4 != 0 { c.far } else { c.near };
-            let sx = if i & 1 != 0 { 1.0 } else { -1.0 };
-            let sy = if i & 2 != 0 { 1.0 } else { -1.0 };
-            p + f * dist + r * (sx * dist * tx) + u * (sy * dist * ty)
-        });
-        let scale = c.far.max(c.position.abs().max_element()).max(1.0);
+    /// The frustum with these planes (near, far, left, right, bottom, top, inside
+    /// positive) and corners, ViewCulling's tolerance set from `scale`, the frustum's
+    /// size in metres.
+    pub(super) fn from_parts(planes: [Plane; 6], corners: [Vec3; 8], scale: f32) -> Frustum {
         Frustum {
             planes,
             corners,
@@ -243,6 +220,7 @@ pub fn box_corners(b: &Aabb) -> [Vec3; 8] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::Camera;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

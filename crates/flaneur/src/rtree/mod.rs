@@ -12,7 +12,6 @@ mod insert;
 mod node;
 mod range;
 mod search;
-mod source;
 mod split;
 mod stats;
 
@@ -22,12 +21,11 @@ pub use history::{History, DEFAULT_HISTORY_LEN};
 pub use node::{ChildEntry, Fanout, Node, NodeView, ObjectEntry};
 pub use range::Range;
 pub use search::{QueryResult, Selection};
-pub use source::{NodeHint, PageSource};
 pub use stats::TreeStats;
 
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::store::{Segment, Store};
+use crate::store::{PageSource, Segment, Store};
 
 /// The name of the store segment that records the tree: a = root page, b = height,
 /// c = number of objects.

@@ -3,10 +3,10 @@
 //! their pages through `NodeView`, without decoding them whole.
 
 use super::node::{NodeView, ObjectEntry};
-use super::source::{NodeHint, PageSource};
 use super::{corrupt, RTree};
 use crate::error::Result;
 use crate::geom::Aabb;
+use crate::store::{NodeHint, PageSource};
 
 /// What a query selects. `descend` is asked of internal entries (subtree MBRs),
 /// `select` of leaf entries (object boxes).

@@ -6,6 +6,8 @@
 //! - `extent.rs`: blobs stored as runs of contiguous pages;
 //! - `counters.rs`: the read counters, the papers' currency;
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
+//! - `source.rs`: [`PageSource`], how a traversal reads node pages (from the store or
+//!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
 //! - `writer.rs`: buffered appends, overwrites and the commit.
 //!
 //! Every read goes through [`Store`], which checks the page (range, kind, length,
@@ -22,6 +24,7 @@ mod extent;
 pub(crate) mod framing;
 mod header;
 mod page;
+mod source;
 mod writer;
 
 #[cfg(test)]
@@ -43,8 +46,9 @@ pub use header::{
     MAX_PAGE_SIZE, MAX_SEGMENT_NAME_LEN, MIN_PAGE_SIZE,
 };
 pub use page::{PageKind, KIND_SLOTS, PAGE_HEADER_LEN};
+pub use source::{NodeHint, PageSource};
 
-use backend::{MmapSource, PageSource, PreadSource};
+use backend::{MmapSource, PreadSource, RawPageSource};
 use counters::Counters;
 use header::HeaderError;
 use writer::Writer;
@@ -134,7 +138,7 @@ pub struct Store {
     header: Header,
     page_size: usize,
     backend: Backend,
-    source: Box<dyn PageSource>,
+    source: Box<dyn RawPageSource>,
     /// Present for created and writable stores.
     writer: Option<Writer>,
     counters: Counters,
@@ -260,7 +264,7 @@ impl Store {
                 "the file is {len} bytes, not a whole number of {page_size}-byte pages"
             )));
         }
-        let source: Box<dyn PageSource> = match backend {
+        let source: Box<dyn RawPageSource> = match backend {
             Backend::Mmap => Box::new(
                 MmapSource::new(file.try_clone().map_err(io_err)?, page_size).map_err(io_err)?,
             ),

@@ -48,8 +48,8 @@ use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
-use crate::rtree::{Coverlap, History, ObjectEntry, PageSource, QueryResult};
-use crate::store::PageKind;
+use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
+use crate::store::{PageKind, PageSource};
 
 /// How a walk retrieves objects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

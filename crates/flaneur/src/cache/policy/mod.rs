@@ -19,7 +19,7 @@ pub use lru::Lru;
 
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::rtree::NodeHint;
+use crate::store::NodeHint;
 
 /// What the requester knows about a page when it asks for it.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,8 +8,8 @@
 //! (h(R), Table 7.1). Both send only what the client lacks (`delta`, §7.3) and share
 //! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
 //! transaction, `sim` a whole route (§7.5). `synthetic` and `routes` make the thesis's
-//! simulated city, PVS table and two routes; `stats` measures a table; `stored` reads
-//! a database's precomputed visibility as the server's table.
+//! simulated city, PVS table and two routes; `stored` reads a database's precomputed
+//! visibility as the server's table.
 //!
 //! Choices the thesis leaves open, and ours:
 //!
@@ -55,7 +55,6 @@ pub mod routes;
 mod sim;
 mod snp;
 mod source;
-mod stats;
 mod stored;
 pub mod synthetic;
 mod table;
@@ -73,7 +72,6 @@ pub use routes::{axis_route, random_route, straight_route, RouteConfig, Straight
 pub use sim::{simulate, SimReport, SimTotals, StepRecord};
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};
-pub use stats::{measure, TableStats};
 pub use stored::StoredPvs;
 pub use synthetic::{SyntheticCity, SyntheticConfig};
 pub use table::{PvsTable, MAX_CELLS};

@@ -309,23 +309,6 @@ impl PvsSource for SyntheticCity {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::prefetch::pvs::measure;
-
-    #[test]
-    fn the_thesis_city_has_its_figures() {
-        let city = SyntheticCity::generate(&SyntheticConfig::default()).unwrap();
-        let g = city.grid();
-        assert_eq!((g.rows(), g.cols()), (243, 243));
-        assert_eq!(city.side(), 4860.0);
-        assert_eq!(city.scene_objects(), 900);
-        let s = measure(&city).unwrap();
-        // Street cells: 93 full rows plus 93 columns of the other 150 rows.
-        assert_eq!(s.viewcells, 93 * 243 + 150 * 93);
-        assert!((s.mean_share - 0.05).abs() < 0.002, "{s:?}");
-        assert!((s.side_overlap - 0.6).abs() < 0.02, "{s:?}");
-        assert!(s.diagonal_overlap < s.side_overlap && s.two_apart_overlap < s.diagonal_overlap);
-        assert!(s.min_pvs > 10 && s.max_pvs < 90, "{s:?}");
-    }
 
     #[test]
     fn same_seed_same_table() {

@@ -6,7 +6,7 @@ use std::os::unix::fs::FileExt;
 
 use memmap2::Mmap;
 
-use super::PageSource;
+use super::RawPageSource;
 
 /// Reads pages out of a read-only shared mapping of the file. Pages beyond the
 /// mapping (a writable store whose file grew since it was mapped) are read with
@@ -41,7 +41,7 @@ fn map(file: &File) -> io::Result<Mmap> {
     unsafe { Mmap::map(file) }
 }
 
-impl PageSource for MmapSource {
+impl RawPageSource for MmapSource {
     fn read(&self, page: u64, buf: &mut [u8]) -> io::Result<()> {
         match self.page_bytes(page) {
             Some(b) if b.len() == buf.len() => {

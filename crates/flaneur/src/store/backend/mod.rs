@@ -10,8 +10,10 @@ use std::io;
 pub(crate) use mmap::MmapSource;
 pub(crate) use pread::PreadSource;
 
-/// A source of whole pages of one database file.
-pub(crate) trait PageSource: Send + Sync {
+/// A source of whole pages of one database file, as raw bytes: unchecked and
+/// uncounted, unlike the verified payloads a [`PageSource`](crate::store::PageSource)
+/// hands a traversal.
+pub(crate) trait RawPageSource: Send + Sync {
     /// Reads page `page` whole (`buf.len()` = page size) into `buf`.
     fn read(&self, page: u64, buf: &mut [u8]) -> io::Result<()>;
 

@@ -6,7 +6,7 @@ use std::io;
 use std::os::unix::fs::{FileExt, OpenOptionsExt};
 use std::path::Path;
 
-use super::PageSource;
+use super::RawPageSource;
 
 /// Buffer alignment for O_DIRECT reads (the usual logical block size bound).
 const DIRECT_ALIGN: usize = 4096;
@@ -60,7 +60,7 @@ impl PreadSource {
     }
 }
 
-impl PageSource for PreadSource {
+impl RawPageSource for PreadSource {
     fn read(&self, page: u64, buf: &mut [u8]) -> io::Result<()> {
         let offset = page * self.page_size as u64;
         if !self.direct {

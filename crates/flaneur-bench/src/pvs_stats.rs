@@ -1,11 +1,11 @@
-//! The statistics the thesis generates its PVS table to (§7.5): the PVS as a share of
-//! the scene, and the share of a viewcell's PVS its neighbour also sees. Measured over
-//! any [`PvsSource`], so a table computed from real geometry can be set beside the
-//! synthetic one.
+//! The statistics the thesis generates its PVS table to (Zheng 2007 §7.5): the PVS as
+//! a share of the scene, and the share of a viewcell's PVS its neighbour also sees.
+//! Measured over any [`PvsSource`], so a table computed from real geometry can be set
+//! beside the synthetic one. Only the `pvs-prefetch` experiment reports them, so they
+//! live here rather than in the engine's prefetcher.
 
-use super::grid::Cell;
-use super::source::{ObjectId, PvsSource};
-use crate::error::Result;
+use flaneur::error::Result;
+use flaneur::prefetch::pvs::{Cell, ObjectId, PvsSource};
 
 /// A PVS table's figures.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -119,7 +119,9 @@ fn intersection(a: &[ObjectId], b: &[ObjectId]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::prefetch::pvs::{Position, PvsTable, ViewcellGrid};
+    use flaneur::prefetch::pvs::{
+        Position, PvsTable, SyntheticCity, SyntheticConfig, ViewcellGrid,
+    };
 
     #[test]
     fn a_small_table_by_hand() {
@@ -137,5 +139,21 @@ mod tests {
         assert!((s.side_jaccard - 2.0 / 6.0).abs() < 1e-12);
         assert_eq!(s.diagonal_overlap, 0.0);
         assert_eq!(intersection(&[1, 5, 9], &[2, 5, 9, 11]), 2);
+    }
+
+    #[test]
+    fn the_thesis_city_has_its_figures() {
+        let city = SyntheticCity::generate(&SyntheticConfig::default()).unwrap();
+        let g = city.grid();
+        assert_eq!((g.rows(), g.cols()), (243, 243));
+        assert_eq!(city.side(), 4860.0);
+        assert_eq!(city.scene_objects(), 900);
+        let s = measure(&city).unwrap();
+        // Street cells: 93 full rows plus 93 columns of the other 150 rows.
+        assert_eq!(s.viewcells, 93 * 243 + 150 * 93);
+        assert!((s.mean_share - 0.05).abs() < 0.002, "{s:?}");
+        assert!((s.side_overlap - 0.6).abs() < 0.02, "{s:?}");
+        assert!(s.diagonal_overlap < s.side_overlap && s.two_apart_overlap < s.diagonal_overlap);
+        assert!(s.min_pvs > 10 && s.max_pvs < 90, "{s:?}");
     }
 }

@@ -1,12 +1,15 @@
 //! Where a traversal reads its nodes: the store itself, or an index cache over it
 //! (`cache::BufferPool`). The hints tell a cache what a page is, so its replacement
 //! policy can weigh level and distance (Shou 2002 §4.2.4) without global state.
+//!
+//! It lives with the store rather than with the R-tree because both the tree and the
+//! cache read pages through it, and the cache sits below the tree.
 
 use std::path::Path;
 
+use super::{PageKind, Store};
 use crate::error::Result;
 use crate::geom::Aabb;
-use crate::store::{PageKind, Store};
 
 /// What a node page is, as the traversal knows it when it asks for the page.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,464 @@
+//! The engine's layering, checked from its sources and its dependency tree.
+//!
+//! The storage, geometry, scene, cache and index modules are the bottom of the engine:
+//! the walks, the prefetchers, the database, the build and the experiments are built on
+//! them, so none of those may be reached from below. And the engine itself draws no
+//! window, talks to no GPU or terminal, plots nothing and generates no city: those
+//! crates belong to `flaneur-render`, `flaneur-bench` and the command.
+//!
+//! The source check reads paths, not types: a `crate::…` or `super::…` path (in a `use`
+//! or anywhere in the code) whose first module is a forbidden one. Comments, strings
+//! and `#[cfg(test)]` items are left out, since unit tests may build on anything.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The engine's bottom layers, as directories of `crates/flaneur/src`.
+const LOWER: [&str; 5] = ["store", "geom", "scene", "cache", "rtree"];
+
+/// Engine modules the bottom layers must not reach; `catalog` is the database's and
+/// the build's shared piece.
+const UPPER: [&str; 5] = ["walk", "prefetch", "database", "build", "catalog"];
+
+/// Crates of the experiments and the renderer, which the engine never names.
+const UPPER_CRATES: [&str; 2] = ["flaneur_bench", "flaneur_render"];
+
+/// Packages the engine must not depend on, even indirectly.
+const FORBIDDEN_PACKAGES: [&str; 7] = [
+    "wgpu",
+    "winit",
+    "clap",
+    "plotters",
+    "indicatif",
+    "image",
+    "citygen",
+];
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn engine_src() -> PathBuf {
+    workspace().join("crates/flaneur/src")
+}
+
+/// `code` with comments, string and char literals replaced by spaces, newlines kept,
+/// so that offsets still give the source's line numbers.
+fn blank_non_code(src: &str) -> Vec<u8> {
+    let b = src.as_bytes();
+    let mut out = b.to_vec();
+    let blank = |out: &mut Vec<u8>, from: usize, to: usize| {
+        for c in &mut out[from..to.min(b.len())] {
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+    };
+    let mut i = 0;
+    while i < b.len() {
+        let rest = &b[i..];
+        if rest.starts_with(b"//") {
+            let end = rest
+                .iter()
+                .position(|&c| c == b'\n')
+                .map_or(b.len(), |p| i + p);
+            blank(&mut out, i, end);
+            i = end;
+        } else if rest.starts_with(b"/*") {
+            let (mut depth, mut j) = (0usize, i);
+            while j < b.len() {
+                if b[j..].starts_with(b"/*") {
+                    depth += 1;
+                    j += 2;
+                } else if b[j..].starts_with(b"*/") {
+                    depth -= 1;
+                    j += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    j += 1;
+                }
+            }
+            blank(&mut out, i, j);
+            i = j;
+        } else if let Some(end) = raw_string_end(b, i) {
+            blank(&mut out, i, end);
+            i = end;
+        } else if b[i] == b'"' {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != b'"' {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            blank(&mut out, i, j + 1);
+            i = j + 1;
+        } else if b[i] == b'\'' {
+            // A char literal ('x', '\n', '\u{..}'), or else a lifetime, left as it is.
+            let close = if rest.get(1) == Some(&b'\\') {
+                rest.iter().skip(3).position(|&c| c == b'\'').map(|p| p + 3)
+            } else {
+                let width = src[i + 1..].chars().next().map_or(1, char::len_utf8);
+                (rest.get(1 + width) == Some(&b'\'')).then_some(1 + width)
+            };
+            match close {
+                Some(p) => {
+                    blank(&mut out, i, i + p + 1);
+                    i += p + 1;
+                }
+                None => i += 1,
+            }
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Where a raw string literal (`r"…"`, `r#"…"#`, `br"…"`) starting at `i` ends.
+fn raw_string_end(b: &[u8], i: usize) -> Option<usize> {
+    if i > 0 && is_ident(b[i - 1]) {
+        return None;
+    }
+    let mut j = i;
+    if b.get(j) == Some(&b'b') {
+        j += 1;
+    }
+    if b.get(j) != Some(&b'r') {
+        return None;
+    }
+    j += 1;
+    let hashes = b[j..].iter().take_while(|&&c| c == b'#').count();
+    j += hashes;
+    if b.get(j) != Some(&b'"') {
+        return None;
+    }
+    let mut close = vec![b'"'];
+    close.extend(std::iter::repeat_n(b'#', hashes));
+    let body = j + 1;
+    let end = b[body..]
+        .windows(close.len())
+        .position(|w| w == close.as_slice())
+        .map_or(b.len(), |p| body + p + close.len());
+    Some(end)
+}
+
+fn is_ident(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || c == b'_'
+}
+
+fn skip_space(code: &[u8], mut i: usize) -> usize {
+    while i < code.len() && code[i].is_ascii_whitespace() {
+        i += 1;
+    }
+    i
+}
+
+/// The matching close of the bracket at `open`.
+fn matching(code: &[u8], open: usize) -> usize {
+    let (o, c) = (code[open], if code[open] == b'{' { b'}' } else { b']' });
+    let mut depth = 0usize;
+    for (j, &x) in code.iter().enumerate().skip(open) {
+        if x == o {
+            depth += 1;
+        } else if x == c {
+            depth -= 1;
+            if depth == 0 {
+                return j;
+            }
+        }
+    }
+    code.len()
+}
+
+/// Blanks every `#[cfg(test)]` item of `code`; returns the names of the test-only
+/// modules declared without a body (`#[cfg(test)] mod tests;`), whose files are left
+/// out too.
+fn blank_test_items(code: &mut [u8]) -> Vec<String> {
+    const ATTR: &[u8] = b"#[cfg(test)]";
+    let mut test_modules = Vec::new();
+    let mut from = 0;
+    while let Some(p) = code[from..].windows(ATTR.len()).position(|w| w == ATTR) {
+        let start = from + p;
+        let mut j = start + ATTR.len();
+        // Further attributes, then the item up to its `;` or its braced body.
+        loop {
+            j = skip_space(code, j);
+            if code[j..].starts_with(b"#[") {
+                j = matching(code, j + 1) + 1;
+            } else {
+                break;
+            }
+        }
+        let item = j;
+        while j < code.len() && code[j] != b';' && code[j] != b'{' {
+            j += 1;
+        }
+        let end = if j < code.len() && code[j] == b'{' {
+            matching(code, j) + 1
+        } else {
+            let head = String::from_utf8_lossy(&code[item..j]).into_owned();
+            let words: Vec<&str> = head.split_whitespace().collect();
+            if let [.., "mod", name] = words.as_slice() {
+                test_modules.push(name.to_string());
+            }
+            j + 1
+        };
+        let end = end.min(code.len());
+        for c in &mut code[start..end] {
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+        from = end;
+    }
+    test_modules
+}
+
+/// One path that reaches a forbidden module: its line (1-based) and what it names.
+#[derive(Debug, PartialEq)]
+struct Reach {
+    line: usize,
+    path: String,
+}
+
+/// The forbidden reaches in the code of the module at `module` (its path below the
+/// crate root, e.g. `["cache", "policy"]`).
+fn forbidden_reaches(code: &[u8], module: &[String]) -> Vec<Reach> {
+    let line_of = |at: usize| 1 + code[..at].iter().filter(|&&c| c == b'\n').count();
+    let word_at = |at: usize| -> (String, usize) {
+        let end = at + code[at..].iter().take_while(|&&c| is_ident(c)).count();
+        (String::from_utf8_lossy(&code[at..end]).into_owned(), end)
+    };
+    // The position after `::` (and any space) following `at`, if one follows.
+    let after_colons = |at: usize| {
+        let k = skip_space(code, at);
+        code[k..]
+            .starts_with(b"::")
+            .then(|| skip_space(code, k + 2))
+    };
+    let mut found = Vec::new();
+    let mut i = 0;
+    while i < code.len() {
+        if !is_ident(code[i]) || (i > 0 && (is_ident(code[i - 1]) || code[i - 1] == b'$')) {
+            i += 1;
+            continue;
+        }
+        let (word, end) = word_at(i);
+        let start = i;
+        i = end;
+        if UPPER_CRATES.contains(&word.as_str()) {
+            found.push(Reach {
+                line: line_of(start),
+                path: word,
+            });
+            continue;
+        }
+        // The module the path has reached: the root for `crate`, one up for each `super`.
+        let mut base: Vec<String> = match word.as_str() {
+            "crate" => Vec::new(),
+            "super" => module[..module.len().saturating_sub(1)].to_vec(),
+            _ => continue,
+        };
+        let mut prefix = word.clone();
+        let Some(mut j) = after_colons(end) else {
+            continue; // `pub(crate)`, `pub(super)`
+        };
+        while word == "super" && word_at(j).0 == "super" {
+            let next = word_at(j).1;
+            let Some(k) = after_colons(next) else { break };
+            base.pop();
+            prefix.push_str("::super");
+            j = k;
+        }
+        // The names the path goes on with: one segment, or the first of each item of a
+        // group.
+        let mut heads = Vec::new();
+        if code.get(j) == Some(&b'{') {
+            let close = matching(code, j);
+            let (mut depth, mut item_start) = (0usize, true);
+            for (k, &c) in code.iter().enumerate().take(close).skip(j + 1) {
+                match c {
+                    b'{' => depth += 1,
+                    b'}' => depth -= 1,
+                    b',' if depth == 0 => item_start = true,
+                    c if item_start && depth == 0 && is_ident(c) => {
+                        heads.push(k);
+                        item_start = false;
+                    }
+                    _ => {}
+                }
+            }
+        } else if code.get(j).is_some_and(|&c| is_ident(c)) {
+            heads.push(j);
+        }
+        for h in heads {
+            let (name, _) = word_at(h);
+            let top = base.first().unwrap_or(&name);
+            if UPPER.contains(&top.as_str()) {
+                found.push(Reach {
+                    line: line_of(h),
+                    path: format!("{prefix}::{name}"),
+                });
+            }
+        }
+        i = i.max(j);
+    }
+    found
+}
+
+/// Every `.rs` file under `dir`, sorted.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|x| x == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// The module a file of the engine holds: `cache/policy/mod.rs` is `cache::policy`.
+fn module_of(src: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod") {
+        parts.pop();
+    }
+    parts
+}
+
+#[test]
+fn lower_layers_do_not_reach_up() {
+    let src = engine_src();
+    let mut test_only: Vec<Vec<String>> = Vec::new();
+    let mut scanned = Vec::new();
+    let mut violations = Vec::new();
+    for layer in LOWER {
+        let files = rust_files(&src.join(layer));
+        assert!(!files.is_empty(), "no source files under {layer}/");
+        for file in files {
+            let module = module_of(&src, &file);
+            if test_only.iter().any(|t| module.starts_with(t)) {
+                continue;
+            }
+            let text = fs::read_to_string(&file).unwrap();
+            let mut code = blank_non_code(&text);
+            for name in blank_test_items(&mut code) {
+                let mut m = module.clone();
+                m.push(name);
+                test_only.push(m);
+            }
+            for r in forbidden_reaches(&code, &module) {
+                violations.push(format!(
+                    "{}:{}: `{}` reaches up from `{}`",
+                    file.strip_prefix(workspace()).unwrap().display(),
+                    r.line,
+                    r.path,
+                    module.join("::")
+                ));
+            }
+            scanned.push(file);
+        }
+    }
+    assert!(scanned.len() >= 20, "only {} files scanned", scanned.len());
+    assert!(
+        violations.is_empty(),
+        "the engine's bottom layers ({}) must not use {}:\n{}",
+        LOWER.join(", "),
+        UPPER.join(", "),
+        violations.join("\n")
+    );
+}
+
+/// The checker itself: it finds each way of writing a forbidden path and nothing in
+/// comments, strings or unit tests.
+#[test]
+fn the_checker_sees_forbidden_paths() {
+    let code = r##"
+use crate::store::Store;
+use crate::walk::Walk;
+use crate::{geom::Aabb, database::Database};
+use crate::{
+    error::Result,
+    prefetch::pvs::{Cell, Snp},
+};
+use super::super::build::BuildOptions;
+use super::frames::Frames;
+fn f() -> crate::catalog::KindCounts { todo!() }
+// use crate::walk::Comment;
+const S: &str = "crate::walk::String";
+const R: &str = r#"crate::build::Raw"#;
+fn g<'a>(x: &'a str) -> char { 'x' }
+#[cfg(test)]
+mod tests {
+    use crate::database::Database;
+}
+#[cfg(test)]
+mod more_tests;
+"##;
+    let mut blanked = blank_non_code(code);
+    let test_modules = blank_test_items(&mut blanked);
+    assert_eq!(test_modules, ["more_tests"]);
+    let module = ["cache".to_string(), "pool".to_string()];
+    let found = forbidden_reaches(&blanked, &module);
+    let got: Vec<(usize, &str)> = found.iter().map(|r| (r.line, r.path.as_str())).collect();
+    assert_eq!(
+        got,
+        [
+            (3, "crate::walk"),
+            (4, "crate::database"),
+            (7, "crate::prefetch"),
+            (9, "super::super::build"),
+            (11, "crate::catalog"),
+        ]
+    );
+}
+
+#[test]
+fn the_engine_depends_on_no_front_end_crate() {
+    let manifest = workspace().join("Cargo.toml");
+    let out = Command::new(env!("CARGO"))
+        .args([
+            "tree", "-p", "flaneur", "-e", "normal", "--prefix", "none", "--locked",
+        ])
+        .arg("--manifest-path")
+        .arg(&manifest)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run cargo tree: {e}"));
+    assert!(
+        out.status.success(),
+        "cargo tree failed ({}):\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let tree = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        tree.lines().any(|l| l.starts_with("flaneur v")),
+        "cargo tree did not list the engine:\n{tree}"
+    );
+    let found: Vec<&str> = tree
+        .lines()
+        .filter(|l| {
+            l.split_whitespace()
+                .next()
+                .is_some_and(|name| FORBIDDEN_PACKAGES.contains(&name))
+        })
+        .collect();
+    assert!(
+        found.is_empty(),
+        "the engine depends on {}, which belong to the front ends:\n{}",
+        found.join(", "),
+        tree
+    );
+}
