@@ -42,7 +42,7 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::cells::{contains_ground, scaled_cell};
-use super::motion::CameraPath;
+use super::path::CameraPath;
 use super::sink::{FrameFigures, FrameSink, LeftOut, NoSink, Played, Viewer};
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
