@@ -42,12 +42,13 @@ use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTr
 
 use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use super::cells::{contains_ground, scaled_cell};
-use super::path::CameraPath;
+use super::path::{CameraPath, Pose};
 use super::sink::{FrameFigures, FrameSink, LeftOut, NoSink, Played, Viewer};
 use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
+use crate::prefetch::motion::{MotionTrack, ViewerMotion};
 use crate::rtree::{Coverlap, History, ObjectEntry, PageSource, QueryResult};
 use crate::store::PageKind;
 
@@ -419,7 +420,7 @@ pub fn walk_live(
     viewer: &mut dyn Viewer,
 ) -> Result<WalkReport> {
     cfg.validate()?;
-    let mut path = CameraPath { poses: Vec::new() };
+    let mut track = MotionTrack::default();
     let oracle = Oracle::new(db)?;
     db.reset_io();
     let pool = match &cfg.index_cache {
@@ -489,24 +490,16 @@ pub fn walk_live(
             let Some(pose) = viewer.next_pose(i)? else {
                 break;
             };
-            if let Some(last) = path.poses.last() {
-                if pose.time.partial_cmp(&last.time) != Some(std::cmp::Ordering::Greater) {
-                    return Err(Error::Invalid(format!(
-                        "frame {i}: pose at {} s after one at {} s; poses must come in time order",
-                        pose.time, last.time
-                    )));
-                }
-            }
-            path.poses.push(pose);
-            if let Some(speed) = pace {
+            track.push(i, pose)?;
+            if let (Some(speed), Some(start)) = (pace, track.start()) {
                 let due = std::time::Duration::from_secs_f64(
-                    ((pose.time - path.poses[0].time) / speed as f64).max(0.0),
+                    ((pose.time - start) / speed as f64).max(0.0),
                 );
                 if let Some(wait) = due.checked_sub(clock.elapsed()) {
                     std::thread::sleep(wait);
                 }
             }
-            let f = state.frame(&path, i, viewer)?;
+            let f = state.frame(&pose, track.motion(), i, viewer)?;
             viewer.figures(&FrameFigures {
                 pages: f.index_pages + f.mesh_pages,
                 objects_buffered: f.objects_buffered,
@@ -588,11 +581,11 @@ struct Walker<'a> {
 impl Walker<'_> {
     fn frame(
         &mut self,
-        path: &CameraPath,
+        pose: &Pose,
+        motion: ViewerMotion,
         i: usize,
         sink: &mut dyn FrameSink,
     ) -> Result<FrameStats> {
-        let pose = path.poses[i];
         let camera = Camera {
             far: self.cfg.far,
             ..Camera::new(pose.position, pose.yaw, pose.pitch)?
@@ -652,15 +645,7 @@ impl Walker<'_> {
             }
         }
         if let Some(k) = self.cfg.prefetch_k {
-            self.maybe_prefetch(
-                &camera,
-                &fcell,
-                ViewerMotion {
-                    velocity: path.velocity_at(i),
-                    yaw_rate: path.yaw_rate_at(i),
-                },
-                k,
-            );
+            self.maybe_prefetch(&camera, &fcell, motion, k);
         }
 
         stats.objects_buffered = self.buffer.len();
@@ -767,7 +752,7 @@ impl Walker<'_> {
         // The cell must hold the frustum from when the viewer leaves the disk cell (any
         // time within the look-ahead) to k seconds on: a cell around the prediction alone
         // would be missed whenever k·velocity passes the cell's margin.
-        let predicted = fcell.union(&motion.frustum_cell(camera, k));
+        let predicted = motion.predicted_cell(camera, fcell, k);
         let center = predicted.center();
         let cell = self.disk_cell_around(&predicted, center);
         // Ask again from the same disk cell only once the prediction has moved by a
@@ -857,46 +842,6 @@ const LOOKAHEAD_S: f32 = 1.0;
 /// queries for itself: a turn's prefetch can be a whole new cell, longer than a frame
 /// has, where the viewer's own complement against the cells it holds is small.
 const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
-
-/// The largest turn a prefetch foresees, radians: a cell around a wider sweep does not
-/// fit the budget beside the viewer's (on the demo city, 90° overflowed 256 MiB on the
-/// backward walk and read twice the pages; 45° never overflowed).
-const MAX_TURN: f32 = std::f32::consts::FRAC_PI_4;
-
-/// The viewer's motion at a frame, as a prefetcher knows it (finite differences of the
-/// path up to this frame).
-#[derive(Clone, Copy, Debug)]
-struct ViewerMotion {
-    velocity: Vec3,
-    /// Radians per second.
-    yaw_rate: f32,
-}
-
-impl ViewerMotion {
-    /// The box around the frusta the viewer will have `t` seconds ahead: its eye moved by
-    /// t·velocity on the ground (so their far-plane centre is F' = F + t·velocity,
-    /// §4.2.5) and its view at every yaw it turns through on the way. The thesis
-    /// predicts the translation only, and a viewer turning at a corner leaves such a
-    /// cell within a few degrees. The turn is foreseen up to [`MAX_TURN`].
-    fn frustum_cell(&self, camera: &Camera, t: f32) -> Aabb {
-        let eye = camera.position + Vec3::new(self.velocity.x, 0.0, self.velocity.z) * t;
-        let turn = (self.yaw_rate * t).clamp(-MAX_TURN, MAX_TURN);
-        let at = |yaw: f32| {
-            Camera {
-                position: eye,
-                yaw,
-                ..*camera
-            }
-            .frustum()
-            .aabb()
-        };
-        // One frustum every 15° of the turn: the union of their boxes holds the ones between.
-        let steps = (turn.abs() / 15f32.to_radians()).ceil() as usize;
-        (1..=steps).fold(at(camera.yaw), |cell, j| {
-            cell.union(&at(camera.yaw + turn * j as f32 / steps as f32))
-        })
-    }
-}
 
 /// Runs one query and loads the meshes of what it returned.
 fn fetch(
