@@ -1,15 +1,18 @@
 //! The walkthrough engine. So far: camera paths through a city (`path`: street walks,
 //! the motion patterns of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007
-//! §7.5 and their CSV files) and the disk cells a walk queries (Shou 2002 §4.1); the
-//! REVIEW frame loop (`review`) with its object buffer (`buffer`), and the PVS walk
-//! (`pvs_walk`).
+//! §7.5 and their CSV files) and the disk cells a walk queries (Shou 2002 §4.1); one
+//! walk session (`session`), the frame loop every mode shares, with its object buffer
+//! (`buffer`); the modes it plays (`mode`): REVIEW and BOX, whose settings and figures
+//! are `review`'s, and the PVS walk, whose are `pvs_walk`'s.
 
 pub mod buffer;
 pub mod cells;
 pub mod lod_select;
+mod mode;
 pub mod path;
 pub mod pvs_walk;
 pub mod review;
+pub mod session;
 mod sink;
 pub mod start;
 pub mod steer;

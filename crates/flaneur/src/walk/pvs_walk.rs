@@ -11,20 +11,17 @@
 //! into an object buffer as they arrive and dropped when it evicts them, and each frame
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
+//!
+//! Here: the settings and the figures a walk reports. The frame loop is the walk
+//! session's (`walk::session`), the client the PVS mode's (`walk::mode::pvs`).
 
 use serde::Serialize;
 
-use std::collections::HashMap;
-use std::sync::Arc;
-
 use crate::database::Database;
-use crate::error::{Error, Result};
-use crate::prefetch::pvs::{Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs};
-use crate::rtree::ObjectEntry;
-use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::error::Result;
 use crate::walk::path::CameraPath;
-use crate::walk::sink::{LeftOut, Played};
-use crate::walk::{FrameFigures, FrameSink, NoSink, Viewer};
+use crate::walk::sink::Played;
+use crate::walk::{FrameSink, NoSink, Viewer};
 
 /// The walk through a database's walkable viewcells, under its former path; see
 /// [`crate::walk::path::cell_walk`].
@@ -110,89 +107,15 @@ pub fn walk_pvs_into(
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more.
+/// window), until it has no more. The walk session's frame loop with the PVS mode
+/// (`walk::mode::pvs`); kept as the entry point while callers move to the session.
 pub fn walk_pvs_live(
     db: &Database,
     prefetch: PvsPrefetch,
-    mut tick: impl FnMut(usize),
+    tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
-    let sink = &mut *viewer;
-    let source = StoredPvs::new(db)?;
-    let (snp, pbnp);
-    let rule: &dyn PrefetchArea = match prefetch {
-        PvsPrefetch::Snp => {
-            snp = Snp;
-            &snp
-        }
-        PvsPrefetch::Pbnp { border } => {
-            pbnp = Pbnp::new(border)?;
-            &pbnp
-        }
-    };
-    let mut client = PvsClient::new(&source, rule, crate::prefetch::pvs::THESIS_CAPACITY)?;
-    let mut frames = Vec::new();
-    // For a renderer: every object's index entry, and what the client holds, loaded.
-    let entries: HashMap<u64, ObjectEntry> = if sink.draws() {
-        db.range(&db.bounds())?
-            .objects
-            .into_iter()
-            .map(|o| (o.id, o))
-            .collect()
-    } else {
-        HashMap::new()
-    };
-    let mut held = ObjectBuffer::new(usize::MAX);
-    // Objects whose meshes could not be read, when the viewer walks on without them.
-    let mut left_out = sink.skips_damaged().then(LeftOut::default);
-    let mut shown: Option<Cell> = None;
-    for i in 0.. {
-        let Some(pose) = sink.next_pose(i)? else {
-            break;
-        };
-        let pose = &pose;
-        let before = db.io().page_reads;
-        let mut frame = PvsFrame::default();
-        if let Some(id) = db.viewcell_at(pose.position)? {
-            let p = Position::new(pose.position.x as f64, pose.position.z as f64);
-            let out = client.step(p)?;
-            shown = Some(out.cell);
-            frame.cell = Some(id);
-            frame.drawn = client.cache().pvs(out.cell).map_or(0, |s| s.len());
-            frame.visual_misses = out.visual_misses;
-            if let Some(t) = &out.transaction {
-                frame.transaction = true;
-                frame.sent = t.sent.len();
-                frame.swaps = t.evicted.len();
-            }
-        }
-        frame.pages = db.io().page_reads - before;
-        if sink.draws() {
-            let at = Drawing {
-                shown,
-                pose,
-                index: i,
-            };
-            draw_pvs(db, &entries, &client, &mut held, &mut left_out, &at, sink)?;
-        }
-        sink.figures(&FrameFigures {
-            pages: frame.pages,
-            objects_buffered: held.len(),
-            objects_drawn: frame.drawn,
-            visual_misses: frame.visual_misses,
-            cell: frame.cell.map_or_else(
-                || "outside every viewcell".into(),
-                |c| format!("viewcell {c}"),
-            ),
-            damaged: left_out
-                .as_mut()
-                .map(LeftOut::take_untold)
-                .unwrap_or_default(),
-            ..Default::default()
-        });
-        frames.push(frame);
-        tick(i);
-    }
+    let frames = super::mode::pvs::walk_live(db, prefetch, tick, viewer)?;
     let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
     let cells_entered = frames
         .windows(2)
@@ -210,67 +133,4 @@ pub fn walk_pvs_live(
         pages: frames.iter().map(|f| f.pages).sum(),
         frames,
     })
-}
-
-/// What a frame draws: the PVS of `shown`, from `pose`.
-struct Drawing<'p> {
-    shown: Option<Cell>,
-    pose: &'p crate::walk::Pose,
-    index: usize,
-}
-
-/// Brings `held` to what the client holds (loading new objects' meshes, dropping what
-/// it evicted; leaving out, when `left_out` is kept, those that cannot be read) and
-/// hands `sink` the PVS of `at.shown` within the frustum.
-fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
-    db: &Database,
-    entries: &HashMap<u64, ObjectEntry>,
-    client: &PvsClient<'_, S, A>,
-    held: &mut ObjectBuffer,
-    left_out: &mut Option<LeftOut>,
-    at: &Drawing<'_>,
-    sink: &mut dyn FrameSink,
-) -> Result<()> {
-    let cache = client.cache();
-    let gone: Vec<u64> = held
-        .iter()
-        .map(|o| o.entry.id)
-        .filter(|&id| !cache.holds(id))
-        .collect();
-    for id in gone {
-        held.remove(id);
-    }
-    for id in cache.objects() {
-        if held.get(id).is_none() && !left_out.as_ref().is_some_and(|l| l.contains(id)) {
-            let entry = entries.get(&id).ok_or_else(|| {
-                Error::Invalid(format!(
-                    "object {id} of a PVS is not in the database's index"
-                ))
-            })?;
-            let mesh = match (db.mesh(entry), left_out.as_mut()) {
-                (Ok(m), _) => m,
-                (Err(e), Some(l)) => {
-                    l.leave_out(id, &e);
-                    continue;
-                }
-                (Err(e), None) => return Err(e),
-            };
-            held.insert(Loaded {
-                entry: *entry,
-                bytes: mesh_bytes(&mesh),
-                mesh: Arc::new(mesh),
-            });
-        }
-    }
-    let camera = at.pose.camera()?;
-    let frustum = camera.frustum();
-    let drawn: Vec<&Loaded> = at
-        .shown
-        .and_then(|c| cache.pvs(c))
-        .unwrap_or(&[])
-        .iter()
-        .filter_map(|id| held.get(*id))
-        .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
-        .collect();
-    sink.frame(at.index, &camera, held, &drawn)
 }
