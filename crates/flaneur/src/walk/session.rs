@@ -135,36 +135,13 @@ fn cull<'b>(buffer: &'b ObjectBuffer, drawable: Drawable<'_>, camera: &Camera) -
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
     use glam::Vec3;
 
     use super::*;
-    use crate::geom::Aabb;
-    use crate::rtree::ObjectEntry;
-    use crate::scene::Mesh;
-    use crate::store::Extent;
+    use crate::walk::buffer::tests::loaded;
     use crate::walk::path::CameraPath;
     use crate::walk::sink::Played;
     use crate::walk::FrameSink;
-
-    fn loaded(id: u64, x: f32) -> Loaded {
-        Loaded {
-            entry: ObjectEntry {
-                id,
-                bounds: Aabb::new([x, 0.0, -1.0], [x + 1.0, 1.0, 1.0]).unwrap(),
-                mesh: Extent {
-                    first_page: 1,
-                    page_count: 1,
-                    byte_len: 10,
-                },
-                triangles: 1,
-                kind: 0,
-            },
-            mesh: Arc::new(Mesh::default()),
-            bytes: 1,
-        }
-    }
 
     /// Loads an object in front of the eye (+x) and one behind it each frame, offers
     /// frame 1 only some objects, and hands the viewer nothing on frame 2.
@@ -189,8 +166,8 @@ mod tests {
             self.frame = at.index;
             self.log.push(format!("retrieve {}", at.index));
             let id = at.index as u64;
-            buffer.insert(loaded(10 + id, 5.0));
-            buffer.insert(loaded(20 + id, -50.0));
+            buffer.insert(loaded(10 + id, 5.0, 1));
+            buffer.insert(loaded(20 + id, -50.0, 1));
             (at.index != 2).then(|| at.pose.camera()).transpose()
         }
 
