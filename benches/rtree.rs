@@ -40,9 +40,8 @@ fn fixture() -> Fixture {
     let db = Database::open(&path).unwrap();
     let walk = street_walk(&db.bounds(), 200, 25.0, 24, 1).unwrap();
     let cells = walk
-        .positions
-        .iter()
-        .map(|p| disk_cell(*p, 500.0, &db.bounds()).unwrap())
+        .positions()
+        .map(|p| disk_cell(p, 500.0, &db.bounds()).unwrap())
         .collect();
     let all = db.range(&db.bounds()).unwrap().objects;
     let rstar = RTree::bulk_load(

@@ -30,12 +30,11 @@ fn small_city() -> (common::City, Database) {
 /// The walk's queries: per step, a CSearch disk cell and a smaller BOX around the eye.
 fn walk_cells(db: &Database) -> Vec<(Aabb, Aabb)> {
     let path = street_walk(&db.bounds(), 200, 15.0, 10, 3).unwrap();
-    path.positions
-        .iter()
+    path.positions()
         .map(|eye| {
             (
-                disk_cell(*eye, 300.0, &db.bounds()).unwrap(),
-                disk_cell(*eye, 120.0, &db.bounds()).unwrap(),
+                disk_cell(eye, 300.0, &db.bounds()).unwrap(),
+                disk_cell(eye, 120.0, &db.bounds()).unwrap(),
             )
         })
         .collect()

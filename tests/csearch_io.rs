@@ -57,8 +57,8 @@ fn pages_reported_are_the_pages_the_store_counted() {
     let db = Database::open(&city.db).unwrap();
     let path = street_walk(&db.bounds(), 40, 15.0, 10, 3).unwrap();
     let mut history = History::default();
-    for eye in &path.positions {
-        let cell = disk_cell(*eye, 300.0, &db.bounds()).unwrap();
+    for eye in path.positions() {
+        let cell = disk_cell(eye, 300.0, &db.bounds()).unwrap();
         let before = db.io();
         let r = db.csearch_step(&mut history, &cell).unwrap();
         let io = db.io().since(&before);
@@ -80,8 +80,8 @@ fn history_filtering_never_changes_a_result() {
     let path = street_walk(&db.bounds(), 150, 12.0, 6, 9).unwrap();
     let mut history = History::new(usize::MAX);
     let mut dropped = 0;
-    for eye in &path.positions {
-        let cell = disk_cell(*eye, 250.0, &db.bounds()).unwrap();
+    for eye in path.positions() {
+        let cell = disk_cell(eye, 250.0, &db.bounds()).unwrap();
         let unfiltered = history.cells();
         let expected = city.brute_complement(&cell, &unfiltered);
         let before = history.len();

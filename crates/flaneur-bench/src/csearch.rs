@@ -121,9 +121,9 @@ fn walk(
 ) -> Result<CsearchReport> {
     let path = street_walk(bounds, cfg.steps, cfg.step, cfg.segment, cfg.seed)?;
     let mut history = History::new(cfg.history_len);
-    let mut rows = Vec::with_capacity(path.positions.len());
-    for (step, eye) in path.positions.iter().enumerate() {
-        let cell = disk_cell(*eye, cfg.cell, bounds)?;
+    let mut rows = Vec::with_capacity(path.len());
+    for (step, eye) in path.positions().enumerate() {
+        let cell = disk_cell(eye, cfg.cell, bounds)?;
         let t = Instant::now();
         let plain = tree.range(store, &cell)?;
         let box_us = t.elapsed().as_secs_f64() * 1e6;

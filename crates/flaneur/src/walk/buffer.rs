@@ -151,11 +151,12 @@ impl ObjectBuffer {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::store::Extent;
 
-    fn loaded(id: u64, x: f32, bytes: usize) -> Loaded {
+    /// An object of `bytes` with an empty mesh in the unit box at `x` on the x axis.
+    pub(crate) fn loaded(id: u64, x: f32, bytes: usize) -> Loaded {
         Loaded {
             entry: ObjectEntry {
                 id,

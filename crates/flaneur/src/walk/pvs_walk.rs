@@ -11,20 +11,21 @@
 //! into an object buffer as they arrive and dropped when it evicts them, and each frame
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
+//!
+//! Here: the settings and the figures a walk reports. The frame loop is the walk
+//! session's (`walk::session`), the client the PVS mode's (`walk::mode::pvs`).
 
 use serde::Serialize;
 
-use std::collections::HashMap;
-use std::sync::Arc;
-
 use crate::database::Database;
-use crate::error::{Error, Result};
-use crate::prefetch::pvs::{Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs};
-use crate::rtree::ObjectEntry;
-use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
-use crate::walk::motion::CameraPath;
-use crate::walk::sink::{LeftOut, Played};
-use crate::walk::{FrameFigures, FrameSink, NoSink, Viewer};
+use crate::error::Result;
+use crate::walk::path::CameraPath;
+use crate::walk::sink::Played;
+use crate::walk::{FrameSink, NoSink, Viewer};
+
+/// The walk through a database's walkable viewcells, under its former path; see
+/// [`crate::walk::path::cell_walk`].
+pub use crate::walk::path::cell_walk;
 
 /// Which neighbours the client prefetches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -106,89 +107,15 @@ pub fn walk_pvs_into(
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more.
+/// window), until it has no more. The walk session's frame loop with the PVS mode
+/// (`walk::mode::pvs`); kept as the entry point while callers move to the session.
 pub fn walk_pvs_live(
     db: &Database,
     prefetch: PvsPrefetch,
-    mut tick: impl FnMut(usize),
+    tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
-    let sink = &mut *viewer;
-    let source = StoredPvs::new(db)?;
-    let (snp, pbnp);
-    let rule: &dyn PrefetchArea = match prefetch {
-        PvsPrefetch::Snp => {
-            snp = Snp;
-            &snp
-        }
-        PvsPrefetch::Pbnp { border } => {
-            pbnp = Pbnp::new(border)?;
-            &pbnp
-        }
-    };
-    let mut client = PvsClient::new(&source, rule, crate::prefetch::pvs::THESIS_CAPACITY)?;
-    let mut frames = Vec::new();
-    // For a renderer: every object's index entry, and what the client holds, loaded.
-    let entries: HashMap<u64, ObjectEntry> = if sink.draws() {
-        db.range(&db.bounds())?
-            .objects
-            .into_iter()
-            .map(|o| (o.id, o))
-            .collect()
-    } else {
-        HashMap::new()
-    };
-    let mut held = ObjectBuffer::new(usize::MAX);
-    // Objects whose meshes could not be read, when the viewer walks on without them.
-    let mut left_out = sink.skips_damaged().then(LeftOut::default);
-    let mut shown: Option<Cell> = None;
-    for i in 0.. {
-        let Some(pose) = sink.next_pose(i)? else {
-            break;
-        };
-        let pose = &pose;
-        let before = db.io().page_reads;
-        let mut frame = PvsFrame::default();
-        if let Some(id) = db.viewcell_at(pose.position)? {
-            let p = Position::new(pose.position.x as f64, pose.position.z as f64);
-            let out = client.step(p)?;
-            shown = Some(out.cell);
-            frame.cell = Some(id);
-            frame.drawn = client.cache().pvs(out.cell).map_or(0, |s| s.len());
-            frame.visual_misses = out.visual_misses;
-            if let Some(t) = &out.transaction {
-                frame.transaction = true;
-                frame.sent = t.sent.len();
-                frame.swaps = t.evicted.len();
-            }
-        }
-        frame.pages = db.io().page_reads - before;
-        if sink.draws() {
-            let at = Drawing {
-                shown,
-                pose,
-                index: i,
-            };
-            draw_pvs(db, &entries, &client, &mut held, &mut left_out, &at, sink)?;
-        }
-        sink.figures(&FrameFigures {
-            pages: frame.pages,
-            objects_buffered: held.len(),
-            objects_drawn: frame.drawn,
-            visual_misses: frame.visual_misses,
-            cell: frame.cell.map_or_else(
-                || "outside every viewcell".into(),
-                |c| format!("viewcell {c}"),
-            ),
-            damaged: left_out
-                .as_mut()
-                .map(LeftOut::take_untold)
-                .unwrap_or_default(),
-            ..Default::default()
-        });
-        frames.push(frame);
-        tick(i);
-    }
+    let frames = super::mode::pvs::walk_live(db, prefetch, tick, viewer)?;
     let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
     let cells_entered = frames
         .windows(2)
@@ -206,147 +133,4 @@ pub fn walk_pvs_live(
         pages: frames.iter().map(|f| f.pages).sum(),
         frames,
     })
-}
-
-/// What a frame draws: the PVS of `shown`, from `pose`.
-struct Drawing<'p> {
-    shown: Option<Cell>,
-    pose: &'p crate::walk::Pose,
-    index: usize,
-}
-
-/// Brings `held` to what the client holds (loading new objects' meshes, dropping what
-/// it evicted; leaving out, when `left_out` is kept, those that cannot be read) and
-/// hands `sink` the PVS of `at.shown` within the frustum.
-fn draw_pvs<S: crate::prefetch::pvs::PvsSource, A: PrefetchArea + ?Sized>(
-    db: &Database,
-    entries: &HashMap<u64, ObjectEntry>,
-    client: &PvsClient<'_, S, A>,
-    held: &mut ObjectBuffer,
-    left_out: &mut Option<LeftOut>,
-    at: &Drawing<'_>,
-    sink: &mut dyn FrameSink,
-) -> Result<()> {
-    let cache = client.cache();
-    let gone: Vec<u64> = held
-        .iter()
-        .map(|o| o.entry.id)
-        .filter(|&id| !cache.holds(id))
-        .collect();
-    for id in gone {
-        held.remove(id);
-    }
-    for id in cache.objects() {
-        if held.get(id).is_none() && !left_out.as_ref().is_some_and(|l| l.contains(id)) {
-            let entry = entries.get(&id).ok_or_else(|| {
-                Error::Invalid(format!(
-                    "object {id} of a PVS is not in the database's index"
-                ))
-            })?;
-            let mesh = match (db.mesh(entry), left_out.as_mut()) {
-                (Ok(m), _) => m,
-                (Err(e), Some(l)) => {
-                    l.leave_out(id, &e);
-                    continue;
-                }
-                (Err(e), None) => return Err(e),
-            };
-            held.insert(Loaded {
-                entry: *entry,
-                bytes: mesh_bytes(&mesh),
-                mesh: Arc::new(mesh),
-            });
-        }
-    }
-    let camera = at.pose.camera()?;
-    let frustum = camera.frustum();
-    let drawn: Vec<&Loaded> = at
-        .shown
-        .and_then(|c| cache.pvs(c))
-        .unwrap_or(&[])
-        .iter()
-        .filter_map(|id| held.get(*id))
-        .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
-        .collect();
-    sink.frame(at.index, &camera, held, &drawn)
-}
-
-/// A walk through the walkable viewcells of `db`: from a cell's centre to a
-/// neighbouring walkable cell's centre, `step` metres a frame at `fps`, going straight
-/// on where it can (four times in five) and turning or, at a dead end, going back;
-/// deterministic from `seed`. The eye is at the middle of the cells' height range.
-pub fn cell_walk(
-    db: &Database,
-    frames: usize,
-    step: f32,
-    fps: f32,
-    seed: u64,
-) -> Result<CameraPath> {
-    use rand::{Rng, SeedableRng};
-    let head = db.visibility()?.ok_or_else(|| {
-        crate::Error::Invalid(format!(
-            "{} has no precomputed visibility: build it with --visibility",
-            db.store().path().display()
-        ))
-    })?;
-    if !(step.is_finite() && step > 0.0 && fps.is_finite() && fps > 0.0) || frames == 0 {
-        return Err(crate::Error::Invalid(format!(
-            "a cell walk needs frames > 0, a positive step and fps (got {frames}, {step} m, {fps})"
-        )));
-    }
-    let grid = &head.grid;
-    let walkable = |r: i64, c: i64| {
-        r >= 0
-            && c >= 0
-            && (r as u32) < grid.rows()
-            && (c as u32) < grid.columns()
-            && head.cell(grid.id(r as u32, c as u32)).is_some()
-    };
-    let centre = |r: i64, c: i64| grid.cell_bounds(r as u32, c as u32).center();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let start = head.cells[rng.gen_range(0..head.cells.len())].id;
-    let (r0, c0) = grid.place(start);
-    let (mut r, mut c) = (r0 as i64, c0 as i64);
-    let dirs = [(0i64, 1i64), (1, 0), (0, -1), (-1, 0)];
-    let mut d = rng.gen_range(0..4usize);
-    let mut p = centre(r, c);
-    let mut poses = Vec::with_capacity(frames);
-    let mut target = p;
-    for f in 0..frames {
-        if (target - p).length() < 1e-3 {
-            // At a centre: choose the next cell.
-            let open: Vec<usize> = (0..4)
-                .filter(|&k| walkable(r + dirs[k].0, c + dirs[k].1))
-                .collect();
-            if !open.is_empty() {
-                let ahead = open.contains(&d) && rng.gen_bool(0.8);
-                if !ahead {
-                    let turns: Vec<usize> =
-                        open.iter().copied().filter(|&k| k != (d + 2) % 4).collect();
-                    d = if turns.is_empty() {
-                        open[0]
-                    } else {
-                        turns[rng.gen_range(0..turns.len())]
-                    };
-                }
-                r += dirs[d].0;
-                c += dirs[d].1;
-                target = centre(r, c);
-            }
-        }
-        let to = target - p;
-        let yaw = (dirs[d].0 as f32).atan2(dirs[d].1 as f32);
-        if to.length() > step {
-            p += to.normalize() * step;
-        } else {
-            p = target;
-        }
-        poses.push(crate::walk::motion::Pose {
-            time: f as f64 / fps as f64,
-            position: p,
-            yaw,
-            pitch: 0.0,
-        });
-    }
-    CameraPath::new(poses)
 }

@@ -12,6 +12,10 @@
 //! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
+//! Here: the settings, their checks, and the figures a walk reports. The frame loop is
+//! the walk session's (`walk::session`), the retrieval the REVIEW mode's
+//! (`walk::mode::review`), the motion prediction `prefetch::motion`'s.
+//!
 //! Prefetching follows Fig. 4.11: the prefetched cell C2 is searched (CSearch against
 //! the history) while the viewer is still in C1, and its objects go into the buffer as
 //! soon as they arrive, its cell into the history; when the frustum cell leaves C1 and
@@ -33,23 +37,11 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
-use std::collections::HashSet;
-use std::sync::{mpsc, Mutex};
-use std::time::{Duration, Instant};
-
-use glam::Vec3;
-use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
-
-use super::buffer::{mesh_bytes, Loaded, ObjectBuffer};
-use super::cells::{contains_ground, scaled_cell};
-use super::motion::CameraPath;
-use super::sink::{FrameFigures, FrameSink, LeftOut, NoSink, Played, Viewer};
-use crate::cache::{policy_by_name, BufferPool, CacheStats, Trace};
+use super::path::CameraPath;
+use super::sink::{FrameSink, NoSink, Played, Viewer};
+use crate::cache::{CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::geom::{Aabb, Camera, Frustum};
-use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
-use crate::store::{PageKind, PageSource};
 
 /// How a walk retrieves objects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -172,7 +164,7 @@ impl ReviewConfig {
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         check_sf(self.sf)?;
         if let Some(k) = self.prefetch_k {
             check_k(k)?;
@@ -367,24 +359,6 @@ impl WalkReport {
     }
 }
 
-/// A query's result with its meshes, loaded on the thread that ran it.
-struct Fetched {
-    cell: Aabb,
-    epoch: u64,
-    objects: Vec<Loaded>,
-    /// What CSearch retrieved for the cell (for the history).
-    retrieved: Vec<ObjectEntry>,
-    /// Time in the index, and reading meshes, on the thread that fetched.
-    query_ms: f64,
-    load_ms: f64,
-}
-
-struct Request {
-    cell: Aabb,
-    history: Vec<Aabb>,
-    epoch: u64,
-}
-
 /// Walks `path` through `db` under `cfg`; `progress` is told each finished frame.
 pub fn walk(
     db: &Database,
@@ -411,588 +385,34 @@ pub fn walk_into(
 }
 
 /// [`walk_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more. Poses must come in time order, as a path's do.
+/// window), until it has no more. Poses must come in time order, as a path's do. The
+/// walk session's frame loop with the REVIEW mode (`walk::mode::review`); kept as the
+/// entry point while callers move to the session.
 pub fn walk_live(
     db: &Database,
     cfg: &ReviewConfig,
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<WalkReport> {
-    cfg.validate()?;
-    let mut path = CameraPath { poses: Vec::new() };
-    let oracle = Oracle::new(db)?;
-    db.reset_io();
-    let pool = match &cfg.index_cache {
-        Some((policy, bytes)) => Some(BufferPool::new(
-            db.store(),
-            *bytes,
-            policy_by_name(policy)?,
-        )?),
-        None => None,
-    };
-    if let (Some(p), true) = (&pool, cfg.record_trace) {
-        p.set_trace(true);
-    }
-    let source: &(dyn PageSource + Sync) = match &pool {
-        Some(p) => p,
-        None => db.store(),
-    };
-    // The ids in the object buffer, which no fetch loads again — read when the meshes
-    // are, so a prefetch asked for before the viewer's own query skips what it loaded.
-    let resident = Mutex::new(HashSet::new());
-    let resident = &resident;
-    // Objects whose meshes could not be read, when the viewer walks on without them;
-    // shared with the prefetch thread, and told of from here (a prefetch that finds
-    // one may be dropped as stale).
-    let left_out = viewer
-        .skips_damaged()
-        .then(|| Mutex::new(LeftOut::default()));
-    let left_out = left_out.as_ref();
-    let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
-        let (req_tx, req_rx) = mpsc::channel::<Request>();
-        let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
-        if cfg.prefetch_k.is_some() {
-            scope.spawn(move || {
-                for req in req_rx {
-                    let fetched = fetch(db, source, cfg.retrieval, &req, (resident, left_out));
-                    if res_tx.send(fetched).is_err() {
-                        break;
-                    }
-                }
-            });
-        } else {
-            drop(req_rx);
-            drop(res_tx);
-        }
-        let mut state = Walker {
-            db,
-            source,
-            cfg,
-            oracle: &oracle,
-            buffer: ObjectBuffer::new(cfg.memory_budget),
-            history: History::default(),
-            disk_cell: None,
-            prefetched: None,
-            last_prediction: None,
-            epoch: 0,
-            in_flight: None,
-            req_tx: cfg.prefetch_k.map(|_| req_tx),
-            res_rx,
-            resident,
-            left_out,
-            counts: Counts::default(),
-        };
-        let mut frames = Vec::new();
-        let pace = cfg.pace.filter(|_| cfg.prefetch_k.is_some());
-        let clock = Instant::now();
-        for i in 0.. {
-            let Some(pose) = viewer.next_pose(i)? else {
-                break;
-            };
-            if let Some(last) = path.poses.last() {
-                if pose.time.partial_cmp(&last.time) != Some(std::cmp::Ordering::Greater) {
-                    return Err(Error::Invalid(format!(
-                        "frame {i}: pose at {} s after one at {} s; poses must come in time order",
-                        pose.time, last.time
-                    )));
-                }
-            }
-            path.poses.push(pose);
-            if let Some(speed) = pace {
-                let due = std::time::Duration::from_secs_f64(
-                    ((pose.time - path.poses[0].time) / speed as f64).max(0.0),
-                );
-                if let Some(wait) = due.checked_sub(clock.elapsed()) {
-                    std::thread::sleep(wait);
-                }
-            }
-            let f = state.frame(&path, i, viewer)?;
-            viewer.figures(&FrameFigures {
-                pages: f.index_pages + f.mesh_pages,
-                objects_buffered: f.objects_buffered,
-                objects_drawn: f.objects_drawn,
-                triangles: f.triangles_drawn,
-                visual_misses: f.visual_misses,
-                prefetch_queue: state.in_flight.is_some() as usize,
-                cache_hit_rate: pool.as_ref().map(|p| p.stats().hit_rate()),
-                cell: state.disk_cell.map_or_else(String::new, |c| {
-                    format!(
-                        "disk cell x {:.0}..{:.0}, z {:.0}..{:.0}",
-                        c.min.x, c.max.x, c.min.z, c.max.z
-                    )
-                }),
-                walk_ms: f.frame_ms,
-                damaged: left_out
-                    .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
-                    .unwrap_or_default(),
-            });
-            frames.push(f);
-            progress(i);
-        }
-        if frames.is_empty() {
-            return Err(Error::Invalid("the walk had no poses".into()));
-        }
-        // Closing the request channel ends the prefetch thread.
-        state.req_tx = None;
-        Ok((frames, state.counts))
-    })?;
-    let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
-    let trace = pool
-        .as_ref()
-        .filter(|_| cfg.record_trace)
-        .map(|p| p.take_trace());
-    Ok(WalkReport {
-        config: cfg.clone(),
-        frames,
-        summary,
-        trace,
-    })
+    super::mode::review::walk_live(db, cfg, progress, viewer)
 }
 
 /// Searches run along a walk, by where their results went.
 #[derive(Clone, Copy, Debug, Default)]
-struct Counts {
-    sync: usize,
-    adopted: usize,
-    stale: usize,
+pub(crate) struct Counts {
+    pub sync: usize,
+    pub adopted: usize,
+    pub stale: usize,
     /// Index and mesh pages read by frame 0's own query (before any prefetch started).
-    initial_load_pages: (u64, u64),
+    pub initial_load_pages: (u64, u64),
 }
 
-struct Walker<'a> {
-    db: &'a Database,
-    source: &'a (dyn PageSource + Sync),
-    cfg: &'a ReviewConfig,
-    oracle: &'a Oracle,
-    buffer: ObjectBuffer,
-    /// Every cell whose objects are all in the buffer (the CSearch history).
-    history: History,
-    disk_cell: Option<Aabb>,
-    /// The latest prefetched cell: its objects are in the buffer, the viewer not yet in it.
-    prefetched: Option<Aabb>,
-    /// Centre of the latest prefetch asked for from this disk cell.
-    last_prediction: Option<Vec3>,
-    /// Bumped by every eviction: a result asked for before it may miss objects.
-    epoch: u64,
-    /// The cell a prefetch is running for.
-    in_flight: Option<Aabb>,
-    req_tx: Option<mpsc::Sender<Request>>,
-    res_rx: mpsc::Receiver<Result<Fetched>>,
-    /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
-    resident: &'a Mutex<HashSet<u64>>,
-    /// With a viewer that walks on past unreadable objects, those left out.
-    left_out: Option<&'a Mutex<LeftOut>>,
+/// The walk's summary from its frames and searches.
+pub(crate) fn summarize(
+    frames: &[FrameStats],
     counts: Counts,
-}
-
-impl Walker<'_> {
-    fn frame(
-        &mut self,
-        path: &CameraPath,
-        i: usize,
-        sink: &mut dyn FrameSink,
-    ) -> Result<FrameStats> {
-        let pose = path.poses[i];
-        let camera = Camera {
-            far: self.cfg.far,
-            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-        };
-        let frustum = camera.frustum();
-        let fcell = frustum.aabb();
-        let io_before = self.db.io();
-        let start = Instant::now();
-        let mut stats = FrameStats {
-            frame: i,
-            time: pose.time,
-            ..Default::default()
-        };
-
-        self.collect_prefetch(None, camera.position, &mut stats)?;
-        if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
-            stats.queried = true;
-            if self.prefetched.is_none()
-                && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell))
-            {
-                let t = Instant::now();
-                self.collect_prefetch(Some(MAX_PREFETCH_WAIT), camera.position, &mut stats)?;
-                stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
-            }
-            match self.prefetched.filter(|p| contains_ground(p, &fcell)) {
-                Some(cell) => {
-                    stats.prefetch_used = true;
-                    self.enter(cell);
-                }
-                None => {
-                    let cell = self.disk_cell_around(&fcell, fcell.center());
-                    let req = self.request(cell);
-                    let f = fetch(
-                        self.db,
-                        self.source,
-                        self.cfg.retrieval,
-                        &req,
-                        (self.resident, self.left_out),
-                    )?;
-                    self.counts.sync += 1;
-                    stats.sync_query = true;
-                    stats.query_ms += f.query_ms;
-                    stats.load_ms += f.load_ms;
-                    let t = Instant::now();
-                    // The viewer is in this cell whether or not the budget holds all of it.
-                    self.adopt(f, camera.position, &mut stats);
-                    self.enter(cell);
-                    stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
-                }
-            }
-            if i == 0 {
-                let io = self.db.io().since(&io_before);
-                self.counts.initial_load_pages = (
-                    io.reads_of(PageKind::RtreeNode),
-                    io.reads_of(PageKind::Mesh),
-                );
-            }
-        }
-        if let Some(k) = self.cfg.prefetch_k {
-            self.maybe_prefetch(
-                &camera,
-                &fcell,
-                ViewerMotion {
-                    velocity: path.velocity_at(i),
-                    yaw_rate: path.yaw_rate_at(i),
-                },
-                k,
-            );
-        }
-
-        stats.objects_buffered = self.buffer.len();
-        let t = Instant::now();
-        let drawn: Vec<&Loaded> = self
-            .buffer
-            .iter()
-            .filter(|o| frustum.overlaps_aabb(&o.entry.bounds))
-            .collect();
-        stats.cull_ms = t.elapsed().as_secs_f64() * 1e3;
-        let t = Instant::now();
-        stats.objects_drawn = drawn.len();
-        stats.triangles_drawn = drawn.iter().map(|o| o.mesh.indices.len() as u64 / 3).sum();
-        stats.prep_ms = t.elapsed().as_secs_f64() * 1e3;
-        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        stats.visual_misses = self.oracle.misses(&frustum, &fcell, &self.buffer);
-        let io = self.db.io().since(&io_before);
-        stats.index_pages = io.reads_of(PageKind::RtreeNode);
-        stats.mesh_pages = io.reads_of(PageKind::Mesh);
-        stats.buffer_bytes = self.buffer.bytes();
-        sink.frame(i, &camera, &self.buffer, &drawn)?;
-        Ok(stats)
-    }
-
-    fn disk_cell_around(&self, fcell: &Aabb, center: Vec3) -> Aabb {
-        scaled_cell(&self.db.bounds(), fcell, center, self.cfg.sf)
-    }
-
-    /// The viewer is now in `cell`, whose objects are all in the buffer.
-    fn enter(&mut self, cell: Aabb) {
-        self.disk_cell = Some(cell);
-        self.prefetched = None;
-        self.last_prediction = None;
-    }
-
-    fn request(&self, cell: Aabb) -> Request {
-        let mut history = self.history.clone();
-        history.filter(&cell);
-        Request {
-            cell,
-            history: history.cells(),
-            epoch: self.epoch,
-        }
-    }
-
-    /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one
-    /// that long at most.
-    fn collect_prefetch(
-        &mut self,
-        wait: Option<Duration>,
-        eye: Vec3,
-        stats: &mut FrameStats,
-    ) -> Result<()> {
-        if self.in_flight.is_none() {
-            return Ok(());
-        }
-        let stopped = || Error::Invalid("the prefetch thread stopped".into());
-        let got = match wait {
-            Some(limit) => match self.res_rx.recv_timeout(limit) {
-                Ok(r) => r,
-                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
-                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
-            },
-            None => match self.res_rx.try_recv() {
-                Ok(r) => r,
-                Err(mpsc::TryRecvError::Empty) => return Ok(()),
-                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
-            },
-        };
-        self.in_flight = None;
-        let fetched = got?;
-        if fetched.epoch != self.epoch {
-            // An eviction came between: the complement it computed may miss objects.
-            self.counts.stale += 1;
-            return Ok(());
-        }
-        let t = Instant::now();
-        self.counts.adopted += 1;
-        stats.prefetch_adopted = true;
-        let cell = fetched.cell;
-        if self.adopt(fetched, eye, stats) {
-            self.prefetched = Some(cell);
-        }
-        stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
-        Ok(())
-    }
-
-    fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, motion: ViewerMotion, k: f32) {
-        let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else {
-            return;
-        };
-        if self.in_flight.is_some() {
-            return;
-        }
-        // Will the frustum cell leave the disk cell (and the cell already prefetched)
-        // within the look-ahead?
-        let soon = motion.frustum_cell(camera, LOOKAHEAD_S);
-        let ahead = fcell.union(&soon);
-        if contains_ground(&disk, &ahead)
-            || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead))
-        {
-            return;
-        }
-        // The cell must hold the frustum from when the viewer leaves the disk cell (any
-        // time within the look-ahead) to k seconds on: a cell around the prediction alone
-        // would be missed whenever k·velocity passes the cell's margin.
-        let predicted = fcell.union(&motion.frustum_cell(camera, k));
-        let center = predicted.center();
-        let cell = self.disk_cell_around(&predicted, center);
-        // Ask again from the same disk cell only once the prediction has moved by a
-        // quarter of the cell: that bounds the prefetches per cell.
-        if let Some(last) = self.last_prediction {
-            let quarter = cell.extent() * 0.25;
-            if (center.x - last.x).abs() < quarter.x && (center.z - last.z).abs() < quarter.z {
-                return;
-            }
-        }
-        let req = self.request(cell);
-        if tx.send(req).is_ok() {
-            self.in_flight = Some(cell);
-            self.last_prediction = Some(center);
-        }
-    }
-
-    /// Takes a query's objects into the buffer and its cell into the history, evicting
-    /// by Fig. 4.8 when over budget. False if the budget could not hold all of the
-    /// cell's objects beside the viewer's (then the cell is not in the history, so a
-    /// later search fetches what was dropped).
-    fn adopt(&mut self, fetched: Fetched, eye: Vec3, stats: &mut FrameStats) -> bool {
-        let cell = fetched.cell;
-        if self.cfg.retrieval == Retrieval::Box {
-            // BOX keeps exactly its cell.
-            self.buffer = ObjectBuffer::new(self.cfg.memory_budget);
-        }
-        stats.objects_loaded += fetched.objects.len();
-        for o in fetched.objects {
-            self.buffer.insert(o);
-        }
-        self.history.filter(&cell);
-        self.history.record(cell, &fetched.retrieved);
-        let mut complete = true;
-        if self.buffer.over_budget() {
-            // Keep the cell the viewer is in as well as the new one (a prefetch lands
-            // before the viewer gets there).
-            let keep: Vec<Aabb> = self
-                .disk_cell
-                .filter(|d| *d != cell)
-                .into_iter()
-                .chain([cell])
-                .collect();
-            let overlapping = |b: &ObjectBuffer, c: &Aabb| -> Vec<ObjectEntry> {
-                b.iter()
-                    .map(|o| o.entry)
-                    .filter(|o| o.bounds.overlaps(c))
-                    .collect()
-            };
-            let whole: Vec<usize> = keep
-                .iter()
-                .map(|c| overlapping(&self.buffer, c).len())
-                .collect();
-            let e = self.buffer.evict_outside_all(&keep, eye);
-            stats.evicted += e.evicted;
-            stats.overflow |= e.overflow;
-            // Restart the history at the cells whose objects the buffer still holds in
-            // full: a cell that lost some to the budget must not hide them from a search.
-            self.history.clear();
-            for (c, n) in keep.iter().zip(whole) {
-                let kept = overlapping(&self.buffer, c);
-                if kept.len() == n {
-                    self.history.record(*c, &kept);
-                } else if *c == cell {
-                    complete = false;
-                }
-            }
-            self.epoch += 1;
-            if self.prefetched.is_some_and(|p| p != cell) {
-                self.prefetched = None;
-            }
-        }
-        if self.cfg.retrieval == Retrieval::CSearch {
-            if let Ok(mut ids) = self.resident.lock() {
-                *ids = self.buffer.iter().map(|o| o.entry.id).collect();
-            }
-        }
-        complete
-    }
-}
-
-/// How far ahead, in seconds of the viewer's motion, a prefetch is started: when the
-/// frustum would leave the disk cell within this time.
-const LOOKAHEAD_S: f32 = 1.0;
-
-/// How long the viewer waits for a prefetch under way that holds its frustum before it
-/// queries for itself: a turn's prefetch can be a whole new cell, longer than a frame
-/// has, where the viewer's own complement against the cells it holds is small.
-const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
-
-/// The largest turn a prefetch foresees, radians: a cell around a wider sweep does not
-/// fit the budget beside the viewer's (on the demo city, 90° overflowed 256 MiB on the
-/// backward walk and read twice the pages; 45° never overflowed).
-const MAX_TURN: f32 = std::f32::consts::FRAC_PI_4;
-
-/// The viewer's motion at a frame, as a prefetcher knows it (finite differences of the
-/// path up to this frame).
-#[derive(Clone, Copy, Debug)]
-struct ViewerMotion {
-    velocity: Vec3,
-    /// Radians per second.
-    yaw_rate: f32,
-}
-
-impl ViewerMotion {
-    /// The box around the frusta the viewer will have `t` seconds ahead: its eye moved by
-    /// t·velocity on the ground (so their far-plane centre is F' = F + t·velocity,
-    /// §4.2.5) and its view at every yaw it turns through on the way. The thesis
-    /// predicts the translation only, and a viewer turning at a corner leaves such a
-    /// cell within a few degrees. The turn is foreseen up to [`MAX_TURN`].
-    fn frustum_cell(&self, camera: &Camera, t: f32) -> Aabb {
-        let eye = camera.position + Vec3::new(self.velocity.x, 0.0, self.velocity.z) * t;
-        let turn = (self.yaw_rate * t).clamp(-MAX_TURN, MAX_TURN);
-        let at = |yaw: f32| {
-            Camera {
-                position: eye,
-                yaw,
-                ..*camera
-            }
-            .frustum()
-            .aabb()
-        };
-        // One frustum every 15° of the turn: the union of their boxes holds the ones between.
-        let steps = (turn.abs() / 15f32.to_radians()).ceil() as usize;
-        (1..=steps).fold(at(camera.yaw), |cell, j| {
-            cell.union(&at(camera.yaw + turn * j as f32 / steps as f32))
-        })
-    }
-}
-
-/// Runs one query and loads the meshes of what it returned.
-fn fetch(
-    db: &Database,
-    source: &(dyn PageSource + Sync),
-    retrieval: Retrieval,
-    req: &Request,
-    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
-) -> Result<Fetched> {
-    let t = Instant::now();
-    let result: QueryResult = match retrieval {
-        Retrieval::Box => db.tree().range(source, &req.cell)?,
-        Retrieval::CSearch => {
-            db.tree()
-                .csearch_with(source, &req.cell, &req.history, Coverlap::default())?
-        }
-    };
-    let query_ms = t.elapsed().as_secs_f64() * 1e3;
-    let t = Instant::now();
-    let mut objects = Vec::with_capacity(result.objects.len());
-    for entry in &result.objects {
-        if resident.lock().is_ok_and(|r| r.contains(&entry.id))
-            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id)))
-        {
-            continue;
-        }
-        let mesh = match (db.mesh(entry), left_out) {
-            (Ok(m), _) => m,
-            (Err(e), Some(l)) => {
-                if let Ok(mut l) = l.lock() {
-                    l.leave_out(entry.id, &e);
-                }
-                continue;
-            }
-            (Err(e), None) => return Err(e),
-        };
-        objects.push(Loaded {
-            entry: *entry,
-            bytes: mesh_bytes(&mesh),
-            mesh: std::sync::Arc::new(mesh),
-        });
-    }
-    let load_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok(Fetched {
-        cell: req.cell,
-        epoch: req.epoch,
-        objects,
-        retrieved: result.objects,
-        query_ms,
-        load_ms,
-    })
-}
-
-/// Ground truth for visual misses: every object's box, in memory, outside the counted
-/// store reads.
-struct Oracle {
-    tree: RStar<GeomWithData<Rectangle<[f32; 3]>, u64>>,
-}
-
-impl Oracle {
-    fn new(db: &Database) -> Result<Oracle> {
-        let all = db.range(&db.bounds())?.objects;
-        Ok(Oracle {
-            tree: RStar::bulk_load(
-                all.iter()
-                    .map(|o| {
-                        GeomWithData::new(
-                            Rectangle::from_corners(
-                                o.bounds.min.to_array(),
-                                o.bounds.max.to_array(),
-                            ),
-                            o.id,
-                        )
-                    })
-                    .collect(),
-            ),
-        })
-    }
-
-    fn misses(&self, frustum: &Frustum, fcell: &Aabb, buffer: &ObjectBuffer) -> usize {
-        let q = AABB::from_corners(fcell.min.to_array(), fcell.max.to_array());
-        self.tree
-            .locate_in_envelope_intersecting(&q)
-            .filter(|g| !buffer.contains(g.data))
-            .filter(|g| {
-                let e = g.geom().envelope();
-                frustum.overlaps_aabb(&Aabb {
-                    min: Vec3::from(e.lower()),
-                    max: Vec3::from(e.upper()),
-                })
-            })
-            .count()
-    }
-}
-
-fn summarize(frames: &[FrameStats], counts: Counts, cache: Option<CacheStats>) -> WalkSummary {
+    cache: Option<CacheStats>,
+) -> WalkSummary {
     let walk = frames.get(1..).unwrap_or_default();
     let n = walk.len().max(1) as f64;
     let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;

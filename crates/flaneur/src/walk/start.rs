@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::motion::Pose;
+use super::path::Pose;
 use super::path::EYE_HEIGHT;
 use crate::database::Database;
 use crate::error::{Error, Result};

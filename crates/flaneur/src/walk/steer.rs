@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::motion::Pose;
+use super::path::Pose;
 use super::path::EYE_HEIGHT;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;

@@ -7,9 +7,9 @@
 //! viewer leans towards, read from which of nine regions of its cell it stands in
 //! (h(R), Table 7.1). Both send only what the client lacks (`delta`, §7.3) and share
 //! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
-//! transaction, `sim` a whole route (§7.5). `synthetic` and `routes` make the thesis's
-//! simulated city, PVS table and two routes; `stored` reads a database's precomputed
-//! visibility as the server's table.
+//! transaction, `sim` a whole route (§7.5). `synthetic` makes the thesis's simulated
+//! city and PVS table, and `walk::path::routes` its two routes; `stored` reads a
+//! database's precomputed visibility as the server's table.
 //!
 //! Choices the thesis leaves open, and ours:
 //!
@@ -43,7 +43,8 @@
 //!   since the current cell and its eight neighbours must fit.
 //! - **Orientation**: columns grow east (+x), rows south (+z); (a − 1, b + 1) is
 //!   north-east of (a, b), as in Fig. 7.1.
-//! - **The synthetic table and the routes**: see [`synthetic`] and [`routes`].
+//! - **The synthetic table and the routes**: see [`synthetic`] and
+//!   [`routes`](crate::walk::path::routes).
 
 mod area;
 mod cache;
@@ -51,7 +52,6 @@ mod client;
 mod delta;
 mod grid;
 mod pbnp;
-pub mod routes;
 mod sim;
 mod snp;
 mod source;
@@ -62,13 +62,15 @@ mod table;
 #[cfg(test)]
 mod tests;
 
+pub use crate::walk::path::routes::{
+    axis_route, random_route, straight_route, RouteConfig, StraightRoute,
+};
 pub use area::{Area, PrefetchArea};
 pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
 pub use client::{PvsClient, StepOutcome, Transaction};
 pub use delta::delta;
 pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
 pub use pbnp::{h, Pbnp};
-pub use routes::{axis_route, random_route, straight_route, RouteConfig, StraightRoute};
 pub use sim::{simulate, SimReport, SimTotals, StepRecord};
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};

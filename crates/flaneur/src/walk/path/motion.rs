@@ -52,9 +52,9 @@ use glam::{Vec2, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::path::EYE_HEIGHT;
+use super::{CameraPath, Pose, EYE_HEIGHT};
 use crate::error::{Error, Result};
-use crate::geom::{Aabb, Camera};
+use crate::geom::Aabb;
 
 /// Nominal block pitch of the street grid, metres: citygen's default 4 lots × 20 m plus
 /// a 14 m street.
@@ -178,134 +178,6 @@ impl FromStr for Motion {
                 ))
             })
     }
-}
-
-/// One camera pose of a path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pose {
-    /// Seconds since the start of the path.
-    pub time: f64,
-    /// The eye, world coordinates (metres).
-    pub position: Vec3,
-    /// Radians; 0 looks along +x, increasing toward +z (as [`Camera::yaw`]).
-    pub yaw: f32,
-    /// Radians, positive up (as [`Camera::pitch`]).
-    pub pitch: f32,
-}
-
-impl Pose {
-    /// The camera at this pose, with the thesis's default frustum (45° × 45°, 1 km).
-    pub fn camera(&self) -> Result<Camera> {
-        Camera::new(self.position, self.yaw, self.pitch)
-    }
-}
-
-/// A timed sequence of poses: what [`generate`] makes, what a recorded session holds,
-/// what [`CameraPath::save_csv`] writes.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct CameraPath {
-    pub poses: Vec<Pose>,
-}
-
-impl CameraPath {
-    /// A checked path: at least one pose, all finite, pitch strictly inside ±90°, times
-    /// strictly increasing.
-    pub fn new(poses: Vec<Pose>) -> Result<CameraPath> {
-        let p = CameraPath { poses };
-        p.validate()?;
-        Ok(p)
-    }
-
-    /// Checks what [`CameraPath::new`] checks; the error names the first bad pose.
-    pub fn validate(&self) -> Result<()> {
-        if self.poses.is_empty() {
-            return Err(Error::Invalid("camera path has no poses".into()));
-        }
-        let mut prev = None;
-        for (i, pose) in self.poses.iter().enumerate() {
-            check_pose(pose, prev)
-                .map_err(|what| Error::Invalid(format!("camera path, pose {i}: {what}")))?;
-            prev = Some(pose.time);
-        }
-        Ok(())
-    }
-
-    pub fn len(&self) -> usize {
-        self.poses.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.poses.is_empty()
-    }
-
-    /// Seconds from the first pose to the last; 0 for fewer than two poses.
-    pub fn duration(&self) -> f64 {
-        match (self.poses.first(), self.poses.last()) {
-            (Some(a), Some(b)) => b.time - a.time,
-            _ => 0.0,
-        }
-    }
-
-    /// The viewer's turning rate at pose `i` (radians per second, positive as yaw
-    /// grows), by the same causal finite difference as [`CameraPath::velocity_at`], the
-    /// yaw step taken the short way round. Zero where that is zero.
-    pub fn yaw_rate_at(&self, i: usize) -> f32 {
-        let n = self.poses.len();
-        if n < 2 {
-            return 0.0;
-        }
-        let i = i.min(n - 1).max(1);
-        let (a, b) = (&self.poses[i - 1], &self.poses[i]);
-        let dt = (b.time - a.time) as f32;
-        let step = (b.yaw - a.yaw + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU)
-            - std::f32::consts::PI;
-        let rate = step / dt;
-        if dt > 0.0 && rate.is_finite() {
-            rate
-        } else {
-            0.0
-        }
-    }
-
-    /// The viewer's velocity at pose `i` (m/s), by finite difference: from pose `i − 1`
-    /// to `i` (causal: what a prefetcher knows at frame `i`), and from pose 0 to 1 for
-    /// `i = 0`. Zero for a path of one pose or none, or where two times do not increase;
-    /// an `i` past the end is taken as the last pose.
-    pub fn velocity_at(&self, i: usize) -> Vec3 {
-        let n = self.poses.len();
-        if n < 2 {
-            return Vec3::ZERO;
-        }
-        let i = i.min(n - 1).max(1);
-        let (a, b) = (&self.poses[i - 1], &self.poses[i]);
-        let dt = b.time - a.time;
-        let v = (b.position - a.position) / dt as f32;
-        if dt > 0.0 && v.is_finite() {
-            v
-        } else {
-            Vec3::ZERO
-        }
-    }
-}
-
-/// What makes a pose valid after `prev` (the previous pose's time); the reason if not.
-pub(super) fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(), String> {
-    if !p.time.is_finite() || !p.position.is_finite() || !p.yaw.is_finite() || !p.pitch.is_finite()
-    {
-        return Err("a value is not finite".into());
-    }
-    if p.pitch.abs() >= FRAC_PI_2 {
-        return Err(format!(
-            "pitch {} is not strictly between -pi/2 and pi/2",
-            p.pitch
-        ));
-    }
-    if let Some(t) = prev {
-        if p.time <= t {
-            return Err(format!("time {} does not increase (previous {t})", p.time));
-        }
-    }
-    Ok(())
 }
 
 /// A path of `frames` poses at `fps` through the city `bounds` in the pattern `motion`,
@@ -737,35 +609,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn velocity_by_finite_difference() {
-        let pose = |t: f64, x: f32| Pose {
-            time: t,
-            position: Vec3::new(x, 0.0, 0.0),
-            yaw: 0.0,
-            pitch: 0.0,
-        };
-        let one = CameraPath::new(vec![pose(0.0, 1.0)]).unwrap();
-        assert_eq!(one.velocity_at(0), Vec3::ZERO);
-        assert_eq!(one.duration(), 0.0);
-        let p = CameraPath::new(vec![pose(0.0, 0.0), pose(0.5, 1.0), pose(1.0, 3.0)]).unwrap();
-        assert_eq!(p.velocity_at(0), Vec3::new(2.0, 0.0, 0.0));
-        assert_eq!(p.velocity_at(1), Vec3::new(2.0, 0.0, 0.0));
-        assert_eq!(p.velocity_at(2), Vec3::new(4.0, 0.0, 0.0));
-        assert_eq!(p.velocity_at(99), Vec3::new(4.0, 0.0, 0.0));
-        assert_eq!(p.duration(), 1.0);
-        assert_eq!(CameraPath::default().velocity_at(0), Vec3::ZERO);
-        assert!(CameraPath::new(vec![]).is_err());
-        assert!(CameraPath::new(vec![pose(1.0, 0.0), pose(1.0, 1.0)]).is_err());
-        assert!(CameraPath::new(vec![pose(0.0, f32::NAN)]).is_err());
-        let steep = Pose {
-            pitch: 1.6,
-            ..pose(0.0, 0.0)
-        };
-        assert!(CameraPath::new(vec![steep]).is_err());
-        assert!(steep.camera().is_err());
     }
 
     #[test]

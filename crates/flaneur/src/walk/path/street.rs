@@ -5,27 +5,21 @@ use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::{CameraPath, Pose, EYE_HEIGHT};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
-/// Eye height of a walker, metres.
-pub const EYE_HEIGHT: f32 = 1.7;
-
-/// Camera positions, one per step.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WalkPath {
-    pub positions: Vec<Vec3>,
-}
-
 /// A walk of `steps` steps of `step` metres inside `bounds` (on x and z), turning by a
-/// right angle with probability `1/segment` per step, and at the city's edge.
+/// right angle with probability `1/segment` per step, and at the city's edge. One pose
+/// per step, a step a second, looking level along the step it takes next (the last one
+/// along the step it would take).
 pub fn street_walk(
     bounds: &Aabb,
     steps: usize,
     step: f32,
     segment: usize,
     seed: u64,
-) -> Result<WalkPath> {
+) -> Result<CameraPath> {
     bounds.validate()?;
     if !(step.is_finite() && step > 0.0) {
         return Err(Error::Invalid(format!(
@@ -38,12 +32,12 @@ pub fn street_walk(
     let mut p = Vec3::new((lo.x + hi.x) * 0.5, lo.y + EYE_HEIGHT, (lo.z + hi.z) * 0.5);
     let dirs = [Vec3::X, Vec3::Z, -Vec3::X, -Vec3::Z];
     let mut d = rng.gen_range(0..4);
-    let mut positions = Vec::with_capacity(steps);
+    let mut poses = Vec::with_capacity(steps);
     let inside = |q: Vec3| {
         q.x >= lo.x + margin && q.x <= hi.x - margin && q.z >= lo.z + margin && q.z <= hi.z - margin
     };
-    for _ in 0..steps {
-        positions.push(p);
+    for i in 0..steps {
+        let at = p;
         if rng.gen_range(0..segment.max(1)) == 0 {
             d = (d + if rng.gen_bool(0.5) { 1 } else { 3 }) % 4;
         }
@@ -55,8 +49,14 @@ pub fn street_walk(
         if tries < 4 {
             p += dirs[d] * step;
         }
+        poses.push(Pose {
+            time: i as f64,
+            position: at,
+            yaw: dirs[d].z.atan2(dirs[d].x),
+            pitch: 0.0,
+        });
     }
-    Ok(WalkPath { positions })
+    Ok(CameraPath { poses })
 }
 
 #[cfg(test)]
@@ -68,10 +68,9 @@ mod tests {
         let city = Aabb::new([0.0, 0.0, 0.0], [500.0, 40.0, 500.0]).unwrap();
         let a = street_walk(&city, 300, 10.0, 20, 7).unwrap();
         assert_eq!(a, street_walk(&city, 300, 10.0, 20, 7).unwrap());
-        assert!(a.positions.iter().all(|p| city.contains_point(*p)));
-        assert!(a
-            .positions
-            .windows(2)
-            .all(|w| (w[1] - w[0]).length() <= 10.0 + 1e-3));
+        assert!(a.positions().all(|p| city.contains_point(p)));
+        let at: Vec<Vec3> = a.positions().collect();
+        assert!(at.windows(2).all(|w| (w[1] - w[0]).length() <= 10.0 + 1e-3));
+        a.validate().unwrap();
     }
 }

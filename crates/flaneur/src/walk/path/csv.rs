@@ -23,7 +23,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::motion::{check_pose, CameraPath, Pose};
+use super::{check_pose, CameraPath, Pose};
 use crate::error::{Error, Result};
 
 /// The header line of a camera-path file.

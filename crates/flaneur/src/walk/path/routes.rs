@@ -26,15 +26,17 @@
 //!   steps has n + 1. Steps are measured along the route: the step that rounds a
 //!   corner of route 2 cuts it, its ends a little less than a step apart.
 //! - Both are drawn from a ChaCha8 generator seeded by `seed`.
+//! - A route is grid positions, the prefetcher's (double precision, on the ground);
+//!   [`to_path`] makes it poses, for a walk to play.
 
 use std::f64::consts::{PI, TAU};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::grid::Position;
-use super::synthetic::SyntheticCity;
+use super::{CameraPath, Pose};
 use crate::error::{Error, Result};
+use crate::prefetch::pvs::{Position, SyntheticCity};
 
 /// The thesis's routes: 3000 steps of 4 m.
 pub const THESIS_STEPS: usize = 3000;
@@ -105,7 +107,8 @@ fn check_start(
 /// Route 1: a random walk from `start` over the positions `walkable` accepts.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{random_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// use flaneur::prefetch::pvs::{SyntheticCity, SyntheticConfig};
+/// use flaneur::walk::path::routes::{random_route, RouteConfig};
 /// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 4, ..Default::default() })?;
 /// let cfg = RouteConfig { steps: 100, ..Default::default() };
 /// let route = random_route(city.intersection(2, 2), &cfg, |p| Ok(city.on_walkway(p)))?;
@@ -169,7 +172,8 @@ const LINES: usize = 7;
 /// turns, `cfg.steps` steps long.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{straight_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// use flaneur::prefetch::pvs::{SyntheticCity, SyntheticConfig};
+/// use flaneur::walk::path::routes::{straight_route, RouteConfig};
 /// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 12, ..Default::default() })?;
 /// let route = straight_route(&city, &RouteConfig { steps: 1000, ..Default::default() })?;
 /// assert_eq!(route.corners.len(), 8);
@@ -278,7 +282,8 @@ pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<Straigh
 /// seven lines.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{axis_route, RouteConfig, SyntheticCity, SyntheticConfig};
+/// use flaneur::prefetch::pvs::{SyntheticCity, SyntheticConfig};
+/// use flaneur::walk::path::routes::{axis_route, RouteConfig};
 /// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 6, ..Default::default() })?;
 /// let cfg = RouteConfig { steps: 400, ..Default::default() };
 /// let route = axis_route(city.intersection(3, 3), &cfg, |p| Ok(city.on_walkway(p)))?;
@@ -350,6 +355,31 @@ pub fn axis_route(
         left -= 1;
     }
     Ok(route)
+}
+
+/// `route` as poses: the eye `eye_y` above the ground's origin, one position a frame at
+/// `fps`, looking level along the step it takes next (the last one along the step that
+/// brought it there; a route of one position looks along +x).
+pub fn to_path(route: &[Position], eye_y: f32, fps: f32) -> Result<CameraPath> {
+    let at = |p: &Position| glam::Vec3::new(p.x as f32, eye_y, p.z as f32);
+    let mut yaw = 0.0;
+    let poses = route
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let towards = route.get(i + 1).filter(|q| *q != p);
+            if let Some(q) = towards {
+                yaw = ((q.z - p.z) as f32).atan2((q.x - p.x) as f32);
+            }
+            Pose {
+                time: i as f64 / fps as f64,
+                position: at(p),
+                yaw,
+                pitch: 0.0,
+            }
+        })
+        .collect();
+    CameraPath::new(poses)
 }
 
 /// The start and the point after each of `steps` steps of `step` metres along the
@@ -487,6 +517,30 @@ mod tests {
                 .windows(2)
                 .all(|w| w[0].distance(w[1]) <= THESIS_STEP + 1e-9));
         }
+    }
+
+    #[test]
+    fn a_route_plays_as_poses() {
+        let c = city();
+        let cfg = RouteConfig {
+            steps: 50,
+            ..Default::default()
+        };
+        let r = random_route(c.intersection(15, 15), &cfg, |p| Ok(c.on_walkway(p))).unwrap();
+        let path = to_path(&r, 1.7, 30.0).unwrap();
+        assert_eq!(path.len(), r.len());
+        for (pose, p) in path.poses.iter().zip(&r) {
+            assert_eq!((pose.position.x, pose.position.z), (p.x as f32, p.z as f32));
+            assert_eq!(pose.position.y, 1.7);
+        }
+        // Each pose looks along its step.
+        for (w, pose) in r.windows(2).zip(&path.poses) {
+            let (s, c) = pose.yaw.sin_cos();
+            let step = ((w[1].x - w[0].x) as f32, (w[1].z - w[0].z) as f32);
+            assert!((c * step.1 - s * step.0).abs() < 1e-3 && c * step.0 + s * step.1 > 0.0);
+        }
+        assert!((path.duration() - 50.0 / 30.0).abs() < 1e-9);
+        assert!(to_path(&[], 1.7, 30.0).is_err());
     }
 
     #[test]

@@ -1,0 +1,184 @@
+//! The PVS mode (Zheng 2007 ch. 7): the retrieval of a PVS walk, one frame at a time for
+//! the walk session. Each frame the eye's viewcell is found and the client steps there,
+//! prefetching neighbours' PVS rows with SNP or PBNP from the database's stored table;
+//! a viewer that draws gets the objects the client holds loaded into the buffer (after
+//! the frame's page count, so those reads are the renderer's), and draws the PVS of the
+//! current cell (the last one, outside cells). The settings and figures are
+//! `walk::pvs_walk`'s.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::geom::Camera;
+use crate::prefetch::pvs::{
+    Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs, THESIS_CAPACITY,
+};
+use crate::rtree::ObjectEntry;
+use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::pvs_walk::{PvsFrame, PvsPrefetch};
+use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
+use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+
+/// A PVS walk over `db`'s precomputed visibility with `prefetch`, the poses coming from
+/// `viewer`: the walk session with the PVS mode. Each frame's figures.
+pub(crate) fn walk_live(
+    db: &Database,
+    prefetch: PvsPrefetch,
+    tick: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<Vec<PvsFrame>> {
+    let source = StoredPvs::new(db)?;
+    let (snp, pbnp);
+    let rule: &dyn PrefetchArea = match prefetch {
+        PvsPrefetch::Snp => {
+            snp = Snp;
+            &snp
+        }
+        PvsPrefetch::Pbnp { border } => {
+            pbnp = Pbnp::new(border)?;
+            &pbnp
+        }
+    };
+    let client = PvsClient::new(&source, rule, THESIS_CAPACITY)?;
+    // For a renderer: every object's index entry, to load what the client holds.
+    let entries: HashMap<u64, ObjectEntry> = if viewer.draws() {
+        db.range(&db.bounds())?
+            .objects
+            .into_iter()
+            .map(|o| (o.id, o))
+            .collect()
+    } else {
+        HashMap::new()
+    };
+    let mut mode = Pvs {
+        db,
+        client,
+        entries,
+        left_out: viewer.skips_damaged().then(LeftOut::default),
+        shown: None,
+        pending: None,
+    };
+    session::run(&mut mode, viewer, tick)
+}
+
+/// The PVS mode: the client, and what a drawing viewer needs beside it.
+struct Pvs<'a> {
+    db: &'a Database,
+    client: PvsClient<'a, StoredPvs<'a>, dyn PrefetchArea + 'a>,
+    entries: HashMap<u64, ObjectEntry>,
+    /// Objects whose meshes could not be read, when the viewer walks on without them.
+    left_out: Option<LeftOut>,
+    /// The cell whose PVS the frames draw: the current one, or the last one outside cells.
+    shown: Option<Cell>,
+    /// The frame retrieved and not yet finished.
+    pending: Option<PvsFrame>,
+}
+
+impl Mode for Pvs<'_> {
+    type Frame = PvsFrame;
+
+    /// What the client holds is bounded by its cache, not by the buffer.
+    fn memory_budget(&self) -> usize {
+        usize::MAX
+    }
+
+    fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
+        let pose = at.pose;
+        let before = self.db.io().page_reads;
+        let mut frame = PvsFrame::default();
+        if let Some(id) = self.db.viewcell_at(pose.position)? {
+            let p = Position::new(pose.position.x as f64, pose.position.z as f64);
+            let out = self.client.step(p)?;
+            self.shown = Some(out.cell);
+            frame.cell = Some(id);
+            frame.drawn = self.client.cache().pvs(out.cell).map_or(0, |s| s.len());
+            frame.visual_misses = out.visual_misses;
+            if let Some(t) = &out.transaction {
+                frame.transaction = true;
+                frame.sent = t.sent.len();
+                frame.swaps = t.evicted.len();
+            }
+        }
+        frame.pages = self.db.io().page_reads - before;
+        self.pending = Some(frame);
+        if !at.draws {
+            return Ok(None);
+        }
+        self.load_held(buffer)?;
+        Ok(Some(pose.camera()?))
+    }
+
+    fn drawable(&self) -> Drawable<'_> {
+        Drawable::Only(
+            self.shown
+                .and_then(|c| self.client.cache().pvs(c))
+                .unwrap_or(&[]),
+        )
+    }
+
+    fn finish(&mut self, _: &Culled<'_>, _: &ObjectBuffer) -> Result<PvsFrame> {
+        self.pending
+            .take()
+            .ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))
+    }
+
+    fn figures(&mut self, frame: &PvsFrame, buffer: &ObjectBuffer) -> FrameFigures {
+        FrameFigures {
+            pages: frame.pages,
+            objects_buffered: buffer.len(),
+            objects_drawn: frame.drawn,
+            visual_misses: frame.visual_misses,
+            cell: frame.cell.map_or_else(
+                || "outside every viewcell".into(),
+                |c| format!("viewcell {c}"),
+            ),
+            damaged: self
+                .left_out
+                .as_mut()
+                .map(LeftOut::take_untold)
+                .unwrap_or_default(),
+            ..Default::default()
+        }
+    }
+}
+
+impl Pvs<'_> {
+    /// Brings `held` to what the client holds: loads new objects' meshes (leaving out,
+    /// when `left_out` is kept, those that cannot be read) and drops what it evicted.
+    fn load_held(&mut self, held: &mut ObjectBuffer) -> Result<()> {
+        let cache = self.client.cache();
+        let gone: Vec<u64> = held
+            .iter()
+            .map(|o| o.entry.id)
+            .filter(|&id| !cache.holds(id))
+            .collect();
+        for id in gone {
+            held.remove(id);
+        }
+        for id in cache.objects() {
+            if held.get(id).is_none() && !self.left_out.as_ref().is_some_and(|l| l.contains(id)) {
+                let entry = self.entries.get(&id).ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "object {id} of a PVS is not in the database's index"
+                    ))
+                })?;
+                let mesh = match (self.db.mesh(entry), self.left_out.as_mut()) {
+                    (Ok(m), _) => m,
+                    (Err(e), Some(l)) => {
+                        l.leave_out(id, &e);
+                        continue;
+                    }
+                    (Err(e), None) => return Err(e),
+                };
+                held.insert(Loaded {
+                    entry: *entry,
+                    bytes: mesh_bytes(&mesh),
+                    mesh: Arc::new(mesh),
+                });
+            }
+        }
+        Ok(())
+    }
+}

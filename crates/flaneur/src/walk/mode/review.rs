@@ -1,0 +1,605 @@
+//! The REVIEW mode (Shou 2002 §4.1–4.4): the retrieval of a REVIEW or BOX walk, one
+//! frame at a time for the walk session. Each frame the frustum cell is tested against
+//! the disk cell; when it leaves, the cell prefetched for it is taken if it holds the
+//! frustum, or a new disk cell is searched (BOX or CSearch against the history) on the
+//! viewer's thread; a prefetch of the cell predicted from the viewer's motion
+//! (`prefetch::motion`) is started on the prefetch thread when the frustum nears the
+//! disk cell's edge. The settings, figures and departures are `walk::review`'s.
+
+use std::collections::HashSet;
+use std::sync::{mpsc, Mutex};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
+
+use crate::cache::{policy_by_name, BufferPool};
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::geom::{Aabb, Camera, Frustum};
+use crate::prefetch::motion::{MotionTrack, ViewerMotion};
+use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
+use crate::store::{IoStats, PageKind, PageSource};
+use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::cells::{contains_ground, scaled_cell};
+use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
+use crate::walk::session::{self, Culled, FrameAt, Mode};
+use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+
+/// A query's result with its meshes, loaded on the thread that ran it.
+struct Fetched {
+    cell: Aabb,
+    epoch: u64,
+    objects: Vec<Loaded>,
+    /// What CSearch retrieved for the cell (for the history).
+    retrieved: Vec<ObjectEntry>,
+    /// Time in the index, and reading meshes, on the thread that fetched.
+    query_ms: f64,
+    load_ms: f64,
+}
+
+struct Request {
+    cell: Aabb,
+    history: Vec<Aabb>,
+    epoch: u64,
+}
+
+/// A REVIEW walk under `cfg` with the poses coming from `viewer`: the walk session with
+/// the REVIEW mode, its index cache and its prefetch thread.
+pub(crate) fn walk_live(
+    db: &Database,
+    cfg: &ReviewConfig,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<WalkReport> {
+    cfg.validate()?;
+    let oracle = Oracle::new(db)?;
+    db.reset_io();
+    let pool = match &cfg.index_cache {
+        Some((policy, bytes)) => Some(BufferPool::new(
+            db.store(),
+            *bytes,
+            policy_by_name(policy)?,
+        )?),
+        None => None,
+    };
+    if let (Some(p), true) = (&pool, cfg.record_trace) {
+        p.set_trace(true);
+    }
+    let source: &(dyn PageSource + Sync) = match &pool {
+        Some(p) => p,
+        None => db.store(),
+    };
+    // The ids in the object buffer, which no fetch loads again — read when the meshes
+    // are, so a prefetch asked for before the viewer's own query skips what it loaded.
+    let resident = Mutex::new(HashSet::new());
+    let resident = &resident;
+    // Objects whose meshes could not be read, when the viewer walks on without them;
+    // shared with the prefetch thread, and told of from here (a prefetch that finds
+    // one may be dropped as stale).
+    let left_out = viewer
+        .skips_damaged()
+        .then(|| Mutex::new(LeftOut::default()));
+    let left_out = left_out.as_ref();
+    let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
+        let (req_tx, req_rx) = mpsc::channel::<Request>();
+        let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
+        if cfg.prefetch_k.is_some() {
+            scope.spawn(move || {
+                for req in req_rx {
+                    let fetched = fetch(db, source, cfg.retrieval, &req, (resident, left_out));
+                    if res_tx.send(fetched).is_err() {
+                        break;
+                    }
+                }
+            });
+        } else {
+            drop(req_rx);
+            drop(res_tx);
+        }
+        let mut mode = Review {
+            db,
+            source,
+            cfg,
+            oracle: &oracle,
+            pool: pool.as_ref(),
+            history: History::default(),
+            disk_cell: None,
+            prefetched: None,
+            last_prediction: None,
+            epoch: 0,
+            in_flight: None,
+            req_tx: cfg.prefetch_k.map(|_| req_tx),
+            res_rx,
+            resident,
+            left_out,
+            counts: Counts::default(),
+            track: MotionTrack::default(),
+            pace: cfg.pace.filter(|_| cfg.prefetch_k.is_some()),
+            clock: Instant::now(),
+            pending: None,
+        };
+        let frames = session::run(&mut mode, viewer, progress)?;
+        if frames.is_empty() {
+            return Err(Error::Invalid("the walk had no poses".into()));
+        }
+        // Closing the request channel ends the prefetch thread.
+        mode.req_tx = None;
+        Ok((frames, mode.counts))
+    })?;
+    let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
+    let trace = pool
+        .as_ref()
+        .filter(|_| cfg.record_trace)
+        .map(|p| p.take_trace());
+    Ok(WalkReport {
+        config: cfg.clone(),
+        frames,
+        summary,
+        trace,
+    })
+}
+
+/// The REVIEW mode: disk cells searched with BOX or CSearch, prefetched on a thread.
+struct Review<'a> {
+    db: &'a Database,
+    source: &'a (dyn PageSource + Sync),
+    cfg: &'a ReviewConfig,
+    oracle: &'a Oracle,
+    /// The index cache, when the walk has one (for its hit rate).
+    pool: Option<&'a BufferPool<'a>>,
+    /// Every cell whose objects are all in the buffer (the CSearch history).
+    history: History,
+    disk_cell: Option<Aabb>,
+    /// The latest prefetched cell: its objects are in the buffer, the viewer not yet in it.
+    prefetched: Option<Aabb>,
+    /// Centre of the latest prefetch asked for from this disk cell.
+    last_prediction: Option<Vec3>,
+    /// Bumped by every eviction: a result asked for before it may miss objects.
+    epoch: u64,
+    /// The cell a prefetch is running for.
+    in_flight: Option<Aabb>,
+    req_tx: Option<mpsc::Sender<Request>>,
+    res_rx: mpsc::Receiver<Result<Fetched>>,
+    /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
+    resident: &'a Mutex<HashSet<u64>>,
+    /// With a viewer that walks on past unreadable objects, those left out.
+    left_out: Option<&'a Mutex<LeftOut>>,
+    counts: Counts,
+    /// The viewer's poses so far, for its motion.
+    track: MotionTrack,
+    /// The path's clock runs this many times faster than real time (prefetching only).
+    pace: Option<f32>,
+    clock: Instant,
+    /// The frame retrieved and not yet finished.
+    pending: Option<Pending>,
+}
+
+/// A frame between its retrieval and its culling.
+struct Pending {
+    stats: FrameStats,
+    frustum: Frustum,
+    fcell: Aabb,
+    io_before: IoStats,
+    start: Instant,
+}
+
+impl Mode for Review<'_> {
+    type Frame = FrameStats;
+
+    fn memory_budget(&self) -> usize {
+        self.cfg.memory_budget
+    }
+
+    fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
+        let (i, pose) = (at.index, at.pose);
+        self.track.push(i, *pose)?;
+        if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
+            let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
+            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let motion = self.track.motion();
+        let camera = Camera {
+            far: self.cfg.far,
+            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
+        };
+        let frustum = camera.frustum();
+        let fcell = frustum.aabb();
+        let io_before = self.db.io();
+        let start = Instant::now();
+        let mut stats = FrameStats {
+            frame: i,
+            time: pose.time,
+            ..Default::default()
+        };
+
+        self.collect_prefetch(None, camera.position, buffer, &mut stats)?;
+        if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
+            stats.queried = true;
+            if self.prefetched.is_none()
+                && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell))
+            {
+                let t = Instant::now();
+                self.collect_prefetch(
+                    Some(MAX_PREFETCH_WAIT),
+                    camera.position,
+                    buffer,
+                    &mut stats,
+                )?;
+                stats.query_ms = t.elapsed().as_secs_f64() * 1e3;
+            }
+            match self.prefetched.filter(|p| contains_ground(p, &fcell)) {
+                Some(cell) => {
+                    stats.prefetch_used = true;
+                    self.enter(cell);
+                }
+                None => {
+                    let cell = self.disk_cell_around(&fcell, fcell.center());
+                    let req = self.request(cell);
+                    let f = fetch(
+                        self.db,
+                        self.source,
+                        self.cfg.retrieval,
+                        &req,
+                        (self.resident, self.left_out),
+                    )?;
+                    self.counts.sync += 1;
+                    stats.sync_query = true;
+                    stats.query_ms += f.query_ms;
+                    stats.load_ms += f.load_ms;
+                    let t = Instant::now();
+                    // The viewer is in this cell whether or not the budget holds all of it.
+                    self.adopt(f, camera.position, buffer, &mut stats);
+                    self.enter(cell);
+                    stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
+                }
+            }
+            if i == 0 {
+                let io = self.db.io().since(&io_before);
+                self.counts.initial_load_pages = (
+                    io.reads_of(PageKind::RtreeNode),
+                    io.reads_of(PageKind::Mesh),
+                );
+            }
+        }
+        if let Some(k) = self.cfg.prefetch_k {
+            self.maybe_prefetch(&camera, &fcell, motion, k);
+        }
+
+        stats.objects_buffered = buffer.len();
+        self.pending = Some(Pending {
+            stats,
+            frustum,
+            fcell,
+            io_before,
+            start,
+        });
+        Ok(Some(camera))
+    }
+
+    fn finish(&mut self, culled: &Culled<'_>, buffer: &ObjectBuffer) -> Result<FrameStats> {
+        let Pending {
+            mut stats,
+            frustum,
+            fcell,
+            io_before,
+            start,
+        } = self
+            .pending
+            .take()
+            .ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))?;
+        stats.cull_ms = culled.ms;
+        let t = Instant::now();
+        stats.objects_drawn = culled.drawn.len();
+        stats.triangles_drawn = culled
+            .drawn
+            .iter()
+            .map(|o| o.mesh.indices.len() as u64 / 3)
+            .sum();
+        stats.prep_ms = t.elapsed().as_secs_f64() * 1e3;
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        stats.visual_misses = self.oracle.misses(&frustum, &fcell, buffer);
+        let io = self.db.io().since(&io_before);
+        stats.index_pages = io.reads_of(PageKind::RtreeNode);
+        stats.mesh_pages = io.reads_of(PageKind::Mesh);
+        stats.buffer_bytes = buffer.bytes();
+        Ok(stats)
+    }
+
+    fn figures(&mut self, f: &FrameStats, _: &ObjectBuffer) -> FrameFigures {
+        FrameFigures {
+            pages: f.index_pages + f.mesh_pages,
+            objects_buffered: f.objects_buffered,
+            objects_drawn: f.objects_drawn,
+            triangles: f.triangles_drawn,
+            visual_misses: f.visual_misses,
+            prefetch_queue: self.in_flight.is_some() as usize,
+            cache_hit_rate: self.pool.map(|p| p.stats().hit_rate()),
+            cell: self.disk_cell.map_or_else(String::new, |c| {
+                format!(
+                    "disk cell x {:.0}..{:.0}, z {:.0}..{:.0}",
+                    c.min.x, c.max.x, c.min.z, c.max.z
+                )
+            }),
+            walk_ms: f.frame_ms,
+            damaged: self
+                .left_out
+                .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
+                .unwrap_or_default(),
+        }
+    }
+}
+
+impl Review<'_> {
+    fn disk_cell_around(&self, fcell: &Aabb, center: Vec3) -> Aabb {
+        scaled_cell(&self.db.bounds(), fcell, center, self.cfg.sf)
+    }
+
+    /// The viewer is now in `cell`, whose objects are all in the buffer.
+    fn enter(&mut self, cell: Aabb) {
+        self.disk_cell = Some(cell);
+        self.prefetched = None;
+        self.last_prediction = None;
+    }
+
+    fn request(&self, cell: Aabb) -> Request {
+        let mut history = self.history.clone();
+        history.filter(&cell);
+        Request {
+            cell,
+            history: history.cells(),
+            epoch: self.epoch,
+        }
+    }
+
+    /// Takes a finished prefetch into the buffer; with `wait`, blocks for the running one
+    /// that long at most.
+    fn collect_prefetch(
+        &mut self,
+        wait: Option<Duration>,
+        eye: Vec3,
+        buffer: &mut ObjectBuffer,
+        stats: &mut FrameStats,
+    ) -> Result<()> {
+        if self.in_flight.is_none() {
+            return Ok(());
+        }
+        let stopped = || Error::Invalid("the prefetch thread stopped".into());
+        let got = match wait {
+            Some(limit) => match self.res_rx.recv_timeout(limit) {
+                Ok(r) => r,
+                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
+            },
+            None => match self.res_rx.try_recv() {
+                Ok(r) => r,
+                Err(mpsc::TryRecvError::Empty) => return Ok(()),
+                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
+            },
+        };
+        self.in_flight = None;
+        let fetched = got?;
+        if fetched.epoch != self.epoch {
+            // An eviction came between: the complement it computed may miss objects.
+            self.counts.stale += 1;
+            return Ok(());
+        }
+        let t = Instant::now();
+        self.counts.adopted += 1;
+        stats.prefetch_adopted = true;
+        let cell = fetched.cell;
+        if self.adopt(fetched, eye, buffer, stats) {
+            self.prefetched = Some(cell);
+        }
+        stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, motion: ViewerMotion, k: f32) {
+        let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else {
+            return;
+        };
+        if self.in_flight.is_some() {
+            return;
+        }
+        // Will the frustum cell leave the disk cell (and the cell already prefetched)
+        // within the look-ahead?
+        let soon = motion.frustum_cell(camera, LOOKAHEAD_S);
+        let ahead = fcell.union(&soon);
+        if contains_ground(&disk, &ahead)
+            || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead))
+        {
+            return;
+        }
+        // The cell must hold the frustum from when the viewer leaves the disk cell (any
+        // time within the look-ahead) to k seconds on: a cell around the prediction alone
+        // would be missed whenever k·velocity passes the cell's margin.
+        let predicted = motion.predicted_cell(camera, fcell, k);
+        let center = predicted.center();
+        let cell = self.disk_cell_around(&predicted, center);
+        // Ask again from the same disk cell only once the prediction has moved by a
+        // quarter of the cell: that bounds the prefetches per cell.
+        if let Some(last) = self.last_prediction {
+            let quarter = cell.extent() * 0.25;
+            if (center.x - last.x).abs() < quarter.x && (center.z - last.z).abs() < quarter.z {
+                return;
+            }
+        }
+        let req = self.request(cell);
+        if tx.send(req).is_ok() {
+            self.in_flight = Some(cell);
+            self.last_prediction = Some(center);
+        }
+    }
+
+    /// Takes a query's objects into the buffer and its cell into the history, evicting
+    /// by Fig. 4.8 when over budget. False if the budget could not hold all of the
+    /// cell's objects beside the viewer's (then the cell is not in the history, so a
+    /// later search fetches what was dropped).
+    fn adopt(
+        &mut self,
+        fetched: Fetched,
+        eye: Vec3,
+        buffer: &mut ObjectBuffer,
+        stats: &mut FrameStats,
+    ) -> bool {
+        let cell = fetched.cell;
+        if self.cfg.retrieval == Retrieval::Box {
+            // BOX keeps exactly its cell.
+            *buffer = ObjectBuffer::new(self.cfg.memory_budget);
+        }
+        stats.objects_loaded += fetched.objects.len();
+        for o in fetched.objects {
+            buffer.insert(o);
+        }
+        self.history.filter(&cell);
+        self.history.record(cell, &fetched.retrieved);
+        let mut complete = true;
+        if buffer.over_budget() {
+            // Keep the cell the viewer is in as well as the new one (a prefetch lands
+            // before the viewer gets there).
+            let keep: Vec<Aabb> = self
+                .disk_cell
+                .filter(|d| *d != cell)
+                .into_iter()
+                .chain([cell])
+                .collect();
+            let overlapping = |b: &ObjectBuffer, c: &Aabb| -> Vec<ObjectEntry> {
+                b.iter()
+                    .map(|o| o.entry)
+                    .filter(|o| o.bounds.overlaps(c))
+                    .collect()
+            };
+            let whole: Vec<usize> = keep.iter().map(|c| overlapping(buffer, c).len()).collect();
+            let e = buffer.evict_outside_all(&keep, eye);
+            stats.evicted += e.evicted;
+            stats.overflow |= e.overflow;
+            // Restart the history at the cells whose objects the buffer still holds in
+            // full: a cell that lost some to the budget must not hide them from a search.
+            self.history.clear();
+            for (c, n) in keep.iter().zip(whole) {
+                let kept = overlapping(buffer, c);
+                if kept.len() == n {
+                    self.history.record(*c, &kept);
+                } else if *c == cell {
+                    complete = false;
+                }
+            }
+            self.epoch += 1;
+            if self.prefetched.is_some_and(|p| p != cell) {
+                self.prefetched = None;
+            }
+        }
+        if self.cfg.retrieval == Retrieval::CSearch {
+            if let Ok(mut ids) = self.resident.lock() {
+                *ids = buffer.iter().map(|o| o.entry.id).collect();
+            }
+        }
+        complete
+    }
+}
+
+/// How far ahead, in seconds of the viewer's motion, a prefetch is started: when the
+/// frustum would leave the disk cell within this time.
+const LOOKAHEAD_S: f32 = 1.0;
+
+/// How long the viewer waits for a prefetch under way that holds its frustum before it
+/// queries for itself: a turn's prefetch can be a whole new cell, longer than a frame
+/// has, where the viewer's own complement against the cells it holds is small.
+const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
+
+/// Runs one query and loads the meshes of what it returned.
+fn fetch(
+    db: &Database,
+    source: &(dyn PageSource + Sync),
+    retrieval: Retrieval,
+    req: &Request,
+    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
+) -> Result<Fetched> {
+    let t = Instant::now();
+    let result: QueryResult = match retrieval {
+        Retrieval::Box => db.tree().range(source, &req.cell)?,
+        Retrieval::CSearch => {
+            db.tree()
+                .csearch_with(source, &req.cell, &req.history, Coverlap::default())?
+        }
+    };
+    let query_ms = t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let mut objects = Vec::with_capacity(result.objects.len());
+    for entry in &result.objects {
+        if resident.lock().is_ok_and(|r| r.contains(&entry.id))
+            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id)))
+        {
+            continue;
+        }
+        let mesh = match (db.mesh(entry), left_out) {
+            (Ok(m), _) => m,
+            (Err(e), Some(l)) => {
+                if let Ok(mut l) = l.lock() {
+                    l.leave_out(entry.id, &e);
+                }
+                continue;
+            }
+            (Err(e), None) => return Err(e),
+        };
+        objects.push(Loaded {
+            entry: *entry,
+            bytes: mesh_bytes(&mesh),
+            mesh: std::sync::Arc::new(mesh),
+        });
+    }
+    let load_ms = t.elapsed().as_secs_f64() * 1e3;
+    Ok(Fetched {
+        cell: req.cell,
+        epoch: req.epoch,
+        objects,
+        retrieved: result.objects,
+        query_ms,
+        load_ms,
+    })
+}
+
+/// Ground truth for visual misses: every object's box, in memory, outside the counted
+/// store reads.
+struct Oracle {
+    tree: RStar<GeomWithData<Rectangle<[f32; 3]>, u64>>,
+}
+
+impl Oracle {
+    fn new(db: &Database) -> Result<Oracle> {
+        let all = db.range(&db.bounds())?.objects;
+        Ok(Oracle {
+            tree: RStar::bulk_load(
+                all.iter()
+                    .map(|o| {
+                        GeomWithData::new(
+                            Rectangle::from_corners(
+                                o.bounds.min.to_array(),
+                                o.bounds.max.to_array(),
+                            ),
+                            o.id,
+                        )
+                    })
+                    .collect(),
+            ),
+        })
+    }
+
+    fn misses(&self, frustum: &Frustum, fcell: &Aabb, buffer: &ObjectBuffer) -> usize {
+        let q = AABB::from_corners(fcell.min.to_array(), fcell.max.to_array());
+        self.tree
+            .locate_in_envelope_intersecting(&q)
+            .filter(|g| !buffer.contains(g.data))
+            .filter(|g| {
+                let e = g.geom().envelope();
+                frustum.overlaps_aabb(&Aabb {
+                    min: Vec3::from(e.lower()),
+                    max: Vec3::from(e.upper()),
+                })
+            })
+            .count()
+    }
+}
