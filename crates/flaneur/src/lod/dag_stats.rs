@@ -15,9 +15,8 @@ use std::time::{Duration, Instant};
 
 use crate::scene::Mesh;
 
+use super::dag::{attributes, choose_parents, potentials, run_starts};
 use super::dag::{Dag, DagConstruction};
-use super::dag_attrs::attributes;
-use super::dag_build::{choose_parents, potentials, run_starts};
 use super::pm::ProgressiveMesh;
 use crate::error::Result;
 

@@ -16,14 +16,12 @@ use std::f32::consts::TAU;
 
 use glam::Vec3;
 
-use super::criteria::{Criteria, View};
 use super::dag::Dag;
-use super::mesh_update::MeshMemory;
 use super::pm::ProgressiveMesh;
 use super::refine::{
-    FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+    Criteria, FrameStats, MeshMemory, RefineParams, Refiner, Traversal, View, THESIS_BUDGET,
+    THESIS_MAX_WORK, THESIS_TAU,
 };
-use super::traversal::Traversal;
 use crate::error::{Error, Result};
 
 /// The settings of the experiment; the default is the thesis's (§4.6.1).

@@ -1,7 +1,7 @@
 //! The DAG hierarchy of vertex splits — Zheng 2007 ch. 3: §3.2 (the legality condition
 //! that defines the dependencies), §3.3 (the full-, non- and mini-redundant
-//! constructions, `dag_build`), §3.4 (the visibility attributes, `dag_attrs`), and a
-//! flat codec for the database (`dag_codec`).
+//! constructions, `build`), §3.4 (the visibility attributes, `attrs`), and a
+//! flat codec for the database (`codec`).
 //!
 //! A split is legal (§3.2, as `SelectiveMesh::split` checks it) when its v_p and its
 //! pivots v_l, v_r are present and every adjusted triangle is present with v_p as a
@@ -29,11 +29,10 @@
 
 use std::ops::Range;
 
-use super::dag_attrs::{attributes, NodeAttrs};
-use super::dag_build::{choose_parents, potentials, run_starts, Csr};
-use super::pm::ProgressiveMesh;
-use super::vsplit::SelectiveMesh;
+use super::attrs::{attributes, NodeAttrs};
+use super::build::{choose_parents, potentials, run_starts, Csr};
 use crate::error::{Error, Result};
+use crate::lod::pm::{ProgressiveMesh, SelectiveMesh};
 
 /// How a DAG's edges are chosen among the dependencies the legality condition gives
 /// (Zheng 2007 §3.3). All three allow exactly the same orders of splits and collapses;
@@ -618,7 +617,10 @@ mod tests {
                 assert_eq!(mesh, before, "a failed node changes nothing");
             }
         };
-        check(&ProgressiveMesh::build(&crate::scene::bunny()).unwrap(), 300);
+        check(
+            &ProgressiveMesh::build(&crate::scene::bunny()).unwrap(),
+            300,
+        );
         check(&ProgressiveMesh::build(&building()).unwrap(), usize::MAX);
         check(
             &ProgressiveMesh::build(&random_patch(3)).unwrap(),

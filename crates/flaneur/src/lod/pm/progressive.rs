@@ -268,7 +268,7 @@ pub(super) struct Collapse {
 /// What a simplifier starts from besides the mesh: its welded connectivity, each
 /// position's quadric, the positions that never collapse, and the triangles' original
 /// normals. The whole mesh's is computed once (`of`); a part of a mesh simplified on
-/// its own (`pm_parallel`) takes its share of the whole's.
+/// its own (`parallel`) takes its share of the whole's.
 pub(super) struct Setup {
     pub adj: Adjacency,
     pub quadrics: Vec<Quadric>,
@@ -857,7 +857,7 @@ mod tests {
     use crate::lod::fixtures::{
         boundary_length, building, check_exact, cube, duplicate_triangles, flat_cube, grid,
     };
-    use crate::lod::topology::Adjacency;
+    use crate::lod::pm::topology::Adjacency;
 
     #[test]
     fn bunny_refines_back_exactly() {
@@ -1036,7 +1036,11 @@ mod tests {
 
     #[test]
     fn deterministic_and_the_same_in_parallel() {
-        let meshes = vec![crate::scene::bunny(), building(), flat_cube([1.0, 2.0, 3.0], 2)];
+        let meshes = vec![
+            crate::scene::bunny(),
+            building(),
+            flat_cube([1.0, 2.0, 3.0], 2),
+        ];
         let one = ProgressiveMesh::build(&meshes[1]).unwrap();
         assert_eq!(one, ProgressiveMesh::build(&meshes[1]).unwrap());
         let all = simplify_all(&meshes).unwrap();

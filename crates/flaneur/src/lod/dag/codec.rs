@@ -26,9 +26,9 @@
 //! (runs, offsets, edges pointing backward, finite attributes in range), so that bytes
 //! that pass are a DAG every traversal can walk without an index check failing.
 
-use super::dag::{Dag, DagConstruction};
-use super::dag_attrs::NodeAttrs;
-use super::dag_build::Csr;
+use super::attrs::NodeAttrs;
+use super::build::Csr;
+use super::graph::{Dag, DagConstruction};
 use crate::error::{Error, Result};
 use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 

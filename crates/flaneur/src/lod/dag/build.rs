@@ -18,9 +18,9 @@
 //! the parents of one node. The result is the same transitive reduction; the worst
 //! case is still quadratic.
 
-use super::dag::DagConstruction;
-use super::pm::ProgressiveMesh;
+use super::graph::DagConstruction;
 use crate::error::{Error, Result};
+use crate::lod::pm::ProgressiveMesh;
 
 /// Adjacency lists in compressed rows: row `i` is `items[starts[i]..starts[i + 1]]`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

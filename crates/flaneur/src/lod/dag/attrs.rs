@@ -39,10 +39,9 @@ use std::f64::consts::FRAC_PI_2;
 
 use glam::DVec3;
 
-use super::dag_build::Csr;
-use super::pm::ProgressiveMesh;
-use super::vsplit::VertexSplit;
+use super::build::Csr;
 use crate::error::{Error, Result};
+use crate::lod::pm::{ProgressiveMesh, VertexSplit};
 
 /// The visibility attributes of one DAG node (Zheng 2007 §3.4).
 #[derive(Clone, Copy, Debug, PartialEq)]

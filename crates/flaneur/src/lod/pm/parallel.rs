@@ -39,7 +39,7 @@ use rayon::prelude::*;
 
 use crate::scene::Mesh;
 
-use super::pm::{assemble, check_input, Collapse, Domain, RemovedFace, Setup, Simplifier};
+use super::progressive::{assemble, check_input, Collapse, Domain, RemovedFace, Setup, Simplifier};
 use super::quadric::Quadric;
 use super::topology::Adjacency;
 use super::ProgressiveMesh;
@@ -550,7 +550,7 @@ impl Part {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::dag_stats::bumpy_torus;
+    use crate::lod::bumpy_torus;
     use crate::lod::fixtures::{building, check_exact, cube};
 
     fn options(leaf_triangles: usize) -> ParallelOptions {
