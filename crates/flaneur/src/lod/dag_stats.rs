@@ -15,8 +15,7 @@ use std::time::{Duration, Instant};
 
 use crate::scene::Mesh;
 
-use super::dag::{attributes, choose_parents, potentials, run_starts};
-use super::dag::{Dag, DagConstruction};
+use super::dag::{Dag, DagConstruction, DagEdges};
 use super::pm::ProgressiveMesh;
 use crate::error::Result;
 
@@ -125,22 +124,19 @@ pub fn dag_stats(pm: &ProgressiveMesh, with_non_redundant: bool) -> Result<DagSt
     let mut built = Vec::with_capacity(3);
     for c in constructions {
         let started = Instant::now();
-        let runs = run_starts(pm)?;
-        let full = potentials(pm, &runs)?;
-        let parents = choose_parents(full, c);
-        let children = parents.transpose();
+        let edges = DagEdges::build(pm, c)?;
         let took = started.elapsed();
-        built.push((c, took, runs, parents, children));
+        built.push((c, took, edges));
     }
-    let (_, _, runs, _, mini_children) = &built[1];
+    let (_, _, mini) = &built[1];
     let started = Instant::now();
-    let attrs = attributes(pm, runs, mini_children)?;
+    let attrs = mini.attributes(pm)?;
     let attributes_took = started.elapsed();
 
     let mut stats: Vec<ConstructionStats> = built
         .into_iter()
-        .map(|(c, build, runs, parents, children)| {
-            let dag = Dag::assemble(c, runs, parents, children, attrs.clone());
+        .map(|(c, build, edges)| {
+            let dag = Dag::assemble(edges, attrs.clone());
             ConstructionStats {
                 construction: c,
                 edges: dag.edge_count(),

@@ -27,8 +27,8 @@
 //! that pass are a DAG every traversal can walk without an index check failing.
 
 use super::attrs::NodeAttrs;
-use super::build::Csr;
-use super::graph::{Dag, DagConstruction};
+use super::build::{Csr, DagConstruction, DagEdges};
+use super::graph::Dag;
 use crate::error::{Error, Result};
 use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 
@@ -198,13 +198,13 @@ impl Dag {
             attrs.push(a);
         }
         let children = parents.transpose();
-        Ok(Dag::assemble(
+        let edges = DagEdges {
             construction,
             run_starts,
             parents,
             children,
-            attrs,
-        ))
+        };
+        Ok(Dag::assemble(edges, attrs))
     }
 }
 

@@ -29,55 +29,10 @@
 
 use std::ops::Range;
 
-use super::attrs::{attributes, NodeAttrs};
-use super::build::{choose_parents, potentials, run_starts, Csr};
+use super::attrs::NodeAttrs;
+use super::build::{Csr, DagConstruction, DagEdges};
 use crate::error::{Error, Result};
 use crate::lod::pm::{ProgressiveMesh, SelectiveMesh};
-
-/// How a DAG's edges are chosen among the dependencies the legality condition gives
-/// (Zheng 2007 §3.3). All three allow exactly the same orders of splits and collapses;
-/// they differ in how many edges a traversal walks and the DAG stores.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum DagConstruction {
-    /// Every creator of an element of a node's dependency list is its parent (§3.3).
-    FullRedundant,
-    /// No edge that a longer path implies (Fig. 3.9): the transitive reduction.
-    /// Worst case quadratic; for tests and measurements.
-    NonRedundant,
-    /// The thesis's practical choice (Fig. 3.10): a potential parent that is also a
-    /// potential parent of a parent already taken is dropped. Linear time.
-    MiniRedundant,
-}
-
-impl DagConstruction {
-    /// All three, in the thesis's order.
-    pub const ALL: [DagConstruction; 3] = [
-        DagConstruction::FullRedundant,
-        DagConstruction::NonRedundant,
-        DagConstruction::MiniRedundant,
-    ];
-
-    /// The short name the thesis's tables use: "full", "non" or "mini".
-    pub fn name(self) -> &'static str {
-        match self {
-            DagConstruction::FullRedundant => "full",
-            DagConstruction::NonRedundant => "non",
-            DagConstruction::MiniRedundant => "mini",
-        }
-    }
-
-    pub(crate) fn code(self) -> u32 {
-        match self {
-            DagConstruction::FullRedundant => 0,
-            DagConstruction::NonRedundant => 1,
-            DagConstruction::MiniRedundant => 2,
-        }
-    }
-
-    pub(crate) fn from_code(code: u32) -> Option<DagConstruction> {
-        DagConstruction::ALL.into_iter().find(|c| c.code() == code)
-    }
-}
 
 /// The DAG hierarchy of a progressive mesh's vertex splits (Zheng 2007 ch. 3), with
 /// each node's visibility attributes.
@@ -136,20 +91,20 @@ impl Dag {
     /// vertex or triangle out of range, or created only by itself or a later split, or
     /// carries a non-finite position, normal or error.
     pub fn build(pm: &ProgressiveMesh, construction: DagConstruction) -> Result<Dag> {
-        let runs = run_starts(pm)?;
-        let parents = choose_parents(potentials(pm, &runs)?, construction);
-        let children = parents.transpose();
-        let attrs = attributes(pm, &runs, &children)?;
-        Ok(Dag::assemble(construction, runs, parents, children, attrs))
+        let edges = DagEdges::build(pm, construction)?;
+        let attrs = edges.attributes(pm)?;
+        Ok(Dag::assemble(edges, attrs))
     }
 
-    pub(crate) fn assemble(
-        construction: DagConstruction,
-        run_starts: Vec<u32>,
-        parents: Csr,
-        children: Csr,
-        attrs: Vec<NodeAttrs>,
-    ) -> Dag {
+    /// The DAG of `edges` with `attrs`, one per node, as
+    /// [`DagEdges::attributes`] computes them.
+    pub(crate) fn assemble(edges: DagEdges, attrs: Vec<NodeAttrs>) -> Dag {
+        let DagEdges {
+            construction,
+            run_starts,
+            parents,
+            children,
+        } = edges;
         let roots = (0..parents.rows() as u32)
             .filter(|&k| parents.row(k as usize).is_empty())
             .collect();

@@ -2,14 +2,19 @@
 //! legality condition that orders them (§3.2), the full-, non- and mini-redundant
 //! constructions of its edges (§3.3), the visibility attributes of its nodes (§3.4),
 //! and its checked byte format.
+//!
+//! The modules depend one way: `build` makes the edges ([`DagEdges`]), `attrs` computes
+//! the attributes over finished edges, `graph` puts the two together as the [`Dag`] that
+//! traversals walk, and `codec` reads and writes it.
 
 mod attrs;
 mod build;
 mod codec;
 mod graph;
+#[cfg(test)]
+mod tests;
 
-pub(super) use attrs::attributes;
 pub use attrs::NodeAttrs;
-pub(super) use build::{choose_parents, potentials, run_starts};
+pub use build::{DagConstruction, DagEdges};
 pub use codec::{DAG_MAGIC, DAG_VERSION};
-pub use graph::{Dag, DagConstruction};
+pub use graph::Dag;
