@@ -5,7 +5,7 @@
 //! Zheng 2007 ch. 2 (§2.1.1 the half-edge collapse, §2.1.2 the quadric error metric,
 //! §2.2.1 the progressive mesh) and §3.2 (the vertex split's content, Fig. 3.5). The
 //! choices the thesis leaves open — creases and seams, boundaries, normals, the error's
-//! unit — are named in `pm::progressive`'s top comment.
+//! unit — are named in `pm::simplify`'s top comment.
 //!
 //! - [`ProgressiveMesh::build`] simplifies one mesh; [`simplify_all`] many, on all cores;
 //!   [`ProgressiveMesh::build_parallel`] one large mesh on all cores (El-Sana–Varshney).

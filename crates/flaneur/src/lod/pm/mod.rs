@@ -5,13 +5,14 @@
 //! from it, and its checked byte format.
 //!
 //! The choices the thesis leaves open — creases and seams, boundaries, normals, the
-//! error's unit — are named in `progressive`'s top comment.
+//! error's unit — are named in `simplify`'s top comment.
 
 mod codec;
 mod levels;
 mod parallel;
 mod progressive;
 mod quadric;
+mod simplify;
 mod topology;
 mod vsplit;
 

@@ -39,8 +39,9 @@ use rayon::prelude::*;
 
 use crate::scene::Mesh;
 
-use super::progressive::{assemble, check_input, Collapse, Domain, RemovedFace, Setup, Simplifier};
+use super::progressive::{assemble, check_input};
 use super::quadric::Quadric;
+use super::simplify::{Collapse, Domain, RemovedFace, Setup, Simplifier};
 use super::topology::Adjacency;
 use super::ProgressiveMesh;
 use crate::error::Result;
