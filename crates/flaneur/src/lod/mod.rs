@@ -13,9 +13,11 @@
 //! - [`PmCursor`], [`ProgressiveMesh::mesh_at_triangles`], [`ProgressiveMesh::mesh_at_error`]
 //!   and [`ProgressiveMesh::levels`] give levels as plain meshes.
 //! - [`hausdorff`] compares two meshes.
+//! - [`bumpy_torus`] is a procedural model of any size, for tests and experiments.
 //! - [`Dag`] orders the splits by what each needs present (Zheng ch. 3: the legality
 //!   condition, the full-, non- and mini-redundant constructions, the visibility
-//!   attributes of §3.4, a checked byte format); [`dag_stats`] compares the three.
+//!   attributes of §3.4, a checked byte format); [`DagEdges`] and [`Dag::assemble`]
+//!   build one in two steps, for the experiments that time them apart.
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
 //!   ch. 4: the fronts, the three traversals, the compact selective mesh); [`refine_orbit`]
 //!   runs the thesis's traversal experiment.
@@ -30,7 +32,6 @@
 //! and `stored` (the LODs a build writes into the database and reads back).
 
 mod dag;
-mod dag_stats;
 #[cfg(test)]
 mod fixtures;
 mod hausdorff;
@@ -39,9 +40,9 @@ mod pm;
 mod refine;
 mod refine_bench;
 pub(crate) mod stored;
+mod torus;
 
-pub use dag::{Dag, DagConstruction, NodeAttrs, DAG_MAGIC, DAG_VERSION};
-pub use dag_stats::{bumpy_torus, dag_stats, ConstructionStats, DagStats};
+pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs, DAG_MAGIC, DAG_VERSION};
 pub use hausdorff::hausdorff;
 pub use inspect::{load_merged, refine_view, write_levels, write_obj, LevelFile, ViewRefinement};
 pub use pm::{
@@ -61,3 +62,4 @@ pub use stored::{
     CHAIN_HEADER_LEN, CHAIN_MAGIC, CHAIN_VERSION, DEFAULT_PM_THRESHOLD, LOD_SEGMENT, TABLE_MAGIC,
     TABLE_VERSION,
 };
+pub use torus::bumpy_torus;

@@ -204,7 +204,7 @@ impl Dag {
             parents,
             children,
         };
-        Ok(Dag::assemble(edges, attrs))
+        Dag::assemble(edges, attrs)
     }
 }
 

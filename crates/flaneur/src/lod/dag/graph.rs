@@ -93,12 +93,21 @@ impl Dag {
     pub fn build(pm: &ProgressiveMesh, construction: DagConstruction) -> Result<Dag> {
         let edges = DagEdges::build(pm, construction)?;
         let attrs = edges.attributes(pm)?;
-        Ok(Dag::assemble(edges, attrs))
+        Dag::assemble(edges, attrs)
     }
 
-    /// The DAG of `edges` with `attrs`, one per node, as
-    /// [`DagEdges::attributes`] computes them.
-    pub(crate) fn assemble(edges: DagEdges, attrs: Vec<NodeAttrs>) -> Dag {
+    /// The DAG of `edges` with `attrs`, one per node, as [`DagEdges::attributes`]
+    /// computes them: what [`build`](Dag::build) does after building the edges, for a
+    /// caller that times or shares the two steps apart. An `Error::Invalid` when
+    /// `attrs` does not hold one entry per node.
+    pub fn assemble(edges: DagEdges, attrs: Vec<NodeAttrs>) -> Result<Dag> {
+        let nodes = edges.run_starts.len() - 1;
+        if attrs.len() != nodes {
+            return Err(Error::Invalid(format!(
+                "LOD DAG: {} attributes for {nodes} nodes",
+                attrs.len()
+            )));
+        }
         let DagEdges {
             construction,
             run_starts,
@@ -108,14 +117,14 @@ impl Dag {
         let roots = (0..parents.rows() as u32)
             .filter(|&k| parents.row(k as usize).is_empty())
             .collect();
-        Dag {
+        Ok(Dag {
             construction,
             run_starts,
             parents,
             children,
             roots,
             attrs,
-        }
+        })
     }
 
     /// How the edges were chosen.
