@@ -1082,7 +1082,7 @@ fn run(cli: Cli) -> Result<()> {
                     } else {
                         taus
                     },
-                    orbit: flaneur::lod::OrbitConfig {
+                    orbit: flaneur_bench::lod_orbit::OrbitConfig {
                         budget: (budget > 0).then_some(budget),
                         max_work,
                         ..d.orbit

@@ -19,8 +19,7 @@
 //!   attributes of §3.4, a checked byte format); [`DagEdges`] and [`Dag::assemble`]
 //!   build one in two steps, for the experiments that time them apart.
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
-//!   ch. 4: the fronts, the three traversals, the compact selective mesh); [`refine_orbit`]
-//!   runs the thesis's traversal experiment.
+//!   ch. 4: the fronts, the three traversals, the compact selective mesh).
 //! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels
 //!   ([`encode_chain`], coarsest first so a coarse level reads few pages), and for large
 //!   objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG, found by id
@@ -38,7 +37,6 @@ mod hausdorff;
 mod inspect;
 mod pm;
 mod refine;
-mod refine_bench;
 pub(crate) mod stored;
 mod torus;
 
@@ -52,9 +50,6 @@ pub use pm::{
 pub use refine::{
     CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, PassStats,
     RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
-};
-pub use refine_bench::{
-    orbit_path, refine_orbit, OrbitConfig, OrbitFrame, OrbitReport, TraversalSummary,
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{
