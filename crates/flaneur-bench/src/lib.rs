@@ -16,6 +16,7 @@ pub mod frame_time;
 pub mod index_cache;
 pub mod lod_dag;
 pub mod lod_dag_stats;
+pub mod lod_inspect;
 pub mod lod_orbit;
 pub mod lod_parallel;
 pub mod lod_refine;

@@ -34,7 +34,6 @@ mod dag;
 #[cfg(test)]
 mod fixtures;
 mod hausdorff;
-mod inspect;
 mod pm;
 mod refine;
 pub(crate) mod stored;
@@ -42,7 +41,6 @@ mod torus;
 
 pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs, DAG_MAGIC, DAG_VERSION};
 pub use hausdorff::hausdorff;
-pub use inspect::{load_merged, refine_view, write_levels, write_obj, LevelFile, ViewRefinement};
 pub use pm::{
     simplify_all, Level, LevelReport, ParallelOptions, ParallelReport, PmCursor, ProgressiveMesh,
     SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE, PM_MAGIC, PM_VERSION,
