@@ -30,7 +30,7 @@
 use std::ops::Range;
 
 use super::attrs::NodeAttrs;
-use super::build::{Csr, DagConstruction, DagEdges};
+use super::build::{DagConstruction, DagEdges};
 use crate::error::{Error, Result};
 use crate::lod::pm::{ProgressiveMesh, SelectiveMesh};
 
@@ -74,12 +74,7 @@ use crate::lod::pm::{ProgressiveMesh, SelectiveMesh};
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Dag {
-    pub(crate) construction: DagConstruction,
-    /// Node k's splits are `run_starts[k]..run_starts[k + 1]`; the last entry is the
-    /// split count.
-    pub(crate) run_starts: Vec<u32>,
-    pub(crate) parents: Csr,
-    pub(crate) children: Csr,
+    pub(crate) edges: DagEdges,
     pub(crate) roots: Vec<u32>,
     pub(crate) attrs: Vec<NodeAttrs>,
 }
@@ -108,20 +103,12 @@ impl Dag {
                 attrs.len()
             )));
         }
-        let DagEdges {
-            construction,
-            run_starts,
-            parents,
-            children,
-        } = edges;
+        let parents = &edges.parents;
         let roots = (0..parents.rows() as u32)
             .filter(|&k| parents.row(k as usize).is_empty())
             .collect();
         Ok(Dag {
-            construction,
-            run_starts,
-            parents,
-            children,
+            edges,
             roots,
             attrs,
         })
@@ -129,28 +116,29 @@ impl Dag {
 
     /// How the edges were chosen.
     pub fn construction(&self) -> DagConstruction {
-        self.construction
+        self.edges.construction
     }
 
     /// The number of nodes: position collapses, each one split or a run of them.
     pub fn node_count(&self) -> usize {
-        self.run_starts.len() - 1
+        self.edges.run_starts.len() - 1
     }
 
     /// The number of vertex splits the nodes hold.
     pub fn split_count(&self) -> usize {
-        *self.run_starts.last().unwrap_or(&0) as usize
+        *self.edges.run_starts.last().unwrap_or(&0) as usize
     }
 
     /// The number of edges (each counted once: the thesis's in-edges).
     pub fn edge_count(&self) -> usize {
-        self.parents.items.len()
+        self.edges.parents.items.len()
     }
 
     /// The splits of `node`, in the order they apply. Panics when `node` is out of
     /// range, like slice indexing.
     pub fn splits(&self, node: u32) -> Range<usize> {
-        self.run_starts[node as usize] as usize..self.run_starts[node as usize + 1] as usize
+        self.edges.run_starts[node as usize] as usize
+            ..self.edges.run_starts[node as usize + 1] as usize
     }
 
     /// The node that holds split `split`, `None` past the last split.
@@ -159,33 +147,39 @@ impl Dag {
             return None;
         }
         // The last run start at or before `split`.
-        Some(self.run_starts.partition_point(|&s| s as usize <= split) as u32 - 1)
+        Some(
+            self.edges
+                .run_starts
+                .partition_point(|&s| s as usize <= split) as u32
+                - 1,
+        )
     }
 
     /// The nodes that must be split before `node`, ascending.
     pub fn parents(&self, node: u32) -> &[u32] {
-        self.parents.row(node as usize)
+        self.edges.parents.row(node as usize)
     }
 
     /// The nodes that must be collapsed before `node`, ascending.
     pub fn children(&self, node: u32) -> &[u32] {
-        self.children.row(node as usize)
+        self.edges.children.row(node as usize)
     }
 
     /// The number of `node`'s parents.
     pub fn in_degree(&self, node: u32) -> u32 {
-        self.parents.starts[node as usize + 1] - self.parents.starts[node as usize]
+        self.edges.parents.starts[node as usize + 1] - self.edges.parents.starts[node as usize]
     }
 
     /// The number of `node`'s children.
     pub fn out_degree(&self, node: u32) -> u32 {
-        self.children.starts[node as usize + 1] - self.children.starts[node as usize]
+        self.edges.children.starts[node as usize + 1] - self.edges.children.starts[node as usize]
     }
 
     /// Every node's in-degree: the counters a traversal starts from, which reach 0
     /// when all of a node's parents are split.
     pub fn in_degrees(&self) -> Vec<u32> {
-        self.parents
+        self.edges
+            .parents
             .starts
             .windows(2)
             .map(|w| w[1] - w[0])
@@ -209,11 +203,11 @@ impl Dag {
 
     /// The bytes the DAG takes in memory: its arrays' lengths, not their capacities.
     pub fn memory_bytes(&self) -> usize {
-        4 * (self.run_starts.len()
-            + self.parents.starts.len()
-            + self.parents.items.len()
-            + self.children.starts.len()
-            + self.children.items.len()
+        4 * (self.edges.run_starts.len()
+            + self.edges.parents.starts.len()
+            + self.edges.parents.items.len()
+            + self.edges.children.starts.len()
+            + self.edges.children.items.len()
             + self.roots.len())
             + std::mem::size_of::<NodeAttrs>() * self.attrs.len()
     }
@@ -538,7 +532,7 @@ mod tests {
             for (p, k) in edges(dag) {
                 assert!(p < k, "parents come first");
             }
-            assert_eq!(dag.children.transpose(), dag.parents);
+            assert_eq!(dag.edges.children.transpose(), dag.edges.parents);
             let roots: Vec<u32> = (0..dag.node_count() as u32)
                 .filter(|&k| dag.in_degree(k) == 0)
                 .collect();

@@ -39,11 +39,10 @@ use rayon::prelude::*;
 
 use crate::scene::Mesh;
 
-use super::progressive::{assemble, check_input};
+use super::progressive::{assemble, check_input, ProgressiveMesh};
 use super::quadric::Quadric;
 use super::simplify::{Collapse, Domain, RemovedFace, Setup, Simplifier};
 use super::topology::Adjacency;
-use super::ProgressiveMesh;
 use crate::error::Result;
 
 /// How to split a mesh for the parallel build.
