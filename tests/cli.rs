@@ -282,8 +282,8 @@ fn lod_writes_levels_and_measures_a_view() {
         "0.25",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let first = flaneur::lod::load_merged(&out.join("level-0.obj")).unwrap();
-    let second = flaneur::lod::load_merged(&out.join("level-1.obj")).unwrap();
+    let first = flaneur_bench::lod_inspect::load_merged(&out.join("level-0.obj")).unwrap();
+    let second = flaneur_bench::lod_inspect::load_merged(&out.join("level-1.obj")).unwrap();
     assert_eq!(first.triangle_count(), 3674);
     assert!(
         second.triangle_count() <= 3674 / 4 + 2,

@@ -23,11 +23,10 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use crate::lod_dag_stats::{dag_stats, ConstructionStats, DagStats};
 use crate::report::Report;
 use flaneur::error::{Error, Result};
-use flaneur::lod::{
-    bumpy_torus, dag_stats, ConstructionStats, DagConstruction, DagStats, ProgressiveMesh,
-};
+use flaneur::lod::{bumpy_torus, DagConstruction, ProgressiveMesh};
 
 /// One model of Zheng 2007 Tables 3.1–3.3, as printed there.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -27,13 +27,13 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use crate::lod_orbit::{
+    orbit_path, refine_orbit, OrbitConfig, OrbitFrame, OrbitReport, TraversalSummary,
+};
 use crate::report::Report;
 use crate::walk_setup::{check_sweep, num};
 use flaneur::error::{Error, Result};
-use flaneur::lod::{
-    bumpy_torus, orbit_path, refine_orbit, Dag, DagConstruction, OrbitConfig, OrbitFrame,
-    OrbitReport, ProgressiveMesh, Traversal, TraversalSummary, THESIS_TAU,
-};
+use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal, THESIS_TAU};
 
 /// The Happy Buddha's triangles (Zheng 2007 Table 3.1), the model of Table 4.1's figures.
 pub const DEFAULT_TRIANGLES: usize = 1_087_474;

@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::catalog::{load_meta, save_meta, write_object};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::lod::table::LodTable;
+use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::{decode_mesh, Mesh};
@@ -263,7 +263,7 @@ impl Database {
         }
     }
 
-    pub(crate) fn lod_entry(&self, id: u64) -> Result<Option<crate::lod::table::LodEntry>> {
+    pub(crate) fn lod_entry(&self, id: u64) -> Result<Option<crate::lod::stored::LodEntry>> {
         match &self.lod {
             Some(t) => t.find(&self.store, id),
             None => Ok(None),

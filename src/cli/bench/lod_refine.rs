@@ -50,7 +50,7 @@ impl LodRefineArgs {
             triangles,
             frames,
             taus: or_default(taus, d.taus.clone()),
-            orbit: flaneur::lod::OrbitConfig {
+            orbit: flaneur_bench::lod_orbit::OrbitConfig {
                 budget: (budget > 0).then_some(budget),
                 max_work,
                 ..d.orbit

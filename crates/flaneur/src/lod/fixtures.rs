@@ -6,8 +6,8 @@ use glam::DVec3;
 
 use citygen::{CityConfig, Mesh};
 
-use super::topology::Adjacency;
-use super::{ProgressiveMesh, SelectiveMesh};
+use super::pm::Adjacency;
+use super::pm::{ProgressiveMesh, SelectiveMesh};
 
 /// The first generated building of at least 600 triangles: flat-shaded, every face with
 /// its own vertices, so every corner and crease is a seam.
@@ -226,7 +226,7 @@ pub(crate) fn check_level(original: &Mesh, pm: &ProgressiveMesh, splits: usize) 
         original_of_vertex[n as usize] = v as u32;
     }
     for (slot, t) in cursor.mesh().slots().iter().enumerate() {
-        if *t == super::NO_TRIANGLE {
+        if *t == super::pm::NO_TRIANGLE {
             continue;
         }
         let o = original_of_slot[slot] as usize;

@@ -5,7 +5,7 @@
 //! Zheng 2007 ch. 2 (§2.1.1 the half-edge collapse, §2.1.2 the quadric error metric,
 //! §2.2.1 the progressive mesh) and §3.2 (the vertex split's content, Fig. 3.5). The
 //! choices the thesis leaves open — creases and seams, boundaries, normals, the error's
-//! unit — are named in `pm`'s top comment.
+//! unit — are named in `pm::simplify`'s top comment.
 //!
 //! - [`ProgressiveMesh::build`] simplifies one mesh; [`simplify_all`] many, on all cores;
 //!   [`ProgressiveMesh::build_parallel`] one large mesh on all cores (El-Sana–Varshney).
@@ -13,73 +13,46 @@
 //! - [`PmCursor`], [`ProgressiveMesh::mesh_at_triangles`], [`ProgressiveMesh::mesh_at_error`]
 //!   and [`ProgressiveMesh::levels`] give levels as plain meshes.
 //! - [`hausdorff`] compares two meshes.
+//! - [`bumpy_torus`] is a procedural model of any size, for tests and experiments.
 //! - [`Dag`] orders the splits by what each needs present (Zheng ch. 3: the legality
 //!   condition, the full-, non- and mini-redundant constructions, the visibility
-//!   attributes of §3.4, a checked byte format); [`dag_stats`] compares the three.
+//!   attributes of §3.4, a checked byte format); [`DagEdges`] and [`Dag::assemble`]
+//!   build one in two steps, for the experiments that time them apart.
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
-//!   ch. 4: the fronts, the three traversals, the compact selective mesh); [`refine_orbit`]
-//!   runs the thesis's traversal experiment.
+//!   ch. 4: the fronts, the three traversals, the compact selective mesh).
 //! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels
 //!   ([`encode_chain`], coarsest first so a coarse level reads few pages), and for large
 //!   objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG, found by id
 //!   through a table in the database ([`LodOptions`], [`LodStats`]);
 //!   `Database::lod_levels`, `lod_mesh` and `progressive` read them back.
+//!
+//! The code is grouped by idea: `pm` (the progressive mesh, its levels and codec), `dag`
+//! (the hierarchy of its splits), `refine` (view-dependent refinement through the DAG)
+//! and `stored` (the LODs a build writes into the database and reads back).
 
-mod bake;
-mod chain;
-mod criteria;
 mod dag;
-mod dag_attrs;
-mod dag_build;
-mod dag_codec;
-mod dag_stats;
 #[cfg(test)]
 mod fixtures;
-mod fronts;
 mod hausdorff;
-mod inspect;
-mod levels;
-mod mesh_update;
 mod pm;
-mod pm_codec;
-mod pm_parallel;
-mod prefetch_hint;
-mod quadric;
 mod refine;
-mod refine_bench;
-#[cfg(test)]
-mod refine_tests;
 pub(crate) mod stored;
-pub(crate) mod table;
-mod topology;
-mod traversal;
-mod vsplit;
+mod torus;
 
-pub(crate) use bake::LodWriter;
-pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
-pub use chain::{
-    decode_chain, encode_chain, ChainDirectory, LevelInfo, CHAIN_HEADER_LEN, CHAIN_MAGIC,
-    CHAIN_VERSION,
-};
-pub use criteria::{Criteria, View};
-pub use dag::{Dag, DagConstruction};
-pub use dag_attrs::NodeAttrs;
-pub use dag_codec::{DAG_MAGIC, DAG_VERSION};
-pub use dag_stats::{bumpy_torus, dag_stats, ConstructionStats, DagStats};
-pub use fronts::Fronts;
+pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs, DAG_MAGIC, DAG_VERSION};
 pub use hausdorff::hausdorff;
-pub use inspect::{load_merged, refine_view, write_levels, write_obj, LevelFile, ViewRefinement};
-pub use levels::{Level, PmCursor};
-pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
-pub use pm::{simplify_all, ProgressiveMesh};
-pub use pm_codec::{PM_MAGIC, PM_VERSION};
-pub use pm_parallel::{LevelReport, ParallelOptions, ParallelReport};
+pub use pm::{
+    simplify_all, Level, LevelReport, ParallelOptions, ParallelReport, PmCursor, ProgressiveMesh,
+    SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE, PM_MAGIC, PM_VERSION,
+};
 pub use refine::{
-    FrameReport, FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+    CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, PassStats,
+    RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
-pub use refine_bench::{
-    orbit_path, refine_orbit, OrbitConfig, OrbitFrame, OrbitReport, TraversalSummary,
+pub(crate) use stored::LodWriter;
+pub use stored::{
+    decode_chain, encode_chain, ChainDirectory, LevelInfo, LodOptions, LodReport, LodStats,
+    CHAIN_HEADER_LEN, CHAIN_MAGIC, CHAIN_VERSION, DEFAULT_PM_THRESHOLD, LOD_SEGMENT, TABLE_MAGIC,
+    TABLE_VERSION,
 };
-pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};
-pub use traversal::{PassStats, Traversal};
-pub use vsplit::{SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE};
+pub use torus::bumpy_torus;

@@ -31,7 +31,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::lod::stored;
-use crate::lod::table::LodEntry;
+use crate::lod::stored::LodEntry;
 use crate::lod::{LevelInfo, MeshChanges, RefineParams, Refiner, Traversal, View, THESIS_BUDGET};
 use crate::scene::Mesh;
 use crate::store::PageKind;

@@ -44,9 +44,9 @@
 use std::collections::BinaryHeap;
 
 use super::criteria::{Evaluation, NodeGeometry, ViewTest};
-use super::dag::Dag;
 use super::fronts::{Fronts, Pass};
 use super::prefetch_hint::{self, prefetch};
+use crate::lod::dag::Dag;
 
 /// The traversal algorithm (Zheng 2007 §4.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -18,9 +18,86 @@
 //! the parents of one node. The result is the same transitive reduction; the worst
 //! case is still quadratic.
 
-use super::dag::DagConstruction;
-use super::pm::ProgressiveMesh;
 use crate::error::{Error, Result};
+use crate::lod::pm::ProgressiveMesh;
+
+/// How a DAG's edges are chosen among the dependencies the legality condition gives
+/// (Zheng 2007 §3.3). All three allow exactly the same orders of splits and collapses;
+/// they differ in how many edges a traversal walks and the DAG stores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DagConstruction {
+    /// Every creator of an element of a node's dependency list is its parent (§3.3).
+    FullRedundant,
+    /// No edge that a longer path implies (Fig. 3.9): the transitive reduction.
+    /// Worst case quadratic; for tests and measurements.
+    NonRedundant,
+    /// The thesis's practical choice (Fig. 3.10): a potential parent that is also a
+    /// potential parent of a parent already taken is dropped. Linear time.
+    MiniRedundant,
+}
+
+impl DagConstruction {
+    /// All three, in the thesis's order.
+    pub const ALL: [DagConstruction; 3] = [
+        DagConstruction::FullRedundant,
+        DagConstruction::NonRedundant,
+        DagConstruction::MiniRedundant,
+    ];
+
+    /// The short name the thesis's tables use: "full", "non" or "mini".
+    pub fn name(self) -> &'static str {
+        match self {
+            DagConstruction::FullRedundant => "full",
+            DagConstruction::NonRedundant => "non",
+            DagConstruction::MiniRedundant => "mini",
+        }
+    }
+
+    pub(crate) fn code(self) -> u32 {
+        match self {
+            DagConstruction::FullRedundant => 0,
+            DagConstruction::NonRedundant => 1,
+            DagConstruction::MiniRedundant => 2,
+        }
+    }
+
+    pub(crate) fn from_code(code: u32) -> Option<DagConstruction> {
+        DagConstruction::ALL.into_iter().find(|c| c.code() == code)
+    }
+}
+
+/// The edges of a progressive mesh's DAG as one construction chooses them, before the
+/// nodes' attributes: the runs of splits that make the nodes, and each node's parents
+/// and children. [`DagEdges::attributes`] computes the attributes over them and
+/// [`Dag::build`](super::Dag::build) puts the two together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DagEdges {
+    pub(crate) construction: DagConstruction,
+    /// Node k's splits are `run_starts[k]..run_starts[k + 1]`; the last entry is the
+    /// split count.
+    pub(crate) run_starts: Vec<u32>,
+    pub(crate) parents: Csr,
+    pub(crate) children: Csr,
+}
+
+impl DagEdges {
+    /// The edges of `pm`'s splits by `construction`: the dependency lists, the
+    /// construction's choice of parents among them, and the children lists.
+    ///
+    /// An `Error::Invalid` when `pm` cannot be refined in any order: a split names a
+    /// vertex or triangle out of range, or created only by itself or a later split.
+    pub fn build(pm: &ProgressiveMesh, construction: DagConstruction) -> Result<DagEdges> {
+        let run_starts = run_starts(pm)?;
+        let parents = choose_parents(potentials(pm, &run_starts)?, construction);
+        let children = parents.transpose();
+        Ok(DagEdges {
+            construction,
+            run_starts,
+            parents,
+            children,
+        })
+    }
+}
 
 /// Adjacency lists in compressed rows: row `i` is `items[starts[i]..starts[i + 1]]`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -76,7 +153,7 @@ impl Csr {
 
 /// Where each node's run of splits starts, with the split count at the end: a run
 /// begins at every split that does not join the one before it.
-pub(crate) fn run_starts(pm: &ProgressiveMesh) -> Result<Vec<u32>> {
+fn run_starts(pm: &ProgressiveMesh) -> Result<Vec<u32>> {
     let s = pm.splits.len();
     if s as u64 >= u32::MAX as u64 {
         return Err(Error::Invalid(format!(
@@ -105,7 +182,7 @@ pub(crate) fn node_of_split(run_starts: &[u32]) -> Vec<u32> {
 /// ascending. An `Err` names the first split whose dependency list is out of range,
 /// names an element created by a later split, or names a triangle slot that its split
 /// leaves empty: such a progressive mesh cannot be refined in any order.
-pub(crate) fn potentials(pm: &ProgressiveMesh, run_starts: &[u32]) -> Result<Csr> {
+fn potentials(pm: &ProgressiveMesh, run_starts: &[u32]) -> Result<Csr> {
     let node_of = node_of_split(run_starts);
     let base_v = pm.base.positions.len();
     let base_t = pm.base.triangle_count();
@@ -169,7 +246,7 @@ pub(crate) fn potentials(pm: &ProgressiveMesh, run_starts: &[u32]) -> Result<Csr
 }
 
 /// The parents `construction` keeps of the potential parents `full`.
-pub(crate) fn choose_parents(full: Csr, construction: DagConstruction) -> Csr {
+fn choose_parents(full: Csr, construction: DagConstruction) -> Csr {
     match construction {
         DagConstruction::FullRedundant => full,
         DagConstruction::NonRedundant => non_redundant(&full),

@@ -1,25 +1,21 @@
 //! The figures of Zheng 2007 Tables 3.2 and 3.3 for one progressive mesh: edges,
 //! construction time and memory of the full-, non- and mini-redundant DAGs, and the
-//! share of the redundant edges the mini-redundant construction removes; plus a
-//! procedural model of any size, to compare with the thesis's models (Table 3.1).
+//! share of the redundant edges the mini-redundant construction removes.
 //!
 //! Memory per vertex, as the thesis counts it (Fig. 3.18: the split, three attributes,
 //! in- and out-edges per node), divided by the full mesh's vertex count: the DAG's
 //! arrays in memory plus the splits as Fig. 3.5 lays them out (v_p, v_c's position and
 //! normal, v_l, v_r, and the adjusted triangles with their count: 40 bytes and 4 per
-//! adjusted triangle). The encoded size (what the database stores, `dag_codec`) is
-//! reported beside it.
+//! adjusted triangle). The encoded size (what the database stores,
+//! `flaneur::lod::Dag::to_bytes`) is reported beside it.
+//!
+//! The models to measure, the bumpy tori that stand in for the thesis's, are the
+//! engine's (`flaneur::lod::bumpy_torus`): its own tests refine them too.
 
-use std::f64::consts::TAU;
 use std::time::{Duration, Instant};
 
-use crate::scene::Mesh;
-
-use super::dag::{Dag, DagConstruction};
-use super::dag_attrs::attributes;
-use super::dag_build::{choose_parents, potentials, run_starts};
-use super::pm::ProgressiveMesh;
-use crate::error::Result;
+use flaneur::error::Result;
+use flaneur::lod::{Dag, DagConstruction, DagEdges, ProgressiveMesh};
 
 /// One construction's figures (a column of Zheng Tables 3.2 and 3.3).
 #[derive(Clone, Debug, PartialEq)]
@@ -101,7 +97,8 @@ impl DagStats {
 /// An `Err` as for [`Dag::build`].
 ///
 /// ```
-/// use flaneur::lod::{dag_stats, ProgressiveMesh};
+/// use flaneur::lod::ProgressiveMesh;
+/// use flaneur_bench::lod_dag_stats::dag_stats;
 /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
 /// let stats = dag_stats(&pm, true)?;
 /// assert!(stats.mini.edges < stats.full.edges);
@@ -126,31 +123,28 @@ pub fn dag_stats(pm: &ProgressiveMesh, with_non_redundant: bool) -> Result<DagSt
     let mut built = Vec::with_capacity(3);
     for c in constructions {
         let started = Instant::now();
-        let runs = run_starts(pm)?;
-        let full = potentials(pm, &runs)?;
-        let parents = choose_parents(full, c);
-        let children = parents.transpose();
+        let edges = DagEdges::build(pm, c)?;
         let took = started.elapsed();
-        built.push((c, took, runs, parents, children));
+        built.push((c, took, edges));
     }
-    let (_, _, runs, _, mini_children) = &built[1];
+    let (_, _, mini) = &built[1];
     let started = Instant::now();
-    let attrs = attributes(pm, runs, mini_children)?;
+    let attrs = mini.attributes(pm)?;
     let attributes_took = started.elapsed();
 
-    let mut stats: Vec<ConstructionStats> = built
+    let mut stats = built
         .into_iter()
-        .map(|(c, build, runs, parents, children)| {
-            let dag = Dag::assemble(c, runs, parents, children, attrs.clone());
-            ConstructionStats {
+        .map(|(c, build, edges)| {
+            let dag = Dag::assemble(edges, attrs.clone())?;
+            Ok(ConstructionStats {
                 construction: c,
                 edges: dag.edge_count(),
                 build,
                 memory_bytes: dag.memory_bytes(),
                 encoded_bytes: dag.encoded_len(),
-            }
+            })
         })
-        .collect();
+        .collect::<Result<Vec<ConstructionStats>>>()?;
     let non = (stats.len() == 3).then(|| stats.remove(2));
     let mini = stats.remove(1);
     let full = stats.remove(0);
@@ -167,54 +161,10 @@ pub fn dag_stats(pm: &ProgressiveMesh, with_non_redundant: bool) -> Result<DagSt
     })
 }
 
-/// A closed, smooth, bumpy torus of about `triangles` triangles (at least 36): a
-/// procedural stand-in for the thesis's scanned models of 70k and 1.1M triangles, with
-/// curvature everywhere, so that no region simplifies for free.
-///
-/// ```
-/// let torus = flaneur::lod::bumpy_torus(70_000);
-/// assert!(torus.validate().is_ok());
-/// assert!((torus.triangle_count() as i64 - 70_000).abs() < 1_500);
-/// ```
-pub fn bumpy_torus(triangles: usize) -> Mesh {
-    // 2·rings·sides triangles with twice as many rings as sides.
-    let sides = ((triangles as f64 / 4.0).sqrt().round() as u32).max(3);
-    let rings = 2 * sides;
-    let (major, minor) = (1.0f64, 0.4f64);
-    let mut mesh = Mesh::default();
-    for i in 0..rings {
-        let u = TAU * i as f64 / rings as f64;
-        for j in 0..sides {
-            let v = TAU * j as f64 / sides as f64;
-            let r = minor
-                * (1.0
-                    + 0.12 * (7.0 * u).sin() * (5.0 * v).sin()
-                    + 0.04 * (23.0 * u + 11.0 * v).sin());
-            let ring = major + r * v.cos();
-            mesh.positions.push([
-                (ring * u.cos()) as f32,
-                (r * v.sin()) as f32,
-                (ring * u.sin()) as f32,
-            ]);
-        }
-    }
-    let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
-    for i in 0..rings {
-        for j in 0..sides {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-    }
-    mesh.compute_smooth_normals();
-    if mesh.signed_volume() < 0.0 {
-        mesh.flip();
-    }
-    mesh
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flaneur::lod::bumpy_torus;
 
     fn report(name: &str, stats: &DagStats) {
         let non = stats.non.as_ref();
@@ -245,7 +195,7 @@ mod tests {
 
     #[test]
     fn bunny_mini_removes_most_redundant_edges() {
-        let pm = ProgressiveMesh::build(&crate::scene::bunny()).unwrap();
+        let pm = ProgressiveMesh::build(&flaneur::scene::bunny()).unwrap();
         let stats = dag_stats(&pm, true).unwrap();
         report("bunny", &stats);
         let non = stats.non.as_ref().unwrap();
@@ -267,16 +217,6 @@ mod tests {
         assert_eq!(stats.triangles, 3674);
     }
 
-    #[test]
-    fn torus_is_closed_and_outward() {
-        let t = bumpy_torus(4_000);
-        t.validate().unwrap();
-        assert_eq!(t.triangle_count(), 2 * 64 * 32);
-        assert!(t.signed_volume() > 0.0);
-        assert_eq!(crate::lod::fixtures::boundary_length(&t), 0.0);
-        assert!(bumpy_torus(0).validate().is_ok());
-    }
-
     /// Models of the thesis's sizes (Table 3.1): about 70k triangles, and the
     /// largest, about 1.1M. Seconds even optimised; run with `--ignored` for the figures.
     #[test]
@@ -286,7 +226,7 @@ mod tests {
             ("bumpy torus", bumpy_torus(69_451)),
             (
                 "bunny subdivided twice",
-                crate::scene::bunny().subdivide().subdivide(),
+                flaneur::scene::bunny().subdivide().subdivide(),
             ),
             ("large bumpy torus", bumpy_torus(1_087_474)),
         ] {

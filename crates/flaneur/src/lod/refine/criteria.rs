@@ -1,6 +1,6 @@
 //! The view-dependent error criteria — Zheng 2007 §3.4 (the tests) and §4.4 (the
 //! ERROR-EVALUATE and NEED-APPLY of the traversals), with the formulas as the thesis
-//! writes them, for a node whose sphere and cone are anchored at its v_c (`dag_attrs`):
+//! writes them, for a node whose sphere and cone are anchored at its v_c (`dag::attrs`):
 //!
 //! - out of view (§3.4.1): (γ − φ) > α, where γ is the angle between the view direction
 //!   n and v_c − e, φ the angle the bounding sphere subtends from the eye

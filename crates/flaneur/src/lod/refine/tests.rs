@@ -8,9 +8,9 @@ use rand_chacha::ChaCha8Rng;
 use crate::scene::Mesh;
 
 use super::criteria::ViewTest;
-use super::fixtures::duplicate_triangles;
 use super::fronts::tests::check_fronts;
-use super::{
+use crate::lod::fixtures::duplicate_triangles;
+use crate::lod::{
     bumpy_torus, CompactMesh, Criteria, Dag, DagConstruction, FrameReport, ProgressiveMesh,
     RefineParams, Refiner, SelectiveMesh, Traversal, View,
 };

@@ -34,9 +34,9 @@
 //!       0      8  object id          u64, ascending over the whole table
 //!       8     16  mesh extent        the object's full mesh (level 0)
 //!      24     16  chain extent       its coarse levels (`chain`), empty when none
-//!      40     16  PM extent          its progressive mesh (`pm_codec`), empty below
+//!      40     16  PM extent          its progressive mesh (`pm::codec`), empty below
 //!                                    the threshold
-//!      56     16  DAG extent         its DAG (`dag_codec`), empty iff the PM's is
+//!      56     16  DAG extent         its DAG (`dag::codec`), empty iff the PM's is
 //!      72      4  triangles          u32, of the full mesh
 //!      76      4  levels             u32, coarse levels in the chain (0 iff empty)
 //! ```

@@ -1,5 +1,5 @@
 //! An object's chain of discrete levels of detail as flat bytes, for one extent of the
-//! database: the levels [`ProgressiveMesh::levels`](super::ProgressiveMesh::levels) cuts,
+//! database: the levels [`ProgressiveMesh::levels`](crate::lod::ProgressiveMesh::levels) cuts,
 //! without the full-detail mesh (level 0), which the database already holds as the
 //! object's mesh extent.
 //!
@@ -35,8 +35,8 @@
 //! the end, triangles and errors ordered, the level's mesh against its entry) — as an
 //! `Error::Invalid`, never a panic, whatever the bytes.
 
-use super::levels::Level;
 use crate::error::{Error, Result};
+use crate::lod::pm::Level;
 use crate::scene::{decode_mesh, encode_mesh, Mesh};
 use crate::store::framing::{
     self as bytes, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN,
@@ -110,7 +110,7 @@ fn directory_len(levels: u64) -> u64 {
 }
 
 /// Encodes the levels of one object coarser than its full mesh. `levels` are finest
-/// first, as [`ProgressiveMesh::levels`](super::ProgressiveMesh::levels) returns them
+/// first, as [`ProgressiveMesh::levels`](crate::lod::ProgressiveMesh::levels) returns them
 /// after level 0 (`levels[0]` is level 1). An `Error::Invalid` when there is no level,
 /// when they are not strictly coarser one after the other (triangles) or their errors
 /// decrease coarse-ward, or when the chain would pass 4 GiB.

@@ -39,10 +39,10 @@ use rayon::prelude::*;
 
 use crate::scene::Mesh;
 
-use super::pm::{assemble, check_input, Collapse, Domain, RemovedFace, Setup, Simplifier};
+use super::progressive::{assemble, check_input, ProgressiveMesh};
 use super::quadric::Quadric;
+use super::simplify::{Collapse, Domain, RemovedFace, Setup, Simplifier};
 use super::topology::Adjacency;
-use super::ProgressiveMesh;
 use crate::error::Result;
 
 /// How to split a mesh for the parallel build.
@@ -550,7 +550,7 @@ impl Part {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lod::dag_stats::bumpy_torus;
+    use crate::lod::bumpy_torus;
     use crate::lod::fixtures::{building, check_exact, cube};
 
     fn options(leaf_triangles: usize) -> ParallelOptions {

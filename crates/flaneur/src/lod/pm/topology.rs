@@ -81,7 +81,7 @@ impl Adjacency {
 
     /// The connectivity of `mesh` with its vertices already welded: vertex v at
     /// position `pos_of[v]`, at `coords`. For a part of a mesh whose welding is known
-    /// (`pm_parallel`), where hashing every vertex again would be wasted.
+    /// (`parallel`), where hashing every vertex again would be wasted.
     pub(crate) fn from_welded(mesh: &Mesh, pos_of: Vec<u32>, coords: Vec<DVec3>) -> Adjacency {
         let n = mesh.positions.len();
         let mut wedge_start = vec![0u32; coords.len() + 1];

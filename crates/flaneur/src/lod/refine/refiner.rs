@@ -19,12 +19,12 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::criteria::{Criteria, NodeGeometry, View, ViewTest};
-use super::dag::Dag;
 use super::fronts::{Fronts, Pass};
 use super::mesh_update::{CompactMesh, MeshChanges};
-use super::pm::ProgressiveMesh;
 use super::traversal::{manage, Context, FrontNode, Op, PassStats, Scratch, Traversal};
 use crate::error::{Error, Result};
+use crate::lod::dag::Dag;
+use crate::lod::pm::ProgressiveMesh;
 
 /// The screen-space error threshold of the thesis's experiments: 0.1 % of the viewport
 /// (Zheng 2007 §4.6.1).

@@ -1,6 +1,6 @@
 //! The build's side of stored LODs: each object's progressive mesh built as its mesh is
 //! written, its chain of coarse levels stored (`chain`), and above a size threshold its
-//! progressive mesh and mini-redundant DAG too (`pm_codec`, `dag_codec`); at the end,
+//! progressive mesh and mini-redundant DAG too (`pm::codec`, `dag::codec`); at the end,
 //! the table that finds them by id (`table`).
 //!
 //! Objects stream through the build, so they are simplified as they come: each object
@@ -23,10 +23,10 @@ use std::time::{Duration, Instant};
 use rayon::Yield;
 
 use super::chain::encode_chain;
-use super::dag::{Dag, DagConstruction};
-use super::pm::ProgressiveMesh;
 use super::table::{encode_table, LodEntry, LodStats, LodTable};
 use crate::error::{Error, Result};
+use crate::lod::dag::{Dag, DagConstruction};
+use crate::lod::pm::ProgressiveMesh;
 use crate::scene::Mesh;
 use crate::store::{Extent, PageKind, Store};
 

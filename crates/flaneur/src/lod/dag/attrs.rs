@@ -33,16 +33,15 @@
 //! three constructions of one progressive mesh get the same attributes. The radius
 //! merge adds a child's whole radius to the distance between the centres, so its slack
 //! compounds toward the roots: conservative, but loose high in the hierarchy (the
-//! attribute test prints by how much).
+//! attribute test in `dag::tests` prints by how much).
 
 use std::f64::consts::FRAC_PI_2;
 
 use glam::DVec3;
 
-use super::dag_build::Csr;
-use super::pm::ProgressiveMesh;
-use super::vsplit::VertexSplit;
+use super::build::{Csr, DagEdges};
 use crate::error::{Error, Result};
+use crate::lod::pm::{ProgressiveMesh, VertexSplit};
 
 /// The visibility attributes of one DAG node (Zheng 2007 §3.4).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,12 +57,12 @@ pub struct NodeAttrs {
     pub error: f32,
 }
 
-fn vec(p: [f32; 3]) -> DVec3 {
+pub(super) fn vec(p: [f32; 3]) -> DVec3 {
     DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
 }
 
 /// The angle between two directions; `None` when either is zero.
-fn angle(a: DVec3, b: DVec3) -> Option<f64> {
+pub(super) fn angle(a: DVec3, b: DVec3) -> Option<f64> {
     let (a, b) = (a.try_normalize()?, b.try_normalize()?);
     // atan2 of |a × b| and a · b stays accurate at small angles, where acos does not.
     Some(a.cross(b).length().atan2(a.dot(b)))
@@ -79,13 +78,17 @@ fn f32_up(x: f64) -> f32 {
     }
 }
 
-/// The attributes of every node, given its parents' CSR (`children` is its
-/// transpose). An `Err` when a split carries a non-finite position, normal or error.
-pub(crate) fn attributes(
-    pm: &ProgressiveMesh,
-    run_starts: &[u32],
-    children: &Csr,
-) -> Result<Vec<NodeAttrs>> {
+impl DagEdges {
+    /// The attributes of every node, merged bottom-up along these edges, for
+    /// [`Dag::build`](super::Dag::build). An `Err` when a split of `pm` (the progressive
+    /// mesh the edges were built from) carries a non-finite position, normal or error.
+    pub fn attributes(&self, pm: &ProgressiveMesh) -> Result<Vec<NodeAttrs>> {
+        attributes(pm, &self.run_starts, &self.children)
+    }
+}
+
+/// The attributes of every node, given its runs and children.
+fn attributes(pm: &ProgressiveMesh, run_starts: &[u32], children: &Csr) -> Result<Vec<NodeAttrs>> {
     let base_v = pm.base.positions.len();
     let position = |v: u32| -> DVec3 {
         let v = v as usize;
@@ -191,130 +194,6 @@ fn initial_angle(axis: DVec3, s: &VertexSplit, position: &impl Fn(u32) -> DVec3)
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    use crate::lod::fixtures::{building, random_patch};
-    use crate::lod::{Dag, DagConstruction};
-
-    /// Every node's sphere holds the positions that it and its descendants split, pivot
-    /// on or create; its cone the normals of their v_c and of their f_l and f_r; its
-    /// error each of its splits' and children's.
-    /// Returns the nodes with a cone narrower than a half-space, and each node's stored
-    /// radius over the exact one (the farthest of those positions).
-    fn check_attrs(pm: &ProgressiveMesh, dag: &Dag) -> (usize, Vec<f64>) {
-        let base_v = pm.base.positions.len();
-        let position = |v: u32| {
-            let v = v as usize;
-            vec(if v < base_v {
-                pm.base.positions[v]
-            } else {
-                pm.splits[v - base_v].position
-            })
-        };
-        let mut narrow = 0;
-        let mut slack = Vec::with_capacity(dag.node_count());
-        let mut seen = vec![u32::MAX; dag.node_count()];
-        for k in 0..dag.node_count() as u32 {
-            let a = dag.attrs(k);
-            let head = &pm.splits[dag.splits(k).start];
-            let (c, axis) = (vec(head.position), vec(head.normal));
-            for &d in dag.children(k) {
-                assert!(
-                    dag.attrs(d).error <= a.error,
-                    "{k} → {d}: error grows downward"
-                );
-            }
-            for i in dag.splits(k) {
-                assert!(pm.splits[i].error <= a.error);
-            }
-            narrow += (a.cone_sin < 1.0) as usize;
-            let mut exact = 0.0f64;
-            let mut stack = vec![k];
-            seen[k as usize] = k;
-            while let Some(x) = stack.pop() {
-                for i in dag.splits(x) {
-                    let s = &pm.splits[i];
-                    let corners = [Some(s.v_p), s.v_l, s.v_r]
-                        .into_iter()
-                        .flatten()
-                        .map(position);
-                    for p in corners.chain([vec(s.position)]) {
-                        let d = c.distance(p);
-                        exact = exact.max(d);
-                        assert!(
-                            d <= a.radius as f64 * (1.0 + 1e-6),
-                            "node {k}, split {i}: {d} > {}",
-                            a.radius
-                        );
-                    }
-                    if a.cone_sin < 1.0 {
-                        let (p, q) = (position(s.v_p), vec(s.position));
-                        let normals = [
-                            Some(vec(s.normal)),
-                            s.v_l.map(|l| (q - p).cross(position(l) - p)),
-                            s.v_r.map(|r| (p - q).cross(position(r) - q)),
-                        ];
-                        for n in normals.into_iter().flatten() {
-                            let Some(delta) = angle(axis, n) else {
-                                continue;
-                            };
-                            assert!(
-                                delta <= FRAC_PI_2 && delta.sin() <= a.cone_sin as f64 + 1e-6,
-                                "node {k}, split {i}: a normal {delta} rad off the axis, sin θ = {}",
-                                a.cone_sin
-                            );
-                        }
-                    }
-                }
-                for &d in dag.children(x) {
-                    if seen[d as usize] != k {
-                        seen[d as usize] = k;
-                        stack.push(d);
-                    }
-                }
-            }
-            if exact > 0.0 {
-                slack.push(a.radius as f64 / exact);
-            }
-        }
-        (narrow, slack)
-    }
-
-    #[test]
-    fn spheres_cones_and_errors_bound_the_descendants() {
-        let pm = ProgressiveMesh::build(&crate::scene::bunny()).unwrap();
-        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-        let (narrow, mut slack) = check_attrs(&pm, &dag);
-        // Most of a smooth surface's nodes do have a cone narrower than a half-space.
-        let nodes = dag.node_count();
-        assert!(narrow * 2 > nodes, "{narrow} of {nodes}");
-        // The thesis's merge adds each child's whole radius to the distance between
-        // centres, so the slack compounds up the hierarchy; measured, not bounded.
-        slack.sort_by(f64::total_cmp);
-        let at = |q: f64| slack[((slack.len() - 1) as f64 * q) as usize];
-        let (lo, hi) = crate::scene::bunny().bounds();
-        eprintln!(
-            "bunny: radius over the exact one: median {:.2}, 90 % {:.2}, max {:.2}; \
-             {narrow} of {nodes} cones narrower than a half-space; root radius {:.1} m, \
-             bounding-box diagonal {:.1} m",
-            at(0.5),
-            at(0.9),
-            at(1.0),
-            dag.attrs(dag.roots()[0]).radius,
-            vec(hi).distance(vec(lo)),
-        );
-        let pm = ProgressiveMesh::build(&building()).unwrap();
-        check_attrs(
-            &pm,
-            &Dag::build(&pm, DagConstruction::NonRedundant).unwrap(),
-        );
-        for seed in 0..6 {
-            let pm = ProgressiveMesh::build(&random_patch(seed)).unwrap();
-            check_attrs(
-                &pm,
-                &Dag::build(&pm, DagConstruction::MiniRedundant).unwrap(),
-            );
-        }
-    }
 
     #[test]
     fn rounding_up_never_shrinks() {

@@ -16,15 +16,11 @@ use std::f32::consts::TAU;
 
 use glam::Vec3;
 
-use super::criteria::{Criteria, View};
-use super::dag::Dag;
-use super::mesh_update::MeshMemory;
-use super::pm::ProgressiveMesh;
-use super::refine::{
-    FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+use flaneur::error::{Error, Result};
+use flaneur::lod::{
+    Criteria, Dag, FrameStats, MeshMemory, ProgressiveMesh, RefineParams, Refiner, Traversal, View,
+    THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
-use super::traversal::Traversal;
-use crate::error::{Error, Result};
 
 /// The settings of the experiment; the default is the thesis's (§4.6.1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -217,8 +213,8 @@ pub fn orbit_path(centre: Vec3, radius: f32, frames: usize, fov: f32) -> Result<
 /// `pm`'s.
 ///
 /// ```
-/// use flaneur::lod::{orbit_path, refine_orbit, Dag, DagConstruction, OrbitConfig,
-///                    ProgressiveMesh, Traversal};
+/// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, Traversal};
+/// use flaneur_bench::lod_orbit::{orbit_path, refine_orbit, OrbitConfig};
 /// use glam::Vec3;
 ///
 /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
@@ -278,7 +274,7 @@ mod tests {
     use std::time::Instant;
 
     use super::*;
-    use crate::lod::{bumpy_torus, DagConstruction};
+    use flaneur::lod::{bumpy_torus, DagConstruction};
 
     fn print(report: &OrbitReport, name: &str) {
         eprintln!(
@@ -342,9 +338,9 @@ mod tests {
 
     #[test]
     fn bunny_orbit() {
-        let pm = ProgressiveMesh::build(&crate::scene::bunny()).unwrap();
+        let pm = ProgressiveMesh::build(&flaneur::scene::bunny()).unwrap();
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-        let (lo, hi) = crate::scene::bunny().bounds();
+        let (lo, hi) = flaneur::scene::bunny().bounds();
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let views = orbit_path(
             (lo + hi) * 0.5,

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-use super::{
+use flaneur::error::{Error, Result};
+use flaneur::lod::{
     hausdorff, Dag, DagConstruction, ProgressiveMesh, RefineParams, Refiner, Traversal, View,
 };
-use crate::error::{Error, Result};
-use crate::scene::{load_obj, Mesh};
+use flaneur::scene::{load_obj, write_mesh_obj, Mesh};
 
 /// Every object of an OBJ file merged into one mesh of disjoint pieces (the progressive
 /// mesh keeps the pieces apart).
@@ -38,7 +38,8 @@ pub struct LevelFile {
 /// ```
 /// # fn main() -> flaneur::Result<()> {
 /// let dir = tempfile::tempdir().unwrap();
-/// let levels = flaneur::lod::write_levels(&flaneur::scene::bunny(), dir.path(), 0.25, 50)?;
+/// let levels =
+///     flaneur_bench::lod_inspect::write_levels(&flaneur::scene::bunny(), dir.path(), 0.25, 50)?;
 /// assert_eq!(levels[0].triangles, 3674);
 /// assert!(levels.windows(2).all(|w| w[1].triangles < w[0].triangles));
 /// assert!(levels.iter().all(|l| l.path.exists()));
@@ -79,7 +80,7 @@ pub fn write_obj(path: &Path, mesh: &Mesh, comment: &str) -> Result<()> {
     let mut w = std::io::BufWriter::new(file);
     let mut body = || -> std::io::Result<()> {
         writeln!(w, "# {comment}")?;
-        crate::scene::write_mesh_obj(&mut w, mesh, 1)?;
+        write_mesh_obj(&mut w, mesh, 1)?;
         w.flush()
     };
     body().map_err(|e| Error::io(path, e))
@@ -145,7 +146,7 @@ mod tests {
 
     #[test]
     fn a_view_refines_the_bunny_near_the_eye_more_than_a_far_one() {
-        let bunny = crate::scene::bunny();
+        let bunny = flaneur::scene::bunny();
         let centre = Vec3::new(0.0, 5.0, 0.0);
         let near = refine_view(
             &bunny,
@@ -170,7 +171,7 @@ mod tests {
 
     #[test]
     fn bad_views_are_errors() {
-        let bunny = crate::scene::bunny();
+        let bunny = flaneur::scene::bunny();
         assert!(refine_view(&bunny, Vec3::ZERO, Vec3::ZERO, 1.0, 0.001).is_err());
         assert!(refine_view(&bunny, Vec3::Z * 20.0, Vec3::ZERO, 1.0, 0.0).is_err());
         assert!(refine_view(&bunny, Vec3::NAN, Vec3::ZERO, 1.0, 0.001).is_err());
@@ -180,7 +181,7 @@ mod tests {
     #[test]
     fn written_levels_load_back() {
         let dir = tempfile::tempdir().unwrap();
-        let levels = write_levels(&crate::scene::bunny(), dir.path(), 0.5, 200).unwrap();
+        let levels = write_levels(&flaneur::scene::bunny(), dir.path(), 0.5, 200).unwrap();
         for l in &levels {
             let back = load_merged(&l.path).unwrap();
             assert_eq!(back.triangle_count(), l.triangles, "{}", l.path.display());

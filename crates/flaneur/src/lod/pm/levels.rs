@@ -9,7 +9,7 @@
 
 use crate::scene::Mesh;
 
-use super::pm::ProgressiveMesh;
+use super::progressive::ProgressiveMesh;
 use super::vsplit::SelectiveMesh;
 use crate::error::{Error, Result};
 

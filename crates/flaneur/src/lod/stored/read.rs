@@ -12,10 +12,10 @@ use std::path::{Path, PathBuf};
 use crate::scene::Mesh;
 
 use super::chain::{ChainDirectory, LevelInfo};
-use super::dag::Dag;
-use super::pm::ProgressiveMesh;
 use super::table::LodEntry;
 use crate::error::{Error, Result};
+use crate::lod::dag::Dag;
+use crate::lod::pm::ProgressiveMesh;
 use crate::scene::decode_mesh;
 use crate::store::{Extent, PageKind, Store};
 

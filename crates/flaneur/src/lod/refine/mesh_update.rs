@@ -28,10 +28,9 @@ use std::ops::Range;
 
 use crate::scene::Mesh;
 
-use super::dag::Dag;
-use super::pm::ProgressiveMesh;
-use super::vsplit::{SplitIds, VertexSplit};
 use crate::error::{Error, Result};
+use crate::lod::dag::Dag;
+use crate::lod::pm::{ProgressiveMesh, SplitIds, VertexSplit};
 
 /// An absent entry of an ID map.
 const NONE: u32 = u32::MAX;

@@ -26,9 +26,9 @@
 //! (runs, offsets, edges pointing backward, finite attributes in range), so that bytes
 //! that pass are a DAG every traversal can walk without an index check failing.
 
-use super::dag::{Dag, DagConstruction};
-use super::dag_attrs::NodeAttrs;
-use super::dag_build::Csr;
+use super::attrs::NodeAttrs;
+use super::build::{Csr, DagConstruction, DagEdges};
+use super::graph::Dag;
 use crate::error::{Error, Result};
 use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 
@@ -92,17 +92,17 @@ impl Dag {
         b.extend_from_slice(&DAG_MAGIC);
         for field in [
             DAG_VERSION,
-            self.construction.code(),
+            self.edges.construction.code(),
             self.node_count() as u32,
             self.split_count() as u32,
             self.edge_count() as u32,
         ] {
             b.extend_from_slice(&field.to_le_bytes());
         }
-        for v in self.run_starts[1..]
+        for v in self.edges.run_starts[1..]
             .iter()
-            .chain(&self.parents.starts[1..])
-            .chain(&self.parents.items)
+            .chain(&self.edges.parents.starts[1..])
+            .chain(&self.edges.parents.items)
         {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -198,13 +198,13 @@ impl Dag {
             attrs.push(a);
         }
         let children = parents.transpose();
-        Ok(Dag::assemble(
+        let edges = DagEdges {
             construction,
             run_starts,
             parents,
             children,
-            attrs,
-        ))
+        };
+        Dag::assemble(edges, attrs)
     }
 }
 
@@ -277,7 +277,7 @@ mod tests {
         let (n, e) = (dag.node_count(), dag.edge_count());
         let sec = Sections::new(n as u64, e as u64);
         let child = (1..n as u32).find(|&k| dag.in_degree(k) >= 2).unwrap() as usize;
-        let first_parent = sec.parents as usize + 4 * dag.parents.starts[child] as usize;
+        let first_parent = sec.parents as usize + 4 * dag.edges.parents.starts[child] as usize;
         let cases: Vec<(usize, u32, &str)> = vec![
             (CONSTRUCTION_OFFSET, 9, "construction"),
             (SPLITS_OFFSET, dag.split_count() as u32 + 1, "cover"),

@@ -46,7 +46,7 @@
 //! that pass are a progressive mesh that `PmCursor` and `SelectiveMesh` walk without an
 //! index check failing (those check every operator anyway; this names the damage early).
 
-use super::pm::ProgressiveMesh;
+use super::progressive::ProgressiveMesh;
 use super::vsplit::VertexSplit;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;

@@ -1,7 +1,7 @@
 //! The DAG hierarchy of vertex splits — Zheng 2007 ch. 3: §3.2 (the legality condition
 //! that defines the dependencies), §3.3 (the full-, non- and mini-redundant
-//! constructions, `dag_build`), §3.4 (the visibility attributes, `dag_attrs`), and a
-//! flat codec for the database (`dag_codec`).
+//! constructions, `build`), §3.4 (the visibility attributes, `attrs`), and a
+//! flat codec for the database (`codec`).
 //!
 //! A split is legal (§3.2, as `SelectiveMesh::split` checks it) when its v_p and its
 //! pivots v_l, v_r are present and every adjusted triangle is present with v_p as a
@@ -29,56 +29,10 @@
 
 use std::ops::Range;
 
-use super::dag_attrs::{attributes, NodeAttrs};
-use super::dag_build::{choose_parents, potentials, run_starts, Csr};
-use super::pm::ProgressiveMesh;
-use super::vsplit::SelectiveMesh;
+use super::attrs::NodeAttrs;
+use super::build::{DagConstruction, DagEdges};
 use crate::error::{Error, Result};
-
-/// How a DAG's edges are chosen among the dependencies the legality condition gives
-/// (Zheng 2007 §3.3). All three allow exactly the same orders of splits and collapses;
-/// they differ in how many edges a traversal walks and the DAG stores.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum DagConstruction {
-    /// Every creator of an element of a node's dependency list is its parent (§3.3).
-    FullRedundant,
-    /// No edge that a longer path implies (Fig. 3.9): the transitive reduction.
-    /// Worst case quadratic; for tests and measurements.
-    NonRedundant,
-    /// The thesis's practical choice (Fig. 3.10): a potential parent that is also a
-    /// potential parent of a parent already taken is dropped. Linear time.
-    MiniRedundant,
-}
-
-impl DagConstruction {
-    /// All three, in the thesis's order.
-    pub const ALL: [DagConstruction; 3] = [
-        DagConstruction::FullRedundant,
-        DagConstruction::NonRedundant,
-        DagConstruction::MiniRedundant,
-    ];
-
-    /// The short name the thesis's tables use: "full", "non" or "mini".
-    pub fn name(self) -> &'static str {
-        match self {
-            DagConstruction::FullRedundant => "full",
-            DagConstruction::NonRedundant => "non",
-            DagConstruction::MiniRedundant => "mini",
-        }
-    }
-
-    pub(crate) fn code(self) -> u32 {
-        match self {
-            DagConstruction::FullRedundant => 0,
-            DagConstruction::NonRedundant => 1,
-            DagConstruction::MiniRedundant => 2,
-        }
-    }
-
-    pub(crate) fn from_code(code: u32) -> Option<DagConstruction> {
-        DagConstruction::ALL.into_iter().find(|c| c.code() == code)
-    }
-}
+use crate::lod::pm::{ProgressiveMesh, SelectiveMesh};
 
 /// The DAG hierarchy of a progressive mesh's vertex splits (Zheng 2007 ch. 3), with
 /// each node's visibility attributes.
@@ -120,12 +74,7 @@ impl DagConstruction {
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Dag {
-    pub(crate) construction: DagConstruction,
-    /// Node k's splits are `run_starts[k]..run_starts[k + 1]`; the last entry is the
-    /// split count.
-    pub(crate) run_starts: Vec<u32>,
-    pub(crate) parents: Csr,
-    pub(crate) children: Csr,
+    pub(crate) edges: DagEdges,
     pub(crate) roots: Vec<u32>,
     pub(crate) attrs: Vec<NodeAttrs>,
 }
@@ -137,57 +86,59 @@ impl Dag {
     /// vertex or triangle out of range, or created only by itself or a later split, or
     /// carries a non-finite position, normal or error.
     pub fn build(pm: &ProgressiveMesh, construction: DagConstruction) -> Result<Dag> {
-        let runs = run_starts(pm)?;
-        let parents = choose_parents(potentials(pm, &runs)?, construction);
-        let children = parents.transpose();
-        let attrs = attributes(pm, &runs, &children)?;
-        Ok(Dag::assemble(construction, runs, parents, children, attrs))
+        let edges = DagEdges::build(pm, construction)?;
+        let attrs = edges.attributes(pm)?;
+        Dag::assemble(edges, attrs)
     }
 
-    pub(crate) fn assemble(
-        construction: DagConstruction,
-        run_starts: Vec<u32>,
-        parents: Csr,
-        children: Csr,
-        attrs: Vec<NodeAttrs>,
-    ) -> Dag {
+    /// The DAG of `edges` with `attrs`, one per node, as [`DagEdges::attributes`]
+    /// computes them: what [`build`](Dag::build) does after building the edges, for a
+    /// caller that times or shares the two steps apart. An `Error::Invalid` when
+    /// `attrs` does not hold one entry per node.
+    pub fn assemble(edges: DagEdges, attrs: Vec<NodeAttrs>) -> Result<Dag> {
+        let nodes = edges.run_starts.len() - 1;
+        if attrs.len() != nodes {
+            return Err(Error::Invalid(format!(
+                "LOD DAG: {} attributes for {nodes} nodes",
+                attrs.len()
+            )));
+        }
+        let parents = &edges.parents;
         let roots = (0..parents.rows() as u32)
             .filter(|&k| parents.row(k as usize).is_empty())
             .collect();
-        Dag {
-            construction,
-            run_starts,
-            parents,
-            children,
+        Ok(Dag {
+            edges,
             roots,
             attrs,
-        }
+        })
     }
 
     /// How the edges were chosen.
     pub fn construction(&self) -> DagConstruction {
-        self.construction
+        self.edges.construction
     }
 
     /// The number of nodes: position collapses, each one split or a run of them.
     pub fn node_count(&self) -> usize {
-        self.run_starts.len() - 1
+        self.edges.run_starts.len() - 1
     }
 
     /// The number of vertex splits the nodes hold.
     pub fn split_count(&self) -> usize {
-        *self.run_starts.last().unwrap_or(&0) as usize
+        *self.edges.run_starts.last().unwrap_or(&0) as usize
     }
 
     /// The number of edges (each counted once: the thesis's in-edges).
     pub fn edge_count(&self) -> usize {
-        self.parents.items.len()
+        self.edges.parents.items.len()
     }
 
     /// The splits of `node`, in the order they apply. Panics when `node` is out of
     /// range, like slice indexing.
     pub fn splits(&self, node: u32) -> Range<usize> {
-        self.run_starts[node as usize] as usize..self.run_starts[node as usize + 1] as usize
+        self.edges.run_starts[node as usize] as usize
+            ..self.edges.run_starts[node as usize + 1] as usize
     }
 
     /// The node that holds split `split`, `None` past the last split.
@@ -196,33 +147,39 @@ impl Dag {
             return None;
         }
         // The last run start at or before `split`.
-        Some(self.run_starts.partition_point(|&s| s as usize <= split) as u32 - 1)
+        Some(
+            self.edges
+                .run_starts
+                .partition_point(|&s| s as usize <= split) as u32
+                - 1,
+        )
     }
 
     /// The nodes that must be split before `node`, ascending.
     pub fn parents(&self, node: u32) -> &[u32] {
-        self.parents.row(node as usize)
+        self.edges.parents.row(node as usize)
     }
 
     /// The nodes that must be collapsed before `node`, ascending.
     pub fn children(&self, node: u32) -> &[u32] {
-        self.children.row(node as usize)
+        self.edges.children.row(node as usize)
     }
 
     /// The number of `node`'s parents.
     pub fn in_degree(&self, node: u32) -> u32 {
-        self.parents.starts[node as usize + 1] - self.parents.starts[node as usize]
+        self.edges.parents.starts[node as usize + 1] - self.edges.parents.starts[node as usize]
     }
 
     /// The number of `node`'s children.
     pub fn out_degree(&self, node: u32) -> u32 {
-        self.children.starts[node as usize + 1] - self.children.starts[node as usize]
+        self.edges.children.starts[node as usize + 1] - self.edges.children.starts[node as usize]
     }
 
     /// Every node's in-degree: the counters a traversal starts from, which reach 0
     /// when all of a node's parents are split.
     pub fn in_degrees(&self) -> Vec<u32> {
-        self.parents
+        self.edges
+            .parents
             .starts
             .windows(2)
             .map(|w| w[1] - w[0])
@@ -246,11 +203,11 @@ impl Dag {
 
     /// The bytes the DAG takes in memory: its arrays' lengths, not their capacities.
     pub fn memory_bytes(&self) -> usize {
-        4 * (self.run_starts.len()
-            + self.parents.starts.len()
-            + self.parents.items.len()
-            + self.children.starts.len()
-            + self.children.items.len()
+        4 * (self.edges.run_starts.len()
+            + self.edges.parents.starts.len()
+            + self.edges.parents.items.len()
+            + self.edges.children.starts.len()
+            + self.edges.children.items.len()
             + self.roots.len())
             + std::mem::size_of::<NodeAttrs>() * self.attrs.len()
     }
@@ -575,7 +532,7 @@ mod tests {
             for (p, k) in edges(dag) {
                 assert!(p < k, "parents come first");
             }
-            assert_eq!(dag.children.transpose(), dag.parents);
+            assert_eq!(dag.edges.children.transpose(), dag.edges.parents);
             let roots: Vec<u32> = (0..dag.node_count() as u32)
                 .filter(|&k| dag.in_degree(k) == 0)
                 .collect();
@@ -618,7 +575,10 @@ mod tests {
                 assert_eq!(mesh, before, "a failed node changes nothing");
             }
         };
-        check(&ProgressiveMesh::build(&crate::scene::bunny()).unwrap(), 300);
+        check(
+            &ProgressiveMesh::build(&crate::scene::bunny()).unwrap(),
+            300,
+        );
         check(&ProgressiveMesh::build(&building()).unwrap(), usize::MAX);
         check(
             &ProgressiveMesh::build(&random_patch(3)).unwrap(),

@@ -14,8 +14,8 @@
 
 use std::collections::VecDeque;
 
-use super::dag::Dag;
 use super::prefetch_hint::prefetch;
+use crate::lod::dag::Dag;
 
 // A node's status bits and its counter share one word, so that maintaining the fronts
 // after an operator takes one cache miss per neighbour, not two.

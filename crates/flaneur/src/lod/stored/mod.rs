@@ -1,0 +1,19 @@
+//! LODs stored in the database: what `flaneur build` bakes for each object (its chain of
+//! coarse levels, coarsest first so that a coarse level reads few pages, and for large
+//! objects its progressive mesh and DAG), the table that finds them by object id, and
+//! their reading back through the store, every page counted.
+
+mod bake;
+mod chain;
+mod read;
+mod table;
+
+pub(crate) use bake::LodWriter;
+pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
+pub use chain::{
+    decode_chain, encode_chain, ChainDirectory, LevelInfo, CHAIN_HEADER_LEN, CHAIN_MAGIC,
+    CHAIN_VERSION,
+};
+pub(crate) use read::{level_mesh, levels, progressive, read_progressive, ProgressiveBytes};
+pub(crate) use table::{LodEntry, LodTable};
+pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};
