@@ -25,6 +25,13 @@ use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
 
 /// How to build.
+///
+/// ```
+/// use flaneur::BuildOptions;
+/// // Small pages, no LODs: a quick index of the meshes alone.
+/// let opts = BuildOptions { page_size: 1024, lod: None, ..BuildOptions::default() };
+/// assert!(opts.visibility.is_none()); // the long step runs only when asked for
+/// ```
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
     /// Page size in bytes (power of two, 1 KiB to 64 KiB).
@@ -54,6 +61,18 @@ impl Default for BuildOptions {
 }
 
 /// What a build wrote.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 20, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// let built = flaneur::build_from_scene(&scene, &db, &Default::default())?;
+/// assert_eq!(built.objects, 20);
+/// assert_eq!(built.bytes, built.pages * 4096);
+/// assert!(built.lod.is_some() && built.visibility.is_none());
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BuildSummary {
     pub objects: u64,
@@ -91,11 +110,44 @@ pub struct VisibilityReport {
 }
 
 /// Builds a database from a citygen scene file.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// let dir = tempfile::tempdir().unwrap();
+/// let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// let city = citygen::CityConfig { objects: 30, landmarks: 0.0, ..Default::default() };
+/// citygen::write_city(&city, &scene, false)?;
+/// flaneur::build_from_scene(&scene, &db, &flaneur::BuildOptions::default())?;
+/// assert_eq!(flaneur::Database::open(&db)?.objects(), 30);
+/// # Ok(()) }
+/// ```
 pub fn build_from_scene(scene: &Path, db: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     build_from_scene_with_progress(scene, db, opts, &Silent)
 }
 
 /// [`build_from_scene`], telling `progress` how many objects (then viewcells) are done.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// use std::sync::atomic::{AtomicU64, Ordering};
+/// use flaneur::progress::{Progress, Step};
+///
+/// struct Built(AtomicU64);
+/// impl Progress for Built {
+///     fn update(&self, step: Step, done: u64, _total: Option<u64>) {
+///         if step == Step::Objects {
+///             self.0.store(done, Ordering::Relaxed);
+///         }
+///     }
+/// }
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 12, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// let built = Built(AtomicU64::new(0));
+/// flaneur::build_from_scene_with_progress(&scene, &db, &Default::default(), &built)?;
+/// assert_eq!(built.0.load(Ordering::Relaxed), 12); // every object, LODs included
+/// # Ok(()) }
+/// ```
 pub fn build_from_scene_with_progress(
     scene: &Path,
     db: &Path,
@@ -113,11 +165,36 @@ pub fn build_from_scene_with_progress(
 
 /// Builds a database from OBJ files: every object or group becomes an object, with
 /// ids in file order.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// let dir = tempfile::tempdir().unwrap();
+/// let obj = dir.path().join("two.obj");
+/// // Two tetrahedra, 10 m apart.
+/// let tetra = |x: f32| format!("v {x} 0 0\nv {} 0 0\nv {x} 1 0\nv {x} 0 1\n", x + 1.0);
+/// let faces = |b: u32| format!("f {} {} {}\nf {} {} {}\nf {} {} {}\nf {} {} {}\n",
+///     b, b + 2, b + 1, b, b + 1, b + 3, b, b + 3, b + 2, b + 1, b + 2, b + 3);
+/// let text = format!("o a\n{}{}o b\n{}{}", tetra(0.0), faces(1), tetra(10.0), faces(5));
+/// std::fs::write(&obj, text).unwrap();
+/// let db = dir.path().join("two.flaneur");
+/// let built = flaneur::build_from_obj(&[obj], &db, &flaneur::BuildOptions::default())?;
+/// assert_eq!((built.objects, built.triangles), (2, 8));
+/// # Ok(()) }
+/// ```
 pub fn build_from_obj(files: &[PathBuf], db: &Path, opts: &BuildOptions) -> Result<BuildSummary> {
     build_from_obj_with_progress(files, db, opts, &Silent)
 }
 
 /// [`build_from_obj`], telling `progress` how many objects (then viewcells) are done.
+///
+/// ```no_run
+/// # fn main() -> flaneur::Result<()> {
+/// // A program that does not draw bars passes `Silent` (what `build_from_obj` does).
+/// let files = ["block.obj".into(), "tower.obj".into()];
+/// let opts = flaneur::BuildOptions::default();
+/// flaneur::build_from_obj_with_progress(&files, "city.flaneur".as_ref(), &opts, &flaneur::progress::Silent)?;
+/// # Ok(()) }
+/// ```
 pub fn build_from_obj_with_progress(
     files: &[PathBuf],
     db: &Path,

@@ -16,6 +16,19 @@ use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 pub use crate::catalog::KindCounts;
 
 /// What `flaneur info` prints.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
+/// let info = flaneur::Database::open(&path)?.info()?;
+/// assert_eq!(info.objects, 40);
+/// assert_eq!(info.file_bytes, info.pages * info.page_size as u64);
+/// assert!(info.lod.is_some() && info.visibility.is_none());
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DatabaseInfo {
     pub objects: u64,
@@ -63,10 +76,15 @@ pub struct VisibilityInfo {
 
 /// An open database.
 ///
-/// ```no_run
+/// ```
 /// # fn main() -> flaneur::Result<()> {
-/// let db = flaneur::Database::open("city.flaneur".as_ref())?;
-/// let hits = db.range(&"0,0,0,100,50,100".parse()?)?;
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
+/// let db = flaneur::Database::open(&path)?;
+/// let hits = db.range(&db.bounds())?;
+/// assert_eq!(hits.objects.len(), 40);
 /// println!("{} objects, {} pages read", hits.objects.len(), hits.pages.len());
 /// # Ok(()) }
 /// ```

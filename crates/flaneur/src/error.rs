@@ -3,8 +3,31 @@
 
 use std::path::PathBuf;
 
+/// The library's result: [`Error`] unless said otherwise.
+///
+/// ```
+/// fn objects(path: &std::path::Path) -> flaneur::Result<u64> {
+///     Ok(flaneur::Database::open(path)?.objects())
+/// }
+/// assert!(objects("no-such.flaneur".as_ref()).is_err());
+/// ```
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// What went wrong, naming the file, page or object.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let path = dir.path().join("not-a-database.flaneur");
+/// std::fs::write(&path, vec![7u8; 8192]).unwrap();
+/// match flaneur::Database::open(&path) {
+///     Err(flaneur::Error::NotADatabase { path: p, what }) => {
+///         assert_eq!(p, path);
+///         println!("{what}"); // what was found instead of the header
+///     }
+///     Err(other) => panic!("{other}"),
+///     Ok(_) => panic!("opened a file of sevens"),
+/// }
+/// ```
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("{path}: {source}")]

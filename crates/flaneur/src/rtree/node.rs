@@ -37,6 +37,19 @@ const KIND_OFFSET: usize = TRIANGLES_OFFSET + 4;
 pub const LEAF_ENTRY_LEN: usize = KIND_OFFSET + 4;
 
 /// An object as the index knows it: what a query returns.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 10, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
+/// let db = flaneur::Database::open(&path)?;
+/// let first = db.range(&db.bounds())?.objects[0];
+/// let mesh = db.mesh(&first)?; // the extent's pages, each checked
+/// assert_eq!(mesh.triangle_count(), first.triangles as usize);
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObjectEntry {
     pub id: u64,

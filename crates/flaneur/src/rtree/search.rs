@@ -16,6 +16,19 @@ pub trait Selection {
 }
 
 /// The objects a query returned and the pages it read, in the order it read them.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
+/// let db = flaneur::Database::open(&path)?;
+/// let all = db.range(&db.bounds())?;
+/// assert_eq!(all.ids().len(), 40);
+/// assert!(all.pages.contains(&db.tree().root)); // every query starts at the root
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct QueryResult {
     pub objects: Vec<ObjectEntry>,
