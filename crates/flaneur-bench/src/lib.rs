@@ -4,8 +4,11 @@
 //! `walk_setup` is the walk every walking experiment takes; `city_series` the generated
 //! cities of growing size that `db_size` walks; `plot` draws every experiment's PNGs;
 //! `report` is what every experiment's report gives the command that writes it.
-//! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on procedural models,
-//! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
+//! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on
+//! procedural models, no database needed, with `lod_dag_stats` (the three DAG
+//! constructions compared) and `lod_orbit` (a scripted orbit refined frame by frame)
+//! beneath them; `lod_inspect` is what `flaneur lod` runs on a mesh file (its levels
+//! written as OBJ, one view's refinement measured); `pvs_prefetch` runs the neighbour PVS prefetchers
 //! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on.
 

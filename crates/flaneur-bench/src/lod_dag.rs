@@ -10,13 +10,13 @@
 //! Happy Buddha's (1,087,474), the smallest and largest of Table 3.3 that the issue asks
 //! for. Each of our rows is set beside the thesis's model nearest in triangles.
 //!
-//! The non-redundant construction is worst-case quadratic (`lod::dag_build`); the thesis
+//! The non-redundant construction is worst-case quadratic (`flaneur::lod::dag`, its construction); the thesis
 //! took 382 s for it on 1.09M triangles. Ours prunes its walk up the DAG and takes 2–3 s
 //! on the 1.09M-triangle torus, so it is built for every model by default;
 //! [`LodDagConfig::non_redundant_max`] skips it above a size, and then its columns, and
 //! the share of redundant edges removed (which needs it), are reported as skipped.
 //!
-//! The figures themselves are `lod::dag_stats`'s: construction times are the edges alone
+//! The figures themselves are `lod_dag_stats`'s: construction times are the edges alone
 //! (dependency lists, parents, children), as Table 3.2 times them; the progressive mesh
 //! before them and the visibility attributes after are timed apart.
 

@@ -5,7 +5,7 @@
 //! Per frame: traversal and update time, triangles, front nodes, updates; every 5th
 //! frame the accuracy of each traversal against the priority-oriented one (Fig. 4.12).
 //!
-//! The run itself is `lod::refine_orbit` on `lod::orbit_path`; this module builds the
+//! The run itself is `lod_orbit::refine_orbit` on `lod_orbit::orbit_path`; this module builds the
 //! landmark, times the build, and writes the figures out. The landmark (our choice) is
 //! a procedural bumpy torus (`lod::bumpy_torus`) of the Happy Buddha's 1,087,474
 //! triangles by default, the model of Table 4.1's last column; the thesis's scanned

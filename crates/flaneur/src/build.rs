@@ -8,7 +8,7 @@
 //! With LODs on (the default), each object is also simplified on the thread pool while
 //! the build reads on, and its coarse levels (and, for large objects, its progressive
 //! mesh and DAG) are appended a batch behind its mesh; the table that finds them by id
-//! is written at the end (`lod::bake`, `lod::table`). Simplifying is most of the time of
+//! is written at the end (`lod::stored`). Simplifying is most of the time of
 //! such a build.
 
 use std::path::{Path, PathBuf};
