@@ -10,8 +10,8 @@
 //! Happy Buddha's (1,087,474), the smallest and largest of Table 3.3 that the issue asks
 //! for. Each of our rows is set beside the thesis's model nearest in triangles.
 //!
-//! The non-redundant construction is worst-case quadratic (`flaneur::lod::dag`, its construction); the thesis
-//! took 382 s for it on 1.09M triangles. Ours prunes its walk up the DAG and takes 2–3 s
+//! The non-redundant construction is worst-case quadratic (`flaneur::lod::dag`'s
+//! construction); the thesis took 382 s for it on 1.09M triangles. Ours prunes its walk up the DAG and takes 2–3 s
 //! on the 1.09M-triangle torus, so it is built for every model by default;
 //! [`LodDagConfig::non_redundant_max`] skips it above a size, and then its columns, and
 //! the share of redundant edges removed (which needs it), are reported as skipped.
