@@ -21,8 +21,8 @@
 //! This file holds the window itself: opening it, what it keeps from frame to frame,
 //! and each pose's pump of events and steering. Its other parts stand beside it, one
 //! idea a file: the options and summary others read, the winit events, the keys and
-//! mouse, the device's loss and recovery, a frame's drawing, the HUD's lines, and
-//! recorded paths.
+//! mouse, the device's loss and recovery, a frame's drawing, the HUD's lines,
+//! recorded paths, and the session of walks run one after another at the window.
 
 mod device;
 mod events;
@@ -31,6 +31,7 @@ mod hud_lines;
 mod keys;
 mod options;
 mod recording;
+mod session;
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -49,6 +50,7 @@ use flaneur::walk::{FrameFigures, Pose, Viewer};
 use hud_lines::GRAPH_FRAMES;
 pub use options::{Change, ViewMode, ViewOptions, ViewSummary};
 pub use recording::save_recording;
+pub use session::{walk_at_window, WindowSession};
 
 /// How long an error stays on the HUD.
 const MESSAGE_FOR: Duration = Duration::from_secs(6);
