@@ -44,7 +44,6 @@ use events::Events;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
-use flaneur::walk::lod_select::LodSelector;
 use flaneur::walk::steer::Steer;
 use flaneur::walk::{FrameFigures, Pose, Viewer};
 use hud_lines::GRAPH_FRAMES;
@@ -65,7 +64,10 @@ pub struct WalkWindow<'a> {
     last_try: Instant,
     opts: ViewOptions,
     steer: Steer,
-    lods: Option<LodSelector<'a>>,
+    /// The τ the walk's LOD selection draws under (`None`: full detail), and whether a
+    /// key set it since the last frame, so that selection starts afresh.
+    lod_tau: Option<f32>,
+    lod_restart: bool,
     captured: bool,
     pub show_hud: bool,
     pub wireframe: bool,
@@ -148,10 +150,9 @@ impl<'a> WalkWindow<'a> {
             .clone()
             .expect("the loop above ends with a window");
         let surfaced = Surfaced::new(&instance, &window, &opts)?;
-        let lods = opts
-            .lod_tau
-            .map(|tau| LodSelector::new(db, tau).map(LodSelector::tolerating_damage))
-            .transpose()?;
+        if let Some(tau) = opts.lod_tau {
+            flaneur::walk::lod_select::check_tau(tau)?;
+        }
         Ok(WalkWindow {
             db,
             event_loop,
@@ -164,8 +165,9 @@ impl<'a> WalkWindow<'a> {
                 steer.speed = opts.speed;
                 steer
             },
+            lod_tau: opts.lod_tau,
+            lod_restart: false,
             opts,
-            lods,
             captured: false,
             show_hud: true,
             wireframe: false,
@@ -216,7 +218,7 @@ impl<'a> WalkWindow<'a> {
 
     /// LOD selection's threshold now (`[` and `]` change it), `None` at full detail.
     pub fn lod_tau(&self) -> Option<f32> {
-        self.lods.as_ref().map(|l| l.tau())
+        self.lod_tau
     }
 
     /// Where the viewer stands now.

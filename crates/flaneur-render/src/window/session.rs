@@ -9,6 +9,7 @@ use super::{Change, ViewMode, ViewOptions, ViewSummary, WalkWindow};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
+use flaneur::walk::lod_select::WalkLods;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::Pose;
@@ -25,12 +26,12 @@ pub struct WindowSession {
 }
 
 /// Opens the window on `db` as `opts` say and walks in `mode` until it closes: REVIEW
-/// and BOX through [`review::walk_live`], PVS through [`pvs_walk::walk_pvs_live`] with
+/// and BOX through [`review::walk_live_with`], PVS through [`pvs_walk::walk_pvs_live_with`] with
 /// PBNP prefetching (REVIEW instead, said so, on a database without visibility).
 /// `boxes` and `top_view` are how the window starts. `tell` is told each problem as it
 /// happens (see [`WalkWindow::telling`]); `opened` is given the window once it is open,
 /// before the first walk, to say what it draws on. An error when the window cannot
-/// open, or when the walk failed [five times running](FAILURES).
+/// open, or when the walk failed five times running.
 pub fn walk_at_window(
     db: &Database,
     opts: ViewOptions,
@@ -52,6 +53,9 @@ pub fn walk_at_window(
     window.boxes = boxes;
     window.top_view = top_view;
     opened(&window);
+    // The walk's LOD selection, handed from walk to walk so that a restart keeps the
+    // levels read and the objects refined.
+    let mut lods = WalkLods::new(db);
     let mut failures = 0;
     loop {
         let walked = match mode {
@@ -68,9 +72,9 @@ pub fn walk_at_window(
                 let rule = PvsPrefetch::Pbnp {
                     border: DEFAULT_BORDER,
                 };
-                pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut window).map(|_| ())
+                pvs_walk::walk_pvs_live_with(db, rule, &mut lods, |_| {}, &mut window).map(|_| ())
             }
-            _ => review::walk_live(db, &cfg, |_| {}, &mut window).map(|_| ()),
+            _ => review::walk_live_with(db, &cfg, &mut lods, |_| {}, &mut window).map(|_| ()),
         };
         match walked {
             Ok(()) => failures = 0,
