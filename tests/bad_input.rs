@@ -175,7 +175,7 @@ impl flaneur::walk::FrameSink for Walker<'_> {
         _: usize,
         _: &flaneur::geom::Camera,
         buffer: &flaneur::walk::buffer::ObjectBuffer,
-        _: &[&flaneur::walk::buffer::Loaded],
+        _: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.held.extend(buffer.iter().map(|o| o.entry.id));
         Ok(())

@@ -13,7 +13,7 @@ use flaneur_bench::report::Report;
 use flaneur::geom::Camera;
 use flaneur_render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
-use flaneur::walk::buffer::{Loaded, ObjectBuffer};
+use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{motion, FrameSink, Motion};
 use flaneur::{BuildOptions, Database};
@@ -255,9 +255,10 @@ impl FrameSink for Checked<'_> {
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
-        self.writer.frame(index, camera, buffer, drawn)?;
+        self.writer.frame(index, camera, buffer, selection)?;
+        let drawn = selection.culled;
         let gpu = self.writer.resident();
         assert!(
             drawn.iter().all(|o| gpu.get((o.entry.id, 0)).is_some()),
@@ -269,6 +270,10 @@ impl FrameSink for Checked<'_> {
         );
         self.frames += 1;
         Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.writer.lod_tau()
     }
 }
 
@@ -338,7 +343,7 @@ fn a_viewer_standing_still_allocates_nothing_after_the_first_frame() {
     let counts = |frames: usize| {
         let mut writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
             .unwrap()
-            .with_lods(&db, 0.001)
+            .with_lod_tau(0.001)
             .unwrap();
         review::walk_into(&db, &standing(frames), &cfg, |_| {}, &mut writer).unwrap();
         let t = writer.times;
@@ -455,6 +460,8 @@ struct AtLevels<'a> {
     writer: FrameWriter<'a>,
     /// Per frame: the triangles of the objects drawn at full detail.
     full: Vec<u64>,
+    /// The selective mesh of each object drawn refined, as last drawn.
+    refined: HashMap<u64, flaneur::lod::CompactMesh>,
 }
 
 impl FrameSink for AtLevels<'_> {
@@ -463,9 +470,18 @@ impl FrameSink for AtLevels<'_> {
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
-        let (_, selected) = self.writer.draw(camera, buffer, drawn)?;
+        self.writer.draw(camera, buffer, selection)?;
+        let (selected, mut refinements) = selection.parts();
+        for d in selected {
+            if d.level == flaneur::walk::lod_select::REFINED {
+                let r = refinements.as_mut().and_then(|r| r.refined(d.id));
+                self.refined
+                    .extend(r.map(|r| (d.id, r.refiner.mesh().clone())));
+            }
+        }
+        let (selected, drawn) = (&selection.drawn, selection.culled);
         assert_eq!(selected.len(), drawn.len(), "frame {index}");
         let gpu = self.writer.resident();
         for (d, o) in selected.iter().zip(drawn) {
@@ -489,6 +505,10 @@ impl FrameSink for AtLevels<'_> {
             .push(drawn.iter().map(|o| o.mesh.triangle_count() as u64).sum());
         Ok(())
     }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.writer.lod_tau()
+    }
 }
 
 /// Drawn with LOD selection, a walk's far objects come from the database's coarse
@@ -509,11 +529,12 @@ fn a_walk_drawn_at_its_levels_of_detail() {
     let tau = 0.05;
     let writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
         .unwrap()
-        .with_lods(&db, tau)
+        .with_lod_tau(tau)
         .unwrap();
     let mut sink = AtLevels {
         writer,
         full: Vec::new(),
+        refined: HashMap::new(),
     };
     review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
     let t = &sink.writer.times;
@@ -558,7 +579,7 @@ fn a_walk_drawn_at_its_levels_of_detail() {
     assert!(r.markdown().contains("τ = 0.05"));
     assert!(FrameWriter::drawing(&gpu, (8, 8), (&db.bounds(), 10.0))
         .unwrap()
-        .with_lods(&db, 0.0)
+        .with_lod_tau(0.0)
         .is_err());
 }
 
@@ -664,11 +685,12 @@ fn large_objects_are_refined_view_by_view() {
     let path = motion::generate(&db.bounds(), Motion::Normal, 90, 30.0, 5).unwrap();
     let writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
         .unwrap()
-        .with_lods(&db, 0.001)
+        .with_lod_tau(0.001)
         .unwrap();
     let mut sink = AtLevels {
         writer,
         full: Vec::new(),
+        refined: HashMap::new(),
     };
     review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
     let lod = sink.writer.times.lod.unwrap();
@@ -682,9 +704,8 @@ fn large_objects_are_refined_view_by_view() {
     assert!(!refined.is_empty());
     // What the GPU holds of each is the refiner's selective mesh, after a walk of
     // incremental uploads.
-    let lods = sink.writer.lods().unwrap();
     for key in &refined {
-        let mesh = lods.refined_mesh(key.0).unwrap();
+        let mesh = &sink.refined[&key.0];
         let (vertices, indices) = sink.writer.resident().read_back(&gpu, *key).unwrap();
         assert_eq!(indices, mesh.indices(), "object {}", key.0);
         for &i in &indices {

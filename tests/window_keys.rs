@@ -32,15 +32,23 @@ impl FrameSink for Typist<'_, '_> {
         index: usize,
         camera: &flaneur::geom::Camera,
         buffer: &flaneur::walk::buffer::ObjectBuffer,
-        drawn: &[&flaneur::walk::buffer::Loaded],
+        selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         if index == 3 {
             self.typing = Some(Command::new("xdotool").args(&self.script).spawn().unwrap());
         }
-        self.window.frame(index, camera, buffer, drawn)?;
+        self.window.frame(index, camera, buffer, selection)?;
         let w = &self.window;
         self.seen.push((w.show_hud, w.boxes, w.lod_tau()));
         Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.window.lod_tau()
+    }
+
+    fn lod_restart(&mut self) -> bool {
+        self.window.lod_restart()
     }
 }
 

@@ -157,7 +157,7 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
         gpu.adapter.name, gpu.adapter.backend
     );
     let mut writer = flaneur_render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
-        .with_lods(db, flaneur::walk::lod_select::DEFAULT_TAU)?;
+        .with_lod_tau(flaneur::walk::lod_select::DEFAULT_TAU)?;
     let bar = indicatif::ProgressBar::new(frames as u64);
     review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
     bar.finish_and_clear();

@@ -7,10 +7,8 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{parse_look, parse_size, parse_vec3};
 use flaneur::walk::motion::CameraPath;
-use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::Database;
-use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
-use flaneur_render::{Change, ViewMode};
+use flaneur_render::ViewMode;
 
 /// `flaneur view`'s arguments.
 #[derive(clap::Args)]
@@ -104,97 +102,39 @@ impl ViewArgs {
     }
 }
 
-/// A session at the window: walks run one after another from where the viewer stands
-/// (a key changed the mode or the budget, or the walk failed), until the window closes.
+/// A session at the window (`flaneur_render::walk_at_window`): walks run one after
+/// another from where the viewer stands, until the window closes; what it drew said
+/// after, and the poses walked saved to `record`.
 pub fn view(
     db: &Database,
     opts: flaneur_render::ViewOptions,
     mode: ViewMode,
-    (boxes, top_view): (bool, bool),
+    boxes_top_view: (bool, bool),
     record: Option<&Path>,
 ) -> Result<()> {
     let start = opts.start;
-    let preset = |m: ViewMode| ReviewConfig {
-        pace: None,
-        ..ReviewConfig::preset(match m {
-            ViewMode::Box => Preset::Box,
-            _ => Preset::Optimal,
-        })
-    };
-    let mut mode = mode;
-    let mut cfg = preset(mode);
-    let mut window =
-        flaneur_render::WalkWindow::open(db, opts, mode)?.telling(|m| eprintln!("{m}"));
-    window.boxes = boxes;
-    window.top_view = top_view;
-    if let Some(a) = window.adapter() {
-        println!("drawing on {} ({:?})", a.name, a.backend);
-    }
-    let p = start.position;
-    println!(
-        "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
-         Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
-        p.x,
-        p.y,
-        p.z,
-        mode.name()
-    );
-    let mut failures = 0;
-    loop {
-        let walked = match mode {
-            ViewMode::Pvs if !db.has_visibility() => {
-                window.report(format!(
-                    "{} has no visibility data (build it with --visibility): showing REVIEW",
-                    db.store().path().display()
-                ));
-                mode = ViewMode::Review;
-                window.mode = mode;
-                continue;
+    let session = flaneur_render::walk_at_window(
+        db,
+        opts,
+        mode,
+        boxes_top_view,
+        |m| eprintln!("{m}"),
+        |window| {
+            if let Some(a) = window.adapter() {
+                println!("drawing on {} ({:?})", a.name, a.backend);
             }
-            ViewMode::Pvs => {
-                let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp {
-                    border: PvsPrefetchConfig::default().border,
-                };
-                flaneur::walk::pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut window).map(|_| ())
-            }
-            _ => review::walk_live(db, &cfg, |_| {}, &mut window).map(|_| ()),
-        };
-        match walked {
-            Ok(()) => failures = 0,
-            Err(e) => {
-                failures += 1;
-                window.report(format!(
-                    "the walk stopped: {e}; going on from where you stand"
-                ));
-                if failures >= 5 {
-                    bail!("the walk failed five times running; last: {e}");
-                }
-            }
-        }
-        if window.closed() {
-            break;
-        }
-        match window.change {
-            Some(Change::Mode(m)) => {
-                cfg = ReviewConfig {
-                    memory_budget: cfg.memory_budget,
-                    ..preset(m)
-                };
-                mode = m;
-                window.mode = m;
-            }
-            Some(Change::Budget(f)) => {
-                cfg.memory_budget = ((cfg.memory_budget as f32 * f) as usize).max(1 << 20);
-                window.report(format!(
-                    "object buffer budget {:.0} MiB",
-                    cfg.memory_budget as f64 / 1048576.0
-                ));
-            }
-            None => {}
-        }
-        window.resume();
-    }
-    let s = &window.summary;
+            let p = start.position;
+            println!(
+                "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
+                 Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
+                p.x,
+                p.y,
+                p.z,
+                mode.name()
+            );
+        },
+    )?;
+    let s = &session.summary;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     println!(
@@ -210,10 +150,10 @@ pub fn view(
         s.problems.len()
     );
     if let Some(r) = record {
-        flaneur_render::save_recording(&window.recorded, r)?;
+        flaneur_render::save_recording(&session.recorded, r)?;
         println!(
             "{} poses recorded to {}",
-            window.recorded.len(),
+            session.recorded.len(),
             r.display()
         );
     }

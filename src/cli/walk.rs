@@ -244,7 +244,7 @@ fn rendered<R>(
     let mut writer =
         flaneur_render::FrameWriter::new(&gpu, r.size, (&db.bounds(), far), &r.dir, r.every)?;
     if let Some(tau) = r.lod_tau {
-        writer = writer.with_lods(db, tau)?;
+        writer = writer.with_lod_tau(tau)?;
     }
     let result = walk(&mut writer)?;
     Ok((

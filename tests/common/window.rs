@@ -66,7 +66,7 @@ impl FrameSink for Player<'_, '_> {
         index: usize,
         camera: &flaneur::geom::Camera,
         buffer: &flaneur::walk::buffer::ObjectBuffer,
-        drawn: &[&flaneur::walk::buffer::Loaded],
+        selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.frames += 1;
         if Some(index) == self.resize_at {
@@ -75,7 +75,15 @@ impl FrameSink for Player<'_, '_> {
         if Some(index) == self.lose_at {
             self.window.lose_device();
         }
-        self.window.frame(index, camera, buffer, drawn)
+        self.window.frame(index, camera, buffer, selection)
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.window.lod_tau()
+    }
+
+    fn lod_restart(&mut self) -> bool {
+        self.window.lod_restart()
     }
 }
 

@@ -20,11 +20,11 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
-use flaneur::walk::buffer::{Loaded, ObjectBuffer};
+use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::lod_select::LodCounts;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
-use flaneur::walk::{CameraPath, FrameSink};
+use flaneur::walk::{CameraPath, FrameSink, Selection};
 
 /// The walk whose frames are compared.
 #[derive(Clone, Copy, Debug)]
@@ -162,9 +162,9 @@ impl FrameSink for Twice<'_> {
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut Selection<'_>,
     ) -> Result<()> {
-        let (mine, _) = self.mode.draw(camera, buffer, drawn)?;
+        let mine = self.mode.draw(camera, buffer, selection)?;
         let (reference, reference_triangles) = self.reference(camera)?;
         let (psnr, differ) = compare(&mine.rgba, &reference.rgba)?;
         self.rows.push(FidelityRow {
@@ -176,6 +176,10 @@ impl FrameSink for Twice<'_> {
             coarse: *self.mode.times.coarse.last().unwrap_or(&0),
         });
         Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.mode.lod_tau()
     }
 }
 
@@ -200,7 +204,7 @@ pub fn run(
         gpu,
         mode: match drawing.lod_tau {
             Some(tau) => {
-                FrameWriter::drawing(gpu, (width, height), (&bounds, far))?.with_lods(db, tau)?
+                FrameWriter::drawing(gpu, (width, height), (&bounds, far))?.with_lod_tau(tau)?
             }
             None => FrameWriter::drawing(gpu, (width, height), (&bounds, far))?,
         },

@@ -1,5 +1,5 @@
 //! A walk drawn headless, frame by frame, into PNG files: the objects the walk engine
-//! selected, each at the level of detail its LOD selection chose, kept on the GPU as
+//! selected, each at the level of detail the walk's LOD selection chose, kept on the GPU as
 //! the object buffer holds them (uploaded when an object is loaded or changes level,
 //! freed when it is evicted, so a steady walk allocates nothing), with the time each
 //! frame spent on the CPU side (LOD selection, uploads) and on drawing and reading back.
@@ -8,12 +8,11 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::{Frame, Gpu, GpuMeshes, Offscreen};
-use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
-use flaneur::walk::buffer::{Loaded, ObjectBuffer};
-use flaneur::walk::lod_select::{Drawn, LodCounts, LodSelector};
-use flaneur::walk::FrameSink;
+use flaneur::walk::buffer::ObjectBuffer;
+use flaneur::walk::lod_select::{check_tau, LodCounts};
+use flaneur::walk::{FrameSink, Selection};
 
 /// What drawing a walk cost.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -66,8 +65,8 @@ pub struct FrameWriter<'a> {
     meshes: GpuMeshes,
     /// Where frames go, and every how many.
     out: Option<(PathBuf, usize)>,
-    /// The walk's LOD selection; `None`: every object at full detail.
-    lods: Option<LodSelector<'a>>,
+    /// The τ the walk's LOD selection draws under; `None`: every object at full detail.
+    lod_tau: Option<f32>,
     pub times: FrameTimes,
 }
 
@@ -106,28 +105,24 @@ impl<'a> FrameWriter<'a> {
             target,
             meshes: GpuMeshes::default(),
             out: None,
-            lods: None,
+            lod_tau: None,
             times: FrameTimes::default(),
         })
     }
 
-    /// The same writer drawing each object at the level of detail LOD selection
-    /// chooses under `tau` (a fraction of the viewport; see
-    /// [`flaneur::walk::lod_select`]), coarse levels read from `db`.
-    pub fn with_lods(self, db: &'a Database, tau: f32) -> Result<FrameWriter<'a>> {
+    /// The same writer asking the walk for each object at the level of detail LOD
+    /// selection chooses under `tau` (a fraction of the viewport; see
+    /// [`flaneur::walk::lod_select`]): the walk reads the coarse levels and selects.
+    pub fn with_lod_tau(self, tau: f32) -> Result<FrameWriter<'a>> {
+        check_tau(tau)?;
         Ok(FrameWriter {
-            lods: Some(LodSelector::new(db, tau)?),
+            lod_tau: Some(tau),
             times: FrameTimes {
                 lod: Some(LodCounts::default()),
                 ..self.times
             },
             ..self
         })
-    }
-
-    /// The walk's LOD selection, when the frames are drawn at its levels.
-    pub fn lods(&self) -> Option<&LodSelector<'a>> {
-        self.lods.as_ref()
     }
 
     /// The meshes on the GPU now.
@@ -138,44 +133,23 @@ impl<'a> FrameWriter<'a> {
 
 impl FrameWriter<'_> {
     /// Draws one frame as [`FrameSink::frame`] does, without writing it: each object
-    /// of `drawn` at its level, the GPU made to hold what `buffer` holds of what has
-    /// been drawn; the selection returned beside the image.
+    /// of `selection` at its level, the GPU made to hold what `buffer` holds of what has
+    /// been drawn, at the level last drawn.
     pub fn draw(
         &mut self,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
-    ) -> Result<(Frame, Vec<Drawn>)> {
-        let started = Instant::now();
-        let selected = match &mut self.lods {
-            Some(lods) => {
-                let s = lods.select(camera, buffer, drawn)?;
-                self.times.lod = Some(lods.counts);
-                s
-            }
-            None => drawn.iter().map(|o| Drawn::full(o)).collect(),
-        };
-        let select = started.elapsed();
-        let frame = self.draw_selected(camera, buffer, &selected, select)?;
-        Ok((frame, selected))
-    }
-
-    /// Draws `selected` (chosen in `select`): the GPU made to hold what `buffer` holds
-    /// of what has been drawn, at the level last drawn.
-    fn draw_selected(
-        &mut self,
-        camera: &Camera,
-        buffer: &ObjectBuffer,
-        selected: &[Drawn],
-        select: Duration,
+        selection: &mut Selection<'_>,
     ) -> Result<Frame> {
+        if let Some(counts) = selection.lod {
+            self.times.lod = Some(counts);
+        }
+        let select = selection.select_ms;
+        let (selected, refinements) = selection.parts();
         let started = Instant::now();
-        let f = self.meshes.follow(
-            self.gpu,
-            |id| buffer.contains(id),
-            selected,
-            self.lods.as_mut(),
-        )?;
+        let f = self
+            .meshes
+            .follow(self.gpu, |id| buffer.contains(id), selected, refinements)?;
         self.times.uploads += f.uploads;
         self.times.evictions += f.freed;
         let upload = started.elapsed();
@@ -187,7 +161,7 @@ impl FrameWriter<'_> {
         let draw = started.elapsed();
         let t = &mut self.times;
         t.frames += 1;
-        t.select_ms.push(ms(select));
+        t.select_ms.push(select);
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
@@ -205,9 +179,9 @@ impl FrameSink for FrameWriter<'_> {
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut Selection<'_>,
     ) -> Result<()> {
-        let (frame, _) = self.draw(camera, buffer, drawn)?;
+        let frame = self.draw(camera, buffer, selection)?;
         if let Some((dir, every)) = &self.out {
             if index.is_multiple_of(*every) {
                 frame.save_png(&dir.join(format!("frame-{index:05}.png")))?;
@@ -215,6 +189,10 @@ impl FrameSink for FrameWriter<'_> {
             }
         }
         Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.lod_tau
     }
 }
 

@@ -26,4 +26,7 @@ pub use scene::{ScenePass, SceneView};
 pub use shot::{fov_x_for, in_view, shot, Shot};
 /// The adapter a [`Gpu`] runs on (its name, driver and backend), as wgpu reports it.
 pub use wgpu::AdapterInfo;
-pub use window::{save_recording, Change, ViewMode, ViewOptions, ViewSummary, WalkWindow};
+pub use window::{
+    save_recording, walk_at_window, Change, ViewMode, ViewOptions, ViewSummary, WalkWindow,
+    WindowSession,
+};

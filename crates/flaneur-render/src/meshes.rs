@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use crate::Gpu;
 use flaneur::error::{Error, Result};
 use flaneur::scene::Mesh;
-use flaneur::walk::lod_select::{Drawn, LodSelector, RefinedObject, REFINED};
+use flaneur::walk::lod_select::{Drawn, RefinedObject, Refinements, REFINED};
 
 /// One vertex as the shader reads it: position, normal, the object's slot (what the id
 /// target shows) and the key its tint comes from (its id folded to 32 bits, so that an
@@ -249,7 +249,7 @@ impl GpuMeshes {
         gpu: &Gpu,
         holds: impl Fn(u64) -> bool,
         selected: &[Drawn],
-        mut lods: Option<&mut LodSelector<'_>>,
+        mut lods: Option<&mut dyn Refinements>,
     ) -> Result<Followed> {
         let level: HashMap<u64, usize> = selected.iter().map(|d| (d.id, d.level)).collect();
         let mut freed =

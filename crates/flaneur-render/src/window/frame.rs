@@ -1,5 +1,5 @@
 //! A walk frame in the window: the frame's times and the walker's obstacles noted,
-//! LOD selection, the meshes followed onto the GPU, then the scene, the boxes and the
+//! what LOD selection found told, the meshes followed onto the GPU, then the scene, the boxes and the
 //! HUD drawn into the surface's texture and presented. Apart because it is the one
 //! thing the window does each frame once the walk has chosen what to draw.
 
@@ -11,18 +11,17 @@ use crate::boxes::lines;
 use crate::scene::SceneView;
 use flaneur::error::Result;
 use flaneur::geom::{Aabb, Camera};
-use flaneur::walk::buffer::{Loaded, ObjectBuffer};
-use flaneur::walk::lod_select::Drawn;
-use flaneur::walk::FrameSink;
+use flaneur::walk::buffer::ObjectBuffer;
+use flaneur::walk::{FrameSink, Selection};
 
 impl WalkWindow<'_> {
-    /// Draws `selected` as `camera` sees it; `Ok(None)` when nothing could be drawn
+    /// Draws `selection` as `camera` sees it; `Ok(None)` when nothing could be drawn
     /// this frame (minimised, occluded, surface being configured again).
     fn draw(
         &mut self,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        selected: &[Drawn],
+        selection: &mut Selection<'_>,
     ) -> Result<Option<(f64, f64)>> {
         let pages_per_s = self.pages_per_second();
         if !self.device_answers() {
@@ -33,12 +32,10 @@ impl WalkWindow<'_> {
         };
         let started = Instant::now();
         s.meshes.set_budget(self.opts.gpu_budget);
-        let followed = s.meshes.follow(
-            &s.gpu,
-            |id| buffer.contains(id),
-            selected,
-            self.lods.as_mut(),
-        )?;
+        let (selected, refinements) = selection.parts();
+        let followed = s
+            .meshes
+            .follow(&s.gpu, |id| buffer.contains(id), selected, refinements)?;
         self.summary.over_budget += followed.over_budget as usize;
         self.summary.peak_gpu_bytes = self.summary.peak_gpu_bytes.max(s.meshes.bytes());
         let cpu = started.elapsed();
@@ -108,7 +105,7 @@ impl WalkWindow<'_> {
             let content = hud_content(
                 &self.figures,
                 self.mode,
-                self.lods.as_ref().map(|l| l.tau()),
+                self.lod_tau,
                 (selected, &s.meshes),
                 (self.steer.fly, camera.position, pages_per_s),
                 self.message
@@ -144,7 +141,7 @@ impl FrameSink for WalkWindow<'_> {
         _: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut Selection<'_>,
     ) -> Result<()> {
         let now = Instant::now();
         if let Some(last) = self.last_frame.replace(now) {
@@ -161,22 +158,14 @@ impl FrameSink for WalkWindow<'_> {
                 .map(|o| o.entry.bounds)
                 .filter(|b| (b.center() - p).length() < 0.5 * b.extent().length() + 20.0),
         );
-        let started = Instant::now();
-        let selected = match &mut self.lods {
-            Some(l) => {
-                let chosen = l.select(camera, buffer, drawn);
-                for what in l.take_damaged() {
-                    self.report(format!("LOD selection: {what}"));
-                }
-                chosen.unwrap_or_else(|e| {
-                    self.report(format!("LOD selection: {e}; drawing full detail"));
-                    drawn.iter().map(|o| Drawn::full(o)).collect()
-                })
-            }
-            None => drawn.iter().map(|o| Drawn::full(o)).collect(),
-        };
-        let select = started.elapsed().as_secs_f64() * 1e3;
-        match self.draw(camera, buffer, &selected) {
+        let select = selection.select_ms;
+        for what in std::mem::take(&mut selection.damaged) {
+            self.report(format!("LOD selection: {what}"));
+        }
+        if let Some(e) = selection.failed.take() {
+            self.report(format!("LOD selection: {e}; drawing full detail"));
+        }
+        match self.draw(camera, buffer, selection) {
             Ok(Some((cpu, gpu))) => {
                 self.summary.frames += 1;
                 self.summary.cpu_ms.push(select + cpu);
@@ -186,6 +175,14 @@ impl FrameSink for WalkWindow<'_> {
             Err(e) => self.report(format!("drawing: {e}")),
         }
         Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.lod_tau
+    }
+
+    fn lod_restart(&mut self) -> bool {
+        std::mem::take(&mut self.lod_restart)
     }
 }
 

@@ -7,7 +7,6 @@ use winit::keyboard::KeyCode;
 use winit::window::CursorGrabMode;
 
 use super::{Change, ViewMode, WalkWindow};
-use flaneur::walk::lod_select::LodSelector;
 use flaneur::walk::steer::Move;
 
 impl WalkWindow<'_> {
@@ -45,11 +44,11 @@ impl WalkWindow<'_> {
                     } else {
                         2.0
                     };
-                    if let Some(l) = &self.lods {
-                        let tau = (l.tau() * factor).clamp(1e-5, 0.5);
-                        self.lods = LodSelector::new(self.db, tau)
-                            .map(LodSelector::tolerating_damage)
-                            .ok();
+                    // The walk's selection starts afresh under the new τ, as it did
+                    // when the window kept it, even where the clamp leaves τ as it was.
+                    if let Some(tau) = self.lod_tau {
+                        self.lod_tau = Some((tau * factor).clamp(1e-5, 0.5));
+                        self.lod_restart = true;
                     }
                 }
                 KeyCode::Minus => self.change = Some(Change::Budget(0.5)),

@@ -21,8 +21,8 @@
 //! This file holds the window itself: opening it, what it keeps from frame to frame,
 //! and each pose's pump of events and steering. Its other parts stand beside it, one
 //! idea a file: the options and summary others read, the winit events, the keys and
-//! mouse, the device's loss and recovery, a frame's drawing, the HUD's lines, and
-//! recorded paths.
+//! mouse, the device's loss and recovery, a frame's drawing, the HUD's lines,
+//! recorded paths, and the session of walks run one after another at the window.
 
 mod device;
 mod events;
@@ -31,6 +31,7 @@ mod hud_lines;
 mod keys;
 mod options;
 mod recording;
+mod session;
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -43,12 +44,12 @@ use events::Events;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
-use flaneur::walk::lod_select::LodSelector;
 use flaneur::walk::steer::Steer;
 use flaneur::walk::{FrameFigures, Pose, Viewer};
 use hud_lines::GRAPH_FRAMES;
 pub use options::{Change, ViewMode, ViewOptions, ViewSummary};
 pub use recording::save_recording;
+pub use session::{walk_at_window, WindowSession};
 
 /// How long an error stays on the HUD.
 const MESSAGE_FOR: Duration = Duration::from_secs(6);
@@ -63,7 +64,10 @@ pub struct WalkWindow<'a> {
     last_try: Instant,
     opts: ViewOptions,
     steer: Steer,
-    lods: Option<LodSelector<'a>>,
+    /// The τ the walk's LOD selection draws under (`None`: full detail), and whether a
+    /// key set it since the last frame, so that selection starts afresh.
+    lod_tau: Option<f32>,
+    lod_restart: bool,
     captured: bool,
     pub show_hud: bool,
     pub wireframe: bool,
@@ -146,10 +150,9 @@ impl<'a> WalkWindow<'a> {
             .clone()
             .expect("the loop above ends with a window");
         let surfaced = Surfaced::new(&instance, &window, &opts)?;
-        let lods = opts
-            .lod_tau
-            .map(|tau| LodSelector::new(db, tau).map(LodSelector::tolerating_damage))
-            .transpose()?;
+        if let Some(tau) = opts.lod_tau {
+            flaneur::walk::lod_select::check_tau(tau)?;
+        }
         Ok(WalkWindow {
             db,
             event_loop,
@@ -162,8 +165,9 @@ impl<'a> WalkWindow<'a> {
                 steer.speed = opts.speed;
                 steer
             },
+            lod_tau: opts.lod_tau,
+            lod_restart: false,
             opts,
-            lods,
             captured: false,
             show_hud: true,
             wireframe: false,
@@ -214,7 +218,7 @@ impl<'a> WalkWindow<'a> {
 
     /// LOD selection's threshold now (`[` and `]` change it), `None` at full detail.
     pub fn lod_tau(&self) -> Option<f32> {
-        self.lods.as_ref().map(|l| l.tau())
+        self.lod_tau
     }
 
     /// Where the viewer stands now.

@@ -12,7 +12,9 @@
 //! from the database's LOD chains when first chosen (only the pages of that level), and
 //! kept while the object stays in the buffer. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
-//! walk's own figures: the walk reports what its retrieval method reads.
+//! walk's own figures: the walk reports what its retrieval method reads. The walk
+//! session runs it ([`WalkLods`]) once a frame's figures are finished, under the τ its
+//! viewer wants, and hands the viewer what to draw; a renderer reads no LOD page.
 //!
 //! Large objects, those the build stored a progressive mesh and DAG for, are refined
 //! view by view instead ([`REFINED`]): the LOD core's constant-time traversal under the
@@ -167,6 +169,30 @@ pub struct RefinedObject {
 /// A large object's refiner as its decoding on the thread pool left it.
 type Decoded = (u64, Result<RefinedObject>);
 
+/// Whether `tau` can be LOD selection's threshold: a fraction of the viewport above 0
+/// and below 1. For a viewer that says which τ it wants before the walk selects under it.
+pub fn check_tau(tau: f32) -> Result<()> {
+    if !(tau > 0.0 && tau < 1.0) {
+        return Err(Error::Invalid(format!(
+            "LOD threshold τ = {tau}: give a fraction of the viewport above 0 and below 1 (the thesis's is {DEFAULT_TAU})"
+        )));
+    }
+    Ok(())
+}
+
+/// Where a renderer finds the refinement of an object drawn [`REFINED`]: its selective
+/// mesh, and the changes not yet uploaded.
+pub trait Refinements {
+    /// Object `id`'s refinement, when it is drawn refined view by view.
+    fn refined(&mut self, id: u64) -> Option<&mut RefinedObject>;
+}
+
+impl Refinements for LodSelector<'_> {
+    fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
+        LodSelector::refined(self, id)
+    }
+}
+
 /// Chooses each drawn object's level, and keeps the coarse levels read so far.
 pub struct LodSelector<'a> {
     db: &'a Database,
@@ -187,11 +213,7 @@ pub struct LodSelector<'a> {
 impl<'a> LodSelector<'a> {
     /// A selector for `db` under `tau` (a fraction of the viewport, above 0 and below 1).
     pub fn new(db: &'a Database, tau: f32) -> Result<LodSelector<'a>> {
-        if !(tau > 0.0 && tau < 1.0) {
-            return Err(Error::Invalid(format!(
-                "LOD threshold τ = {tau}: give a fraction of the viewport above 0 and below 1 (the thesis's is {DEFAULT_TAU})"
-            )));
-        }
+        check_tau(tau)?;
         Ok(LodSelector {
             db,
             tau,
@@ -425,6 +447,87 @@ impl LodSelector<'_> {
     /// changes since the last call took them.
     pub fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
         self.refined.get_mut(&id)
+    }
+}
+
+/// LOD selection as a walk runs it for its viewer: a selector under the τ the viewer
+/// [wants](super::FrameSink::lod_tau), made again when it wants another (or
+/// [asks](super::FrameSink::lod_restart) to start afresh). A session of several walks
+/// at one window hands the same one from walk to walk, so that the levels read and the
+/// objects refined so far stay so when a walk restarts.
+///
+/// Made [`Default`], it has no database to read levels from: every frame at full detail.
+#[derive(Default)]
+pub struct WalkLods<'db> {
+    db: Option<&'db Database>,
+    selector: Option<LodSelector<'db>>,
+}
+
+/// What a viewer wants of LOD selection on a frame.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LodWanted {
+    pub tau: Option<f32>,
+    pub restart: bool,
+    /// Whether an object whose LOD data cannot be read is drawn at full detail, told
+    /// of, rather than the frame failing ([`LodSelector::tolerating_damage`]).
+    pub tolerant: bool,
+}
+
+impl<'db> WalkLods<'db> {
+    /// LOD selection over `db`, before any frame.
+    pub fn new(db: &'db Database) -> WalkLods<'db> {
+        WalkLods {
+            db: Some(db),
+            selector: None,
+        }
+    }
+
+    /// The frame's selection of `culled` (the objects of `buffer` in view of `camera`)
+    /// as `want` says.
+    pub(crate) fn select<'f>(
+        &'f mut self,
+        want: LodWanted,
+        camera: &Camera,
+        buffer: &ObjectBuffer,
+        culled: &'f [&'f Loaded],
+    ) -> Result<super::Selection<'f>> {
+        if want.restart || self.selector.as_ref().map(LodSelector::tau) != want.tau {
+            self.selector = match (want.tau, self.db) {
+                (Some(tau), Some(db)) => {
+                    let s = LodSelector::new(db, tau)?;
+                    Some(if want.tolerant {
+                        s.tolerating_damage()
+                    } else {
+                        s
+                    })
+                }
+                _ => None,
+            };
+        }
+        let full = || culled.iter().map(|o| Drawn::full(o)).collect();
+        let started = std::time::Instant::now();
+        let (drawn, damaged, failed) = match &mut self.selector {
+            None => (full(), Vec::new(), None),
+            Some(s) => {
+                let chosen = s.select(camera, buffer, culled);
+                let damaged = s.take_damaged();
+                match chosen {
+                    Ok(d) => (d, damaged, None),
+                    Err(e) if want.tolerant => (full(), damaged, Some(e.to_string())),
+                    Err(e) => return Err(e),
+                }
+            }
+        };
+        let select_ms = started.elapsed().as_secs_f64() * 1e3;
+        Ok(super::Selection {
+            culled,
+            drawn,
+            select_ms,
+            lod: self.selector.as_ref().map(|s| s.counts),
+            damaged,
+            failed,
+            refinements: self.selector.as_mut().map(|s| s as &mut dyn Refinements),
+        })
     }
 }
 

@@ -26,4 +26,4 @@ pub mod motion {
 
 pub use path::motion::Motion;
 pub use path::{street_walk, CameraPath, Pose};
-pub use sink::{FrameFigures, FrameSink, NoSink, Viewer};
+pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};

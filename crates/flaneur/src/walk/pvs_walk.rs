@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use crate::database::Database;
 use crate::error::Result;
+use crate::walk::lod_select::WalkLods;
 use crate::walk::path::CameraPath;
 use crate::walk::sink::Played;
 use crate::walk::{FrameSink, NoSink, Viewer};
@@ -115,7 +116,19 @@ pub fn walk_pvs_live(
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
-    let frames = super::mode::pvs::walk_live(db, prefetch, tick, viewer)?;
+    walk_pvs_live_with(db, prefetch, &mut WalkLods::new(db), tick, viewer)
+}
+
+/// [`walk_pvs_live`] with LOD selection `lods` kept from an earlier walk (one before it
+/// at the same window), so that what it read and refined stays so.
+pub fn walk_pvs_live_with<'db>(
+    db: &'db Database,
+    prefetch: PvsPrefetch,
+    lods: &mut WalkLods<'db>,
+    tick: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<PvsWalkReport> {
+    let frames = super::mode::pvs::walk_live(db, prefetch, lods, tick, viewer)?;
     let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
     let cells_entered = frames
         .windows(2)

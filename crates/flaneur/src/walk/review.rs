@@ -37,6 +37,7 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
+use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use crate::cache::{CacheStats, Trace};
@@ -394,7 +395,19 @@ pub fn walk_live(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<WalkReport> {
-    super::mode::review::walk_live(db, cfg, progress, viewer)
+    walk_live_with(db, cfg, &mut WalkLods::new(db), progress, viewer)
+}
+
+/// [`walk_live`] with LOD selection `lods` kept from an earlier walk (one before it at
+/// the same window), so that what it read and refined stays so.
+pub fn walk_live_with<'db>(
+    db: &'db Database,
+    cfg: &ReviewConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<WalkReport> {
+    super::mode::review::walk_live(db, cfg, lods, progress, viewer)
 }
 
 /// Searches run along a walk, by where their results went.

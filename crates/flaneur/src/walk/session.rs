@@ -19,6 +19,7 @@
 use std::time::Instant;
 
 use super::buffer::{Loaded, ObjectBuffer};
+use super::lod_select::{LodWanted, WalkLods};
 use super::path::Pose;
 use super::sink::{FrameFigures, Viewer};
 use crate::error::Result;
@@ -78,10 +79,13 @@ pub struct Culled<'b> {
 }
 
 /// Walks `mode` with `viewer` until it has no more poses; `progress` is told each
-/// finished frame. The mode's figures of every frame, in order.
+/// finished frame. Each frame the viewer is handed is selected by `lods` under the τ
+/// the viewer wants (its LOD pages counted apart from the mode's figures, which are
+/// finished before). The mode's figures of every frame, in order.
 pub fn run<M: Mode + ?Sized>(
     mode: &mut M,
     viewer: &mut dyn Viewer,
+    lods: &mut WalkLods<'_>,
     mut progress: impl FnMut(usize),
 ) -> Result<Vec<M::Frame>> {
     let mut buffer = ObjectBuffer::new(mode.memory_budget());
@@ -102,7 +106,13 @@ pub fn run<M: Mode + ?Sized>(
         };
         let frame = mode.finish(&culled, &buffer)?;
         if let Some(camera) = &camera {
-            viewer.frame(index, camera, &buffer, &culled.drawn)?;
+            let want = LodWanted {
+                tau: viewer.lod_tau(),
+                restart: viewer.lod_restart(),
+                tolerant: viewer.skips_damaged(),
+            };
+            let mut selection = lods.select(want, camera, &buffer, &culled.drawn)?;
+            viewer.frame(index, camera, &buffer, &mut selection)?;
         }
         viewer.figures(&mode.figures(&frame, &buffer));
         frames.push(frame);
@@ -197,8 +207,16 @@ mod tests {
     struct Sink<'l>(&'l std::cell::RefCell<Vec<String>>);
 
     impl FrameSink for Sink<'_> {
-        fn frame(&mut self, i: usize, _: &Camera, _: &ObjectBuffer, d: &[&Loaded]) -> Result<()> {
-            self.0.borrow_mut().push(format!("frame {i}: {}", d.len()));
+        fn frame(
+            &mut self,
+            i: usize,
+            _: &Camera,
+            _: &ObjectBuffer,
+            d: &mut crate::walk::Selection<'_>,
+        ) -> Result<()> {
+            self.0
+                .borrow_mut()
+                .push(format!("frame {i}: {}", d.culled.len()));
             Ok(())
         }
     }
@@ -222,6 +240,7 @@ mod tests {
                 path: &path,
                 sink: &mut sink,
             },
+            &mut WalkLods::default(),
             |i| ticks.push(i),
         )
         .unwrap();

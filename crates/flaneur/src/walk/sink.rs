@@ -1,26 +1,75 @@
 //! What a walk shows, frame by frame, for whoever draws it: the camera, the object
-//! buffer, and the objects drawn (the buffer after frustum culling). The renderer
-//! implements [`FrameSink`]; a walk that draws nothing passes [`NoSink`].
+//! buffer, the objects in view (the buffer after frustum culling) and what to draw of
+//! them, each at the level the walk's LOD selection chose for the τ the sink wants. The
+//! renderer implements [`FrameSink`]; a walk that draws nothing passes [`NoSink`].
 
 use super::buffer::{Loaded, ObjectBuffer};
+use super::lod_select::{Drawn, LodCounts, Refinements};
 use crate::error::Result;
 use crate::geom::Camera;
 
 /// Receives each frame of a walk as the engine selected it.
 pub trait FrameSink {
-    /// Frame `index`, seen by `camera`: `drawn` are the objects of `buffer` in view.
+    /// Frame `index`, seen by `camera`: `selection` is what to draw of the objects of
+    /// `buffer` in view.
     fn frame(
         &mut self,
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut Selection<'_>,
     ) -> Result<()>;
 
     /// Whether it draws, so that a walk must load the objects' meshes for it (a walk
     /// that only counts, like the PVS walk, loads none otherwise).
     fn draws(&self) -> bool {
         true
+    }
+
+    /// The screen-space error the walk's LOD selection draws this frame under, a
+    /// fraction of the viewport ([`lod_select`](super::lod_select)); `None`: every
+    /// object at full detail.
+    fn lod_tau(&self) -> Option<f32> {
+        None
+    }
+
+    /// Whether LOD selection starts afresh this frame, forgetting the levels read so
+    /// far (a window's key setting τ asks it even where τ stays the same).
+    fn lod_restart(&mut self) -> bool {
+        false
+    }
+}
+
+/// What a frame draws: the objects in view, each at the level LOD selection chose.
+pub struct Selection<'f> {
+    /// The objects of the buffer in view, at full detail as the walk loaded them.
+    pub culled: &'f [&'f Loaded],
+    /// Each of them, in the same order, at its level (at full detail without LOD
+    /// selection).
+    pub drawn: Vec<Drawn>,
+    /// Time LOD selection took, ms.
+    pub select_ms: f64,
+    /// What LOD selection read and chose over the walk so far; `None` without it.
+    pub lod: Option<LodCounts>,
+    /// Objects whose LOD data was found unreadable on this frame, drawn at full detail
+    /// (or their discrete levels) from now on, each with why; and, when selection
+    /// failed and the frame is drawn at full detail, why. Only for a viewer that
+    /// [skips damaged objects](Viewer::skips_damaged); otherwise the frame fails.
+    pub damaged: Vec<String>,
+    pub failed: Option<String>,
+    pub(crate) refinements: Option<&'f mut (dyn Refinements + 'f)>,
+}
+
+impl<'f> Selection<'f> {
+    /// What to draw, and where the objects drawn refined find their selective mesh and
+    /// its changed ranges (to upload them); apart so that both are borrowed at once.
+    pub fn parts(&mut self) -> (&[Drawn], Option<&mut dyn Refinements>) {
+        (
+            &self.drawn,
+            self.refinements
+                .as_mut()
+                .map(|r| &mut **r as &mut dyn Refinements),
+        )
     }
 }
 
@@ -29,7 +78,13 @@ pub trait FrameSink {
 pub struct NoSink;
 
 impl FrameSink for NoSink {
-    fn frame(&mut self, _: usize, _: &Camera, _: &ObjectBuffer, _: &[&Loaded]) -> Result<()> {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &Camera,
+        _: &ObjectBuffer,
+        _: &mut Selection<'_>,
+    ) -> Result<()> {
         Ok(())
     }
 
@@ -91,13 +146,21 @@ impl FrameSink for Played<'_> {
         index: usize,
         camera: &Camera,
         buffer: &ObjectBuffer,
-        drawn: &[&Loaded],
+        selection: &mut Selection<'_>,
     ) -> Result<()> {
-        self.sink.frame(index, camera, buffer, drawn)
+        self.sink.frame(index, camera, buffer, selection)
     }
 
     fn draws(&self) -> bool {
         self.sink.draws()
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.sink.lod_tau()
+    }
+
+    fn lod_restart(&mut self) -> bool {
+        self.sink.lod_restart()
     }
 }
 

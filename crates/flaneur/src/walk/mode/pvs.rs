@@ -17,15 +17,17 @@ use crate::prefetch::pvs::{
 };
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::lod_select::WalkLods;
 use crate::walk::pvs_walk::{PvsFrame, PvsPrefetch};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 
 /// A PVS walk over `db`'s precomputed visibility with `prefetch`, the poses coming from
 /// `viewer`: the walk session with the PVS mode. Each frame's figures.
-pub(crate) fn walk_live(
-    db: &Database,
+pub(crate) fn walk_live<'db>(
+    db: &'db Database,
     prefetch: PvsPrefetch,
+    lods: &mut WalkLods<'db>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<Vec<PvsFrame>> {
@@ -60,7 +62,7 @@ pub(crate) fn walk_live(
         shown: None,
         pending: None,
     };
-    session::run(&mut mode, viewer, tick)
+    session::run(&mut mode, viewer, lods, tick)
 }
 
 /// The PVS mode: the client, and what a drawing viewer needs beside it.

@@ -22,6 +22,7 @@ use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
 use crate::store::{IoStats, PageKind, PageSource};
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
+use crate::walk::lod_select::WalkLods;
 use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
@@ -46,9 +47,10 @@ struct Request {
 
 /// A REVIEW walk under `cfg` with the poses coming from `viewer`: the walk session with
 /// the REVIEW mode, its index cache and its prefetch thread.
-pub(crate) fn walk_live(
-    db: &Database,
+pub(crate) fn walk_live<'db>(
+    db: &'db Database,
     cfg: &ReviewConfig,
+    lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<WalkReport> {
@@ -119,7 +121,7 @@ pub(crate) fn walk_live(
             clock: Instant::now(),
             pending: None,
         };
-        let frames = session::run(&mut mode, viewer, progress)?;
+        let frames = session::run(&mut mode, viewer, lods, progress)?;
         if frames.is_empty() {
             return Err(Error::Invalid("the walk had no poses".into()));
         }
