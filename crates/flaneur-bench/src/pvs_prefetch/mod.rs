@@ -208,7 +208,7 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
     let route1 = random_route(city.intersection(middle, middle), &cfg.route, |p| {
         Ok(city.on_walkway(p))
     })?;
-    let route2 = straight_route(&city, &cfg.route)?.positions;
+    let route2 = straight_route(&city.street_grid(), &cfg.route)?.positions;
     let (routes, sweep) = walk(&city, [route1, route2], cfg, || None)?;
     let c = &cfg.city;
     let place = Place {

@@ -28,6 +28,7 @@ use super::grid::{Cell, Position, ViewcellGrid};
 use super::source::{ObjectId, PvsSource};
 use super::table::PvsTable;
 use crate::error::{Error, Result};
+use crate::walk::path::routes::StreetGrid;
 
 /// The settings of a synthetic city; the defaults are the thesis's.
 #[derive(Clone, Debug, PartialEq)]
@@ -252,6 +253,16 @@ impl SyntheticCity {
     /// Streets along each axis (`blocks` + 1, the edge ones included).
     pub fn streets(&self) -> u32 {
         self.config.blocks + 1
+    }
+
+    /// The city's streets as route 2 walks them.
+    pub fn street_grid(&self) -> StreetGrid {
+        StreetGrid {
+            blocks: self.config.blocks,
+            pitch: self.pitch(),
+            street: self.config.street,
+            side: self.side(),
+        }
     }
 
     /// The centre of the crossing of street `i` (counted west to east) and street `j`

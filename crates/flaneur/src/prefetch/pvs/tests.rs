@@ -13,7 +13,7 @@ fn thesis() -> &'static (SyntheticCity, Vec<Position>, Vec<Position>) {
         let city = SyntheticCity::generate(&SyntheticConfig::default()).unwrap();
         let cfg = RouteConfig::default();
         let r1 = random_route(city.intersection(15, 15), &cfg, |p| Ok(city.on_walkway(p))).unwrap();
-        let r2 = straight_route(&city, &cfg).unwrap().positions;
+        let r2 = straight_route(&city.street_grid(), &cfg).unwrap().positions;
         (city, r1, r2)
     })
 }

@@ -4,7 +4,7 @@
 //! are drawn is ours:
 //!
 //! - Both keep to the walkways of the synthetic city, the middle third of each street
-//!   (its middle lane of 20 m viewcells; [`SyntheticCity::on_walkway`]). The thesis's
+//!   (its middle lane of 20 m viewcells; `SyntheticCity::on_walkway`). The thesis's
 //!   SNP swaps say as much: 1797 on route 2 is exactly 3 × 599, three new viewcells at
 //!   every crossing, and 1785 in 585 transactions on route 1 is at least three each;
 //!   a walker in a lane beside the buildings would find only two new viewcells at a
@@ -18,7 +18,8 @@
 //!   [`MARGIN`] from its edges, and turn where they cross the next line's street. Its
 //!   first six lines are a random 85–115 % of a seventh of the route each (in whole
 //!   blocks), turning left or right as the city leaves room; the seventh is as long as
-//!   the steps left.
+//!   the steps left. It needs only the city's street layout ([`StreetGrid`]), not its
+//!   PVS table.
 //! - On a real city (a database's walkable viewcells) route 1 is the same walk, and
 //!   route 2 is [`axis_route`]: lines along x or z that turn early where a building
 //!   is in the way.
@@ -36,7 +37,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{CameraPath, Pose};
 use crate::error::{Error, Result};
-use crate::prefetch::pvs::{Position, SyntheticCity};
+use crate::prefetch::pvs::Position;
 
 /// The thesis's routes: 3000 steps of 4 m.
 pub const THESIS_STEPS: usize = 3000;
@@ -168,21 +169,38 @@ pub struct StraightRoute {
 /// Lines of route 2.
 const LINES: usize = 7;
 
-/// Route 2: seven straight lines along the streets of `city` with six right-angle
+/// A city laid out as a regular grid of square blocks with streets between them and
+/// round the edge, as route 2 needs to know it: street `i` (counted from 0 along x or
+/// z) spans `i * pitch` to `i * pitch + street` metres across, from the origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreetGrid {
+    /// Blocks along each side (streets are one more).
+    pub blocks: u32,
+    /// Metres from one street to the next (a block and a street).
+    pub pitch: f64,
+    /// Width of a street, metres.
+    pub street: f64,
+    /// The city's side, metres, the edge streets included. Given rather than derived
+    /// from the others, so that a city measured in whole viewcells keeps its own
+    /// arithmetic for where its edge lies.
+    pub side: f64,
+}
+
+/// Route 2: seven straight lines along the streets of `streets` with six right-angle
 /// turns, `cfg.steps` steps long.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{SyntheticCity, SyntheticConfig};
-/// use flaneur::walk::path::routes::{straight_route, RouteConfig};
-/// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 12, ..Default::default() })?;
-/// let route = straight_route(&city, &RouteConfig { steps: 1000, ..Default::default() })?;
+/// use flaneur::walk::path::routes::{straight_route, RouteConfig, StreetGrid};
+/// // 12 × 12 blocks of 100 m with 60 m streets.
+/// let streets = StreetGrid { blocks: 12, pitch: 160.0, street: 60.0, side: 1980.0 };
+/// let route = straight_route(&streets, &RouteConfig { steps: 1000, ..Default::default() })?;
 /// assert_eq!(route.corners.len(), 8);
 /// assert_eq!(route.positions.len(), 1001);
 /// # Ok::<(), flaneur::Error>(())
 /// ```
-pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<StraightRoute> {
+pub fn straight_route(streets: &StreetGrid, cfg: &RouteConfig) -> Result<StraightRoute> {
     cfg.validate()?;
-    let street = city.config().street;
+    let street = streets.street;
     let (lane_lo, lane_hi) = (street / 3.0 + MARGIN, 2.0 * street / 3.0 - MARGIN);
     if lane_lo >= lane_hi {
         return Err(Error::Pvs(format!(
@@ -190,8 +208,8 @@ pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<Straigh
         )));
     }
     let total = cfg.steps as f64 * cfg.step;
-    let blocks = city.config().blocks;
-    let pitch = city.pitch();
+    let blocks = streets.blocks;
+    let pitch = streets.pitch;
     let per_line = total / LINES as f64 / pitch;
     let (lo, hi) = (
         (0.85 * per_line).round().max(1.0) as u32,
@@ -239,9 +257,9 @@ pub fn straight_route(city: &SyntheticCity, cfg: &RouteConfig) -> Result<Straigh
         }
         let last = *corners.last().expect("the start");
         let (here, limit) = if along_x {
-            (last.x, city.side())
+            (last.x, streets.side)
         } else {
-            (last.z, city.side())
+            (last.z, streets.side)
         };
         // The last line runs along its own walkway, which spans the city, so it may go
         // up to the grid's edge either way.
@@ -409,7 +427,7 @@ fn sample(corners: &[Position], steps: usize, step: f64) -> Vec<Position> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::prefetch::pvs::SyntheticConfig;
+    use crate::prefetch::pvs::{SyntheticCity, SyntheticConfig};
 
     fn city() -> SyntheticCity {
         SyntheticCity::generate(&SyntheticConfig::default()).unwrap()
@@ -477,7 +495,7 @@ mod tests {
         let c = city();
         for seed in 1..=5 {
             let r = straight_route(
-                &c,
+                &c.street_grid(),
                 &RouteConfig {
                     seed,
                     ..Default::default()
@@ -559,7 +577,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not a walkable position"), "{e}");
-        let e = straight_route(&c, &RouteConfig::default())
+        let e = straight_route(&c.street_grid(), &RouteConfig::default())
             .unwrap_err()
             .to_string();
         assert!(e.contains("does not fit"), "{e}");
@@ -578,7 +596,7 @@ mod tests {
             },
         ] {
             assert!(random_route(c.intersection(0, 0), &cfg, on).is_err());
-            assert!(straight_route(&c, &cfg).is_err());
+            assert!(straight_route(&c.street_grid(), &cfg).is_err());
         }
     }
 }
