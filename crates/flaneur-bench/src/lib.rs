@@ -6,7 +6,8 @@
 //! `report` is what every experiment's report gives the command that writes it.
 //! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on procedural models,
 //! no database needed; `pvs_prefetch` runs the neighbour PVS prefetchers
-//! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either, and
+//! (`flaneur::prefetch::pvs`) on the thesis's synthetic city and PVS table, which it
+//! draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on.
 
 pub mod cell_size;

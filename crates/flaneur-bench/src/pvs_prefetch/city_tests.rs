@@ -4,7 +4,12 @@
 use std::collections::HashSet;
 use std::sync::OnceLock;
 
-use super::*;
+use flaneur::prefetch::pvs::{
+    ObjectId, Pbnp, Position, PrefetchArea, PvsClient, PvsSource, Snp, THESIS_CAPACITY,
+};
+use flaneur::walk::path::routes::{random_route, straight_route, RouteConfig};
+
+use super::{simulate, StepRecord, SyntheticCity, SyntheticConfig};
 
 /// The thesis's city and its two routes, made once for all tests.
 fn thesis() -> &'static (SyntheticCity, Vec<Position>, Vec<Position>) {

@@ -24,11 +24,11 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::grid::{Cell, Position, ViewcellGrid};
-use super::source::{ObjectId, PvsSource};
+use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::{Cell, ObjectId, Position, PvsSource, ViewcellGrid};
+use flaneur::walk::path::routes::StreetGrid;
+
 use super::table::PvsTable;
-use crate::error::{Error, Result};
-use crate::walk::path::routes::StreetGrid;
 
 /// The settings of a synthetic city; the defaults are the thesis's.
 #[derive(Clone, Debug, PartialEq)]
@@ -152,7 +152,8 @@ impl SyntheticConfig {
 /// A generated city: its plan and its PVS table.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{PvsSource, SyntheticCity, SyntheticConfig};
+/// use flaneur::prefetch::pvs::PvsSource;
+/// use flaneur_bench::pvs_prefetch::{SyntheticCity, SyntheticConfig};
 /// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 4, ..Default::default() })?;
 /// assert_eq!(city.scene_objects(), 16);
 /// let here = city.intersection(1, 2);
