@@ -57,9 +57,6 @@ mod snp;
 mod source;
 mod stored;
 
-pub use crate::walk::path::routes::{
-    axis_route, random_route, straight_route, RouteConfig, StraightRoute,
-};
 pub use area::{Area, PrefetchArea};
 pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
 pub use client::{PvsClient, StepOutcome, Transaction};
