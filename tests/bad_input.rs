@@ -240,8 +240,8 @@ fn damaged_mesh_met_by<'p>(
 /// A mesh page damaged in the middle of a REVIEW walk.
 #[test]
 fn a_walk_meets_a_damaged_mesh() {
+    use flaneur::walk::path::motion::{self, Motion};
     use flaneur::walk::review::{self, Preset, ReviewConfig};
-    use flaneur::walk::{motion, Motion};
     let c = city();
     let bounds = c.bounds();
     let path = motion::generate(&bounds, Motion::Normal, 90, 30.0, 1).unwrap();
@@ -259,9 +259,10 @@ fn a_walk_meets_a_damaged_mesh() {
 /// The PVS walk meeting a damaged mesh when it draws, as the REVIEW walk does.
 #[test]
 fn a_pvs_walk_meets_a_damaged_mesh() {
+    use flaneur::walk::path::cell_walk;
     use flaneur::walk::pvs_walk::{self, PvsPrefetch};
     let c = common::city(60, 3, &common::with_visibility());
-    let path = pvs_walk::cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();
+    let path = cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();
     let rule = PvsPrefetch::Pbnp { border: 0.25 };
     damaged_mesh_met_by(&c, 120, |db, skip| {
         let mut w = Walker::new(&path, skip);

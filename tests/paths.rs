@@ -2,7 +2,7 @@
 //! view frustum's ViewCulling (§4.3, Fig. 4.15) against a brute-force reference.
 
 use flaneur::geom::{Aabb, Camera, Frustum};
-use flaneur::walk::motion::{generate, Motion};
+use flaneur::walk::path::motion::{generate, Motion};
 use flaneur::walk::{CameraPath, Pose};
 use flaneur::Error;
 use glam::{DVec3, Vec3};

@@ -14,8 +14,9 @@ use flaneur::geom::Camera;
 use flaneur_render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
 use flaneur::walk::buffer::ObjectBuffer;
+use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::{motion, FrameSink, Motion};
+use flaneur::walk::FrameSink;
 use flaneur::{BuildOptions, Database};
 use glam::Vec3;
 
@@ -398,7 +399,7 @@ fn with_visibility(dir: &std::path::Path) -> Database {
 fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
-    let path = flaneur::walk::pvs_walk::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
+    let path = flaneur::walk::path::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
     let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
     let plain = flaneur::walk::pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
     let gpu = gpu();
@@ -428,7 +429,7 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
 fn fidelity_of_the_pvs_walk() {
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
-    let path = flaneur::walk::pvs_walk::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
+    let path = flaneur::walk::path::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
     let r = fidelity(&db, &gpu, &path, ModeWalk::Pvs(rule), "pvs", (96, None));

@@ -4,7 +4,8 @@
 
 mod common;
 
-use flaneur::walk::motion::{self, CameraPath, Motion, Pose};
+use flaneur::walk::path::motion::{self, Motion};
+use flaneur::walk::path::{CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use glam::Vec3;

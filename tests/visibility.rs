@@ -84,7 +84,7 @@ fn every_walkable_cell_has_a_pvs_with_dovs() {
     }
     assert!(db.pvs(u32::MAX).unwrap().is_none());
     // A walk through the cells stays in them; bad settings are errors.
-    use flaneur::walk::pvs_walk::cell_walk;
+    use flaneur::walk::path::cell_walk;
     let walk = cell_walk(&db, 600, 0.5, 30.0, 3).unwrap();
     assert_eq!(walk.poses.len(), 600);
     for p in &walk.poses {
@@ -266,9 +266,8 @@ fn a_damaged_table_is_an_error_naming_its_page() {
 
 #[test]
 fn buildings_occlude_and_the_prefetcher_reads_the_table() {
-    use flaneur::prefetch::pvs::{
-        simulate, Pbnp, Position, Snp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY,
-    };
+    use flaneur::prefetch::pvs::{Pbnp, Position, Snp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY};
+    use flaneur_bench::pvs_prefetch::simulate;
     let dir = tempfile::tempdir().unwrap();
     let (scene, path) = (scene_in(dir.path(), 120, 4), dir.path().join("c.flaneur"));
     let summary = flaneur::build_from_scene(&scene, &path, &with_visibility()).unwrap();

@@ -7,8 +7,8 @@ mod common;
 mod window;
 
 use flaneur_render::{ViewMode, WalkWindow};
+use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::{motion, Motion};
 use flaneur::{BuildOptions, Database};
 use window::{display, options, Player};
 

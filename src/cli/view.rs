@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::args::{parse_look, parse_size, parse_vec3};
-use flaneur::walk::motion::CameraPath;
+use flaneur::walk::path::CameraPath;
 use flaneur::Database;
 use flaneur_render::ViewMode;
 

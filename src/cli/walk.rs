@@ -7,7 +7,8 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{pace, parse_size};
 use super::write_file;
-use flaneur::walk::motion::{self, CameraPath, Motion};
+use flaneur::walk::path::motion::{self, Motion};
+use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::{Backend, Database};
@@ -344,7 +345,7 @@ fn pvs_walk_cmd(
     let db = Database::open_with(path, backend)?;
     let poses = match camera {
         // A walker's pace: 1.4 m/s.
-        "cells" => pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
         other => camera_path(&db, other, frames, fps, seed)?,
     };
     let bar = frame_bar(&poses, quiet);

@@ -8,8 +8,9 @@
 //! procedural models, no database needed, with `lod_dag_stats` (the three DAG
 //! constructions compared) and `lod_orbit` (a scripted orbit refined frame by frame)
 //! beneath them; `lod_inspect` is what `flaneur lod` runs on a mesh file (its levels
-//! written as OBJ, one view's refinement measured); `pvs_prefetch` runs the neighbour PVS prefetchers
-//! (`flaneur::prefetch::pvs`) on a synthetic PVS table, no database either, and
+//! written as OBJ, one view's refinement measured). `pvs_prefetch` runs the neighbour
+//! PVS prefetchers (`flaneur::prefetch::pvs`) on the thesis's synthetic city and PVS
+//! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on.
 
 pub mod cell_size;

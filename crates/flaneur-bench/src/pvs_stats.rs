@@ -119,9 +119,8 @@ fn intersection(a: &[ObjectId], b: &[ObjectId]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flaneur::prefetch::pvs::{
-        Position, PvsTable, SyntheticCity, SyntheticConfig, ViewcellGrid,
-    };
+    use crate::pvs_prefetch::{PvsTable, SyntheticCity, SyntheticConfig};
+    use flaneur::prefetch::pvs::{Position, ViewcellGrid};
 
     #[test]
     fn a_small_table_by_hand() {

@@ -38,7 +38,7 @@ use flaneur::geom::{Aabb, Camera};
 use flaneur::scene::Mesh;
 use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use flaneur::walk::cells::{contains_ground, scaled_cell};
-use flaneur::walk::motion::Motion;
+use flaneur::walk::path::motion::Motion;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]

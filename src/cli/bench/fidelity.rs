@@ -8,7 +8,8 @@ use anyhow::{bail, Result};
 use super::report::write_report;
 use crate::cli::args::parse_size;
 use crate::cli::walk::camera_path;
-use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::path::cell_walk;
+use flaneur::walk::pvs_walk::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
 use flaneur::Database;
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
@@ -71,7 +72,7 @@ impl FidelityArgs {
         let path =
             path.unwrap_or_else(|| if preset.is_some() { "normal" } else { "cells" }.to_string());
         let poses = match path.as_str() {
-            "cells" if preset.is_none() => pvs_walk::cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+            "cells" if preset.is_none() => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
             other => camera_path(&db, other, frames, fps, seed)?,
         };
         let cfg = ReviewConfig {

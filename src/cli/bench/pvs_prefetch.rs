@@ -6,9 +6,9 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::args::or_default;
-use flaneur::prefetch::pvs::{RouteConfig, SyntheticConfig};
+use flaneur::walk::path::routes::RouteConfig;
 use flaneur::Database;
-use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig};
+use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig, SyntheticConfig};
 
 /// `flaneur bench pvs-prefetch`'s arguments.
 #[derive(clap::Args)]

@@ -1,6 +1,6 @@
 //! The walk settings every walking experiment takes, as arguments.
 
-use flaneur::walk::motion::Motion;
+use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review;
 use flaneur_bench::walk_setup::{self, WalkSetup};
 

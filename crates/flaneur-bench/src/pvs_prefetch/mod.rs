@@ -5,9 +5,10 @@
 //! step, and visual misses; beside them, PBNP swept over its region size, which the
 //! thesis leaves open.
 //!
-//! It runs on the synthetic PVS table (`prefetch::pvs::synthetic`, how it is drawn is
-//! named there) and the two routes (`prefetch::pvs::routes`); one seed draws both. No
-//! database: the table and the walks take well under a second. [`run_on_database`]
+//! It runs on the synthetic PVS table (`synthetic`, how it is drawn is named there,
+//! held in a `PvsTable`) and the two routes (`flaneur::walk::path::routes`); one seed
+//! draws both, and `simulate` walks a route (§7.5). No database: the table and the
+//! walks take well under a second. [`run_on_database`]
 //! runs the same experiment over a database's precomputed visibility, every PVS record
 //! read through the store, with route 2 drawn along the city's walkable cells
 //! (`axis_route`).
@@ -17,12 +18,19 @@ use std::path::Path;
 use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{
-    axis_route, check_border, random_route, simulate, straight_route, Pbnp, Position, PvsSource,
-    RouteConfig, SimReport, SimTotals, Snp, StoredPvs, SyntheticCity, SyntheticConfig,
-    DEFAULT_BORDER, THESIS_CAPACITY,
+    check_border, Pbnp, Position, PvsSource, Snp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY,
 };
+use flaneur::walk::path::routes::{axis_route, random_route, straight_route, RouteConfig};
 
 use crate::pvs_stats::{measure, TableStats};
+
+mod sim;
+pub mod synthetic;
+mod table;
+
+pub use sim::{simulate, SimReport, SimTotals, StepRecord};
+pub use synthetic::{SyntheticCity, SyntheticConfig};
+pub use table::{PvsTable, MAX_CELLS};
 
 /// One column of Zheng 2007 Table 7.2, with §7.5's objects per transaction and in the
 /// first transaction.
@@ -208,7 +216,7 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
     let route1 = random_route(city.intersection(middle, middle), &cfg.route, |p| {
         Ok(city.on_walkway(p))
     })?;
-    let route2 = straight_route(&city, &cfg.route)?.positions;
+    let route2 = straight_route(&city.street_grid(), &cfg.route)?.positions;
     let (routes, sweep) = walk(&city, [route1, route2], cfg, || None)?;
     let c = &cfg.city;
     let place = Place {
@@ -746,5 +754,9 @@ impl Report for PvsPrefetchReport {
     }
 }
 
+#[cfg(test)]
+mod city_tests;
+#[cfg(test)]
+mod route_tests;
 #[cfg(test)]
 mod tests;

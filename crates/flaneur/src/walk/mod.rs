@@ -17,13 +17,6 @@ mod sink;
 pub mod start;
 pub mod steer;
 
-/// The motion patterns under their former path, `walk::motion`, with the path types
-/// they make; kept while callers move to [`path::motion`] and [`path`].
-pub mod motion {
-    pub use super::path::motion::*;
-    pub use super::path::{CameraPath, Pose};
-}
-
 pub use path::motion::Motion;
 pub use path::{street_walk, CameraPath, Pose};
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};

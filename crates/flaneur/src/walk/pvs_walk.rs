@@ -24,10 +24,6 @@ use crate::walk::path::CameraPath;
 use crate::walk::sink::Played;
 use crate::walk::{FrameSink, NoSink, Viewer};
 
-/// The walk through a database's walkable viewcells, under its former path; see
-/// [`crate::walk::path::cell_walk`].
-pub use crate::walk::path::cell_walk;
-
 /// Which neighbours the client prefetches.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub enum PvsPrefetch {

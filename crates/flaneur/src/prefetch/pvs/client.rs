@@ -40,12 +40,21 @@ pub struct StepOutcome {
 /// A client walking over a PVS source with a prefetching rule.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{Cell, Pbnp, Position, PvsClient, PvsTable, ViewcellGrid};
-/// let grid = ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 1, 3)?;
-/// let mut table = PvsTable::new(grid, 10)?;
-/// for (col, pvs) in [vec![1, 2, 3], vec![2, 3, 4], vec![3, 4, 5]].into_iter().enumerate() {
-///     table.insert(Cell::new(0, col as u32), pvs)?;
+/// use flaneur::prefetch::pvs::{Cell, ObjectId, Pbnp, Position, PvsClient, PvsSource, ViewcellGrid};
+/// # use flaneur::Result;
+/// // A street of three cells west to east, each seeing three objects, the next cell's
+/// // view shifted one object on.
+/// struct Street(ViewcellGrid);
+/// impl PvsSource for Street {
+///     fn grid(&self) -> &ViewcellGrid { &self.0 }
+///     fn scene_objects(&self) -> u64 { 10 }
+///     fn is_viewcell(&self, cell: Cell) -> Result<bool> { Ok(self.0.contains(cell)) }
+///     fn pvs(&self, cell: Cell) -> Result<Vec<ObjectId>> {
+///         let first = u64::from(cell.col) + 1;
+///         Ok((first..first + 3).collect())
+///     }
 /// }
+/// let table = Street(ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 1, 3)?);
 /// let pbnp = Pbnp::new(0.25)?;
 /// let mut client = PvsClient::new(&table, &pbnp, 9)?;
 /// let start = client.step(Position::new(30.0, 10.0))?; // the middle of cell (0, 1)

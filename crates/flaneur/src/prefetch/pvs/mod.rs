@@ -7,9 +7,10 @@
 //! viewer leans towards, read from which of nine regions of its cell it stands in
 //! (h(R), Table 7.1). Both send only what the client lacks (`delta`, §7.3) and share
 //! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
-//! transaction, `sim` a whole route (§7.5). `synthetic` makes the thesis's simulated
-//! city and PVS table, and `walk::path::routes` its two routes; `stored` reads a
-//! database's precomputed visibility as the server's table.
+//! transaction. `stored` reads a database's precomputed visibility as the server's
+//! table; `walk::path::routes` draws the thesis's two routes. The simulation of §7.5
+//! (a whole route's counts), the thesis's synthetic city and its in-memory PVS table
+//! are the `pvs-prefetch` experiment's, in `flaneur-bench`.
 //!
 //! Choices the thesis leaves open, and ours:
 //!
@@ -43,8 +44,8 @@
 //!   since the current cell and its eight neighbours must fit.
 //! - **Orientation**: columns grow east (+x), rows south (+z); (a − 1, b + 1) is
 //!   north-east of (a, b), as in Fig. 7.1.
-//! - **The synthetic table and the routes**: see [`synthetic`] and
-//!   [`routes`](crate::walk::path::routes).
+//! - **The routes**: see [`routes`](crate::walk::path::routes); the synthetic table is
+//!   described with the experiment that draws it.
 
 mod area;
 mod cache;
@@ -52,28 +53,16 @@ mod client;
 mod delta;
 mod grid;
 mod pbnp;
-mod sim;
 mod snp;
 mod source;
 mod stored;
-pub mod synthetic;
-mod table;
 
-#[cfg(test)]
-mod tests;
-
-pub use crate::walk::path::routes::{
-    axis_route, random_route, straight_route, RouteConfig, StraightRoute,
-};
 pub use area::{Area, PrefetchArea};
 pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
 pub use client::{PvsClient, StepOutcome, Transaction};
 pub use delta::delta;
 pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
 pub use pbnp::{h, Pbnp};
-pub use sim::{simulate, SimReport, SimTotals, StepRecord};
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};
 pub use stored::StoredPvs;
-pub use synthetic::{SyntheticCity, SyntheticConfig};
-pub use table::{PvsTable, MAX_CELLS};

@@ -1,7 +1,7 @@
 //! Where the prefetcher gets PVS rows from: the server's boolean table T of §7.3, one
-//! row S_i per viewcell. A small trait, so that the prefetcher runs unchanged over the
-//! synthetic table of the experiments ([`PvsTable`](super::PvsTable)) and over a
-//! database's precomputed visibility.
+//! row S_i per viewcell. A small trait, so that the prefetcher runs unchanged over a
+//! database's precomputed visibility ([`StoredPvs`](super::StoredPvs)) and over the
+//! tables an experiment or a test makes up.
 
 use super::grid::{Cell, ViewcellGrid};
 use crate::error::Result;
@@ -12,13 +12,37 @@ pub type ObjectId = u64;
 /// A table of potentially visible sets over a viewcell grid.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{Cell, Position, PvsSource, PvsTable, ViewcellGrid};
-/// let grid = ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 1, 2)?;
-/// let mut table = PvsTable::new(grid, 10)?;
-/// table.insert(Cell::new(0, 0), vec![4, 1, 2])?;
-/// assert_eq!(table.pvs(Cell::new(0, 0))?, [1, 2, 4]);
-/// assert!(!table.is_viewcell(Cell::new(0, 1))?); // inside a building, say
-/// assert!(table.pvs(Cell::new(0, 1)).is_err());
+/// use flaneur::prefetch::pvs::{Cell, ObjectId, Position, PvsSource, ViewcellGrid};
+/// use flaneur::{Error, Result};
+///
+/// /// Two cells side by side: a street that sees objects 1, 2 and 4, and a building.
+/// struct Corner {
+///     grid: ViewcellGrid,
+/// }
+///
+/// impl PvsSource for Corner {
+///     fn grid(&self) -> &ViewcellGrid {
+///         &self.grid
+///     }
+///     fn scene_objects(&self) -> u64 {
+///         10
+///     }
+///     fn is_viewcell(&self, cell: Cell) -> Result<bool> {
+///         Ok(cell == Cell::new(0, 0))
+///     }
+///     fn pvs(&self, cell: Cell) -> Result<Vec<ObjectId>> {
+///         match self.is_viewcell(cell)? {
+///             true => Ok(vec![1, 2, 4]),
+///             false => Err(Error::Pvs(format!("cell {cell} has no viewcell"))),
+///         }
+///     }
+/// }
+///
+/// let corner = Corner { grid: ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 1, 2)? };
+/// let here = corner.grid().cell_of(Position::new(5.0, 5.0))?;
+/// assert_eq!(corner.pvs(here)?, [1, 2, 4]);
+/// assert!(!corner.is_viewcell(Cell::new(0, 1))?);
+/// assert!(corner.pvs(Cell::new(0, 1)).is_err());
 /// # Ok::<(), flaneur::Error>(())
 /// ```
 pub trait PvsSource {

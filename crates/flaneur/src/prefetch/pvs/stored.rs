@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 ///
 /// ```
 /// # fn main() -> flaneur::Result<()> {
-/// use flaneur::prefetch::pvs::{simulate, Pbnp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY};
+/// use flaneur::prefetch::pvs::{Pbnp, PvsClient, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY};
 /// use flaneur::visibility::VisibilityOptions;
 /// let dir = tempfile::tempdir().unwrap();
 /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
@@ -25,8 +25,13 @@ use crate::error::{Error, Result};
 /// let db = flaneur::Database::open(&path)?;
 /// let source = StoredPvs::new(&db)?;
 /// let start = source.walkable_centres()?[0];
-/// let report = simulate(&source, &Pbnp::new(DEFAULT_BORDER)?, &[start], THESIS_CAPACITY)?;
-/// assert_eq!(report.totals.transactions, 1);
+/// let pbnp = Pbnp::new(DEFAULT_BORDER)?;
+/// let mut client = PvsClient::new(&source, &pbnp, THESIS_CAPACITY)?;
+/// // The first position fetches its area from an empty cache: one transaction.
+/// let first = client.step(start)?;
+/// assert!(first.transaction.is_some());
+/// // Standing still fetches nothing more.
+/// assert!(client.step(start)?.transaction.is_none());
 /// # Ok(()) }
 /// ```
 pub struct StoredPvs<'a> {

@@ -48,8 +48,8 @@ impl Pose {
     }
 }
 
-/// A timed sequence of poses: what [`generate`] makes, what a recorded session holds,
-/// what [`CameraPath::save_csv`] writes.
+/// A timed sequence of poses: what [`generate`](motion::generate) makes, what a recorded
+/// session holds, what [`CameraPath::save_csv`] writes.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct CameraPath {
     pub poses: Vec<Pose>,

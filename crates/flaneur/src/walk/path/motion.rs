@@ -186,7 +186,7 @@ impl FromStr for Motion {
 ///
 /// ```
 /// use flaneur::geom::Aabb;
-/// use flaneur::walk::motion::{generate, Motion};
+/// use flaneur::walk::path::motion::{generate, Motion};
 /// # fn main() -> flaneur::Result<()> {
 /// let city: Aabb = "0,0,0,2000,80,2000".parse()?;
 /// let path = generate(&city, Motion::Fast, 300, 30.0, 7)?;

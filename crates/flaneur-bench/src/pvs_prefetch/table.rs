@@ -1,14 +1,25 @@
 //! The in-memory PVS table: one sorted row per viewcell of a grid, none for the cells
 //! without a viewcell. The synthetic city fills one; tests build small ones by hand.
 
-use super::grid::{Cell, ViewcellGrid};
-use super::source::{ObjectId, PvsSource};
-use crate::error::{Error, Result};
+use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::{Cell, ObjectId, PvsSource, ViewcellGrid};
 
 /// The most cells a [`PvsTable`]'s grid may have (a row slot each, viewcell or not).
 pub const MAX_CELLS: u64 = 1 << 24;
 
-/// A [`PvsSource`] held in memory. See [`PvsSource`] for an example.
+/// A [`PvsSource`] held in memory.
+///
+/// ```
+/// use flaneur::prefetch::pvs::{Cell, Position, PvsSource, ViewcellGrid};
+/// use flaneur_bench::pvs_prefetch::PvsTable;
+/// let grid = ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 1, 2)?;
+/// let mut table = PvsTable::new(grid, 10)?;
+/// table.insert(Cell::new(0, 0), vec![4, 1, 2])?;
+/// assert_eq!(table.pvs(Cell::new(0, 0))?, [1, 2, 4]);
+/// assert!(!table.is_viewcell(Cell::new(0, 1))?); // inside a building, say
+/// assert!(table.pvs(Cell::new(0, 1)).is_err());
+/// # Ok::<(), flaneur::Error>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct PvsTable {
     grid: ViewcellGrid,
@@ -105,7 +116,7 @@ impl PvsSource for PvsTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::prefetch::pvs::Position;
+    use flaneur::prefetch::pvs::Position;
 
     #[test]
     fn rows_are_sorted_and_checked() {

@@ -2,11 +2,8 @@
 //! position's transaction is counted. Deterministic: the same table, rule and route
 //! give the same counts.
 
-use super::area::PrefetchArea;
-use super::client::PvsClient;
-use super::grid::{Cell, Position};
-use super::source::PvsSource;
-use crate::error::{Error, Result};
+use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::{Cell, Position, PrefetchArea, PvsClient, PvsSource};
 
 /// What one position of the route cost.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -82,7 +79,8 @@ pub struct SimReport {
 /// Walks `route` with a client of `capacity` cache entries using `rule`.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{simulate, Cell, Pbnp, Position, PvsTable, Snp, ViewcellGrid};
+/// use flaneur::prefetch::pvs::{Cell, Pbnp, Position, Snp, ViewcellGrid};
+/// use flaneur_bench::pvs_prefetch::{simulate, PvsTable};
 /// let grid = ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 3, 10)?;
 /// let mut table = PvsTable::new(grid, 100)?;
 /// for row in 0..3 {

@@ -4,7 +4,12 @@
 use std::collections::HashSet;
 use std::sync::OnceLock;
 
-use super::*;
+use flaneur::prefetch::pvs::{
+    ObjectId, Pbnp, Position, PrefetchArea, PvsClient, PvsSource, Snp, THESIS_CAPACITY,
+};
+use flaneur::walk::path::routes::{random_route, straight_route, RouteConfig};
+
+use super::{simulate, StepRecord, SyntheticCity, SyntheticConfig};
 
 /// The thesis's city and its two routes, made once for all tests.
 fn thesis() -> &'static (SyntheticCity, Vec<Position>, Vec<Position>) {
@@ -13,7 +18,7 @@ fn thesis() -> &'static (SyntheticCity, Vec<Position>, Vec<Position>) {
         let city = SyntheticCity::generate(&SyntheticConfig::default()).unwrap();
         let cfg = RouteConfig::default();
         let r1 = random_route(city.intersection(15, 15), &cfg, |p| Ok(city.on_walkway(p))).unwrap();
-        let r2 = straight_route(&city, &cfg).unwrap().positions;
+        let r2 = straight_route(&city.street_grid(), &cfg).unwrap().positions;
         (city, r1, r2)
     })
 }

@@ -24,10 +24,11 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::grid::{Cell, Position, ViewcellGrid};
-use super::source::{ObjectId, PvsSource};
+use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::{Cell, ObjectId, Position, PvsSource, ViewcellGrid};
+use flaneur::walk::path::routes::StreetGrid;
+
 use super::table::PvsTable;
-use crate::error::{Error, Result};
 
 /// The settings of a synthetic city; the defaults are the thesis's.
 #[derive(Clone, Debug, PartialEq)]
@@ -151,7 +152,8 @@ impl SyntheticConfig {
 /// A generated city: its plan and its PVS table.
 ///
 /// ```
-/// use flaneur::prefetch::pvs::{PvsSource, SyntheticCity, SyntheticConfig};
+/// use flaneur::prefetch::pvs::PvsSource;
+/// use flaneur_bench::pvs_prefetch::{SyntheticCity, SyntheticConfig};
 /// let city = SyntheticCity::generate(&SyntheticConfig { blocks: 4, ..Default::default() })?;
 /// assert_eq!(city.scene_objects(), 16);
 /// let here = city.intersection(1, 2);
@@ -252,6 +254,16 @@ impl SyntheticCity {
     /// Streets along each axis (`blocks` + 1, the edge ones included).
     pub fn streets(&self) -> u32 {
         self.config.blocks + 1
+    }
+
+    /// The city's streets as route 2 walks them.
+    pub fn street_grid(&self) -> StreetGrid {
+        StreetGrid {
+            blocks: self.config.blocks,
+            pitch: self.pitch(),
+            street: self.config.street,
+            side: self.side(),
+        }
     }
 
     /// The centre of the crossing of street `i` (counted west to east) and street `j`
