@@ -222,6 +222,56 @@ impl Database {
         }
     }
 
+    /// The stored level a viewer at `eye` should see `object` at: the coarsest whose
+    /// error stays under `tau` of the viewport for a vertical field of view `fov_y`
+    /// (radians), as a walk's LOD selection chooses it ([`crate::lod::level_for`], the
+    /// distance taken to the object's box). Level 0, the full mesh, when the object has
+    /// no LOD data or the eye is inside its box. Reads only the object's LOD entry and
+    /// its chain's directory; [`Database::lod_mesh`] then reads that level.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// # citygen::write_city(&city, &scene, false)?;
+    /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+    /// use glam::Vec3;
+    /// let db = flaneur::Database::open(&path)?;
+    /// let house = db.range(&db.bounds())?.objects[0];
+    /// let fov = 60f32.to_radians();
+    /// let near = db.lod_level_for(&house, house.bounds.center(), fov, 0.001)?;
+    /// let far = db.lod_level_for(&house, house.bounds.center() + Vec3::X * 5_000.0, fov, 0.001)?;
+    /// assert_eq!(near.level, 0); // standing inside it: full detail
+    /// assert!(far.level > 0 && far.triangles < near.triangles);
+    /// let mesh = db.lod_mesh(house.id, far.level)?;
+    /// assert_eq!(mesh.triangle_count(), far.triangles as usize);
+    /// # Ok(()) }
+    /// ```
+    pub fn lod_level_for(
+        &self,
+        object: &ObjectEntry,
+        eye: glam::Vec3,
+        fov_y: f32,
+        tau: f32,
+    ) -> Result<LevelInfo> {
+        let full = LevelInfo {
+            level: 0,
+            triangles: object.triangles,
+            error: 0.0,
+        };
+        let Some(levels) = self.lod_levels(object.id)? else {
+            return Ok(full);
+        };
+        let level = crate::lod::level_for(
+            &levels,
+            crate::lod::distance_to(&object.bounds, eye),
+            fov_y,
+            tau,
+        );
+        Ok(levels.get(level).copied().unwrap_or(full))
+    }
+
     /// Level `level` of object `id` as a mesh (0: the full mesh). Reads the LOD table's
     /// entry page, then for a coarse level only the pages of the object's chain that
     /// hold its directory and that level — the coarser the level, the fewer pages.

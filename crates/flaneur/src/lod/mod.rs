@@ -51,8 +51,8 @@ pub use refine::{
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{
-    decode_chain, encode_chain, ChainDirectory, LevelInfo, LodOptions, LodReport, LodStats,
-    CHAIN_HEADER_LEN, CHAIN_MAGIC, CHAIN_VERSION, DEFAULT_PM_THRESHOLD, LOD_SEGMENT, TABLE_MAGIC,
-    TABLE_VERSION,
+    decode_chain, distance_to, encode_chain, level_for, ChainDirectory, LevelInfo, LodOptions,
+    LodReport, LodStats, CHAIN_HEADER_LEN, CHAIN_MAGIC, CHAIN_VERSION, DEFAULT_PM_THRESHOLD,
+    LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION,
 };
 pub use torus::bumpy_torus;

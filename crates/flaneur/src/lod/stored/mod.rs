@@ -6,6 +6,7 @@
 mod bake;
 mod chain;
 mod read;
+mod select;
 mod table;
 
 pub(crate) use bake::LodWriter;
@@ -15,5 +16,6 @@ pub use chain::{
     CHAIN_VERSION,
 };
 pub(crate) use read::{level_mesh, levels, progressive, read_progressive, ProgressiveBytes};
+pub use select::{distance_to, level_for};
 pub(crate) use table::{LodEntry, LodTable};
 pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};
