@@ -33,7 +33,6 @@ fn fixture() -> Fixture {
             ..Default::default()
         },
         &scene,
-        false,
     )
     .unwrap();
     flaneur::build_from_scene(&scene, &path, &BuildOptions::default()).unwrap();

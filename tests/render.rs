@@ -33,7 +33,7 @@ fn build(dir: &std::path::Path, opts: &BuildOptions) -> Database {
         landmarks: 0.0,
         ..Default::default()
     };
-    citygen::write_city(&config, &scene, false).unwrap();
+    citygen::write_city(&config, &scene).unwrap();
     let db_path = dir.join("c.flaneur");
     flaneur::build_from_scene(&scene, &db_path, opts).unwrap();
     Database::open(&db_path).unwrap()

@@ -33,7 +33,7 @@ fn scene_in(dir: &std::path::Path, objects: u64, seed: u64) -> std::path::PathBu
         landmarks: 0.0,
         ..Default::default()
     };
-    citygen::write_city(&config, &scene, false).unwrap();
+    citygen::write_city(&config, &scene).unwrap();
     scene
 }
 

@@ -6,13 +6,12 @@
 use std::path::Path;
 use std::sync::mpsc::sync_channel;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::config::CityConfig;
+use crate::recipe::{checked_layout, object_on};
 use flaneur_scene::SceneError;
 use flaneur_scene::SceneObject;
-use crate::recipe::{checked_layout, object_on};
 use flaneur_scene::{SceneSummary, SceneWriter};
 
 /// Objects built together in one parallel batch.
@@ -67,34 +66,35 @@ pub fn generate<E: From<SceneError>>(
     })
 }
 
-/// Generates the city `config` into a scene file at `path`, with a progress bar on
-/// standard error when `progress` is set (and it is a terminal).
-pub fn write_city(
+/// Generates the city `config` into a scene file at `path`.
+pub fn write_city(config: &CityConfig, path: &Path) -> Result<SceneSummary, SceneError> {
+    write_city_with_progress(config, path, |_| {})
+}
+
+/// [`write_city`], telling `progress` how many objects are written so far (of
+/// `config.objects`), so that a caller can draw a bar: the library draws none.
+///
+/// ```
+/// let dir = tempfile::tempdir().unwrap();
+/// let config = citygen::CityConfig { objects: 30, landmarks: 0.0, ..Default::default() };
+/// let mut last = 0;
+/// citygen::write_city_with_progress(&config, &dir.path().join("c.scene"), |n| last = n).unwrap();
+/// assert_eq!(last, 30);
+/// ```
+pub fn write_city_with_progress(
     config: &CityConfig,
     path: &Path,
-    progress: bool,
+    mut progress: impl FnMut(u64),
 ) -> Result<SceneSummary, SceneError> {
     config.validate()?;
-    let bar = if progress {
-        let bar = ProgressBar::new(config.objects);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{elapsed_precise} [{wide_bar}] {pos}/{len} objects ({per_sec}, {eta} left)",
-            )
-            .expect("a valid template")
-            .progress_chars("=> "),
-        );
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
     let mut writer = SceneWriter::create(path)?;
+    let mut written = 0u64;
     generate(config, |object| {
         writer.write(&object)?;
-        bar.inc(1);
+        written += 1;
+        progress(written);
         Ok::<(), SceneError>(())
     })?;
-    bar.finish_and_clear();
     writer.finish()
 }
 
@@ -148,7 +148,7 @@ mod tests {
             ..Default::default()
         };
         assert!(matches!(
-            write_city(&config, &path, false),
+            write_city(&config, &path),
             Err(SceneError::Config(_))
         ));
         assert!(!path.exists());

@@ -34,7 +34,7 @@ mod recipe;
 mod sculpture;
 
 pub use config::{CityConfig, MAX_OBJECTS};
-pub use generate::{generate, write_city};
+pub use generate::{generate, write_city, write_city_with_progress};
 pub use obj_export::export_obj;
 pub use recipe::object;
 // The scene types are the engine's (`flaneur-scene`); they are named here too so that a

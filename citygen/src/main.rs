@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
 
 use citygen::CityConfig;
 
@@ -82,10 +83,15 @@ fn main() -> Result<()> {
     if let Err(e) = config.validate() {
         bail!("{e}");
     }
-    let progress = !args.quiet && std::io::stderr().is_terminal();
+    let bar = if !args.quiet && std::io::stderr().is_terminal() {
+        objects_bar(config.objects)
+    } else {
+        ProgressBar::hidden()
+    };
     let started = Instant::now();
-    let summary = citygen::write_city(&config, &args.out, progress)
+    let summary = citygen::write_city_with_progress(&config, &args.out, |n| bar.set_position(n))
         .with_context(|| format!("writing {}", args.out.display()))?;
+    bar.finish_and_clear();
     let secs = started.elapsed().as_secs_f64();
     println!(
         "{}: {} objects, {} triangles, {} bytes in {:.2} s ({:.0} objects/s, {:.0} triangles/object, {:.0} bytes/object), city {:.0} m square",
@@ -112,4 +118,17 @@ fn main() -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The bar of objects written, on standard error.
+fn objects_bar(objects: u64) -> ProgressBar {
+    let bar = ProgressBar::new(objects);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{wide_bar}] {pos}/{len} objects ({per_sec}, {eta} left)",
+        )
+        .expect("a valid template")
+        .progress_chars("=> "),
+    );
+    bar
 }

@@ -17,7 +17,7 @@ fn small(seed: u64) -> CityConfig {
 
 fn write(dir: &Path, name: &str, config: &CityConfig) -> PathBuf {
     let path = dir.join(name);
-    write_city(config, &path, false).unwrap();
+    write_city(config, &path).unwrap();
     path
 }
 
@@ -64,7 +64,7 @@ fn round_trip_keeps_everything_but_normal_precision() {
         ..Default::default()
     };
     let path = dir.path().join("city.scene");
-    let summary = write_city(&config, &path, false).unwrap();
+    let summary = write_city(&config, &path).unwrap();
     assert_eq!(summary.objects, 120);
     assert_eq!(summary.bytes, std::fs::metadata(&path).unwrap().len());
 

@@ -63,3 +63,16 @@ pub fn with_bar<T>(
     bar.finish_and_clear();
     Ok(result?)
 }
+
+/// The bar of a city's objects as the generator writes them (as `citygen` draws it).
+pub fn city_bar(objects: u64) -> ProgressBar {
+    let bar = ProgressBar::new(objects);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{wide_bar}] {pos}/{len} objects ({per_sec}, {eta} left)",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar
+}

@@ -51,7 +51,9 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
                 "generating a city of {objects} objects into {}",
                 scene.display()
             );
-            let s = citygen::write_city(&city, &scene, true)?;
+            let bar = super::bars::city_bar(city.objects);
+            let s = citygen::write_city_with_progress(&city, &scene, |n| bar.set_position(n))?;
+            bar.finish_and_clear();
             println!(
                 "  {} objects, {} triangles, {:.1} MiB",
                 s.objects,

@@ -47,7 +47,7 @@ pub fn city(objects: u64, seed: u64, opts: &BuildOptions) -> City {
         landmarks: 0.0,
         ..Default::default()
     };
-    citygen::write_city(&config, &scene, false).unwrap();
+    citygen::write_city(&config, &scene).unwrap();
     flaneur::build_from_scene(&scene, &db, opts).unwrap();
     let boxes = citygen::SceneReader::open(&scene)
         .unwrap()

@@ -71,7 +71,7 @@ fn build(dir: &Path, db: &Path, objects: u64, seed: u64, page_size: usize) -> Re
         seed,
         ..Default::default()
     };
-    citygen::write_city(&city, &scene, false)?;
+    citygen::write_city(&city, &scene)?;
     let built = build_from_scene(
         &scene,
         db,

@@ -66,7 +66,7 @@ impl Default for BuildOptions {
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 20, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 20, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// let built = flaneur::build_from_scene(&scene, &db, &Default::default())?;
 /// assert_eq!(built.objects, 20);
 /// assert_eq!(built.bytes, built.pages * 4096);
@@ -116,7 +116,7 @@ pub struct VisibilityReport {
 /// let dir = tempfile::tempdir().unwrap();
 /// let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
 /// let city = citygen::CityConfig { objects: 30, landmarks: 0.0, ..Default::default() };
-/// citygen::write_city(&city, &scene, false)?;
+/// citygen::write_city(&city, &scene)?;
 /// flaneur::build_from_scene(&scene, &db, &flaneur::BuildOptions::default())?;
 /// assert_eq!(flaneur::Database::open(&db)?.objects(), 30);
 /// # Ok(()) }
@@ -142,7 +142,7 @@ pub fn build_from_scene(scene: &Path, db: &Path, opts: &BuildOptions) -> Result<
 /// }
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, db) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 12, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 12, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// let built = Built(AtomicU64::new(0));
 /// flaneur::build_from_scene_with_progress(&scene, &db, &Default::default(), &built)?;
 /// assert_eq!(built.0.load(Ordering::Relaxed), 12); // every object, LODs included

@@ -21,7 +21,7 @@ pub use crate::catalog::KindCounts;
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
 /// let info = flaneur::Database::open(&path)?.info()?;
 /// assert_eq!(info.objects, 40);
@@ -80,7 +80,7 @@ pub struct VisibilityInfo {
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
 /// let db = flaneur::Database::open(&path)?;
 /// let hits = db.range(&db.bounds())?;
@@ -205,7 +205,7 @@ impl Database {
     /// let dir = tempfile::tempdir().unwrap();
     /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
     /// let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-    /// citygen::write_city(&city, &scene, false)?;
+    /// citygen::write_city(&city, &scene)?;
     /// flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
     ///
     /// let db = flaneur::Database::open(&path)?;
@@ -234,7 +234,7 @@ impl Database {
     /// # let dir = tempfile::tempdir().unwrap();
     /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
     /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-    /// # citygen::write_city(&city, &scene, false)?;
+    /// # citygen::write_city(&city, &scene)?;
     /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
     /// use glam::Vec3;
     /// let db = flaneur::Database::open(&path)?;
@@ -284,7 +284,7 @@ impl Database {
     /// # let dir = tempfile::tempdir().unwrap();
     /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
     /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-    /// # citygen::write_city(&city, &scene, false)?;
+    /// # citygen::write_city(&city, &scene)?;
     /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
     /// let db = flaneur::Database::open(&path)?;
     /// let levels = db.lod_levels(0)?.unwrap();
@@ -313,7 +313,7 @@ impl Database {
     /// # let dir = tempfile::tempdir().unwrap();
     /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
     /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-    /// # citygen::write_city(&city, &scene, false)?;
+    /// # citygen::write_city(&city, &scene)?;
     /// let lod = flaneur::lod::LodOptions { pm_threshold: 0, ..Default::default() };
     /// let opts = flaneur::BuildOptions { lod: Some(lod), ..Default::default() };
     /// flaneur::build_from_scene(&scene, &path, &opts)?;
@@ -423,7 +423,7 @@ impl Database {
     /// let dir = tempfile::tempdir().unwrap();
     /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
     /// let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-    /// citygen::write_city(&city, &scene, false)?;
+    /// citygen::write_city(&city, &scene)?;
     /// let opts = flaneur::BuildOptions {
     ///     lod: None,
     ///     visibility: Some(VisibilityOptions { resolution: 16, ..Default::default() }),

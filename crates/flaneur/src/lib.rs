@@ -11,7 +11,7 @@
 //! let dir = tempfile::tempdir().unwrap();
 //! let (scene, db_path) = (dir.path().join("city.scene"), dir.path().join("city.flaneur"));
 //! let city = citygen::CityConfig { objects: 300, ..Default::default() };
-//! citygen::write_city(&city, &scene, false)?;
+//! citygen::write_city(&city, &scene)?;
 //! flaneur::build_from_scene(&scene, &db_path, &BuildOptions::default())?;
 //!
 //! let db = Database::open(&db_path)?;

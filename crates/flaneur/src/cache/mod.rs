@@ -23,7 +23,7 @@
 //! use flaneur::{rtree::History, BuildOptions, Database};
 //! let dir = tempfile::tempdir().unwrap();
 //! let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-//! citygen::write_city(&citygen::CityConfig { objects: 300, ..Default::default() }, &scene, false)?;
+//! citygen::write_city(&citygen::CityConfig { objects: 300, ..Default::default() }, &scene)?;
 //! flaneur::build_from_scene(&scene, &path, &BuildOptions { page_size: 1024, ..Default::default() })?;
 //! let db = Database::open(&path)?;
 //!

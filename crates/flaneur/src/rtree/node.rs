@@ -42,7 +42,7 @@ pub const LEAF_ENTRY_LEN: usize = KIND_OFFSET + 4;
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 10, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 10, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
 /// let db = flaneur::Database::open(&path)?;
 /// let first = db.range(&db.bounds())?.objects[0];

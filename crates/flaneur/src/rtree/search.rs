@@ -21,7 +21,7 @@ pub trait Selection {
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
-/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene, false)?;
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene)?;
 /// # flaneur::build_from_scene(&scene, &path, &Default::default())?;
 /// let db = flaneur::Database::open(&path)?;
 /// let all = db.range(&db.bounds())?;

@@ -33,7 +33,7 @@ const PROBE: f32 = 120.0;
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
 /// # let city = citygen::CityConfig { objects: 60, landmarks: 0.0, ..Default::default() };
-/// # citygen::write_city(&city, &scene, false)?;
+/// # citygen::write_city(&city, &scene)?;
 /// # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
 /// let db = flaneur::Database::open(&path)?;

@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 /// let dir = tempfile::tempdir().unwrap();
 /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
 /// let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
-/// citygen::write_city(&city, &scene, false)?;
+/// citygen::write_city(&city, &scene)?;
 /// let opts = flaneur::BuildOptions {
 ///     lod: None,
 ///     visibility: Some(VisibilityOptions { resolution: 16, ..Default::default() }),
