@@ -4,7 +4,8 @@
 //! the walks, the prefetchers, the database, the build and the experiments are built on
 //! them, so none of those may be reached from below. And the engine itself draws no
 //! window, talks to no GPU or terminal, plots nothing and generates no city: those
-//! crates belong to `flaneur-render`, `flaneur-bench` and the command.
+//! crates belong to `flaneur-render`, `flaneur-bench` and the command. The renderer,
+//! in turn, reads no database: it draws what the walk hands it.
 //!
 //! The source check reads paths, not types: a `crate::…` or `super::…` path (in a `use`
 //! or anywhere in the code) whose first module is a forbidden one. Comments, strings
@@ -377,6 +378,44 @@ fn lower_layers_do_not_reach_up() {
         "the engine's bottom layers ({}) must not use {}:\n{}",
         LOWER.join(", "),
         UPPER.join(", "),
+        violations.join("\n")
+    );
+}
+
+/// The renderer draws what the walk selected and never reads the database: its code
+/// names neither the `Database` nor the engine's `database` and `store` modules, so
+/// that every page a walk reads is the walk's, counted in its figures, and a frame's
+/// data flows one way.
+#[test]
+fn the_renderer_never_reads_the_database() {
+    let src = workspace().join("crates/flaneur-render/src");
+    let mut violations = Vec::new();
+    let files = rust_files(&src);
+    assert!(files.len() >= 10, "only {} renderer files", files.len());
+    for file in files {
+        let text = fs::read_to_string(&file).unwrap();
+        let code = String::from_utf8(blank_non_code(&text)).unwrap();
+        for (n, line) in code.lines().enumerate() {
+            let squeezed: String = line.chars().filter(|c| !c.is_whitespace()).collect();
+            let names_database = line
+                .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                .any(|w| w == "Database");
+            if names_database
+                || squeezed.contains("flaneur::database")
+                || squeezed.contains("flaneur::store")
+            {
+                violations.push(format!(
+                    "{}:{}: {}",
+                    file.strip_prefix(workspace()).unwrap().display(),
+                    n + 1,
+                    line.trim()
+                ));
+            }
+        }
+    }
+    assert!(
+        violations.is_empty(),
+        "the renderer must draw what the walk hands it, not read the database:\n{}",
         violations.join("\n")
     );
 }

@@ -8,16 +8,17 @@ mod common;
 
 use std::collections::HashMap;
 
-use flaneur_bench::fidelity::ModeWalk;
-use flaneur_bench::report::Report;
+use flaneur::geom::fov_x_for;
 use flaneur::geom::Camera;
-use flaneur_render::{fov_x_for, shot, FrameWriter, Gpu};
 use flaneur::visibility::RayScene;
 use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::FrameSink;
 use flaneur::{BuildOptions, Database};
+use flaneur_bench::fidelity::ModeWalk;
+use flaneur_bench::report::Report;
+use flaneur_render::{shot, FrameWriter, Gpu, Shot};
 use glam::Vec3;
 
 const WIDTH: u32 = 192;
@@ -60,6 +61,16 @@ fn city(dir: &std::path::Path) -> (Database, Camera) {
     (db, camera)
 }
 
+/// `db` as `camera` sees it at full detail, `camera` fitted to the picture: what
+/// `flaneur shot` draws.
+fn full_detail(db: &Database, gpu: &Gpu, camera: &Camera) -> Shot {
+    let camera = camera.fitted_to(WIDTH as f32 / HEIGHT as f32).unwrap();
+    let meshes: Vec<_> = (db.in_view(&camera).unwrap().iter())
+        .map(|o| (o.id, db.mesh(o).unwrap()))
+        .collect();
+    shot(gpu, &camera, &db.bounds(), &meshes, WIDTH, HEIGHT).unwrap()
+}
+
 /// The fidelity experiment over `path` with `walk` (named `mode`), square pictures of
 /// `size` pixels drawn under `lod_tau`.
 fn fidelity(
@@ -89,7 +100,7 @@ fn the_id_target_shows_what_rays_meet_and_the_image_matches_its_reference() {
     let dir = tempfile::tempdir().unwrap();
     let (db, camera) = city(dir.path());
     let gpu = gpu();
-    let picture = shot(&db, &gpu, &camera, WIDTH, HEIGHT).unwrap();
+    let picture = full_detail(&db, &gpu, &camera);
     let frame = &picture.frame;
     assert_eq!(frame.objects.len(), (WIDTH * HEIGHT) as usize);
     assert!(picture.objects > 10 && picture.gpu_bytes > 0, "{picture:?}");

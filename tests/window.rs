@@ -6,10 +6,10 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur_render::{ViewMode, WalkWindow};
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
+use flaneur_render::{ViewMode, WalkWindow};
 use window::{display, options, Player};
 
 #[test]
@@ -22,7 +22,7 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
     let db = Database::open(&city.db).unwrap();
     let poses = motion::generate(&db.bounds(), Motion::Normal, 40, 30.0, 2).unwrap();
     let opts = options(&db, &poses);
-    let mut window = WalkWindow::open(&db, opts, ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(opts, ViewMode::Box).unwrap();
     // Boxes over the view from above: their drawing must not fail either.
     window.boxes = true;
     window.top_view = true;

@@ -6,10 +6,10 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur_render::{ViewMode, WalkWindow};
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
+use flaneur_render::{ViewMode, WalkWindow};
 use window::{display, options, Player};
 
 /// A mesh page damaged where the walk starts, and the GPU device lost a third of the
@@ -41,7 +41,7 @@ fn the_walk_goes_on_past_a_damaged_page_and_a_lost_device() {
     bytes[(victim.mesh.first_page * page_size + 30) as usize] ^= 0x5a;
     std::fs::write(&city.db, bytes).unwrap();
     let db = Database::open(&city.db).unwrap();
-    let mut window = WalkWindow::open(&db, options(&db, &poses), ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(options(&db, &poses), ViewMode::Box).unwrap();
     let cfg = ReviewConfig {
         pace: Some(1.0),
         ..ReviewConfig::preset(Preset::Box)

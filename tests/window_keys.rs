@@ -9,16 +9,16 @@ mod window;
 
 use std::process::Command;
 
-use flaneur_render::{Change, ViewMode, WalkWindow};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{FrameSink, Pose, Viewer};
 use flaneur::{BuildOptions, Database};
+use flaneur_render::{Change, ViewMode, WalkWindow};
 use window::{display, options};
 
 /// Steers the window by sending `script` to `xdotool` at frame 3, and ends the walk
 /// after `limit` frames whatever happened.
-struct Typist<'w, 'a> {
-    window: &'w mut WalkWindow<'a>,
+struct Typist<'w> {
+    window: &'w mut WalkWindow,
     script: Vec<&'static str>,
     limit: usize,
     typing: Option<std::process::Child>,
@@ -26,7 +26,7 @@ struct Typist<'w, 'a> {
     seen: Vec<(bool, bool, Option<f32>)>,
 }
 
-impl FrameSink for Typist<'_, '_> {
+impl FrameSink for Typist<'_> {
     fn frame(
         &mut self,
         index: usize,
@@ -52,7 +52,7 @@ impl FrameSink for Typist<'_, '_> {
     }
 }
 
-impl Viewer for Typist<'_, '_> {
+impl Viewer for Typist<'_> {
     fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<Pose>> {
         if frame >= self.limit {
             return Ok(None);
@@ -80,7 +80,7 @@ fn keys_and_the_mouse_steer_the_window() {
         ..options(&db, &flaneur::walk::CameraPath { poses: Vec::new() })
     };
     let start = opts.start;
-    let mut window = WalkWindow::open(&db, opts, ViewMode::Review).unwrap();
+    let mut window = WalkWindow::open(opts, ViewMode::Review).unwrap();
     let tau = window.lod_tau().unwrap();
     assert!(window.show_hud && !window.boxes);
     let cfg = ReviewConfig {

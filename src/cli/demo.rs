@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 
 use super::bars::Bars;
 use super::build::print_lod_report;
-use super::view::view;
+use super::view::{view, window_options};
 use super::walk::print_walk;
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::CameraPath;
@@ -114,7 +114,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
         let start = flaneur::walk::start::busiest_street(&db)?;
-        let opts = flaneur_render::ViewOptions::new(&db, start);
+        let opts = window_options(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),

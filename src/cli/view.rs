@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use super::args::{parse_look, parse_size, parse_vec3};
 use flaneur::walk::path::CameraPath;
 use flaneur::Database;
-use flaneur_render::ViewMode;
+use flaneur_render::{ViewMode, WalkWindow};
 
 /// `flaneur view`'s arguments.
 #[derive(clap::Args)]
@@ -96,45 +96,49 @@ impl ViewArgs {
             play,
             gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
             speed,
-            ..flaneur_render::ViewOptions::new(&db, start)
+            ..window_options(&db, start)
         };
         view(&db, opts, mode, (boxes, top_view), record.as_deref())
     }
 }
 
-/// A session at the window (`flaneur_render::walk_at_window`): walks run one after
-/// another from where the viewer stands, until the window closes; what it drew said
-/// after, and the poses walked saved to `record`.
+/// How the window opens on `db` from `start` by default: titled with the database's
+/// path.
+pub fn window_options(db: &Database, start: flaneur::walk::Pose) -> flaneur_render::ViewOptions {
+    flaneur_render::ViewOptions {
+        title: format!("flaneur — {}", db.store().path().display()),
+        ..flaneur_render::ViewOptions::new(db.bounds(), start)
+    }
+}
+
+/// A session at the window (the walk engine's `walk::live` session): walks run one
+/// after another from where the viewer stands, until the window closes; what it drew
+/// said after, and the poses walked saved to `record`.
 pub fn view(
     db: &Database,
     opts: flaneur_render::ViewOptions,
     mode: ViewMode,
-    boxes_top_view: (bool, bool),
+    (boxes, top_view): (bool, bool),
     record: Option<&Path>,
 ) -> Result<()> {
     let start = opts.start;
-    let session = flaneur_render::walk_at_window(
-        db,
-        opts,
-        mode,
-        boxes_top_view,
-        |m| eprintln!("{m}"),
-        |window| {
-            if let Some(a) = window.adapter() {
-                println!("drawing on {} ({:?})", a.name, a.backend);
-            }
-            let p = start.position;
-            println!(
-                "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
-                 Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
-                p.x,
-                p.y,
-                p.z,
-                mode.name()
-            );
-        },
-    )?;
-    let s = &session.summary;
+    let mut window = WalkWindow::open(opts, mode)?.telling(|m| eprintln!("{m}"));
+    window.boxes = boxes;
+    window.top_view = top_view;
+    if let Some(a) = window.adapter() {
+        println!("drawing on {} ({:?})", a.name, a.backend);
+    }
+    let p = start.position;
+    println!(
+        "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
+         Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
+        p.x,
+        p.y,
+        p.z,
+        mode.name()
+    );
+    flaneur::walk::live::run(db, mode, &mut window)?;
+    let s = &window.summary;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     println!(
@@ -150,10 +154,10 @@ pub fn view(
         s.problems.len()
     );
     if let Some(r) = record {
-        flaneur_render::save_recording(&session.recorded, r)?;
+        flaneur_render::save_recording(&window.recorded, r)?;
         println!(
             "{} poses recorded to {}",
-            session.recorded.len(),
+            window.recorded.len(),
             r.display()
         );
     }

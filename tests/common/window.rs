@@ -5,9 +5,9 @@
 
 use std::process::{Child, Command};
 
-use flaneur_render::{ViewOptions, WalkWindow};
 use flaneur::walk::{FrameSink, Pose, Viewer};
 use flaneur::Database;
+use flaneur_render::{ViewOptions, WalkWindow};
 
 /// An X server to draw on: `None` when the session has a display already.
 pub struct Display(Option<Child>);
@@ -53,14 +53,14 @@ pub fn display() -> Option<Display> {
 
 /// Plays the window's path through it, asking for a new size at frame `resize_at`, and
 /// destroying its GPU device at frame `lose_at`.
-pub struct Player<'w, 'a> {
-    pub window: &'w mut WalkWindow<'a>,
+pub struct Player<'w> {
+    pub window: &'w mut WalkWindow,
     pub resize_at: Option<usize>,
     pub lose_at: Option<usize>,
     pub frames: usize,
 }
 
-impl FrameSink for Player<'_, '_> {
+impl FrameSink for Player<'_> {
     fn frame(
         &mut self,
         index: usize,
@@ -87,7 +87,7 @@ impl FrameSink for Player<'_, '_> {
     }
 }
 
-impl Viewer for Player<'_, '_> {
+impl Viewer for Player<'_> {
     fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<Pose>> {
         self.window.next_pose(frame)
     }
@@ -109,6 +109,9 @@ pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions 
         lod_tau: Some(0.001),
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
-        ..ViewOptions::new(db, flaneur::walk::start::busiest_street(db).unwrap())
+        ..ViewOptions::new(
+            db.bounds(),
+            flaneur::walk::start::busiest_street(db).unwrap(),
+        )
     }
 }

@@ -19,12 +19,12 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
-use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::lod_select::LodCounts;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
 use flaneur::walk::{CameraPath, FrameSink, Selection};
+use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 
 /// The walk whose frames are compared.
 #[derive(Clone, Copy, Debug)]
@@ -139,7 +139,7 @@ impl Twice<'_> {
     /// The full-detail picture: every object whose box meets the frustum, read from the
     /// database; the GPU keeps only the current frame's.
     fn reference(&mut self, camera: &Camera) -> Result<(Frame, u64)> {
-        let inside = flaneur_render::in_view(self.db, camera)?;
+        let inside = self.db.in_view(camera)?;
         let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
         self.resident.retain(|(id, _)| keep.contains(&id));
         for o in &inside {

@@ -109,8 +109,7 @@ impl Offscreen {
     /// the image, and the image's aspect (width / height).
     pub fn fitted(&self, camera: &Camera) -> Result<(Camera, f32)> {
         let aspect = self.width as f32 / self.height as f32;
-        let fitted = camera.with_fov(crate::fov_x_for(camera.fov_y, aspect), camera.fov_y)?;
-        Ok((fitted, aspect))
+        Ok((camera.fitted_to(aspect)?, aspect))
     }
 
     /// Draws `draw` (objects at a level, each resident in `meshes`) with `view_proj`

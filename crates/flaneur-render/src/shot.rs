@@ -1,14 +1,14 @@
-//! One picture of a database from a viewpoint, drawn headless: the objects whose boxes
-//! meet the view frustum (an R-tree range query over the frustum's box, then the
-//! frustum test), each at full detail.
+//! One picture drawn headless from a viewpoint: the meshes the caller read (for a
+//! full-detail picture, those of [`Database::in_view`](flaneur::Database::in_view)),
+//! uploaded, drawn and read back.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 use crate::{Frame, Gpu, GpuMeshes, Offscreen};
 use flaneur::error::{Error, Result};
-use flaneur::geom::Camera;
-use flaneur::{Database, ObjectEntry};
+use flaneur::geom::{Aabb, Camera};
+use flaneur::scene::Mesh;
 
 /// What [`shot`] drew.
 #[derive(Clone, Debug)]
@@ -19,54 +19,45 @@ pub struct Shot {
     pub triangles: u64,
     /// GPU memory the objects' meshes took, bytes.
     pub gpu_bytes: u64,
-    /// Selecting and reading the objects, uploading them, drawing and reading back.
-    pub select: Duration,
+    /// Uploading the objects, and drawing and reading back.
     pub upload: Duration,
     pub draw: Duration,
 }
 
-/// The horizontal field of view that, with `fov_y`, fills an image of `aspect`
-/// (width / height).
-pub fn fov_x_for(fov_y: f32, aspect: f32) -> f32 {
-    2.0 * ((fov_y * 0.5).tan() * aspect).atan()
-}
-
-/// The objects of `db` whose boxes meet `camera`'s view frustum: a range query over the
-/// frustum's box, then the frustum test. What a full-detail picture draws.
-pub fn in_view(db: &Database, camera: &Camera) -> Result<Vec<ObjectEntry>> {
-    let frustum = camera.frustum();
-    let mut found = db.range(&frustum.aabb())?.objects;
-    found.retain(|o| frustum.overlaps_aabb(&o.bounds));
-    Ok(found)
-}
-
-/// Renders `db` as `camera` sees it (its vertical field of view kept, its horizontal
-/// one fitted to the image) into a `width` × `height` frame.
+/// Renders `meshes` (each object's id and mesh) as `camera` sees them, over the ground
+/// of a city within `city`, into a `width` × `height` frame. `camera` keeps its
+/// vertical field of view and has its horizontal one fitted to the image
+/// ([`Camera::fitted_to`]): select the meshes with the fitted camera.
 ///
 /// ```no_run
 /// # fn main() -> flaneur::Result<()> {
 /// use flaneur::{geom::Camera, Database};
 /// use flaneur_render::{shot, Gpu};
 /// let db = Database::open("city.flaneur".as_ref())?;
-/// let camera = Camera::new(glam::Vec3::new(100.0, 1.7, 80.0), 0.0, 0.0)?;
-/// let picture = shot(&db, &Gpu::headless()?, &camera, 640, 480)?;
+/// let camera = Camera::new(glam::Vec3::new(100.0, 1.7, 80.0), 0.0, 0.0)?.fitted_to(640.0 / 480.0)?;
+/// let mut meshes = Vec::new();
+/// for o in db.in_view(&camera)? {
+///     meshes.push((o.id, db.mesh(&o)?));
+/// }
+/// let picture = shot(&Gpu::headless()?, &camera, &db.bounds(), &meshes, 640, 480)?;
 /// picture.frame.save_png("shot.png".as_ref())?;
 /// println!("{} objects, {} triangles", picture.objects, picture.triangles);
 /// # Ok(()) }
 /// ```
-pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) -> Result<Shot> {
+pub fn shot(
+    gpu: &Gpu,
+    camera: &Camera,
+    city: &Aabb,
+    meshes: &[(u64, Mesh)],
+    width: u32,
+    height: u32,
+) -> Result<Shot> {
     let mut target = Offscreen::new(gpu, width, height)?;
-    target.set_ground(gpu, &db.bounds(), camera.far);
+    target.set_ground(gpu, city, camera.far);
     let (camera, aspect) = target.fitted(camera)?;
     let started = Instant::now();
-    let mut meshes = Vec::new();
-    for o in in_view(db, &camera)? {
-        meshes.push((o.id, db.mesh(&o)?));
-    }
-    let select = started.elapsed();
-    let started = Instant::now();
     let mut resident = GpuMeshes::default();
-    for (id, mesh) in &meshes {
+    for (id, mesh) in meshes {
         resident.upload(gpu, (*id, 0), mesh)?;
     }
     let upload = started.elapsed();
@@ -78,7 +69,6 @@ pub fn shot(db: &Database, gpu: &Gpu, camera: &Camera, width: u32, height: u32) 
         objects: meshes.len(),
         triangles: meshes.iter().map(|m| m.1.triangle_count() as u64).sum(),
         gpu_bytes: resident.bytes(),
-        select,
         upload,
         draw: started.elapsed(),
     })

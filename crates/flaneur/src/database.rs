@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::catalog::{load_meta, save_meta, write_object};
 use crate::error::{Error, Result};
-use crate::geom::Aabb;
+use crate::geom::{Aabb, Camera};
 use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
@@ -150,6 +150,16 @@ impl Database {
     /// BOX: every object whose box overlaps `query`.
     pub fn range(&self, query: &Aabb) -> Result<QueryResult> {
         self.tree.range(&self.store, query)
+    }
+
+    /// The objects whose boxes meet `camera`'s view frustum: a range query over the
+    /// frustum's box, then the frustum test. What a full-detail picture from `camera`
+    /// draws (each object's mesh through [`Database::mesh`]).
+    pub fn in_view(&self, camera: &Camera) -> Result<Vec<ObjectEntry>> {
+        let frustum = camera.frustum();
+        let mut found = self.range(&frustum.aabb())?.objects;
+        found.retain(|o| frustum.overlaps_aabb(&o.bounds));
+        Ok(found)
     }
 
     /// CSearch: the objects overlapping `cell` and none of the `history` cells.

@@ -120,7 +120,7 @@ fn window_targets(gpu: &Gpu, size: (u32, u32)) -> [wgpu::TextureView; 2] {
     .map(|t| t.create_view(&Default::default()))
 }
 
-impl WalkWindow<'_> {
+impl WalkWindow {
     /// Destroys the GPU device the window draws with, as a driver reset or a GPU taken
     /// away would: the window then recovers as from any lost device (an embedder's way
     /// to check that its walk survives one).

@@ -14,7 +14,7 @@ use flaneur::geom::{Aabb, Camera};
 use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::{FrameSink, Selection};
 
-impl WalkWindow<'_> {
+impl WalkWindow {
     /// Draws `selection` as `camera` sees it; `Ok(None)` when nothing could be drawn
     /// this frame (minimised, occluded, surface being configured again).
     fn draw(
@@ -135,7 +135,7 @@ impl WalkWindow<'_> {
     }
 }
 
-impl FrameSink for WalkWindow<'_> {
+impl FrameSink for WalkWindow {
     fn frame(
         &mut self,
         _: usize,

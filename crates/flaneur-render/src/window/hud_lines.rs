@@ -13,7 +13,7 @@ use flaneur::walk::FrameFigures;
 /// Frame times the HUD's graph shows.
 pub(super) const GRAPH_FRAMES: usize = 120;
 
-impl WalkWindow<'_> {
+impl WalkWindow {
     pub(super) fn pages_per_second(&self) -> f64 {
         match (self.pages.front(), self.pages.back()) {
             (Some(a), Some(b)) if b.0 > a.0 => (b.1 - a.1) as f64 / (b.0 - a.0).as_secs_f64(),

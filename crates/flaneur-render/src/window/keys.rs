@@ -9,7 +9,7 @@ use winit::window::CursorGrabMode;
 use super::{Change, ViewMode, WalkWindow};
 use flaneur::walk::steer::Move;
 
-impl WalkWindow<'_> {
+impl WalkWindow {
     pub(super) fn handle_keys(&mut self) {
         for (code, pressed) in std::mem::take(&mut self.events.keys) {
             let movement = match code {

@@ -22,7 +22,9 @@
 //! and each pose's pump of events and steering. Its other parts stand beside it, one
 //! idea a file: the options and summary others read, the winit events, the keys and
 //! mouse, the device's loss and recovery, a frame's drawing, the HUD's lines,
-//! recorded paths, and the session of walks run one after another at the window.
+//! and recorded paths. The session of walks run one after another at the window, as
+//! its keys change the mode, is the walk engine's ([`flaneur::walk::live`]); the
+//! window is its [`LiveViewer`] and never reads the database.
 
 mod device;
 mod events;
@@ -31,7 +33,6 @@ mod hud_lines;
 mod keys;
 mod options;
 mod recording;
-mod session;
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -41,22 +42,20 @@ use winit::platform::pump_events::EventLoopExtPumpEvents;
 
 use device::Surfaced;
 use events::Events;
-use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
+use flaneur::walk::live::{Change, LiveViewer, ViewMode};
 use flaneur::walk::steer::Steer;
 use flaneur::walk::{FrameFigures, Pose, Viewer};
 use hud_lines::GRAPH_FRAMES;
-pub use options::{Change, ViewMode, ViewOptions, ViewSummary};
+pub use options::{ViewOptions, ViewSummary};
 pub use recording::save_recording;
-pub use session::{walk_at_window, WindowSession};
 
 /// How long an error stays on the HUD.
 const MESSAGE_FOR: Duration = Duration::from_secs(6);
 
 /// The window, steered by a person or playing a path.
-pub struct WalkWindow<'a> {
-    db: &'a Database,
+pub struct WalkWindow {
     event_loop: EventLoop<()>,
     events: Events,
     instance: wgpu::Instance,
@@ -88,6 +87,8 @@ pub struct WalkWindow<'a> {
     quit: bool,
     last_frame: Option<Instant>,
     frame_ms: VecDeque<f32>,
+    /// Pages the walks read so far, and that count over the last second.
+    pages_read: u64,
     pages: VecDeque<(Instant, u64)>,
     figures: FrameFigures,
     /// Boxes the walker may not enter: the buffered objects near the eye.
@@ -99,10 +100,10 @@ pub struct WalkWindow<'a> {
     pub summary: ViewSummary,
 }
 
-impl<'a> WalkWindow<'a> {
-    /// Opens the window on `db`. An `Error::Render` when there is no display to open it
-    /// on, saying what to use instead.
-    pub fn open(db: &'a Database, opts: ViewOptions, mode: ViewMode) -> Result<WalkWindow<'a>> {
+impl WalkWindow {
+    /// Opens the window as `opts` say, showing `mode`. An `Error::Render` when there is
+    /// no display to open it on, saying what to use instead.
+    pub fn open(opts: ViewOptions, mode: ViewMode) -> Result<WalkWindow> {
         let (w, h) = opts.size;
         if w == 0 || h == 0 {
             return Err(Error::Invalid(format!("a window of {w} × {h} pixels")));
@@ -132,7 +133,7 @@ impl<'a> WalkWindow<'a> {
             ));
         let mut events = Events {
             size: opts.size,
-            title: format!("flaneur — {}", db.store().path().display()),
+            title: opts.title.clone(),
             ..Default::default()
         };
         let started = Instant::now();
@@ -154,7 +155,6 @@ impl<'a> WalkWindow<'a> {
             flaneur::walk::lod_select::check_tau(tau)?;
         }
         Ok(WalkWindow {
-            db,
             event_loop,
             events,
             instance,
@@ -184,6 +184,7 @@ impl<'a> WalkWindow<'a> {
             quit: false,
             last_frame: None,
             frame_ms: VecDeque::with_capacity(GRAPH_FRAMES),
+            pages_read: 0,
             pages: VecDeque::new(),
             figures: FrameFigures::default(),
             obstacles: Vec::new(),
@@ -259,7 +260,7 @@ impl<'a> WalkWindow<'a> {
     }
 }
 
-impl Viewer for WalkWindow<'_> {
+impl Viewer for WalkWindow {
     fn next_pose(&mut self, _: usize) -> Result<Option<Pose>> {
         self.events.mouse = (0.0, 0.0);
         self.event_loop
@@ -307,8 +308,7 @@ impl Viewer for WalkWindow<'_> {
         };
         self.last_pose = Some(pose.time);
         self.recorded.push(pose);
-        let reads = self.db.io().page_reads;
-        self.pages.push_back((Instant::now(), reads));
+        self.pages.push_back((Instant::now(), self.pages_read));
         while self.pages.len() > 2 && self.pages[0].0.elapsed() > Duration::from_secs(1) {
             self.pages.pop_front();
         }
@@ -316,6 +316,7 @@ impl Viewer for WalkWindow<'_> {
     }
 
     fn figures(&mut self, figures: &FrameFigures) {
+        self.pages_read += figures.pages + figures.lod_pages;
         for what in &figures.damaged {
             self.report(what.clone());
         }
@@ -324,5 +325,27 @@ impl Viewer for WalkWindow<'_> {
 
     fn skips_damaged(&self) -> bool {
         true
+    }
+}
+
+impl LiveViewer for WalkWindow {
+    fn closed(&self) -> bool {
+        WalkWindow::closed(self)
+    }
+
+    fn change(&self) -> Option<Change> {
+        self.change
+    }
+
+    fn show_mode(&mut self, mode: ViewMode) {
+        self.mode = mode;
+    }
+
+    fn report(&mut self, what: String) {
+        WalkWindow::report(self, what)
+    }
+
+    fn resume(&mut self) {
+        WalkWindow::resume(self)
     }
 }

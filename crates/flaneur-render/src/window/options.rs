@@ -1,45 +1,16 @@
-//! What the window is opened with and what it hands back: the options, the walk modes
-//! it shows, the changes its keys ask of the walk, and the session's summary. Apart
+//! What the window is opened with and what it hands back: the options and the
+//! session's summary. Apart
 //! from the window's workings because they are plain data that the CLI, the demo and
 //! the tests make and read without touching winit or wgpu.
 
-use flaneur::database::Database;
 use flaneur::geom::Aabb;
 use flaneur::walk::{CameraPath, Pose};
-
-/// What the window asks the walk to change, when a key asks for it: the walk ends
-/// its run and starts again from where the viewer stands.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Change {
-    /// REVIEW (CSearch with index cache and prefetching), plain BOX queries, or PVS.
-    Mode(ViewMode),
-    /// The object buffer's budget, times this factor.
-    Budget(f32),
-}
-
-/// The walk modes the window can show so far.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ViewMode {
-    Review,
-    Box,
-    /// The current viewcell's PVS, neighbours prefetched (a database built with
-    /// visibility).
-    Pvs,
-}
-
-impl ViewMode {
-    pub fn name(self) -> &'static str {
-        match self {
-            ViewMode::Review => "review",
-            ViewMode::Box => "box",
-            ViewMode::Pvs => "pvs",
-        }
-    }
-}
 
 /// How the window opens.
 #[derive(Clone, Debug)]
 pub struct ViewOptions {
+    /// The window's title, and its size in pixels.
+    pub title: String,
     pub size: (u32, u32),
     /// LOD selection's threshold, a fraction of the viewport; `None`: full detail.
     pub lod_tau: Option<f32>,
@@ -58,16 +29,17 @@ pub struct ViewOptions {
 }
 
 impl ViewOptions {
-    /// Walking `db` from `start`: a 1024 × 768 window, LODs under the thesis's τ, a
-    /// 256 MiB GPU budget, a walker's pace, and the ground reaching the default
-    /// frustum's depth past the city.
-    pub fn new(db: &Database, start: Pose) -> ViewOptions {
+    /// Walking a city within `city` from `start`: a 1024 × 768 window titled
+    /// "flaneur", LODs under the thesis's τ, a 256 MiB GPU budget, a walker's pace, and
+    /// the ground, at the city's foot, reaching the default frustum's depth past it.
+    pub fn new(city: Aabb, start: Pose) -> ViewOptions {
         ViewOptions {
+            title: "flaneur".into(),
             size: (1024, 768),
             lod_tau: Some(flaneur::walk::lod_select::DEFAULT_TAU),
             start,
-            ground: db.bounds().min.y,
-            city: db.bounds(),
+            ground: city.min.y,
+            city,
             margin: flaneur::geom::DEFAULT_FAR,
             play: None,
             gpu_budget: Some(256 << 20),

@@ -9,7 +9,7 @@ use super::WalkWindow;
 use flaneur::error::Result;
 use flaneur::walk::{CameraPath, Pose};
 
-impl WalkWindow<'_> {
+impl WalkWindow {
     /// Holds the played pose `p` back until its time, counted from the first pose
     /// played since the walk (re)started.
     pub(super) fn wait_for(&mut self, p: &Pose) {

@@ -59,6 +59,12 @@ pub struct Camera {
     pub far: f32,
 }
 
+/// The horizontal field of view that, with `fov_y`, fills an image of `aspect`
+/// (width / height); radians.
+pub fn fov_x_for(fov_y: f32, aspect: f32) -> f32 {
+    2.0 * ((fov_y * 0.5).tan() * aspect).atan()
+}
+
 impl Camera {
     /// A camera at `position` looking along (`yaw`, `pitch`) with the thesis's defaults:
     /// 45° × 45° field of view, near 0.5 m, far 1000 m. Errors on a non-finite input or a
@@ -86,6 +92,22 @@ impl Camera {
         };
         c.validate()?;
         Ok(c)
+    }
+
+    /// The same camera with its vertical field of view kept and its horizontal one
+    /// fitted to an image of `aspect` (width / height): what a picture of that shape
+    /// shows.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// let camera = flaneur::geom::Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?;
+    /// let wide = camera.fitted_to(16.0 / 9.0)?;
+    /// assert_eq!(wide.fov_y, camera.fov_y);
+    /// assert!(wide.fov_x > camera.fov_x);
+    /// # Ok(()) }
+    /// ```
+    pub fn fitted_to(self, aspect: f32) -> Result<Camera> {
+        self.with_fov(fov_x_for(self.fov_y, aspect), self.fov_y)
     }
 
     /// The same camera with other clip distances (`0 < near < far`, metres).

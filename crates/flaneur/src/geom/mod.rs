@@ -7,7 +7,7 @@ mod frustum;
 mod plane;
 
 pub use aabb::Aabb;
-pub use camera::{Camera, DEFAULT_FAR, DEFAULT_FOV, DEFAULT_NEAR};
+pub use camera::{fov_x_for, Camera, DEFAULT_FAR, DEFAULT_FOV, DEFAULT_NEAR};
 pub use frustum::Frustum;
 pub use frustum::{box_corners, EDGES};
 pub use plane::Plane;

@@ -479,6 +479,7 @@ impl<'db> WalkLods<'db> {
             };
         }
         let full = || culled.iter().map(|o| Drawn::full(o)).collect();
+        let pages_before = self.selector.as_ref().map_or(0, |s| s.counts.pages);
         let started = std::time::Instant::now();
         let (drawn, damaged, failed) = match &mut self.selector {
             None => (full(), Vec::new(), None),
@@ -497,6 +498,7 @@ impl<'db> WalkLods<'db> {
             culled,
             drawn,
             select_ms,
+            pages: self.selector.as_ref().map_or(0, |s| s.counts.pages) - pages_before,
             lod: self.selector.as_ref().map(|s| s.counts),
             damaged,
             failed,

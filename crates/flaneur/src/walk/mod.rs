@@ -3,10 +3,12 @@
 //! §7.5 and their CSV files) and the disk cells a walk queries (Shou 2002 §4.1); one
 //! walk session (`session`), the frame loop every mode shares, with its object buffer
 //! (`buffer`); the modes it plays (`mode`): REVIEW and BOX, whose settings and figures
-//! are `review`'s, and the PVS walk, whose are `pvs_walk`'s.
+//! are `review`'s, and the PVS walk, whose are `pvs_walk`'s; and walks at a live viewer
+//! one after another as its person changes mode (`live`).
 
 pub mod buffer;
 pub mod cells;
+pub mod live;
 pub mod lod_select;
 mod mode;
 pub mod path;

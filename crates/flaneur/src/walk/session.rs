@@ -105,6 +105,7 @@ pub fn run<M: Mode + ?Sized>(
             None => Culled::default(),
         };
         let frame = mode.finish(&culled, &buffer)?;
+        let mut lod_pages = 0;
         if let Some(camera) = &camera {
             let want = LodWanted {
                 tau: viewer.lod_tau(),
@@ -112,9 +113,13 @@ pub fn run<M: Mode + ?Sized>(
                 tolerant: viewer.skips_damaged(),
             };
             let mut selection = lods.select(want, camera, &buffer, &culled.drawn)?;
+            lod_pages = selection.pages;
             viewer.frame(index, camera, &buffer, &mut selection)?;
         }
-        viewer.figures(&mode.figures(&frame, &buffer));
+        viewer.figures(&FrameFigures {
+            lod_pages,
+            ..mode.figures(&frame, &buffer)
+        });
         frames.push(frame);
         progress(index);
     }

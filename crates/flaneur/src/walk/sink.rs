@@ -47,8 +47,9 @@ pub struct Selection<'f> {
     /// Each of them, in the same order, at its level (at full detail without LOD
     /// selection).
     pub drawn: Vec<Drawn>,
-    /// Time LOD selection took, ms.
+    /// Time LOD selection took, ms, and the LOD pages it read for this frame.
     pub select_ms: f64,
+    pub pages: u64,
     /// What LOD selection read and chose over the walk so far; `None` without it.
     pub lod: Option<LodCounts>,
     /// Objects whose LOD data was found unreadable on this frame, drawn at full detail
@@ -114,8 +115,10 @@ pub trait Viewer: FrameSink {
 /// What one frame of a walk did, for a live display beside the picture.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameFigures {
-    /// Pages the walk read on this frame (index and meshes, prefetches included).
+    /// Pages the walk read on this frame (index and meshes, prefetches included), and
+    /// those its LOD selection read (levels, progressive meshes).
     pub pages: u64,
+    pub lod_pages: u64,
     pub objects_buffered: usize,
     pub objects_drawn: usize,
     /// Triangles of the objects drawn, at full detail.

@@ -313,6 +313,8 @@ impl Mode for Review<'_> {
     fn figures(&mut self, f: &FrameStats, _: &ObjectBuffer) -> FrameFigures {
         FrameFigures {
             pages: f.index_pages + f.mesh_pages,
+            // The session adds what LOD selection read.
+            lod_pages: 0,
             objects_buffered: f.objects_buffered,
             objects_drawn: f.objects_drawn,
             triangles: f.triangles_drawn,

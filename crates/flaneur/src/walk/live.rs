@@ -1,0 +1,154 @@
+//! Walks at a live viewer (a person at a window): walks run one after another from
+//! where the viewer stands, until the viewer closes. A change the viewer asks for (the
+//! mode, the object buffer's budget) ends a walk and the next one starts with it; a
+//! walk that fails is told of and started again, so that a damaged page or a failing
+//! disk does not end the session, unless it fails five times running. Here rather than
+//! in the window because it is the walk engine's side of the window: which walk runs,
+//! and with what; the window only supplies poses and draws frames.
+
+use super::lod_select::WalkLods;
+use super::pvs_walk::{self, PvsPrefetch};
+use super::review::{self, Preset, ReviewConfig};
+use super::Viewer;
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::prefetch::pvs::DEFAULT_BORDER;
+
+/// Failed walks in a row that end the session: the walk is then not getting over it.
+const FAILURES: usize = 5;
+
+/// The walk modes a live viewer can show so far.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewMode {
+    /// CSearch over disk cells with the index cache and prefetching (Shou 2002 §4.4).
+    Review,
+    /// Plain BOX queries over disk cells.
+    Box,
+    /// The current viewcell's PVS, neighbours prefetched (a database built with
+    /// visibility).
+    Pvs,
+}
+
+impl ViewMode {
+    /// The mode's name, as the CLI's `--mode` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewMode::Review => "review",
+            ViewMode::Box => "box",
+            ViewMode::Pvs => "pvs",
+        }
+    }
+}
+
+/// What a live viewer asks the walk to change: the walk ends its run and starts again
+/// from where the viewer stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Change {
+    /// Another mode.
+    Mode(ViewMode),
+    /// The object buffer's budget, times this factor.
+    Budget(f32),
+}
+
+/// A viewer that walks live: besides poses and frames ([`Viewer`]), it says when it is
+/// closed and what change it asks for, shows the mode walked, and is told what went
+/// wrong.
+pub trait LiveViewer: Viewer {
+    /// Whether the person ended the session.
+    fn closed(&self) -> bool;
+
+    /// The change asked for during the walk that just ended, if any.
+    fn change(&self) -> Option<Change>;
+
+    /// The mode walked from now on.
+    fn show_mode(&mut self, mode: ViewMode);
+
+    /// A problem met and got over, or a setting changed, in words.
+    fn report(&mut self, what: String);
+
+    /// Readies the viewer for the next walk, from where this one stopped.
+    fn resume(&mut self);
+}
+
+/// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
+/// through [`review::walk_live_with`], PVS through [`pvs_walk::walk_pvs_live_with`]
+/// with PBNP prefetching (REVIEW instead, said so, on a database without visibility).
+/// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
+/// read and the objects refined. An error when the walk failed five times running.
+///
+/// ```no_run
+/// # fn run(db: &flaneur::Database, window: &mut impl flaneur::walk::live::LiveViewer) -> flaneur::Result<()> {
+/// use flaneur::walk::live::{self, ViewMode};
+/// live::run(db, ViewMode::Review, window)?;
+/// # Ok(()) }
+/// ```
+pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Result<()> {
+    let preset = |m: ViewMode| ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(match m {
+            ViewMode::Box => Preset::Box,
+            _ => Preset::Optimal,
+        })
+    };
+    let mut mode = mode;
+    let mut cfg = preset(mode);
+    viewer.show_mode(mode);
+    let mut lods = WalkLods::new(db);
+    let mut failures = 0;
+    loop {
+        let walked = match mode {
+            ViewMode::Pvs if !db.has_visibility() => {
+                viewer.report(format!(
+                    "{} has no visibility data (build it with --visibility): showing REVIEW",
+                    db.store().path().display()
+                ));
+                mode = ViewMode::Review;
+                viewer.show_mode(mode);
+                continue;
+            }
+            ViewMode::Pvs => {
+                let rule = PvsPrefetch::Pbnp {
+                    border: DEFAULT_BORDER,
+                };
+                pvs_walk::walk_pvs_live_with(db, rule, &mut lods, |_| {}, viewer).map(|_| ())
+            }
+            _ => review::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ()),
+        };
+        match walked {
+            Ok(()) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                viewer.report(format!(
+                    "the walk stopped: {e}; going on from where you stand"
+                ));
+                if failures >= FAILURES {
+                    return Err(Error::Invalid(format!(
+                        "the walk failed five times running; last: {e}"
+                    )));
+                }
+            }
+        }
+        if viewer.closed() {
+            return Ok(());
+        }
+        match viewer.change() {
+            Some(Change::Mode(m)) => {
+                cfg = ReviewConfig {
+                    memory_budget: cfg.memory_budget,
+                    ..preset(m)
+                };
+                mode = m;
+                viewer.show_mode(m);
+            }
+            Some(Change::Budget(f)) => {
+                cfg.memory_budget = ((cfg.memory_budget as f32 * f) as usize).max(1 << 20);
+                viewer.report(format!(
+                    "object buffer budget {:.0} MiB",
+                    cfg.memory_budget as f64 / 1048576.0
+                ));
+            }
+            None => {}
+        }
+        viewer.resume();
+    }
+}

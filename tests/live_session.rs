@@ -1,0 +1,181 @@
+//! The walk engine's live session (`walk::live`), driven by a scripted viewer instead
+//! of a window: the changes a person's keys ask for restart the walk with them, a mode
+//! the database cannot show falls back and says so, and failing walks restart until
+//! the fifth in a row ends the session.
+
+mod common;
+
+use flaneur::geom::Camera;
+use flaneur::walk::buffer::ObjectBuffer;
+use flaneur::walk::live::{self, Change, LiveViewer, ViewMode};
+use flaneur::walk::{street_walk, CameraPath, FrameSink, Pose, Selection, Viewer};
+use flaneur::{BuildOptions, Database, Error, Result};
+
+/// Plays `path` over and over, one walk per entry of `script`: walk `i` lasts
+/// `script[i].0` poses, then asks for `script[i].1`; the viewer closes after the last.
+/// With `fail_from`, every frame from that walk on fails.
+struct Scripted {
+    path: CameraPath,
+    script: Vec<(usize, Option<Change>)>,
+    fail_from: Option<usize>,
+    walk: usize,
+    played: usize,
+    modes: Vec<ViewMode>,
+    reports: Vec<String>,
+    /// Frames drawn in each walk, and the pages each walk's figures counted.
+    frames: Vec<usize>,
+    pages: Vec<u64>,
+}
+
+impl Scripted {
+    fn new(path: CameraPath, script: Vec<(usize, Option<Change>)>) -> Scripted {
+        Scripted {
+            path,
+            script,
+            fail_from: None,
+            walk: 0,
+            played: 0,
+            modes: Vec::new(),
+            reports: Vec::new(),
+            frames: vec![0],
+            pages: vec![0],
+        }
+    }
+}
+
+impl FrameSink for Scripted {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &Camera,
+        _: &ObjectBuffer,
+        s: &mut Selection<'_>,
+    ) -> Result<()> {
+        if self.fail_from.is_some_and(|f| self.walk >= f) {
+            return Err(Error::Invalid("a scripted failure".into()));
+        }
+        assert_eq!(s.drawn.len(), s.culled.len());
+        self.frames[self.walk] += 1;
+        Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        Some(0.003)
+    }
+}
+
+impl Viewer for Scripted {
+    fn next_pose(&mut self, frame: usize) -> Result<Option<Pose>> {
+        let Some(&(poses, _)) = self.script.get(self.walk) else {
+            return Ok(None);
+        };
+        if frame >= poses {
+            return Ok(None);
+        }
+        let pose = self.path.poses[self.played % self.path.poses.len()];
+        self.played += 1;
+        Ok(Some(Pose {
+            time: self.played as f64 / 30.0,
+            ..pose
+        }))
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.pages[self.walk] += figures.pages + figures.lod_pages;
+    }
+}
+
+impl LiveViewer for Scripted {
+    fn closed(&self) -> bool {
+        self.walk + 1 >= self.script.len()
+    }
+
+    fn change(&self) -> Option<Change> {
+        self.script[self.walk].1
+    }
+
+    fn show_mode(&mut self, mode: ViewMode) {
+        self.modes.push(mode);
+    }
+
+    fn report(&mut self, what: String) {
+        self.reports.push(what);
+    }
+
+    fn resume(&mut self) {
+        self.walk += 1;
+        self.frames.push(0);
+        self.pages.push(0);
+    }
+}
+
+fn city() -> (common::City, Database, CameraPath) {
+    let city = common::city(120, 5, &BuildOptions::default());
+    let db = Database::open(&city.db).unwrap();
+    let path = street_walk(&db.bounds(), 200, 1.5, 40, 3).unwrap();
+    (city, db, path)
+}
+
+#[test]
+fn a_change_restarts_the_walk_with_it_and_a_mode_the_database_lacks_falls_back() {
+    let (_city, db, path) = city();
+    let mut viewer = Scripted::new(
+        path,
+        vec![
+            (20, Some(Change::Mode(ViewMode::Box))),
+            (20, Some(Change::Budget(0.5))),
+            (20, Some(Change::Mode(ViewMode::Pvs))),
+            (20, None),
+        ],
+    );
+    live::run(&db, ViewMode::Review, &mut viewer).unwrap();
+    // Review, then Box; Pvs asked of a database without visibility shows Review.
+    assert_eq!(
+        viewer.modes,
+        [
+            ViewMode::Review,
+            ViewMode::Box,
+            ViewMode::Pvs,
+            ViewMode::Review
+        ]
+    );
+    // The budget the walk started with, kept across the change of mode, then halved
+    // and said in MiB.
+    let budget =
+        flaneur::walk::review::ReviewConfig::preset(flaneur::walk::review::Preset::Optimal)
+            .memory_budget;
+    assert_eq!(viewer.reports.len(), 2, "{:?}", viewer.reports);
+    assert_eq!(
+        viewer.reports[0],
+        format!(
+            "object buffer budget {:.0} MiB",
+            budget as f64 / 2.0 / 1048576.0
+        )
+    );
+    assert!(
+        viewer.reports[1].contains("has no visibility data"),
+        "{:?}",
+        viewer.reports
+    );
+    // Every walk drew its poses, and read pages: the first one from a cold start.
+    assert_eq!(viewer.frames, [20, 20, 20, 20]);
+    assert!(viewer.pages[0] > 0, "{:?}", viewer.pages);
+}
+
+#[test]
+fn failing_walks_restart_until_the_fifth_in_a_row_ends_the_session() {
+    let (_city, db, path) = city();
+    let mut viewer = Scripted::new(path, vec![(10, None); 8]);
+    viewer.fail_from = Some(1);
+    let e = live::run(&db, ViewMode::Review, &mut viewer).unwrap_err();
+    assert!(e.to_string().contains("failed five times running"), "{e}");
+    // One good walk, then five failed ones, each told of.
+    assert_eq!(viewer.walk, 5, "{:?}", viewer.reports);
+    assert_eq!(viewer.frames[0], 10);
+    let told: Vec<_> = viewer
+        .reports
+        .iter()
+        .filter(|r| r.starts_with("the walk stopped: ") && r.contains("a scripted failure"))
+        .collect();
+    assert_eq!(told.len(), 5, "{:?}", viewer.reports);
+}
