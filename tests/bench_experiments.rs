@@ -6,6 +6,9 @@ mod common;
 
 use common::flaneur;
 
+use flaneur::walk::review::Preset;
+use flaneur::walk::Motion;
+use flaneur::{BuildOptions, Database, Error};
 use flaneur_bench::cell_size::{self, CellSizeConfig};
 use flaneur_bench::db_size::{self, DbSizeConfig};
 use flaneur_bench::frame_time::{self, FrameTimeConfig};
@@ -14,9 +17,6 @@ use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
 use flaneur_bench::report::Report;
 use flaneur_bench::view_culling::{self, BufferModel, ViewCullingConfig};
 use flaneur_bench::walk_setup::{WalkSetup, THESIS_PATTERNS};
-use flaneur::walk::review::Preset;
-use flaneur::walk::Motion;
-use flaneur::{BuildOptions, Database, Error};
 
 fn city() -> common::City {
     common::city(

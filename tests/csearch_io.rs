@@ -4,10 +4,10 @@
 
 mod common;
 
-use flaneur_bench::csearch::{self, CsearchConfig};
 use flaneur::rtree::History;
 use flaneur::walk::{cells::disk_cell, street_walk};
 use flaneur::{BuildOptions, Database};
+use flaneur_bench::csearch::{self, CsearchConfig};
 
 fn small_city() -> common::City {
     // 1 KiB pages keep the tree's leaves small next to the cells, as 4 KiB pages are

@@ -2,8 +2,8 @@
 // an object derives from this one value, so that a config plus an id is all it takes to
 // rebuild any object of any city, on any machine, in any order.
 
-use flaneur_scene::SceneError;
 use crate::layout::Layout;
+use flaneur_scene::SceneError;
 
 /// The most objects a city may have. A million is the intended scale; ten times that
 /// still streams in bounded memory, it only takes disk.

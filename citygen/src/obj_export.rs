@@ -8,9 +8,9 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use crate::config::CityConfig;
-use flaneur_scene::SceneError;
-use flaneur_scene::write_mesh_obj;
 use crate::recipe::object_on;
+use flaneur_scene::write_mesh_obj;
+use flaneur_scene::SceneError;
 
 /// Writes every object of `config` whose bounds overlap the x–z rectangle `region`
 /// (`([x_min, z_min], [x_max, z_max])`, metres) to the OBJ file `out`, one `o object_<id>`

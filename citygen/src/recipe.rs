@@ -10,10 +10,10 @@ use rand_chacha::ChaCha8Rng;
 use crate::archetypes::building;
 use crate::bunny_landmark::bunny_landmark;
 use crate::config::CityConfig;
-use flaneur_scene::SceneError;
 use crate::layout::Layout;
-use flaneur_scene::{ObjectKind, SceneObject};
 use crate::sculpture::sculpture;
+use flaneur_scene::SceneError;
+use flaneur_scene::{ObjectKind, SceneObject};
 
 /// Salts that keep the independent per-id draws apart.
 const STREAM_SALT: u64 = 0x6f62_6a65_6374_0001;

@@ -75,5 +75,4 @@ mod tests {
         let (min, max) = b.bounds();
         assert!((max[1] - min[1] - 9.657_897).abs() < 1e-3);
     }
-
 }

@@ -93,7 +93,11 @@ pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     let normals = (0..v)
         .map(|i| {
             let o = normals_at + i * NORMAL_LEN;
-            flaneur_scene::dequantize_normal([bytes[o] as i8, bytes[o + 1] as i8, bytes[o + 2] as i8])
+            flaneur_scene::dequantize_normal([
+                bytes[o] as i8,
+                bytes[o + 1] as i8,
+                bytes[o + 2] as i8,
+            ])
         })
         .collect();
     let mut indices = Vec::with_capacity(n);
