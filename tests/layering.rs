@@ -20,7 +20,7 @@ const LOWER: [&str; 5] = ["store", "geom", "scene", "cache", "rtree"];
 
 /// Engine modules the bottom layers must not reach; `catalog` is the database's and
 /// the build's shared piece.
-const UPPER: [&str; 5] = ["walk", "prefetch", "database", "build", "catalog"];
+const UPPER: [&str; 6] = ["walk", "prefetch", "database", "build", "catalog", "hdov"];
 
 /// Crates of the experiments and the renderer, which the engine never names.
 const UPPER_CRATES: [&str; 2] = ["flaneur_bench", "flaneur_render"];

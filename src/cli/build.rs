@@ -53,6 +53,11 @@ pub struct BuildArgs {
     /// (with --visibility).
     #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius)]
     occluder_radius: f32,
+    /// Build the HDoV-tree over the objects, their LODs and the visibility (needs
+    /// --visibility), storing its V-pages under these schemes: any of horizontal,
+    /// vertical and indexed, comma-separated.
+    #[arg(long, value_name = "SCHEMES", value_delimiter = ',')]
+    hdov: Option<Vec<flaneur::hdov::Scheme>>,
     #[arg(long, short)]
     quiet: bool,
 }
@@ -73,8 +78,12 @@ impl BuildArgs {
             dov_resolution,
             sample_spacing,
             occluder_radius,
+            hdov,
             quiet,
         } = self;
+        if hdov.is_some() && !visibility {
+            bail!("--hdov needs --visibility: the HDoV-tree is built from the viewcells' DoVs");
+        }
         let opts = BuildOptions {
             visibility: visibility.then(|| VisibilityOptions {
                 cell_size,
@@ -91,6 +100,10 @@ impl BuildArgs {
             lod: (!no_lod).then(|| LodOptions {
                 pm_threshold,
                 ..LodOptions::default()
+            }),
+            hdov: hdov.map(|schemes| flaneur::hdov::HdovOptions {
+                schemes,
+                ..Default::default()
             }),
         };
         let summary = build(&inputs, &out, &opts, !quiet)?;
@@ -120,7 +133,39 @@ impl BuildArgs {
                 v.rays as f64 / v.dov_seconds.max(1e-9) / 1e6
             );
         }
+        if let Some(h) = &summary.hdov {
+            print_hdov_report(h);
+        }
         Ok(())
+    }
+}
+
+/// The HDoV-tree's lines of a build's summary.
+fn print_hdov_report(h: &flaneur::hdov::HdovReport) {
+    println!(
+        "  HDoV-tree: {} nodes (fan-out {}, height {}), {} with internal LODs ({} levels, {} triangles, \
+         {} pages); {} cells, {:.1} visible nodes per cell; {:.1} s (internal LODs {:.1} s)",
+        h.nodes,
+        h.fanout,
+        h.height,
+        h.nodes_with_lods,
+        h.lod_levels,
+        h.lod_triangles,
+        h.lod_pages,
+        h.cells,
+        h.visible_nodes as f64 / h.cells.max(1) as f64,
+        h.seconds,
+        h.lod_seconds
+    );
+    for s in &h.schemes {
+        println!(
+            "    {:<10} {:>10} bytes ({} pages, {} V-pages); eqs. 5.7–5.9 estimate {} bytes",
+            s.scheme.name(),
+            s.bytes,
+            s.pages,
+            s.vpages,
+            s.estimate_bytes
+        );
     }
 }
 

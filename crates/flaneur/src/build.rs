@@ -17,6 +17,7 @@ use std::time::Instant;
 use crate::catalog::{save_meta, write_object, KindCounts};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::hdov::{build_hdov, HdovOptions, HdovReport};
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
@@ -46,6 +47,9 @@ pub struct BuildOptions {
     /// Precompute the viewcells' visibility this way; `None` computes none (the
     /// default: it is the long step of a build).
     pub visibility: Option<VisibilityOptions>,
+    /// Build the HDoV-tree over the objects, their LODs and the visibility this way
+    /// (it needs `visibility`); `None` builds none.
+    pub hdov: Option<HdovOptions>,
 }
 
 impl Default for BuildOptions {
@@ -56,6 +60,7 @@ impl Default for BuildOptions {
             insertion: false,
             lod: Some(LodOptions::default()),
             visibility: None,
+            hdov: None,
         }
     }
 }
@@ -87,6 +92,8 @@ pub struct BuildSummary {
     pub lod: Option<LodReport>,
     /// What the visibility precomputation made; `None` when it did not run.
     pub visibility: Option<VisibilityReport>,
+    /// What the HDoV-tree took; `None` when none was built.
+    pub hdov: Option<HdovReport>,
 }
 
 /// What `flaneur build --visibility` computed.
@@ -224,6 +231,11 @@ fn build(
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
     let start = Instant::now();
+    if opts.hdov.is_some() && opts.visibility.is_none() {
+        return Err(Error::Invalid(
+            "the HDoV-tree needs the viewcells' visibility: build with --visibility too".into(),
+        ));
+    }
     let mut lods = opts.lod.as_ref().map(LodWriter::new).transpose()?;
     let mut store = Store::create(db, opts.page_size)?;
     // Objects count as built once their LODs are stored too, which may be a batch later.
@@ -278,6 +290,7 @@ fn build(
     drop(kept);
     let objects = entries.len() as u64;
     let before = store.page_count();
+    let hdov_entries = opts.hdov.as_ref().map(|_| entries.clone());
     let tree = if opts.insertion {
         let mut tree = RTree::bulk_load(&mut store, Vec::new(), opts.fill)?;
         for e in entries {
@@ -289,6 +302,10 @@ fn build(
     };
     kinds.rtree = store.page_count() - before;
     tree.save(&mut store)?;
+    let hdov = match (&opts.hdov, hdov_entries) {
+        (Some(h), Some(entries)) => Some(build_hdov(&mut store, entries, h, progress)?),
+        _ => None,
+    };
     save_meta(&mut store, objects, triangles, &bounds, &kinds)?;
     let pages = store.page_count();
     let page_size = store.page_size() as u64;
@@ -302,6 +319,7 @@ fn build(
         seconds: start.elapsed().as_secs_f64(),
         lod,
         visibility,
+        hdov,
     })
 }
 

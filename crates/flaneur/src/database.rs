@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::catalog::{load_meta, save_meta, write_object};
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
+use crate::hdov::{self, HdovTree, Scheme, SearchResult, TreeHead};
 use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
@@ -97,6 +98,7 @@ pub struct Database {
     kinds: KindCounts,
     lod: Option<LodTable>,
     visibility: Option<VisibilityTable>,
+    hdov: Option<HdovTree>,
 }
 
 impl Database {
@@ -120,6 +122,7 @@ impl Database {
         let meta = load_meta(&store)?;
         let lod = LodTable::open(&store)?;
         let visibility = VisibilityTable::open(&store)?;
+        let hdov = HdovTree::open(&store)?;
         let kinds = KindCounts {
             lod: lod.as_ref().map_or(0, LodTable::pages),
             visibility: visibility.as_ref().map_or(0, VisibilityTable::pages),
@@ -143,6 +146,7 @@ impl Database {
             kinds,
             lod,
             visibility,
+            hdov,
             store,
         })
     }
@@ -462,6 +466,72 @@ impl Database {
             Some(t) => t.cell_at(&self.store, p),
             None => Ok(None),
         }
+    }
+
+    /// The HDoV-tree's head (its nodes, fan-out, cells and schemes); `None` for a
+    /// database built without `--hdov`. Reads the head the first time.
+    pub fn hdov(&self) -> Result<Option<&TreeHead>> {
+        self.hdov.as_ref().map(|t| t.head(&self.store)).transpose()
+    }
+
+    /// The HDoV-tree search (Shou 2002 Fig. 5.4) from viewcell `cell` under the DoV
+    /// threshold `eta`, through the smallest storage scheme built (indexed-vertical,
+    /// then vertical, then horizontal): what is visible from the cell, each object or
+    /// group of objects with the detail it deserves. Every page it reads is counted
+    /// ([`Database::io`]); the result says how many nodes and V-pages. An error for a
+    /// database without an HDoV-tree or a cell that is not walkable.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// use flaneur::{hdov::HdovOptions, visibility::VisibilityOptions, BuildOptions};
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// let city = citygen::CityConfig { objects: 60, landmarks: 0.0, ..Default::default() };
+    /// citygen::write_city(&city, &scene)?;
+    /// let opts = BuildOptions {
+    ///     visibility: Some(VisibilityOptions { resolution: 16, ..Default::default() }),
+    ///     hdov: Some(HdovOptions::default()),
+    ///     ..Default::default()
+    /// };
+    /// flaneur::build_from_scene(&scene, &path, &opts)?;
+    ///
+    /// let db = flaneur::Database::open(&path)?;
+    /// let cell = db.hdov()?.expect("built with --hdov").cells[0];
+    /// let all = db.hdov_search(cell, 0.0)?; // η = 0: the cell's PVS, every object
+    /// assert_eq!(all.objects().count(), db.pvs(cell)?.unwrap().ids.len());
+    /// let coarse = db.hdov_search(cell, 0.01)?; // groups of barely seen objects stop early
+    /// assert!(coarse.nodes_read <= all.nodes_read);
+    /// # Ok(()) }
+    /// ```
+    pub fn hdov_search(&self, cell: u32, eta: f32) -> Result<SearchResult> {
+        let tree = self.hdov_tree()?;
+        let schemes = tree.schemes(&self.store)?;
+        let smallest = [Scheme::Indexed, Scheme::Vertical, Scheme::Horizontal]
+            .into_iter()
+            .find(|s| schemes.iter().any(|t| t.scheme == *s))
+            .ok_or_else(|| Error::Invalid("the HDoV-tree stores no scheme".into()))?;
+        self.hdov_search_with(cell, eta, smallest)
+    }
+
+    /// [`Database::hdov_search`] through the storage scheme `scheme`.
+    pub fn hdov_search_with(&self, cell: u32, eta: f32, scheme: Scheme) -> Result<SearchResult> {
+        let tree = self.hdov_tree()?;
+        let slot = tree.head(&self.store)?.slot(cell).ok_or_else(|| {
+            Error::Invalid(format!(
+                "viewcell {cell} is not a walkable cell of the HDoV-tree"
+            ))
+        })?;
+        let stored = tree.scheme(&self.store, scheme)?;
+        hdov::search(&self.store, tree, stored, slot, eta)
+    }
+
+    pub(crate) fn hdov_tree(&self) -> Result<&HdovTree> {
+        self.hdov.as_ref().ok_or_else(|| {
+            Error::Invalid(format!(
+                "{} has no HDoV-tree: build it with --visibility --hdov",
+                self.store.path().display()
+            ))
+        })
     }
 
     /// What `info` reports of the visibility; `None` without one. Reads the head.

@@ -31,6 +31,7 @@ mod catalog;
 pub mod database;
 pub mod error;
 pub mod geom;
+pub mod hdov;
 pub mod lod;
 pub mod prefetch;
 pub mod progress;

@@ -10,6 +10,10 @@ pub enum Step {
     Objects,
     /// A build precomputing visibility; counted in viewcells.
     Visibility,
+    /// A build making the HDoV-tree: its internal LODs (counted in nodes), then each
+    /// viewcell's V-pages (counted in cells).
+    HdovLods,
+    HdovCells,
 }
 
 impl Step {
@@ -18,6 +22,8 @@ impl Step {
         match self {
             Step::Objects => "objects",
             Step::Visibility => "cells",
+            Step::HdovLods => "nodes",
+            Step::HdovCells => "cells",
         }
     }
 
@@ -26,6 +32,8 @@ impl Step {
         match self {
             Step::Objects => "building",
             Step::Visibility => "visibility",
+            Step::HdovLods => "HDoV LODs",
+            Step::HdovCells => "HDoV V-pages",
         }
     }
 }

@@ -81,7 +81,11 @@ pub(crate) fn bulk_load(store: &mut Store, entries: Vec<ObjectEntry>, fill: f32)
 }
 
 /// Splits `items` into runs of at most `cap`, tiled along the axes of spread.
-fn tile<T>(mut items: Vec<T>, cap: usize, center: impl Fn(&T) -> Vec3 + Copy) -> Vec<Vec<T>> {
+pub(crate) fn tile<T>(
+    mut items: Vec<T>,
+    cap: usize,
+    center: impl Fn(&T) -> Vec3 + Copy,
+) -> Vec<Vec<T>> {
     let bounds = Aabb::from_points(items.iter().map(center));
     let spread = bounds.extent().to_array();
     let mut axes = [0usize, 1, 2];

@@ -15,6 +15,7 @@ mod search;
 mod split;
 mod stats;
 
+pub(crate) use bulk::tile as str_tile;
 pub use bulk::DEFAULT_FILL;
 pub use complement::{covered, Complement, Coverlap};
 pub use history::{History, DEFAULT_HISTORY_LEN};

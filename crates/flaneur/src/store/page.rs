@@ -49,7 +49,8 @@ pub const KIND_SLOTS: usize = 16;
 /// assert_eq!(PageKind::Mesh.name(), "mesh");
 /// assert_eq!(PageKind::from_u8(5), Some(PageKind::Lod));
 /// assert_eq!(PageKind::from_u8(6), Some(PageKind::Visibility));
-/// assert_eq!(PageKind::ALL.len(), 6);
+/// assert_eq!(PageKind::from_u8(8), Some(PageKind::VPage));
+/// assert_eq!(PageKind::ALL.len(), 8);
 /// ```
 #[repr(u8)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -70,19 +71,27 @@ pub enum PageKind {
     /// with its objects' degrees of visibility. Counted apart, as PVS reads are the
     /// currency of the PVS prefetcher.
     Visibility = 6,
+    /// A node of the HDoV-tree (its view-invariant part: the entries, with each
+    /// child's h, s and internal LODs), and the tree's head.
+    HdovNode = 7,
+    /// The HDoV-tree's view-variant part: V-pages (each node's DoV and count of visible
+    /// objects per entry, for one viewcell) and the V-page-indexes that find them.
+    VPage = 8,
 }
 
-const _: () = assert!((PageKind::Visibility as usize) < KIND_SLOTS);
+const _: () = assert!((PageKind::VPage as usize) < KIND_SLOTS);
 
 impl PageKind {
     /// Every kind, in kind-byte order.
-    pub const ALL: [PageKind; 6] = [
+    pub const ALL: [PageKind; 8] = [
         PageKind::Header,
         PageKind::RtreeNode,
         PageKind::Mesh,
         PageKind::Meta,
         PageKind::Lod,
         PageKind::Visibility,
+        PageKind::HdovNode,
+        PageKind::VPage,
     ];
 
     /// The kind stored as byte `b`, if any.
@@ -99,6 +108,8 @@ impl PageKind {
             PageKind::Meta => "meta",
             PageKind::Lod => "lod",
             PageKind::Visibility => "visibility",
+            PageKind::HdovNode => "hdov-node",
+            PageKind::VPage => "v-page",
         }
     }
 }

@@ -1,0 +1,426 @@
+//! Building the HDoV-tree at the end of `flaneur build --visibility --hdov …`, from what
+//! the build has written: the objects' index entries, their stored LODs and the
+//! visibility table (Shou 2002 Fig. 5.13).
+//!
+//! 1. **Pack.** The objects are packed by Sort-Tile-Recursive into nodes of the
+//!    HDoV-node page's fan-out (the R-tree's packing; the tree has its own pages because
+//!    its entries are wider), and numbered in depth-first preorder.
+//! 2. **Internal LODs.** Bottom-up, a level at a time, every node's on all cores
+//!    (`lods`); each parent entry gets its child's h, s and LOD chain.
+//! 3. **Nodes.** Written back to back in preorder.
+//! 4. **V-pages.** For every walkable viewcell, its PVS's DoVs summed up the tree
+//!    (`vd`), then stored under each scheme asked for (`scheme`).
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::lods::{aggregate, internal_levels};
+use super::node::{capacity, ChildRef, HNode, HNodeKind};
+use super::scheme::{self, Scheme, Shape};
+use super::tree::{TreeHead, HDOV_SEGMENT};
+use super::vd::{CellVd, Topology, VENTRY_LEN};
+use crate::error::{Error, Result};
+use crate::geom::Aabb;
+use crate::lod::encode_chain;
+use crate::lod::stored::{level_mesh, LodTable};
+use crate::progress::{Progress, Step};
+use crate::rtree::{str_tile, ObjectEntry};
+use crate::scene::{decode_mesh, Mesh};
+use crate::store::{Extent, PageKind, Segment, Store};
+use crate::visibility::VisibilityTable;
+
+/// How to build the HDoV-tree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdovOptions {
+    /// The storage schemes to write (at least one).
+    pub schemes: Vec<Scheme>,
+    /// Share of a node's fan-out that packing fills.
+    pub fill: f32,
+}
+
+impl Default for HdovOptions {
+    /// Every scheme, full nodes.
+    fn default() -> HdovOptions {
+        HdovOptions {
+            schemes: Scheme::ALL.to_vec(),
+            fill: 1.0,
+        }
+    }
+}
+
+/// One scheme as stored, against its estimate (eqs. 5.7–5.9).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SchemeReport {
+    pub scheme: Scheme,
+    pub bytes: u64,
+    pub pages: u64,
+    pub vpages: u64,
+    pub estimate_bytes: u64,
+}
+
+/// What building the HDoV-tree made and cost.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct HdovReport {
+    pub nodes: u32,
+    pub height: u32,
+    pub fanout: u32,
+    /// Nodes (the root left out) with internal LODs, their levels and triangles, and
+    /// the pages they take.
+    pub nodes_with_lods: u32,
+    pub lod_levels: u64,
+    pub lod_triangles: u64,
+    pub lod_pages: u64,
+    /// Pages of the nodes and of the head.
+    pub node_pages: u64,
+    pub head_pages: u64,
+    /// Viewcells, and N_vnode summed over them.
+    pub cells: u32,
+    pub visible_nodes: u64,
+    pub schemes: Vec<SchemeReport>,
+    /// Wall-clock seconds of the whole step, and of its internal LODs.
+    pub seconds: f64,
+    pub lod_seconds: f64,
+}
+
+/// A node as packing makes it, before it is numbered.
+struct Packed {
+    level: u16,
+    mbr: Aabb,
+    objects_below: u32,
+    /// Leaf: its objects; internal: its children (indices into the packed nodes).
+    objects: Vec<ObjectEntry>,
+    children: Vec<usize>,
+}
+
+/// Packs `objects` into leaves and levels above of at most `cap` entries; the root is
+/// the last node.
+fn pack(objects: Vec<ObjectEntry>, cap: usize) -> Vec<Packed> {
+    let mut nodes = Vec::new();
+    let mut level: Vec<usize> = Vec::new();
+    for group in str_tile(objects, cap, |o| o.bounds.center()) {
+        level.push(nodes.len());
+        nodes.push(Packed {
+            level: 0,
+            mbr: group.iter().fold(Aabb::EMPTY, |b, o| b.union(&o.bounds)),
+            objects_below: group.len() as u32,
+            objects: group,
+            children: Vec::new(),
+        });
+    }
+    let mut height = 0u16;
+    while level.len() > 1 {
+        height += 1;
+        let centres: Vec<(usize, glam::Vec3)> =
+            level.iter().map(|&i| (i, nodes[i].mbr.center())).collect();
+        let mut next = Vec::new();
+        for group in str_tile(centres, cap, |c| c.1) {
+            let children: Vec<usize> = group.into_iter().map(|c| c.0).collect();
+            next.push(nodes.len());
+            nodes.push(Packed {
+                level: height,
+                mbr: children
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &c| b.union(&nodes[c].mbr)),
+                objects_below: children.iter().map(|&c| nodes[c].objects_below).sum(),
+                objects: Vec::new(),
+                children,
+            });
+        }
+        level = next;
+    }
+    nodes
+}
+
+/// The packed nodes in depth-first preorder from the root (the last one).
+fn preorder(nodes: &[Packed]) -> Vec<usize> {
+    let mut order = Vec::with_capacity(nodes.len());
+    let mut stack = vec![nodes.len() - 1];
+    while let Some(n) = stack.pop() {
+        order.push(n);
+        stack.extend(nodes[n].children.iter().rev());
+    }
+    order
+}
+
+/// Each object's coarsest stored level (its full mesh when it has none), read from the
+/// store being built.
+fn coarsest_meshes(store: &Store, objects: &[ObjectEntry]) -> Result<HashMap<u64, Mesh>> {
+    let table = LodTable::open(store)?;
+    let mut out = HashMap::with_capacity(objects.len());
+    for o in objects {
+        let entry = match &table {
+            Some(t) => t.find(store, o.id)?,
+            None => None,
+        };
+        let mesh = match entry {
+            Some(e) if e.levels > 0 => level_mesh(store, &e, e.levels as usize)?,
+            _ => decode_mesh(&store.read_extent(&o.mesh, PageKind::Mesh)?).map_err(|what| {
+                Error::CorruptPage {
+                    path: store.path().to_path_buf(),
+                    page: o.mesh.first_page,
+                    what: format!("mesh of object {}: {what}", o.id),
+                }
+            })?,
+        };
+        out.insert(o.id, mesh);
+    }
+    Ok(out)
+}
+
+/// A node's internal LODs once made: its levels, and the geometry its parent is made
+/// from (its coarsest level, or its source when it has none).
+struct Made {
+    levels: Vec<crate::lod::Level>,
+    source_triangles: usize,
+    coarsest: Mesh,
+}
+
+impl Made {
+    /// Its faces for s: its finest internal LOD's, or its source's.
+    fn faces(&self) -> usize {
+        self.levels
+            .first()
+            .map_or(self.source_triangles, |l| l.mesh.triangle_count())
+    }
+}
+
+/// Builds the HDoV-tree over `objects` into `store` as `opts` say.
+pub(crate) fn build_hdov(
+    store: &mut Store,
+    objects: Vec<ObjectEntry>,
+    opts: &HdovOptions,
+    progress: &dyn Progress,
+) -> Result<HdovReport> {
+    let start = Instant::now();
+    if opts.schemes.is_empty() {
+        return Err(Error::Invalid(
+            "an HDoV-tree needs at least one storage scheme".into(),
+        ));
+    }
+    if !(0.1..=1.0).contains(&opts.fill) {
+        return Err(Error::Invalid(format!(
+            "HDoV fill factor {} is outside 0.1..=1",
+            opts.fill
+        )));
+    }
+    let visibility = VisibilityTable::open(store)?.ok_or_else(|| {
+        Error::Invalid(
+            "the HDoV-tree needs the viewcells' visibility: build with --visibility".into(),
+        )
+    })?;
+    let max = capacity(store.payload_size());
+    if max < 2 {
+        return Err(Error::Invalid(format!(
+            "page size {} is too small for HDoV nodes",
+            store.page_size()
+        )));
+    }
+    let cap = ((max as f32 * opts.fill).floor() as usize).clamp(2, max);
+    let object_count = objects.len() as u64;
+    let coarse = coarsest_meshes(store, &objects)?;
+    let packed = pack(objects, cap);
+    let order = preorder(&packed);
+    let mut number = vec![0u32; packed.len()];
+    for (k, &n) in order.iter().enumerate() {
+        number[n] = k as u32;
+    }
+
+    // Internal LODs, a level at a time from the leaves up, each level's nodes at once.
+    let lod_start = Instant::now();
+    let root = packed.len() - 1;
+    let mut made: Vec<Option<Made>> = (0..packed.len()).map(|_| None).collect();
+    let top = packed[root].level;
+    let mut done = 0u64;
+    for level in 0..=top {
+        let at: Vec<usize> = (0..packed.len())
+            .filter(|&n| packed[n].level == level && n != root)
+            .collect();
+        let results: Vec<Result<Made>> = at
+            .par_iter()
+            .map(|&n| {
+                let p = &packed[n];
+                let parts: Vec<&Mesh> = if p.level == 0 {
+                    p.objects.iter().map(|o| &coarse[&o.id]).collect()
+                } else {
+                    p.children
+                        .iter()
+                        .map(|&c| &made[c].as_ref().expect("made below").coarsest)
+                        .collect()
+                };
+                let source = aggregate(parts);
+                let levels = internal_levels(&source)?;
+                let coarsest = levels.last().map(|l| l.mesh.clone());
+                Ok(Made {
+                    source_triangles: source.triangle_count(),
+                    coarsest: coarsest.unwrap_or(source),
+                    levels,
+                })
+            })
+            .collect();
+        for (&n, r) in at.iter().zip(results) {
+            made[n] = Some(r?);
+        }
+        done += at.len() as u64;
+        progress.update(Step::HdovLods, done, Some(packed.len() as u64 - 1));
+    }
+    progress.finish(Step::HdovLods);
+    let lod_seconds = lod_start.elapsed().as_secs_f64();
+
+    // The chains, then the nodes, whose entries point at them.
+    let mut chains: Vec<Extent> = vec![Extent::default(); packed.len()];
+    let (mut lod_pages, mut nodes_with_lods, mut lod_levels, mut lod_triangles) = (0, 0, 0, 0);
+    for &n in &order {
+        let Some(m) = &made[n] else { continue };
+        if m.levels.is_empty() {
+            continue;
+        }
+        let bytes = encode_chain(number[n] as u64, m.source_triangles, &m.levels)?;
+        let e = store.append_extent(PageKind::Lod, &bytes)?;
+        lod_pages += e.page_count as u64;
+        nodes_with_lods += 1;
+        lod_levels += m.levels.len() as u64;
+        lod_triangles += m
+            .levels
+            .iter()
+            .map(|l| l.mesh.triangle_count() as u64)
+            .sum::<u64>();
+        chains[n] = e;
+    }
+    let log_m = (cap as f64).ln();
+    let child_ref = |c: usize| {
+        let m = made[c].as_ref().expect("every child is made");
+        let p = &packed[c];
+        let below: usize = if p.level == 0 {
+            p.objects.iter().map(|o| o.triangles as usize).sum()
+        } else {
+            p.children
+                .iter()
+                .map(|&g| made[g].as_ref().expect("made").faces())
+                .sum()
+        };
+        ChildRef {
+            mbr: p.mbr,
+            node: number[c],
+            objects: p.objects_below,
+            h: ((p.objects_below as f64).ln() / log_m) as f32,
+            s: (m.faces() as f64 / below.max(1) as f64).max(f64::MIN_POSITIVE) as f32,
+            lods: chains[c],
+        }
+    };
+    let first_node = store.page_count();
+    let mut topology = Topology {
+        entries: vec![0; packed.len()],
+        parent: vec![None; packed.len()],
+        level: vec![0; packed.len()],
+        object: HashMap::with_capacity(object_count as usize),
+    };
+    for &n in &order {
+        let p = &packed[n];
+        let k = number[n] as usize;
+        topology.level[k] = p.level;
+        let kind = if p.level == 0 {
+            topology.entries[k] = p.objects.len() as u16;
+            for (slot, o) in p.objects.iter().enumerate() {
+                topology.object.insert(o.id, (k as u32, slot as u16));
+            }
+            HNodeKind::Leaf(p.objects.clone())
+        } else {
+            topology.entries[k] = p.children.len() as u16;
+            for (slot, &c) in p.children.iter().enumerate() {
+                topology.parent[number[c] as usize] = Some((k as u32, slot as u16));
+            }
+            HNodeKind::Internal {
+                level: p.level,
+                children: p.children.iter().map(|&c| child_ref(c)).collect(),
+            }
+        };
+        let node = HNode {
+            number: number[n],
+            kind,
+        };
+        let page = store.append_page(PageKind::HdovNode, &node.encode())?;
+        debug_assert_eq!(page, first_node + number[n] as u64);
+    }
+    let node_pages = packed.len() as u64;
+
+    // Each cell's VDs, then every scheme asked for.
+    let cells: Vec<u32> = visibility.head(store)?.cells.iter().map(|c| c.id).collect();
+    let mut vds: Vec<CellVd> = Vec::with_capacity(cells.len());
+    for (i, &id) in cells.iter().enumerate() {
+        let pvs = visibility.pvs(store, id)?.ok_or_else(|| {
+            Error::Invalid(format!("viewcell {id} is in the directory but has no PVS"))
+        })?;
+        vds.push(
+            topology
+                .aggregate(&pvs.ids, &pvs.dov)
+                .map_err(|e| Error::Invalid(format!("viewcell {id}: {e}")))?,
+        );
+        progress.update(Step::HdovCells, i as u64 + 1, Some(cells.len() as u64));
+    }
+    progress.finish(Step::HdovCells);
+    let shape = Shape {
+        cells: cells.len(),
+        nodes: packed.len(),
+        vpage_len: max * VENTRY_LEN,
+    };
+    let visible_nodes: u64 = vds.iter().map(|v| v.len() as u64).sum();
+    let mut schemes = Vec::new();
+    let mut stored = Vec::new();
+    let mut asked = opts.schemes.clone();
+    asked.sort();
+    asked.dedup();
+    for s in asked {
+        let bytes = scheme::encode(s, shape, &vds);
+        let e = store.append_extent(PageKind::VPage, &bytes)?;
+        let vpages = match s {
+            Scheme::Horizontal => (shape.cells * shape.nodes) as u64,
+            _ => visible_nodes,
+        };
+        schemes.push(SchemeReport {
+            scheme: s,
+            bytes: bytes.len() as u64,
+            pages: e.page_count as u64,
+            vpages,
+            estimate_bytes: scheme::estimate(s, shape, visible_nodes),
+        });
+        stored.push((s, e));
+    }
+    let head = TreeHead {
+        first_node,
+        nodes: packed.len() as u32,
+        height: top as u32 + 1,
+        fanout: cap as u32,
+        objects: object_count,
+        vpage_len: shape.vpage_len as u32,
+        seconds: start.elapsed().as_secs_f64(),
+        lod_pages,
+        visible_nodes,
+        schemes: stored,
+        cells,
+    };
+    let e = store.append_extent(PageKind::HdovNode, &head.encode())?;
+    store.set_segment(Segment::new(
+        HDOV_SEGMENT,
+        e.first_page,
+        e.byte_len as u64,
+        e.page_count as u64,
+    ))?;
+    Ok(HdovReport {
+        nodes: head.nodes,
+        height: head.height,
+        fanout: head.fanout,
+        nodes_with_lods,
+        lod_levels,
+        lod_triangles,
+        lod_pages,
+        node_pages,
+        head_pages: e.page_count as u64,
+        cells: head.cells.len() as u32,
+        visible_nodes,
+        schemes,
+        seconds: start.elapsed().as_secs_f64(),
+        lod_seconds,
+    })
+}
