@@ -525,6 +525,13 @@ impl Database {
         hdov::search(&self.store, tree, stored, slot, eta)
     }
 
+    /// What an HDoV search found, read at the detail it deserves: an object at the
+    /// stored level eq. 5.6 picks, a node at the internal LOD eq. 5.5 picks
+    /// (`hdov::level_for_detail`). Every page counted.
+    pub fn hdov_load(&self, found: &hdov::Found) -> Result<hdov::Representation> {
+        hdov::load(&self.store, self.lod.as_ref(), found)
+    }
+
     pub(crate) fn hdov_tree(&self) -> Result<&HdovTree> {
         self.hdov.as_ref().ok_or_else(|| {
             Error::Invalid(format!(

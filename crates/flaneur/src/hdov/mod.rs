@@ -21,6 +21,7 @@
 //! ([`search()`]).
 
 mod build;
+mod load;
 mod lods;
 pub mod node;
 mod scheme;
@@ -30,6 +31,8 @@ mod vd;
 
 pub(crate) use build::build_hdov;
 pub use build::{HdovOptions, HdovReport, SchemeReport};
+pub(crate) use load::load;
+pub use load::Representation;
 pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
 pub use node::{ChildRef, HNode, HNodeKind};
 pub use scheme::{estimate, Scheme, Shape, StoredScheme, POINTER_LEN, SCHEME_VERSION};

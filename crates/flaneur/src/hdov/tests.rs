@@ -237,3 +237,41 @@ fn a_database_without_the_tree_or_a_bad_eta_says_so() {
     let e = plain.hdov_search(0, 0.0).unwrap_err();
     assert!(e.to_string().contains("no HDoV-tree"), "{e}");
 }
+
+#[test]
+fn what_a_search_finds_loads_at_its_detail() {
+    let db = open();
+    let cells = db.hdov().unwrap().unwrap().cells.clone();
+    let (mut nodes, mut objects) = (0, 0);
+    for &cell in cells.iter().step_by(7) {
+        for f in db.hdov_search(cell, 0.05).unwrap().found {
+            let rep = db.hdov_load(&f).unwrap();
+            assert!(rep.mesh.triangle_count() > 0);
+            match f {
+                Found::Node { .. } => {
+                    // An internal LOD: levels count from 1.
+                    assert!(rep.level >= 1);
+                    nodes += 1;
+                }
+                Found::Object { entry, detail, .. } => {
+                    assert!(rep.mesh.triangle_count() <= entry.triangles as usize);
+                    // The level eq. 5.6 picks: barely visible objects come coarse.
+                    let levels = db.lod_levels(entry.id).unwrap().unwrap();
+                    let t: Vec<u32> = levels.iter().map(|l| l.triangles).collect();
+                    assert_eq!(
+                        rep.level,
+                        level_for_detail(&t, detail),
+                        "object {}",
+                        entry.id
+                    );
+                    assert_eq!(rep.mesh.triangle_count(), t[rep.level] as usize);
+                    if detail < 0.05 {
+                        assert!(rep.level > 0, "object {} at detail {detail}", entry.id);
+                    }
+                    objects += 1;
+                }
+            }
+        }
+    }
+    assert!(nodes > 0 && objects > 0, "{nodes} nodes, {objects} objects");
+}

@@ -15,7 +15,9 @@ pub use chain::{
     decode_chain, encode_chain, ChainDirectory, LevelInfo, CHAIN_HEADER_LEN, CHAIN_MAGIC,
     CHAIN_VERSION,
 };
-pub(crate) use read::{level_mesh, levels, progressive, read_progressive, ProgressiveBytes};
+pub(crate) use read::{
+    chain_level, level_mesh, levels, progressive, read_progressive, ProgressiveBytes,
+};
 pub use select::{distance_to, level_for};
 pub(crate) use table::{LodEntry, LodTable};
 pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};

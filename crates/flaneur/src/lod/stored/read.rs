@@ -56,27 +56,33 @@ struct ChainHead {
     prefix: Vec<u8>,
 }
 
-fn read_chain_head(store: &Store, e: &LodEntry) -> Result<ChainHead> {
-    let what = format!("LOD chain of object {}", e.id);
-    let ext = &e.chain;
+/// The chain at `ext`'s directory and first pages, `what` naming it in errors.
+fn read_chain(store: &Store, ext: &Extent, what: &str) -> Result<ChainHead> {
     let total = ext.byte_len as usize;
     let payload = store.payload_size();
     let read = |start: usize, len: usize| {
         store
             .read_extent_range(ext, PageKind::Lod, start, len)
-            .map_err(|err| about(store, ext, &what, err))
+            .map_err(|err| about(store, ext, what, err))
     };
     // The first page holds the header, usually the directory, often the coarsest level.
     let mut prefix = read(0, total.min(payload))?;
     let dir_len =
-        ChainDirectory::len_from_prefix(&prefix).map_err(|err| about(store, ext, &what, err))?;
+        ChainDirectory::len_from_prefix(&prefix).map_err(|err| about(store, ext, what, err))?;
     if dir_len > prefix.len() && dir_len <= total {
         // A long directory: read up to the end of its last page.
         let end = dir_len.div_ceil(payload).saturating_mul(payload).min(total);
         prefix.extend(read(prefix.len(), end - prefix.len())?);
     }
-    let dir =
-        ChainDirectory::decode(&prefix, total).map_err(|err| about(store, ext, &what, err))?;
+    let dir = ChainDirectory::decode(&prefix, total).map_err(|err| about(store, ext, what, err))?;
+    Ok(ChainHead { dir, prefix })
+}
+
+/// The chain of the object of `e`, checked to be that object's.
+fn read_chain_head(store: &Store, e: &LodEntry) -> Result<ChainHead> {
+    let what = format!("LOD chain of object {}", e.id);
+    let ext = &e.chain;
+    let ChainHead { dir, prefix } = read_chain(store, ext, &what)?;
     if dir.object != e.id
         || dir.full_triangles != e.triangles
         || dir.stored_levels() != e.levels as usize
@@ -131,7 +137,36 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
     }
     let head = read_chain_head(store, e)?;
     let what = format!("LOD level {level} of object {}", e.id);
-    let ext = &e.chain;
+    chain_level_of(store, &e.chain, &head, level, &what)
+}
+
+/// One level of a group's chain (an HDoV node's internal LODs, numbered 1..=n finest
+/// first, not checked against an object), chosen by `pick` from its levels: the level's
+/// description and mesh. `what` names the chain in errors.
+pub(crate) fn chain_level(
+    store: &Store,
+    ext: &Extent,
+    what: &str,
+    pick: impl FnOnce(&[LevelInfo]) -> usize,
+) -> Result<(LevelInfo, Mesh)> {
+    let head = read_chain(store, ext, what)?;
+    let levels = head.dir.levels();
+    let level = pick(&levels[1..]) + 1;
+    let info = *levels.get(level).ok_or_else(|| {
+        Error::Invalid(format!("{what}: no level {level} of {}", levels.len() - 1))
+    })?;
+    let what = format!("{what}, level {level}");
+    Ok((info, chain_level_of(store, ext, &head, level, &what)?))
+}
+
+/// Stored level `level` of the chain at `ext` whose head is read.
+fn chain_level_of(
+    store: &Store,
+    ext: &Extent,
+    head: &ChainHead,
+    level: usize,
+    what: &str,
+) -> Result<Mesh> {
     let (offset, length) = head.dir.level_range(level)?;
     let end = offset + length;
     let have = head.prefix.len();
@@ -142,14 +177,14 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
         let from = offset.max(have);
         let rest = store
             .read_extent_range(ext, PageKind::Lod, from, end - from)
-            .map_err(|err| about(store, ext, &what, err))?;
+            .map_err(|err| about(store, ext, what, err))?;
         let mut b = head.prefix.get(offset..).unwrap_or(&[]).to_vec();
         b.extend(rest);
         b
     };
     head.dir
         .decode_level(level, &bytes)
-        .map_err(|err| about(store, ext, &what, err))
+        .map_err(|err| about(store, ext, what, err))
 }
 
 /// The progressive mesh and DAG of the object of `e`, when it has them; checked against
