@@ -16,11 +16,12 @@ mod split;
 mod stats;
 
 pub use bulk::DEFAULT_FILL;
-pub use complement::{covered, Complement, Coverlap};
+use complement::Complement;
+pub use complement::Coverlap;
 pub use history::{History, DEFAULT_HISTORY_LEN};
-pub use node::{ChildEntry, Fanout, Node, NodeView, ObjectEntry};
-pub use range::Range;
-pub use search::{QueryResult, Selection};
+pub use node::{Fanout, ObjectEntry};
+use range::Range;
+pub use search::QueryResult;
 pub use stats::TreeStats;
 
 use crate::error::{Error, Result};
@@ -29,7 +30,7 @@ use crate::store::{PageSource, Segment, Store};
 
 /// The name of the store segment that records the tree: a = root page, b = height,
 /// c = number of objects.
-pub const SEGMENT: &str = "rtree";
+pub(crate) const SEGMENT: &str = "rtree";
 
 /// A handle on the tree in a store: where its root is and how tall it is. Reads go
 /// through the `Store` passed to each call, so they are all counted there.

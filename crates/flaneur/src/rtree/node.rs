@@ -57,7 +57,8 @@ pub struct ObjectEntry {
     /// Where the object's mesh lies in the database.
     pub mesh: Extent,
     pub triangles: u32,
-    /// `citygen::ObjectKind` as a byte; 255 for imported objects.
+    /// `citygen::ObjectKind` as a byte; [`KIND_IMPORTED`](crate::scene::KIND_IMPORTED) (255)
+    /// for imported objects.
     pub kind: u8,
 }
 
@@ -91,10 +92,6 @@ impl Node {
             Node::Leaf(e) => e.len(),
             Node::Internal { children, .. } => children.len(),
         }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 
     /// The MBR of all entries.
@@ -194,10 +191,6 @@ impl<'a> NodeView<'a> {
 
     pub fn len(&self) -> usize {
         self.count
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
     }
 
     #[inline]
