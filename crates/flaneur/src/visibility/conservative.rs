@@ -199,6 +199,7 @@ impl Scene {
     }
 
     /// Occluder prisms found among the objects' occluder boxes.
+    #[cfg(test)]
     pub fn prism_count(&self) -> usize {
         self.prisms.len()
     }
@@ -383,7 +384,7 @@ mod city_tests {
     use super::*;
     use crate::visibility::cells::{ViewcellGrid, DEFAULT_EYE_RANGE};
     use crate::visibility::intersect::{ray_triangle_distance, triangles};
-    use crate::visibility::occluder_boxes;
+    use crate::visibility::occluder::occluder_boxes;
 
     /// Rays from random walkable points of random cells of a small generated city: the
     /// first object each ray meets is in the cell's PVS.
