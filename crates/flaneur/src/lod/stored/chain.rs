@@ -342,6 +342,7 @@ impl ChainDirectory {
 }
 
 /// Decodes a whole chain: its directory and every stored level, level 1 first.
+#[cfg(test)]
 pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
     let dir = ChainDirectory::decode(bytes, bytes.len())?;
     let meshes = (1..=dir.stored_levels())
