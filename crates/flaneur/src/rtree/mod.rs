@@ -36,10 +36,13 @@ pub(crate) const SEGMENT: &str = "rtree";
 /// through the `Store` passed to each call, so they are all counted there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RTree {
+    /// The root's page.
     pub root: u64,
     /// Levels including the leaves: 1 when the root is a leaf.
     pub height: u32,
+    /// Objects in the tree.
     pub objects: u64,
+    /// Entries per node for the store's page size.
     pub fanout: Fanout,
 }
 

@@ -67,7 +67,10 @@ pub enum Backend {
     /// One positioned read per page; with `direct`, the file is opened with O_DIRECT
     /// so reads bypass the page cache (cold-cache experiments; not every filesystem
     /// allows it).
-    Pread { direct: bool },
+    Pread {
+        /// Open the file with O_DIRECT.
+        direct: bool,
+    },
 }
 
 impl Backend {

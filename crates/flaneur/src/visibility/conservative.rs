@@ -69,6 +69,8 @@ impl Default for SampleOptions {
 }
 
 impl SampleOptions {
+    /// Checks the settings: a positive spacing and a radius from 0 up, both finite; the
+    /// error names the bad one.
     pub fn validate(&self) -> Result<()> {
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(Error::Invalid(format!(

@@ -96,6 +96,7 @@ pub trait Policy: Send {
     fn end_search(&mut self) {}
     /// Entries the policy tracks (resident pages).
     fn len(&self) -> usize;
+    /// Whether the policy tracks no entry.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
