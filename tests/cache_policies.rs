@@ -5,7 +5,7 @@
 
 mod common;
 
-use flaneur::cache::{belady, policy_by_name, BufferPool, CacheStats, Trace, POLICY_NAMES};
+use flaneur::cache::{belady_replay, policy_by_name, BufferPool, CacheStats, Trace, POLICY_NAMES};
 use flaneur::geom::Aabb;
 use flaneur::rtree::{Coverlap, History, QueryResult};
 use flaneur::store::PageSource;
@@ -118,7 +118,7 @@ fn a_trace_survives_csv_and_no_policy_beats_belady() {
     let back = Trace::read_csv(&path).unwrap();
     assert_eq!(back, trace);
     for capacity in [1, 2, 4, 8, 16, 32, 64, 128, 1024] {
-        let best = belady::replay(&back, capacity);
+        let best = belady_replay(&back, capacity);
         assert_eq!(best.accesses(), back.len() as u64);
         for policy in POLICY_NAMES {
             let got = back.replay(policy_by_name(policy).unwrap(), capacity);
@@ -165,7 +165,7 @@ fn a_replay_gives_the_live_pools_counts() {
             }
             trace = Some(t);
         }
-        let best = belady::replay(trace.as_ref().unwrap(), capacity);
+        let best = belady_replay(trace.as_ref().unwrap(), capacity);
         report += &format!(
             "{capacity:>4} pages  {:<8} hit rate {:.4}  ({best:?})\n",
             "belady",

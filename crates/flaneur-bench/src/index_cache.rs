@@ -13,7 +13,7 @@ use std::path::Path;
 
 use crate::report::Report;
 use crate::walk_setup::{check_sweep, num, WalkSetup};
-use flaneur::cache::{belady, policy_by_name, CacheStats, Trace};
+use flaneur::cache::{belady_replay, policy_by_name, CacheStats, Trace};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::walk::path::motion::Motion;
@@ -102,7 +102,7 @@ pub fn run(db: &Database, cfg: &IndexCacheConfig) -> Result<IndexCacheReport> {
                 bytes: pages * page,
                 lru: trace.0.replay(policy_by_name("lru")?, pages),
                 dplru: trace.0.replay(policy_by_name("dplru")?, pages),
-                belady: belady::replay(&trace.0, pages),
+                belady: belady_replay(&trace.0, pages),
             });
         }
     }

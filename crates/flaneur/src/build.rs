@@ -80,11 +80,15 @@ impl Default for BuildOptions {
 /// ```
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BuildSummary {
+    /// Objects written.
     pub objects: u64,
+    /// Triangles over all objects' full meshes.
     pub triangles: u64,
     /// Pages of the file, header included.
     pub pages: u64,
+    /// Bytes of the file: pages × page size.
     pub bytes: u64,
+    /// Levels of the R-tree, leaves included.
     pub height: u32,
     /// Wall-clock seconds of the whole build, LODs included.
     pub seconds: f64,
@@ -101,7 +105,9 @@ pub struct BuildSummary {
 pub struct VisibilityReport {
     /// Walkable cells, each with a PVS, of the grid's rows × columns.
     pub cells: usize,
+    /// Rows of the viewcell grid.
     pub rows: u32,
+    /// Columns of the viewcell grid.
     pub columns: u32,
     /// Objects over all PVSs.
     pub entries: u64,
@@ -109,8 +115,9 @@ pub struct VisibilityReport {
     pub occluders: usize,
     /// DoV rays cast.
     pub rays: u64,
-    /// Seconds of the whole precomputation, and of those, seconds casting DoV rays.
+    /// Seconds of the whole precomputation.
     pub seconds: f64,
+    /// Of those, the seconds spent casting DoV rays.
     pub dov_seconds: f64,
     /// Pages the table takes.
     pub pages: u64,

@@ -18,8 +18,11 @@ const KINDS_SEGMENT: &str = "pagekinds";
 /// Pages written per kind, kept in the header so `info` need not scan the file.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct KindCounts {
+    /// R-tree node pages ([`PageKind::RtreeNode`](crate::store::PageKind::RtreeNode)).
     pub rtree: u64,
+    /// The objects' full meshes' pages ([`PageKind::Mesh`](crate::store::PageKind::Mesh)).
     pub mesh: u64,
+    /// Metadata pages ([`PageKind::Meta`](crate::store::PageKind::Meta)).
     pub meta: u64,
     /// LOD pages (chains, progressive meshes, DAGs, the LOD table); 0 in a database
     /// without LODs. Kept in the LOD table's segment, not in `pagekinds`, so that files

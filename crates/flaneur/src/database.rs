@@ -32,15 +32,25 @@ pub use crate::catalog::KindCounts;
 /// ```
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DatabaseInfo {
+    /// Objects in the database.
     pub objects: u64,
+    /// Triangles over all objects' full meshes.
     pub triangles: u64,
+    /// Bytes per page.
     pub page_size: usize,
+    /// Pages of the file, the header included.
     pub pages: u64,
+    /// The file's length: pages × page size.
     pub file_bytes: u64,
+    /// Pages written per kind.
     pub pages_by_kind: KindCounts,
+    /// The box around every object: its min x, y, z, then its max x, y, z.
     pub bounds: [f32; 6],
+    /// The R-tree's shape: nodes and entries per level, and their fill.
     pub tree: TreeStats,
+    /// The most entries a leaf node holds.
     pub fanout_leaf: usize,
+    /// The most entries an internal node holds.
     pub fanout_internal: usize,
     /// What the database holds as LODs; `None` when it holds none (built with
     /// `--no-lod`, or before LODs were stored).
@@ -52,26 +62,36 @@ pub struct DatabaseInfo {
 /// What `flaneur info` reports of the precomputed visibility.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct VisibilityInfo {
+    /// Rows of the viewcell grid.
     pub rows: u32,
+    /// Columns of the viewcell grid.
     pub columns: u32,
     /// Walkable cells, each with a PVS.
     pub cells: usize,
+    /// The side of a viewcell, metres.
     pub cell_size: f32,
+    /// The eye heights a viewcell covers, metres above the ground.
     pub eye: [f32; 2],
+    /// Pixels per side of a cube face for the DoV (N).
     pub resolution: u32,
-    /// The conservative test's widest sampled patch and occluder radius, in metres.
+    /// The conservative test's widest sampled patch, in metres.
     pub sample_spacing: f32,
+    /// The conservative test's occluder radius, in metres: occluders further from a
+    /// sample (in plan) were not used.
     pub occluder_radius: f32,
-    /// Mean objects per PVS, and that as a share of the scene's objects.
+    /// Mean objects per PVS.
     pub mean_pvs: f64,
+    /// The mean objects per PVS as a share of the scene's objects.
     pub mean_share: f64,
-    /// Seconds of the whole precomputation, and per cell.
+    /// Seconds of the whole precomputation.
     pub seconds: f64,
+    /// Seconds of the whole precomputation per cell.
     pub seconds_per_cell: f64,
     /// Seconds spent casting the DoV's rays, per cell.
     pub dov_seconds_per_cell: f64,
-    /// DoV rays cast, and per second of casting them.
+    /// DoV rays cast.
     pub rays: u64,
+    /// DoV rays cast per second of casting them.
     pub rays_per_second: f64,
 }
 
@@ -377,10 +397,12 @@ impl Database {
         Ok(entry)
     }
 
+    /// Objects in the database (from the header; reads nothing).
     pub fn objects(&self) -> u64 {
         self.objects
     }
 
+    /// Triangles over all objects' full meshes (from the header; reads nothing).
     pub fn triangles(&self) -> u64 {
         self.triangles
     }
@@ -395,10 +417,13 @@ impl Database {
         self.bounds
     }
 
+    /// The R-tree: its root, height and fan-out. Its queries read through the page source
+    /// they are given: the store, or a [`BufferPool`](crate::cache::BufferPool) over it.
     pub fn tree(&self) -> &RTree {
         &self.tree
     }
 
+    /// The page store the database reads through: its header, pages and read counters.
     pub fn store(&self) -> &Store {
         &self.store
     }
@@ -408,6 +433,7 @@ impl Database {
         self.store.stats()
     }
 
+    /// Sets the read counters of [`Database::io`] back to zero.
     pub fn reset_io(&self) {
         self.store.reset_stats()
     }

@@ -30,41 +30,70 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 /// ```
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the system said.
         source: std::io::Error,
     },
 
     /// The file is not a flaneur database, or a different version of one.
     #[error("{path}: not a flaneur database: {what}")]
-    NotADatabase { path: PathBuf, what: String },
+    NotADatabase {
+        /// The file.
+        path: PathBuf,
+        /// What was found instead.
+        what: String,
+    },
 
     /// A page failed its checks: checksum, kind, length or content.
     #[error("{path}: page {page} is corrupt: {what}")]
     CorruptPage {
+        /// The database file.
         path: PathBuf,
+        /// The page, counted from 0 (the header).
         page: u64,
+        /// Which check failed, and what was found.
         what: String,
     },
 
     /// The file is shorter than its header says.
     #[error("{path}: truncated: {what}")]
-    Truncated { path: PathBuf, what: String },
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// What is missing.
+        what: String,
+    },
 
+    /// A box that cannot be used (not finite, min above max on some axis, or text that is
+    /// not a box); the message names it.
     #[error("bad box: {0}")]
     BadBox(String),
 
     /// A scene or model file that cannot be read (scene file, OBJ).
     #[error("{path}: {what}")]
-    BadInput { path: PathBuf, what: String },
+    BadInput {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it, and where.
+        what: String,
+    },
 
+    /// A scene's error, from the scene types and the scene file (`flaneur-scene`).
     #[error(transparent)]
     Scene(#[from] flaneur_scene::SceneError),
 
     /// A cubic projection's resolution (pixels per face side) out of range.
     #[error("cubic projection resolution must be 1..={max} pixels per face side, not {n}")]
-    BadResolution { n: u32, max: u32 },
+    BadResolution {
+        /// The resolution asked for.
+        n: u32,
+        /// The largest there may be.
+        max: u32,
+    },
 
     /// A viewpoint or ray origin that is not a finite point, or a ray direction that is
     /// not finite and non-zero; the message names which and its value.
@@ -73,12 +102,23 @@ pub enum Error {
 
     /// An object's mesh that cannot be ray cast (no triangles, bad indices, NaN).
     #[error("object {id}: mesh cannot be ray cast: {what}")]
-    BadMesh { id: u64, what: String },
+    BadMesh {
+        /// The object's id.
+        id: u64,
+        /// What is wrong with its mesh.
+        what: String,
+    },
 
     /// A viewcell box that is not finite, or has no volume.
     #[error("viewcell {cell}: {what}")]
-    BadViewcell { cell: usize, what: String },
+    BadViewcell {
+        /// The viewcell's index among those given.
+        cell: usize,
+        /// What is wrong with its box.
+        what: String,
+    },
 
+    /// A setting, argument or value that cannot be used; the message names it.
     #[error("{0}")]
     Invalid(String),
 

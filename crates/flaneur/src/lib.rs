@@ -25,6 +25,10 @@
 //! # Ok(()) }
 //! ```
 
+// Every type a public signature names must have a public path, so that a user can name
+// it: a type of an internal module left out of the re-exports is a warning.
+#![warn(unnameable_types)]
+
 pub mod build;
 pub mod cache;
 mod catalog;

@@ -20,15 +20,15 @@ use super::trace::Trace;
 /// cache of `capacity_pages` pages.
 ///
 /// ```
-/// use flaneur::cache::{belady, Access, Hint, Lru, Trace};
+/// use flaneur::cache::{belady_replay, Access, Hint, Lru, Trace};
 /// use flaneur::geom::Aabb;
 /// let at = |page| Access { page, hint: Hint::UNKNOWN, query: Aabb::EMPTY, search: 0 };
 /// let t = Trace { accesses: [1, 2, 3, 1, 2, 3, 1, 2, 3].map(at).to_vec() };
-/// let best = belady::replay(&t, 2);
+/// let best = belady_replay(&t, 2);
 /// assert_eq!(t.replay(Box::new(Lru::default()), 2).hits, 0); // LRU thrashes
 /// assert_eq!(best.hits, 4); // keeps 1 and 2, never caches 3
 /// ```
-pub fn replay(trace: &Trace, capacity_pages: usize) -> CacheStats {
+pub fn belady_replay(trace: &Trace, capacity_pages: usize) -> CacheStats {
     let n = trace.accesses.len();
     // next[i]: the index of the next access of the same page, or n for never.
     let mut next = vec![n; n];
@@ -93,7 +93,7 @@ mod tests {
         // 7 0 1 2 0 3 0 4 2 3 0 3 2 with 3 frames: only the six cold misses (2 evicts
         // 7, 3 evicts 1, 4 is never used again and bypasses).
         let t = trace(&[7, 0, 1, 2, 0, 3, 0, 4, 2, 3, 0, 3, 2]);
-        let s = replay(&t, 3);
+        let s = belady_replay(&t, 3);
         assert_eq!((s.misses, s.evictions), (6, 2));
         assert_eq!(s.hits + s.misses, 13);
     }
@@ -102,7 +102,7 @@ mod tests {
     fn capacity_zero_and_bypass() {
         let t = trace(&[1, 2, 1, 2]);
         assert_eq!(
-            replay(&t, 0),
+            belady_replay(&t, 0),
             CacheStats {
                 hits: 0,
                 misses: 4,
@@ -111,7 +111,7 @@ mod tests {
         );
         // With one frame, 1 2 1 2 1: keeping 1 (bypassing 2) gives two hits.
         let t = trace(&[1, 2, 1, 2, 1]);
-        assert_eq!(replay(&t, 1).hits, 2);
+        assert_eq!(belady_replay(&t, 1).hits, 2);
         assert!(t.replay(Box::new(Lru::default()), 1).hits <= 2);
     }
 
@@ -123,7 +123,10 @@ mod tests {
             let pages: Vec<u64> = (0..300).map(|_| rng.gen_range(0..40)).collect();
             let t = trace(&pages);
             for cap in [1, 2, 5, 10, 39, 40] {
-                let (best, lru) = (replay(&t, cap), t.replay(Box::new(Lru::default()), cap));
+                let (best, lru) = (
+                    belady_replay(&t, cap),
+                    t.replay(Box::new(Lru::default()), cap),
+                );
                 assert!(best.hits >= lru.hits, "cap {cap}: {best:?} < {lru:?}");
                 assert_eq!(best.accesses(), lru.accesses());
             }

@@ -10,7 +10,8 @@
 //! - `policy/`: the [`Policy`] trait and [`Lru`], [`DpLru`], [`Dov`], [`DovTime`];
 //! - `distance.rs`: [`block_distance`], the DIST of §4.2.4;
 //! - `trace.rs`: [`Trace`], recorded accesses, their CSV file and their replay;
-//! - `belady.rs`: Belady's optimal offline replacement, the ceiling of every policy;
+//! - `belady.rs`: [`belady_replay`], Belady's optimal offline replacement, the ceiling of
+//!   every policy;
 //! - `stats.rs`: [`CacheStats`], counted once here and only reported elsewhere.
 //!
 //! Departures from the thesis, each named in its file: the pool makes room before it
@@ -19,7 +20,7 @@
 //!
 //! ```
 //! # fn main() -> flaneur::Result<()> {
-//! use flaneur::cache::{belady, policy_by_name, BufferPool};
+//! use flaneur::cache::{belady_replay, policy_by_name, BufferPool};
 //! use flaneur::{rtree::History, BuildOptions, Database};
 //! let dir = tempfile::tempdir().unwrap();
 //! let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
@@ -36,22 +37,23 @@
 //! let again = db.tree().range(&pool, &cell)?;
 //! assert!(pool.stats().hits > 0);
 //! let trace = pool.take_trace();
-//! assert!(trace.replay(policy_by_name("dplru")?, 8).hit_rate() <= belady::replay(&trace, 8).hit_rate());
+//! assert!(trace.replay(policy_by_name("dplru")?, 8).hit_rate() <= belady_replay(&trace, 8).hit_rate());
 //! # let _ = again; Ok(()) }
 //! ```
 
-pub mod belady;
+mod belady;
 mod distance;
 mod frames;
-pub mod policy;
+mod policy;
 mod pool;
 mod stats;
 mod trace;
 
+pub use belady::belady_replay;
 pub use distance::block_distance;
 pub use policy::{
     policy_by_name, Dov, DovTime, DpLru, Hint, Lru, Policy, DEFAULT_KAPPA, POLICY_NAMES,
 };
 pub use pool::BufferPool;
 pub use stats::CacheStats;
-pub use trace::{Access, Trace, CSV_HEADER, MAX_SEARCH_GAP};
+pub use trace::{Access, Trace};

@@ -174,6 +174,7 @@ impl<'s> BufferPool<'s> {
         self.lock().frames.stats()
     }
 
+    /// Sets the counts of [`BufferPool::stats`] back to zero.
     pub fn reset_stats(&self) {
         self.lock().frames.reset_stats();
     }
@@ -196,6 +197,7 @@ impl<'s> BufferPool<'s> {
         Trace { accesses }
     }
 
+    /// The byte budget the pool was made with.
     pub fn budget_bytes(&self) -> usize {
         self.budget
     }
@@ -210,10 +212,12 @@ impl<'s> BufferPool<'s> {
         self.lock().frames.len() * self.store.page_size()
     }
 
+    /// The replacement policy's name, as [`Policy::name`](crate::cache::Policy::name) gives it.
     pub fn policy_name(&self) -> String {
         self.lock().frames.policy_name()
     }
 
+    /// The store the pool reads missed pages from.
     pub fn store(&self) -> &'s Store {
         self.store
     }

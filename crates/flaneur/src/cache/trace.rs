@@ -35,7 +35,9 @@ pub const MAX_SEARCH_GAP: u64 = 1 << 20;
 /// One access of a pool.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Access {
+    /// The page asked for.
     pub page: u64,
+    /// What the requester said of the page.
     pub hint: Hint,
     /// The box of the search in progress (`Aabb::EMPTY` outside one).
     pub query: Aabb,
@@ -46,14 +48,17 @@ pub struct Access {
 /// An access sequence, in order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trace {
+    /// The accesses, in the order they were made.
     pub accesses: Vec<Access>,
 }
 
 impl Trace {
+    /// Accesses in the trace.
     pub fn len(&self) -> usize {
         self.accesses.len()
     }
 
+    /// Whether the trace holds no access.
     pub fn is_empty(&self) -> bool {
         self.accesses.is_empty()
     }

@@ -20,7 +20,9 @@ use crate::error::{Error, Result};
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// The lower corner.
     pub min: Vec3,
+    /// The upper corner.
     pub max: Vec3,
 }
 
@@ -55,6 +57,7 @@ impl Aabb {
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// Whether the box holds no point: `min > max` on some axis, as in [`Aabb::EMPTY`].
     pub fn is_empty(&self) -> bool {
         self.min.cmpgt(self.max).any()
     }
@@ -79,11 +82,13 @@ impl Aabb {
         self.min.cmple(other.min).all() && other.max.cmple(self.max).all()
     }
 
+    /// Whether `p` lies in the closed box.
     #[inline]
     pub fn contains_point(&self, p: Vec3) -> bool {
         self.min.cmple(p).all() && p.cmple(self.max).all()
     }
 
+    /// The smallest box around both.
     #[inline]
     pub fn union(&self, other: &Aabb) -> Aabb {
         Aabb {
@@ -101,10 +106,12 @@ impl Aabb {
         (!b.is_empty()).then_some(b)
     }
 
+    /// The centre point.
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
 
+    /// The size along each axis: `max - min`.
     pub fn extent(&self) -> Vec3 {
         self.max - self.min
     }

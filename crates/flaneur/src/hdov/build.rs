@@ -23,7 +23,7 @@ use super::tree::{TreeHead, HDOV_SEGMENT};
 use super::vd::{CellVd, Topology, VENTRY_LEN};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::lod::encode_chain;
+use crate::lod::stored::encode_chain;
 use crate::lod::stored::{level_mesh, LodTable};
 use crate::progress::{Progress, Step};
 use crate::rtree::{str_tile, ObjectEntry};

@@ -4,13 +4,13 @@
 //! viewcell's degrees of visibility.
 //!
 //! - The **view-invariant** part (§5.2.2, §5.6): nodes packed over the objects' boxes
-//!   ([`node`] is the page layout), each parent entry carrying its child's h and s
+//!   (`node` is the page layout), each parent entry carrying its child's h and s
 //!   (eqs. 5.3–5.4) and internal LODs made from the children's simplified geometry
 //!   (`lods`).
 //! - The **view-variant** part (§5.2.2, §5.5.3): per viewcell, each entry's VD = (DoV,
 //!   NVO) summed bottom-up from the visibility table (`vd`), in V-pages stored under
 //!   the horizontal, vertical or indexed-vertical scheme (§5.4, [`Scheme`]).
-//! - The **search** (§5.3, Fig. 5.4): [`search()`] under a DoV threshold η.
+//! - The **search** (§5.3, Fig. 5.4): `search` under a DoV threshold η, reached through [`Database::hdov_search`](crate::Database::hdov_search).
 //!
 //! `flaneur build --visibility --hdov …` writes it ([`HdovOptions`]); an open database
 //! searches it with [`Database::hdov_search`](crate::Database::hdov_search).
@@ -18,12 +18,12 @@
 //! The choices the thesis leaves open are named where they are made: the tree has its
 //! own pages, packed like the R-tree (`build`); three internal LODs per node (`lods`);
 //! pointers of 4 bytes (`scheme`); the details of eqs. 5.5–5.6 read as triangle counts
-//! ([`search()`]).
+//! ([`level_for_detail`]).
 
 mod build;
 mod load;
 mod lods;
-pub mod node;
+mod node;
 mod scheme;
 mod search;
 mod tree;
@@ -34,11 +34,12 @@ pub use build::{HdovOptions, HdovReport, SchemeReport};
 pub(crate) use load::load;
 pub use load::Representation;
 pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
-pub use node::{ChildRef, HNode, HNodeKind};
-pub use scheme::{estimate, Scheme, Shape, StoredScheme, POINTER_LEN, SCHEME_VERSION};
-pub use search::{level_for_detail, search, stops, Found, SearchResult, MAXDOV};
-pub use tree::{HdovTree, TreeHead, HDOV_SEGMENT, TREE_VERSION};
-pub use vd::{Vd, VENTRY_LEN};
+pub use scheme::{Scheme, POINTER_LEN};
+pub(crate) use search::search;
+pub use search::{level_for_detail, stops, Found, SearchResult, MAXDOV};
+pub(crate) use tree::HdovTree;
+pub use tree::{TreeHead, HDOV_SEGMENT};
+pub use vd::Vd;
 
 #[cfg(test)]
 mod tests;

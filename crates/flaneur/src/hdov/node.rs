@@ -77,11 +77,6 @@ impl HNode {
         }
     }
 
-    /// Whether the node has no entries.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     pub fn level(&self) -> u16 {
         match &self.kind {
             HNodeKind::Leaf(_) => 0,

@@ -5,6 +5,7 @@
 use std::collections::BTreeSet;
 use std::sync::OnceLock;
 
+use super::node::HNodeKind;
 use super::*;
 use crate::error::Error;
 use crate::visibility::VisibilityOptions;

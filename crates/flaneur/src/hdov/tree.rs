@@ -148,7 +148,7 @@ impl TreeHead {
     }
 
     /// The shape its schemes were written for.
-    pub fn shape(&self) -> Shape {
+    pub(crate) fn shape(&self) -> Shape {
         Shape {
             cells: self.cells.len(),
             nodes: self.nodes as usize,

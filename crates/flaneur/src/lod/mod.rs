@@ -20,11 +20,12 @@
 //!   build one in two steps, for the experiments that time them apart.
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
 //!   ch. 4: the fronts, the three traversals, the compact selective mesh).
-//! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels
-//!   ([`encode_chain`], coarsest first so a coarse level reads few pages), and for large
-//!   objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG, found by id
-//!   through a table in the database ([`LodOptions`], [`LodStats`]);
-//!   `Database::lod_levels`, `lod_mesh` and `progressive` read them back.
+//! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels (coarsest
+//!   first so a coarse level reads few pages; its bytes open with [`CHAIN_MAGIC`]), and
+//!   for large objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG,
+//!   found by id through a table in the database ([`LodOptions`], [`LodStats`]);
+//!   `Database::lod_levels` ([`LevelInfo`]), `lod_mesh` and `progressive` read them
+//!   back, and [`level_for`] is the criterion that picks a stored level for a view.
 //!
 //! The code is grouped by idea: `pm` (the progressive mesh, its levels and codec), `dag`
 //! (the hierarchy of its splits), `refine` (view-dependent refinement through the DAG)
@@ -39,11 +40,11 @@ mod refine;
 pub(crate) mod stored;
 mod torus;
 
-pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs, DAG_MAGIC, DAG_VERSION};
+pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs};
 pub use hausdorff::hausdorff;
 pub use pm::{
     simplify_all, Level, LevelReport, ParallelOptions, ParallelReport, PmCursor, ProgressiveMesh,
-    SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE, PM_MAGIC, PM_VERSION,
+    SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE,
 };
 pub use refine::{
     CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, PassStats,
@@ -51,8 +52,7 @@ pub use refine::{
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{
-    decode_chain, distance_to, encode_chain, level_for, ChainDirectory, LevelInfo, LodOptions,
-    LodReport, LodStats, CHAIN_HEADER_LEN, CHAIN_MAGIC, CHAIN_VERSION, DEFAULT_PM_THRESHOLD,
-    LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION,
+    distance_to, level_for, LevelInfo, LodOptions, LodReport, LodStats, CHAIN_MAGIC,
+    DEFAULT_PM_THRESHOLD,
 };
 pub use torus::bumpy_torus;

@@ -7,7 +7,11 @@
 //!
 //! Departure, named: the thesis predicts the translation only; a viewer turning at a
 //! corner leaves such a cell within a few degrees, so the prediction also sweeps the
-//! yaw it turns through on the way, up to [`MAX_TURN`].
+//! yaw it turns through on the way, up to 45° (`MAX_TURN`).
+//!
+//! The estimates are public ([`velocity`], [`yaw_rate`]; a camera path's `velocity_at`
+//! and `yaw_rate_at`); the prediction is the REVIEW walk's, which prefetches the
+//! predicted cell when a walk sets its `prefetch_k` (`walk::review::ReviewConfig`).
 
 use glam::Vec3;
 
@@ -18,11 +22,11 @@ use crate::walk::{CameraPath, Pose};
 /// The largest turn a prediction foresees, radians: a cell around a wider sweep does
 /// not fit the budget beside the viewer's (on the demo city, 90° overflowed 256 MiB on
 /// the backward walk and read twice the pages; 45° never overflowed).
-pub const MAX_TURN: f32 = std::f32::consts::FRAC_PI_4;
+pub(crate) const MAX_TURN: f32 = std::f32::consts::FRAC_PI_4;
 
 /// The viewer's motion at a frame, as a prefetcher knows it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ViewerMotion {
+pub(crate) struct ViewerMotion {
     /// Metres per second.
     pub velocity: Vec3,
     /// Radians per second, positive as yaw grows.
@@ -112,7 +116,7 @@ pub fn yaw_rate(poses: &[Pose], i: usize) -> f32 {
 /// The poses a viewer has had so far, from which its motion is estimated frame by
 /// frame; they must come in time order, as a path's do.
 #[derive(Clone, Debug, Default)]
-pub struct MotionTrack {
+pub(crate) struct MotionTrack {
     seen: CameraPath,
 }
 

@@ -52,14 +52,17 @@ impl History {
         }
     }
 
+    /// Cells held.
     pub fn len(&self) -> usize {
         self.cells.len()
     }
 
+    /// Whether no cell is held.
     pub fn is_empty(&self) -> bool {
         self.cells.is_empty()
     }
 
+    /// The most cells it holds.
     pub fn max_len(&self) -> usize {
         self.max_len
     }
@@ -69,6 +72,7 @@ impl History {
         self.cells.iter().map(|c| c.cell).collect()
     }
 
+    /// Forgets every cell.
     pub fn clear(&mut self) {
         self.cells.clear();
     }

@@ -17,11 +17,12 @@ mod stats;
 
 pub(crate) use bulk::tile as str_tile;
 pub use bulk::DEFAULT_FILL;
-pub use complement::{covered, Complement, Coverlap};
+use complement::Complement;
+pub use complement::Coverlap;
 pub use history::{History, DEFAULT_HISTORY_LEN};
-pub use node::{ChildEntry, Fanout, Node, NodeView, ObjectEntry};
-pub use range::Range;
-pub use search::{QueryResult, Selection};
+pub use node::{Fanout, ObjectEntry};
+use range::Range;
+pub use search::QueryResult;
 pub use stats::TreeStats;
 
 use crate::error::{Error, Result};
@@ -30,16 +31,19 @@ use crate::store::{PageSource, Segment, Store};
 
 /// The name of the store segment that records the tree: a = root page, b = height,
 /// c = number of objects.
-pub const SEGMENT: &str = "rtree";
+pub(crate) const SEGMENT: &str = "rtree";
 
 /// A handle on the tree in a store: where its root is and how tall it is. Reads go
 /// through the `Store` passed to each call, so they are all counted there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RTree {
+    /// The root's page.
     pub root: u64,
     /// Levels including the leaves: 1 when the root is a leaf.
     pub height: u32,
+    /// Objects in the tree.
     pub objects: u64,
+    /// Entries per node for the store's page size.
     pub fanout: Fanout,
 }
 

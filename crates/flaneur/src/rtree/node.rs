@@ -52,12 +52,16 @@ pub const LEAF_ENTRY_LEN: usize = KIND_OFFSET + 4;
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObjectEntry {
+    /// The object's id.
     pub id: u64,
+    /// The box around the object's mesh.
     pub bounds: Aabb,
     /// Where the object's mesh lies in the database.
     pub mesh: Extent,
+    /// Triangles of its full mesh.
     pub triangles: u32,
-    /// `citygen::ObjectKind` as a byte; 255 for imported objects.
+    /// `citygen::ObjectKind` as a byte; [`KIND_IMPORTED`](crate::scene::KIND_IMPORTED) (255)
+    /// for imported objects.
     pub kind: u8,
 }
 
@@ -91,10 +95,6 @@ impl Node {
             Node::Leaf(e) => e.len(),
             Node::Internal { children, .. } => children.len(),
         }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 
     /// The MBR of all entries.
@@ -196,10 +196,6 @@ impl<'a> NodeView<'a> {
         self.count
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-
     #[inline]
     pub fn mbr(&self, i: usize) -> Aabb {
         let len = if self.is_leaf() {
@@ -239,11 +235,14 @@ impl<'a> NodeView<'a> {
 /// Entries per node for a page payload size: the fan-out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fanout {
+    /// The most entries of a leaf.
     pub leaf: usize,
+    /// The most entries of an internal node.
     pub internal: usize,
 }
 
 impl Fanout {
+    /// The fan-out of nodes in pages of `payload` bytes (a page less its header).
     pub fn for_payload(payload: usize) -> Fanout {
         let room = payload.saturating_sub(NODE_HEADER_LEN);
         Fanout {
@@ -252,6 +251,7 @@ impl Fanout {
         }
     }
 
+    /// The most entries of a node at `level` (0: a leaf).
     pub fn max(&self, level: u16) -> usize {
         if level == 0 {
             self.leaf

@@ -31,7 +31,9 @@ pub trait Selection {
 /// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct QueryResult {
+    /// The objects found.
     pub objects: Vec<ObjectEntry>,
+    /// The node pages the query read, in the order it read them.
     pub pages: Vec<u64>,
 }
 

@@ -6,8 +6,11 @@ use super::{corrupt, RTree};
 use crate::error::Result;
 use crate::store::{PageKind, Store};
 
+/// The shape of a tree, as [`RTree::stats`] walks it: nodes and entries per level,
+/// and how full the nodes are.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct TreeStats {
+    /// Levels, leaves included.
     pub height: u32,
     /// Nodes per level, leaves first.
     pub nodes: Vec<u64>,

@@ -9,7 +9,7 @@ pub use flaneur_scene::{
     bunny, write_mesh_obj, Mesh, ObjectKind, SceneError, SceneObject, SceneReader, SceneSummary,
     SceneWriter,
 };
-pub use mesh_codec::{decode_mesh, encode_mesh};
+pub(crate) use mesh_codec::{decode_mesh, encode_mesh};
 pub use obj::load_obj;
 
 /// The kind byte of objects that did not come from citygen (OBJ imports).

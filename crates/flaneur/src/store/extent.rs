@@ -29,8 +29,11 @@ const BYTE_LEN_OFFSET: usize = PAGE_COUNT_OFFSET + 4;
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Extent {
+    /// The first page of the run.
     pub first_page: u64,
+    /// Pages in the run.
     pub page_count: u32,
+    /// The blob's length in bytes.
     pub byte_len: u32,
 }
 

@@ -80,8 +80,11 @@ pub fn max_segments(page_size: usize) -> usize {
 pub struct Segment {
     /// 1..=15 ascii bytes, no NUL.
     pub name: String,
+    /// The first of the owner's values (for `"rtree"`, the root page).
     pub a: u64,
+    /// The second (for `"rtree"`, the height).
     pub b: u64,
+    /// The third (for `"rtree"`, the object count).
     pub c: u64,
 }
 

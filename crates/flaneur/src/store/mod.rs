@@ -41,11 +41,9 @@ use crate::error::{Error, Result};
 
 pub use counters::IoStats;
 pub use extent::Extent;
-pub use header::{
-    max_segments, valid_page_size, Header, Segment, DEFAULT_PAGE_SIZE, FORMAT_VERSION, MAGIC,
-    MAX_PAGE_SIZE, MAX_SEGMENT_NAME_LEN, MIN_PAGE_SIZE,
-};
-pub use page::{PageKind, KIND_SLOTS, PAGE_HEADER_LEN};
+pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
+pub use header::{Header, Segment, DEFAULT_PAGE_SIZE};
+pub use page::{PageKind, PAGE_HEADER_LEN};
 pub use source::{NodeHint, PageSource};
 
 use backend::{MmapSource, PreadSource, RawPageSource};
@@ -69,7 +67,10 @@ pub enum Backend {
     /// One positioned read per page; with `direct`, the file is opened with O_DIRECT
     /// so reads bypass the page cache (cold-cache experiments; not every filesystem
     /// allows it).
-    Pread { direct: bool },
+    Pread {
+        /// Open the file with O_DIRECT.
+        direct: bool,
+    },
 }
 
 impl Backend {

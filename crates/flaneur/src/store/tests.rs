@@ -4,6 +4,7 @@ use std::fs::OpenOptions;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
+use super::header::{max_segments, MAGIC};
 use super::*;
 
 const PS: usize = 1024;

@@ -51,9 +51,13 @@ pub struct ViewcellGrid {
 /// One viewcell: its id, place in the grid, and box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Viewcell {
+    /// The cell's id in its grid: `row × columns + column`.
     pub id: u32,
+    /// The cell's row (along z).
     pub row: u32,
+    /// The cell's column (along x).
     pub column: u32,
+    /// The cell's box: its patch of ground, between the grid's two eye heights.
     pub bounds: Aabb,
 }
 
@@ -91,10 +95,12 @@ impl ViewcellGrid {
         })
     }
 
+    /// Rows of cells (along z).
     pub fn rows(&self) -> u32 {
         self.rows
     }
 
+    /// Columns of cells (along x).
     pub fn columns(&self) -> u32 {
         self.columns
     }
@@ -104,6 +110,7 @@ impl ViewcellGrid {
         self.rows as usize * self.columns as usize
     }
 
+    /// Whether the grid has no cell (never, for a grid [`ViewcellGrid::new`] made).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

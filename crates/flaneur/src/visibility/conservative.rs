@@ -69,6 +69,8 @@ impl Default for SampleOptions {
 }
 
 impl SampleOptions {
+    /// Checks the settings: a positive spacing and a radius from 0 up, both finite; the
+    /// error names the bad one.
     pub fn validate(&self) -> Result<()> {
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(Error::Invalid(format!(
@@ -199,6 +201,7 @@ impl Scene {
     }
 
     /// Occluder prisms found among the objects' occluder boxes.
+    #[cfg(test)]
     pub fn prism_count(&self) -> usize {
         self.prisms.len()
     }
@@ -383,7 +386,7 @@ mod city_tests {
     use super::*;
     use crate::visibility::cells::{ViewcellGrid, DEFAULT_EYE_RANGE};
     use crate::visibility::intersect::{ray_triangle_distance, triangles};
-    use crate::visibility::occluder_boxes;
+    use crate::visibility::occluder::occluder_boxes;
 
     /// Rays from random walkable points of random cells of a small generated city: the
     /// first object each ray meets is in the cell's PVS.

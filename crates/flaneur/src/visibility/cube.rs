@@ -30,7 +30,8 @@ const BANDS_PER_FACE: usize = 16;
 /// The identity-buffer value of a pixel whose ray hits nothing.
 pub const SKY: u32 = u32::MAX;
 
-/// The six faces' pixel grids around a viewpoint, and each pixel's ΔDoV.
+/// The cubic projection of Shou 2002 §5.5.2: the six faces' pixel grids around a
+/// viewpoint, and each pixel's ΔDoV (its exact solid angle over 4π).
 ///
 /// ```
 /// use flaneur::visibility::CubicProjection;

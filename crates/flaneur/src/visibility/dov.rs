@@ -36,7 +36,7 @@ pub struct PointDov {
 ///
 /// ```
 /// # fn main() -> flaneur::Result<()> {
-/// use flaneur::visibility::{dov::point_dov, CubicProjection, RayScene};
+/// use flaneur::visibility::{point_dov, CubicProjection, RayScene};
 /// // Two unit cubes on the x axis, one behind the other as seen from the origin.
 /// let cube = |x: f32| {
 ///     let mut m = citygen::Mesh::default();
@@ -185,7 +185,7 @@ pub fn corners(cell: &Aabb) -> [[f32; 3]; 8] {
 /// ```
 /// # fn main() -> flaneur::Result<()> {
 /// use flaneur::geom::Aabb;
-/// use flaneur::visibility::{dov::cell_dovs, CubicProjection, RayScene};
+/// use flaneur::visibility::{cell_dovs, CubicProjection, RayScene};
 /// let wall = citygen::Mesh {
 ///     positions: vec![[-5.0, 0.0, 10.0], [5.0, 0.0, 10.0], [5.0, 6.0, 10.0], [-5.0, 6.0, 10.0]],
 ///     normals: vec![[0.0, 0.0, -1.0]; 4],
@@ -217,7 +217,7 @@ pub fn cell_dovs(
 /// ```
 /// # fn main() -> flaneur::Result<()> {
 /// use flaneur::geom::Aabb;
-/// use flaneur::visibility::{dov::{cell_dovs, cell_dovs_after, CornerMemo}, CubicProjection, RayScene};
+/// use flaneur::visibility::{cell_dovs, cell_dovs_after, CornerMemo, CubicProjection, RayScene};
 /// let wall = citygen::Mesh {
 ///     positions: vec![[-5.0, 0.0, 10.0], [5.0, 0.0, 10.0], [5.0, 6.0, 10.0], [-5.0, 6.0, 10.0]],
 ///     normals: vec![[0.0, 0.0, -1.0]; 4],

@@ -448,7 +448,7 @@ mod tests {
     /// the eye to a point of the box passes through a prism.
     #[test]
     fn what_it_hides_is_behind_a_prism_on_every_sight_line() {
-        use crate::visibility::segment_meets_box;
+        use crate::visibility::intersect::segment_meets_box;
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let (mut hidden, mut lines) = (0, 0);

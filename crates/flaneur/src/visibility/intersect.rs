@@ -56,6 +56,7 @@ pub fn triangle_meets_box(t: &[Vec3; 3], b: &Aabb) -> bool {
 }
 
 /// Whether the closed segment from `p` to `q` meets the closed box `b` (the slab test).
+#[cfg(test)]
 pub fn segment_meets_box(p: Vec3, q: Vec3, b: &Aabb) -> bool {
     let d = q - p;
     let (mut t0, mut t1) = (0.0f32, 1.0f32);

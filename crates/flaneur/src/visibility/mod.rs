@@ -4,14 +4,23 @@
 //!
 //! - [`cells`](ViewcellGrid): the grid of viewcells, the walkable ones.
 //! - `occluder`: a box inside each building's solid, its convex part (paper-notes).
-//! - `conservative`: the conservative PVS of §5.5.1 (a [`Scene`]), by occluder shrinking
-//!   and the occlusion horizons of sample points (`horizon`).
-//! - [`precompute`]: all of it for a city, as `flaneur build --visibility` runs it;
-//!   `table` its bytes, [`VisibilityTable`] their reading through the store.
-//! - [`raycast`]: the scene's triangles in one BVH; the first hit of a ray as an object.
-//! - [`cube`]: the cube's faces, pixels and their ΔDoV; the identity buffer.
-//! - [`dov`]: point DoV (the sum of an object's pixels) and cell DoV (the maximum over a
-//!   viewcell's eight corners), for a batch of cells sharing corners.
+//! - `conservative`: the conservative PVS of §5.5.1 (a `Scene`), by occluder shrinking
+//!   and the occlusion horizons of sample points (`horizon`), sampled as
+//!   [`SampleOptions`] say.
+//! - `precompute`: all of it for a city, as `flaneur build --visibility` runs it with
+//!   [`VisibilityOptions`]; `table` its bytes ([`TableHead`], each cell's [`CellPvs`]),
+//!   `stored` their reading through the store ([`Database::visibility`],
+//!   [`Database::pvs`]).
+//! - `raycast`: [`RayScene`], the scene's triangles in one BVH; the first hit of a ray as
+//!   an object ([`Hit`]).
+//! - `cube`: [`CubicProjection`], the cube's faces, pixels and their ΔDoV; the identity
+//!   buffer.
+//! - `dov`: point DoV ([`point_dov`], the sum of an object's pixels) and cell DoV
+//!   ([`cell_dovs`], the maximum over a viewcell's eight corners), for a batch of cells
+//!   sharing corners ([`cell_dovs_after`] for a run of batches).
+//!
+//! [`Database::visibility`]: crate::Database::visibility
+//! [`Database::pvs`]: crate::Database::pvs
 //!
 //! The DoV computation's choices (the thesis renders object ids into a z-buffer on the
 //! six faces of a cube; here each pixel casts one ray into a BVH of the scene's
@@ -20,7 +29,7 @@
 //! - **Sampling.** One ray per pixel centre, no supersampling: a pixel belongs wholly to
 //!   the first object its centre ray meets. N = 256 pixels per face side by default.
 //! - **ΔDoV.** The pixel's exact solid angle over 4π, of which eq. 5.11 is the midpoint
-//!   value; eq. 5.11 slightly overcounts the sphere, the exact form sums to 1 ([`cube`]).
+//!   value; eq. 5.11 slightly overcounts the sphere, the exact form sums to 1 ([`CubicProjection`]).
 //! - **Sky.** A pixel whose ray meets nothing belongs to no object; its share is reported
 //!   as `sky`. The scene is what the caller gives: citygen builds no ground, so rays below
 //!   the horizon that pass between buildings are sky, not ground.
@@ -51,30 +60,28 @@
 
 mod cells;
 mod conservative;
-pub mod cube;
-pub mod dov;
+mod cube;
+mod dov;
 mod horizon;
 mod intersect;
 mod occluder;
 mod precompute;
-pub mod raycast;
+mod raycast;
 mod stored;
 mod table;
 
 #[cfg(test)]
 mod tests;
 
-pub use cells::{corners, Viewcell, ViewcellGrid, DEFAULT_CELL_SIZE, DEFAULT_EYE_RANGE};
-pub use conservative::{prisms, SampleOptions, Scene};
+pub use cells::{Viewcell, ViewcellGrid};
+pub use conservative::SampleOptions;
 pub use cube::{CubicProjection, SKY};
 pub use dov::{cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovStats, PointDov};
-pub use horizon::{Horizon, Prism};
-pub use intersect::{ray_triangle_distance, segment_meets_box, triangle_meets_box};
-pub use occluder::occluder_boxes;
-pub use precompute::{precompute, Precomputed, VisibilityOptions};
+pub(crate) use precompute::precompute;
+pub use precompute::VisibilityOptions;
 pub use raycast::{Hit, RayScene};
-pub use stored::VisibilityTable;
+pub(crate) use stored::VisibilityTable;
+pub(crate) use table::encode_table;
 pub use table::{
-    encode_table, CellEntry, CellPvs, TableHead, VisibilitySettings, VisibilityStats,
-    VISIBILITY_SEGMENT,
+    CellEntry, CellPvs, TableHead, VisibilitySettings, VisibilityStats, VISIBILITY_SEGMENT,
 };

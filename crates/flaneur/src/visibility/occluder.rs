@@ -59,26 +59,6 @@ const COLUMNS: usize = 16;
 /// one below, then other boxes standing on the footprint that none of those covers
 /// (wider and lower ones); none when there is no worthwhile one (the mesh is small,
 /// flat, open, or does not stand on its bounds' ground).
-///
-/// ```
-/// use flaneur::visibility::occluder_boxes;
-/// // A closed 10 × 6 × 4 m block: its occluder fills it, less the safety margin.
-/// let mut mesh = citygen::Mesh::default();
-/// let p = |x: f32, y: f32, z: f32| [x, y, z];
-/// mesh.positions = vec![
-///     p(0., 0., 0.), p(10., 0., 0.), p(10., 0., 4.), p(0., 0., 4.),
-///     p(0., 6., 0.), p(10., 6., 0.), p(10., 6., 4.), p(0., 6., 4.),
-/// ];
-/// mesh.normals = vec![[0.0, 1.0, 0.0]; 8];
-/// mesh.indices = vec![
-///     0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6, 0, 4, 5, 0, 5, 1,
-///     1, 5, 6, 1, 6, 2, 2, 6, 7, 2, 7, 3, 3, 7, 4, 3, 4, 0,
-/// ];
-/// let boxes = occluder_boxes(&mesh);
-/// assert_eq!(boxes.len(), 1);
-/// let b = boxes[0];
-/// assert!(b.extent().x > 9.9 && b.extent().y > 5.9 && b.extent().z > 3.9);
-/// ```
 pub fn occluder_boxes(mesh: &Mesh) -> Vec<Aabb> {
     let mut boxes = Vec::new();
     if mesh.validate().is_err() || mesh.triangle_count() == 0 {
@@ -403,6 +383,32 @@ mod tests {
             total / found as f32
         );
         assert_eq!(found, objects.len(), "every building has an occluder");
+    }
+
+    #[test]
+    fn a_closed_block_is_filled_by_its_occluder() {
+        // A closed 10 × 6 × 4 m block: its occluder fills it, less the safety margin.
+        let mut mesh = Mesh::default();
+        let p = |x: f32, y: f32, z: f32| [x, y, z];
+        mesh.positions = vec![
+            p(0., 0., 0.),
+            p(10., 0., 0.),
+            p(10., 0., 4.),
+            p(0., 0., 4.),
+            p(0., 6., 0.),
+            p(10., 6., 0.),
+            p(10., 6., 4.),
+            p(0., 6., 4.),
+        ];
+        mesh.normals = vec![[0.0, 1.0, 0.0]; 8];
+        mesh.indices = vec![
+            0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6, 0, 4, 5, 0, 5, 1, 1, 5, 6, 1, 6, 2, 2, 6, 7, 2, 7,
+            3, 3, 7, 4, 3, 4, 0,
+        ];
+        let boxes = occluder_boxes(&mesh);
+        assert_eq!(boxes.len(), 1);
+        let b = boxes[0];
+        assert!(b.extent().x > 9.9 && b.extent().y > 5.9 && b.extent().z > 3.9);
     }
 
     #[test]

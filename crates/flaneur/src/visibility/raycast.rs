@@ -40,7 +40,8 @@ pub struct Hit {
     pub distance: f32,
 }
 
-/// Objects' triangle meshes in one BVH, for casting rays against.
+/// Objects' triangle meshes in one BVH, for casting rays against: the source of the
+/// identity buffer ([`CubicProjection::identity_buffer`](super::CubicProjection::identity_buffer)).
 ///
 /// ```
 /// # fn main() -> flaneur::Result<()> {

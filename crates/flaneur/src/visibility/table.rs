@@ -64,6 +64,7 @@ pub struct VisibilitySettings {
     pub resolution: u32,
     /// The DoV given to objects in a PVS that no sample ray met.
     pub dov_s: f32,
+    /// How the conservative test sampled each cell.
     #[serde(skip)]
     pub samples: SampleOptions,
     /// Angular bins of the occlusion horizons.
@@ -77,25 +78,35 @@ pub struct VisibilityStats {
     pub seconds: f64,
     /// Of those, the seconds spent casting the DoV's rays.
     pub dov_seconds: f64,
+    /// Rays cast for the DoV.
     pub rays: u64,
+    /// Objects over all PVSs.
     pub entries: u64,
+    /// Objects in the scene it was computed for.
     pub objects: u64,
 }
 
 /// Where one cell's record lies in the table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CellEntry {
+    /// The cell's id.
     pub id: u32,
+    /// Where its record starts, in bytes from the table's start.
     pub offset: u64,
+    /// The record's length in bytes.
     pub len: u32,
+    /// Objects in its PVS.
     pub count: u32,
 }
 
 /// The head of a table: everything but the records.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableHead {
+    /// The viewcell grid.
     pub grid: ViewcellGrid,
+    /// How the visibility was computed.
     pub settings: VisibilitySettings,
+    /// What the computation measured.
     pub stats: VisibilityStats,
     /// Walkable cells, ids ascending.
     pub cells: Vec<CellEntry>,
@@ -119,7 +130,9 @@ impl TableHead {
 /// One cell's PVS: object ids ascending, and the DoV of each.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CellPvs {
+    /// Object ids, ascending.
     pub ids: Vec<u64>,
+    /// The DoV of each object, in the order of `ids`.
     pub dov: Vec<f32>,
 }
 

@@ -161,6 +161,7 @@ impl DovTime {
         Ok(DovTime(Ranked::new(kappa)))
     }
 
+    /// κ, the weight given to each search of age.
     pub fn kappa(&self) -> f64 {
         self.0.kappa
     }

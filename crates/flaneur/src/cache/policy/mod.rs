@@ -64,6 +64,11 @@ impl Hint {
 /// `victim` when it needs room, `on_remove` when it drops an entry itself (`clear`),
 /// and `end_search` after each search. `victim` forgets the key it returns.
 ///
+/// A policy keeps only keys and what the hints told it; the pool keeps the bytes. Every
+/// access passes its own [`Hint`] (level, tree height, MBR, DoV), so no policy needs
+/// global knowledge of the tree or of the visibility data. Belady's offline optimum is
+/// not a `Policy`, since it needs the future: see [`belady_replay`](super::belady_replay).
+///
 /// ```
 /// use flaneur::cache::{Hint, Lru, Policy};
 /// use flaneur::geom::Aabb;
@@ -91,6 +96,7 @@ pub trait Policy: Send {
     fn end_search(&mut self) {}
     /// Entries the policy tracks (resident pages).
     fn len(&self) -> usize;
+    /// Whether the policy tracks no entry.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -16,5 +16,4 @@ mod tests;
 
 pub use attrs::NodeAttrs;
 pub use build::{DagConstruction, DagEdges};
-pub use codec::{DAG_MAGIC, DAG_VERSION};
 pub use graph::Dag;

@@ -16,7 +16,6 @@ mod simplify;
 mod topology;
 mod vsplit;
 
-pub use codec::{PM_MAGIC, PM_VERSION};
 pub use levels::{Level, PmCursor};
 pub use parallel::{LevelReport, ParallelOptions, ParallelReport};
 pub use progressive::{simplify_all, ProgressiveMesh};

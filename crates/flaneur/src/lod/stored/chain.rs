@@ -70,6 +70,7 @@ const ENTRY_LEN: usize = ENTRY_CRC + 4;
 pub struct LevelInfo {
     /// 0 is the full-detail mesh; each higher level is coarser.
     pub level: usize,
+    /// Triangles of the level's mesh.
     pub triangles: u32,
     /// The largest error of the collapses that made it from the original, in metres
     /// (0 for level 0).
@@ -342,6 +343,7 @@ impl ChainDirectory {
 }
 
 /// Decodes a whole chain: its directory and every stored level, level 1 first.
+#[cfg(test)]
 pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
     let dir = ChainDirectory::decode(bytes, bytes.len())?;
     let meshes = (1..=dir.stored_levels())

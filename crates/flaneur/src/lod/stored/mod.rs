@@ -11,13 +11,11 @@ mod table;
 
 pub(crate) use bake::LodWriter;
 pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
-pub use chain::{
-    decode_chain, encode_chain, ChainDirectory, LevelInfo, CHAIN_HEADER_LEN, CHAIN_MAGIC,
-    CHAIN_VERSION,
-};
+pub(crate) use chain::encode_chain;
+pub use chain::{LevelInfo, CHAIN_MAGIC};
 pub(crate) use read::{
     chain_level, level_mesh, levels, progressive, read_progressive, ProgressiveBytes,
 };
 pub use select::{distance_to, level_for};
+pub use table::LodStats;
 pub(crate) use table::{LodEntry, LodTable};
-pub use table::{LodStats, LOD_SEGMENT, TABLE_MAGIC, TABLE_VERSION};

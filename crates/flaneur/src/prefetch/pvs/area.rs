@@ -10,6 +10,7 @@ use crate::error::Result;
 /// source's business, not the area's.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Area {
+    /// The cell the viewer stands in.
     pub current: Cell,
     /// The current cell first.
     pub cells: Vec<Cell>,

@@ -75,6 +75,7 @@ impl ClientCache {
         })
     }
 
+    /// The most entries (viewcells) the cache holds.
     pub fn capacity(&self) -> usize {
         self.capacity
     }
@@ -84,10 +85,12 @@ impl ClientCache {
         self.entries.len()
     }
 
+    /// Whether no entry is cached.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }
 
+    /// Whether `cell`'s entry (its PVS row) is cached.
     pub fn contains(&self, cell: Cell) -> bool {
         self.entries.iter().any(|e| e.cell == cell)
     }

@@ -27,10 +27,13 @@ pub struct Transaction {
 /// What one position of the walk cost.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StepOutcome {
+    /// The cell the position lies in.
     pub cell: Cell,
     /// The viewer came into `cell` from another cell at this position (never at the
     /// first position of a walk, which starts from an empty cache).
     pub entered: bool,
+    /// This position's prefetching transaction; `None` when every cell of its area was
+    /// already cached.
     pub transaction: Option<Transaction>,
     /// On entering a cell: objects of its PVS the client did not hold, which the
     /// viewer would see missing until this position's transaction arrives.
@@ -85,6 +88,7 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         })
     }
 
+    /// The client's cache of PVS rows and objects.
     pub fn cache(&self) -> &ClientCache {
         &self.cache
     }

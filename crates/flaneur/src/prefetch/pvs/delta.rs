@@ -8,13 +8,6 @@ use super::source::ObjectId;
 
 /// ΔS: the union of the `requested` rows (each ascending) without the objects `held`,
 /// ascending.
-///
-/// ```
-/// use flaneur::prefetch::pvs::delta;
-/// // Fig. 7.3: C1 holds 1, 2, 3, 4 and 8; its neighbour C2 sees 1 to 6.
-/// let held = [1, 2, 3, 4, 8];
-/// assert_eq!(delta(&[&[1, 2, 3, 4, 5, 6]], |id| held.contains(&id)), [5, 6]);
-/// ```
 pub fn delta(requested: &[&[ObjectId]], held: impl Fn(ObjectId) -> bool) -> Vec<ObjectId> {
     let mut out: Vec<ObjectId> = requested
         .iter()
@@ -29,6 +22,16 @@ pub fn delta(requested: &[&[ObjectId]], held: impl Fn(ObjectId) -> bool) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fig_7_3() {
+        // C1 holds 1, 2, 3, 4 and 8; its neighbour C2 sees 1 to 6.
+        let held = [1, 2, 3, 4, 8];
+        assert_eq!(
+            delta(&[&[1, 2, 3, 4, 5, 6]], |id| held.contains(&id)),
+            [5, 6]
+        );
+    }
 
     #[test]
     fn union_of_rows_less_what_is_held() {

@@ -14,11 +14,14 @@ use crate::error::{Error, Result};
 /// A point on the ground plane, metres (x east, z south; the world's y is up).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Position {
+    /// East, metres.
     pub x: f64,
+    /// South, metres.
     pub z: f64,
 }
 
 impl Position {
+    /// The point (`x`, `z`).
     pub const fn new(x: f64, z: f64) -> Position {
         Position { x, z }
     }
@@ -42,11 +45,14 @@ impl fmt::Display for Position {
 /// A cell of the grid: (row, column), row 0 the northernmost, column 0 the westernmost.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Cell {
+    /// The row: 0 is the northernmost.
     pub row: u32,
+    /// The column: 0 is the westernmost.
     pub col: u32,
 }
 
 impl Cell {
+    /// The cell (`row`, `col`).
     pub const fn new(row: u32, col: u32) -> Cell {
         Cell { row, col }
     }
@@ -75,18 +81,28 @@ impl fmt::Display for Cell {
 /// The nine regions of a cell (Fig. 7.2(a)): the middle, four sides, four corners.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Region {
+    /// The middle.
     M,
+    /// The north side.
     N,
+    /// The south side.
     S,
+    /// The east side.
     E,
+    /// The west side.
     W,
+    /// The north-west corner.
     NW,
+    /// The north-east corner.
     NE,
+    /// The south-east corner.
     SE,
+    /// The south-west corner.
     SW,
 }
 
 impl Region {
+    /// The nine regions, the middle first.
     pub const ALL: [Region; 9] = [
         Region::M,
         Region::N,
@@ -129,6 +145,7 @@ impl Region {
         }
     }
 
+    /// The region's name as Fig. 7.2 and Table 7.1 write it: "M", "N", … "SW".
     pub fn name(self) -> &'static str {
         match self {
             Region::M => "M",
@@ -214,6 +231,7 @@ impl ViewcellGrid {
         })
     }
 
+    /// The grid's north-west corner.
     pub fn origin(&self) -> Position {
         self.origin
     }
@@ -223,10 +241,12 @@ impl ViewcellGrid {
         self.cell_size
     }
 
+    /// Rows of cells.
     pub fn rows(&self) -> u32 {
         self.rows
     }
 
+    /// Columns of cells.
     pub fn cols(&self) -> u32 {
         self.cols
     }

@@ -56,6 +56,7 @@ impl Pbnp {
         Ok(Pbnp { border })
     }
 
+    /// The width of the side and corner regions, as a share of the cell's side.
     pub fn border(&self) -> f64 {
         self.border
     }
