@@ -4,6 +4,7 @@
 
 mod csearch;
 mod fidelity;
+mod hdov_search;
 mod index_cache;
 mod lod_dag;
 mod lod_parallel;
@@ -31,6 +32,10 @@ enum Experiment {
     /// and compared: PSNR and the share of differing pixels beside triangles drawn
     /// (the thesis's Figs. 5.26 and 6.6 as numbers). Renders headless.
     Fidelity(fidelity::FidelityArgs),
+    /// HDoV-tree searches from random viewcells under DoV thresholds η from 0 to 0.008:
+    /// search and total I/O per storage scheme against the naive PVS list (Figs.
+    /// 5.21–5.22). Needs a database built with --visibility --hdov.
+    HdovSearch(hdov_search::HdovSearchArgs),
     /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
     PrefetchK(prefetch_k::PrefetchKArgs),
     /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
@@ -66,6 +71,7 @@ impl BenchArgs {
     pub fn run(self) -> Result<()> {
         match self.experiment {
             Experiment::Fidelity(a) => a.run(),
+            Experiment::HdovSearch(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),
             Experiment::Patterns(a) => a.run(),
