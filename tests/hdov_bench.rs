@@ -4,8 +4,6 @@
 
 mod common;
 
-use common::flaneur;
-
 use flaneur::hdov::HdovOptions;
 use flaneur::visibility::VisibilityOptions;
 use flaneur::{BuildOptions, Database};
