@@ -541,6 +541,32 @@ impl Database {
 
     /// [`Database::hdov_search`] through the storage scheme `scheme`.
     pub fn hdov_search_with(&self, cell: u32, eta: f32, scheme: Scheme) -> Result<SearchResult> {
+        self.hdov_search_cached(cell, eta, scheme, None)
+    }
+
+    /// [`Database::hdov_search_with`], reading the tree's nodes through `cache` when
+    /// given: the node cache of Shou 2002 §5.7, which holds the view-invariant nodes
+    /// (not the V-pages, which change with the cell, nor the objects) under the pool's
+    /// policy (LRU, DoV or DoV-Time, each told the node's DoV in the cell).
+    ///
+    /// ```no_run
+    /// # fn main() -> flaneur::Result<()> {
+    /// use flaneur::cache::{policy_by_name, BufferPool};
+    /// let db = flaneur::Database::open("city.flaneur".as_ref())?;
+    /// let cache = BufferPool::new(db.store(), 100 * 4096, policy_by_name("dov")?)?;
+    /// let cell = db.hdov()?.expect("built with --hdov").cells[0];
+    /// let scheme = flaneur::hdov::Scheme::Indexed;
+    /// db.hdov_search_cached(cell, 0.0001, scheme, Some(&cache))?;
+    /// println!("node cache hit rate {:.2}", cache.stats().hit_rate());
+    /// # Ok(()) }
+    /// ```
+    pub fn hdov_search_cached(
+        &self,
+        cell: u32,
+        eta: f32,
+        scheme: Scheme,
+        cache: Option<&crate::cache::BufferPool<'_>>,
+    ) -> Result<SearchResult> {
         let tree = self.hdov_tree()?;
         let slot = tree.head(&self.store)?.slot(cell).ok_or_else(|| {
             Error::Invalid(format!(
@@ -548,7 +574,7 @@ impl Database {
             ))
         })?;
         let stored = tree.scheme(&self.store, scheme)?;
-        hdov::search(&self.store, tree, stored, slot, eta)
+        hdov::search(&self.store, tree, stored, slot, eta, cache)
     }
 
     /// What an HDoV search found, read at the detail it deserves: an object at the

@@ -313,16 +313,11 @@ impl StoredScheme {
         }
     }
 
-    /// Node `node`'s V-entries (its first `entries`) in the cell entered, `None` when
-    /// the node is not visible there. Reads its V-page (counted) unless the scheme's
-    /// index says nil.
-    pub fn vpage(
-        &self,
-        store: &Store,
-        entered: &Entered,
-        node: u32,
-        entries: usize,
-    ) -> Result<Option<Vec<Vd>>> {
+    /// Node `node`'s V-entries in the cell entered (as many as a V-page holds, those
+    /// past the node's entries blank), `None` when the node is not visible there. Reads
+    /// its V-page (counted) unless the scheme's index says nil.
+    pub fn vpage(&self, store: &Store, entered: &Entered, node: u32) -> Result<Option<Vec<Vd>>> {
+        let entries = self.shape.vpage_len / super::vd::VENTRY_LEN;
         let number = match entered {
             Entered::Horizontal { slot } => {
                 Some(node as u64 * self.shape.cells as u64 + *slot as u64 + 1)

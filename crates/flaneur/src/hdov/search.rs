@@ -17,9 +17,11 @@ use super::node::HNodeKind;
 use super::scheme::{Entered, StoredScheme};
 use super::tree::HdovTree;
 use super::vd::Vd;
+use crate::cache::{BufferPool, Hint};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
+use crate::store::PageSource as _;
 use crate::store::{Extent, Store};
 
 /// The largest DoV an object seen from outside its box can have (half the sphere),
@@ -109,29 +111,54 @@ pub fn level_for_detail(triangles: &[u32], detail: f32) -> usize {
 }
 
 /// Searches the tree in the cell at `slot` under `eta`, reading V-pages through
-/// `scheme`. An error names a damaged node or V-page, or a tree whose V-pages disagree
-/// with themselves.
+/// `scheme` and nodes through `cache` when there is one (ending one of its searches
+/// when done, so that DoV-Time's clock counts searches). An error names a damaged node
+/// or V-page, or a tree whose V-pages disagree with themselves.
 pub fn search(
     store: &Store,
     tree: &HdovTree,
     scheme: &StoredScheme,
     slot: usize,
     eta: f32,
+    cache: Option<&BufferPool<'_>>,
+) -> Result<SearchResult> {
+    let found = search_in(store, tree, scheme, slot, eta, cache);
+    if let Some(c) = cache {
+        c.end_search();
+    }
+    found
+}
+
+fn search_in(
+    store: &Store,
+    tree: &HdovTree,
+    scheme: &StoredScheme,
+    slot: usize,
+    eta: f32,
+    cache: Option<&BufferPool<'_>>,
 ) -> Result<SearchResult> {
     if !(eta.is_finite() && eta >= 0.0) {
         return Err(Error::Invalid(format!(
             "a DoV threshold η of {eta}: give a number ≥ 0"
         )));
     }
-    let fanout = tree.head(store)?.fanout as f64;
+    let head = tree.head(store)?;
+    let (fanout, height) = (head.fanout as f64, head.height);
     let entered = scheme.enter(store, slot)?;
     let mut out = SearchResult::default();
-    let root = tree.node(store, 0)?;
-    out.nodes_read += 1;
-    let Some(vds) = scheme.vpage(store, &entered, 0, root.len())? else {
+    // The root's V-page first: a cache is told the root's DoV, the sum of its entries'.
+    let Some(vds) = scheme.vpage(store, &entered, 0)? else {
         return Ok(out);
     };
     out.vpages_read += 1;
+    let hint = Hint {
+        level: height as u16 - 1,
+        height,
+        mbr: Aabb::EMPTY,
+        dov: vds.iter().map(|v| v.dov).sum(),
+    };
+    let root = tree.node_through(store, cache, 0, &hint)?;
+    out.nodes_read += 1;
     let walk = Walk {
         store,
         tree,
@@ -139,6 +166,8 @@ pub fn search(
         entered: &entered,
         eta,
         fanout,
+        height,
+        cache,
     };
     walk.visit(root, &vds, &mut out)?;
     Ok(out)
@@ -152,6 +181,8 @@ struct Walk<'a> {
     entered: &'a Entered,
     eta: f32,
     fanout: f64,
+    height: u32,
+    cache: Option<&'a BufferPool<'a>>,
 }
 
 impl Walk<'_> {
@@ -168,7 +199,7 @@ impl Walk<'_> {
                     }
                 }
             }
-            HNodeKind::Internal { children, .. } => {
+            HNodeKind::Internal { level, children } => {
                 for (c, &vd) in children.iter().zip(vds) {
                     if vd.dov <= 0.0 {
                         continue;
@@ -184,12 +215,17 @@ impl Walk<'_> {
                         });
                         continue;
                     }
-                    let child = self.tree.node(self.store, c.node)?;
+                    let hint = Hint {
+                        level: level - 1,
+                        height: self.height,
+                        mbr: c.mbr,
+                        dov: vd.dov,
+                    };
+                    let child = self
+                        .tree
+                        .node_through(self.store, self.cache, c.node, &hint)?;
                     out.nodes_read += 1;
-                    let Some(cvds) =
-                        self.scheme
-                            .vpage(self.store, self.entered, c.node, child.len())?
-                    else {
+                    let Some(cvds) = self.scheme.vpage(self.store, self.entered, c.node)? else {
                         return Err(Error::Invalid(format!(
                             "{}: HDoV node {} has DoV {} in its parent's V-page but no visible entry of its own ({} scheme)",
                             self.store.path().display(),

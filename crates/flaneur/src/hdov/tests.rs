@@ -276,3 +276,44 @@ fn what_a_search_finds_loads_at_its_detail() {
     }
     assert!(nodes > 0 && objects > 0, "{nodes} nodes, {objects} objects");
 }
+
+#[test]
+fn a_node_cache_serves_the_same_answers_and_saves_node_reads() {
+    use crate::cache::{policy_by_name, BufferPool};
+    use crate::store::PageKind;
+    let db = open();
+    let head = db.hdov().unwrap().unwrap().clone();
+    let cache = BufferPool::new(
+        db.store(),
+        head.nodes as usize * db.store().page_size(),
+        policy_by_name("dovtime").unwrap(),
+    )
+    .unwrap();
+    let cells: Vec<u32> = head.cells.iter().copied().step_by(5).collect();
+    for round in 0..2 {
+        let before = db.io();
+        for &cell in &cells {
+            let plain = db.hdov_search_with(cell, 0.0005, Scheme::Indexed).unwrap();
+            let cached = db
+                .hdov_search_cached(cell, 0.0005, Scheme::Indexed, Some(&cache))
+                .unwrap();
+            assert_eq!(plain, cached, "cell {cell}");
+        }
+        let io = db.io().since(&before);
+        let stats = cache.stats();
+        if round == 1 {
+            // The whole tree fits: the second round reads no node through the cache,
+            // so its node pages are the plain searches' alone.
+            let plain_nodes: u64 = cells
+                .iter()
+                .map(|&c| {
+                    db.hdov_search_with(c, 0.0005, Scheme::Indexed)
+                        .unwrap()
+                        .nodes_read
+                })
+                .sum();
+            assert_eq!(io.reads_of(PageKind::HdovNode), plain_nodes);
+            assert!(stats.hit_rate() > 0.5, "{stats:?}");
+        }
+    }
+}

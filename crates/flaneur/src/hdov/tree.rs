@@ -26,6 +26,7 @@ use std::sync::OnceLock;
 
 use super::node::HNode;
 use super::scheme::{Scheme, Shape, StoredScheme};
+use crate::cache::{BufferPool, Hint};
 use crate::error::{Error, Result};
 use crate::store::framing::{f64_at, push_crc, u32_at, u64_at, CRC_LEN};
 use crate::store::{Extent, PageKind, Store};
@@ -238,7 +239,21 @@ impl HdovTree {
     }
 
     /// Node `number`, read from its page (counted).
+    #[cfg(test)]
     pub fn node(&self, store: &Store, number: u32) -> Result<HNode> {
+        self.node_through(store, None, number, &Hint::UNKNOWN)
+    }
+
+    /// Node `number`, read through `cache` when there is one (the node caches of
+    /// §5.7 hold the view-invariant nodes: `hint` carries the node's level and its DoV
+    /// in the current cell), else from its page. A page read is counted by the store.
+    pub fn node_through(
+        &self,
+        store: &Store,
+        cache: Option<&BufferPool<'_>>,
+        number: u32,
+        hint: &Hint,
+    ) -> Result<HNode> {
         let head = self.head(store)?;
         if number >= head.nodes {
             return Err(Error::Invalid(format!(
@@ -247,7 +262,11 @@ impl HdovTree {
             )));
         }
         let page = head.first_node + number as u64;
-        let b = store.read_page(page, PageKind::HdovNode)?;
+        let mut b = Vec::new();
+        match cache {
+            Some(c) => c.get(page, PageKind::HdovNode, hint, &mut b)?,
+            None => store.read_page_into(page, PageKind::HdovNode, &mut b)?,
+        }
         let node = HNode::decode(&b, head.nodes).map_err(|e| self.corrupt(store, page, e))?;
         if node.number != number {
             return Err(self.corrupt(
