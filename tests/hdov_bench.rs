@@ -1,12 +1,14 @@
-//! `flaneur bench hdov-search` on a small city built with the HDoV-tree: every method and
-//! threshold present, the naive list flat across η, the tree's I/O falling as η grows,
-//! η = 0 finding the naive method's objects, and the command's files written.
+//! `flaneur bench hdov-search` and `hdov-cache` on a small city built with the HDoV-tree:
+//! every method and threshold present, the naive list flat across η, the tree's I/O
+//! falling as η grows, η = 0 finding the naive method's objects, no cache policy above
+//! Belady's, and the commands' files written.
 
 mod common;
 
 use flaneur::hdov::HdovOptions;
 use flaneur::visibility::VisibilityOptions;
 use flaneur::{BuildOptions, Database};
+use flaneur_bench::hdov_cache::{self, HdovCacheConfig};
 use flaneur_bench::hdov_search::{self, HdovSearchConfig, HdovSearchRow, PLOT_SEARCH, PLOT_TOTAL};
 use flaneur_bench::report::Report;
 
@@ -119,4 +121,66 @@ fn the_command_writes_its_report_and_refuses_a_database_without_the_tree() {
     assert!(!refused.status.success());
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(err.contains("no HDoV-tree"), "{err}");
+}
+
+#[test]
+fn hdov_cache_policies_stay_at_or_below_belady() {
+    let city = city();
+    let db = Database::open(&city.db).unwrap();
+    let nodes = db.hdov().unwrap().unwrap().nodes as usize;
+    assert!(nodes > 10, "{nodes} nodes");
+    let cfg = HdovCacheConfig {
+        queries: 300,
+        etas: vec![1e-4],
+        sizes: vec![2, 5, nodes],
+        ..Default::default()
+    };
+    let r = hdov_cache::run(&db, &cfg, |_, _| {}).unwrap();
+    // Two query sets × one η × three sizes × (three policies and Belady).
+    assert_eq!(r.rows.len(), 2 * 3 * 4);
+    for set in ["continuous", "random"] {
+        for size in &cfg.sizes {
+            let at: Vec<_> = r
+                .rows
+                .iter()
+                .filter(|x| x.queries == set && x.size == *size)
+                .collect();
+            let belady = at.iter().find(|x| x.policy == "belady").unwrap().hit_rate;
+            for x in &at {
+                assert!(
+                    x.hit_rate <= belady + 1e-12,
+                    "{x:?} above Belady's {belady}"
+                );
+                assert!(
+                    x.working_set <= nodes && x.accesses > x.working_set,
+                    "{x:?}"
+                );
+            }
+            // A cache holding the whole tree misses only each node's first access.
+            if *size == nodes {
+                for x in &at {
+                    let ceiling = 1.0 - x.working_set as f64 / x.accesses as f64;
+                    assert!((x.hit_rate - ceiling).abs() < 1e-9, "{x:?}");
+                }
+            }
+        }
+    }
+    // Continuous queries revisit the same nodes more than random ones.
+    let rate = |set: &str| {
+        r.rows
+            .iter()
+            .find(|x| x.queries == set && x.size == 5 && x.policy == "lru")
+            .unwrap()
+            .hit_rate
+    };
+    assert!(
+        rate("continuous") >= rate("random"),
+        "{} < {}",
+        rate("continuous"),
+        rate("random")
+    );
+    let dir = tempfile::tempdir().unwrap();
+    r.plot(dir.path()).unwrap();
+    assert!(dir.path().join(hdov_cache::plot_file("random")).exists());
+    assert!(r.markdown().contains("## continuous queries"));
 }

@@ -19,6 +19,7 @@ pub mod csearch;
 pub mod db_size;
 pub mod fidelity;
 pub mod frame_time;
+pub mod hdov_cache;
 pub mod hdov_search;
 pub mod index_cache;
 pub mod lod_dag;

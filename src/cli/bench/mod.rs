@@ -4,6 +4,7 @@
 
 mod csearch;
 mod fidelity;
+mod hdov_cache;
 mod hdov_search;
 mod index_cache;
 mod lod_dag;
@@ -32,6 +33,10 @@ enum Experiment {
     /// and compared: PSNR and the share of differing pixels beside triangles drawn
     /// (the thesis's Figs. 5.26 and 6.6 as numbers). Renders headless.
     Fidelity(fidelity::FidelityArgs),
+    /// Hit rate of a cache of HDoV-tree nodes against its size, LRU, DoV and DoV-Time
+    /// beside Belady, for continuous and random viewcell queries (Figs. 5.15–5.20).
+    /// Needs a database built with --visibility --hdov.
+    HdovCache(hdov_cache::HdovCacheArgs),
     /// HDoV-tree searches from random viewcells under DoV thresholds η from 0 to 0.008:
     /// search and total I/O per storage scheme against the naive PVS list (Figs.
     /// 5.21–5.22). Needs a database built with --visibility --hdov.
@@ -71,6 +76,7 @@ impl BenchArgs {
     pub fn run(self) -> Result<()> {
         match self.experiment {
             Experiment::Fidelity(a) => a.run(),
+            Experiment::HdovCache(a) => a.run(),
             Experiment::HdovSearch(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),
