@@ -184,3 +184,21 @@ fn hdov_cache_policies_stay_at_or_below_belady() {
     assert!(dir.path().join(hdov_cache::plot_file("random")).exists());
     assert!(r.markdown().contains("## continuous queries"));
 }
+
+#[test]
+fn hdov_storage_reads_each_scheme_and_its_estimate() {
+    let city = city();
+    let db = Database::open(&city.db).unwrap();
+    let r = flaneur_bench::hdov_storage::run(&db).unwrap();
+    assert_eq!(r.rows.len(), 3);
+    for row in &r.rows {
+        // Each scheme is its estimate plus a 44-byte head (and the indexed scheme's
+        // directory of 12 bytes a cell).
+        let extra = row.bytes - row.estimate_bytes;
+        assert!(extra == 44 || extra == 44 + 12 * r.cells as u64, "{row:?}");
+    }
+    assert_eq!(r.rows[0].share_of_horizontal, 1.0);
+    assert!(r.visible_share > 0.0 && r.visible_share <= 1.0);
+    assert!(r.markdown().contains("| indexed |"), "{}", r.markdown());
+    assert_eq!(r.to_csv().lines().count(), 4);
+}

@@ -21,6 +21,7 @@ pub mod fidelity;
 pub mod frame_time;
 pub mod hdov_cache;
 pub mod hdov_search;
+pub mod hdov_storage;
 pub mod index_cache;
 pub mod lod_dag;
 pub mod lod_dag_stats;

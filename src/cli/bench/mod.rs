@@ -6,6 +6,7 @@ mod csearch;
 mod fidelity;
 mod hdov_cache;
 mod hdov_search;
+mod hdov_storage;
 mod index_cache;
 mod lod_dag;
 mod lod_parallel;
@@ -37,6 +38,9 @@ enum Experiment {
     /// beside Belady, for continuous and random viewcell queries (Figs. 5.15–5.20).
     /// Needs a database built with --visibility --hdov.
     HdovCache(hdov_cache::HdovCacheArgs),
+    /// What each storage scheme of the HDoV-tree takes, against eqs. 5.7–5.9 and the
+    /// thesis's Table 5.2. Needs a database built with --visibility --hdov.
+    HdovStorage(hdov_storage::HdovStorageArgs),
     /// HDoV-tree searches from random viewcells under DoV thresholds η from 0 to 0.008:
     /// search and total I/O per storage scheme against the naive PVS list (Figs.
     /// 5.21–5.22). Needs a database built with --visibility --hdov.
@@ -78,6 +82,7 @@ impl BenchArgs {
             Experiment::Fidelity(a) => a.run(),
             Experiment::HdovCache(a) => a.run(),
             Experiment::HdovSearch(a) => a.run(),
+            Experiment::HdovStorage(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),
             Experiment::Patterns(a) => a.run(),

@@ -157,6 +157,12 @@ impl TreeHead {
         }
     }
 
+    /// What eqs. 5.7–5.9 estimate `scheme` takes for this tree, bytes (its head and,
+    /// for the indexed scheme, its directory aside).
+    pub fn estimate(&self, scheme: Scheme) -> u64 {
+        super::scheme::estimate(scheme, self.shape(), self.visible_nodes)
+    }
+
     /// The slot of viewcell `cell`, `None` when it has none (not walkable).
     pub fn slot(&self, cell: u32) -> Option<usize> {
         self.cells.binary_search(&cell).ok()

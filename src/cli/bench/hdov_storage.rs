@@ -1,0 +1,28 @@
+//! `flaneur bench hdov-storage` (Shou 2002, Table 5.2).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::report::write_report;
+use flaneur::Database;
+use flaneur_bench::hdov_storage;
+
+/// `flaneur bench hdov-storage`'s arguments.
+#[derive(clap::Args)]
+pub struct HdovStorageArgs {
+    /// A database built with --visibility --hdov (all three schemes for the whole
+    /// table).
+    db: PathBuf,
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+impl HdovStorageArgs {
+    /// Reads the tree's head and writes the table.
+    pub fn run(self) -> Result<()> {
+        let db = Database::open(&self.db)?;
+        let r = hdov_storage::run(&db)?;
+        write_report(&self.out, &r)
+    }
+}
