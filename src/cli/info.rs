@@ -92,6 +92,26 @@ fn info(path: &Path, json: bool) -> Result<()> {
             );
         }
     }
+    if let Some(h) = &info.hdov {
+        println!(
+            "hdov        {} nodes (fan-out {}, height {}), internal LODs {} pages; {} cells, {:.1} visible nodes per cell; built in {:.1} s",
+            h.nodes,
+            h.fanout,
+            h.height,
+            h.lod_pages,
+            h.cells,
+            h.visible_nodes as f64 / h.cells.max(1) as f64,
+            h.seconds
+        );
+        for (scheme, bytes) in &h.schemes {
+            println!(
+                "  {:<10} {} bytes ({:.2} MiB)",
+                scheme.name(),
+                bytes,
+                *bytes as f64 / (1 << 20) as f64
+            );
+        }
+    }
     let b = info.bounds;
     println!(
         "bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}",

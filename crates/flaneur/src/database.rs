@@ -57,6 +57,27 @@ pub struct DatabaseInfo {
     pub lod: Option<LodStats>,
     /// The precomputed visibility; `None` when the build computed none.
     pub visibility: Option<VisibilityInfo>,
+    /// The HDoV-tree; absent (and left out of the JSON) when the build made none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hdov: Option<HdovInfo>,
+}
+
+/// What `flaneur info` reports of the HDoV-tree.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct HdovInfo {
+    /// Nodes, levels, and the entries packing put in a node (M).
+    pub nodes: u32,
+    pub height: u32,
+    pub fanout: u32,
+    /// Viewcells, and N_vnode summed over them.
+    pub cells: usize,
+    pub visible_nodes: u64,
+    /// Pages of the internal LODs.
+    pub lod_pages: u64,
+    /// Each scheme stored, and its bytes.
+    pub schemes: Vec<(hdov::Scheme, u64)>,
+    /// The build's seconds for the tree.
+    pub seconds: f64,
 }
 
 /// What `flaneur info` reports of the precomputed visibility.
@@ -641,6 +662,20 @@ impl Database {
             fanout_internal: self.tree.fanout.internal,
             lod: self.lod_stats()?,
             visibility: self.visibility_info()?,
+            hdov: self.hdov()?.map(|h| HdovInfo {
+                nodes: h.nodes,
+                height: h.height,
+                fanout: h.fanout,
+                cells: h.cells.len(),
+                visible_nodes: h.visible_nodes,
+                lod_pages: h.lod_pages,
+                schemes: h
+                    .schemes
+                    .iter()
+                    .map(|s| (s.0, s.1.byte_len as u64))
+                    .collect(),
+                seconds: h.seconds,
+            }),
         })
     }
 }

@@ -49,7 +49,7 @@ pub use build::{
     build_from_obj, build_from_obj_with_progress, build_from_scene, build_from_scene_with_progress,
     BuildOptions, BuildSummary,
 };
-pub use database::{Database, DatabaseInfo};
+pub use database::{Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};
 pub use rtree::{History, ObjectEntry, QueryResult};
 pub use store::Backend;
