@@ -174,7 +174,7 @@ impl flaneur::walk::FrameSink for Walker<'_> {
         &mut self,
         _: usize,
         _: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         _: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.held.extend(buffer.iter().map(|o| o.entry.id));

@@ -31,7 +31,7 @@ impl FrameSink for Typist<'_> {
         &mut self,
         index: usize,
         camera: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         if index == 3 {

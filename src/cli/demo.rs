@@ -113,7 +113,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         println!(
             "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
-        let start = flaneur::walk::start::busiest_street(&db)?;
+        let start = flaneur::walk::busiest_street(&db)?;
         let opts = window_options(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),

@@ -43,7 +43,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 256.0)]
     gpu_budget_mb: f64,
     /// Walking speed, m/s (Shift runs at four times it).
-    #[arg(long, default_value_t = flaneur::walk::steer::WALK_SPEED)]
+    #[arg(long, default_value_t = flaneur::walk::WALK_SPEED)]
     speed: f32,
     /// Start with the bounding boxes on (B), and seen from above (T).
     #[arg(long)]
@@ -85,7 +85,7 @@ impl ViewArgs {
                 yaw: look.0.to_radians(),
                 pitch: look.1.to_radians(),
             },
-            None => flaneur::walk::start::busiest_street(&db)?,
+            None => flaneur::walk::busiest_street(&db)?,
         };
         let play = play
             .map(|p| CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display())))

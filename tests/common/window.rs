@@ -65,7 +65,7 @@ impl FrameSink for Player<'_> {
         &mut self,
         index: usize,
         camera: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.frames += 1;
@@ -109,9 +109,6 @@ pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions 
         lod_tau: Some(0.001),
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
-        ..ViewOptions::new(
-            db.bounds(),
-            flaneur::walk::start::busiest_street(db).unwrap(),
-        )
+        ..ViewOptions::new(db.bounds(), flaneur::walk::busiest_street(db).unwrap())
     }
 }

@@ -43,7 +43,7 @@ impl ViewOptions {
             margin: flaneur::geom::DEFAULT_FAR,
             play: None,
             gpu_budget: Some(256 << 20),
-            speed: flaneur::walk::steer::WALK_SPEED,
+            speed: flaneur::walk::WALK_SPEED,
         }
     }
 }

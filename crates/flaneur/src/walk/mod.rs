@@ -1,13 +1,31 @@
-//! The walkthrough engine. So far: camera paths through a city (`path`: street walks,
-//! the motion patterns of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007
-//! §7.5 and their CSV files) and the disk cells a walk queries (Shou 2002 §4.1); one
-//! walk session (`session`), the frame loop every mode shares, with its object buffer
-//! (`buffer`); the modes it plays (`mode`): REVIEW and BOX, whose settings and figures
-//! are `review`'s, and the PVS walk, whose are `pvs_walk`'s; and walks at a live viewer
-//! one after another as its person changes mode (`live`).
+//! The walkthrough engine: a viewer's poses in; for each frame, the objects it sees read
+//! from the database, kept in an object buffer, culled and selected at a level of
+//! detail, every page counted, and handed to whoever draws them.
+//!
+//! One walk session ([`session`]), the frame loop every mode shares, plays the modes
+//! (`mode`), its retrieval strategies: REVIEW and BOX over disk cells (Shou 2002
+//! §4.1–4.4), whose settings, entry points and figures are [`review`]'s, and the PVS
+//! walk (Zheng 2007 ch. 7), whose are [`pvs_walk`]'s. [`live`] runs walks one after
+//! another at a live viewer as its person changes the mode; [`lod_select`] is each
+//! frame's LOD selection; [`path`] the camera paths (street walks, the motion patterns
+//! of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007 §7.5, their CSV files).
+//!
+//! Re-exported here, one idea per file:
+//! - `sink.rs`: what a walk hands whoever draws it: [`FrameSink`] (a frame's
+//!   [`Selection`]; [`NoSink`] draws nothing), [`Viewer`] (a sink that also gives the
+//!   poses), [`FrameFigures`] (what a frame cost);
+//! - `buffer.rs`: [`ObjectBuffer`], the object buffer and its eviction (Shou 2002
+//!   §4.2.2, Fig. 4.8), of [`Loaded`] objects ([`mesh_bytes`] each), an eviction's
+//!   [`Eviction`];
+//! - `cells.rs`: the disk cells of Shou 2002 §4.1: [`disk_cell`] around an eye,
+//!   [`scaled_cell`] (REVIEW's, SF times the frustum cell) and [`contains_ground`];
+//! - `start.rs`: [`busiest_street`], where a viewer starts;
+//! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
+//!   mouse, at [`WALK_SPEED`];
+//! - from [`path`]: [`CameraPath`], [`Pose`], [`street_walk`] and [`Motion`].
 
-pub mod buffer;
-pub mod cells;
+mod buffer;
+mod cells;
 pub mod live;
 pub mod lod_select;
 mod mode;
@@ -16,9 +34,13 @@ pub mod pvs_walk;
 pub mod review;
 pub mod session;
 mod sink;
-pub mod start;
-pub mod steer;
+mod start;
+mod steer;
 
+pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer};
+pub use cells::{contains_ground, disk_cell, scaled_cell};
 pub use path::motion::Motion;
 pub use path::{street_walk, CameraPath, Pose};
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};
+pub use start::busiest_street;
+pub use steer::{Move, Steer, WALK_SPEED};
