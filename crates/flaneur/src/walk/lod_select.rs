@@ -13,8 +13,9 @@
 //! kept while the object stays in the buffer. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
 //! walk's own figures: the walk reports what its retrieval method reads. The walk
-//! session runs it ([`WalkLods`]) once a frame's figures are finished, under the τ its
-//! viewer wants, and hands the viewer what to draw; a renderer reads no LOD page.
+//! session runs it once a frame's figures are finished, under the τ its viewer wants
+//! ([`FrameSink::lod_tau`](super::FrameSink::lod_tau)), and hands the viewer what to
+//! draw; a renderer reads no LOD page.
 //!
 //! Large objects, those the build stored a progressive mesh and DAG for, are refined
 //! view by view instead ([`REFINED`]): the LOD core's constant-time traversal under the
@@ -432,7 +433,7 @@ impl LodSelector<'_> {
 ///
 /// Made [`Default`], it has no database to read levels from: every frame at full detail.
 #[derive(Default)]
-pub struct WalkLods<'db> {
+pub(crate) struct WalkLods<'db> {
     db: Option<&'db Database>,
     selector: Option<LodSelector<'db>>,
 }
@@ -449,7 +450,7 @@ pub(crate) struct LodWanted {
 
 impl<'db> WalkLods<'db> {
     /// LOD selection over `db`, before any frame.
-    pub fn new(db: &'db Database) -> WalkLods<'db> {
+    pub(crate) fn new(db: &'db Database) -> WalkLods<'db> {
         WalkLods {
             db: Some(db),
             selector: None,

@@ -2,8 +2,8 @@
 //! from the database, kept in an object buffer, culled and selected at a level of
 //! detail, every page counted, and handed to whoever draws them.
 //!
-//! One walk session ([`session`]), the frame loop every mode shares, plays the modes
-//! (`mode`), its retrieval strategies: REVIEW and BOX over disk cells (Shou 2002
+//! One walk session (`session.rs`), the frame loop every mode shares, plays the modes
+//! (`mode/`), its retrieval strategies: REVIEW and BOX over disk cells (Shou 2002
 //! §4.1–4.4), whose settings, entry points and figures are [`review`]'s, and the PVS
 //! walk (Zheng 2007 ch. 7), whose are [`pvs_walk`]'s. [`live`] runs walks one after
 //! another at a live viewer as its person changes the mode; [`lod_select`] is each
@@ -32,7 +32,7 @@ mod mode;
 pub mod path;
 pub mod pvs_walk;
 pub mod review;
-pub mod session;
+mod session;
 mod sink;
 mod start;
 mod steer;

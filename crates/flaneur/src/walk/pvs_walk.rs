@@ -12,8 +12,9 @@
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
 //!
-//! Here: the settings and the figures a walk reports. The frame loop is the walk
-//! session's (`walk::session`), the client the PVS mode's (`walk::mode::pvs`).
+//! Here: the settings, the entry points and the figures a walk reports. The frame loop
+//! is the walk session's (`walk/session.rs`), the client the PVS mode's
+//! (`walk/mode/pvs.rs`).
 
 use serde::Serialize;
 
@@ -104,8 +105,7 @@ pub fn walk_pvs_into(
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more. The walk session's frame loop with the PVS mode
-/// (`walk::mode::pvs`); kept as the entry point while callers move to the session.
+/// window), until it has no more.
 pub fn walk_pvs_live(
     db: &Database,
     prefetch: PvsPrefetch,
@@ -117,7 +117,7 @@ pub fn walk_pvs_live(
 
 /// [`walk_pvs_live`] with LOD selection `lods` kept from an earlier walk (one before it
 /// at the same window), so that what it read and refined stays so.
-pub fn walk_pvs_live_with<'db>(
+pub(crate) fn walk_pvs_live_with<'db>(
     db: &'db Database,
     prefetch: PvsPrefetch,
     lods: &mut WalkLods<'db>,

@@ -12,9 +12,9 @@
 //! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
-//! Here: the settings, their checks, and the figures a walk reports. The frame loop is
-//! the walk session's (`walk::session`), the retrieval the REVIEW mode's
-//! (`walk::mode::review`), the motion prediction `prefetch::motion`'s.
+//! Here: the settings, their checks, the entry points and the figures a walk reports.
+//! The frame loop is the walk session's (`walk/session.rs`), the retrieval the REVIEW
+//! mode's (`walk/mode/review.rs`), the motion prediction `prefetch::motion`'s.
 //!
 //! Prefetching follows Fig. 4.11: the prefetched cell C2 is searched (CSearch against
 //! the history) while the viewer is still in C1, and its objects go into the buffer as
@@ -386,9 +386,7 @@ pub fn walk_into(
 }
 
 /// [`walk_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more. Poses must come in time order, as a path's do. The
-/// walk session's frame loop with the REVIEW mode (`walk::mode::review`); kept as the
-/// entry point while callers move to the session.
+/// window), until it has no more. Poses must come in time order, as a path's do.
 pub fn walk_live(
     db: &Database,
     cfg: &ReviewConfig,
@@ -400,7 +398,7 @@ pub fn walk_live(
 
 /// [`walk_live`] with LOD selection `lods` kept from an earlier walk (one before it at
 /// the same window), so that what it read and refined stays so.
-pub fn walk_live_with<'db>(
+pub(crate) fn walk_live_with<'db>(
     db: &'db Database,
     cfg: &ReviewConfig,
     lods: &mut WalkLods<'db>,
