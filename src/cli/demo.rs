@@ -145,7 +145,7 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
     let poses = (0..frames)
         .map(|i| {
             let t = i as f32 / (frames - 1) as f32;
-            flaneur::walk::Pose {
+            flaneur::walk::path::Pose {
                 time: i as f64 / 30.0,
                 position: from.lerp(to, t),
                 yaw,

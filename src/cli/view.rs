@@ -79,7 +79,7 @@ impl ViewArgs {
         };
         let db = Database::open(&db)?;
         let start = match at {
-            Some(p) => flaneur::walk::Pose {
+            Some(p) => flaneur::walk::path::Pose {
                 time: 0.0,
                 position: p,
                 yaw: look.0.to_radians(),
@@ -104,7 +104,10 @@ impl ViewArgs {
 
 /// How the window opens on `db` from `start` by default: titled with the database's
 /// path.
-pub fn window_options(db: &Database, start: flaneur::walk::Pose) -> flaneur_render::ViewOptions {
+pub fn window_options(
+    db: &Database,
+    start: flaneur::walk::path::Pose,
+) -> flaneur_render::ViewOptions {
     flaneur_render::ViewOptions {
         title: format!("flaneur — {}", db.store().path().display()),
         ..flaneur_render::ViewOptions::new(db.bounds(), start)

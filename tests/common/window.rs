@@ -5,7 +5,8 @@
 
 use std::process::{Child, Command};
 
-use flaneur::walk::{FrameSink, Pose, Viewer};
+use flaneur::walk::path::Pose;
+use flaneur::walk::{FrameSink, Viewer};
 use flaneur::Database;
 use flaneur_render::{ViewOptions, WalkWindow};
 
@@ -103,7 +104,7 @@ impl Viewer for Player<'_> {
 
 /// A small window over `db` playing `poses` from its busiest street, with LODs and a
 /// GPU budget of 4 MiB.
-pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions {
+pub fn options(db: &Database, poses: &flaneur::walk::path::CameraPath) -> ViewOptions {
     ViewOptions {
         size: (256, 192),
         lod_tau: Some(0.001),

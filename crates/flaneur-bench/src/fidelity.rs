@@ -20,9 +20,10 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
 use flaneur::walk::lod_select::LodCounts;
+use flaneur::walk::path::CameraPath;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
-use flaneur::walk::{CameraPath, FrameSink, ObjectBuffer, Selection};
+use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 
 /// The walk whose frames are compared.

@@ -194,7 +194,7 @@ struct Sums {
 
 fn one_sf(
     db: &Database,
-    poses: &[flaneur::walk::Pose],
+    poses: &[flaneur::walk::path::Pose],
     cfg: &ViewCullingConfig,
     sf: f32,
 ) -> Result<ViewCullingRow> {

@@ -7,8 +7,9 @@
 //! §4.1–4.4), whose settings, entry points and figures are [`review`]'s, and the PVS
 //! walk (Zheng 2007 ch. 7), whose are [`pvs_walk`]'s. [`live`] runs walks one after
 //! another at a live viewer as its person changes the mode; [`lod_select`] is each
-//! frame's LOD selection; [`path`] the camera paths (street walks, the motion patterns
-//! of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007 §7.5, their CSV files).
+//! frame's LOD selection; [`path`] the camera paths ([`CameraPath`](path::CameraPath),
+//! a timed sequence of [`Pose`](path::Pose)s, and its CSV file; street walks, the
+//! motion patterns of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007 §7.5).
 //!
 //! Re-exported here, one idea per file:
 //! - `sink.rs`: what a walk hands whoever draws it: [`FrameSink`] (a frame's
@@ -21,8 +22,7 @@
 //!   [`scaled_cell`] (REVIEW's, SF times the frustum cell) and [`contains_ground`];
 //! - `start.rs`: [`busiest_street`], where a viewer starts;
 //! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
-//!   mouse, at [`WALK_SPEED`];
-//! - from [`path`]: [`CameraPath`], [`Pose`], [`street_walk`] and [`Motion`].
+//!   mouse, at [`WALK_SPEED`].
 
 mod buffer;
 mod cells;
@@ -39,8 +39,6 @@ mod steer;
 
 pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer};
 pub use cells::{contains_ground, disk_cell, scaled_cell};
-pub use path::motion::Motion;
-pub use path::{street_walk, CameraPath, Pose};
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};
 pub use start::busiest_street;
 pub use steer::{Move, Steer, WALK_SPEED};

@@ -98,7 +98,7 @@ impl FrameSink for NoSink {
 /// recorded path), and what draws the frame the walk selects for it.
 pub trait Viewer: FrameSink {
     /// The pose of frame `frame`, or `None` when the walk ends.
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>>;
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>>;
 
     /// What the frame just drawn cost the walk, for a display beside the picture.
     fn figures(&mut self, _figures: &FrameFigures) {}
@@ -139,7 +139,7 @@ pub struct FrameFigures {
 
 /// A recorded path played to a sink: the viewer of a walk along a fixed path.
 pub(crate) struct Played<'a> {
-    pub path: &'a super::CameraPath,
+    pub path: &'a super::path::CameraPath,
     pub sink: &'a mut dyn FrameSink,
 }
 
@@ -168,7 +168,7 @@ impl FrameSink for Played<'_> {
 }
 
 impl Viewer for Played<'_> {
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>> {
         Ok(self.path.poses.get(frame).copied())
     }
 }

@@ -53,7 +53,8 @@ pub enum Move {
 /// window here: the window turns its events into these calls.
 ///
 /// ```
-/// use flaneur::walk::{Move, Pose, Steer};
+/// use flaneur::walk::path::Pose;
+/// use flaneur::walk::{Move, Steer};
 /// let start = Pose { time: 0.0, position: glam::Vec3::new(0.0, 1.7, 0.0), yaw: 0.0, pitch: 0.0 };
 /// let mut steer = Steer::new(start, 0.0)?;
 /// steer.key(Move::Forward, true);

@@ -58,7 +58,7 @@ use crate::geom::Aabb;
 
 /// Nominal block pitch of the street grid, metres: citygen's default 4 lots × 20 m plus
 /// a 14 m street.
-pub const BLOCK_PITCH: f32 = 94.0;
+const BLOCK_PITCH: f32 = 94.0;
 
 /// The frame rates [`generate`] accepts, frames per second.
 pub const MIN_FPS: f32 = 0.01;

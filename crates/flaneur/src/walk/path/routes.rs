@@ -11,12 +11,14 @@
 //!   three each; a walker in a lane beside the buildings would find only two new
 //!   viewcells at a crossing along it (the third cell is inside a building).
 //! - Route 1 starts at the street crossing nearest the city's centre and keeps a
-//!   heading; before each step it changes it with chance [`TURN_CHANCE`], to the
-//!   opposite heading half of those times (the back-and-forth) and to a uniformly
-//!   random one otherwise. A step that would leave the walkways is redrawn with a
-//!   random heading.
+//!   heading; before each step it changes it with chance 0.04, to the opposite heading
+//!   half of those times (the back-and-forth) and to a uniformly random one otherwise:
+//!   a new heading every 25 steps (100 m) on average. The thesis gives no figure; at
+//!   this one PBNP saves about as large a share of SNP's transactions on route 1 as the
+//!   thesis's Table 7.2 shows (17 %), where more frequent turns would make its saving
+//!   larger. A step that would leave the walkways is redrawn with a random heading.
 //! - Route 2's lines each keep a random distance into their walkway, at least
-//!   [`MARGIN`] from its edges, and turn where they cross the next line's street. Its
+//!   0.5 m from its edges, and turn where they cross the next line's street. Its
 //!   first six lines are a random 85–115 % of a seventh of the route each (in whole
 //!   blocks), turning left or right as the city leaves room; the seventh is as long as
 //!   the steps left. It needs only the city's street layout ([`StreetGrid`]), not its
@@ -44,14 +46,12 @@ use crate::prefetch::pvs::Position;
 pub const THESIS_STEPS: usize = 3000;
 pub const THESIS_STEP: f64 = 4.0;
 
-/// Route 1's chance of changing heading before a step (half of them reversals): a new
-/// heading every 25 steps (100 m) on average. The thesis gives no figure; at this one
-/// PBNP saves about as large a share of SNP's transactions on route 1 as the thesis's
-/// Table 7.2 shows (17 %), where more frequent turns would make its saving larger.
-pub const TURN_CHANCE: f64 = 0.04;
+/// Route 1's chance of changing heading before a step (half of them reversals); why
+/// this figure, the module's top comment says.
+const TURN_CHANCE: f64 = 0.04;
 
 /// Route 2 keeps at least this far from the edges of its walkways, metres.
-pub const MARGIN: f64 = 0.5;
+const MARGIN: f64 = 0.5;
 
 /// How long a route is and how it is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
