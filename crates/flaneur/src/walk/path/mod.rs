@@ -53,6 +53,7 @@ impl Pose {
 /// session holds, what [`CameraPath::save_csv`] writes.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct CameraPath {
+    /// The poses, in time order (what [`CameraPath::validate`] checks).
     pub poses: Vec<Pose>,
 }
 
@@ -79,10 +80,12 @@ impl CameraPath {
         Ok(())
     }
 
+    /// Poses in the path.
     pub fn len(&self) -> usize {
         self.poses.len()
     }
 
+    /// Whether it has no pose (a path [`CameraPath::new`] would refuse).
     pub fn is_empty(&self) -> bool {
         self.poses.is_empty()
     }

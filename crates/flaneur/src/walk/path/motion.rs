@@ -70,11 +70,17 @@ pub const MAX_FPS: f32 = 10_000.0;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Motion {
+    /// 15 m/s along the streets, turning at a quarter of the intersections.
     Normal,
+    /// 40 m/s, as `Normal` otherwise.
     Fast,
+    /// 4 m/s, as `Normal` otherwise.
     Slow,
+    /// Turning at three quarters of the intersections, the view looking around.
     Turning,
+    /// Moving against the view, reversing every 10 to 20 s.
     Backward,
+    /// Off the streets: speed and heading redrawn every 1 to 6 s.
     Random,
 }
 

@@ -42,8 +42,9 @@ use super::{CameraPath, Pose};
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::Position;
 
-/// The thesis's routes: 3000 steps of 4 m.
+/// The thesis's routes: 3000 steps of [`THESIS_STEP`].
 pub const THESIS_STEPS: usize = 3000;
+/// The length of a step of the thesis's routes, metres.
 pub const THESIS_STEP: f64 = 4.0;
 
 /// Route 1's chance of changing heading before a step (half of them reversals); why
@@ -56,9 +57,11 @@ const MARGIN: f64 = 0.5;
 /// How long a route is and how it is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RouteConfig {
+    /// Steps the route takes (its positions are one more).
     pub steps: usize,
     /// Metres per step.
     pub step: f64,
+    /// The seed of the ChaCha8 generator the route is drawn from.
     pub seed: u64,
 }
 
@@ -73,6 +76,7 @@ impl Default for RouteConfig {
 }
 
 impl RouteConfig {
+    /// Checks the settings: 1 to 10,000,000 steps of a positive, finite length.
     pub fn validate(&self) -> Result<()> {
         if self.steps == 0 || self.steps > 10_000_000 {
             return Err(Error::Pvs(format!(
@@ -164,7 +168,9 @@ pub fn random_route(
 /// Route 2: its corners (start, six turns, end) and its positions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StraightRoute {
+    /// Where its lines meet: the start, the six turns and the end.
     pub corners: Vec<Position>,
+    /// The start and the point after each step, along the lines.
     pub positions: Vec<Position>,
 }
 
