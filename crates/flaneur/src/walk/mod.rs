@@ -1,17 +1,50 @@
 //! The walkthrough engine: a viewer's poses in; for each frame, the objects it sees read
-//! from the database, kept in an object buffer, culled and selected at a level of
-//! detail, every page counted, and handed to whoever draws them.
+//! from the database, kept in an object buffer, culled, selected at a level of detail
+//! and handed to whoever draws them, every page counted.
 //!
-//! One walk session (`session.rs`), the frame loop every mode shares, plays the modes
-//! (`mode/`), its retrieval strategies: REVIEW and BOX over disk cells (Shou 2002
-//! §4.1–4.4), whose settings, entry points and figures are [`review`]'s, and the PVS
-//! walk (Zheng 2007 ch. 7), whose are [`pvs_walk`]'s. [`live`] runs walks one after
-//! another at a live viewer as its person changes the mode; [`lod_select`] is each
-//! frame's LOD selection; [`path`] the camera paths ([`CameraPath`](path::CameraPath),
-//! a timed sequence of [`Pose`](path::Pose)s, and its CSV file; street walks, the
-//! motion patterns of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007 §7.5).
+//! One walk session (`session.rs`) is the frame loop every mode shares. Each frame the
+//! viewer gives a pose; the mode retrieves for it (brings the object buffer to what the
+//! mode holds: loads, drops, evicts); the objects it offers are culled against the
+//! frustum; the mode finishes its figures; [`lod_select`] picks each object's level
+//! under the τ the viewer wants; the viewer is handed the frame, then its figures. The
+//! modes (`mode/`) are the session's retrieval strategies: REVIEW and BOX over disk
+//! cells (Shou 2002 §4.1–4.4) and the PVS client (Zheng 2007 ch. 7). The loop and the
+//! modes are crate-private: a user walks a mode through its namespace's entry points.
 //!
-//! Re-exported here, one idea per file:
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 60, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::walk::{path, review};
+//! let db = flaneur::Database::open(&file)?;
+//! let poses = path::street_walk(&db.bounds(), 30, 5.0, 10, 7)?;
+//! // CSearch through the index cache, without prefetching (so unpaced).
+//! let cfg = review::ReviewConfig::preset(review::Preset::Np);
+//! let report = review::walk(&db, &poses, &cfg, |_| {})?;
+//! assert_eq!(report.frames.len(), 30);
+//! assert!(report.frames[0].queried && report.summary.queries >= 1);
+//! # Ok(()) }
+//! ```
+//!
+//! The public namespaces, each one idea a user reaches for by name:
+//! - [`review`]: REVIEW and BOX walks ([`review::walk`], [`review::walk_into`] with a
+//!   sink, [`review::walk_live`] with a viewer), their settings ([`review::ReviewConfig`],
+//!   the presets of §4.4, the defaults and checks) and figures ([`review::WalkReport`]);
+//! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`] and the rest), its
+//!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
+//! - [`live`]: walks one after another at a live viewer (a window) as its person changes
+//!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
+//! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
+//!   [`lod_select::REFINED`]) and its selector, counts and threshold;
+//! - [`path`]: camera paths ([`path::CameraPath`], a timed sequence of [`path::Pose`]s,
+//!   read and written as CSV) and their generators: street walks, viewcell walks, the
+//!   motion patterns of Shou 2002 §4.4.1 ([`path::motion`]) and the routes of Zheng
+//!   2007 §7.5 ([`path::routes`]).
+//!
+//! Re-exported here, flat, one idea per file:
 //! - `sink.rs`: what a walk hands whoever draws it: [`FrameSink`] (a frame's
 //!   [`Selection`]; [`NoSink`] draws nothing), [`Viewer`] (a sink that also gives the
 //!   poses), [`FrameFigures`] (what a frame cost);
