@@ -9,7 +9,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use flaneur::geom::Aabb;
 use flaneur::rtree::{History, RTree as PagedTree};
 use flaneur::store::Store;
-use flaneur::walk::{cells::disk_cell, street_walk};
+use flaneur::walk::{disk_cell, path::street_walk};
 use flaneur::{BuildOptions, Database};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
 

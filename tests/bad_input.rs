@@ -152,14 +152,14 @@ fn a_scene_file_cut_short_fails_the_build_and_leaves_no_database() {
 /// Plays a path, walking on past damaged objects when `skip` says so, and keeps what
 /// the figures told of them and the ids the walk held.
 struct Walker<'p> {
-    path: &'p flaneur::walk::CameraPath,
+    path: &'p flaneur::walk::path::CameraPath,
     skip: bool,
     damaged: Vec<String>,
     held: std::collections::HashSet<u64>,
 }
 
 impl<'p> Walker<'p> {
-    fn new(path: &'p flaneur::walk::CameraPath, skip: bool) -> Walker<'p> {
+    fn new(path: &'p flaneur::walk::path::CameraPath, skip: bool) -> Walker<'p> {
         Walker {
             path,
             skip,
@@ -174,7 +174,7 @@ impl flaneur::walk::FrameSink for Walker<'_> {
         &mut self,
         _: usize,
         _: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         _: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.held.extend(buffer.iter().map(|o| o.entry.id));
@@ -183,7 +183,7 @@ impl flaneur::walk::FrameSink for Walker<'_> {
 }
 
 impl flaneur::walk::Viewer for Walker<'_> {
-    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
         Ok(self.path.poses.get(frame).copied())
     }
 

@@ -6,8 +6,8 @@ mod common;
 
 use common::flaneur;
 
+use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review::Preset;
-use flaneur::walk::Motion;
 use flaneur::{BuildOptions, Database, Error};
 use flaneur_bench::cell_size::{self, CellSizeConfig};
 use flaneur_bench::db_size::{self, DbSizeConfig};
@@ -134,11 +134,9 @@ fn prefetch_k_sweeps_every_pattern() {
             .mean_frame_ms;
         assert!(report.rows_of(p).all(|r| r.mean_frame_ms >= best_ms));
     }
-    assert_eq!(report.best_k(flaneur::walk::Motion::Random), None);
+    assert_eq!(report.best_k(Motion::Random), None);
     // Something must have been prefetched on the fast walk.
-    assert!(report
-        .rows_of(flaneur::walk::Motion::Fast)
-        .any(|r| r.prefetches_used > 0));
+    assert!(report.rows_of(Motion::Fast).any(|r| r.prefetches_used > 0));
 
     let csv = report.to_csv();
     let lines: Vec<&str> = csv.lines().collect();

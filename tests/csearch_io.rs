@@ -5,7 +5,7 @@
 mod common;
 
 use flaneur::rtree::History;
-use flaneur::walk::{cells::disk_cell, street_walk};
+use flaneur::walk::{disk_cell, path::street_walk};
 use flaneur::{BuildOptions, Database};
 use flaneur_bench::csearch::{self, CsearchConfig};
 

@@ -6,9 +6,9 @@
 mod common;
 
 use flaneur::geom::Camera;
-use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::live::{self, Change, LiveViewer, ViewMode};
-use flaneur::walk::{street_walk, CameraPath, FrameSink, Pose, Selection, Viewer};
+use flaneur::walk::path::{street_walk, CameraPath, Pose};
+use flaneur::walk::{FrameSink, ObjectBuffer, Selection, Viewer};
 use flaneur::{BuildOptions, Database, Error, Result};
 
 /// Plays `path` over and over, one walk per entry of `script`: walk `i` lasts

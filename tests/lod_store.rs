@@ -434,8 +434,8 @@ fn builds_are_deterministic_and_finish_inside_a_one_thread_pool() {
 /// DAG spend decoding on the thread pool, and refined from the frame after they are
 /// done; the frame that first sees it reads them, and never waits for them.
 /// Every object of `db` loaded into an object buffer, as a walk would hold them.
-fn all_loaded(db: &Database) -> flaneur::walk::buffer::ObjectBuffer {
-    use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+fn all_loaded(db: &Database) -> flaneur::walk::ObjectBuffer {
+    use flaneur::walk::{mesh_bytes, Loaded, ObjectBuffer};
     let mut buffer = ObjectBuffer::new(usize::MAX);
     for o in all_objects(db) {
         let mesh = db.mesh(&o).unwrap();
@@ -462,8 +462,8 @@ fn far_above(db: &Database) -> flaneur::geom::Camera {
 
 #[test]
 fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
-    use flaneur::walk::buffer::Loaded;
     use flaneur::walk::lod_select::{LodSelector, REFINED};
+    use flaneur::walk::Loaded;
     let city = common::city(
         30,
         5,
@@ -530,8 +530,8 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
 /// tolerating damage, the object drawn at full detail from then on, told of once.
 #[test]
 fn lod_selection_meets_a_damaged_lod_page() {
-    use flaneur::walk::buffer::Loaded;
     use flaneur::walk::lod_select::LodSelector;
+    use flaneur::walk::Loaded;
     let city = common::city(30, 4, &BuildOptions::default());
     let db = Database::open(&city.db).unwrap();
     let victim = all_objects(&db)[5];

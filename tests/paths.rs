@@ -3,7 +3,7 @@
 
 use flaneur::geom::{Aabb, Camera, Frustum};
 use flaneur::walk::path::motion::{generate, Motion};
-use flaneur::walk::{CameraPath, Pose};
+use flaneur::walk::path::{CameraPath, Pose};
 use flaneur::Error;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};

@@ -11,10 +11,9 @@ use std::collections::HashMap;
 use flaneur::geom::fov_x_for;
 use flaneur::geom::Camera;
 use flaneur::visibility::RayScene;
-use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::FrameSink;
+use flaneur::walk::{FrameSink, ObjectBuffer};
 use flaneur::{BuildOptions, Database};
 use flaneur_bench::fidelity::ModeWalk;
 use flaneur_bench::report::Report;
@@ -76,7 +75,7 @@ fn full_detail(db: &Database, gpu: &Gpu, camera: &Camera) -> Shot {
 fn fidelity(
     db: &Database,
     gpu: &Gpu,
-    path: &flaneur::walk::CameraPath,
+    path: &flaneur::walk::path::CameraPath,
     walk: ModeWalk<'_>,
     mode: &str,
     (size, lod_tau): (u32, Option<f32>),
@@ -344,9 +343,9 @@ fn a_viewer_standing_still_allocates_nothing_after_the_first_frame() {
         ..ReviewConfig::preset(Preset::Optimal)
     };
     let walked = motion::generate(&db.bounds(), Motion::Normal, 30, 30.0, 2).unwrap();
-    let standing = |frames: usize| flaneur::walk::CameraPath {
+    let standing = |frames: usize| flaneur::walk::path::CameraPath {
         poses: (0..frames)
-            .map(|i| flaneur::walk::Pose {
+            .map(|i| flaneur::walk::path::Pose {
                 time: i as f64 / 30.0,
                 ..walked.poses[15]
             })

@@ -9,8 +9,9 @@ mod window;
 
 use std::process::Command;
 
+use flaneur::walk::path::Pose;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::{FrameSink, Pose, Viewer};
+use flaneur::walk::{FrameSink, Viewer};
 use flaneur::{BuildOptions, Database};
 use flaneur_render::{Change, ViewMode, WalkWindow};
 use window::{display, options};
@@ -31,7 +32,7 @@ impl FrameSink for Typist<'_> {
         &mut self,
         index: usize,
         camera: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         if index == 3 {
@@ -77,7 +78,7 @@ fn keys_and_the_mouse_steer_the_window() {
     let db = Database::open(&city.db).unwrap();
     let opts = flaneur_render::ViewOptions {
         play: None,
-        ..options(&db, &flaneur::walk::CameraPath { poses: Vec::new() })
+        ..options(&db, &flaneur::walk::path::CameraPath { poses: Vec::new() })
     };
     let start = opts.start;
     let mut window = WalkWindow::open(opts, ViewMode::Review).unwrap();

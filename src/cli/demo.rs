@@ -113,7 +113,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         println!(
             "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
-        let start = flaneur::walk::start::busiest_street(&db)?;
+        let start = flaneur::walk::busiest_street(&db)?;
         let opts = window_options(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None) {
             Ok(()) => return Ok(()),
@@ -145,7 +145,7 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
     let poses = (0..frames)
         .map(|i| {
             let t = i as f32 / (frames - 1) as f32;
-            flaneur::walk::Pose {
+            flaneur::walk::path::Pose {
                 time: i as f64 / 30.0,
                 position: from.lerp(to, t),
                 yaw,

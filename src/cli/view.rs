@@ -43,7 +43,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 256.0)]
     gpu_budget_mb: f64,
     /// Walking speed, m/s (Shift runs at four times it).
-    #[arg(long, default_value_t = flaneur::walk::steer::WALK_SPEED)]
+    #[arg(long, default_value_t = flaneur::walk::WALK_SPEED)]
     speed: f32,
     /// Start with the bounding boxes on (B), and seen from above (T).
     #[arg(long)]
@@ -79,13 +79,13 @@ impl ViewArgs {
         };
         let db = Database::open(&db)?;
         let start = match at {
-            Some(p) => flaneur::walk::Pose {
+            Some(p) => flaneur::walk::path::Pose {
                 time: 0.0,
                 position: p,
                 yaw: look.0.to_radians(),
                 pitch: look.1.to_radians(),
             },
-            None => flaneur::walk::start::busiest_street(&db)?,
+            None => flaneur::walk::busiest_street(&db)?,
         };
         let play = play
             .map(|p| CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display())))
@@ -104,7 +104,10 @@ impl ViewArgs {
 
 /// How the window opens on `db` from `start` by default: titled with the database's
 /// path.
-pub fn window_options(db: &Database, start: flaneur::walk::Pose) -> flaneur_render::ViewOptions {
+pub fn window_options(
+    db: &Database,
+    start: flaneur::walk::path::Pose,
+) -> flaneur_render::ViewOptions {
     flaneur_render::ViewOptions {
         title: format!("flaneur — {}", db.store().path().display()),
         ..flaneur_render::ViewOptions::new(db.bounds(), start)

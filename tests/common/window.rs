@@ -5,7 +5,8 @@
 
 use std::process::{Child, Command};
 
-use flaneur::walk::{FrameSink, Pose, Viewer};
+use flaneur::walk::path::Pose;
+use flaneur::walk::{FrameSink, Viewer};
 use flaneur::Database;
 use flaneur_render::{ViewOptions, WalkWindow};
 
@@ -65,7 +66,7 @@ impl FrameSink for Player<'_> {
         &mut self,
         index: usize,
         camera: &flaneur::geom::Camera,
-        buffer: &flaneur::walk::buffer::ObjectBuffer,
+        buffer: &flaneur::walk::ObjectBuffer,
         selection: &mut flaneur::walk::Selection<'_>,
     ) -> flaneur::Result<()> {
         self.frames += 1;
@@ -103,15 +104,12 @@ impl Viewer for Player<'_> {
 
 /// A small window over `db` playing `poses` from its busiest street, with LODs and a
 /// GPU budget of 4 MiB.
-pub fn options(db: &Database, poses: &flaneur::walk::CameraPath) -> ViewOptions {
+pub fn options(db: &Database, poses: &flaneur::walk::path::CameraPath) -> ViewOptions {
     ViewOptions {
         size: (256, 192),
         lod_tau: Some(0.001),
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
-        ..ViewOptions::new(
-            db.bounds(),
-            flaneur::walk::start::busiest_street(db).unwrap(),
-        )
+        ..ViewOptions::new(db.bounds(), flaneur::walk::busiest_street(db).unwrap())
     }
 }

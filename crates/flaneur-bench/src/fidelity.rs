@@ -19,11 +19,11 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
-use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::lod_select::LodCounts;
+use flaneur::walk::path::CameraPath;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
-use flaneur::walk::{CameraPath, FrameSink, Selection};
+use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 
 /// The walk whose frames are compared.

@@ -13,7 +13,7 @@
 //! when they exceed the memory budget) — the buffer Table 4.2 reasons about ("when the
 //! cell size increases, more irrelevant data are retrieved into the memory"); or, as
 //! REVIEW's Optimal buffer does, every loaded object until the memory budget is passed,
-//! then only the latest cell's (Fig. 4.8, `walk::buffer::ObjectBuffer`).
+//! then only the latest cell's (Fig. 4.8, `walk::ObjectBuffer`).
 //!
 //! Each frame: culling is the REVIEW test (`Frustum::overlaps_aabb` on each buffered
 //! object's box); preparing an object for drawing is copying its vertices, normals and
@@ -36,9 +36,8 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::scene::Mesh;
-use flaneur::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
-use flaneur::walk::cells::{contains_ground, scaled_cell};
 use flaneur::walk::path::motion::Motion;
+use flaneur::walk::{contains_ground, mesh_bytes, scaled_cell, Loaded, ObjectBuffer};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -195,7 +194,7 @@ struct Sums {
 
 fn one_sf(
     db: &Database,
-    poses: &[flaneur::walk::Pose],
+    poses: &[flaneur::walk::path::Pose],
     cfg: &ViewCullingConfig,
     sf: f32,
 ) -> Result<ViewCullingRow> {

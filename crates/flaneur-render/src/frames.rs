@@ -10,9 +10,8 @@ use std::time::{Duration, Instant};
 use crate::{Frame, Gpu, GpuMeshes, Offscreen};
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
-use flaneur::walk::buffer::ObjectBuffer;
 use flaneur::walk::lod_select::{check_tau, LodCounts};
-use flaneur::walk::{FrameSink, Selection};
+use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 
 /// What drawing a walk cost.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]

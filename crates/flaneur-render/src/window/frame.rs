@@ -11,8 +11,7 @@ use crate::boxes::lines;
 use crate::scene::SceneView;
 use flaneur::error::Result;
 use flaneur::geom::{Aabb, Camera};
-use flaneur::walk::buffer::ObjectBuffer;
-use flaneur::walk::{FrameSink, Selection};
+use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 
 impl WalkWindow {
     /// Draws `selection` as `camera` sees it; `Ok(None)` when nothing could be drawn

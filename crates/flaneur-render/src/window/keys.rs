@@ -7,7 +7,7 @@ use winit::keyboard::KeyCode;
 use winit::window::CursorGrabMode;
 
 use super::{Change, ViewMode, WalkWindow};
-use flaneur::walk::steer::Move;
+use flaneur::walk::Move;
 
 impl WalkWindow {
     pub(super) fn handle_keys(&mut self) {

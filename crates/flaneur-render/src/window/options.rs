@@ -4,7 +4,7 @@
 //! the tests make and read without touching winit or wgpu.
 
 use flaneur::geom::Aabb;
-use flaneur::walk::{CameraPath, Pose};
+use flaneur::walk::path::{CameraPath, Pose};
 
 /// How the window opens.
 #[derive(Clone, Debug)]
@@ -43,7 +43,7 @@ impl ViewOptions {
             margin: flaneur::geom::DEFAULT_FAR,
             play: None,
             gpu_budget: Some(256 << 20),
-            speed: flaneur::walk::steer::WALK_SPEED,
+            speed: flaneur::walk::WALK_SPEED,
         }
     }
 }

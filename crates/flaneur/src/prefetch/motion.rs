@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
-use crate::walk::{CameraPath, Pose};
+use crate::walk::path::{CameraPath, Pose};
 
 /// The largest turn a prediction foresees, radians: a cell around a wider sweep does
 /// not fit the budget beside the viewer's (on the demo city, 90° overflowed 256 MiB on

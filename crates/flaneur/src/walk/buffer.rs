@@ -20,8 +20,11 @@ use crate::scene::Mesh;
 /// An object in memory: its index entry and its mesh.
 #[derive(Clone, Debug)]
 pub struct Loaded {
+    /// The object's entry in the R-tree: its id, box and where its mesh lies.
     pub entry: ObjectEntry,
+    /// Its mesh at full detail, as read from the database.
     pub mesh: Arc<Mesh>,
+    /// Bytes it takes in memory, as the buffer's budget counts them ([`mesh_bytes`]).
     pub bytes: usize,
 }
 
@@ -33,11 +36,37 @@ pub fn mesh_bytes(mesh: &Mesh) -> usize {
 /// What an eviction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Eviction {
+    /// Objects dropped from the buffer.
     pub evicted: usize,
     /// The latest cell's own objects did not fit: some of them were dropped too.
     pub overflow: bool,
 }
 
+/// The object buffer of a walk (Shou 2002 §4.2.2, Fig. 4.8): the objects loaded so far,
+/// keyed by object id, under a memory budget in bytes. Over budget, an eviction keeps
+/// the objects that overlap the latest disk cell and, when even those do not fit, drops
+/// the farthest from the viewer until they do ([`ObjectBuffer::evict_outside`]).
+///
+/// ```
+/// # use std::sync::Arc;
+/// use flaneur::walk::{mesh_bytes, Loaded, ObjectBuffer};
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # let city = citygen::CityConfig { objects: 60, ..Default::default() };
+/// # citygen::write_city(&city, &scene)?;
+/// # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
+/// # flaneur::build_from_scene(&scene, &path, &opts)?;
+/// let db = flaneur::Database::open(&path)?;
+/// let mut buffer = ObjectBuffer::new(64 << 20);
+/// for entry in db.range(&db.bounds())?.objects {
+///     let mesh = Arc::new(db.mesh(&entry)?);
+///     let bytes = mesh_bytes(&mesh);
+///     buffer.insert(Loaded { entry, mesh, bytes });
+/// }
+/// assert!(!buffer.is_empty() && !buffer.over_budget());
+/// # Ok(()) }
+/// ```
 #[derive(Debug)]
 pub struct ObjectBuffer {
     objects: HashMap<u64, Loaded>,
@@ -46,6 +75,7 @@ pub struct ObjectBuffer {
 }
 
 impl ObjectBuffer {
+    /// An empty buffer of `budget` bytes.
     pub fn new(budget: usize) -> ObjectBuffer {
         ObjectBuffer {
             objects: HashMap::new(),
@@ -54,26 +84,33 @@ impl ObjectBuffer {
         }
     }
 
+    /// Objects in the buffer.
     pub fn len(&self) -> usize {
         self.objects.len()
     }
 
+    /// Whether it holds no object.
     pub fn is_empty(&self) -> bool {
         self.objects.is_empty()
     }
 
+    /// Bytes its objects take, summed from their [`Loaded::bytes`].
     pub fn bytes(&self) -> usize {
         self.bytes
     }
 
+    /// Its budget, bytes.
     pub fn budget(&self) -> usize {
         self.budget
     }
 
+    /// Whether object `id` is in the buffer.
     pub fn contains(&self, id: u64) -> bool {
         self.objects.contains_key(&id)
     }
 
+    /// Whether its objects take more than its budget (an insertion never evicts: the
+    /// walk evicts when it sees this).
     pub fn over_budget(&self) -> bool {
         self.bytes > self.budget
     }
@@ -87,6 +124,7 @@ impl ObjectBuffer {
         }
     }
 
+    /// Its objects, in no particular order.
     pub fn iter(&self) -> impl Iterator<Item = &Loaded> {
         self.objects.values()
     }

@@ -71,8 +71,9 @@ pub trait LiveViewer: Viewer {
 }
 
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
-/// through [`review::walk_live_with`], PVS through [`pvs_walk::walk_pvs_live_with`]
-/// with PBNP prefetching (REVIEW instead, said so, on a database without visibility).
+/// as [`review::walk_live`] walks them (unpaced: a person sets the pace), PVS as
+/// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
+/// database without visibility).
 /// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
 /// read and the objects refined. An error when the walk failed five times running.
 ///

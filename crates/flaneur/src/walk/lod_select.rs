@@ -13,8 +13,9 @@
 //! kept while the object stays in the buffer. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
 //! walk's own figures: the walk reports what its retrieval method reads. The walk
-//! session runs it ([`WalkLods`]) once a frame's figures are finished, under the τ its
-//! viewer wants, and hands the viewer what to draw; a renderer reads no LOD page.
+//! session runs it once a frame's figures are finished, under the τ its viewer wants
+//! ([`FrameSink::lod_tau`](super::FrameSink::lod_tau)), and hands the viewer what to
+//! draw; a renderer reads no LOD page.
 //!
 //! Large objects, those the build stored a progressive mesh and DAG for, are refined
 //! view by view instead ([`REFINED`]): the LOD core's constant-time traversal under the
@@ -51,12 +52,15 @@ pub const REFINED: usize = usize::MAX;
 /// One object as a frame draws it: at which level, and that level's mesh.
 #[derive(Clone, Debug)]
 pub struct Drawn {
+    /// The object's id.
     pub id: u64,
+    /// Its box.
     pub bounds: Aabb,
     /// 0: full detail; each higher level is coarser; [`REFINED`]: refined view by
     /// view (the mesh is then the full one the buffer holds, the triangles the
     /// selective mesh's).
     pub level: usize,
+    /// The mesh of that level.
     pub mesh: Arc<Mesh>,
     /// Triangles drawn.
     pub triangles: usize,
@@ -90,13 +94,14 @@ pub struct LodCounts {
     pub levels_read: u64,
     /// Pages those reads (and the level directories) took.
     pub pages: u64,
-    /// Objects drawn refined view by view, summed over frames, and the vertex splits
-    /// and edge collapses their refinement applied.
+    /// Objects drawn refined view by view, summed over frames.
     pub refined_draws: u64,
+    /// The vertex splits and edge collapses their refinement applied.
     pub refine_ops: u64,
-    /// Objects whose progressive mesh and DAG were decoded off the frame's thread, and
-    /// draws at discrete levels while theirs was being decoded.
+    /// Objects whose progressive mesh and DAG were decoded off the frame's thread.
     pub decoded: u64,
+    /// Draws at discrete levels of objects whose progressive mesh and DAG were still
+    /// being decoded.
     pub drawn_while_decoding: u64,
 }
 
@@ -134,7 +139,11 @@ impl ObjectLevels {
 
 /// A large object refined view by view, and the changes not yet uploaded.
 pub struct RefinedObject {
+    /// The object's refiner: its selective mesh ([`Refiner::mesh`]), refined frame by
+    /// frame.
     pub refiner: Refiner<'static>,
+    /// The ranges of the selective mesh's arrays changed since a renderer last took
+    /// them, to upload.
     pub pending: MeshChanges,
     /// The arrays' largest sizes: every vertex and triangle of the full mesh.
     pub capacity: (usize, usize),
@@ -181,6 +190,7 @@ pub struct LodSelector<'a> {
     /// than the frame failing, and what was found so since [`LodSelector::take_damaged`].
     tolerant: bool,
     damaged: Vec<String>,
+    /// What it read and chose so far.
     pub counts: LodCounts,
 }
 
@@ -228,6 +238,7 @@ impl<'a> LodSelector<'a> {
         Ok(())
     }
 
+    /// The screen-space error it selects under, a fraction of the viewport.
     pub fn tau(&self) -> f32 {
         self.tau
     }
@@ -432,7 +443,7 @@ impl LodSelector<'_> {
 ///
 /// Made [`Default`], it has no database to read levels from: every frame at full detail.
 #[derive(Default)]
-pub struct WalkLods<'db> {
+pub(crate) struct WalkLods<'db> {
     db: Option<&'db Database>,
     selector: Option<LodSelector<'db>>,
 }
@@ -449,7 +460,7 @@ pub(crate) struct LodWanted {
 
 impl<'db> WalkLods<'db> {
     /// LOD selection over `db`, before any frame.
-    pub fn new(db: &'db Database) -> WalkLods<'db> {
+    pub(crate) fn new(db: &'db Database) -> WalkLods<'db> {
         WalkLods {
             db: Some(db),
             selector: None,

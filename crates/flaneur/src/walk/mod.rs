@@ -1,24 +1,77 @@
-//! The walkthrough engine. So far: camera paths through a city (`path`: street walks,
-//! the motion patterns of Shou 2002 §4.4.1, viewcell walks, the routes of Zheng 2007
-//! §7.5 and their CSV files) and the disk cells a walk queries (Shou 2002 §4.1); one
-//! walk session (`session`), the frame loop every mode shares, with its object buffer
-//! (`buffer`); the modes it plays (`mode`): REVIEW and BOX, whose settings and figures
-//! are `review`'s, and the PVS walk, whose are `pvs_walk`'s; and walks at a live viewer
-//! one after another as its person changes mode (`live`).
+//! The walkthrough engine: a viewer's poses in; for each frame, the objects it sees read
+//! from the database, kept in an object buffer, culled, selected at a level of detail
+//! and handed to whoever draws them, every page counted.
+//!
+//! One walk session (`session.rs`) is the frame loop every mode shares. Each frame the
+//! viewer gives a pose; the mode retrieves for it (brings the object buffer to what the
+//! mode holds: loads, drops, evicts); the objects it offers are culled against the
+//! frustum; the mode finishes its figures; [`lod_select`] picks each object's level
+//! under the τ the viewer wants; the viewer is handed the frame, then its figures. The
+//! modes (`mode/`) are the session's retrieval strategies: REVIEW and BOX over disk
+//! cells (Shou 2002 §4.1–4.4) and the PVS client (Zheng 2007 ch. 7). The loop and the
+//! modes are crate-private: a user walks a mode through its namespace's entry points.
+//!
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 60, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::walk::{path, review};
+//! let db = flaneur::Database::open(&file)?;
+//! let poses = path::street_walk(&db.bounds(), 30, 5.0, 10, 7)?;
+//! // CSearch through the index cache, without prefetching (so unpaced).
+//! let cfg = review::ReviewConfig::preset(review::Preset::Np);
+//! let report = review::walk(&db, &poses, &cfg, |_| {})?;
+//! assert_eq!(report.frames.len(), 30);
+//! assert!(report.frames[0].queried && report.summary.queries >= 1);
+//! # Ok(()) }
+//! ```
+//!
+//! The public namespaces, each one idea a user reaches for by name:
+//! - [`review`]: REVIEW and BOX walks ([`review::walk`], [`review::walk_into`] with a
+//!   sink, [`review::walk_live`] with a viewer), their settings ([`review::ReviewConfig`],
+//!   the presets of §4.4, the defaults and checks) and figures ([`review::WalkReport`]);
+//! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`] and the rest), its
+//!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
+//! - [`live`]: walks one after another at a live viewer (a window) as its person changes
+//!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
+//! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
+//!   [`lod_select::REFINED`]) and its selector, counts and threshold;
+//! - [`path`]: camera paths ([`path::CameraPath`], a timed sequence of [`path::Pose`]s,
+//!   read and written as CSV) and their generators: street walks, viewcell walks, the
+//!   motion patterns of Shou 2002 §4.4.1 ([`path::motion`]) and the routes of Zheng
+//!   2007 §7.5 ([`path::routes`]).
+//!
+//! Re-exported here, flat, one idea per file:
+//! - `sink.rs`: what a walk hands whoever draws it: [`FrameSink`] (a frame's
+//!   [`Selection`]; [`NoSink`] draws nothing), [`Viewer`] (a sink that also gives the
+//!   poses), [`FrameFigures`] (what a frame cost);
+//! - `buffer.rs`: [`ObjectBuffer`], the object buffer and its eviction (Shou 2002
+//!   §4.2.2, Fig. 4.8), of [`Loaded`] objects ([`mesh_bytes`] each), an eviction's
+//!   [`Eviction`];
+//! - `cells.rs`: the disk cells of Shou 2002 §4.1: [`disk_cell`] around an eye,
+//!   [`scaled_cell`] (REVIEW's, SF times the frustum cell) and [`contains_ground`];
+//! - `start.rs`: [`busiest_street`], where a viewer starts;
+//! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
+//!   mouse, at [`WALK_SPEED`].
 
-pub mod buffer;
-pub mod cells;
+mod buffer;
+mod cells;
 pub mod live;
 pub mod lod_select;
 mod mode;
 pub mod path;
 pub mod pvs_walk;
 pub mod review;
-pub mod session;
+mod session;
 mod sink;
-pub mod start;
-pub mod steer;
+mod start;
+mod steer;
 
-pub use path::motion::Motion;
-pub use path::{street_walk, CameraPath, Pose};
+pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer};
+pub use cells::{contains_ground, disk_cell, scaled_cell};
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};
+pub use start::busiest_street;
+pub use steer::{Move, Steer, WALK_SPEED};

@@ -12,8 +12,9 @@
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
 //!
-//! Here: the settings and the figures a walk reports. The frame loop is the walk
-//! session's (`walk::session`), the client the PVS mode's (`walk::mode::pvs`).
+//! Here: the settings, the entry points and the figures a walk reports. The frame loop
+//! is the walk session's (`walk/session.rs`), the client the PVS mode's
+//! (`walk/mode/pvs.rs`).
 
 use serde::Serialize;
 
@@ -29,11 +30,16 @@ use crate::walk::{FrameSink, NoSink, Viewer};
 pub enum PvsPrefetch {
     /// All eight on every cell change.
     Snp,
-    /// Those the viewer leans towards; the border band as a share of the cell's side.
-    Pbnp { border: f64 },
+    /// Those the viewer leans towards, by the region of its cell it is in.
+    Pbnp {
+        /// The width of the side and corner regions, a fraction of the cell's side in
+        /// (0, 0.5] ([`DEFAULT_BORDER`](crate::prefetch::pvs::DEFAULT_BORDER): 0.25).
+        border: f64,
+    },
 }
 
 impl PvsPrefetch {
+    /// The rule's name, as the CLI's `--prefetch` spells it: `snp` or `pbnp`.
     pub fn name(&self) -> &'static str {
         match self {
             PvsPrefetch::Snp => "snp",
@@ -49,9 +55,12 @@ pub struct PvsFrame {
     pub cell: Option<u32>,
     /// Objects drawn: the current cell's PVS (0 outside cells).
     pub drawn: usize,
-    /// Whether a prefetch transaction ran, and what it sent and evicted.
+    /// Whether a prefetch transaction ran.
     pub transaction: bool,
+    /// Objects it sent the client.
     pub sent: usize,
+    /// Its cache swaps: entries of the client's cache (a viewcell's PVS each) replaced
+    /// to make room.
     pub swaps: usize,
     /// On entering a cell, objects of its PVS the client did not hold.
     pub visual_misses: usize,
@@ -62,15 +71,25 @@ pub struct PvsFrame {
 /// What a PVS walk did, frame by frame and in all.
 #[derive(Clone, Debug, Serialize)]
 pub struct PvsWalkReport {
+    /// The prefetching rule walked.
     pub prefetch: PvsPrefetch,
+    /// Every frame's figures, in order.
     pub frames: Vec<PvsFrame>,
+    /// Frames whose eye was in no walkable viewcell.
     pub frames_outside: usize,
+    /// Moves into a viewcell other than the last frame's.
     pub cells_entered: usize,
+    /// Prefetch transactions run.
     pub transactions: usize,
+    /// Cache swaps, summed over frames ([`PvsFrame::swaps`]).
     pub swaps: usize,
+    /// Objects sent the client, summed over frames.
     pub objects_sent: usize,
+    /// Visual misses, summed over frames ([`PvsFrame::visual_misses`]).
     pub visual_misses: usize,
+    /// Objects drawn per frame inside walkable cells, on average.
     pub mean_drawn: f64,
+    /// Pages read, summed over frames.
     pub pages: u64,
 }
 
@@ -104,8 +123,7 @@ pub fn walk_pvs_into(
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more. The walk session's frame loop with the PVS mode
-/// (`walk::mode::pvs`); kept as the entry point while callers move to the session.
+/// window), until it has no more.
 pub fn walk_pvs_live(
     db: &Database,
     prefetch: PvsPrefetch,
@@ -117,7 +135,7 @@ pub fn walk_pvs_live(
 
 /// [`walk_pvs_live`] with LOD selection `lods` kept from an earlier walk (one before it
 /// at the same window), so that what it read and refined stays so.
-pub fn walk_pvs_live_with<'db>(
+pub(crate) fn walk_pvs_live_with<'db>(
     db: &'db Database,
     prefetch: PvsPrefetch,
     lods: &mut WalkLods<'db>,

@@ -12,9 +12,9 @@
 //! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
-//! Here: the settings, their checks, and the figures a walk reports. The frame loop is
-//! the walk session's (`walk::session`), the retrieval the REVIEW mode's
-//! (`walk::mode::review`), the motion prediction `prefetch::motion`'s.
+//! Here: the settings, their checks, the entry points and the figures a walk reports.
+//! The frame loop is the walk session's (`walk/session.rs`), the retrieval the REVIEW
+//! mode's (`walk/mode/review.rs`), the motion prediction `prefetch::motion`'s.
 //!
 //! Prefetching follows Fig. 4.11: the prefetched cell C2 is searched (CSearch against
 //! the history) while the viewer is still in C1, and its objects go into the buffer as
@@ -67,8 +67,11 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// Every configuration, in the thesis's order.
     pub const ALL: [Preset; 4] = [Preset::Optimal, Preset::Nc, Preset::Np, Preset::Box];
 
+    /// The configuration's name, as the CLI spells it and [`str::parse`] reads it:
+    /// `optimal`, `nc`, `np` or `box`.
     pub fn name(&self) -> &'static str {
         match self {
             Preset::Optimal => "optimal",
@@ -93,6 +96,7 @@ impl std::str::FromStr for Preset {
 /// Everything a walk can vary.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct ReviewConfig {
+    /// How a new disk cell's objects are retrieved: BOX or CSearch.
     pub retrieval: Retrieval,
     /// Index cache: policy name and budget in bytes.
     pub index_cache: Option<(String, usize)>,
@@ -116,8 +120,9 @@ pub struct ReviewConfig {
     pub pace: Option<f32>,
 }
 
-/// The thesis's defaults (§4.4): index cache 1 MB with distance-priority LRU, k = 0.8.
+/// The thesis's index cache (§4.4): 1 MB, with distance-priority LRU.
 pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
+/// The thesis's prefetch factor k (§4.4), seconds.
 pub const DEFAULT_K: f32 = 0.8;
 /// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
 /// on the demo city's pattern table (`flaneur bench patterns`) it gave Optimal 4-14 % of
@@ -125,6 +130,7 @@ pub const DEFAULT_K: f32 = 0.8;
 /// after the first in a minute, while a cell still holds the frustum for 100 m of
 /// forward motion.
 pub const DEFAULT_SF: f32 = 1.2;
+/// The thesis's frustum depth (§4.4), metres.
 pub const DEFAULT_FAR: f32 = 1000.0;
 /// Walks with prefetching play four times faster than real time by default: a
 /// minute's path in 15 s, the prefetch thread getting a quarter of a viewer's time.
@@ -134,6 +140,9 @@ pub const DEFAULT_PACE: f32 = 4.0;
 pub const DEFAULT_MEMORY_BUDGET: usize = 256 << 20;
 
 impl ReviewConfig {
+    /// The configuration `p` of §4.4 with the defaults above: CSearch with the index
+    /// cache and prefetching for `Optimal`, less the cache (`Nc`) or prefetching (`Np`),
+    /// and plain BOX with neither (`Box`).
     pub fn preset(p: Preset) -> ReviewConfig {
         let cache = Some(("dplru".to_string(), DEFAULT_INDEX_CACHE));
         let base = ReviewConfig {
@@ -238,14 +247,20 @@ pub fn check_budget(bytes: usize) -> Result<()> {
 /// One frame's figures. Times in milliseconds.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct FrameStats {
+    /// The frame's index in the walk, from 0.
     pub frame: usize,
+    /// Its pose's time on the path, seconds.
     pub time: f64,
     /// Waiting for a query (synchronous, or a prefetch not yet done).
     pub query_ms: f64,
     /// Reading and decoding meshes on this thread, and adding them to the buffer.
     pub load_ms: f64,
+    /// Culling the buffer against the frustum.
     pub cull_ms: f64,
+    /// Gathering the figures of the objects drawn.
     pub prep_ms: f64,
+    /// The walk's whole time for the frame, from its retrieval to its figures (not
+    /// drawing it, nor waiting for the path's clock).
     pub frame_ms: f64,
     /// The viewer moved to a new disk cell on this frame (queried on this thread, or
     /// switched to a prefetched cell).
@@ -260,14 +275,19 @@ pub struct FrameStats {
     pub objects_loaded: usize,
     /// Objects in the buffer after loading, before culling.
     pub objects_buffered: usize,
+    /// Objects drawn: those of the buffer in the view frustum.
     pub objects_drawn: usize,
+    /// Their triangles, at full detail.
     pub triangles_drawn: u64,
     /// Objects in the view frustum that were not in memory.
     pub visual_misses: usize,
-    /// Physical page reads this frame (index and meshes, both threads).
+    /// Physical reads of index pages this frame, on both threads.
     pub index_pages: u64,
+    /// Physical reads of mesh pages this frame, on both threads.
     pub mesh_pages: u64,
+    /// Bytes the object buffer holds at the end of the frame.
     pub buffer_bytes: usize,
+    /// Objects evicted from the buffer on this frame.
     pub evicted: usize,
     /// The latest cell's own objects did not fit the budget.
     pub overflow: bool,
@@ -278,15 +298,18 @@ pub struct FrameStats {
 /// figures, which describe the walk itself.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct WalkSummary {
+    /// Frames walked, frame 0 included.
     pub frames: usize,
     /// Frame 0: the first disk cell, loaded cold.
     pub initial_load_ms: f64,
     /// Index and mesh pages that frame 0's query read: the cold load alone, without what
     /// a prefetch started in that frame read beside it.
     pub initial_load_pages: (u64, u64),
-    /// Mean, maximum and variance of the frame time, frames 1 onwards.
+    /// The mean frame time ([`FrameStats::frame_ms`]), frames 1 onwards.
     pub mean_frame_ms: f64,
+    /// The longest frame time, frames 1 onwards.
     pub max_frame_ms: f64,
+    /// The frame time's variance, frames 1 onwards, ms².
     pub frame_ms_variance: f64,
     /// Frames (from 1 on) over 50 ms, the thesis's real-time limit.
     pub frames_over_50ms: usize,
@@ -302,22 +325,32 @@ pub struct WalkSummary {
     pub cell_changes: usize,
     /// Moves to a new disk cell that had been prefetched.
     pub prefetches_used: usize,
+    /// Index pages read, all frames.
     pub index_pages: u64,
+    /// Mesh pages read, all frames.
     pub mesh_pages: u64,
     /// Index pages per query.
     pub index_pages_per_query: f64,
     /// Index and mesh pages per query: the thesis's "disk I/Os per query".
     pub io_per_query: f64,
+    /// Visual misses, summed over frames ([`FrameStats::visual_misses`]).
     pub visual_misses: u64,
+    /// Frames on which the latest cell's own objects did not fit the budget.
     pub overflow_frames: usize,
+    /// The most bytes the object buffer held at the end of a frame.
     pub peak_buffer_bytes: usize,
+    /// The index cache's figures over the walk, when it had one.
     pub index_cache: Option<CacheStats>,
 }
 
+/// What a REVIEW or BOX walk did: its settings, every frame's figures, their summary.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct WalkReport {
+    /// The settings walked.
     pub config: ReviewConfig,
+    /// Every frame's figures, in order.
     pub frames: Vec<FrameStats>,
+    /// The walk's figures in all.
     pub summary: WalkSummary,
     /// The index cache's accesses, when `record_trace` was set and a cache was used.
     #[serde(skip)]
@@ -386,9 +419,7 @@ pub fn walk_into(
 }
 
 /// [`walk_into`] with the poses coming from `viewer` frame by frame (a person at a
-/// window), until it has no more. Poses must come in time order, as a path's do. The
-/// walk session's frame loop with the REVIEW mode (`walk::mode::review`); kept as the
-/// entry point while callers move to the session.
+/// window), until it has no more. Poses must come in time order, as a path's do.
 pub fn walk_live(
     db: &Database,
     cfg: &ReviewConfig,
@@ -400,7 +431,7 @@ pub fn walk_live(
 
 /// [`walk_live`] with LOD selection `lods` kept from an earlier walk (one before it at
 /// the same window), so that what it read and refined stays so.
-pub fn walk_live_with<'db>(
+pub(crate) fn walk_live_with<'db>(
     db: &'db Database,
     cfg: &ReviewConfig,
     lods: &mut WalkLods<'db>,

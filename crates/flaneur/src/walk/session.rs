@@ -26,7 +26,7 @@ use crate::error::Result;
 use crate::geom::Camera;
 
 /// A walk's retrieval strategy: what it does per frame, given the pose.
-pub trait Mode {
+pub(crate) trait Mode {
     /// The mode's own figures of one frame.
     type Frame;
 
@@ -53,7 +53,7 @@ pub trait Mode {
 
 /// The frame a mode retrieves for.
 #[derive(Clone, Copy, Debug)]
-pub struct FrameAt<'p> {
+pub(crate) struct FrameAt<'p> {
     pub index: usize,
     pub pose: &'p Pose,
     /// Whether the viewer draws ([`FrameSink::draws`](super::FrameSink::draws)): a mode
@@ -63,7 +63,7 @@ pub struct FrameAt<'p> {
 
 /// The buffered objects a frame may draw.
 #[derive(Clone, Copy, Debug)]
-pub enum Drawable<'a> {
+pub(crate) enum Drawable<'a> {
     /// Every object in the buffer, in its order.
     All,
     /// These, in this order, those not in the buffer left out.
@@ -72,7 +72,7 @@ pub enum Drawable<'a> {
 
 /// What a frame draws: the drawable objects within the frustum.
 #[derive(Debug, Default)]
-pub struct Culled<'b> {
+pub(crate) struct Culled<'b> {
     pub drawn: Vec<&'b Loaded>,
     /// Time taken to cull, ms.
     pub ms: f64,
@@ -82,7 +82,7 @@ pub struct Culled<'b> {
 /// finished frame. Each frame the viewer is handed is selected by `lods` under the τ
 /// the viewer wants (its LOD pages counted apart from the mode's figures, which are
 /// finished before). The mode's figures of every frame, in order.
-pub fn run<M: Mode + ?Sized>(
+pub(crate) fn run<M: Mode + ?Sized>(
     mode: &mut M,
     viewer: &mut dyn Viewer,
     lods: &mut WalkLods<'_>,

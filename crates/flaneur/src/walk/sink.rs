@@ -47,16 +47,19 @@ pub struct Selection<'f> {
     /// Each of them, in the same order, at its level (at full detail without LOD
     /// selection).
     pub drawn: Vec<Drawn>,
-    /// Time LOD selection took, ms, and the LOD pages it read for this frame.
+    /// Time LOD selection took, ms.
     pub select_ms: f64,
+    /// The LOD pages selection read for this frame.
     pub pages: u64,
     /// What LOD selection read and chose over the walk so far; `None` without it.
     pub lod: Option<LodCounts>,
     /// Objects whose LOD data was found unreadable on this frame, drawn at full detail
-    /// (or their discrete levels) from now on, each with why; and, when selection
-    /// failed and the frame is drawn at full detail, why. Only for a viewer that
+    /// (or their discrete levels) from now on, each with why. Only for a viewer that
     /// [skips damaged objects](Viewer::skips_damaged); otherwise the frame fails.
     pub damaged: Vec<String>,
+    /// Why selection failed, when it did and the frame is drawn at full detail instead
+    /// (only for a viewer that [skips damaged objects](Viewer::skips_damaged), as
+    /// [`Selection::damaged`]).
     pub failed: Option<String>,
     pub(crate) refinements: Option<&'f mut (dyn Refinements + 'f)>,
 }
@@ -98,7 +101,7 @@ impl FrameSink for NoSink {
 /// recorded path), and what draws the frame the walk selects for it.
 pub trait Viewer: FrameSink {
     /// The pose of frame `frame`, or `None` when the walk ends.
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>>;
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>>;
 
     /// What the frame just drawn cost the walk, for a display beside the picture.
     fn figures(&mut self, _figures: &FrameFigures) {}
@@ -115,14 +118,19 @@ pub trait Viewer: FrameSink {
 /// What one frame of a walk did, for a live display beside the picture.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameFigures {
-    /// Pages the walk read on this frame (index and meshes, prefetches included), and
-    /// those its LOD selection read (levels, progressive meshes).
+    /// Pages the walk read on this frame (index and meshes, prefetches included).
     pub pages: u64,
+    /// Pages its LOD selection read on this frame (levels, progressive meshes).
     pub lod_pages: u64,
+    /// Objects in the object buffer.
     pub objects_buffered: usize,
+    /// Objects the frame draws.
     pub objects_drawn: usize,
     /// Triangles of the objects drawn, at full detail.
     pub triangles: u64,
+    /// Objects the viewer should see that the walk did not hold, as its mode counts
+    /// them (REVIEW and BOX: in the frustum, not in memory; PVS: on entering a cell, in
+    /// its PVS, not held by the client).
     pub visual_misses: usize,
     /// Searches running ahead of the viewer (prefetches in flight).
     pub prefetch_queue: usize,
@@ -139,7 +147,7 @@ pub struct FrameFigures {
 
 /// A recorded path played to a sink: the viewer of a walk along a fixed path.
 pub(crate) struct Played<'a> {
-    pub path: &'a super::CameraPath,
+    pub path: &'a super::path::CameraPath,
     pub sink: &'a mut dyn FrameSink,
 }
 
@@ -168,7 +176,7 @@ impl FrameSink for Played<'_> {
 }
 
 impl Viewer for Played<'_> {
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>> {
         Ok(self.path.poses.get(frame).copied())
     }
 }

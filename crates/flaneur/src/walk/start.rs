@@ -17,16 +17,24 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
 /// The half-side of the box around a point whose objects count as its neighbours, metres.
-pub const NEIGHBOURHOOD: f32 = 60.0;
+const NEIGHBOURHOOD: f32 = 60.0;
 /// How far a point on a street is from every object, metres (citygen's streets are
 /// 14 m wide by default).
-pub const CLEARANCE: f32 = 3.0;
+const CLEARANCE: f32 = 3.0;
 /// Grid points per side.
 const GRID: usize = 48;
 /// How far the view along a street is probed, metres.
 const PROBE: f32 = 120.0;
 
-/// A pose at eye height on the busiest street of `db`'s city, looking along it.
+/// A pose at eye height on the busiest street of `db`'s city, looking along it: where a
+/// viewer starts.
+///
+/// Found from the buildings, the database holding no streets: of a 48 × 48 grid of
+/// points at eye height over the city, those no object box comes within 3 m of are on a
+/// street; the one with the most objects within 60 m wins (ties to the one nearest the
+/// city's centre), looking along the axis on which the view runs farthest before it
+/// meets a box. Range queries only, their pages read before any walk begins. An error
+/// when no point is clear of every object.
 ///
 /// ```
 /// # fn main() -> flaneur::Result<()> {
@@ -37,7 +45,7 @@ const PROBE: f32 = 120.0;
 /// # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
 /// let db = flaneur::Database::open(&path)?;
-/// let start = flaneur::walk::start::busiest_street(&db)?;
+/// let start = flaneur::walk::busiest_street(&db)?;
 /// let around = glam::Vec3::new(2.9, 0.5, 2.9);
 /// let near = db.range(&flaneur::geom::Aabb::around(start.position, around))?;
 /// assert!(near.objects.is_empty(), "a street, clear of every building");

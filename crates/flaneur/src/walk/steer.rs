@@ -12,12 +12,14 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
 /// How far from a wall a walker's eye stays, metres.
-pub const BODY_RADIUS: f32 = 0.4;
-/// Walking speed, m/s; running multiplies it.
+const BODY_RADIUS: f32 = 0.4;
+/// A steered walker's speed, m/s, unless its caller sets another ([`Steer::speed`]);
+/// running is four times it.
 pub const WALK_SPEED: f32 = 1.4;
-pub const RUN_FACTOR: f32 = 4.0;
+/// How many times faster running is than walking.
+const RUN_FACTOR: f32 = 4.0;
 /// Radians of turn per pixel of mouse motion.
-pub const MOUSE_SENSITIVITY: f32 = 0.0025;
+const MOUSE_SENSITIVITY: f32 = 0.0025;
 /// The longest move tested against the walls at once, metres.
 const MAX_STEP: f32 = 0.25;
 /// How close to straight up or down the view may pitch, radians short of 90°.
@@ -26,20 +28,33 @@ const PITCH_MARGIN: f32 = 0.02;
 /// A movement key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Move {
+    /// Along the view (on the ground when walking).
     Forward,
+    /// Against the view.
     Back,
+    /// Sideways, to the left of the view.
     Left,
+    /// Sideways, to the right of the view.
     Right,
+    /// Straight up (flying only).
     Up,
+    /// Straight down (flying only).
     Down,
+    /// Held with a movement key: four times as fast.
     Run,
 }
 
-/// The steered camera.
+/// A person steering the camera: held movement keys ([`Move`]) and mouse motion in, a
+/// pose per frame out ([`Steer::step`]). Walking keeps the eye at street height
+/// ([`EYE_HEIGHT`](crate::walk::path::EYE_HEIGHT) above the ground) and stops it at the boxes
+/// it is given (the objects the walk has loaded around it, grown by a body radius of
+/// 0.4 m, so that it slides along a wall rather than entering it); flying goes anywhere
+/// half a metre or more above the ground. A mouse pixel turns the view by 0.0025 rad. No
+/// window here: the window turns its events into these calls.
 ///
 /// ```
-/// use flaneur::walk::steer::{Move, Steer};
-/// use flaneur::walk::Pose;
+/// use flaneur::walk::path::Pose;
+/// use flaneur::walk::{Move, Steer};
 /// let start = Pose { time: 0.0, position: glam::Vec3::new(0.0, 1.7, 0.0), yaw: 0.0, pitch: 0.0 };
 /// let mut steer = Steer::new(start, 0.0)?;
 /// steer.key(Move::Forward, true);
@@ -54,7 +69,7 @@ pub struct Steer {
     held: [bool; 7],
     /// Flying: free height, no collisions.
     pub fly: bool,
-    /// Walking speed, m/s (running is [`RUN_FACTOR`] times it).
+    /// Walking speed, m/s (running is four times it); [`WALK_SPEED`] at first.
     pub speed: f32,
 }
 
@@ -79,6 +94,7 @@ impl Steer {
         })
     }
 
+    /// Where the camera is now, and when.
     pub fn pose(&self) -> Pose {
         self.pose
     }

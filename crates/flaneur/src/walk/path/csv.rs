@@ -27,18 +27,31 @@ use super::{check_pose, CameraPath, Pose};
 use crate::error::{Error, Result};
 
 /// The header line of a camera-path file.
-pub const HEADER: &str = "time,x,y,z,yaw,pitch";
+const HEADER: &str = "time,x,y,z,yaw,pitch";
 
 impl CameraPath {
-    /// Writes the path as CSV (see the module docs). Errors on an invalid path (one that
-    /// [`CameraPath::load_csv`] would refuse, the empty path included) or on I/O.
+    /// Writes the path as CSV: the header line `time,x,y,z,yaw,pitch`, then one pose a
+    /// line, `time` in seconds, `x, y, z` in metres, `yaw, pitch` in radians (as
+    /// [`Camera`](crate::geom::Camera)'s), each number in the shortest form that reads
+    /// back to the same float, so that a path survives a save and load bit for bit.
+    /// Errors on an invalid path (one that [`CameraPath::load_csv`] would refuse, the
+    /// empty path included) or on I/O.
+    ///
+    /// ```text
+    /// time,x,y,z,yaw,pitch
+    /// 0,1000,1.7,1000,1.5707964,0.012
+    /// 0.03333333333333333,1000,1.7,1000.5,1.5707964,0.0121
+    /// ```
     pub fn save_csv(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         self.validate()?;
         std::fs::write(path, self.to_csv()).map_err(|e| Error::io(path, e))
     }
 
-    /// Reads a path written by [`CameraPath::save_csv`] or by hand.
+    /// Reads a path written by [`CameraPath::save_csv`] or by hand: the header (case and
+    /// spaces aside), then at least one pose; blank lines are ignored. Every value must
+    /// be finite, `|pitch| < π/2`, and times strictly increasing. A bad line is an error
+    /// that names the file and the line (counted from 1).
     pub fn load_csv(path: impl AsRef<Path>) -> Result<CameraPath> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;

@@ -1,8 +1,9 @@
 //! Camera paths: poses over time, from wherever they come. The generators, one file
 //! each: `motion`, the motion patterns of Shou 2002 §4.4.1 plus a random walk;
 //! `street`, a walker on straight streets; `viewcells`, a walk through a database's
-//! walkable viewcells; `routes`, the two walking routes of Zheng 2007 §7.5. `csv` reads
-//! and writes a path as a file (a recorded session).
+//! walkable viewcells; `routes`, the two walking routes of Zheng 2007 §7.5. A path is
+//! read and written as a CSV file (a recorded session): [`CameraPath::load_csv`],
+//! [`CameraPath::save_csv`] (the file's layout opens `csv.rs`).
 //!
 //! Every generator gives a [`CameraPath`] but the routes, whose grid positions stay in
 //! the prefetcher's double precision (a position exactly on a cell border must fall on
@@ -16,7 +17,7 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 use crate::geom::Camera;
 
-pub mod csv;
+mod csv;
 pub mod motion;
 pub mod routes;
 mod street;
@@ -52,6 +53,7 @@ impl Pose {
 /// session holds, what [`CameraPath::save_csv`] writes.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct CameraPath {
+    /// The poses, in time order (what [`CameraPath::validate`] checks).
     pub poses: Vec<Pose>,
 }
 
@@ -78,10 +80,12 @@ impl CameraPath {
         Ok(())
     }
 
+    /// Poses in the path.
     pub fn len(&self) -> usize {
         self.poses.len()
     }
 
+    /// Whether it has no pose (a path [`CameraPath::new`] would refuse).
     pub fn is_empty(&self) -> bool {
         self.poses.is_empty()
     }

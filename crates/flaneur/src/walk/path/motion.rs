@@ -58,7 +58,7 @@ use crate::geom::Aabb;
 
 /// Nominal block pitch of the street grid, metres: citygen's default 4 lots × 20 m plus
 /// a 14 m street.
-pub const BLOCK_PITCH: f32 = 94.0;
+const BLOCK_PITCH: f32 = 94.0;
 
 /// The frame rates [`generate`] accepts, frames per second.
 pub const MIN_FPS: f32 = 0.01;
@@ -70,11 +70,17 @@ pub const MAX_FPS: f32 = 10_000.0;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Motion {
+    /// 15 m/s along the streets, turning at a quarter of the intersections.
     Normal,
+    /// 40 m/s, as `Normal` otherwise.
     Fast,
+    /// 4 m/s, as `Normal` otherwise.
     Slow,
+    /// Turning at three quarters of the intersections, the view looking around.
     Turning,
+    /// Moving against the view, reversing every 10 to 20 s.
     Backward,
+    /// Off the streets: speed and heading redrawn every 1 to 6 s.
     Random,
 }
 

@@ -11,12 +11,14 @@
 //!   three each; a walker in a lane beside the buildings would find only two new
 //!   viewcells at a crossing along it (the third cell is inside a building).
 //! - Route 1 starts at the street crossing nearest the city's centre and keeps a
-//!   heading; before each step it changes it with chance [`TURN_CHANCE`], to the
-//!   opposite heading half of those times (the back-and-forth) and to a uniformly
-//!   random one otherwise. A step that would leave the walkways is redrawn with a
-//!   random heading.
+//!   heading; before each step it changes it with chance 0.04, to the opposite heading
+//!   half of those times (the back-and-forth) and to a uniformly random one otherwise:
+//!   a new heading every 25 steps (100 m) on average. The thesis gives no figure; at
+//!   this one PBNP saves about as large a share of SNP's transactions on route 1 as the
+//!   thesis's Table 7.2 shows (17 %), where more frequent turns would make its saving
+//!   larger. A step that would leave the walkways is redrawn with a random heading.
 //! - Route 2's lines each keep a random distance into their walkway, at least
-//!   [`MARGIN`] from its edges, and turn where they cross the next line's street. Its
+//!   0.5 m from its edges, and turn where they cross the next line's street. Its
 //!   first six lines are a random 85–115 % of a seventh of the route each (in whole
 //!   blocks), turning left or right as the city leaves room; the seventh is as long as
 //!   the steps left. It needs only the city's street layout ([`StreetGrid`]), not its
@@ -40,25 +42,26 @@ use super::{CameraPath, Pose};
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::Position;
 
-/// The thesis's routes: 3000 steps of 4 m.
+/// The thesis's routes: 3000 steps of [`THESIS_STEP`].
 pub const THESIS_STEPS: usize = 3000;
+/// The length of a step of the thesis's routes, metres.
 pub const THESIS_STEP: f64 = 4.0;
 
-/// Route 1's chance of changing heading before a step (half of them reversals): a new
-/// heading every 25 steps (100 m) on average. The thesis gives no figure; at this one
-/// PBNP saves about as large a share of SNP's transactions on route 1 as the thesis's
-/// Table 7.2 shows (17 %), where more frequent turns would make its saving larger.
-pub const TURN_CHANCE: f64 = 0.04;
+/// Route 1's chance of changing heading before a step (half of them reversals); why
+/// this figure, the module's top comment says.
+const TURN_CHANCE: f64 = 0.04;
 
 /// Route 2 keeps at least this far from the edges of its walkways, metres.
-pub const MARGIN: f64 = 0.5;
+const MARGIN: f64 = 0.5;
 
 /// How long a route is and how it is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RouteConfig {
+    /// Steps the route takes (its positions are one more).
     pub steps: usize,
     /// Metres per step.
     pub step: f64,
+    /// The seed of the ChaCha8 generator the route is drawn from.
     pub seed: u64,
 }
 
@@ -73,6 +76,7 @@ impl Default for RouteConfig {
 }
 
 impl RouteConfig {
+    /// Checks the settings: 1 to 10,000,000 steps of a positive, finite length.
     pub fn validate(&self) -> Result<()> {
         if self.steps == 0 || self.steps > 10_000_000 {
             return Err(Error::Pvs(format!(
@@ -164,7 +168,9 @@ pub fn random_route(
 /// Route 2: its corners (start, six turns, end) and its positions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StraightRoute {
+    /// Where its lines meet: the start, the six turns and the end.
     pub corners: Vec<Position>,
+    /// The start and the point after each step, along the lines.
     pub positions: Vec<Position>,
 }
 
