@@ -140,9 +140,9 @@ pub const DEFAULT_PACE: f32 = 4.0;
 pub const DEFAULT_MEMORY_BUDGET: usize = 256 << 20;
 
 impl ReviewConfig {
-    /// The configuration `p` of §4.4 with the defaults above: CSearch with the index
-    /// cache and prefetching for `Optimal`, less the cache (`Nc`) or prefetching (`Np`),
-    /// and plain BOX with neither (`Box`).
+    /// The configuration `p` of §4.4 at this module's defaults (`DEFAULT_*`): CSearch
+    /// with the index cache and prefetching for `Optimal`, less the cache (`Nc`) or
+    /// prefetching (`Np`), and plain BOX with neither (`Box`).
     pub fn preset(p: Preset) -> ReviewConfig {
         let cache = Some(("dplru".to_string(), DEFAULT_INDEX_CACHE));
         let base = ReviewConfig {
