@@ -67,10 +67,13 @@ pub struct DatabaseInfo {
 pub struct HdovInfo {
     /// Nodes, levels, and the entries packing put in a node (M).
     pub nodes: u32,
+    /// Levels of nodes.
     pub height: u32,
+    /// The entries packing put in a node (M, the base of h's log).
     pub fanout: u32,
     /// Viewcells, and N_vnode summed over them.
     pub cells: usize,
+    /// Visible nodes summed over the cells (N_vnode).
     pub visible_nodes: u64,
     /// Pages of the internal LODs.
     pub lod_pages: u64,

@@ -28,6 +28,8 @@
 // Every type a public signature names must have a public path, so that a user can name
 // it: a type of an internal module left out of the re-exports is a warning.
 #![warn(unnameable_types)]
+// Every public item is documented: the engine is a library first.
+#![warn(missing_docs)]
 
 pub mod build;
 pub mod cache;

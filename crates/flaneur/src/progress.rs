@@ -10,9 +10,9 @@ pub enum Step {
     Objects,
     /// A build precomputing visibility; counted in viewcells.
     Visibility,
-    /// A build making the HDoV-tree: its internal LODs (counted in nodes), then each
-    /// viewcell's V-pages (counted in cells).
+    /// A build making the HDoV-tree's internal LODs; counted in nodes.
     HdovLods,
+    /// A build making the HDoV-tree's V-pages; counted in viewcells.
     HdovCells,
 }
 

@@ -53,34 +53,49 @@ impl Default for HdovOptions {
 /// One scheme as stored, against its estimate (eqs. 5.7–5.9).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SchemeReport {
+    /// The scheme.
     pub scheme: Scheme,
+    /// Bytes its extent takes, head included.
     pub bytes: u64,
+    /// Pages of its extent.
     pub pages: u64,
+    /// V-pages it stores.
     pub vpages: u64,
+    /// What eqs. 5.7–5.9 estimate (its head and directory aside), bytes.
     pub estimate_bytes: u64,
 }
 
 /// What building the HDoV-tree made and cost.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct HdovReport {
+    /// Nodes of the tree.
     pub nodes: u32,
+    /// Levels of nodes.
     pub height: u32,
+    /// The entries packing put in a node (M).
     pub fanout: u32,
     /// Nodes (the root left out) with internal LODs, their levels and triangles, and
     /// the pages they take.
     pub nodes_with_lods: u32,
+    /// Internal LOD levels stored, over all nodes.
     pub lod_levels: u64,
+    /// Their triangles.
     pub lod_triangles: u64,
+    /// Pages they take.
     pub lod_pages: u64,
     /// Pages of the nodes and of the head.
     pub node_pages: u64,
+    /// Pages of the tree's head.
     pub head_pages: u64,
     /// Viewcells, and N_vnode summed over them.
     pub cells: u32,
+    /// Visible nodes summed over the cells (N_vnode).
     pub visible_nodes: u64,
+    /// Each scheme stored.
     pub schemes: Vec<SchemeReport>,
     /// Wall-clock seconds of the whole step, and of its internal LODs.
     pub seconds: f64,
+    /// Seconds of the internal LODs.
     pub lod_seconds: f64,
 }
 

@@ -13,7 +13,9 @@ use crate::store::{PageKind, Store};
 /// an internal LOD's levels count from 1, finest first).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Representation {
+    /// The mesh read.
     pub mesh: Mesh,
+    /// Its level: 0 an object's full mesh, an internal LOD's from 1 (finest).
     pub level: usize,
 }
 

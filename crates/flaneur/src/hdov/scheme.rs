@@ -54,12 +54,16 @@ pub const INTEGER_LEN: usize = 4;
 /// How the V-pages are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub enum Scheme {
+    /// Every node a V-page in every cell, found by position (§5.4.1).
     Horizontal,
+    /// A V-page-index segment of every node per cell, nil for hidden nodes (§5.4.2).
     Vertical,
+    /// Only the visible nodes' (node, pointer) pairs per cell (§5.4.3).
     Indexed,
 }
 
 impl Scheme {
+    /// The three schemes, in the order of §5.4.
     pub const ALL: [Scheme; 3] = [Scheme::Horizontal, Scheme::Vertical, Scheme::Indexed];
 
     /// The name `flaneur build --hdov` takes.

@@ -31,17 +31,24 @@ pub const MAXDOV: f32 = 0.5;
 /// What the search found: an object, or a node drawn at one of its internal LODs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Found {
+    /// An object, at the detail of eq. 5.6.
     Object {
+        /// The object, as the index knows it.
         entry: ObjectEntry,
+        /// Its DoV from the cell.
         dov: f32,
         /// Eq. 5.6's k: 1 draws it at full detail, 0 at its coarsest level.
         detail: f32,
     },
+    /// A node, at one of its internal LODs (eq. 5.5).
     Node {
         /// The node's depth-first number, its box and its internal LODs (a chain).
         node: u32,
+        /// The box of the objects below it.
         mbr: Aabb,
+        /// Its internal LODs: an LOD chain.
         lods: Extent,
+        /// Its DoV from the cell: the sum of its visible objects'.
         dov: f32,
         /// Visible objects below it.
         nvo: u32,
@@ -51,6 +58,7 @@ pub enum Found {
 }
 
 impl Found {
+    /// The DoV of what was found.
     pub fn dov(&self) -> f32 {
         match self {
             Found::Object { dov, .. } | Found::Node { dov, .. } => *dov,
@@ -61,9 +69,11 @@ impl Found {
 /// A search's answer and what it read.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SearchResult {
+    /// What was found, in the order of the depth-first search.
     pub found: Vec<Found>,
     /// Nodes read (one page each) and V-pages read.
     pub nodes_read: u64,
+    /// V-pages read.
     pub vpages_read: u64,
 }
 

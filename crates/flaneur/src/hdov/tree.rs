@@ -42,21 +42,32 @@ const SCHEME_RECORD: usize = 24;
 /// What the tree's head says.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TreeHead {
+    /// The page of node 0, the root; node n is page `first_node + n`.
     pub first_node: u64,
+    /// Nodes of the tree (N_node).
     pub nodes: u32,
+    /// Levels of nodes.
     pub height: u32,
+    /// The entries packing put in a node (M, the base of h's log).
     pub fanout: u32,
+    /// Objects below the root.
     pub objects: u64,
+    /// Bytes of a V-page.
     pub vpage_len: u32,
+    /// The build's seconds for the tree.
     pub seconds: f64,
+    /// Pages of the internal LODs.
     pub lod_pages: u64,
+    /// Visible nodes summed over the cells (N_vnode).
     pub visible_nodes: u64,
+    /// Each scheme stored, and its extent.
     pub schemes: Vec<(Scheme, Extent)>,
     /// The viewcell id of each slot, ascending.
     pub cells: Vec<u32>,
 }
 
 impl TreeHead {
+    /// The head's bytes, as the layout above.
     pub fn encode(&self) -> Vec<u8> {
         let mut b = Vec::new();
         b.extend_from_slice(&MAGIC);
@@ -88,6 +99,7 @@ impl TreeHead {
         b
     }
 
+    /// Reads a head's bytes; the complaint names what is wrong.
     pub fn decode(b: &[u8]) -> std::result::Result<TreeHead, String> {
         if b.len() < FIXED + CRC_LEN || b[..4] != MAGIC {
             return Err("not an HDoV-tree head".into());

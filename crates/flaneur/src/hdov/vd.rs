@@ -23,6 +23,7 @@ pub const VENTRY_LEN: usize = 8;
 /// One entry's view-variant data for a cell.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vd {
+    /// Its DoV: the sum of the visible objects' below it (one object's for a leaf entry).
     pub dov: f32,
     /// Visible objects below (NVO).
     pub nvo: u32,
