@@ -63,6 +63,24 @@ pub struct DatabaseInfo {
 }
 
 /// What `flaneur info` reports of the HDoV-tree.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// use flaneur::{hdov::{HdovOptions, Scheme}, visibility::VisibilityOptions, BuildOptions};
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() }, &scene)?;
+/// let opts = BuildOptions {
+///     visibility: Some(VisibilityOptions { resolution: 16, ..Default::default() }),
+///     hdov: Some(HdovOptions { schemes: vec![Scheme::Indexed], ..Default::default() }),
+///     ..Default::default()
+/// };
+/// flaneur::build_from_scene(&scene, &path, &opts)?;
+/// let hdov = flaneur::Database::open(&path)?.info()?.hdov.expect("built with --hdov");
+/// assert_eq!(hdov.schemes.len(), 1);
+/// assert!(hdov.cells > 0 && hdov.nodes >= 1);
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct HdovInfo {
     /// Nodes, levels, and the entries packing put in a node (M).
