@@ -10,9 +10,12 @@
 //! cell); every policy and size is then a replay of that trace, which gives exactly the
 //! counts a live cache of that size and policy would (`cache::Trace::replay`). The
 //! continuous chain is a random walk over the walkable cells, each step to a walkable
-//! side neighbour (staying put when there is none); both sets come from a fixed seed.
+//! side neighbour (staying put when there is none); both sets come from one ChaCha8 generator of a fixed seed.
 
 use std::path::Path;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 use crate::report::Report;
 use flaneur::cache::{belady_replay, policy_by_name, BufferPool, Trace};
@@ -92,25 +95,13 @@ pub struct HdovCacheReport {
     pub rows: Vec<HdovCacheRow>,
 }
 
-/// A small xorshift generator, seeded.
-struct Draws(u64);
-
-impl Draws {
-    fn next(&mut self, n: usize) -> usize {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 % n as u64) as usize
-    }
-}
-
 /// `n` random walkable cells, and a chain of `n` neighbouring ones, of a grid with
 /// `columns` columns whose walkable cells are `cells` (ascending).
 pub fn query_sets(cells: &[u32], columns: u32, n: usize, seed: u64) -> (Vec<u32>, Vec<u32>) {
-    let mut d = Draws(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
-    let random = (0..n).map(|_| cells[d.next(cells.len())]).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let random = crate::hdov_search::draw_cells(cells, n, &mut rng);
     let walkable = |id: i64| id >= 0 && cells.binary_search(&(id as u32)).is_ok();
-    let mut at = cells[d.next(cells.len())];
+    let mut at = cells[rng.gen_range(0..cells.len())];
     let mut chain = Vec::with_capacity(n);
     for _ in 0..n {
         chain.push(at);
@@ -122,7 +113,7 @@ pub fn query_sets(cells: &[u32], columns: u32, n: usize, seed: u64) -> (Vec<u32>
             .filter(|&id| walkable(id))
             .collect();
         if !steps.is_empty() {
-            at = steps[d.next(steps.len())] as u32;
+            at = steps[rng.gen_range(0..steps.len())] as u32;
         }
     }
     (chain, random)
@@ -136,17 +127,9 @@ pub fn run(
     mut tick: impl FnMut(usize, usize),
 ) -> Result<HdovCacheReport> {
     cfg.validate()?;
-    let head = db.hdov()?.ok_or_else(|| {
-        Error::Invalid(format!(
-            "{} has no HDoV-tree: build it with --visibility --hdov",
-            db.store().path().display()
-        ))
-    })?;
+    let head = db.hdov_head()?;
     let (nodes, cells) = (head.nodes, head.cells.clone());
-    let scheme = [Scheme::Indexed, Scheme::Vertical, Scheme::Horizontal]
-        .into_iter()
-        .find(|s| head.schemes.iter().any(|h| h.0 == *s))
-        .ok_or_else(|| Error::Invalid("the HDoV-tree stores no scheme".into()))?;
+    let scheme = head.smallest_scheme()?;
     let columns = db
         .visibility()?
         .ok_or_else(|| Error::Invalid("an HDoV-tree without visibility".into()))?

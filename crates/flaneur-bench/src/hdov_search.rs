@@ -20,6 +20,9 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -98,16 +101,10 @@ pub struct HdovSearchReport {
     pub rows: Vec<HdovSearchRow>,
 }
 
-/// The cells queried: `n` draws from `cells` by an xorshift generator seeded `seed`.
-fn draw_cells(cells: &[u32], n: usize, seed: u64) -> Vec<u32> {
-    let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+/// The cells queried: `n` uniform draws from `cells` by `rng`.
+pub(crate) fn draw_cells(cells: &[u32], n: usize, rng: &mut impl Rng) -> Vec<u32> {
     (0..n)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            cells[(x % cells.len() as u64) as usize]
-        })
+        .map(|_| cells[rng.gen_range(0..cells.len())])
         .collect()
 }
 
@@ -149,15 +146,14 @@ pub fn run(
     mut tick: impl FnMut(usize, usize),
 ) -> Result<HdovSearchReport> {
     cfg.validate()?;
-    let head = db.hdov()?.ok_or_else(|| {
-        Error::Invalid(format!(
-            "{} has no HDoV-tree: build it with --visibility --hdov",
-            db.store().path().display()
-        ))
-    })?;
+    let head = db.hdov_head()?;
     let (cells, nodes) = (head.cells.clone(), head.nodes);
     let schemes: Vec<Scheme> = head.schemes.iter().map(|s| s.0).collect();
-    let queried = draw_cells(&cells, cfg.queries, cfg.seed);
+    let queried = draw_cells(
+        &cells,
+        cfg.queries,
+        &mut ChaCha8Rng::seed_from_u64(cfg.seed),
+    );
     let loads = cfg.load_queries.min(cfg.queries);
     let entries: HashMap<u64, ObjectEntry> = db
         .range(&db.bounds())?
@@ -360,9 +356,10 @@ mod tests {
     #[test]
     fn cells_are_drawn_alike_for_a_seed() {
         let cells = [3, 8, 9, 40];
-        let a = draw_cells(&cells, 50, 7);
-        assert_eq!(a, draw_cells(&cells, 50, 7));
-        assert_ne!(a, draw_cells(&cells, 50, 8));
+        let draw = |seed| draw_cells(&cells, 50, &mut ChaCha8Rng::seed_from_u64(seed));
+        let a = draw(7);
+        assert_eq!(a, draw(7));
+        assert_ne!(a, draw(8));
         assert!(a.iter().all(|c| cells.contains(c)));
         assert!(cells.iter().all(|c| a.contains(c)));
     }

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use crate::report::Report;
 use flaneur::database::Database;
-use flaneur::error::{Error, Result};
+use flaneur::error::Result;
 use flaneur::hdov::Scheme;
 
 /// Table 5.2 of the thesis, bytes.
@@ -54,12 +54,7 @@ pub struct HdovStorageReport {
 
 /// Reads what `db`'s HDoV-tree takes.
 pub fn run(db: &Database) -> Result<HdovStorageReport> {
-    let head = db.hdov()?.ok_or_else(|| {
-        Error::Invalid(format!(
-            "{} has no HDoV-tree: build it with --visibility --hdov",
-            db.store().path().display()
-        ))
-    })?;
+    let head = db.hdov_head()?;
     let (c, n, nv) = (
         head.cells.len() as u64,
         head.nodes as u64,

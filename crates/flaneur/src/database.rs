@@ -542,6 +542,12 @@ impl Database {
         self.hdov.as_ref().map(|t| t.head(&self.store)).transpose()
     }
 
+    /// [`Database::hdov`] for a caller that needs the tree: an error naming the
+    /// database when it was built without `--hdov`.
+    pub fn hdov_head(&self) -> Result<&TreeHead> {
+        self.hdov_tree()?.head(&self.store)
+    }
+
     /// The HDoV-tree search (Shou 2002 Fig. 5.4) from viewcell `cell` under the DoV
     /// threshold `eta`, through the smallest storage scheme built (indexed-vertical,
     /// then vertical, then horizontal): what is visible from the cell, each object or
@@ -572,12 +578,7 @@ impl Database {
     /// # Ok(()) }
     /// ```
     pub fn hdov_search(&self, cell: u32, eta: f32) -> Result<SearchResult> {
-        let tree = self.hdov_tree()?;
-        let schemes = tree.schemes(&self.store)?;
-        let smallest = [Scheme::Indexed, Scheme::Vertical, Scheme::Horizontal]
-            .into_iter()
-            .find(|s| schemes.iter().any(|t| t.scheme == *s))
-            .ok_or_else(|| Error::Invalid("the HDoV-tree stores no scheme".into()))?;
+        let smallest = self.hdov_head()?.smallest_scheme()?;
         self.hdov_search_with(cell, eta, smallest)
     }
 

@@ -175,6 +175,16 @@ impl TreeHead {
         super::scheme::estimate(scheme, self.shape(), self.visible_nodes)
     }
 
+    /// The smallest scheme stored, by eqs. 5.7–5.9 for a city whose cells see little
+    /// of the tree: indexed-vertical, then vertical, then horizontal. An error for a
+    /// head that lists none.
+    pub fn smallest_scheme(&self) -> Result<Scheme> {
+        [Scheme::Indexed, Scheme::Vertical, Scheme::Horizontal]
+            .into_iter()
+            .find(|s| self.schemes.iter().any(|t| t.0 == *s))
+            .ok_or_else(|| Error::Invalid("the HDoV-tree stores no scheme".into()))
+    }
+
     /// The slot of viewcell `cell`, `None` when it has none (not walkable).
     pub fn slot(&self, cell: u32) -> Option<usize> {
         self.cells.binary_search(&cell).ok()
