@@ -435,15 +435,11 @@ fn builds_are_deterministic_and_finish_inside_a_one_thread_pool() {
 /// done; the frame that first sees it reads them, and never waits for them.
 /// Every object of `db` loaded into an object buffer, as a walk would hold them.
 fn all_loaded(db: &Database) -> flaneur::walk::ObjectBuffer {
-    use flaneur::walk::{mesh_bytes, Loaded, ObjectBuffer};
+    use flaneur::walk::{Loaded, ObjectBuffer};
     let mut buffer = ObjectBuffer::new(usize::MAX);
     for o in all_objects(db) {
         let mesh = db.mesh(&o).unwrap();
-        buffer.insert(Loaded {
-            entry: o,
-            bytes: mesh_bytes(&mesh),
-            mesh: std::sync::Arc::new(mesh),
-        });
+        buffer.insert(Loaded::new(o, mesh));
     }
     buffer
 }

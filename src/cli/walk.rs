@@ -11,6 +11,7 @@ use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::visual::{self, VisualConfig, VisualReport};
 use flaneur::{Backend, Database};
 
 /// `flaneur walk`'s arguments.
@@ -18,8 +19,9 @@ use flaneur::{Backend, Database};
 pub struct WalkArgs {
     db: PathBuf,
     /// `review` (CSearch with index cache and prefetching), `box` (plain range
-    /// queries) or `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
-    /// database built with --visibility).
+    /// queries), `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
+    /// database built with --visibility) or `visual` (the HDoV-tree searched under
+    /// --eta; needs one built with --visibility --hdov).
     #[arg(long, default_value = "review")]
     mode: String,
     /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
@@ -87,6 +89,17 @@ pub struct WalkArgs {
     /// Write every N-th rendered frame (all are drawn and timed).
     #[arg(long, default_value_t = 1)]
     every: usize,
+    /// With --mode visual: the DoV threshold η of the HDoV-tree's search.
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    eta: f32,
+    /// With --mode visual: the storage scheme searched (horizontal, vertical, indexed;
+    /// default the smallest built).
+    #[arg(long)]
+    scheme: Option<String>,
+    /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
+    /// many seconds on (ours, not the thesis's; default off).
+    #[arg(long)]
+    next_cell_prefetch: Option<f32>,
     /// LOD selection's screen-space error, a fraction of the viewport: each object
     /// drawn at the coarsest stored level under it (0: full detail).
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
@@ -122,6 +135,9 @@ impl WalkArgs {
             size,
             every,
             lod_tau,
+            eta,
+            scheme,
+            next_cell_prefetch,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
@@ -148,13 +164,42 @@ impl WalkArgs {
                 render.as_ref(),
             );
         }
+        if mode == "visual" && config.is_none() {
+            let mut cfg = VisualConfig {
+                eta,
+                prefetch_k: next_cell_prefetch,
+                pace: pace(speed),
+                ..VisualConfig::default()
+            };
+            if let Some(s) = scheme {
+                cfg.scheme = Some(s.parse().map_err(anyhow::Error::msg)?);
+            }
+            if let Some(bytes) = cache_bytes {
+                cfg.node_cache = (bytes > 0)
+                    .then(|| (policy.clone().unwrap_or_else(|| "dovtime".into()), bytes));
+            } else if let (Some(p), Some(c)) = (&policy, &mut cfg.node_cache) {
+                c.0 = p.clone();
+            }
+            cfg.far = far.unwrap_or(cfg.far);
+            cfg.fallback_sf = sf.unwrap_or(cfg.fallback_sf);
+            return visual_walk_cmd(
+                &db,
+                &cfg,
+                path.as_deref().unwrap_or("cells"),
+                (frames, fps, seed),
+                csv.as_deref(),
+                backend,
+                quiet,
+                render.as_ref(),
+            );
+        }
         let path = path.unwrap_or_else(|| "normal".into());
         let preset = match config {
             Some(p) => p,
             None => match mode.as_str() {
                 "review" => Preset::Optimal,
                 "box" => Preset::Box,
-                other => bail!("unknown mode '{other}' (review, box, pvs)"),
+                other => bail!("unknown mode '{other}' (review, box, pvs, visual)"),
             },
         };
         let mut cfg = ReviewConfig::preset(preset);
@@ -392,6 +437,86 @@ fn pvs_walk_cmd(
         print_render(&drawn, r)?;
     }
     Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn visual_walk_cmd(
+    path: &Path,
+    cfg: &VisualConfig,
+    camera: &str,
+    (frames, fps, seed): (usize, f32, u64),
+    csv: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+    render: Option<&RenderOpts>,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = match camera {
+        // A walker's pace: 1.4 m/s.
+        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+        other => camera_path(&db, other, frames, fps, seed)?,
+    };
+    let bar = frame_bar(&poses, quiet);
+    let (r, drawn) = rendered(&db, render, cfg.far, |sink| {
+        visual::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
+    })?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        write_file(p, &r.to_csv())?;
+    }
+    print_visual(&r);
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
+    }
+    Ok(())
+}
+
+/// A VISUAL walk's summary: its settings, frames, searches, pages and memory.
+pub fn print_visual(r: &VisualReport) {
+    let (s, c) = (&r.summary, &r.config);
+    let cache = c
+        .node_cache
+        .as_ref()
+        .map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10));
+    let prefetch = c.prefetch_k.map_or("off".to_string(), |k| {
+        format!(
+            "k = {k} s (ours){}",
+            c.pace
+                .map_or(", unpaced".into(), |p| format!(", played {p}x real time"))
+        )
+    });
+    println!(
+        "visual walk: η = {}, {} scheme, node cache {cache}, next-cell prefetch {prefetch}, frustum {} m",
+        c.eta,
+        c.scheme.map_or("smallest", |s| s.name()),
+        c.far
+    );
+    println!(
+        "  frames {}   first (cold) load {:.1} ms   then mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}",
+        s.frames, s.initial_load_ms, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms
+    );
+    println!(
+        "  cells entered {}   searches {} on the viewer's thread ({:.2} ms each), {} prefetched ({} used)   outside every cell: {} frames, {} REVIEW box queries",
+        s.cells_entered, s.searches, s.mean_search_ms, s.prefetches, s.prefetches_used, s.frames_outside, s.fallback_queries
+    );
+    println!(
+        "  pages read: {} tree (nodes and V-pages) + {} models + {} other   finds loaded {}, reused {} (delta), left out {}",
+        s.tree_pages, s.model_pages, s.other_pages, s.loaded, s.reused, s.left_out
+    );
+    println!(
+        "  drawn per frame {:.1} objects and nodes, {:.0} triangles   peak memory {:.1} MiB",
+        s.mean_drawn,
+        s.mean_triangles,
+        s.peak_buffer_bytes as f64 / (1 << 20) as f64
+    );
+    if let Some(cs) = &s.node_cache {
+        println!(
+            "  node cache: {} hits, {} misses, hit rate {:.1}%",
+            cs.hits,
+            cs.misses,
+            cs.hit_rate() * 100.0
+        );
+    }
 }
 
 /// A walk's summary: its settings, then its frames, queries, pages, misses and index

@@ -25,7 +25,6 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -37,7 +36,7 @@ use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::scene::Mesh;
 use flaneur::walk::path::motion::Motion;
-use flaneur::walk::{contains_ground, mesh_bytes, scaled_cell, Loaded, ObjectBuffer};
+use flaneur::walk::{contains_ground, scaled_cell, Loaded, ObjectBuffer};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -300,11 +299,7 @@ impl Held {
     fn load(&mut self, db: &Database, cell: &Aabb, eye: Vec3) -> Result<bool> {
         let load = |entry: flaneur::rtree::ObjectEntry| -> Result<Loaded> {
             let mesh = db.mesh(&entry)?;
-            Ok(Loaded {
-                entry,
-                bytes: mesh_bytes(&mesh),
-                mesh: Arc::new(mesh),
-            })
+            Ok(Loaded::new(entry, mesh))
         };
         match self {
             Held::Cell { objects, budget } => {

@@ -627,6 +627,11 @@ impl Database {
         hdov::load(&self.store, self.lod.as_ref(), found)
     }
 
+    /// A reader of what HDoV searches find, remembering their levels (a walk's).
+    pub(crate) fn hdov_loader(&self) -> hdov::Loader<'_> {
+        hdov::Loader::new(&self.store, self.lod.as_ref())
+    }
+
     pub(crate) fn hdov_tree(&self) -> Result<&HdovTree> {
         self.hdov.as_ref().ok_or_else(|| {
             Error::Invalid(format!(

@@ -31,8 +31,8 @@ mod vd;
 
 pub(crate) use build::build_hdov;
 pub use build::{HdovOptions, HdovReport, SchemeReport};
-pub(crate) use load::load;
 pub use load::Representation;
+pub(crate) use load::{load, Loader};
 pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
 pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;

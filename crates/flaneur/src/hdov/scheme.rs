@@ -119,7 +119,7 @@ pub fn encode(scheme: Scheme, shape: Shape, cells: &[CellVd]) -> Vec<u8> {
     };
     match scheme {
         Scheme::Horizontal => {
-            let blank = vec![Vd::default(); 0];
+            let blank: Vec<Vd> = Vec::new();
             for n in 0..nodes as u32 {
                 for cell in cells {
                     push_vpage(cell.get(&n).unwrap_or(&blank), &mut vpages);

@@ -17,15 +17,48 @@ use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
 use crate::scene::Mesh;
 
-/// An object in memory: its index entry and its mesh.
+/// An object in memory: its index entry and its mesh, at full detail or at the stored
+/// level the walk chose for it.
+///
+/// An HDoV walk also holds groups of objects drawn as one (a tree node at an internal
+/// LOD): their ids carry [`GROUP_ID`], so that they never meet an object's.
 #[derive(Clone, Debug)]
 pub struct Loaded {
     /// The object's entry in the R-tree: its id, box and where its mesh lies.
     pub entry: ObjectEntry,
-    /// Its mesh at full detail, as read from the database.
+    /// Its mesh at level `level`, as read from the database.
     pub mesh: Arc<Mesh>,
     /// Bytes it takes in memory, as the buffer's budget counts them ([`mesh_bytes`]).
     pub bytes: usize,
+    /// The stored level `mesh` is: 0 full detail, each higher one coarser. LOD
+    /// selection draws an object at this level or a coarser one, never finer.
+    pub level: usize,
+}
+
+/// The bit an id has when it names a group of objects drawn as one (an HDoV-tree node
+/// at one of its internal LODs) rather than an object.
+pub const GROUP_ID: u64 = 1 << 63;
+
+impl Loaded {
+    /// `entry`'s object with its full mesh.
+    pub fn new(entry: ObjectEntry, mesh: Mesh) -> Loaded {
+        Loaded::at_level(entry, mesh, 0)
+    }
+
+    /// `entry`'s object with `mesh`, its stored level `level`.
+    pub fn at_level(entry: ObjectEntry, mesh: Mesh, level: usize) -> Loaded {
+        Loaded {
+            entry,
+            bytes: mesh_bytes(&mesh),
+            mesh: Arc::new(mesh),
+            level,
+        }
+    }
+
+    /// Whether it is a group of objects drawn as one ([`GROUP_ID`]).
+    pub fn is_group(&self) -> bool {
+        self.entry.id & GROUP_ID != 0
+    }
 }
 
 /// Bytes a mesh takes in memory (positions, normals, indices).
@@ -48,8 +81,7 @@ pub struct Eviction {
 /// the farthest from the viewer until they do ([`ObjectBuffer::evict_outside`]).
 ///
 /// ```
-/// # use std::sync::Arc;
-/// use flaneur::walk::{mesh_bytes, Loaded, ObjectBuffer};
+/// use flaneur::walk::{Loaded, ObjectBuffer};
 /// # fn main() -> flaneur::Result<()> {
 /// # let dir = tempfile::tempdir().unwrap();
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
@@ -60,9 +92,8 @@ pub struct Eviction {
 /// let db = flaneur::Database::open(&path)?;
 /// let mut buffer = ObjectBuffer::new(64 << 20);
 /// for entry in db.range(&db.bounds())?.objects {
-///     let mesh = Arc::new(db.mesh(&entry)?);
-///     let bytes = mesh_bytes(&mesh);
-///     buffer.insert(Loaded { entry, mesh, bytes });
+///     let mesh = db.mesh(&entry)?;
+///     buffer.insert(Loaded::new(entry, mesh));
 /// }
 /// assert!(!buffer.is_empty() && !buffer.over_budget());
 /// # Ok(()) }
@@ -113,6 +144,13 @@ impl ObjectBuffer {
     /// walk evicts when it sees this).
     pub fn over_budget(&self) -> bool {
         self.bytes > self.budget
+    }
+
+    /// Puts `loaded` in place of the object of its id, if there was one (an object
+    /// loaded again at another level).
+    pub fn replace(&mut self, loaded: Loaded) {
+        self.remove(loaded.entry.id);
+        self.insert(loaded);
     }
 
     /// Adds an object (a second copy of the same id is ignored).
@@ -209,6 +247,7 @@ pub(crate) mod tests {
             },
             mesh: Arc::new(Mesh::default()),
             bytes,
+            level: 0,
         }
     }
 

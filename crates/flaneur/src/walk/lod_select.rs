@@ -8,9 +8,11 @@
 //! the distance from the eye to the object's box, so an object the eye is inside, or
 //! touching, is drawn at full detail.
 //!
-//! Level 0 is the mesh the walk loaded into its object buffer; the coarser ones are read
-//! from the database's LOD chains when first chosen (only the pages of that level), and
-//! kept while the object stays in the buffer. A database without LODs, or an object
+//! The mesh the walk loaded into its object buffer is the object's level 0, or the
+//! coarser level the walk chose for it ([`Loaded::level`], VISUAL's), which selection
+//! never draws finer; the coarser ones are read from the database's LOD chains when
+//! first chosen (only the pages of that level), and kept while the object stays in the
+//! buffer. A group of objects drawn as one (an HDoV node) is drawn as loaded. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
 //! walk's own figures: the walk reports what its retrieval method reads. The walk
 //! session runs it once a frame's figures are finished, under the τ its viewer wants
@@ -73,12 +75,13 @@ impl Drawn {
         self.level > 0 && self.level != REFINED
     }
 
-    /// An object drawn at full detail, as the walk loaded it.
+    /// An object drawn as the walk loaded it: at full detail, or at the level the walk
+    /// chose ([`Loaded::level`]).
     pub fn full(o: &Loaded) -> Drawn {
         Drawn {
             id: o.entry.id,
             bounds: o.entry.bounds,
-            level: 0,
+            level: o.level,
             mesh: o.mesh.clone(),
             triangles: o.mesh.triangle_count(),
         }
@@ -266,6 +269,12 @@ impl<'a> LodSelector<'a> {
         let mut out = Vec::with_capacity(drawn.len());
         for o in drawn {
             let id = o.entry.id;
+            // A group drawn as one (an HDoV node's internal LOD) has no levels of its own
+            // beyond the one the walk chose.
+            if o.is_group() {
+                out.push(Drawn::full(o));
+                continue;
+            }
             if !self.objects.contains_key(&id) && !self.refined.contains_key(&id) {
                 if let Err(e) = self.first_sight(o) {
                     self.damage(id, e, "at full detail")?;
@@ -282,15 +291,13 @@ impl<'a> LodSelector<'a> {
                 self.counts.drawn_while_decoding += 1;
             }
             let d = distance_to(&o.entry.bounds, camera.position);
-            let level = level_for(&levels.levels, d, camera.fov_y, self.tau);
-            let mesh = if level == 0 {
+            // Never finer than the level the walk loaded.
+            let level = level_for(&levels.levels, d, camera.fov_y, self.tau).max(o.level);
+            let mesh = if level == o.level {
                 o.mesh.clone()
             } else {
                 match levels.mesh(self.db, level, &mut self.counts.levels_read) {
-                    Ok(m) => {
-                        self.counts.coarse_draws += 1;
-                        m
-                    }
+                    Ok(m) => m,
                     Err(e) => {
                         *levels = ObjectLevels::full_only();
                         self.damage(id, e, "at full detail")?;
@@ -299,6 +306,9 @@ impl<'a> LodSelector<'a> {
                     }
                 }
             };
+            if level > 0 {
+                self.counts.coarse_draws += 1;
+            }
             out.push(Drawn {
                 id,
                 bounds: o.entry.bounds,

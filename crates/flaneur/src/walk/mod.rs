@@ -8,7 +8,8 @@
 //! frustum; the mode finishes its figures; [`lod_select`] picks each object's level
 //! under the τ the viewer wants; the viewer is handed the frame, then its figures. The
 //! modes (`mode/`) are the session's retrieval strategies: REVIEW and BOX over disk
-//! cells (Shou 2002 §4.1–4.4) and the PVS client (Zheng 2007 ch. 7). The loop and the
+//! cells (Shou 2002 §4.1–4.4), the PVS client (Zheng 2007 ch. 7) and VISUAL over the
+//! HDoV-tree (Shou 2002 §5.8.5). The loop and the
 //! modes are crate-private: a user walks a mode through its namespace's entry points.
 //!
 //! ```
@@ -35,6 +36,8 @@
 //!   the presets of §4.4, the defaults and checks) and figures ([`review::WalkReport`]);
 //! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`] and the rest), its
 //!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
+//! - [`visual`]: the VISUAL walk over the HDoV-tree ([`visual::walk`] and the rest),
+//!   its settings ([`visual::VisualConfig`]) and figures ([`visual::VisualReport`]);
 //! - [`live`]: walks one after another at a live viewer (a window) as its person changes
 //!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
 //! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
@@ -69,8 +72,9 @@ mod session;
 mod sink;
 mod start;
 mod steer;
+pub mod visual;
 
-pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer};
+pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer, GROUP_ID};
 pub use cells::{contains_ground, disk_cell, scaled_cell};
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};
 pub use start::busiest_street;

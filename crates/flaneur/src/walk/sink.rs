@@ -199,7 +199,11 @@ impl LeftOut {
     /// Object `id` left out, reading its mesh having failed with `e`.
     pub fn leave_out(&mut self, id: u64, e: &crate::Error) {
         self.ids.insert(id);
-        self.untold.push(format!("object {id} left out: {e}"));
+        self.untold.push(if id & super::GROUP_ID != 0 {
+            format!("HDoV node {} left out: {e}", id & !super::GROUP_ID)
+        } else {
+            format!("object {id} left out: {e}")
+        });
     }
 
     /// Those left out since the last call, each with why.

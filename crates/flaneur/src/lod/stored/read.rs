@@ -159,6 +159,14 @@ pub(crate) fn chain_level(
     Ok((info, chain_level_of(store, ext, &head, level, &what)?))
 }
 
+/// The levels of a group's chain (an HDoV node's internal LODs, 1..=n finest first),
+/// from its directory. `what` names the chain in errors.
+pub(crate) fn chain_levels(store: &Store, ext: &Extent, what: &str) -> Result<Vec<LevelInfo>> {
+    let mut levels = read_chain(store, ext, what)?.dir.levels();
+    levels.remove(0);
+    Ok(levels)
+}
+
 /// Stored level `level` of the chain at `ext` whose head is read.
 fn chain_level_of(
     store: &Store,

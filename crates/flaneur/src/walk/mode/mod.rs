@@ -1,7 +1,8 @@
 //! The walk modes: the retrieval strategies the walk session (`walk::session`) plays,
 //! one file each, each implementing [`Mode`](super::session::Mode). `review`: REVIEW
 //! and BOX (Shou 2002 §4.1–4.4); `pvs`: the PVS client with SNP or PBNP (Zheng 2007
-//! ch. 7).
+//! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5).
 
 pub(crate) mod pvs;
 pub(crate) mod review;
+pub(crate) mod visual;

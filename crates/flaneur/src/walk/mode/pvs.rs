@@ -7,7 +7,6 @@
 //! `walk::pvs_walk`'s.
 
 use std::collections::HashMap;
-use std::sync::Arc;
 
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -16,7 +15,7 @@ use crate::prefetch::pvs::{
     Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs, THESIS_CAPACITY,
 };
 use crate::rtree::ObjectEntry;
-use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::pvs_walk::{PvsFrame, PvsPrefetch};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
@@ -174,11 +173,7 @@ impl Pvs<'_> {
                     }
                     (Err(e), None) => return Err(e),
                 };
-                held.insert(Loaded {
-                    entry: *entry,
-                    bytes: mesh_bytes(&mesh),
-                    mesh: Arc::new(mesh),
-                });
+                held.insert(Loaded::new(*entry, mesh));
             }
         }
         Ok(())

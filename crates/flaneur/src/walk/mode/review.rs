@@ -20,7 +20,7 @@ use crate::geom::{Aabb, Camera, Frustum};
 use crate::prefetch::motion::{MotionTrack, ViewerMotion};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
 use crate::store::{IoStats, PageKind, PageSource};
-use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
+use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
@@ -549,11 +549,7 @@ fn fetch(
             }
             (Err(e), None) => return Err(e),
         };
-        objects.push(Loaded {
-            entry: *entry,
-            bytes: mesh_bytes(&mesh),
-            mesh: std::sync::Arc::new(mesh),
-        });
+        objects.push(Loaded::new(*entry, mesh));
     }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Fetched {

@@ -1,0 +1,585 @@
+//! The VISUAL mode (Shou 2002 §5.8.5): the retrieval of a VISUAL walk, one frame at a
+//! time for the walk session. Each frame the eye's viewcell is found; on a change of
+//! cell the HDoV-tree is searched (or a prefetch's finds taken) and the finds brought
+//! into the buffer by delta; outside every cell, REVIEW's BOX query of a disk cell
+//! instead. The next-cell prefetch (ours) runs on a thread of its own. The settings,
+//! figures and departures are `walk::visual`'s.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use crate::cache::{policy_by_name, BufferPool, CacheStats};
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::geom::{Aabb, Camera};
+use crate::hdov::{Found, Loader, Scheme};
+use crate::prefetch::motion::MotionTrack;
+use crate::rtree::ObjectEntry;
+use crate::store::{IoStats, PageKind};
+use crate::walk::buffer::{Loaded, ObjectBuffer, GROUP_ID};
+use crate::walk::cells::{contains_ground, scaled_cell};
+use crate::walk::lod_select::WalkLods;
+use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
+use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+use crate::walk::visual::{VisualConfig, VisualFrame};
+
+/// How long the viewer waits for a prefetch of the cell it enters before it searches
+/// for itself, as REVIEW's does.
+const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
+
+/// One find of a search (or of the fallback's query), at the level it deserves.
+#[derive(Clone, Debug)]
+struct Piece {
+    /// Its id in the buffer: the object's, or the node's with [`GROUP_ID`].
+    key: u64,
+    level: usize,
+    found: Found,
+}
+
+/// A prefetched cell's finds, and the meshes the thread read for them.
+struct Prefetched {
+    cell: u32,
+    pieces: Vec<Piece>,
+    loaded: Vec<Loaded>,
+    /// Finds it could not read (a viewer that walks on), with why.
+    failed: Vec<(u64, Error)>,
+}
+
+/// What the prefetch thread is asked: a cell, and what the buffer held at which level.
+struct Request {
+    cell: u32,
+    held: HashMap<u64, usize>,
+}
+
+/// A VISUAL walk under `cfg` with the poses coming from `viewer`: the walk session with
+/// the VISUAL mode. Every frame's figures, and the node cache's.
+pub(crate) fn walk_live<'db>(
+    db: &'db Database,
+    cfg: &VisualConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<(Vec<VisualFrame>, Option<CacheStats>)> {
+    cfg.validate()?;
+    let head = db.hdov_head()?;
+    let scheme = match cfg.scheme {
+        Some(s) if head.schemes.iter().any(|t| t.0 == s) => s,
+        Some(s) => {
+            return Err(Error::Invalid(format!(
+                "{} has no {} scheme of its HDoV-tree (rebuild with --hdov {})",
+                db.store().path().display(),
+                s.name(),
+                s.name()
+            )))
+        }
+        None => head.smallest_scheme()?,
+    };
+    let pool = match &cfg.node_cache {
+        Some((policy, bytes)) => Some(BufferPool::new(
+            db.store(),
+            *bytes,
+            policy_by_name(policy)?,
+        )?),
+        None => None,
+    };
+    let tolerant = viewer.skips_damaged();
+    let search = Searcher {
+        db,
+        eta: cfg.eta,
+        scheme,
+        pool: pool.as_ref(),
+        tolerant,
+    };
+    let search = &search;
+    db.reset_io();
+    let frames = std::thread::scope(|scope| -> Result<Vec<VisualFrame>> {
+        let (req_tx, req_rx) = mpsc::channel::<Request>();
+        let (res_tx, res_rx) = mpsc::channel::<Result<Prefetched>>();
+        if cfg.prefetch_k.is_some() {
+            scope.spawn(move || {
+                let mut loader = db.hdov_loader();
+                for req in req_rx {
+                    let got = search.prefetch(&mut loader, &req);
+                    if res_tx.send(got).is_err() {
+                        break;
+                    }
+                }
+            });
+        } else {
+            drop(req_rx);
+            drop(res_tx);
+        }
+        let mut mode = Visual {
+            db,
+            cfg,
+            search,
+            loader: db.hdov_loader(),
+            current: None,
+            pieces: Vec::new(),
+            drawable: Vec::new(),
+            fallback_cell: None,
+            prefetched: None,
+            in_flight: None,
+            asked: None,
+            req_tx: cfg.prefetch_k.map(|_| req_tx),
+            res_rx,
+            left_out: tolerant.then(LeftOut::default),
+            track: MotionTrack::default(),
+            pace: cfg.pace.filter(|_| cfg.prefetch_k.is_some()),
+            clock: Instant::now(),
+            pending: None,
+        };
+        let frames = session::run(&mut mode, viewer, lods, progress)?;
+        mode.req_tx = None;
+        if frames.is_empty() {
+            return Err(Error::Invalid("the walk had no poses".into()));
+        }
+        Ok(frames)
+    })?;
+    Ok((frames, pool.as_ref().map(BufferPool::stats)))
+}
+
+/// A cell's finds at their levels, those whose level could not be read (with why),
+/// and the search's time, ms.
+struct Finds {
+    pieces: Vec<Piece>,
+    failed: Vec<(u64, Error)>,
+    ms: f64,
+}
+
+/// What both threads search with.
+struct Searcher<'a> {
+    db: &'a Database,
+    eta: f32,
+    scheme: Scheme,
+    pool: Option<&'a BufferPool<'a>>,
+    tolerant: bool,
+}
+
+impl Searcher<'_> {
+    /// The finds of `cell`, each at the level `loader` says it deserves (those whose
+    /// level could not be read left apart when tolerant; otherwise the error).
+    fn finds(&self, loader: &mut Loader<'_>, cell: u32) -> Result<Finds> {
+        let t = Instant::now();
+        let result = self
+            .db
+            .hdov_search_cached(cell, self.eta, self.scheme, self.pool)?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let mut pieces = Vec::with_capacity(result.found.len());
+        let mut failed = Vec::new();
+        for found in result.found {
+            let key = key_of(&found)?;
+            match loader.level(&found) {
+                Ok(level) => pieces.push(Piece { key, level, found }),
+                Err(e) if self.tolerant => failed.push((key, e)),
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(Finds { pieces, failed, ms })
+    }
+
+    /// The prefetch thread's work: `req`'s cell searched, and what the buffer did not
+    /// hold at its level read.
+    fn prefetch(&self, loader: &mut Loader<'_>, req: &Request) -> Result<Prefetched> {
+        let Finds {
+            pieces, mut failed, ..
+        } = self.finds(loader, req.cell)?;
+        let mut loaded = Vec::new();
+        for p in &pieces {
+            if req.held.get(&p.key) == Some(&p.level) {
+                continue;
+            }
+            match read(loader, p) {
+                Ok(l) => loaded.push(l),
+                Err(e) if self.tolerant => failed.push((p.key, e)),
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(Prefetched {
+            cell: req.cell,
+            pieces,
+            loaded,
+            failed,
+        })
+    }
+}
+
+/// The viewcell of the HDoV-tree whose box holds `p`: its patch of ground, and between
+/// its eye heights (an eye above them, over the roofs, sees what the cell's PVS was not
+/// computed for).
+fn cell_at(db: &Database, p: glam::Vec3) -> Result<Option<u32>> {
+    let (Some(cell), Some(vis)) = (db.viewcell_at(p)?, db.visibility()?) else {
+        return Ok(None);
+    };
+    let (row, column) = vis.grid.place(cell);
+    let b = vis.grid.cell_bounds(row, column);
+    let within = (b.min.y - EYE_SLACK..=b.max.y + EYE_SLACK).contains(&p.y);
+    Ok((within && db.hdov_head()?.slot(cell).is_some()).then_some(cell))
+}
+
+/// How far, in metres, an eye may be above or below its cell's eye heights and still be
+/// in it: a walker's step up a kerb.
+const EYE_SLACK: f32 = 0.5;
+
+/// The id a find has in the buffer.
+fn key_of(found: &Found) -> Result<u64> {
+    match found {
+        Found::Object { entry, .. } if entry.id & GROUP_ID != 0 => Err(Error::Invalid(format!(
+            "object {} has an id with its top bit set, which VISUAL keeps for HDoV nodes",
+            entry.id
+        ))),
+        Found::Object { entry, .. } => Ok(entry.id),
+        Found::Node { node, .. } => Ok(GROUP_ID | *node as u64),
+    }
+}
+
+/// `piece` read at its level, as the buffer holds it.
+fn read(loader: &mut Loader<'_>, piece: &Piece) -> Result<Loaded> {
+    let mesh = loader.mesh(&piece.found, piece.level)?;
+    let entry = match &piece.found {
+        Found::Object { entry, .. } => *entry,
+        Found::Node { mbr, lods, .. } => ObjectEntry {
+            id: piece.key,
+            bounds: *mbr,
+            mesh: *lods,
+            triangles: mesh.triangle_count() as u32,
+            kind: 0,
+        },
+    };
+    Ok(Loaded::at_level(entry, mesh, piece.level))
+}
+
+/// The VISUAL mode: the current cell's finds, the fallback's cell, the prefetch.
+struct Visual<'a> {
+    db: &'a Database,
+    cfg: &'a VisualConfig,
+    search: &'a Searcher<'a>,
+    loader: Loader<'a>,
+    /// The viewcell whose finds the buffer holds; `None` before the first or outside.
+    current: Option<u32>,
+    /// Its finds (or the fallback's objects).
+    pieces: Vec<Piece>,
+    /// Their keys, in the search's order: what a frame may draw.
+    drawable: Vec<u64>,
+    /// Outside every cell: the fallback's disk cell.
+    fallback_cell: Option<Aabb>,
+    /// The latest prefetched cell, its finds in the buffer.
+    prefetched: Option<(u32, Vec<Piece>)>,
+    /// The cell a prefetch is running for.
+    in_flight: Option<u32>,
+    /// The cell last asked for (not asked again until another is predicted).
+    asked: Option<u32>,
+    req_tx: Option<mpsc::Sender<Request>>,
+    res_rx: mpsc::Receiver<Result<Prefetched>>,
+    left_out: Option<LeftOut>,
+    track: MotionTrack,
+    pace: Option<f32>,
+    clock: Instant,
+    pending: Option<(VisualFrame, IoStats, Instant)>,
+}
+
+impl Mode for Visual<'_> {
+    type Frame = VisualFrame;
+
+    /// What VISUAL holds is what its cell finds; the buffer is not capped.
+    fn memory_budget(&self) -> usize {
+        usize::MAX
+    }
+
+    fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
+        let (i, pose) = (at.index, at.pose);
+        self.track.push(i, *pose)?;
+        if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
+            let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
+            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let camera = Camera {
+            far: self.cfg.far,
+            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
+        };
+        let io_before = self.db.io();
+        let start = Instant::now();
+        let mut frame = VisualFrame {
+            frame: i,
+            time: pose.time,
+            ..Default::default()
+        };
+        self.collect_prefetch(None, buffer, &mut frame)?;
+        let cell = cell_at(self.db, pose.position)?;
+        match cell {
+            Some(c) if self.current != Some(c) => self.enter(c, buffer, &mut frame)?,
+            Some(_) => {}
+            None => self.fall_back(&camera, buffer, &mut frame)?,
+        }
+        frame.cell = cell;
+        frame.objects_found = self
+            .pieces
+            .iter()
+            .filter(|p| matches!(p.found, Found::Object { .. }))
+            .count();
+        frame.nodes_found = self.pieces.len() - frame.objects_found;
+        if let Some(k) = self.cfg.prefetch_k {
+            self.maybe_prefetch(pose.position + self.track.motion().velocity * k, buffer)?;
+        }
+        self.pending = Some((frame, io_before, start));
+        Ok(Some(camera))
+    }
+
+    fn drawable(&self) -> Drawable<'_> {
+        Drawable::Only(&self.drawable)
+    }
+
+    fn finish(&mut self, culled: &Culled<'_>, buffer: &ObjectBuffer) -> Result<VisualFrame> {
+        let (mut frame, io_before, start) = self
+            .pending
+            .take()
+            .ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))?;
+        frame.cull_ms = culled.ms;
+        frame.drawn = culled.drawn.len();
+        frame.triangles_drawn = culled
+            .drawn
+            .iter()
+            .map(|o| o.mesh.triangle_count() as u64)
+            .sum();
+        frame.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let io = self.db.io().since(&io_before);
+        let of = |kinds: &[PageKind]| kinds.iter().map(|k| io.reads_of(*k)).sum::<u64>();
+        frame.tree_pages = of(&[PageKind::HdovNode, PageKind::VPage]);
+        frame.model_pages = of(&[PageKind::Mesh, PageKind::Lod]);
+        frame.other_pages = io.page_reads - frame.tree_pages - frame.model_pages;
+        frame.buffer_bytes = buffer.bytes();
+        Ok(frame)
+    }
+
+    fn figures(&mut self, f: &VisualFrame, buffer: &ObjectBuffer) -> FrameFigures {
+        FrameFigures {
+            pages: f.tree_pages + f.model_pages + f.other_pages,
+            objects_buffered: buffer.len(),
+            objects_drawn: f.drawn,
+            triangles: f.triangles_drawn,
+            prefetch_queue: self.in_flight.is_some() as usize,
+            cache_hit_rate: self.search.pool.map(|p| p.stats().hit_rate()),
+            cell: match f.cell {
+                Some(c) => format!(
+                    "viewcell {c}, η = {}: {} objects, {} nodes",
+                    self.cfg.eta, f.objects_found, f.nodes_found
+                ),
+                None => "outside every viewcell: REVIEW's box query".into(),
+            },
+            walk_ms: f.frame_ms,
+            damaged: self
+                .left_out
+                .as_mut()
+                .map(LeftOut::take_untold)
+                .unwrap_or_default(),
+            ..Default::default()
+        }
+    }
+}
+
+impl Visual<'_> {
+    /// The viewer moved into viewcell `cell`: its finds from a prefetch or a search,
+    /// brought into the buffer by delta.
+    fn enter(
+        &mut self,
+        cell: u32,
+        buffer: &mut ObjectBuffer,
+        frame: &mut VisualFrame,
+    ) -> Result<()> {
+        if self.in_flight == Some(cell) {
+            self.collect_prefetch(Some(MAX_PREFETCH_WAIT), buffer, frame)?;
+        }
+        let pieces = match self.prefetched.take() {
+            Some((c, pieces)) if c == cell => {
+                frame.prefetch_used = true;
+                pieces
+            }
+            other => {
+                self.prefetched = other;
+                let t = Instant::now();
+                let Finds { pieces, failed, ms } = self.search.finds(&mut self.loader, cell)?;
+                frame.searched = true;
+                frame.search_ms = ms;
+                frame.load_ms += t.elapsed().as_secs_f64() * 1e3 - ms;
+                self.leave_out(failed, frame);
+                pieces
+            }
+        };
+        self.hold(pieces, buffer, frame)?;
+        self.current = Some(cell);
+        self.fallback_cell = None;
+        Ok(())
+    }
+
+    /// Outside every viewcell: REVIEW's BOX query of the disk cell around the frustum,
+    /// asked again when the frustum leaves it.
+    fn fall_back(
+        &mut self,
+        camera: &Camera,
+        buffer: &mut ObjectBuffer,
+        frame: &mut VisualFrame,
+    ) -> Result<()> {
+        let fcell = camera.frustum().aabb();
+        if self.current.is_none()
+            && self
+                .fallback_cell
+                .is_some_and(|c| contains_ground(&c, &fcell))
+        {
+            return Ok(());
+        }
+        let cell = scaled_cell(
+            &self.db.bounds(),
+            &fcell,
+            fcell.center(),
+            self.cfg.fallback_sf,
+        );
+        let t = Instant::now();
+        let objects = self.db.range(&cell)?.objects;
+        frame.search_ms = t.elapsed().as_secs_f64() * 1e3;
+        frame.fallback_query = true;
+        let pieces = objects
+            .into_iter()
+            .map(|entry| Piece {
+                key: entry.id,
+                level: 0,
+                found: Found::Object {
+                    entry,
+                    dov: 0.0,
+                    detail: 1.0,
+                },
+            })
+            .collect();
+        self.hold(pieces, buffer, frame)?;
+        self.current = None;
+        self.fallback_cell = Some(cell);
+        Ok(())
+    }
+
+    /// Makes `pieces` what the frames draw: reads those the buffer does not hold at
+    /// their level, drops what neither they nor the prefetched cell want.
+    fn hold(
+        &mut self,
+        pieces: Vec<Piece>,
+        buffer: &mut ObjectBuffer,
+        frame: &mut VisualFrame,
+    ) -> Result<()> {
+        let t = Instant::now();
+        let mut kept = Vec::with_capacity(pieces.len());
+        for p in pieces {
+            if self.left_out.as_ref().is_some_and(|l| l.contains(p.key)) {
+                continue;
+            }
+            if buffer.get(p.key).is_some_and(|o| o.level == p.level) {
+                frame.reused += 1;
+            } else {
+                match read(&mut self.loader, &p) {
+                    Ok(l) => {
+                        buffer.replace(l);
+                        frame.loaded += 1;
+                    }
+                    Err(e) if self.left_out.is_some() => {
+                        self.leave_out(vec![(p.key, e)], frame);
+                        continue;
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            kept.push(p);
+        }
+        let mut wanted: HashSet<u64> = kept.iter().map(|p| p.key).collect();
+        if let Some((_, pre)) = &self.prefetched {
+            wanted.extend(pre.iter().map(|p| p.key));
+        }
+        let gone: Vec<u64> = buffer
+            .iter()
+            .map(|o| o.entry.id)
+            .filter(|id| !wanted.contains(id))
+            .collect();
+        frame.dropped += gone.len();
+        for id in gone {
+            buffer.remove(id);
+        }
+        self.drawable = kept.iter().map(|p| p.key).collect();
+        self.pieces = kept;
+        frame.load_ms += t.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    /// Finds that could not be read, left out from now on.
+    fn leave_out(&mut self, failed: Vec<(u64, Error)>, frame: &mut VisualFrame) {
+        if let Some(l) = self.left_out.as_mut() {
+            for (key, e) in failed {
+                if !l.contains(key) {
+                    l.leave_out(key, &e);
+                    frame.left_out += 1;
+                }
+            }
+        }
+    }
+
+    /// Takes a finished prefetch's finds into the buffer; with `wait`, blocks for the
+    /// running one that long at most.
+    fn collect_prefetch(
+        &mut self,
+        wait: Option<Duration>,
+        buffer: &mut ObjectBuffer,
+        frame: &mut VisualFrame,
+    ) -> Result<()> {
+        if self.in_flight.is_none() {
+            return Ok(());
+        }
+        let stopped = || Error::Invalid("the prefetch thread stopped".into());
+        let got = match wait {
+            Some(limit) => match self.res_rx.recv_timeout(limit) {
+                Ok(r) => r,
+                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
+            },
+            None => match self.res_rx.try_recv() {
+                Ok(r) => r,
+                Err(mpsc::TryRecvError::Empty) => return Ok(()),
+                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
+            },
+        };
+        self.in_flight = None;
+        let got = got?;
+        let t = Instant::now();
+        frame.prefetch_adopted = true;
+        self.leave_out(got.failed, frame);
+        for l in got.loaded {
+            // Loaded at the level the cell wants, unless the buffer now holds it so.
+            if buffer.get(l.entry.id).is_none_or(|o| o.level != l.level) {
+                buffer.replace(l);
+            }
+        }
+        self.prefetched = Some((got.cell, got.pieces));
+        frame.load_ms += t.elapsed().as_secs_f64() * 1e3;
+        Ok(())
+    }
+
+    /// Asks the prefetch thread for the viewcell at `ahead` (where the eye will be),
+    /// when it is another than the current one and not yet asked for.
+    fn maybe_prefetch(&mut self, ahead: glam::Vec3, buffer: &ObjectBuffer) -> Result<()> {
+        let Some(tx) = &self.req_tx else {
+            return Ok(());
+        };
+        if self.in_flight.is_some() || !ahead.is_finite() {
+            return Ok(());
+        }
+        let Some(cell) = cell_at(self.db, ahead)? else {
+            return Ok(());
+        };
+        if Some(cell) == self.current || Some(cell) == self.asked {
+            return Ok(());
+        }
+        let held = buffer.iter().map(|o| (o.entry.id, o.level)).collect();
+        if tx.send(Request { cell, held }).is_ok() {
+            self.in_flight = Some(cell);
+            self.asked = Some(cell);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,378 @@
+//! The VISUAL walkthrough (Shou 2002 §5.8.5, `flaneur walk DB --mode visual`): a camera
+//! path over a database built with `--visibility --hdov`, each frame drawing what the
+//! HDoV-tree finds from the eye's viewcell under the DoV threshold η, each object or
+//! group of objects at the detail its DoV deserves; every page read counted.
+//!
+//! Each frame the eye's viewcell is found. On a change of cell the tree is searched
+//! (Fig. 5.4, through a node cache) and the search's finds are loaded by **delta**: a
+//! find already in the object buffer at the level it now deserves is not read again
+//! (the thesis's hash set of buffered models), one at another level is read at that
+//! level, and what the new cell does not find is dropped. Objects keep their ids;
+//! nodes drawn at an internal LOD are held under ids that carry
+//! [`GROUP_ID`](super::GROUP_ID), so that the two never meet. A frame draws its cell's
+//! finds within the frustum.
+//!
+//! Named departures and choices:
+//! - **Outside every viewcell** (over a building, off the grid, or above the cells' eye
+//!   heights: a viewcell is a box, and its PVS holds for eyes within it) the walk falls back to
+//!   REVIEW's spatial query: a BOX query of the disk cell SF times the frustum's box,
+//!   asked again when the frustum leaves it, its objects loaded at full detail (delta
+//!   too); those frames are counted ([`VisualSummary::frames_outside`]).
+//! - **Next-cell prefetch** ([`VisualConfig::prefetch_k`]) is ours, not the thesis's
+//!   (its VISUAL has none): a thread searches and loads the viewcell the eye will be in
+//!   k seconds on, along its motion, so that entering it reads nothing on the viewer's
+//!   thread. Off by default; `bench visual-vs-review` measures it on and off. A walk
+//!   with it is paced to the path's clock like REVIEW's ([`VisualConfig::pace`]).
+//! - The memory held is not capped: it is what the cell's finds take (and the
+//!   prefetched cell's), reported as [`VisualSummary::peak_buffer_bytes`], the thesis's
+//!   "maximum memory used".
+//! - A find whose mesh or internal LOD cannot be read stops the walk with the error
+//!   naming the page; for a viewer that [walks on](super::Viewer::skips_damaged) it is
+//!   left out instead, counted and told of.
+//!
+//! Here: the settings, the entry points and the figures a walk reports. The frame loop
+//! is the walk session's (`walk/session.rs`), the retrieval the VISUAL mode's
+//! (`walk/mode/visual.rs`).
+//!
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions {
+//! #     visibility: Some(flaneur::visibility::VisibilityOptions {
+//! #         resolution: 8, ..Default::default() }),
+//! #     hdov: Some(Default::default()),
+//! #     ..Default::default()
+//! # };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::walk::{path, visual};
+//! let db = flaneur::Database::open(&file)?;
+//! let poses = path::cell_walk(&db, 40, 0.5, 10.0, 3)?;
+//! let report = visual::walk(&db, &poses, &visual::VisualConfig::default(), |_| {})?;
+//! assert_eq!(report.frames.len(), 40);
+//! assert!(report.summary.searches >= 1);
+//! # Ok(()) }
+//! ```
+
+use serde::Serialize;
+
+use super::lod_select::WalkLods;
+use super::path::CameraPath;
+use super::sink::{FrameSink, NoSink, Played, Viewer};
+use crate::cache::CacheStats;
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::hdov::Scheme;
+
+/// The thesis's threshold for VISUAL's walks (Table 5.3, Figs. 5.24–5.26).
+pub const DEFAULT_ETA: f32 = 0.001;
+/// The node cache's default size: the 400 pages the thesis's caches stay within
+/// (§5.8.3), of 4 KiB.
+pub const DEFAULT_NODE_CACHE: usize = 400 * 4096;
+
+/// Everything a VISUAL walk can vary.
+#[derive(Clone, Debug, Serialize)]
+pub struct VisualConfig {
+    /// The DoV threshold η of the search: 0 finds every visible object at the detail
+    /// of its DoV; larger draws more of the city at nodes' internal LODs.
+    pub eta: f32,
+    /// The storage scheme searched; `None`: the smallest one built.
+    pub scheme: Option<Scheme>,
+    /// The node cache: policy name (`lru`, `dov`, `dovtime`, …) and bytes; `None`: nodes
+    /// read from the store every time.
+    pub node_cache: Option<(String, usize)>,
+    /// Next-cell prefetch, ours (the thesis's VISUAL has none): search and load, on a
+    /// thread, the viewcell the eye will be in this many seconds on. `None`: off.
+    pub prefetch_k: Option<f32>,
+    /// Depth of the view frustum, metres.
+    pub far: f32,
+    /// The fallback's disk cell outside every viewcell: SF times the frustum's box.
+    pub fallback_sf: f32,
+    /// Play the path's clock this many times faster than real time when prefetching,
+    /// as REVIEW does ([`ReviewConfig::pace`](super::review::ReviewConfig::pace)).
+    pub pace: Option<f32>,
+}
+
+impl Default for VisualConfig {
+    /// The thesis's VISUAL: η = 0.001, the smallest scheme, a DoV-Time node cache of
+    /// 400 pages, no prefetch, REVIEW's frustum depth and SF.
+    fn default() -> VisualConfig {
+        VisualConfig {
+            eta: DEFAULT_ETA,
+            scheme: None,
+            node_cache: Some(("dovtime".into(), DEFAULT_NODE_CACHE)),
+            prefetch_k: None,
+            far: super::review::DEFAULT_FAR,
+            fallback_sf: super::review::DEFAULT_SF,
+            pace: Some(super::review::DEFAULT_PACE),
+        }
+    }
+}
+
+impl VisualConfig {
+    pub(crate) fn validate(&self) -> Result<()> {
+        if !(self.eta.is_finite() && self.eta >= 0.0) {
+            return Err(Error::Invalid(format!(
+                "a DoV threshold η of {}: give a number ≥ 0",
+                self.eta
+            )));
+        }
+        if let Some(k) = self.prefetch_k {
+            super::review::check_k(k)?;
+        }
+        super::review::check_far(self.far)?;
+        super::review::check_sf(self.fallback_sf)?;
+        if let Some(p) = self.pace {
+            super::review::check_pace(p)?;
+        }
+        Ok(())
+    }
+}
+
+/// One frame of a VISUAL walk. Times in milliseconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct VisualFrame {
+    /// The frame's index, from 0.
+    pub frame: usize,
+    /// Its pose's time on the path, seconds.
+    pub time: f64,
+    /// The viewcell the eye is in; `None` outside every one (the fallback's frame).
+    pub cell: Option<u32>,
+    /// The tree was searched for this frame's cell on the viewer's thread.
+    pub searched: bool,
+    /// The new cell's finds were a prefetch's, already loaded.
+    pub prefetch_used: bool,
+    /// A prefetch's finds reached the buffer on this frame.
+    pub prefetch_adopted: bool,
+    /// Outside every viewcell, the fallback's spatial query ran on this frame.
+    pub fallback_query: bool,
+    /// Objects the current cell's search found (or the fallback's query).
+    pub objects_found: usize,
+    /// Nodes it found at an internal LOD.
+    pub nodes_found: usize,
+    /// Finds read on this frame's thread (new, or at another level).
+    pub loaded: usize,
+    /// Finds the cell wanted that the buffer already held at their level (delta).
+    pub reused: usize,
+    /// Finds dropped, the new cell not finding them.
+    pub dropped: usize,
+    /// Finds left out, their pages unreadable (a viewer that walks on).
+    pub left_out: usize,
+    /// What the frame draws: finds in the frustum.
+    pub drawn: usize,
+    /// Their triangles.
+    pub triangles_drawn: u64,
+    /// Searching the tree on this thread.
+    pub search_ms: f64,
+    /// Reading and decoding finds' meshes on this thread.
+    pub load_ms: f64,
+    /// Culling against the frustum.
+    pub cull_ms: f64,
+    /// The walk's whole time for the frame (not drawing it, nor waiting for the clock).
+    pub frame_ms: f64,
+    /// Pages of the tree read this frame (nodes and V-pages), on both threads.
+    pub tree_pages: u64,
+    /// Pages of models read (meshes, LOD levels and internal LODs), on both threads.
+    pub model_pages: u64,
+    /// Other pages (the viewcells' table, the fallback's R-tree), on both threads.
+    pub other_pages: u64,
+    /// Bytes the buffer holds at the end of the frame.
+    pub buffer_bytes: usize,
+}
+
+/// A VISUAL walk in all. Frame 0 loads the first cell cold and is left out of the
+/// frame-time figures, as REVIEW's is.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct VisualSummary {
+    /// Frames walked, frame 0 included.
+    pub frames: usize,
+    /// Frame 0's time, ms.
+    pub initial_load_ms: f64,
+    /// Mean frame time from frame 1 on, ms.
+    pub mean_frame_ms: f64,
+    /// Longest frame from frame 1 on, ms.
+    pub max_frame_ms: f64,
+    /// Frame time's variance from frame 1 on, ms².
+    pub frame_ms_variance: f64,
+    /// Frames from 1 on over 50 ms.
+    pub frames_over_50ms: usize,
+    /// Moves into another viewcell.
+    pub cells_entered: usize,
+    /// Searches on the viewer's thread.
+    pub searches: usize,
+    /// Searches the prefetch thread ran.
+    pub prefetches: usize,
+    /// Cells entered whose finds a prefetch had loaded.
+    pub prefetches_used: usize,
+    /// Mean time of a search on the viewer's thread, ms (Fig. 5.27a).
+    pub mean_search_ms: f64,
+    /// Frames outside every viewcell, drawn by the fallback.
+    pub frames_outside: usize,
+    /// The fallback's spatial queries.
+    pub fallback_queries: usize,
+    /// Pages read, by kind, over the walk.
+    pub tree_pages: u64,
+    /// Model pages (meshes, levels, internal LODs).
+    pub model_pages: u64,
+    /// Other pages (viewcells' table, the fallback's R-tree).
+    pub other_pages: u64,
+    /// Finds loaded on the viewer's thread, and reused from the buffer.
+    pub loaded: usize,
+    /// Finds reused, summed over cell changes.
+    pub reused: usize,
+    /// Finds left out as unreadable.
+    pub left_out: usize,
+    /// Objects and groups drawn per frame, on average.
+    pub mean_drawn: f64,
+    /// Triangles drawn per frame, on average.
+    pub mean_triangles: f64,
+    /// The most bytes the buffer held at a frame's end.
+    pub peak_buffer_bytes: usize,
+    /// The node cache's figures, when it had one.
+    pub node_cache: Option<CacheStats>,
+}
+
+/// What a VISUAL walk did: its settings, every frame's figures, their summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct VisualReport {
+    /// The settings walked.
+    pub config: VisualConfig,
+    /// Every frame's figures, in order.
+    pub frames: Vec<VisualFrame>,
+    /// The walk in all.
+    pub summary: VisualSummary,
+}
+
+impl VisualReport {
+    /// One row per frame.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "frame,time,cell,searched,prefetch_used,prefetch_adopted,fallback_query,objects_found,nodes_found,loaded,reused,dropped,left_out,drawn,triangles_drawn,search_ms,load_ms,cull_ms,frame_ms,tree_pages,model_pages,other_pages,buffer_bytes\n",
+        );
+        for f in &self.frames {
+            s.push_str(&format!(
+                "{},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{}\n",
+                f.frame,
+                f.time,
+                f.cell.map_or(String::new(), |c| c.to_string()),
+                f.searched as u8,
+                f.prefetch_used as u8,
+                f.prefetch_adopted as u8,
+                f.fallback_query as u8,
+                f.objects_found,
+                f.nodes_found,
+                f.loaded,
+                f.reused,
+                f.dropped,
+                f.left_out,
+                f.drawn,
+                f.triangles_drawn,
+                f.search_ms,
+                f.load_ms,
+                f.cull_ms,
+                f.frame_ms,
+                f.tree_pages,
+                f.model_pages,
+                f.other_pages,
+                f.buffer_bytes
+            ));
+        }
+        s
+    }
+}
+
+/// Walks `path` over `db`'s HDoV-tree under `cfg`; `progress` is told each finished
+/// frame. An error for a database without an HDoV-tree.
+pub fn walk(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &VisualConfig,
+    progress: impl FnMut(usize),
+) -> Result<VisualReport> {
+    walk_into(db, path, cfg, progress, &mut NoSink)
+}
+
+/// [`walk`], handing each frame to `sink` (a renderer) once its figures are taken.
+pub fn walk_into(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &VisualConfig,
+    progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+) -> Result<VisualReport> {
+    if path.poses.is_empty() {
+        return Err(Error::Invalid("the camera path has no poses".into()));
+    }
+    walk_live(db, cfg, progress, &mut Played { path, sink })
+}
+
+/// [`walk_into`] with the poses coming from `viewer` frame by frame, until it has no
+/// more. Poses must come in time order.
+pub fn walk_live(
+    db: &Database,
+    cfg: &VisualConfig,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<VisualReport> {
+    walk_live_with(db, cfg, &mut WalkLods::new(db), progress, viewer)
+}
+
+/// [`walk_live`] with LOD selection `lods` kept from an earlier walk.
+pub(crate) fn walk_live_with<'db>(
+    db: &'db Database,
+    cfg: &VisualConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<VisualReport> {
+    let (frames, node_cache) = super::mode::visual::walk_live(db, cfg, lods, progress, viewer)?;
+    let summary = summarize(&frames, node_cache);
+    Ok(VisualReport {
+        config: cfg.clone(),
+        frames,
+        summary,
+    })
+}
+
+/// The walk's summary from its frames (and prefetches, counted in them).
+fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSummary {
+    let walk = frames.get(1..).unwrap_or_default();
+    let n = walk.len().max(1) as f64;
+    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let searched: Vec<&VisualFrame> = frames.iter().filter(|f| f.searched).collect();
+    let all = frames.len().max(1) as f64;
+    VisualSummary {
+        frames: frames.len(),
+        initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
+        mean_frame_ms: mean,
+        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
+        frame_ms_variance: walk
+            .iter()
+            .map(|f| (f.frame_ms - mean).powi(2))
+            .sum::<f64>()
+            / n,
+        frames_over_50ms: walk.iter().filter(|f| f.frame_ms > 50.0).count(),
+        cells_entered: frames
+            .windows(2)
+            .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
+            .count(),
+        searches: searched.len(),
+        prefetches: frames.iter().filter(|f| f.prefetch_adopted).count(),
+        prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
+        mean_search_ms: searched.iter().map(|f| f.search_ms).sum::<f64>()
+            / searched.len().max(1) as f64,
+        frames_outside: frames.iter().filter(|f| f.cell.is_none()).count(),
+        fallback_queries: frames.iter().filter(|f| f.fallback_query).count(),
+        tree_pages: frames.iter().map(|f| f.tree_pages).sum(),
+        model_pages: frames.iter().map(|f| f.model_pages).sum(),
+        other_pages: frames.iter().map(|f| f.other_pages).sum(),
+        loaded: frames.iter().map(|f| f.loaded).sum(),
+        reused: frames.iter().map(|f| f.reused).sum(),
+        left_out: frames.iter().map(|f| f.left_out).sum(),
+        mean_drawn: frames.iter().map(|f| f.drawn as f64).sum::<f64>() / all,
+        mean_triangles: frames.iter().map(|f| f.triangles_drawn as f64).sum::<f64>() / all,
+        peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
+        node_cache,
+    }
+}
