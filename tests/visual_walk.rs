@@ -307,3 +307,63 @@ fn a_database_without_the_tree_says_so() {
     let e = visual::walk(&db, &path, &bad, |_| {}).unwrap_err();
     assert!(e.to_string().contains("η"), "{e}");
 }
+
+#[test]
+fn visual_vs_review_misses_nothing_visible_where_reviews_small_box_does() {
+    use flaneur_bench::visual_vs_review::{self, VisualVsReviewConfig};
+    let db = Database::open(&city().db).unwrap();
+    let cfg = VisualVsReviewConfig {
+        frames: 150,
+        etas: vec![0.0, 0.001],
+        boxes: vec![60.0],
+        sessions: vec!["normal".into(), "back-forth".into()],
+        pace: 50.0,
+        ..Default::default()
+    };
+    let mut ticks = 0;
+    let r = visual_vs_review::run(&db, &cfg, |_, _| ticks += 1).unwrap();
+    // Per session: each η, VISUAL with the prefetch, and each box.
+    assert_eq!(r.rows.len(), 2 * 4);
+    assert_eq!(ticks, r.rows.len());
+    let v0 = r.row("normal", "visual", 0.0).unwrap();
+    assert_eq!(
+        v0.mean_missed, 0.0,
+        "η = 0 draws every visible object in view"
+    );
+    let review = r.row("normal", "review", 60.0).unwrap();
+    assert!(review.mean_missed > 0.0, "{review:?}");
+    assert!(r.rows.iter().all(|x| x.pages > 0 && x.queries >= 1));
+    // The frame series of the normal session, one per walk, for Figs. 5.24–5.25.
+    assert_eq!(r.series.len(), 4);
+    assert!(r.series.iter().all(|(_, ms)| ms.len() == cfg.frames));
+
+    // The command writes its report.
+    let out = city().dir.path().join("vvr");
+    let o = common::flaneur(&[
+        "bench",
+        "visual-vs-review",
+        city().db.to_str().unwrap(),
+        "--frames",
+        "60",
+        "--etas",
+        "0.001",
+        "--boxes",
+        "60",
+        "--sessions",
+        "normal",
+        "--pace",
+        "50",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "visual-vs-review.csv",
+        "visual-vs-review.md",
+        "visual-vs-review-frames.csv",
+        "visual-vs-review-frames.png",
+        "visual-vs-review-eta.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+}

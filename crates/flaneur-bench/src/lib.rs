@@ -36,4 +36,5 @@ pub mod pvs_prefetch;
 pub mod pvs_stats;
 pub mod report;
 pub mod view_culling;
+pub mod visual_vs_review;
 pub mod walk_setup;

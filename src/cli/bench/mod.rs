@@ -16,6 +16,7 @@ mod prefetch_k;
 mod pvs_prefetch;
 mod report;
 mod view_culling;
+mod visual_vs_review;
 mod walk_setup;
 
 use anyhow::Result;
@@ -45,6 +46,11 @@ enum Experiment {
     /// search and total I/O per storage scheme against the naive PVS list (Figs.
     /// 5.21–5.22). Needs a database built with --visibility --hdov.
     HdovSearch(hdov_search::HdovSearchArgs),
+    /// VISUAL, the HDoV-tree walkthrough, against REVIEW with 400 m and 200 m query
+    /// boxes along the same sessions: frame time and its variance, memory, pages and the
+    /// visible objects each misses, VISUAL at Table 5.3's nine η (Table 5.3, Figs.
+    /// 5.24–5.27). Needs a database built with --visibility --hdov.
+    VisualVsReview(visual_vs_review::VisualVsReviewArgs),
     /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
     PrefetchK(prefetch_k::PrefetchKArgs),
     /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
@@ -82,6 +88,7 @@ impl BenchArgs {
             Experiment::Fidelity(a) => a.run(),
             Experiment::HdovCache(a) => a.run(),
             Experiment::HdovSearch(a) => a.run(),
+            Experiment::VisualVsReview(a) => a.run(),
             Experiment::HdovStorage(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),
