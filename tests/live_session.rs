@@ -179,3 +179,39 @@ fn failing_walks_restart_until_the_fifth_in_a_row_ends_the_session() {
         .collect();
     assert_eq!(told.len(), 5, "{:?}", viewer.reports);
 }
+
+#[test]
+fn visual_walks_live_where_the_tree_is_and_falls_back_to_pvs_where_it_is_not() {
+    let with_tree = common::city(
+        120,
+        5,
+        &BuildOptions {
+            hdov: Some(flaneur::hdov::HdovOptions::default()),
+            ..common::with_visibility()
+        },
+    );
+    let db = Database::open(&with_tree.db).unwrap();
+    let path = flaneur::walk::path::cell_walk(&db, 60, 1.0, 10.0, 2).unwrap();
+    let mut viewer = Scripted::new(
+        path.clone(),
+        vec![(30, Some(Change::Mode(ViewMode::Pvs))), (30, None)],
+    );
+    live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
+    assert_eq!(viewer.modes, [ViewMode::Visual, ViewMode::Pvs]);
+    assert!(viewer.reports.is_empty(), "{:?}", viewer.reports);
+    assert_eq!(viewer.frames, [30, 30]);
+    assert!(viewer.pages[0] > 0, "{:?}", viewer.pages);
+
+    // Without the tree: PVS, said so.
+    let without = common::city(60, 5, &common::with_visibility());
+    let db = Database::open(&without.db).unwrap();
+    let path = flaneur::walk::path::cell_walk(&db, 20, 1.0, 10.0, 2).unwrap();
+    let mut viewer = Scripted::new(path, vec![(10, None)]);
+    live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
+    assert_eq!(viewer.modes, [ViewMode::Visual, ViewMode::Pvs]);
+    assert!(
+        viewer.reports[0].contains("no HDoV-tree"),
+        "{:?}",
+        viewer.reports
+    );
+}

@@ -14,9 +14,10 @@ use flaneur_render::{ViewMode, WalkWindow};
 #[derive(clap::Args)]
 pub struct ViewArgs {
     db: PathBuf,
-    /// review (CSearch, index cache, prefetching), box (plain range queries) or pvs
+    /// review (CSearch, index cache, prefetching), box (plain range queries), pvs
     /// (the current viewcell's PVS, PBNP prefetching; a database built with
-    /// --visibility); 1, 2 and 3 switch while walking.
+    /// --visibility) or visual (the HDoV-tree under --eta; one built with --visibility
+    /// --hdov); 1, 2, 3 and 4 switch while walking.
     #[arg(long, default_value = "review")]
     mode: String,
     /// Window size, WIDTHxHEIGHT pixels (the walk's 45° view is its centred square).
@@ -50,6 +51,9 @@ pub struct ViewArgs {
     boxes: bool,
     #[arg(long)]
     top_view: bool,
+    /// The VISUAL mode's DoV threshold η.
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    eta: f32,
 }
 
 impl ViewArgs {
@@ -68,13 +72,15 @@ impl ViewArgs {
             speed,
             boxes,
             top_view,
+            eta,
         } = self;
         let mode = match mode.as_str() {
             "review" => ViewMode::Review,
             "box" => ViewMode::Box,
             "pvs" => ViewMode::Pvs,
+            "visual" => ViewMode::Visual,
             other => {
-                bail!("the window shows the review, box and pvs modes so far, not '{other}'")
+                bail!("the window shows the review, box, pvs and visual modes, not '{other}'")
             }
         };
         let db = Database::open(&db)?;
@@ -96,6 +102,7 @@ impl ViewArgs {
             play,
             gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
             speed,
+            eta,
             ..window_options(&db, start)
         };
         view(&db, opts, mode, (boxes, top_view), record.as_deref())
@@ -134,7 +141,7 @@ pub fn view(
     let p = start.position;
     println!(
         "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
-         Shift runs, F flies, 1/2/3 review/box/pvs, [ ] LOD τ, - = budget, H HUD, Q quits",
+         Shift runs, F flies, 1/2/3/4 review/box/pvs/visual, [ ] LOD τ, - = budget, H HUD, Q quits",
         p.x,
         p.y,
         p.z,

@@ -38,6 +38,7 @@ impl WalkWindow {
                 KeyCode::Digit1 => self.change = Some(Change::Mode(ViewMode::Review)),
                 KeyCode::Digit2 => self.change = Some(Change::Mode(ViewMode::Box)),
                 KeyCode::Digit3 => self.change = Some(Change::Mode(ViewMode::Pvs)),
+                KeyCode::Digit4 => self.change = Some(Change::Mode(ViewMode::Visual)),
                 KeyCode::BracketLeft | KeyCode::BracketRight => {
                     let factor = if code == KeyCode::BracketLeft {
                         0.5

@@ -348,4 +348,8 @@ impl LiveViewer for WalkWindow {
     fn resume(&mut self) {
         WalkWindow::resume(self)
     }
+
+    fn eta(&self) -> f32 {
+        self.opts.eta
+    }
 }

@@ -26,11 +26,14 @@ pub struct ViewOptions {
     pub gpu_budget: Option<u64>,
     /// Walking speed, m/s (running is four times it, flying the same).
     pub speed: f32,
+    /// The DoV threshold η of the VISUAL mode's search.
+    pub eta: f32,
 }
 
 impl ViewOptions {
     /// Walking a city within `city` from `start`: a 1024 × 768 window titled
-    /// "flaneur", LODs under the thesis's τ, a 256 MiB GPU budget, a walker's pace, and
+    /// "flaneur", LODs under the thesis's τ, VISUAL under its η, a 256 MiB GPU budget, a
+    /// walker's pace, and
     /// the ground, at the city's foot, reaching the default frustum's depth past it.
     pub fn new(city: Aabb, start: Pose) -> ViewOptions {
         ViewOptions {
@@ -44,6 +47,7 @@ impl ViewOptions {
             play: None,
             gpu_budget: Some(256 << 20),
             speed: flaneur::walk::WALK_SPEED,
+            eta: flaneur::walk::visual::DEFAULT_ETA,
         }
     }
 }

@@ -9,6 +9,7 @@
 use super::lod_select::WalkLods;
 use super::pvs_walk::{self, PvsPrefetch};
 use super::review::{self, Preset, ReviewConfig};
+use super::visual::{self, VisualConfig, DEFAULT_ETA};
 use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -27,6 +28,9 @@ pub enum ViewMode {
     /// The current viewcell's PVS, neighbours prefetched (a database built with
     /// visibility).
     Pvs,
+    /// The HDoV-tree searched from the current viewcell under the viewer's η (a
+    /// database built with visibility and the tree).
+    Visual,
 }
 
 impl ViewMode {
@@ -36,6 +40,7 @@ impl ViewMode {
             ViewMode::Review => "review",
             ViewMode::Box => "box",
             ViewMode::Pvs => "pvs",
+            ViewMode::Visual => "visual",
         }
     }
 }
@@ -68,12 +73,19 @@ pub trait LiveViewer: Viewer {
 
     /// Readies the viewer for the next walk, from where this one stopped.
     fn resume(&mut self);
+
+    /// The DoV threshold η a VISUAL walk searches under.
+    fn eta(&self) -> f32 {
+        DEFAULT_ETA
+    }
 }
 
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
 /// as [`review::walk_live`] walks them (unpaced: a person sets the pace), PVS as
 /// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
-/// database without visibility).
+/// database without visibility), VISUAL as [`visual::walk_live`] does under the
+/// viewer's [η](LiveViewer::eta) (PVS instead, said so, on a database without the
+/// HDoV-tree).
 /// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
 /// read and the objects refined. An error when the walk failed five times running.
 ///
@@ -106,6 +118,23 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                 mode = ViewMode::Review;
                 viewer.show_mode(mode);
                 continue;
+            }
+            ViewMode::Visual if db.hdov()?.is_none() => {
+                viewer.report(format!(
+                    "{} has no HDoV-tree (build it with --visibility --hdov): showing PVS",
+                    db.store().path().display()
+                ));
+                mode = ViewMode::Pvs;
+                viewer.show_mode(mode);
+                continue;
+            }
+            ViewMode::Visual => {
+                let cfg = VisualConfig {
+                    eta: viewer.eta(),
+                    pace: None,
+                    ..VisualConfig::default()
+                };
+                visual::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Pvs => {
                 let rule = PvsPrefetch::Pbnp {

@@ -281,9 +281,10 @@ pub struct FrameStats {
     pub triangles_drawn: u64,
     /// Objects in the view frustum that were not in memory.
     pub visual_misses: usize,
-    /// Physical reads of index pages this frame, on both threads.
+    /// Physical reads of index pages this frame, on both threads (from the start of
+    /// its retrieval, its wait for the path's clock included: a prefetch reads then).
     pub index_pages: u64,
-    /// Physical reads of mesh pages this frame, on both threads.
+    /// Physical reads of mesh pages this frame, on both threads (as `index_pages`).
     pub mesh_pages: u64,
     /// Bytes the object buffer holds at the end of the frame.
     pub buffer_bytes: usize,

@@ -21,8 +21,13 @@
 //! - **Next-cell prefetch** ([`VisualConfig::prefetch_k`]) is ours, not the thesis's
 //!   (its VISUAL has none): a thread searches and loads the viewcell the eye will be in
 //!   k seconds on, along its motion, so that entering it reads nothing on the viewer's
-//!   thread. Off by default; `bench visual-vs-review` measures it on and off. A walk
-//!   with it is paced to the path's clock like REVIEW's ([`VisualConfig::pace`]).
+//!   thread. Off by default; `bench visual-vs-review` measures it on and off.
+//! - A walk is paced to the path's clock ([`VisualConfig::pace`]), with or without the
+//!   prefetch: frames back to back run with caches a viewer's frames would not have
+//!   (warm from the frame before), which flatters the steady frames about 4× here, and a
+//!   prefetch thread would not get a viewer's time. The pages a frame counts are those
+//!   read on both threads from the start of its retrieval, its wait for the clock
+//!   included (where a prefetch does most of its reading).
 //! - The memory held is not capped: it is what the cell's finds take (and the
 //!   prefetched cell's), reported as [`VisualSummary::peak_buffer_bytes`], the thesis's
 //!   "maximum memory used".
@@ -89,8 +94,9 @@ pub struct VisualConfig {
     pub far: f32,
     /// The fallback's disk cell outside every viewcell: SF times the frustum's box.
     pub fallback_sf: f32,
-    /// Play the path's clock this many times faster than real time when prefetching,
-    /// as REVIEW does ([`ReviewConfig::pace`](super::review::ReviewConfig::pace)).
+    /// Play the path's clock this many times faster than real time, as REVIEW does
+    /// with prefetching ([`ReviewConfig::pace`](super::review::ReviewConfig::pace));
+    /// `None`: frames back to back.
     pub pace: Option<f32>,
 }
 

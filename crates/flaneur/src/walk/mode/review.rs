@@ -196,6 +196,9 @@ impl Mode for Review<'_> {
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
         let (i, pose) = (at.index, at.pose);
         self.track.push(i, *pose)?;
+        // Counted from before the wait for the clock: what the prefetch thread reads
+        // meanwhile is this frame's.
+        let io_before = self.db.io();
         if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
             let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
             if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
@@ -209,7 +212,6 @@ impl Mode for Review<'_> {
         };
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
-        let io_before = self.db.io();
         let start = Instant::now();
         let mut stats = FrameStats {
             frame: i,

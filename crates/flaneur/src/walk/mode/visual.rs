@@ -126,7 +126,7 @@ pub(crate) fn walk_live<'db>(
             res_rx,
             left_out: tolerant.then(LeftOut::default),
             track: MotionTrack::default(),
-            pace: cfg.pace.filter(|_| cfg.prefetch_k.is_some()),
+            pace: cfg.pace,
             clock: Instant::now(),
             pending: None,
         };
@@ -290,6 +290,9 @@ impl Mode for Visual<'_> {
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
         let (i, pose) = (at.index, at.pose);
         self.track.push(i, *pose)?;
+        // Counted from before the wait for the clock: what the prefetch thread reads
+        // meanwhile is this frame's.
+        let io_before = self.db.io();
         if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
             let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
             if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
@@ -300,7 +303,6 @@ impl Mode for Visual<'_> {
             far: self.cfg.far,
             ..Camera::new(pose.position, pose.yaw, pose.pitch)?
         };
-        let io_before = self.db.io();
         let start = Instant::now();
         let mut frame = VisualFrame {
             frame: i,
