@@ -7,10 +7,12 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{pace, parse_size};
 use super::write_file;
+use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
 use flaneur::{Backend, Database};
 
@@ -20,8 +22,10 @@ pub struct WalkArgs {
     db: PathBuf,
     /// `review` (CSearch with index cache and prefetching), `box` (plain range
     /// queries), `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
-    /// database built with --visibility) or `visual` (the HDoV-tree searched under
-    /// --eta; needs one built with --visibility --hdov).
+    /// database built with --visibility), `visual` (the HDoV-tree searched under
+    /// --eta; needs one built with --visibility --hdov), or the memory scene tree of
+    /// the whole city traversed by `vsc` (under --eta), `pb` (under --budget) or
+    /// `conv` (frustum culling only; each needs --visibility).
     #[arg(long, default_value = "review")]
     mode: String,
     /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
@@ -89,7 +93,10 @@ pub struct WalkArgs {
     /// Write every N-th rendered frame (all are drawn and timed).
     #[arg(long, default_value_t = 1)]
     every: usize,
-    /// With --mode visual: the DoV threshold η of the HDoV-tree's search.
+    /// With --mode pb: the polygon budget, triangles a frame.
+    #[arg(long, default_value_t = 20_000)]
+    budget: u64,
+    /// With --mode visual or vsc: the DoV threshold η of the search.
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
     eta: f32,
     /// With --mode visual: the storage scheme searched (horizontal, vertical, indexed;
@@ -138,6 +145,7 @@ impl WalkArgs {
             eta,
             scheme,
             next_cell_prefetch,
+            budget,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
@@ -158,6 +166,28 @@ impl WalkArgs {
                 fps,
                 seed,
                 rule,
+                csv.as_deref(),
+                backend,
+                quiet,
+                render.as_ref(),
+            );
+        }
+        let traversal = match mode.as_str() {
+            "vsc" => Some(Traversal::Vsc { eta }),
+            "pb" => Some(Traversal::Pb { budget }),
+            "conv" => Some(Traversal::Conv),
+            _ => None,
+        };
+        if let (Some(how), None) = (traversal, config) {
+            let cfg = SceneConfig {
+                far: far.unwrap_or(review::DEFAULT_FAR),
+                ..SceneConfig::new(how)
+            };
+            return scene_walk_cmd(
+                &db,
+                &cfg,
+                path.as_deref().unwrap_or("cells"),
+                (frames, fps, seed),
                 csv.as_deref(),
                 backend,
                 quiet,
@@ -199,7 +229,7 @@ impl WalkArgs {
             None => match mode.as_str() {
                 "review" => Preset::Optimal,
                 "box" => Preset::Box,
-                other => bail!("unknown mode '{other}' (review, box, pvs, visual)"),
+                other => bail!("unknown mode '{other}' (review, box, pvs, visual, vsc, pb, conv)"),
             },
         };
         let mut cfg = ReviewConfig::preset(preset);
@@ -469,6 +499,105 @@ fn visual_walk_cmd(
         print_render(&drawn, r)?;
     }
     Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn scene_walk_cmd(
+    path: &Path,
+    cfg: &SceneConfig,
+    camera: &str,
+    (frames, fps, seed): (usize, f32, u64),
+    csv: Option<&Path>,
+    backend: Backend,
+    quiet: bool,
+    render: Option<&RenderOpts>,
+) -> Result<()> {
+    let db = Database::open_with(path, backend)?;
+    let poses = match camera {
+        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
+        other => camera_path(&db, other, frames, fps, seed)?,
+    };
+    let started = std::time::Instant::now();
+    let bars = super::bars::Bars::default();
+    let mut tree = SceneTree::load(
+        &db,
+        if quiet {
+            &flaneur::progress::Silent
+        } else {
+            &bars
+        },
+    )?;
+    if !quiet {
+        eprintln!(
+            "scene tree: {} nodes, loaded in {:.1} s",
+            tree.nodes.len(),
+            started.elapsed().as_secs_f64()
+        );
+    }
+    let bar = frame_bar(&poses, quiet);
+    let (r, drawn) = rendered(&db, render, cfg.far, |sink| {
+        scene_walk::walk_into(&db, &mut tree, &poses, cfg, |_| bar.inc(1), sink)
+    })?;
+    bar.finish_and_clear();
+    if let Some(p) = csv {
+        let mut out = String::from(
+            "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,forced,pages
+",
+        );
+        for f in &r.frames {
+            out.push_str(&format!(
+                "{},{:.4},{},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{}
+",
+                f.frame,
+                f.time,
+                f.cell.map_or(String::new(), |c| c.to_string()),
+                f.conv as u8,
+                f.update_ms,
+                f.traverse_ms,
+                f.frame_ms,
+                f.visited,
+                f.drawn,
+                f.internal,
+                f.triangles,
+                f.dropped,
+                f.forced as u8,
+                f.pages
+            ));
+        }
+        write_file(p, &out)?;
+    }
+    print_scene(&r);
+    if let (Some(drawn), Some(r)) = (drawn, render) {
+        print_render(&drawn, r)?;
+    }
+    Ok(())
+}
+
+/// A scene-tree walk's summary.
+fn print_scene(r: &SceneReport) {
+    let s = &r.summary;
+    println!(
+        "scene tree walk, {}: frames {}   mean {:.3} ms   max {:.2} ms   variance {:.4}   traversal {:.3} ms",
+        r.config.traversal.label(),
+        s.frames,
+        s.mean_frame_ms,
+        s.max_frame_ms,
+        s.frame_ms_variance,
+        s.mean_traverse_ms
+    );
+    println!(
+        "  per frame: {:.0} triangles (most {}), {:.1} nodes visited, {:.1} drawn   cells entered {}, {} frames outside every cell, {} drawn by CONV before the first",
+        s.mean_triangles, s.max_triangles, s.mean_visited, s.mean_drawn, s.cells_entered, s.frames_outside, s.frames_conv
+    );
+    if let Traversal::Pb { budget } = r.config.traversal {
+        println!(
+            "  within the budget of {budget} triangles on {:.1} % of frames",
+            r.within_budget() * 100.0
+        );
+    }
+    if let Some(t) = r.too_big() {
+        println!("  {t}");
+    }
 }
 
 /// A VISUAL walk's summary: its settings, frames, searches, pages and memory.

@@ -10,7 +10,10 @@
 //! what they loaded at full detail, and their pictures differ from the reference only
 //! where an object in view was not yet loaded (a visual miss). The PVS walk draws its
 //! current viewcell's PVS: its pictures also lose what the precomputation judged
-//! hidden (and got wrong), and everything while the eye is outside every cell.
+//! hidden (and got wrong), and everything while the eye is outside every cell. VISUAL
+//! draws what the HDoV-tree found, each object at the level its DoV deserves and the
+//! groups it stopped at as their nodes' internal LODs: its pictures lose what those
+//! coarser shapes change.
 
 use std::path::Path;
 
@@ -23,6 +26,7 @@ use flaneur::walk::lod_select::LodCounts;
 use flaneur::walk::path::CameraPath;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
+use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
 
@@ -33,6 +37,8 @@ pub enum ModeWalk<'a> {
     Review(&'a ReviewConfig),
     /// The PVS walk over the database's precomputed visibility, with this prefetcher.
     Pvs(PvsPrefetch),
+    /// VISUAL over the database's HDoV-tree under this configuration.
+    Visual(&'a VisualConfig),
 }
 
 impl ModeWalk<'_> {
@@ -42,6 +48,7 @@ impl ModeWalk<'_> {
             ModeWalk::Review(cfg) => cfg.far,
             // The PVS walk's cameras have the default frustum (`Pose::camera`).
             ModeWalk::Pvs(_) => flaneur::geom::DEFAULT_FAR,
+            ModeWalk::Visual(cfg) => cfg.far,
         }
     }
 }
@@ -218,6 +225,9 @@ pub fn run(
         }
         ModeWalk::Pvs(prefetch) => {
             pvs_walk::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
+        }
+        ModeWalk::Visual(cfg) => {
+            visual::walk_into(db, path, cfg, progress, &mut sink)?;
         }
     }
     Ok(FidelityReport {

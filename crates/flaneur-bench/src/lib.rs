@@ -35,6 +35,7 @@ pub mod prefetch_k;
 pub mod pvs_prefetch;
 pub mod pvs_stats;
 pub mod report;
+pub mod scene_tree;
 pub mod view_culling;
 pub mod visual_vs_review;
 pub mod walk_setup;

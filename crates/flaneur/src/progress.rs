@@ -14,6 +14,10 @@ pub enum Step {
     HdovLods,
     /// A build making the HDoV-tree's V-pages; counted in viewcells.
     HdovCells,
+    /// Loading the memory scene tree's objects; counted in objects.
+    SceneObjects,
+    /// Making the scene tree's internal LODs; counted in nodes.
+    SceneLods,
 }
 
 impl Step {
@@ -24,6 +28,8 @@ impl Step {
             Step::Visibility => "cells",
             Step::HdovLods => "nodes",
             Step::HdovCells => "cells",
+            Step::SceneObjects => "objects",
+            Step::SceneLods => "nodes",
         }
     }
 
@@ -34,6 +40,8 @@ impl Step {
             Step::Visibility => "visibility",
             Step::HdovLods => "HDoV LODs",
             Step::HdovCells => "HDoV V-pages",
+            Step::SceneObjects => "scene tree objects",
+            Step::SceneLods => "scene tree LODs",
         }
     }
 }

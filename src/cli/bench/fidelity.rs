@@ -11,6 +11,7 @@ use crate::cli::walk::camera_path;
 use flaneur::walk::path::cell_walk;
 use flaneur::walk::pvs_walk::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::visual::VisualConfig;
 use flaneur::Database;
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 
@@ -23,8 +24,9 @@ pub struct FidelityArgs {
     /// normal; cells in pvs mode].
     #[arg(long)]
     path: Option<String>,
-    /// review, box, or pvs (the viewcell's PVS with PBNP prefetching; the database
-    /// must have been built with --visibility).
+    /// review, box, pvs (the viewcell's PVS with PBNP prefetching; the database
+    /// must have been built with --visibility) or visual (the HDoV-tree under --eta;
+    /// built with --visibility --hdov).
     #[arg(long, default_value = "review")]
     mode: String,
     #[arg(long, default_value_t = 300)]
@@ -38,6 +40,9 @@ pub struct FidelityArgs {
     /// viewport (0: the mode's objects at full detail).
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
     lod_tau: f32,
+    /// With --mode visual: the DoV threshold η.
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    eta: f32,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -53,18 +58,19 @@ impl FidelityArgs {
             seed,
             size,
             lod_tau,
+            eta,
             out,
         } = self;
         let preset = match mode.as_str() {
             "review" => Some(Preset::Optimal),
             "box" => Some(Preset::Box),
-            "pvs" => None,
-            other => bail!("fidelity draws the review, box and pvs modes, not '{other}'"),
+            "pvs" | "visual" => None,
+            other => bail!("fidelity draws the review, box, pvs and visual modes, not '{other}'"),
         };
         let db = Database::open(&db)?;
         if preset.is_none() && !db.has_visibility() {
             bail!(
-                "{} has no precomputed visibility for the pvs mode (build it with --visibility)",
+                "{} has no precomputed visibility for the {mode} mode (build it with --visibility)",
                 db.store().path().display()
             );
         }
@@ -79,8 +85,14 @@ impl FidelityArgs {
             pace: None,
             ..ReviewConfig::preset(preset.unwrap_or(Preset::Optimal))
         };
+        let visual = VisualConfig {
+            eta,
+            pace: None,
+            ..VisualConfig::default()
+        };
         let walk = match preset {
             Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
+            None if mode == "visual" => flaneur_bench::fidelity::ModeWalk::Visual(&visual),
             None => flaneur_bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
                 border: PvsPrefetchConfig::default().border,
             }),
@@ -99,8 +111,14 @@ impl FidelityArgs {
             height: size.1,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         };
-        let r =
-            flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &mode, &drawing, |_| bar.inc(1))?;
+        let label = if mode == "visual" {
+            format!("visual (η = {eta})")
+        } else {
+            mode.clone()
+        };
+        let r = flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, |_| {
+            bar.inc(1)
+        })?;
         bar.finish_and_clear();
         write_report(&out, &r)
     }

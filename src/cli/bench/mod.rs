@@ -15,6 +15,7 @@ mod patterns;
 mod prefetch_k;
 mod pvs_prefetch;
 mod report;
+mod scene_tree;
 mod view_culling;
 mod visual_vs_review;
 mod walk_setup;
@@ -51,6 +52,10 @@ enum Experiment {
     /// visible objects each misses, VISUAL at Table 5.3's nine η (Table 5.3, Figs.
     /// 5.24–5.27). Needs a database built with --visibility --hdov.
     VisualVsReview(visual_vs_review::VisualVsReviewArgs),
+    /// The memory HDoV scene tree walked by CONV, VSC(η) and PB(n): frame time,
+    /// triangles, nodes visited, frames within budget (Table 6.1, Figs. 6.4–6.7). Needs
+    /// a database built with --visibility.
+    SceneTree(scene_tree::SceneTreeArgs),
     /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
     PrefetchK(prefetch_k::PrefetchKArgs),
     /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
@@ -89,6 +94,7 @@ impl BenchArgs {
             Experiment::HdovCache(a) => a.run(),
             Experiment::HdovSearch(a) => a.run(),
             Experiment::VisualVsReview(a) => a.run(),
+            Experiment::SceneTree(a) => a.run(),
             Experiment::HdovStorage(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),

@@ -11,6 +11,8 @@
 //!   NVO) summed bottom-up from the visibility table (`vd`), in V-pages stored under
 //!   the horizontal, vertical or indexed-vertical scheme (§5.4, [`Scheme`]).
 //! - The **search** (§5.3, Fig. 5.4): `search` under a DoV threshold η, reached through [`Database::hdov_search`](crate::Database::hdov_search).
+//! - The **memory scene tree** of ch. 6 ([`scene`]): the city in memory as a k-D tree
+//!   with internal LODs and one VD a node, traversed by VSC(η), PB(n) or CONV.
 //!
 //! `flaneur build --visibility --hdov …` writes it ([`HdovOptions`]); an open database
 //! searches it with [`Database::hdov_search`](crate::Database::hdov_search).
@@ -24,6 +26,7 @@ mod build;
 mod load;
 mod lods;
 mod node;
+pub mod scene;
 mod scheme;
 mod search;
 mod tree;

@@ -49,6 +49,24 @@ pub fn scaled_cell(bounds: &Aabb, fcell: &Aabb, center: Vec3, sf: f32) -> Aabb {
     Aabb { min: lo, max: hi }.union(&ground)
 }
 
+/// The walkable viewcell of `db` whose box holds `p`: its patch of ground, and between
+/// its eye heights give or take [`EYE_SLACK`] (an eye above them, over the roofs, sees
+/// what the cell's PVS was not computed for). `None` without visibility.
+pub(crate) fn viewcell_holding(db: &crate::Database, p: Vec3) -> Result<Option<u32>> {
+    let (Some(cell), Some(vis)) = (db.viewcell_at(p)?, db.visibility()?) else {
+        return Ok(None);
+    };
+    let (row, column) = vis.grid.place(cell);
+    let b = vis.grid.cell_bounds(row, column);
+    Ok((b.min.y - EYE_SLACK..=b.max.y + EYE_SLACK)
+        .contains(&p.y)
+        .then_some(cell))
+}
+
+/// How far, in metres, an eye may be above or below its cell's eye heights and still be
+/// in it: a walker's step up a kerb.
+pub(crate) const EYE_SLACK: f32 = 0.5;
+
 /// Whether `outer` holds `inner` on the ground plane (x and z).
 pub fn contains_ground(outer: &Aabb, inner: &Aabb) -> bool {
     outer.min.x <= inner.min.x

@@ -8,8 +8,8 @@
 //! frustum; the mode finishes its figures; [`lod_select`] picks each object's level
 //! under the τ the viewer wants; the viewer is handed the frame, then its figures. The
 //! modes (`mode/`) are the session's retrieval strategies: REVIEW and BOX over disk
-//! cells (Shou 2002 §4.1–4.4), the PVS client (Zheng 2007 ch. 7) and VISUAL over the
-//! HDoV-tree (Shou 2002 §5.8.5). The loop and the
+//! cells (Shou 2002 §4.1–4.4), the PVS client (Zheng 2007 ch. 7), VISUAL over the
+//! HDoV-tree (Shou 2002 §5.8.5) and VSC, PB and CONV over the memory scene tree (ch. 6). The loop and the
 //! modes are crate-private: a user walks a mode through its namespace's entry points.
 //!
 //! ```
@@ -38,6 +38,8 @@
 //!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
 //! - [`visual`]: the VISUAL walk over the HDoV-tree ([`visual::walk`] and the rest),
 //!   its settings ([`visual::VisualConfig`]) and figures ([`visual::VisualReport`]);
+//! - [`scene_walk`]: VSC, PB and CONV walks over the memory scene tree
+//!   ([`scene_walk::walk`], [`scene_walk::SceneConfig`], [`scene_walk::SceneReport`]);
 //! - [`live`]: walks one after another at a live viewer (a window) as its person changes
 //!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
 //! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
@@ -68,6 +70,7 @@ mod mode;
 pub mod path;
 pub mod pvs_walk;
 pub mod review;
+pub mod scene_walk;
 mod session;
 mod sink;
 mod start;

@@ -18,7 +18,7 @@ use crate::prefetch::motion::MotionTrack;
 use crate::rtree::ObjectEntry;
 use crate::store::{IoStats, PageKind};
 use crate::walk::buffer::{Loaded, ObjectBuffer, GROUP_ID};
-use crate::walk::cells::{contains_ground, scaled_cell};
+use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
@@ -118,6 +118,7 @@ pub(crate) fn walk_live<'db>(
             current: None,
             pieces: Vec::new(),
             drawable: Vec::new(),
+            found: (0, 0),
             fallback_cell: None,
             prefetched: None,
             in_flight: None,
@@ -205,22 +206,13 @@ impl Searcher<'_> {
     }
 }
 
-/// The viewcell of the HDoV-tree whose box holds `p`: its patch of ground, and between
-/// its eye heights (an eye above them, over the roofs, sees what the cell's PVS was not
-/// computed for).
+/// The viewcell of the HDoV-tree whose box holds `p` ([`viewcell_holding`]).
 fn cell_at(db: &Database, p: glam::Vec3) -> Result<Option<u32>> {
-    let (Some(cell), Some(vis)) = (db.viewcell_at(p)?, db.visibility()?) else {
-        return Ok(None);
-    };
-    let (row, column) = vis.grid.place(cell);
-    let b = vis.grid.cell_bounds(row, column);
-    let within = (b.min.y - EYE_SLACK..=b.max.y + EYE_SLACK).contains(&p.y);
-    Ok((within && db.hdov_head()?.slot(cell).is_some()).then_some(cell))
+    Ok(match viewcell_holding(db, p)? {
+        Some(c) if db.hdov_head()?.slot(c).is_some() => Some(c),
+        _ => None,
+    })
 }
-
-/// How far, in metres, an eye may be above or below its cell's eye heights and still be
-/// in it: a walker's step up a kerb.
-const EYE_SLACK: f32 = 0.5;
 
 /// The id a find has in the buffer.
 fn key_of(found: &Found) -> Result<u64> {
@@ -262,6 +254,8 @@ struct Visual<'a> {
     pieces: Vec<Piece>,
     /// Their keys, in the search's order: what a frame may draw.
     drawable: Vec<u64>,
+    /// Of those, objects and nodes.
+    found: (usize, usize),
     /// Outside every cell: the fallback's disk cell.
     fallback_cell: Option<Aabb>,
     /// The latest prefetched cell, its finds in the buffer.
@@ -317,12 +311,7 @@ impl Mode for Visual<'_> {
             None => self.fall_back(&camera, buffer, &mut frame)?,
         }
         frame.cell = cell;
-        frame.objects_found = self
-            .pieces
-            .iter()
-            .filter(|p| matches!(p.found, Found::Object { .. }))
-            .count();
-        frame.nodes_found = self.pieces.len() - frame.objects_found;
+        (frame.objects_found, frame.nodes_found) = self.found;
         if let Some(k) = self.cfg.prefetch_k {
             self.maybe_prefetch(pose.position + self.track.motion().velocity * k, buffer)?;
         }
@@ -331,7 +320,12 @@ impl Mode for Visual<'_> {
     }
 
     fn drawable(&self) -> Drawable<'_> {
-        Drawable::Only(&self.drawable)
+        // Without a prefetched cell beside them the buffer holds exactly the cell's
+        // finds: culling walks it as it lies rather than looking each one up.
+        match self.prefetched {
+            None => Drawable::All,
+            Some(_) => Drawable::Only(&self.drawable),
+        }
     }
 
     fn finish(&mut self, culled: &Culled<'_>, buffer: &ObjectBuffer) -> Result<VisualFrame> {
@@ -505,6 +499,11 @@ impl Visual<'_> {
             buffer.remove(id);
         }
         self.drawable = kept.iter().map(|p| p.key).collect();
+        let objects = kept
+            .iter()
+            .filter(|p| matches!(p.found, Found::Object { .. }))
+            .count();
+        self.found = (objects, kept.len() - objects);
         self.pieces = kept;
         frame.load_ms += t.elapsed().as_secs_f64() * 1e3;
         Ok(())

@@ -1,0 +1,41 @@
+//! The memory HDoV scene tree (Shou 2002 ch. 6): the whole city in memory as a k-D tree
+//! whose nodes carry internal LODs and one VD each ([`SceneTree`], `tree.rs`), and its
+//! three traversals, CONV, VSC(η) and PB(n) ([`traverse`], `traverse.rs`). The walk
+//! modes `vsc`, `pb` and `conv` draw with it (`flaneur::walk::scene_walk`).
+//!
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions {
+//! #     visibility: Some(flaneur::visibility::VisibilityOptions {
+//! #         resolution: 8, ..Default::default() }),
+//! #     ..Default::default()
+//! # };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::hdov::scene::{traverse, SceneTree, Traversal};
+//! let db = flaneur::Database::open(&file)?;
+//! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
+//! let cells = db.visibility()?.unwrap();
+//! let cell = cells.cells[0].id;
+//! tree.enter(&db, cell)?;
+//! let (row, column) = cells.grid.place(cell);
+//! let eye = flaneur::walk::path::Pose {
+//!     time: 0.0,
+//!     position: cells.grid.cell_bounds(row, column).center(),
+//!     yaw: 0.0,
+//!     pitch: 0.0,
+//! };
+//! let frustum = eye.camera()?.frustum();
+//! let conv = traverse(&tree, Traversal::Conv, &frustum)?;
+//! let vsc = traverse(&tree, Traversal::Vsc { eta: 0.001 }, &frustum)?;
+//! assert!(vsc.triangles <= conv.triangles);
+//! # Ok(()) }
+//! ```
+
+mod traverse;
+mod tree;
+
+pub use traverse::{traverse, Active, Traversal, Traversed, MAX_ATTEMPTS};
+pub use tree::{SceneNode, SceneTree};

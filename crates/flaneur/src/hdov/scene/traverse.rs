@@ -1,0 +1,277 @@
+//! The scene tree's traversals (Shou 2002 §6.1, §6.3): what a frame draws, node by node
+//! and at which representation, each culling nodes outside the view frustum.
+//!
+//! - **CONV**, the baseline: the same hierarchy with view frustum culling only, every
+//!   object in view at full detail.
+//! - **VSC(η)** (§6.1.1): the disk search's rule in memory. A node of DoV 0 is culled;
+//!   a leaf is drawn at the detail of eq. 5.6; an internal node stops at its internal
+//!   LOD (detail by eq. 5.5) when DoV ≤ η and h(1 + log₂ s) < log₂ NVO.
+//! - **PB(n)** (§6.1.2, Fig. 6.2): a polygon budget of n triangles handed down the tree,
+//!   children in descending DoV, child i getting B·(dᵢ/D)·k with k the share of the
+//!   budget still left; a node's representation is the one of about
+//!   min(λ·finest + (1 − λ)·coarsest, Bᵢ) triangles, λ = min(DoV/MAXDOV, 1). A leaf that
+//!   does not fit what is left is dropped and its parent retreats to its own
+//!   representation instead of its children's; after [`MAX_ATTEMPTS`] retreats that do
+//!   not fit in a row the traversal ends, drawing the last node over the budget.
+//!
+//! Choices the thesis leaves open, named: a representation "of about" t triangles is
+//! the finest with at most t (the coarsest when none has so few); a retreat undoes what
+//! the node's children had chosen (they are not drawn beside it); a node culled by the
+//! frustum or by DoV 0 succeeds with nothing; MAX_ATTEMPTS is 8.
+
+use super::super::search::{level_for_detail, stops, MAXDOV};
+use super::tree::{SceneNode, SceneTree};
+use crate::error::{Error, Result};
+use crate::geom::Frustum;
+
+/// Retreats to a parent's representation that do not fit, in a row, before PB ends its
+/// traversal (the thesis's MAX_ATTEMPTS, whose value it does not give).
+pub const MAX_ATTEMPTS: u32 = 8;
+
+/// How the scene tree is traversed.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum Traversal {
+    /// CONV: view frustum culling only, every object at full detail.
+    Conv,
+    /// VSC(η): visibility simplification culling under the DoV threshold η.
+    Vsc {
+        /// The DoV threshold.
+        eta: f32,
+    },
+    /// PB(n): a polygon budget of n triangles a frame.
+    Pb {
+        /// The budget, triangles.
+        budget: u64,
+    },
+}
+
+impl Traversal {
+    /// The traversal's name as the thesis writes it: CONV, VSC(η), PB(n).
+    pub fn label(&self) -> String {
+        match self {
+            Traversal::Conv => "CONV".into(),
+            Traversal::Vsc { eta } => format!("VSC({eta})"),
+            Traversal::Pb { budget } => format!("PB({budget})"),
+        }
+    }
+
+    /// Checks its parameter, naming a bad one.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Traversal::Vsc { eta } if !(eta.is_finite() && eta >= 0.0) => Err(Error::Invalid(
+                format!("a DoV threshold η of {eta}: give a number ≥ 0"),
+            )),
+            Traversal::Pb { budget: 0 } => Err(Error::Invalid(
+                "a polygon budget of 0 triangles draws nothing: give more".into(),
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A node drawn: at which of its representations, and its triangles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Active {
+    /// The node, an index into [`SceneTree::nodes`].
+    pub node: u32,
+    /// Its representation: 0 its finest.
+    pub level: usize,
+    /// That representation's triangles.
+    pub triangles: u32,
+}
+
+/// What a traversal chose, and what it cost.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Traversed {
+    /// The nodes drawn, in the order visited.
+    pub active: Vec<Active>,
+    /// Nodes visited (Table 6.1's "Nodes").
+    pub visited: usize,
+    /// Triangles of the nodes drawn.
+    pub triangles: u64,
+    /// PB: nodes dropped for want of budget.
+    pub dropped: usize,
+    /// PB: the traversal ran out of attempts and drew a node over the budget.
+    pub forced: bool,
+    /// PB: an object whose coarsest representation alone is over the whole budget (its
+    /// id and triangles), when the frame met one.
+    pub too_big: Option<(u64, u32)>,
+}
+
+/// Traverses `tree` as `how` says for a view of `frustum`. VSC and PB use the VDs of
+/// the tree's current cell.
+pub fn traverse(tree: &SceneTree, how: Traversal, frustum: &Frustum) -> Result<Traversed> {
+    how.validate()?;
+    let mut out = Traversed::default();
+    match how {
+        Traversal::Conv => conv(tree, 0, frustum, &mut out),
+        Traversal::Vsc { eta } => vsc(tree, 0, eta, frustum, &mut out),
+        Traversal::Pb { budget } => {
+            let mut pb = Budget {
+                tree,
+                frustum,
+                initial: budget as f64,
+                remaining: budget as f64,
+                attempts: 0,
+                ended: false,
+                out: &mut out,
+            };
+            pb.refine(0, budget as f64);
+        }
+    }
+    out.triangles = out.active.iter().map(|a| a.triangles as u64).sum();
+    Ok(out)
+}
+
+fn conv(tree: &SceneTree, k: u32, frustum: &Frustum, out: &mut Traversed) {
+    out.visited += 1;
+    let n = &tree.nodes[k as usize];
+    if !frustum.overlaps_aabb(&n.bounds) {
+        return;
+    }
+    match n.children {
+        None => out.active.push(Active {
+            node: k,
+            level: 0,
+            triangles: n.triangles.first().copied().unwrap_or(0),
+        }),
+        Some([a, b]) => {
+            conv(tree, a, frustum, out);
+            conv(tree, b, frustum, out);
+        }
+    }
+}
+
+fn vsc(tree: &SceneTree, k: u32, eta: f32, frustum: &Frustum, out: &mut Traversed) {
+    out.visited += 1;
+    let n = &tree.nodes[k as usize];
+    if n.vd.dov <= 0.0 || !frustum.overlaps_aabb(&n.bounds) {
+        return;
+    }
+    match n.children {
+        None => out
+            .active
+            .push(at_detail(k, n, (n.vd.dov / MAXDOV).min(1.0))),
+        Some(_) if !n.levels.is_empty() && stops(n.vd, eta, n.h, n.s, 2.0) => {
+            out.active.push(at_detail(k, n, (n.vd.dov / eta).min(1.0)))
+        }
+        Some([a, b]) => {
+            vsc(tree, a, eta, frustum, out);
+            vsc(tree, b, eta, frustum, out);
+        }
+    }
+}
+
+/// Node `k` at the level of `detail` (eqs. 5.5–5.6).
+fn at_detail(k: u32, n: &SceneNode, detail: f32) -> Active {
+    let level = level_for_detail(&n.triangles, detail);
+    Active {
+        node: k,
+        level,
+        triangles: n.triangles[level],
+    }
+}
+
+/// The polygon budget traversal's state (Fig. 6.2).
+struct Budget<'a> {
+    tree: &'a SceneTree,
+    frustum: &'a Frustum,
+    initial: f64,
+    remaining: f64,
+    attempts: u32,
+    ended: bool,
+    out: &'a mut Traversed,
+}
+
+impl Budget<'_> {
+    /// Fig. 6.2's Refine(node) with the node's share `budget`: whether it (or what it
+    /// retreated to) fitted.
+    fn refine(&mut self, k: u32, budget: f64) -> bool {
+        if self.ended {
+            return true;
+        }
+        self.out.visited += 1;
+        let n = &self.tree.nodes[k as usize];
+        if n.vd.dov <= 0.0 || !self.frustum.overlaps_aabb(&n.bounds) {
+            return true;
+        }
+        let lod = lod_for_budget(n, budget);
+        let Some([a, b]) = n.children else {
+            let (level, t) = lod.expect("a leaf has its object's mesh");
+            if (t as f64) < self.remaining {
+                self.take(k, level, t);
+                return true;
+            }
+            self.out.dropped += 1;
+            let coarsest = *n.triangles.last().expect("a leaf has levels");
+            if coarsest as f64 > self.initial {
+                self.out.too_big = Some((n.object.expect("a leaf"), coarsest));
+            }
+            return false;
+        };
+        let (mark, before) = (self.out.active.len(), self.remaining);
+        let mut children = [a, b];
+        let dov = |c: &u32| self.tree.nodes[*c as usize].vd.dov;
+        if dov(&b) > dov(&a) {
+            children.swap(0, 1);
+        }
+        let total = n.vd.dov as f64;
+        let mut success = true;
+        for c in children {
+            let share = budget * dov(&c) as f64 / total * (self.remaining / self.initial);
+            if !self.refine(c, share) {
+                success = false;
+            }
+        }
+        if success || self.ended {
+            return true;
+        }
+        // A child overdrew: this node's own representation instead of its children's.
+        self.out.active.truncate(mark);
+        self.remaining = before;
+        match lod {
+            Some((level, t)) if (t as f64) < self.remaining => {
+                self.take(k, level, t);
+                self.attempts = 0;
+                true
+            }
+            lod if self.attempts > MAX_ATTEMPTS => {
+                if let Some((level, t)) = lod {
+                    self.take(k, level, t);
+                }
+                self.out.forced = true;
+                self.ended = true;
+                true
+            }
+            _ => {
+                self.out.dropped += 1;
+                self.attempts += 1;
+                false
+            }
+        }
+    }
+
+    fn take(&mut self, node: u32, level: usize, triangles: u32) {
+        self.remaining -= triangles as f64;
+        self.out.active.push(Active {
+            node,
+            level,
+            triangles,
+        });
+    }
+}
+
+/// The representation of node `n` for a share `budget`: the finest with at most
+/// min(λ·finest + (1 − λ)·coarsest, budget) triangles (the coarsest when none has so
+/// few), λ = min(DoV/MAXDOV, 1). `None` for a node without representations.
+fn lod_for_budget(n: &SceneNode, budget: f64) -> Option<(usize, u32)> {
+    let (&finest, &coarsest) = (n.triangles.first()?, n.triangles.last()?);
+    let lambda = (n.vd.dov / MAXDOV).min(1.0) as f64;
+    let want = (lambda * finest as f64 + (1.0 - lambda) * coarsest as f64).min(budget);
+    let level = n
+        .triangles
+        .iter()
+        .position(|&t| t as f64 <= want)
+        .unwrap_or(n.triangles.len() - 1);
+    Some((level, n.triangles[level]))
+}

@@ -1,0 +1,246 @@
+//! Walks over the memory HDoV scene tree (Shou 2002 ch. 6, `flaneur walk DB --mode
+//! vsc|pb|conv`): the whole city loaded into a [`SceneTree`] once, then each frame the
+//! eye's viewcell found (its VDs brought in through the tree's hash table on a change
+//! of cell) and the tree traversed by VSC(η), PB(n) or CONV, view frustum culling in
+//! all three; what the traversal chose is what the frame draws.
+//!
+//! A viewpoint outside every viewcell keeps the VDs of the last cell it was in (the
+//! thesis's run-time phase is for viewpoints within the cells); one before any cell
+//! is drawn by CONV. Both are counted ([`SceneSummary::frames_outside`],
+//! [`SceneSummary::frames_conv`]). Frame time is the walk's own: the VD update, the
+//! traversal, bringing the object buffer to what it chose, and culling.
+//!
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions {
+//! #     visibility: Some(flaneur::visibility::VisibilityOptions {
+//! #         resolution: 8, ..Default::default() }),
+//! #     ..Default::default()
+//! # };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::hdov::scene::{SceneTree, Traversal};
+//! use flaneur::walk::{path, scene_walk};
+//! let db = flaneur::Database::open(&file)?;
+//! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
+//! let poses = path::cell_walk(&db, 30, 0.5, 10.0, 3)?;
+//! let cfg = scene_walk::SceneConfig::new(Traversal::Vsc { eta: 0.001 });
+//! let report = scene_walk::walk(&db, &mut tree, &poses, &cfg, |_| {})?;
+//! assert_eq!(report.frames.len(), 30);
+//! # Ok(()) }
+//! ```
+
+use serde::Serialize;
+
+use super::lod_select::WalkLods;
+use super::path::CameraPath;
+use super::sink::{FrameSink, NoSink, Played, Viewer};
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::hdov::scene::{SceneTree, Traversal};
+
+/// What a scene-tree walk can vary.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SceneConfig {
+    /// The traversal: CONV, VSC(η) or PB(n).
+    pub traversal: Traversal,
+    /// Depth of the view frustum, metres.
+    pub far: f32,
+}
+
+impl SceneConfig {
+    /// `traversal` with REVIEW's frustum depth.
+    pub fn new(traversal: Traversal) -> SceneConfig {
+        SceneConfig {
+            traversal,
+            far: super::review::DEFAULT_FAR,
+        }
+    }
+}
+
+/// One frame of a scene-tree walk. Times in milliseconds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SceneFrame {
+    /// The frame's index, from 0.
+    pub frame: usize,
+    /// Its pose's time on the path, seconds.
+    pub time: f64,
+    /// The viewcell the eye is in; `None` outside every one.
+    pub cell: Option<u32>,
+    /// Drawn by CONV, no cell having been entered yet.
+    pub conv: bool,
+    /// Bringing the VDs to a new cell.
+    pub update_ms: f64,
+    /// The traversal.
+    pub traverse_ms: f64,
+    /// The walk's whole time for the frame.
+    pub frame_ms: f64,
+    /// Nodes the traversal visited.
+    pub visited: usize,
+    /// Nodes drawn (objects and internal nodes).
+    pub drawn: usize,
+    /// Of those, internal nodes at an internal LOD.
+    pub internal: usize,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// PB: nodes dropped for want of budget.
+    pub dropped: usize,
+    /// PB: the traversal ran out of attempts and drew a node over the budget.
+    pub forced: bool,
+    /// PB: an object whose coarsest representation alone is over the budget (id,
+    /// triangles), when the frame met one.
+    pub too_big: Option<(u64, u32)>,
+    /// Pages read (a new cell's PVS; the tree is in memory).
+    pub pages: u64,
+}
+
+/// A scene-tree walk in all; frame 0 left out of the frame-time figures.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SceneSummary {
+    /// Frames walked, frame 0 included.
+    pub frames: usize,
+    /// Mean frame time from frame 1 on, ms.
+    pub mean_frame_ms: f64,
+    /// Frame time's variance from frame 1 on, ms².
+    pub frame_ms_variance: f64,
+    /// Longest frame from frame 1 on, ms.
+    pub max_frame_ms: f64,
+    /// Mean traversal time, ms.
+    pub mean_traverse_ms: f64,
+    /// Triangles drawn per frame, on average.
+    pub mean_triangles: f64,
+    /// Nodes visited per frame, on average (Table 6.1's "Nodes").
+    pub mean_visited: f64,
+    /// Nodes drawn per frame, on average.
+    pub mean_drawn: f64,
+    /// The most triangles a frame drew.
+    pub max_triangles: u64,
+    /// Moves into another viewcell.
+    pub cells_entered: usize,
+    /// Frames outside every viewcell (the last cell's VDs kept).
+    pub frames_outside: usize,
+    /// Frames drawn by CONV before any cell was entered.
+    pub frames_conv: usize,
+    /// PB: frames that drew more triangles than the budget.
+    pub frames_over_budget: usize,
+    /// PB: frames that met an object whose coarsest representation alone is over the
+    /// budget.
+    pub frames_too_big: usize,
+}
+
+/// What a scene-tree walk did.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneReport {
+    /// The settings walked.
+    pub config: SceneConfig,
+    /// Every frame's figures, in order.
+    pub frames: Vec<SceneFrame>,
+    /// The walk in all.
+    pub summary: SceneSummary,
+}
+
+impl SceneReport {
+    /// PB's budget held on this share of the frames (1 for other traversals).
+    pub fn within_budget(&self) -> f64 {
+        1.0 - self.summary.frames_over_budget as f64 / self.frames.len().max(1) as f64
+    }
+
+    /// What PB's budget could not hold, in words: the first object whose coarsest
+    /// representation alone is over it. `None` when none was met.
+    pub fn too_big(&self) -> Option<String> {
+        let Traversal::Pb { budget } = self.config.traversal else {
+            return None;
+        };
+        let (frame, (id, t)) = self
+            .frames
+            .iter()
+            .find_map(|f| f.too_big.map(|b| (f.frame, b)))?;
+        Some(format!(
+            "object {id}'s coarsest representation alone has {t} triangles, over the budget of {budget} (first on frame {frame}, {} frames in all)",
+            self.summary.frames_too_big
+        ))
+    }
+}
+
+/// Walks `path` over `tree` (loaded from `db`) under `cfg`; `progress` is told each
+/// frame.
+pub fn walk(
+    db: &Database,
+    tree: &mut SceneTree,
+    path: &CameraPath,
+    cfg: &SceneConfig,
+    progress: impl FnMut(usize),
+) -> Result<SceneReport> {
+    walk_into(db, tree, path, cfg, progress, &mut NoSink)
+}
+
+/// [`walk`], handing each frame to `sink`.
+pub fn walk_into(
+    db: &Database,
+    tree: &mut SceneTree,
+    path: &CameraPath,
+    cfg: &SceneConfig,
+    progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+) -> Result<SceneReport> {
+    if path.poses.is_empty() {
+        return Err(Error::Invalid("the camera path has no poses".into()));
+    }
+    walk_live(db, tree, cfg, progress, &mut Played { path, sink })
+}
+
+/// [`walk_into`] with the poses coming from `viewer`.
+pub fn walk_live(
+    db: &Database,
+    tree: &mut SceneTree,
+    cfg: &SceneConfig,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<SceneReport> {
+    cfg.traversal.validate()?;
+    super::review::check_far(cfg.far)?;
+    let frames =
+        super::mode::scene::walk_live(db, tree, cfg, &mut WalkLods::new(db), progress, viewer)?;
+    let summary = summarize(&frames, cfg);
+    Ok(SceneReport {
+        config: *cfg,
+        frames,
+        summary,
+    })
+}
+
+fn summarize(frames: &[SceneFrame], cfg: &SceneConfig) -> SceneSummary {
+    let walk = frames.get(1..).unwrap_or_default();
+    let n = walk.len().max(1) as f64;
+    let all = frames.len().max(1) as f64;
+    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let budget = match cfg.traversal {
+        Traversal::Pb { budget } => Some(budget),
+        _ => None,
+    };
+    SceneSummary {
+        frames: frames.len(),
+        mean_frame_ms: mean,
+        frame_ms_variance: walk
+            .iter()
+            .map(|f| (f.frame_ms - mean).powi(2))
+            .sum::<f64>()
+            / n,
+        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
+        mean_traverse_ms: walk.iter().map(|f| f.traverse_ms).sum::<f64>() / n,
+        mean_triangles: frames.iter().map(|f| f.triangles as f64).sum::<f64>() / all,
+        mean_visited: frames.iter().map(|f| f.visited as f64).sum::<f64>() / all,
+        mean_drawn: frames.iter().map(|f| f.drawn as f64).sum::<f64>() / all,
+        max_triangles: frames.iter().map(|f| f.triangles).max().unwrap_or(0),
+        cells_entered: frames
+            .windows(2)
+            .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
+            .count(),
+        frames_outside: frames.iter().filter(|f| f.cell.is_none()).count(),
+        frames_conv: frames.iter().filter(|f| f.conv).count(),
+        frames_over_budget: budget.map_or(0, |b| frames.iter().filter(|f| f.triangles > b).count()),
+        frames_too_big: frames.iter().filter(|f| f.too_big.is_some()).count(),
+    }
+}
