@@ -741,3 +741,51 @@ fn large_objects_are_refined_view_by_view() {
         100.0 * mean_differ
     );
 }
+
+/// VISUAL's fidelity: at η = 0 it draws each visible object in view at the level its
+/// DoV deserves, so never more triangles than the reference; at a large η groups drawn
+/// at their nodes' internal LODs appear, and the pictures stay close to full detail.
+#[test]
+fn fidelity_of_the_visual_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = build(
+        dir.path(),
+        &BuildOptions {
+            hdov: Some(flaneur::hdov::HdovOptions::default()),
+            ..common::with_visibility()
+        },
+    );
+    let path = flaneur::walk::path::cell_walk(&db, 60, 0.5, 30.0, 2).unwrap();
+    let gpu = gpu();
+    let at = |eta: f32| flaneur::walk::visual::VisualConfig {
+        eta,
+        pace: None,
+        ..Default::default()
+    };
+    let exact = at(0.0);
+    let r = fidelity(
+        &db,
+        &gpu,
+        &path,
+        ModeWalk::Visual(&exact),
+        "visual",
+        (96, None),
+    );
+    assert_eq!(r.rows.len(), 60);
+    assert!(r
+        .rows
+        .iter()
+        .all(|row| row.triangles <= row.reference_triangles));
+    assert!(r.mean_differ() < 0.05, "{:.3}", r.mean_differ());
+    let coarse = at(0.05);
+    let c = fidelity(
+        &db,
+        &gpu,
+        &path,
+        ModeWalk::Visual(&coarse),
+        "visual",
+        (96, None),
+    );
+    assert_eq!(c.rows.len(), 60);
+    assert!(c.mean_differ() < 0.2, "{:.3}", c.mean_differ());
+}

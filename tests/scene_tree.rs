@@ -215,3 +215,67 @@ fn a_walk_counts_conv_frames_before_any_cell_and_frames_outside() {
     );
     assert!(r.frames[15..].iter().all(|f| !f.conv && f.cell.is_none()));
 }
+
+#[test]
+fn the_scene_tree_bench_sets_vsc_and_pb_beside_conv_and_writes_its_report() {
+    use flaneur_bench::scene_tree::{self, SceneTreeConfig};
+    let db = Database::open(&city().db).unwrap();
+    let cfg = SceneTreeConfig {
+        frames: 90,
+        etas: vec![0.0, 0.001],
+        budgets: vec![2_000],
+        ..Default::default()
+    };
+    let r = scene_tree::run(&db, &cfg, |_, _| {}).unwrap();
+    assert_eq!(r.rows.len(), 4);
+    let conv = r.row("CONV").unwrap();
+    let vsc = r.row("VSC(0.001)").unwrap();
+    assert!(vsc.mean_triangles <= conv.mean_triangles);
+    assert!(vsc.mean_visited <= conv.mean_visited);
+    let pb = r.row("PB(2000)").unwrap();
+    assert!(pb.within_budget >= 0.99, "{pb:?}");
+    assert!(r.series.iter().all(|(_, f)| f.len() == cfg.frames));
+
+    let out = city().dir.path().join("scene-bench");
+    let o = common::flaneur(&[
+        "bench",
+        "scene-tree",
+        city().db.to_str().unwrap(),
+        "--frames",
+        "30",
+        "--etas",
+        "0.001",
+        "--budgets",
+        "5000",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "scene-tree.csv",
+        "scene-tree.md",
+        "scene-tree-frames.csv",
+        "scene-tree-triangles.png",
+        "scene-tree-frames.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    // And a walk in the mode from the command line.
+    let o = common::flaneur(&[
+        "walk",
+        city().db.to_str().unwrap(),
+        "--mode",
+        "pb",
+        "--budget",
+        "3000",
+        "--frames",
+        "30",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains("PB(3000)") && said.contains("within the budget"),
+        "{said}"
+    );
+}

@@ -541,7 +541,7 @@ fn scene_walk_cmd(
     bar.finish_and_clear();
     if let Some(p) = csv {
         let mut out = String::from(
-            "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,forced,pages
+            "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,ended,pages
 ",
         );
         for f in &r.frames {
@@ -560,7 +560,7 @@ fn scene_walk_cmd(
                 f.internal,
                 f.triangles,
                 f.dropped,
-                f.forced as u8,
+                f.ended as u8,
                 f.pages
             ));
         }

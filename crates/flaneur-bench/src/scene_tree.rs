@@ -86,6 +86,8 @@ pub struct SceneRow {
     pub mean_drawn: f64,
     /// PB: the share of frames within the budget (1 otherwise).
     pub within_budget: f64,
+    /// PB: frames whose traversal ran out of attempts and ended early.
+    pub frames_ended: usize,
     /// PB: what the budget could not hold, in words.
     pub too_big: Option<String>,
 }
@@ -136,6 +138,7 @@ pub fn run(
             mean_visited: s.mean_visited,
             mean_drawn: s.mean_drawn,
             within_budget: r.within_budget(),
+            frames_ended: s.frames_ended,
             too_big: r.too_big(),
         });
         tick(rows.len(), cfg.traversals().len());
@@ -168,11 +171,11 @@ impl Report for SceneTreeReport {
 
     fn to_csv(&self) -> String {
         let mut s = String::from(
-            "traversal,mean_frame_ms,frame_ms_variance,max_frame_ms,mean_traverse_ms,mean_triangles,max_triangles,mean_visited,mean_drawn,within_budget\n",
+            "traversal,mean_frame_ms,frame_ms_variance,max_frame_ms,mean_traverse_ms,mean_triangles,max_triangles,mean_visited,mean_drawn,within_budget,frames_ended\n",
         );
         for r in &self.rows {
             s.push_str(&format!(
-                "{},{:.4},{:.4},{:.3},{:.4},{:.0},{},{:.1},{:.1},{:.4}\n",
+                "{},{:.4},{:.4},{:.3},{:.4},{:.0},{},{:.1},{:.1},{:.4},{}\n",
                 r.traversal,
                 r.mean_frame_ms,
                 r.frame_ms_variance,
@@ -182,7 +185,8 @@ impl Report for SceneTreeReport {
                 r.max_triangles,
                 r.mean_visited,
                 r.mean_drawn,
-                r.within_budget
+                r.within_budget,
+                r.frames_ended
             ));
         }
         s
@@ -205,8 +209,8 @@ impl Report for SceneTreeReport {
              A walk of {} frames through the walkable viewcells of a city of {} objects at {} m/s \
              (seed {}); the scene tree has {} nodes and took {:.1} s to load. Frame time is the \
              walk's own, not drawing; the thesis's includes rendering.\n\n\
-             | traversal | mean frame ms | variance | traversal ms | triangles a frame | most | nodes visited | nodes drawn | within budget |\n\
-             |---|---|---|---|---|---|---|---|---|\n",
+             | traversal | mean frame ms | variance | traversal ms | triangles a frame | most | nodes visited | nodes drawn | within budget | ended early |\n\
+             |---|---|---|---|---|---|---|---|---|---|\n",
             c.frames,
             self.objects,
             c.speed,
@@ -216,7 +220,7 @@ impl Report for SceneTreeReport {
         );
         for r in &self.rows {
             s.push_str(&format!(
-                "| {} | {:.3} | {:.4} | {:.3} | {:.0} | {} | {:.1} | {:.1} | {:.1} % |\n",
+                "| {} | {:.3} | {:.4} | {:.3} | {:.0} | {} | {:.1} | {:.1} | {:.1} % | {} |\n",
                 r.traversal,
                 r.mean_frame_ms,
                 r.frame_ms_variance,
@@ -225,7 +229,8 @@ impl Report for SceneTreeReport {
                 r.max_triangles,
                 r.mean_visited,
                 r.mean_drawn,
-                r.within_budget * 100.0
+                r.within_budget * 100.0,
+                r.frames_ended
             ));
         }
         for r in &self.rows {

@@ -87,8 +87,8 @@ pub struct SceneFrame {
     pub triangles: u64,
     /// PB: nodes dropped for want of budget.
     pub dropped: usize,
-    /// PB: the traversal ran out of attempts and drew a node over the budget.
-    pub forced: bool,
+    /// PB: the traversal ran out of attempts and ended, drawing what was active.
+    pub ended: bool,
     /// PB: an object whose coarsest representation alone is over the budget (id,
     /// triangles), when the frame met one.
     pub too_big: Option<(u64, u32)>,
@@ -128,6 +128,8 @@ pub struct SceneSummary {
     /// PB: frames that met an object whose coarsest representation alone is over the
     /// budget.
     pub frames_too_big: usize,
+    /// PB: frames whose traversal ran out of attempts and ended early.
+    pub frames_ended: usize,
 }
 
 /// What a scene-tree walk did.
@@ -242,5 +244,6 @@ fn summarize(frames: &[SceneFrame], cfg: &SceneConfig) -> SceneSummary {
         frames_conv: frames.iter().filter(|f| f.conv).count(),
         frames_over_budget: budget.map_or(0, |b| frames.iter().filter(|f| f.triangles > b).count()),
         frames_too_big: frames.iter().filter(|f| f.too_big.is_some()).count(),
+        frames_ended: frames.iter().filter(|f| f.ended).count(),
     }
 }

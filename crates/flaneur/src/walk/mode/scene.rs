@@ -95,7 +95,7 @@ impl Mode for Scene<'_> {
         frame.drawn = chosen.active.len();
         frame.triangles = chosen.triangles;
         frame.dropped = chosen.dropped;
-        frame.forced = chosen.forced;
+        frame.ended = chosen.ended;
         frame.too_big = chosen.too_big;
         self.drawable.clear();
         for a in &chosen.active {
