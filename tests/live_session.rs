@@ -181,7 +181,7 @@ fn failing_walks_restart_until_the_fifth_in_a_row_ends_the_session() {
 }
 
 #[test]
-fn visual_walks_live_where_the_tree_is_and_falls_back_to_pvs_where_it_is_not() {
+fn visual_and_the_scene_tree_walk_live_and_visual_falls_back_to_pvs_without_the_tree() {
     let with_tree = common::city(
         120,
         5,
@@ -194,12 +194,27 @@ fn visual_walks_live_where_the_tree_is_and_falls_back_to_pvs_where_it_is_not() {
     let path = flaneur::walk::path::cell_walk(&db, 60, 1.0, 10.0, 2).unwrap();
     let mut viewer = Scripted::new(
         path.clone(),
-        vec![(30, Some(Change::Mode(ViewMode::Pvs))), (30, None)],
+        vec![
+            (30, Some(Change::Mode(ViewMode::Pvs))),
+            (30, Some(Change::Mode(ViewMode::Vsc))),
+            (30, Some(Change::Mode(ViewMode::Pb))),
+            (30, Some(Change::Mode(ViewMode::Conv))),
+            (30, None),
+        ],
     );
     live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
-    assert_eq!(viewer.modes, [ViewMode::Visual, ViewMode::Pvs]);
-    assert!(viewer.reports.is_empty(), "{:?}", viewer.reports);
-    assert_eq!(viewer.frames, [30, 30]);
+    let modes = [
+        ViewMode::Visual,
+        ViewMode::Pvs,
+        ViewMode::Vsc,
+        ViewMode::Pb,
+        ViewMode::Conv,
+    ];
+    assert_eq!(viewer.modes, modes);
+    // The scene tree is loaded once, when VSC is first shown, and said so.
+    assert_eq!(viewer.reports.len(), 1, "{:?}", viewer.reports);
+    assert!(viewer.reports[0].contains("loading the scene tree"));
+    assert_eq!(viewer.frames, [30; 5]);
     assert!(viewer.pages[0] > 0, "{:?}", viewer.pages);
 
     // Without the tree: PVS, said so.

@@ -367,3 +367,45 @@ fn visual_vs_review_misses_nothing_visible_where_reviews_small_box_does() {
         assert!(out.join(f).exists(), "{f} missing");
     }
 }
+
+/// Each frame's objects' DoVs as handed to LOD selection.
+#[derive(Default)]
+struct Dovs(Vec<(u64, Option<f32>)>);
+
+impl FrameSink for Dovs {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &Camera,
+        _: &ObjectBuffer,
+        s: &mut Selection<'_>,
+    ) -> flaneur::Result<()> {
+        self.0.extend(s.culled.iter().map(|o| (o.entry.id, o.dov)));
+        Ok(())
+    }
+}
+
+#[test]
+fn with_dov_tau_objects_hand_their_dov_to_lod_selection_and_groups_none() {
+    let db = Database::open(&city().db).unwrap();
+    let path = cell_walk(&db, 60, 1.5, 10.0, 2).unwrap();
+    let walk = |dov_tau: bool| {
+        let cfg = VisualConfig {
+            dov_tau,
+            ..unpaced(0.002)
+        };
+        let mut seen = Dovs::default();
+        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        seen.0
+    };
+    let with = walk(true);
+    assert!(!with.is_empty());
+    for (id, dov) in &with {
+        if id & GROUP_ID != 0 {
+            assert_eq!(*dov, None);
+        } else {
+            assert!(dov.is_some_and(|d| d > 0.0), "object {id}: {dov:?}");
+        }
+    }
+    assert!(walk(false).iter().all(|(_, d)| d.is_none()));
+}

@@ -16,8 +16,9 @@ pub struct ViewArgs {
     db: PathBuf,
     /// review (CSearch, index cache, prefetching), box (plain range queries), pvs
     /// (the current viewcell's PVS, PBNP prefetching; a database built with
-    /// --visibility) or visual (the HDoV-tree under --eta; one built with --visibility
-    /// --hdov); 1, 2, 3 and 4 switch while walking.
+    /// --visibility), visual (the HDoV-tree under --eta; one built with --visibility
+    /// --hdov), or the memory scene tree by vsc (under --eta), pb (under --budget) or
+    /// conv (frustum culling only); 1 to 7 switch while walking.
     #[arg(long, default_value = "review")]
     mode: String,
     /// Window size, WIDTHxHEIGHT pixels (the walk's 45° view is its centred square).
@@ -51,9 +52,12 @@ pub struct ViewArgs {
     boxes: bool,
     #[arg(long)]
     top_view: bool,
-    /// The VISUAL mode's DoV threshold η.
+    /// The VISUAL and VSC modes' DoV threshold η.
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
     eta: f32,
+    /// The PB mode's polygon budget, triangles a frame.
+    #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
+    budget: u64,
 }
 
 impl ViewArgs {
@@ -73,14 +77,18 @@ impl ViewArgs {
             boxes,
             top_view,
             eta,
+            budget,
         } = self;
         let mode = match mode.as_str() {
             "review" => ViewMode::Review,
             "box" => ViewMode::Box,
             "pvs" => ViewMode::Pvs,
             "visual" => ViewMode::Visual,
+            "vsc" => ViewMode::Vsc,
+            "pb" => ViewMode::Pb,
+            "conv" => ViewMode::Conv,
             other => {
-                bail!("the window shows the review, box, pvs and visual modes, not '{other}'")
+                bail!("the window shows the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'")
             }
         };
         let db = Database::open(&db)?;
@@ -103,6 +111,7 @@ impl ViewArgs {
             gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
             speed,
             eta,
+            polygon_budget: budget,
             ..window_options(&db, start)
         };
         view(&db, opts, mode, (boxes, top_view), record.as_deref())
@@ -141,7 +150,7 @@ pub fn view(
     let p = start.position;
     println!(
         "starting at {:.0}, {:.1}, {:.0} in {} mode; W A S D and the mouse (click to capture it), \
-         Shift runs, F flies, 1/2/3/4 review/box/pvs/visual, [ ] LOD τ, - = budget, H HUD, Q quits",
+         Shift runs, F flies, 1-7 review/box/pvs/visual/vsc/pb/conv, [ ] LOD τ, - = budget, H HUD, Q quits",
         p.x,
         p.y,
         p.z,

@@ -103,6 +103,10 @@ pub struct WalkArgs {
     /// default the smallest built).
     #[arg(long)]
     scheme: Option<String>,
+    /// With --mode visual: objects refined view by view take a τ stretched by their DoV
+    /// (ours; default off).
+    #[arg(long)]
+    dov_tau: bool,
     /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
     /// many seconds on (ours, not the thesis's; default off).
     #[arg(long)]
@@ -146,6 +150,7 @@ impl WalkArgs {
             scheme,
             next_cell_prefetch,
             budget,
+            dov_tau,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
@@ -199,6 +204,7 @@ impl WalkArgs {
                 eta,
                 prefetch_k: next_cell_prefetch,
                 pace: pace(speed),
+                dov_tau,
                 ..VisualConfig::default()
             };
             if let Some(s) = scheme {

@@ -43,6 +43,10 @@ pub struct FidelityArgs {
     /// With --mode visual: the DoV threshold η.
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
     eta: f32,
+    /// With --mode visual: objects refined view by view take a τ stretched by their
+    /// DoV (ours).
+    #[arg(long)]
+    dov_tau: bool,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -59,6 +63,7 @@ impl FidelityArgs {
             size,
             lod_tau,
             eta,
+            dov_tau,
             out,
         } = self;
         let preset = match mode.as_str() {
@@ -87,6 +92,7 @@ impl FidelityArgs {
         };
         let visual = VisualConfig {
             eta,
+            dov_tau,
             pace: None,
             ..VisualConfig::default()
         };
@@ -112,7 +118,7 @@ impl FidelityArgs {
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         };
         let label = if mode == "visual" {
-            format!("visual (η = {eta})")
+            format!("visual (η = {eta}{})", if dov_tau { ", DoV τ" } else { "" })
         } else {
             mode.clone()
         };

@@ -74,7 +74,7 @@ pub(super) fn hud_content(
         ),
         format!("{} at {:.0}, {:.1}, {:.0}", f.cell, p.x, p.y, p.z),
         format!(
-            "WASD shift F fly  1 review 2 box 3 pvs 4 visual  [ ] tau  - = budget  H hud  B boxes  T top{}  Q quit",
+            "WASD shift F fly  1 review 2 box 3 pvs 4 visual 5 vsc 6 pb 7 conv  [ ] tau  - = budget  H hud  B boxes  T top{}  Q quit",
             if wireframe { "  G lines" } else { "" }
         ),
     ];

@@ -39,6 +39,9 @@ impl WalkWindow {
                 KeyCode::Digit2 => self.change = Some(Change::Mode(ViewMode::Box)),
                 KeyCode::Digit3 => self.change = Some(Change::Mode(ViewMode::Pvs)),
                 KeyCode::Digit4 => self.change = Some(Change::Mode(ViewMode::Visual)),
+                KeyCode::Digit5 => self.change = Some(Change::Mode(ViewMode::Vsc)),
+                KeyCode::Digit6 => self.change = Some(Change::Mode(ViewMode::Pb)),
+                KeyCode::Digit7 => self.change = Some(Change::Mode(ViewMode::Conv)),
                 KeyCode::BracketLeft | KeyCode::BracketRight => {
                     let factor = if code == KeyCode::BracketLeft {
                         0.5

@@ -352,4 +352,8 @@ impl LiveViewer for WalkWindow {
     fn eta(&self) -> f32 {
         self.opts.eta
     }
+
+    fn polygon_budget(&self) -> u64 {
+        self.opts.polygon_budget
+    }
 }

@@ -26,8 +26,10 @@ pub struct ViewOptions {
     pub gpu_budget: Option<u64>,
     /// Walking speed, m/s (running is four times it, flying the same).
     pub speed: f32,
-    /// The DoV threshold η of the VISUAL mode's search.
+    /// The DoV threshold η of the VISUAL and VSC modes.
     pub eta: f32,
+    /// The PB mode's polygon budget, triangles a frame.
+    pub polygon_budget: u64,
 }
 
 impl ViewOptions {
@@ -48,6 +50,7 @@ impl ViewOptions {
             gpu_budget: Some(256 << 20),
             speed: flaneur::walk::WALK_SPEED,
             eta: flaneur::walk::visual::DEFAULT_ETA,
+            polygon_budget: flaneur::walk::live::DEFAULT_BUDGET,
         }
     }
 }

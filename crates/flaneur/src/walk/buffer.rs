@@ -33,6 +33,10 @@ pub struct Loaded {
     /// The stored level `mesh` is: 0 full detail, each higher one coarser. LOD
     /// selection draws an object at this level or a coarser one, never finer.
     pub level: usize,
+    /// Its DoV from the viewer's cell, when the walk hands it on for LOD selection
+    /// (VISUAL with `dov_tau`): an object refined view by view then takes a τ its DoV
+    /// stretches ([`dov_tau`](super::lod_select::dov_tau)).
+    pub dov: Option<f32>,
 }
 
 /// The bit an id has when it names a group of objects drawn as one (an HDoV-tree node
@@ -52,6 +56,7 @@ impl Loaded {
             bytes: mesh_bytes(&mesh),
             mesh: Arc::new(mesh),
             level,
+            dov: None,
         }
     }
 
@@ -248,6 +253,7 @@ pub(crate) mod tests {
             mesh: Arc::new(Mesh::default()),
             bytes,
             level: 0,
+            dov: None,
         }
     }
 

@@ -9,10 +9,12 @@
 use super::lod_select::WalkLods;
 use super::pvs_walk::{self, PvsPrefetch};
 use super::review::{self, Preset, ReviewConfig};
+use super::scene_walk::{self, SceneConfig};
 use super::visual::{self, VisualConfig, DEFAULT_ETA};
 use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};
+use crate::hdov::scene::{SceneTree, Traversal};
 use crate::prefetch::pvs::DEFAULT_BORDER;
 
 /// Failed walks in a row that end the session: the walk is then not getting over it.
@@ -31,6 +33,13 @@ pub enum ViewMode {
     /// The HDoV-tree searched from the current viewcell under the viewer's η (a
     /// database built with visibility and the tree).
     Visual,
+    /// The memory scene tree traversed by VSC under the viewer's η (a database built
+    /// with visibility; the tree is loaded when first shown).
+    Vsc,
+    /// The memory scene tree under the viewer's polygon budget (PB).
+    Pb,
+    /// The memory scene tree with view frustum culling only (CONV).
+    Conv,
 }
 
 impl ViewMode {
@@ -41,6 +50,9 @@ impl ViewMode {
             ViewMode::Box => "box",
             ViewMode::Pvs => "pvs",
             ViewMode::Visual => "visual",
+            ViewMode::Vsc => "vsc",
+            ViewMode::Pb => "pb",
+            ViewMode::Conv => "conv",
         }
     }
 }
@@ -74,18 +86,28 @@ pub trait LiveViewer: Viewer {
     /// Readies the viewer for the next walk, from where this one stopped.
     fn resume(&mut self);
 
-    /// The DoV threshold η a VISUAL walk searches under.
+    /// The DoV threshold η a VISUAL or VSC walk searches under.
     fn eta(&self) -> f32 {
         DEFAULT_ETA
     }
+
+    /// The polygon budget a PB walk draws under, triangles a frame.
+    fn polygon_budget(&self) -> u64 {
+        DEFAULT_BUDGET
+    }
 }
+
+/// The polygon budget a live PB walk draws under unless the viewer says otherwise:
+/// Fig. 6.7's smallest, 20,000 triangles.
+pub const DEFAULT_BUDGET: u64 = 20_000;
 
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
 /// as [`review::walk_live`] walks them (unpaced: a person sets the pace), PVS as
 /// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
 /// database without visibility), VISUAL as [`visual::walk_live`] does under the
 /// viewer's [η](LiveViewer::eta) (PVS instead, said so, on a database without the
-/// HDoV-tree).
+/// HDoV-tree), VSC, PB and CONV as [`scene_walk::walk_live`] does over the memory scene
+/// tree, loaded when first shown (REVIEW instead, said so, without visibility).
 /// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
 /// read and the objects refined. An error when the walk failed five times running.
 ///
@@ -107,6 +129,7 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
     let mut cfg = preset(mode);
     viewer.show_mode(mode);
     let mut lods = WalkLods::new(db);
+    let mut tree: Option<SceneTree> = None;
     let mut failures = 0;
     loop {
         let walked = match mode {
@@ -127,6 +150,41 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                 mode = ViewMode::Pvs;
                 viewer.show_mode(mode);
                 continue;
+            }
+            ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv if !db.has_visibility() => {
+                viewer.report(format!(
+                    "{} has no visibility data (build it with --visibility): showing REVIEW",
+                    db.store().path().display()
+                ));
+                mode = ViewMode::Review;
+                viewer.show_mode(mode);
+                continue;
+            }
+            ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv => {
+                if tree.is_none() {
+                    viewer.report("loading the scene tree: every object and its LODs".into());
+                    match SceneTree::load(db, &crate::progress::Silent) {
+                        Ok(t) => tree = Some(t),
+                        Err(e) => {
+                            viewer.report(format!(
+                                "the scene tree could not be loaded: {e}; showing REVIEW"
+                            ));
+                            mode = ViewMode::Review;
+                            viewer.show_mode(mode);
+                            continue;
+                        }
+                    }
+                }
+                let how = match mode {
+                    ViewMode::Vsc => Traversal::Vsc { eta: viewer.eta() },
+                    ViewMode::Pb => Traversal::Pb {
+                        budget: viewer.polygon_budget(),
+                    },
+                    _ => Traversal::Conv,
+                };
+                let tree = tree.as_mut().expect("loaded above");
+                let cfg = SceneConfig::new(how);
+                scene_walk::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Visual => {
                 let cfg = VisualConfig {

@@ -50,6 +50,29 @@ use super::buffer::{Loaded, ObjectBuffer};
 pub const DEFAULT_TAU: f32 = 0.001;
 /// The level of an object refined view by view: its mesh is the refiner's.
 pub const REFINED: usize = usize::MAX;
+/// The most a DoV stretches an object's τ ([`dov_tau`]).
+pub const DOV_TAU_STRETCH: f32 = 8.0;
+
+/// The screen-space error an object refined view by view is refined under when its
+/// DoV from the viewer's cell is `dov` (ours, not the thesis's): τ as it is for an
+/// object of DoV at least MAXDOV (half the view's sphere), stretched by MAXDOV/DoV up
+/// to [`DOV_TAU_STRETCH`] times for one barely visible, so that a landmark seen through
+/// a gap refines less. Without a DoV, τ.
+///
+/// ```
+/// use flaneur::walk::lod_select::{dov_tau, DOV_TAU_STRETCH};
+/// assert_eq!(dov_tau(0.001, None), 0.001);
+/// assert_eq!(dov_tau(0.001, Some(0.5)), 0.001);
+/// assert!((dov_tau(0.001, Some(0.25)) - 0.002).abs() < 1e-9);
+/// assert_eq!(dov_tau(0.001, Some(1e-6)), 0.001 * DOV_TAU_STRETCH);
+/// ```
+pub fn dov_tau(tau: f32, dov: Option<f32>) -> f32 {
+    match dov {
+        Some(d) if d > 0.0 => tau * (crate::hdov::MAXDOV / d).clamp(1.0, DOV_TAU_STRETCH),
+        Some(_) => tau * DOV_TAU_STRETCH,
+        None => tau,
+    }
+}
 
 /// One object as a frame draws it: at which level, and that level's mesh.
 #[derive(Clone, Debug)]
@@ -412,7 +435,7 @@ impl LodSelector<'_> {
             camera.fov_x.max(camera.fov_y),
         )?;
         let params = RefineParams {
-            tau: self.tau,
+            tau: dov_tau(self.tau, o.dov),
             budget: Some(THESIS_BUDGET),
             ..RefineParams::thesis(Traversal::ConstantTime)
         };

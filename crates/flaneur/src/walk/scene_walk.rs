@@ -201,10 +201,21 @@ pub fn walk_live(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<SceneReport> {
+    walk_live_with(db, tree, cfg, &mut WalkLods::new(db), progress, viewer)
+}
+
+/// [`walk_live`] with LOD selection `lods` kept from an earlier walk.
+pub(crate) fn walk_live_with<'db>(
+    db: &'db Database,
+    tree: &mut SceneTree,
+    cfg: &SceneConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<SceneReport> {
     cfg.traversal.validate()?;
     super::review::check_far(cfg.far)?;
-    let frames =
-        super::mode::scene::walk_live(db, tree, cfg, &mut WalkLods::new(db), progress, viewer)?;
+    let frames = super::mode::scene::walk_live(db, tree, cfg, lods, progress, viewer)?;
     let summary = summarize(&frames, cfg);
     Ok(SceneReport {
         config: *cfg,

@@ -94,6 +94,10 @@ pub struct VisualConfig {
     pub far: f32,
     /// The fallback's disk cell outside every viewcell: SF times the frustum's box.
     pub fallback_sf: f32,
+    /// Objects refined view by view take a τ stretched by their DoV
+    /// ([`dov_tau`](super::lod_select::dov_tau)): ours, not the thesis's. Off by
+    /// default.
+    pub dov_tau: bool,
     /// Play the path's clock this many times faster than real time, as REVIEW does
     /// with prefetching ([`ReviewConfig::pace`](super::review::ReviewConfig::pace));
     /// `None`: frames back to back.
@@ -111,6 +115,7 @@ impl Default for VisualConfig {
             prefetch_k: None,
             far: super::review::DEFAULT_FAR,
             fallback_sf: super::review::DEFAULT_SF,
+            dov_tau: false,
             pace: Some(super::review::DEFAULT_PACE),
         }
     }

@@ -124,6 +124,7 @@ impl Mode for Scene<'_> {
                 bytes: mesh_bytes(&mesh),
                 mesh,
                 level: a.level,
+                dov: None,
             });
         }
         let keep: HashSet<u64> = self.drawable.iter().copied().collect();

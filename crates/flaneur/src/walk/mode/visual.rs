@@ -90,6 +90,7 @@ pub(crate) fn walk_live<'db>(
         scheme,
         pool: pool.as_ref(),
         tolerant,
+        dov_tau: cfg.dov_tau,
     };
     let search = &search;
     db.reset_io();
@@ -156,6 +157,8 @@ struct Searcher<'a> {
     scheme: Scheme,
     pool: Option<&'a BufferPool<'a>>,
     tolerant: bool,
+    /// Whether objects carry their DoV to LOD selection.
+    dov_tau: bool,
 }
 
 impl Searcher<'_> {
@@ -191,7 +194,7 @@ impl Searcher<'_> {
             if req.held.get(&p.key) == Some(&p.level) {
                 continue;
             }
-            match read(loader, p) {
+            match read(loader, p, self.dov_tau) {
                 Ok(l) => loaded.push(l),
                 Err(e) if self.tolerant => failed.push((p.key, e)),
                 Err(e) => return Err(e),
@@ -226,8 +229,8 @@ fn key_of(found: &Found) -> Result<u64> {
     }
 }
 
-/// `piece` read at its level, as the buffer holds it.
-fn read(loader: &mut Loader<'_>, piece: &Piece) -> Result<Loaded> {
+/// `piece` read at its level, as the buffer holds it (with its DoV when `dov_tau`).
+fn read(loader: &mut Loader<'_>, piece: &Piece, dov_tau: bool) -> Result<Loaded> {
     let mesh = loader.mesh(&piece.found, piece.level)?;
     let entry = match &piece.found {
         Found::Object { entry, .. } => *entry,
@@ -239,7 +242,13 @@ fn read(loader: &mut Loader<'_>, piece: &Piece) -> Result<Loaded> {
             kind: 0,
         },
     };
-    Ok(Loaded::at_level(entry, mesh, piece.level))
+    let mut loaded = Loaded::at_level(entry, mesh, piece.level);
+    // The fallback's objects (DoV 0) have no DoV to hand on.
+    match (dov_tau, &piece.found) {
+        (true, Found::Object { dov, .. }) if *dov > 0.0 => loaded.dov = Some(*dov),
+        _ => {}
+    }
+    Ok(loaded)
 }
 
 /// The VISUAL mode: the current cell's finds, the fallback's cell, the prefetch.
@@ -471,7 +480,7 @@ impl Visual<'_> {
             if buffer.get(p.key).is_some_and(|o| o.level == p.level) {
                 frame.reused += 1;
             } else {
-                match read(&mut self.loader, &p) {
+                match read(&mut self.loader, &p, self.search.dov_tau) {
                     Ok(l) => {
                         buffer.replace(l);
                         frame.loaded += 1;
