@@ -789,3 +789,29 @@ fn fidelity_of_the_visual_walk() {
     assert_eq!(c.rows.len(), 60);
     assert!(c.mean_differ() < 0.2, "{:.3}", c.mean_differ());
 }
+
+/// The scene tree's fidelity: CONV draws every object in the frustum at full detail, so
+/// its pictures are the reference's on every frame; VSC(0) draws the visible ones at
+/// the level their DoV deserves, never more triangles, and PB(n) within its budget.
+#[test]
+fn fidelity_of_the_scene_tree_traversals() {
+    use flaneur::hdov::scene::Traversal;
+    use flaneur::walk::scene_walk::SceneConfig;
+    let dir = tempfile::tempdir().unwrap();
+    let db = with_visibility(dir.path());
+    let path = flaneur::walk::path::cell_walk(&db, 40, 0.5, 30.0, 2).unwrap();
+    let gpu = gpu();
+    let conv = SceneConfig::new(Traversal::Conv);
+    let r = fidelity(&db, &gpu, &path, ModeWalk::Scene(&conv), "conv", (96, None));
+    assert_eq!(r.rows.len(), 40);
+    for row in &r.rows {
+        assert_eq!(row.triangles, row.reference_triangles, "{row:?}");
+        assert!(row.psnr.is_infinite() && row.differ == 0.0, "{row:?}");
+    }
+    let vsc = SceneConfig::new(Traversal::Vsc { eta: 0.0 });
+    let v = fidelity(&db, &gpu, &path, ModeWalk::Scene(&vsc), "vsc", (96, None));
+    assert!(v.rows.iter().all(|row| row.triangles <= row.reference_triangles));
+    let pb = SceneConfig::new(Traversal::Pb { budget: 5_000 });
+    let p = fidelity(&db, &gpu, &path, ModeWalk::Scene(&pb), "pb", (96, None));
+    assert!(p.rows.iter().all(|row| row.triangles <= 5_000), "{:?}", p.rows);
+}

@@ -13,7 +13,8 @@
 //! hidden (and got wrong), and everything while the eye is outside every cell. VISUAL
 //! draws what the HDoV-tree found, each object at the level its DoV deserves and the
 //! groups it stopped at as their nodes' internal LODs: its pictures lose what those
-//! coarser shapes change.
+//! coarser shapes change. The scene tree's traversals (VSC, PB, CONV) draw what they
+//! chose, at the representation they chose.
 
 use std::path::Path;
 
@@ -22,10 +23,12 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Camera;
+use flaneur::hdov::scene::SceneTree;
 use flaneur::walk::lod_select::LodCounts;
 use flaneur::walk::path::CameraPath;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
+use flaneur::walk::scene_walk::{self, SceneConfig};
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
@@ -39,6 +42,8 @@ pub enum ModeWalk<'a> {
     Pvs(PvsPrefetch),
     /// VISUAL over the database's HDoV-tree under this configuration.
     Visual(&'a VisualConfig),
+    /// The memory scene tree (loaded first) under this traversal.
+    Scene(&'a SceneConfig),
 }
 
 impl ModeWalk<'_> {
@@ -49,6 +54,7 @@ impl ModeWalk<'_> {
             // The PVS walk's cameras have the default frustum (`Pose::camera`).
             ModeWalk::Pvs(_) => flaneur::geom::DEFAULT_FAR,
             ModeWalk::Visual(cfg) => cfg.far,
+            ModeWalk::Scene(cfg) => cfg.far,
         }
     }
 }
@@ -228,6 +234,10 @@ pub fn run(
         }
         ModeWalk::Visual(cfg) => {
             visual::walk_into(db, path, cfg, progress, &mut sink)?;
+        }
+        ModeWalk::Scene(cfg) => {
+            let mut tree = SceneTree::load(db, &flaneur::progress::Silent)?;
+            scene_walk::walk_into(db, &mut tree, path, cfg, progress, &mut sink)?;
         }
     }
     Ok(FidelityReport {

@@ -8,9 +8,11 @@ use anyhow::{bail, Result};
 use super::report::write_report;
 use crate::cli::args::parse_size;
 use crate::cli::walk::camera_path;
+use flaneur::hdov::scene::Traversal;
 use flaneur::walk::path::cell_walk;
 use flaneur::walk::pvs_walk::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::scene_walk::SceneConfig;
 use flaneur::walk::visual::VisualConfig;
 use flaneur::Database;
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
@@ -25,8 +27,9 @@ pub struct FidelityArgs {
     #[arg(long)]
     path: Option<String>,
     /// review, box, pvs (the viewcell's PVS with PBNP prefetching; the database
-    /// must have been built with --visibility) or visual (the HDoV-tree under --eta;
-    /// built with --visibility --hdov).
+    /// must have been built with --visibility), visual (the HDoV-tree under --eta;
+    /// built with --visibility --hdov), or the memory scene tree by vsc (under --eta),
+    /// pb (under --budget) or conv.
     #[arg(long, default_value = "review")]
     mode: String,
     #[arg(long, default_value_t = 300)]
@@ -43,6 +46,9 @@ pub struct FidelityArgs {
     /// With --mode visual: the DoV threshold η.
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
     eta: f32,
+    /// With --mode pb: the polygon budget, triangles a frame.
+    #[arg(long, default_value_t = 20_000)]
+    budget: u64,
     /// With --mode visual: objects refined view by view take a τ stretched by their
     /// DoV (ours).
     #[arg(long)]
@@ -64,13 +70,16 @@ impl FidelityArgs {
             lod_tau,
             eta,
             dov_tau,
+            budget,
             out,
         } = self;
         let preset = match mode.as_str() {
             "review" => Some(Preset::Optimal),
             "box" => Some(Preset::Box),
-            "pvs" | "visual" => None,
-            other => bail!("fidelity draws the review, box, pvs and visual modes, not '{other}'"),
+            "pvs" | "visual" | "vsc" | "pb" | "conv" => None,
+            other => bail!(
+                "fidelity draws the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'"
+            ),
         };
         let db = Database::open(&db)?;
         if preset.is_none() && !db.has_visibility() {
@@ -96,9 +105,17 @@ impl FidelityArgs {
             pace: None,
             ..VisualConfig::default()
         };
+        let scene = SceneConfig::new(match mode.as_str() {
+            "vsc" => Traversal::Vsc { eta },
+            "pb" => Traversal::Pb { budget },
+            _ => Traversal::Conv,
+        });
         let walk = match preset {
             Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
             None if mode == "visual" => flaneur_bench::fidelity::ModeWalk::Visual(&visual),
+            None if matches!(mode.as_str(), "vsc" | "pb" | "conv") => {
+                flaneur_bench::fidelity::ModeWalk::Scene(&scene)
+            }
             None => flaneur_bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
                 border: PvsPrefetchConfig::default().border,
             }),
@@ -117,10 +134,10 @@ impl FidelityArgs {
             height: size.1,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         };
-        let label = if mode == "visual" {
-            format!("visual (η = {eta}{})", if dov_tau { ", DoV τ" } else { "" })
-        } else {
-            mode.clone()
+        let label = match mode.as_str() {
+            "visual" => format!("visual (η = {eta}{})", if dov_tau { ", DoV τ" } else { "" }),
+            "vsc" | "pb" | "conv" => scene.traversal.label(),
+            _ => mode.clone(),
         };
         let r = flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, |_| {
             bar.inc(1)
