@@ -202,3 +202,39 @@ fn hdov_storage_reads_each_scheme_and_its_estimate() {
     assert!(r.markdown().contains("| indexed |"), "{}", r.markdown());
     assert_eq!(r.to_csv().lines().count(), 4);
 }
+
+#[test]
+fn hdov_scaling_searches_each_city_of_the_series_against_the_naive_list() {
+    use flaneur_bench::hdov_scaling::{self, HdovScalingConfig};
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = HdovScalingConfig {
+        sizes: vec![60, 240],
+        page_size: 1024,
+        resolution: 8,
+        search: HdovSearchConfig {
+            queries: 40,
+            load_queries: 4,
+            etas: vec![0.0, 0.01],
+            seed: 2,
+        },
+        ..Default::default()
+    };
+    let mut ticks = 0;
+    let r = hdov_scaling::run(dir.path(), &cfg, |_, _| ticks += 1).unwrap();
+    assert_eq!(ticks, 2);
+    // Per city: the naive list and the smallest scheme, at each η.
+    assert_eq!(r.rows.len(), 2 * 2 * 2);
+    let nodes = |n: u64| {
+        r.rows
+            .iter()
+            .find(|x| x.objects == n && x.method != "naive")
+            .unwrap()
+            .nodes
+    };
+    assert!(nodes(240) > nodes(60), "a larger city, a larger tree");
+    assert!(r.rows.iter().all(|x| x.search_pages > 0.0 && x.total_pages > 0.0));
+    // A second run finds the cities built.
+    let again = hdov_scaling::run(dir.path(), &cfg, |_, _| {}).unwrap();
+    assert_eq!(again.rows.len(), r.rows.len());
+    assert!(r.markdown().contains("Fig. 5.23"));
+}

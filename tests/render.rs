@@ -810,8 +810,15 @@ fn fidelity_of_the_scene_tree_traversals() {
     }
     let vsc = SceneConfig::new(Traversal::Vsc { eta: 0.0 });
     let v = fidelity(&db, &gpu, &path, ModeWalk::Scene(&vsc), "vsc", (96, None));
-    assert!(v.rows.iter().all(|row| row.triangles <= row.reference_triangles));
+    assert!(v
+        .rows
+        .iter()
+        .all(|row| row.triangles <= row.reference_triangles));
     let pb = SceneConfig::new(Traversal::Pb { budget: 5_000 });
     let p = fidelity(&db, &gpu, &path, ModeWalk::Scene(&pb), "pb", (96, None));
-    assert!(p.rows.iter().all(|row| row.triangles <= 5_000), "{:?}", p.rows);
+    assert!(
+        p.rows.iter().all(|row| row.triangles <= 5_000),
+        "{:?}",
+        p.rows
+    );
 }

@@ -4,9 +4,14 @@
 //! in one folder, where a later run finds and reuses it: building is the slow part, and
 //! the same seed gives the same city.
 //!
-//! A database is named after what determines it — objects, seed, page size — so a file
-//! of another series is never taken for this one. Its scene file is written beside it,
-//! built from, and deleted: the database holds everything the walks need.
+//! A database is named after what determines it — objects, seed, page size, and for a
+//! series with the HDoV-tree the DoV resolution — so a file of another series is never
+//! taken for this one. Its scene file is written beside it, built from, and deleted: the
+//! database holds everything the experiments need.
+//!
+//! Two kinds of series ([`SeriesKind`]): plain cities without LODs, for the walks that
+//! read index and mesh pages only; and cities with LODs, visibility and the HDoV-tree
+//! (every scheme), for the HDoV-tree's scaling (Fig. 5.23).
 
 use std::path::{Path, PathBuf};
 
@@ -25,10 +30,38 @@ pub struct SeriesCity {
     pub built: bool,
 }
 
+/// What a series' databases hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeriesKind {
+    /// Meshes and the R-tree, no LODs.
+    Plain,
+    /// LODs, visibility with DoV at this resolution, and the HDoV-tree.
+    Hdov {
+        /// The DoV's cube-map resolution.
+        resolution: u32,
+    },
+}
+
 /// The database file of the city of `objects` objects, generated from `seed`, with pages
 /// of `page_size` bytes, in `dir`.
 pub fn city_path(dir: &Path, objects: u64, seed: u64, page_size: usize) -> PathBuf {
-    dir.join(format!("city-{objects}-seed{seed}-{page_size}B.flaneur"))
+    city_path_of(dir, objects, seed, page_size, SeriesKind::Plain)
+}
+
+/// [`city_path`] for a series of `kind`.
+pub fn city_path_of(
+    dir: &Path,
+    objects: u64,
+    seed: u64,
+    page_size: usize,
+    kind: SeriesKind,
+) -> PathBuf {
+    match kind {
+        SeriesKind::Plain => dir.join(format!("city-{objects}-seed{seed}-{page_size}B.flaneur")),
+        SeriesKind::Hdov { resolution } => dir.join(format!(
+            "city-{objects}-seed{seed}-{page_size}B-hdov{resolution}.flaneur"
+        )),
+    }
 }
 
 /// Makes sure that `dir` holds a database of each size in `sizes` (generating and
@@ -43,15 +76,27 @@ pub fn ensure(
     sizes: &[u64],
     seed: u64,
     page_size: usize,
+    progress: impl FnMut(u64, bool),
+) -> Result<Vec<SeriesCity>> {
+    ensure_of(dir, sizes, seed, page_size, SeriesKind::Plain, progress)
+}
+
+/// [`ensure`] for a series of `kind`.
+pub fn ensure_of(
+    dir: &Path,
+    sizes: &[u64],
+    seed: u64,
+    page_size: usize,
+    kind: SeriesKind,
     mut progress: impl FnMut(u64, bool),
 ) -> Result<Vec<SeriesCity>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let mut cities = Vec::with_capacity(sizes.len());
     for &objects in sizes {
-        let path = city_path(dir, objects, seed, page_size);
+        let path = city_path_of(dir, objects, seed, page_size, kind);
         let built = !path.exists();
         if built {
-            build(dir, &path, objects, seed, page_size)?;
+            build(dir, &path, objects, seed, page_size, kind)?;
         }
         check(&path, objects, page_size)?;
         progress(objects, built);
@@ -64,7 +109,14 @@ pub fn ensure(
     Ok(cities)
 }
 
-fn build(dir: &Path, db: &Path, objects: u64, seed: u64, page_size: usize) -> Result<()> {
+fn build(
+    dir: &Path,
+    db: &Path,
+    objects: u64,
+    seed: u64,
+    page_size: usize,
+    kind: SeriesKind,
+) -> Result<()> {
     let scene = dir.join(format!("city-{objects}-seed{seed}.scene"));
     let city = citygen::CityConfig {
         objects,
@@ -72,16 +124,24 @@ fn build(dir: &Path, db: &Path, objects: u64, seed: u64, page_size: usize) -> Re
         ..Default::default()
     };
     citygen::write_city(&city, &scene)?;
-    let built = build_from_scene(
-        &scene,
-        db,
-        &BuildOptions {
+    let opts = match kind {
+        SeriesKind::Plain => BuildOptions {
             page_size,
             // The search-time walks read index and mesh pages only.
             lod: None,
             ..Default::default()
         },
-    );
+        SeriesKind::Hdov { resolution } => BuildOptions {
+            page_size,
+            visibility: Some(flaneur::visibility::VisibilityOptions {
+                resolution,
+                ..Default::default()
+            }),
+            hdov: Some(flaneur::hdov::HdovOptions::default()),
+            ..Default::default()
+        },
+    };
+    let built = build_from_scene(&scene, db, &opts);
     // The scene is as large as the database and no longer needed, built or not.
     let removed = std::fs::remove_file(&scene).map_err(|e| Error::io(&scene, e));
     built?;

@@ -20,6 +20,7 @@ pub mod db_size;
 pub mod fidelity;
 pub mod frame_time;
 pub mod hdov_cache;
+pub mod hdov_scaling;
 pub mod hdov_search;
 pub mod hdov_storage;
 pub mod index_cache;

@@ -5,6 +5,7 @@
 mod csearch;
 mod fidelity;
 mod hdov_cache;
+mod hdov_scaling;
 mod hdov_search;
 mod hdov_storage;
 mod index_cache;
@@ -47,6 +48,9 @@ enum Experiment {
     /// search and total I/O per storage scheme against the naive PVS list (Figs.
     /// 5.21–5.22). Needs a database built with --visibility --hdov.
     HdovSearch(hdov_search::HdovSearchArgs),
+    /// HDoV-tree search and total I/O against the naive method on generated cities of
+    /// growing size, built once with LODs, visibility and the tree (Fig. 5.23).
+    HdovScaling(hdov_scaling::HdovScalingArgs),
     /// VISUAL, the HDoV-tree walkthrough, against REVIEW with 400 m and 200 m query
     /// boxes along the same sessions: frame time and its variance, memory, pages and the
     /// visible objects each misses, VISUAL at Table 5.3's nine η (Table 5.3, Figs.
@@ -93,6 +97,7 @@ impl BenchArgs {
             Experiment::Fidelity(a) => a.run(),
             Experiment::HdovCache(a) => a.run(),
             Experiment::HdovSearch(a) => a.run(),
+            Experiment::HdovScaling(a) => a.run(),
             Experiment::VisualVsReview(a) => a.run(),
             Experiment::SceneTree(a) => a.run(),
             Experiment::HdovStorage(a) => a.run(),
