@@ -126,10 +126,10 @@ pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
 pub const DEFAULT_K: f32 = 0.8;
 /// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
 /// on the demo city's pattern table (`flaneur bench patterns`) it gives Optimal 10-25 %
-/// of BOX's disk I/Os per query (the thesis: 9-21 %; measured again once a frame counted
-/// what the prefetch thread reads while the viewer waits for the clock, which the first
-/// measure, 4-14 %, missed), while a cell still holds the frustum for 100 m of forward
-/// motion. 1.5 gave a slow walk no query after the first in a minute.
+/// of BOX's disk I/Os per query (the thesis: 9-21 %; measured again once a frame's count
+/// included what the prefetch thread reads while the viewer waits for the clock, where an
+/// earlier measure gave 4-14 %), while a cell still holds the frustum for 100 m of
+/// forward motion. 1.5 gave a slow walk no query after the first in a minute.
 pub const DEFAULT_SF: f32 = 1.2;
 /// The thesis's frustum depth (§4.4), metres.
 pub const DEFAULT_FAR: f32 = 1000.0;
