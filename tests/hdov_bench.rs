@@ -232,7 +232,10 @@ fn hdov_scaling_searches_each_city_of_the_series_against_the_naive_list() {
             .nodes
     };
     assert!(nodes(240) > nodes(60), "a larger city, a larger tree");
-    assert!(r.rows.iter().all(|x| x.search_pages > 0.0 && x.total_pages > 0.0));
+    assert!(r
+        .rows
+        .iter()
+        .all(|x| x.search_pages > 0.0 && x.total_pages > 0.0));
     // A second run finds the cities built.
     let again = hdov_scaling::run(dir.path(), &cfg, |_, _| {}).unwrap();
     assert_eq!(again.rows.len(), r.rows.len());

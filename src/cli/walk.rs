@@ -394,6 +394,21 @@ struct RenderOpts {
     lod_tau: Option<f32>,
 }
 
+/// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable
+/// ones at a walker's pace, 1.4 m/s), else as [`camera_path`].
+fn viewcell_path(
+    db: &Database,
+    camera: &str,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+) -> Result<CameraPath> {
+    match camera {
+        "cells" => Ok(cell_walk(db, frames, 1.4 / fps, fps, seed)?),
+        other => camera_path(db, other, frames, fps, seed),
+    }
+}
+
 /// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.
 pub fn camera_path(
     db: &Database,
@@ -424,11 +439,7 @@ fn pvs_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
-    let poses = match camera {
-        // A walker's pace: 1.4 m/s.
-        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
-        other => camera_path(&db, other, frames, fps, seed)?,
-    };
+    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     let bar = frame_bar(&poses, quiet);
     // The PVS walk's cameras have the default frustum (`Pose::camera`).
     let (r, drawn) = rendered(&db, render, flaneur::geom::DEFAULT_FAR, |sink| {
@@ -487,11 +498,7 @@ fn visual_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
-    let poses = match camera {
-        // A walker's pace: 1.4 m/s.
-        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
-        other => camera_path(&db, other, frames, fps, seed)?,
-    };
+    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     let bar = frame_bar(&poses, quiet);
     let (r, drawn) = rendered(&db, render, cfg.far, |sink| {
         visual::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
@@ -519,10 +526,7 @@ fn scene_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
-    let poses = match camera {
-        "cells" => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
-        other => camera_path(&db, other, frames, fps, seed)?,
-    };
+    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     let started = std::time::Instant::now();
     let bars = super::bars::Bars::default();
     let mut tree = SceneTree::load(

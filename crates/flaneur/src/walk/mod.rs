@@ -64,6 +64,7 @@
 
 mod buffer;
 mod cells;
+mod frame_times;
 pub mod live;
 pub mod lod_select;
 mod mode;

@@ -37,6 +37,7 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
+use super::frame_times::frame_times;
 use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
@@ -459,9 +460,7 @@ pub(crate) fn summarize(
     counts: Counts,
     cache: Option<CacheStats>,
 ) -> WalkSummary {
-    let walk = frames.get(1..).unwrap_or_default();
-    let n = walk.len().max(1) as f64;
-    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
     let queries = counts.sync + counts.adopted + counts.stale;
     let index_pages: u64 = frames.iter().map(|f| f.index_pages).sum();
     let mesh_pages: u64 = frames.iter().map(|f| f.mesh_pages).sum();
@@ -476,14 +475,10 @@ pub(crate) fn summarize(
         frames: frames.len(),
         initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
         initial_load_pages: counts.initial_load_pages,
-        mean_frame_ms: mean,
-        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
-        frame_ms_variance: walk
-            .iter()
-            .map(|f| (f.frame_ms - mean).powi(2))
-            .sum::<f64>()
-            / n,
-        frames_over_50ms: walk.iter().filter(|f| f.frame_ms > 50.0).count(),
+        mean_frame_ms: times.mean,
+        max_frame_ms: times.max,
+        frame_ms_variance: times.variance,
+        frames_over_50ms: times.over_50ms,
         queries,
         sync_queries: counts.sync,
         prefetches_adopted: counts.adopted,

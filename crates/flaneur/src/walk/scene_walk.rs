@@ -34,6 +34,7 @@
 
 use serde::Serialize;
 
+use super::frame_times::frame_times;
 use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
@@ -228,20 +229,16 @@ fn summarize(frames: &[SceneFrame], cfg: &SceneConfig) -> SceneSummary {
     let walk = frames.get(1..).unwrap_or_default();
     let n = walk.len().max(1) as f64;
     let all = frames.len().max(1) as f64;
-    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
     let budget = match cfg.traversal {
         Traversal::Pb { budget } => Some(budget),
         _ => None,
     };
     SceneSummary {
         frames: frames.len(),
-        mean_frame_ms: mean,
-        frame_ms_variance: walk
-            .iter()
-            .map(|f| (f.frame_ms - mean).powi(2))
-            .sum::<f64>()
-            / n,
-        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
+        mean_frame_ms: times.mean,
+        frame_ms_variance: times.variance,
+        max_frame_ms: times.max,
         mean_traverse_ms: walk.iter().map(|f| f.traverse_ms).sum::<f64>() / n,
         mean_triangles: frames.iter().map(|f| f.triangles as f64).sum::<f64>() / all,
         mean_visited: frames.iter().map(|f| f.visited as f64).sum::<f64>() / all,

@@ -62,6 +62,7 @@
 
 use serde::Serialize;
 
+use super::frame_times::frame_times;
 use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
@@ -348,22 +349,16 @@ pub(crate) fn walk_live_with<'db>(
 
 /// The walk's summary from its frames (and prefetches, counted in them).
 fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSummary {
-    let walk = frames.get(1..).unwrap_or_default();
-    let n = walk.len().max(1) as f64;
-    let mean = walk.iter().map(|f| f.frame_ms).sum::<f64>() / n;
+    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
     let searched: Vec<&VisualFrame> = frames.iter().filter(|f| f.searched).collect();
     let all = frames.len().max(1) as f64;
     VisualSummary {
         frames: frames.len(),
         initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
-        mean_frame_ms: mean,
-        max_frame_ms: walk.iter().map(|f| f.frame_ms).fold(0.0, f64::max),
-        frame_ms_variance: walk
-            .iter()
-            .map(|f| (f.frame_ms - mean).powi(2))
-            .sum::<f64>()
-            / n,
-        frames_over_50ms: walk.iter().filter(|f| f.frame_ms > 50.0).count(),
+        mean_frame_ms: times.mean,
+        max_frame_ms: times.max,
+        frame_ms_variance: times.variance,
+        frames_over_50ms: times.over_50ms,
         cells_entered: frames
             .windows(2)
             .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)

@@ -2,9 +2,11 @@
 //! one file each, each implementing [`Mode`](super::session::Mode). `review`: REVIEW
 //! and BOX (Shou 2002 §4.1–4.4); `pvs`: the PVS client with SNP or PBNP (Zheng 2007
 //! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
-//! CONV over the memory scene tree (Shou 2002 ch. 6).
+//! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
+//! answer for REVIEW and VISUAL.
 
 pub(crate) mod pvs;
+mod receive;
 pub(crate) mod review;
 pub(crate) mod scene;
 pub(crate) mod visual;

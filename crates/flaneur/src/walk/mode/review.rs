@@ -23,6 +23,7 @@ use crate::store::{IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
+use crate::walk::mode::receive::receive;
 use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
@@ -372,18 +373,8 @@ impl Review<'_> {
         if self.in_flight.is_none() {
             return Ok(());
         }
-        let stopped = || Error::Invalid("the prefetch thread stopped".into());
-        let got = match wait {
-            Some(limit) => match self.res_rx.recv_timeout(limit) {
-                Ok(r) => r,
-                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
-                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
-            },
-            None => match self.res_rx.try_recv() {
-                Ok(r) => r,
-                Err(mpsc::TryRecvError::Empty) => return Ok(()),
-                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
-            },
+        let Some(got) = receive(&self.res_rx, wait)? else {
+            return Ok(());
         };
         self.in_flight = None;
         let fetched = got?;

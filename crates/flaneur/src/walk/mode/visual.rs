@@ -20,6 +20,7 @@ use crate::store::{IoStats, PageKind};
 use crate::walk::buffer::{Loaded, ObjectBuffer, GROUP_ID};
 use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
 use crate::walk::lod_select::WalkLods;
+use crate::walk::mode::receive::receive;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 use crate::walk::visual::{VisualConfig, VisualFrame};
@@ -541,18 +542,8 @@ impl Visual<'_> {
         if self.in_flight.is_none() {
             return Ok(());
         }
-        let stopped = || Error::Invalid("the prefetch thread stopped".into());
-        let got = match wait {
-            Some(limit) => match self.res_rx.recv_timeout(limit) {
-                Ok(r) => r,
-                Err(mpsc::RecvTimeoutError::Timeout) => return Ok(()),
-                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(stopped()),
-            },
-            None => match self.res_rx.try_recv() {
-                Ok(r) => r,
-                Err(mpsc::TryRecvError::Empty) => return Ok(()),
-                Err(mpsc::TryRecvError::Disconnected) => return Err(stopped()),
-            },
+        let Some(got) = receive(&self.res_rx, wait)? else {
+            return Ok(());
         };
         self.in_flight = None;
         let got = got?;
