@@ -409,3 +409,57 @@ fn with_dov_tau_objects_hand_their_dov_to_lod_selection_and_groups_none() {
     }
     assert!(walk(false).iter().all(|(_, d)| d.is_none()));
 }
+
+/// What LOD selection drew of each object against the level VISUAL loaded it at.
+struct Levels {
+    finer: usize,
+    coarser_or_same: usize,
+}
+
+impl FrameSink for Levels {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &Camera,
+        _: &ObjectBuffer,
+        s: &mut Selection<'_>,
+    ) -> flaneur::Result<()> {
+        for (d, o) in s.drawn.iter().zip(s.culled) {
+            if d.level == flaneur::walk::lod_select::REFINED {
+                continue;
+            }
+            if d.level < o.level {
+                self.finer += 1;
+            } else {
+                self.coarser_or_same += 1;
+            }
+        }
+        Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        Some(0.001)
+    }
+}
+
+#[test]
+fn finer_by_tau_lets_lod_selection_draw_near_objects_finer_than_eq_5_6() {
+    let db = Database::open(&city().db).unwrap();
+    let path = cell_walk(&db, 80, 1.5, 10.0, 2).unwrap();
+    let walk = |finer_by_tau: bool| {
+        let cfg = VisualConfig {
+            finer_by_tau,
+            ..unpaced(0.0)
+        };
+        let mut seen = Levels {
+            finer: 0,
+            coarser_or_same: 0,
+        };
+        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        (seen.finer, seen.coarser_or_same)
+    };
+    let (finer, _) = walk(false);
+    assert_eq!(finer, 0, "never finer than loaded without the option");
+    let (finer, rest) = walk(true);
+    assert!(finer > 0, "no object drawn finer than eq. 5.6's level ({rest} others)");
+}

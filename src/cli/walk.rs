@@ -107,6 +107,10 @@ pub struct WalkArgs {
     /// (ours; default off).
     #[arg(long)]
     dov_tau: bool,
+    /// With --mode visual: an object may be drawn finer than eq. 5.6's level where
+    /// --lod-tau asks for it (ours; default off).
+    #[arg(long)]
+    finer_by_tau: bool,
     /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
     /// many seconds on (ours, not the thesis's; default off).
     #[arg(long)]
@@ -151,6 +155,7 @@ impl WalkArgs {
             next_cell_prefetch,
             budget,
             dov_tau,
+            finer_by_tau,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
@@ -205,6 +210,7 @@ impl WalkArgs {
                 prefetch_k: next_cell_prefetch,
                 pace: pace(speed),
                 dov_tau,
+                finer_by_tau,
                 ..VisualConfig::default()
             };
             if let Some(s) = scheme {

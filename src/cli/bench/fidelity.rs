@@ -53,6 +53,10 @@ pub struct FidelityArgs {
     /// DoV (ours).
     #[arg(long)]
     dov_tau: bool,
+    /// With --mode visual: an object may be drawn finer than eq. 5.6's level where
+    /// --lod-tau asks for it (ours).
+    #[arg(long)]
+    finer_by_tau: bool,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -70,6 +74,7 @@ impl FidelityArgs {
             lod_tau,
             eta,
             dov_tau,
+            finer_by_tau,
             budget,
             out,
         } = self;
@@ -102,6 +107,7 @@ impl FidelityArgs {
         let visual = VisualConfig {
             eta,
             dov_tau,
+            finer_by_tau,
             pace: None,
             ..VisualConfig::default()
         };
@@ -135,7 +141,11 @@ impl FidelityArgs {
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         };
         let label = match mode.as_str() {
-            "visual" => format!("visual (η = {eta}{})", if dov_tau { ", DoV τ" } else { "" }),
+            "visual" => format!(
+                "visual (η = {eta}{}{})",
+                if dov_tau { ", DoV τ" } else { "" },
+                if finer_by_tau { ", finer by τ" } else { "" }
+            ),
             "vsc" | "pb" | "conv" => scene.traversal.label(),
             _ => mode.clone(),
         };

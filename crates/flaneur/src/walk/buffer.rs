@@ -30,9 +30,12 @@ pub struct Loaded {
     pub mesh: Arc<Mesh>,
     /// Bytes it takes in memory, as the buffer's budget counts them ([`mesh_bytes`]).
     pub bytes: usize,
-    /// The stored level `mesh` is: 0 full detail, each higher one coarser. LOD
-    /// selection draws an object at this level or a coarser one, never finer.
+    /// The stored level `mesh` is: 0 full detail, each higher one coarser.
     pub level: usize,
+    /// The finest level LOD selection may draw it at: `level` (never finer than the walk
+    /// loaded it) unless the walk lets the screen-space error ask for more (VISUAL's
+    /// `finer_by_tau`), the finer level then read when first wanted.
+    pub finest: usize,
     /// Its DoV from the viewer's cell, when the walk hands it on for LOD selection
     /// (VISUAL with `dov_tau`): an object refined view by view then takes a τ its DoV
     /// stretches ([`dov_tau`](super::lod_select::dov_tau)).
@@ -56,6 +59,7 @@ impl Loaded {
             bytes: mesh_bytes(&mesh),
             mesh: Arc::new(mesh),
             level,
+            finest: level,
             dov: None,
         }
     }
@@ -253,6 +257,7 @@ pub(crate) mod tests {
             mesh: Arc::new(Mesh::default()),
             bytes,
             level: 0,
+            finest: 0,
             dov: None,
         }
     }

@@ -10,7 +10,8 @@
 //!
 //! The mesh the walk loaded into its object buffer is the object's level 0, or the
 //! coarser level the walk chose for it ([`Loaded::level`], VISUAL's), which selection
-//! never draws finer; the coarser ones are read from the database's LOD chains when
+//! never draws finer unless the walk allows it ([`Loaded::finest`]: VISUAL's
+//! `finer_by_tau`, the finer level then read like a coarse one); the coarser ones are read from the database's LOD chains when
 //! first chosen (only the pages of that level), and kept while the object stays in the
 //! buffer. A group of objects drawn as one (an HDoV node) is drawn as loaded. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
@@ -150,14 +151,24 @@ impl ObjectLevels {
         }
     }
 
-    /// Coarse level `level`'s mesh: kept, or read from `db` (counted in `reads`).
-    fn mesh(&mut self, db: &Database, level: usize, reads: &mut u64) -> Result<Arc<Mesh>> {
+    /// Level `level`'s mesh: kept, or read from `db` (counted in `reads`; the full
+    /// mesh's pages, which are not LOD pages, in `pages`).
+    fn mesh(
+        &mut self,
+        db: &Database,
+        level: usize,
+        reads: &mut u64,
+        pages: &mut u64,
+    ) -> Result<Arc<Mesh>> {
         if let Some(m) = &self.meshes[level] {
             return Ok(m.clone());
         }
         let entry = self.entry.as_ref().expect("an object with levels has data");
         let m = Arc::new(stored::level_mesh(db.store(), entry, level)?);
         *reads += 1;
+        if level == 0 {
+            *pages += entry.mesh.page_count as u64;
+        }
         self.meshes[level] = Some(m.clone());
         Ok(m)
     }
@@ -314,12 +325,17 @@ impl<'a> LodSelector<'a> {
                 self.counts.drawn_while_decoding += 1;
             }
             let d = distance_to(&o.entry.bounds, camera.position);
-            // Never finer than the level the walk loaded.
-            let level = level_for(&levels.levels, d, camera.fov_y, self.tau).max(o.level);
+            // Never finer than the walk allows (the level it loaded, unless it says).
+            let level = match levels.levels.is_empty() {
+                // No levels to choose from (none stored, or unreadable): as loaded.
+                true => o.level,
+                false => level_for(&levels.levels, d, camera.fov_y, self.tau).max(o.finest),
+            };
             let mesh = if level == o.level {
                 o.mesh.clone()
             } else {
-                match levels.mesh(self.db, level, &mut self.counts.levels_read) {
+                let (reads, pages) = (&mut self.counts.levels_read, &mut self.counts.pages);
+                match levels.mesh(self.db, level, reads, pages) {
                     Ok(m) => m,
                     Err(e) => {
                         *levels = ObjectLevels::full_only();

@@ -95,6 +95,12 @@ pub struct VisualConfig {
     pub far: f32,
     /// The fallback's disk cell outside every viewcell: SF times the frustum's box.
     pub fallback_sf: f32,
+    /// An object may be drawn finer than eq. 5.6's level where LOD selection's
+    /// screen-space error asks for it (ours, not the thesis's): eq. 5.6 gives full
+    /// detail only at a DoV of MAXDOV, half the view's sphere, so a near façade of DoV
+    /// 0.1 would stay close to its coarsest level. The finer level is read by LOD
+    /// selection when first wanted. Off by default.
+    pub finer_by_tau: bool,
     /// Objects refined view by view take a τ stretched by their DoV
     /// ([`dov_tau`](super::lod_select::dov_tau)): ours, not the thesis's. Off by
     /// default.
@@ -117,6 +123,7 @@ impl Default for VisualConfig {
             far: super::review::DEFAULT_FAR,
             fallback_sf: super::review::DEFAULT_SF,
             dov_tau: false,
+            finer_by_tau: false,
             pace: Some(super::review::DEFAULT_PACE),
         }
     }

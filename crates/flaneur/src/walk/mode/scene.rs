@@ -124,6 +124,7 @@ impl Mode for Scene<'_> {
                 bytes: mesh_bytes(&mesh),
                 mesh,
                 level: a.level,
+                finest: a.level,
                 dov: None,
             });
         }

@@ -92,6 +92,7 @@ pub(crate) fn walk_live<'db>(
         pool: pool.as_ref(),
         tolerant,
         dov_tau: cfg.dov_tau,
+        finer_by_tau: cfg.finer_by_tau,
     };
     let search = &search;
     db.reset_io();
@@ -160,6 +161,8 @@ struct Searcher<'a> {
     tolerant: bool,
     /// Whether objects carry their DoV to LOD selection.
     dov_tau: bool,
+    /// Whether LOD selection may draw objects finer than they were loaded.
+    finer_by_tau: bool,
 }
 
 impl Searcher<'_> {
@@ -195,7 +198,7 @@ impl Searcher<'_> {
             if req.held.get(&p.key) == Some(&p.level) {
                 continue;
             }
-            match read(loader, p, self.dov_tau) {
+            match read(loader, p, self) {
                 Ok(l) => loaded.push(l),
                 Err(e) if self.tolerant => failed.push((p.key, e)),
                 Err(e) => return Err(e),
@@ -230,8 +233,9 @@ fn key_of(found: &Found) -> Result<u64> {
     }
 }
 
-/// `piece` read at its level, as the buffer holds it (with its DoV when `dov_tau`).
-fn read(loader: &mut Loader<'_>, piece: &Piece, dov_tau: bool) -> Result<Loaded> {
+/// `piece` read at its level, as the buffer holds it, with what LOD selection is to
+/// know of it as `search` says (its DoV, how fine it may be drawn).
+fn read(loader: &mut Loader<'_>, piece: &Piece, search: &Searcher<'_>) -> Result<Loaded> {
     let mesh = loader.mesh(&piece.found, piece.level)?;
     let entry = match &piece.found {
         Found::Object { entry, .. } => *entry,
@@ -244,10 +248,14 @@ fn read(loader: &mut Loader<'_>, piece: &Piece, dov_tau: bool) -> Result<Loaded>
         },
     };
     let mut loaded = Loaded::at_level(entry, mesh, piece.level);
-    // The fallback's objects (DoV 0) have no DoV to hand on.
-    match (dov_tau, &piece.found) {
-        (true, Found::Object { dov, .. }) if *dov > 0.0 => loaded.dov = Some(*dov),
-        _ => {}
+    if let Found::Object { dov, .. } = &piece.found {
+        // The fallback's objects (DoV 0) have no DoV to hand on.
+        if search.dov_tau && *dov > 0.0 {
+            loaded.dov = Some(*dov);
+        }
+        if search.finer_by_tau {
+            loaded.finest = 0;
+        }
     }
     Ok(loaded)
 }
@@ -481,7 +489,7 @@ impl Visual<'_> {
             if buffer.get(p.key).is_some_and(|o| o.level == p.level) {
                 frame.reused += 1;
             } else {
-                match read(&mut self.loader, &p, self.search.dov_tau) {
+                match read(&mut self.loader, &p, self.search) {
                     Ok(l) => {
                         buffer.replace(l);
                         frame.loaded += 1;
