@@ -461,5 +461,8 @@ fn finer_by_tau_lets_lod_selection_draw_near_objects_finer_than_eq_5_6() {
     let (finer, _) = walk(false);
     assert_eq!(finer, 0, "never finer than loaded without the option");
     let (finer, rest) = walk(true);
-    assert!(finer > 0, "no object drawn finer than eq. 5.6's level ({rest} others)");
+    assert!(
+        finer > 0,
+        "no object drawn finer than eq. 5.6's level ({rest} others)"
+    );
 }

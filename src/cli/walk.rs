@@ -293,19 +293,14 @@ fn walk_cmd(
     if let Some(p) = save_path {
         poses.save_csv(p)?;
     }
-    let bar = frame_bar(&poses, quiet);
-    let (report, drawn) = rendered(&db, render, cfg.far, |sink| {
-        review::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
+    let (report, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
+        review::walk_into(&db, &poses, cfg, tick, sink)
     })?;
-    bar.finish_and_clear();
     if let Some(p) = csv {
         write_file(p, &report.to_csv())?;
     }
     print_walk(&report);
-    if let (Some(drawn), Some(r)) = (drawn, render) {
-        print_render(&drawn, r)?;
-    }
-    Ok(())
+    print_render(drawn, render)
 }
 
 /// A bar counting the walk's frames, hidden when quiet.
@@ -317,16 +312,23 @@ fn frame_bar(poses: &CameraPath, quiet: bool) -> indicatif::ProgressBar {
     }
 }
 
-/// Runs `walk` with a frame writer when `render` asks for one (frames drawn with a
-/// ground reaching `far` past the city), else with no sink; and what drawing cost.
+/// Runs `walk` over `poses` under a bar of its frames (hidden when `quiet`), with a frame
+/// writer when `render` asks for one (frames drawn with a ground reaching `far` past the
+/// city), else with no sink; and what drawing cost. `walk` is handed the sink and what
+/// to tell of each frame.
 fn rendered<R>(
     db: &Database,
+    (poses, quiet): (&CameraPath, bool),
     render: Option<&RenderOpts>,
     far: f32,
-    walk: impl FnOnce(&mut dyn flaneur::walk::FrameSink) -> flaneur::Result<R>,
+    walk: impl FnOnce(&mut dyn flaneur::walk::FrameSink, &mut dyn FnMut(usize)) -> flaneur::Result<R>,
 ) -> Result<(R, Option<Drawn>)> {
+    let bar = frame_bar(poses, quiet);
+    let mut tick = |_: usize| bar.inc(1);
     let Some(r) = render else {
-        return Ok((walk(&mut flaneur::walk::NoSink)?, None));
+        let result = walk(&mut flaneur::walk::NoSink, &mut tick)?;
+        bar.finish_and_clear();
+        return Ok((result, None));
     };
     let gpu = flaneur_render::Gpu::headless()?;
     let mut writer =
@@ -334,7 +336,8 @@ fn rendered<R>(
     if let Some(tau) = r.lod_tau {
         writer = writer.with_lod_tau(tau)?;
     }
-    let result = walk(&mut writer)?;
+    let result = walk(&mut writer, &mut tick)?;
+    bar.finish_and_clear();
     Ok((
         result,
         Some(Drawn {
@@ -350,8 +353,12 @@ struct Drawn {
     times: flaneur_render::FrameTimes,
 }
 
-/// What drawing a walk's frames cost, printed and written to `render.csv` beside them.
-fn print_render(drawn: &Drawn, r: &RenderOpts) -> Result<()> {
+/// What drawing a walk's frames cost, printed and written to `render.csv` beside them
+/// (nothing when the walk was not drawn).
+fn print_render(drawn: Option<Drawn>, r: Option<&RenderOpts>) -> Result<()> {
+    let (Some(drawn), Some(r)) = (drawn, r) else {
+        return Ok(());
+    };
     let (adapter, t) = (&drawn.adapter, &drawn.times);
     let csv = r.dir.join("render.csv");
     write_file(&csv, &t.to_csv())?;
@@ -446,12 +453,14 @@ fn pvs_walk_cmd(
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
-    let bar = frame_bar(&poses, quiet);
     // The PVS walk's cameras have the default frustum (`Pose::camera`).
-    let (r, drawn) = rendered(&db, render, flaneur::geom::DEFAULT_FAR, |sink| {
-        pvs_walk::walk_pvs_into(&db, &poses, rule, |_| bar.inc(1), sink)
-    })?;
-    bar.finish_and_clear();
+    let (r, drawn) = rendered(
+        &db,
+        (&poses, quiet),
+        render,
+        flaneur::geom::DEFAULT_FAR,
+        |sink, tick| pvs_walk::walk_pvs_into(&db, &poses, rule, tick, sink),
+    )?;
     if let Some(p) = csv {
         let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
         for (i, f) in r.frames.iter().enumerate() {
@@ -486,10 +495,7 @@ fn pvs_walk_cmd(
         "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
         r.mean_drawn, r.pages
     );
-    if let (Some(drawn), Some(r)) = (drawn, render) {
-        print_render(&drawn, r)?;
-    }
-    Ok(())
+    print_render(drawn, render)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -505,19 +511,14 @@ fn visual_walk_cmd(
 ) -> Result<()> {
     let db = Database::open_with(path, backend)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
-    let bar = frame_bar(&poses, quiet);
-    let (r, drawn) = rendered(&db, render, cfg.far, |sink| {
-        visual::walk_into(&db, &poses, cfg, |_| bar.inc(1), sink)
+    let (r, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
+        visual::walk_into(&db, &poses, cfg, tick, sink)
     })?;
-    bar.finish_and_clear();
     if let Some(p) = csv {
         write_file(p, &r.to_csv())?;
     }
     print_visual(&r);
-    if let (Some(drawn), Some(r)) = (drawn, render) {
-        print_render(&drawn, r)?;
-    }
-    Ok(())
+    print_render(drawn, render)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -550,11 +551,9 @@ fn scene_walk_cmd(
             started.elapsed().as_secs_f64()
         );
     }
-    let bar = frame_bar(&poses, quiet);
-    let (r, drawn) = rendered(&db, render, cfg.far, |sink| {
-        scene_walk::walk_into(&db, &mut tree, &poses, cfg, |_| bar.inc(1), sink)
+    let (r, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
+        scene_walk::walk_into(&db, &mut tree, &poses, cfg, tick, sink)
     })?;
-    bar.finish_and_clear();
     if let Some(p) = csv {
         let mut out = String::from(
             "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,ended,pages
@@ -583,10 +582,7 @@ fn scene_walk_cmd(
         write_file(p, &out)?;
     }
     print_scene(&r);
-    if let (Some(drawn), Some(r)) = (drawn, render) {
-        print_render(&drawn, r)?;
-    }
-    Ok(())
+    print_render(drawn, render)
 }
 
 /// A scene-tree walk's summary.

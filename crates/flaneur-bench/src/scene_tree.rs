@@ -118,6 +118,7 @@ pub fn run(
     let mut tree = SceneTree::load(db, &flaneur::progress::Silent)?;
     let load_s = t.elapsed().as_secs_f64();
     let traversals = cfg.traversals();
+    let total = traversals.len();
     let mut rows = Vec::with_capacity(traversals.len());
     let mut series = Vec::new();
     for how in traversals {
@@ -141,7 +142,7 @@ pub fn run(
             frames_ended: s.frames_ended,
             too_big: r.too_big(),
         });
-        tick(rows.len(), cfg.traversals().len());
+        tick(rows.len(), total);
     }
     Ok(SceneTreeReport {
         config: cfg.clone(),

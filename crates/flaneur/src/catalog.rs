@@ -8,7 +8,7 @@
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
-use crate::scene::{encode_mesh, Mesh};
+use crate::scene::{decode_mesh, encode_mesh, Mesh};
 use crate::store::{Extent, PageKind, Segment, Store};
 
 const OBJECTS_SEGMENT: &str = "objects";
@@ -120,6 +120,17 @@ pub(crate) fn save_meta(
         a: kinds.rtree,
         b: kinds.mesh,
         c: kinds.meta,
+    })
+}
+
+/// Reads `object`'s full mesh from `store` (counted like every read); a mesh that does
+/// not decode is a [`Error::CorruptPage`] naming its first page and the object.
+pub(crate) fn read_mesh(store: &Store, object: &ObjectEntry) -> Result<Mesh> {
+    let bytes = store.read_extent(&object.mesh, PageKind::Mesh)?;
+    decode_mesh(&bytes).map_err(|what| Error::CorruptPage {
+        path: store.path().to_path_buf(),
+        page: object.mesh.first_page,
+        what: format!("mesh of object {}: {what}", object.id),
     })
 }
 

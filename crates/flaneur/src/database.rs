@@ -10,8 +10,8 @@ use crate::hdov::{self, HdovTree, Scheme, SearchResult, TreeHead};
 use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
-use crate::scene::{decode_mesh, Mesh};
-use crate::store::{Backend, IoStats, PageKind, Store};
+use crate::scene::Mesh;
+use crate::store::{Backend, IoStats, Store};
 use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 
 pub use crate::catalog::KindCounts;
@@ -251,12 +251,7 @@ impl Database {
 
     /// Reads an object's mesh (counted like every read).
     pub fn mesh(&self, object: &ObjectEntry) -> Result<Mesh> {
-        let bytes = self.store.read_extent(&object.mesh, PageKind::Mesh)?;
-        decode_mesh(&bytes).map_err(|what| Error::CorruptPage {
-            path: self.store.path().to_path_buf(),
-            page: object.mesh.first_page,
-            what: format!("mesh of object {}: {what}", object.id),
-        })
+        crate::catalog::read_mesh(&self.store, object)
     }
 
     /// Whether the database holds LOD data (reads nothing).

@@ -27,7 +27,7 @@ use crate::lod::stored::encode_chain;
 use crate::lod::stored::{level_mesh, LodTable};
 use crate::progress::{Progress, Step};
 use crate::rtree::{str_tile, ObjectEntry};
-use crate::scene::{decode_mesh, Mesh};
+use crate::scene::Mesh;
 use crate::store::{Extent, PageKind, Segment, Store};
 use crate::visibility::VisibilityTable;
 
@@ -171,13 +171,7 @@ fn coarsest_meshes(store: &Store, objects: &[ObjectEntry]) -> Result<HashMap<u64
         };
         let mesh = match entry {
             Some(e) if e.levels > 0 => level_mesh(store, &e, e.levels as usize)?,
-            _ => decode_mesh(&store.read_extent(&o.mesh, PageKind::Mesh)?).map_err(|what| {
-                Error::CorruptPage {
-                    path: store.path().to_path_buf(),
-                    page: o.mesh.first_page,
-                    what: format!("mesh of object {}: {what}", o.id),
-                }
-            })?,
+            _ => crate::catalog::read_mesh(store, o)?,
         };
         out.insert(o.id, mesh);
     }

@@ -10,11 +10,12 @@
 use std::collections::HashMap;
 
 use super::search::{level_for_detail, Found};
-use crate::error::{Error, Result};
+use crate::catalog::read_mesh;
+use crate::error::Result;
 use crate::lod::stored::{chain_level, chain_levels, level_mesh, levels, LodEntry, LodTable};
 use crate::lod::LevelInfo;
-use crate::scene::{decode_mesh, Mesh};
-use crate::store::{PageKind, Store};
+use crate::scene::Mesh;
+use crate::store::Store;
 
 /// A found object's or node's mesh, and the level it is at (0: an object's full mesh;
 /// an internal LOD's levels count from 1, finest first).
@@ -91,14 +92,7 @@ impl<'a> Loader<'a> {
         match found {
             Found::Object { entry, .. } => match self.object(entry.id)?.as_ref().map(|(e, _)| *e) {
                 Some(e) => level_mesh(self.store, &e, level),
-                None => {
-                    let bytes = self.store.read_extent(&entry.mesh, PageKind::Mesh)?;
-                    decode_mesh(&bytes).map_err(|what| Error::CorruptPage {
-                        path: self.store.path().to_path_buf(),
-                        page: entry.mesh.first_page,
-                        what: format!("mesh of object {}: {what}", entry.id),
-                    })
-                }
+                None => read_mesh(self.store, entry),
             },
             Found::Node { node, lods, .. } => {
                 let what = node_chain(*node);

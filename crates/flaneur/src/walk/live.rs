@@ -101,6 +101,18 @@ pub trait LiveViewer: Viewer {
 /// Fig. 6.7's smallest, 20,000 triangles.
 pub const DEFAULT_BUDGET: u64 = 20_000;
 
+/// Tells `viewer` `what` and shows it mode `to`, which the session walks from now on.
+fn fall_back<V: LiveViewer>(viewer: &mut V, what: String, to: ViewMode) -> ViewMode {
+    viewer.report(what);
+    viewer.show_mode(to);
+    to
+}
+
+/// A mode's name as a report says it: REVIEW, PVS.
+fn shown(mode: ViewMode) -> String {
+    mode.name().to_uppercase()
+}
+
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
 /// as [`review::walk_live`] walks them (unpaced: a person sets the pace), PVS as
 /// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
@@ -132,45 +144,43 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
     let mut tree: Option<SceneTree> = None;
     let mut failures = 0;
     loop {
+        // A mode the database cannot show: the one it falls back to, said so.
+        let lacking = match mode {
+            ViewMode::Pvs | ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv
+                if !db.has_visibility() =>
+            {
+                Some((
+                    "no visibility data (build it with --visibility)",
+                    ViewMode::Review,
+                ))
+            }
+            ViewMode::Visual if db.hdov()?.is_none() => Some((
+                "no HDoV-tree (build it with --visibility --hdov)",
+                ViewMode::Pvs,
+            )),
+            _ => None,
+        };
+        if let Some((what, to)) = lacking {
+            let path = db.store().path().display();
+            mode = fall_back(
+                viewer,
+                format!("{path} has {what}: showing {}", shown(to)),
+                to,
+            );
+            continue;
+        }
         let walked = match mode {
-            ViewMode::Pvs if !db.has_visibility() => {
-                viewer.report(format!(
-                    "{} has no visibility data (build it with --visibility): showing REVIEW",
-                    db.store().path().display()
-                ));
-                mode = ViewMode::Review;
-                viewer.show_mode(mode);
-                continue;
-            }
-            ViewMode::Visual if db.hdov()?.is_none() => {
-                viewer.report(format!(
-                    "{} has no HDoV-tree (build it with --visibility --hdov): showing PVS",
-                    db.store().path().display()
-                ));
-                mode = ViewMode::Pvs;
-                viewer.show_mode(mode);
-                continue;
-            }
-            ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv if !db.has_visibility() => {
-                viewer.report(format!(
-                    "{} has no visibility data (build it with --visibility): showing REVIEW",
-                    db.store().path().display()
-                ));
-                mode = ViewMode::Review;
-                viewer.show_mode(mode);
-                continue;
-            }
             ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv => {
                 if tree.is_none() {
                     viewer.report("loading the scene tree: every object and its LODs".into());
                     match SceneTree::load(db, &crate::progress::Silent) {
                         Ok(t) => tree = Some(t),
                         Err(e) => {
-                            viewer.report(format!(
-                                "the scene tree could not be loaded: {e}; showing REVIEW"
-                            ));
-                            mode = ViewMode::Review;
-                            viewer.show_mode(mode);
+                            let what = format!(
+                                "the scene tree could not be loaded: {e}; showing {}",
+                                shown(ViewMode::Review)
+                            );
+                            mode = fall_back(viewer, what, ViewMode::Review);
                             continue;
                         }
                     }

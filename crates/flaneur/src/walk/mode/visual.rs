@@ -119,7 +119,6 @@ pub(crate) fn walk_live<'db>(
             search,
             loader: db.hdov_loader(),
             current: None,
-            pieces: Vec::new(),
             drawable: Vec::new(),
             found: (0, 0),
             fallback_cell: None,
@@ -268,9 +267,8 @@ struct Visual<'a> {
     loader: Loader<'a>,
     /// The viewcell whose finds the buffer holds; `None` before the first or outside.
     current: Option<u32>,
-    /// Its finds (or the fallback's objects).
-    pieces: Vec<Piece>,
-    /// Their keys, in the search's order: what a frame may draw.
+    /// The keys of its finds (or of the fallback's objects), in the search's order:
+    /// what a frame may draw.
     drawable: Vec<u64>,
     /// Of those, objects and nodes.
     found: (usize, usize),
@@ -522,7 +520,6 @@ impl Visual<'_> {
             .filter(|p| matches!(p.found, Found::Object { .. }))
             .count();
         self.found = (objects, kept.len() - objects);
-        self.pieces = kept;
         frame.load_ms += t.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
