@@ -37,6 +37,12 @@ fn tree(db: &Database) -> SceneTree {
     SceneTree::load(db, &flaneur::progress::Silent).unwrap()
 }
 
+/// The ids of `db`'s walkable viewcells.
+fn walkable(db: &Database) -> Vec<u32> {
+    let head = db.visibility().unwrap().unwrap();
+    head.cells.iter().map(|c| c.id).collect()
+}
+
 /// The eye at the centre of viewcell `cell`, looking along `yaw`.
 fn eye(db: &Database, cell: u32, yaw: f32) -> Pose {
     let grid = &db.visibility().unwrap().unwrap().grid;
@@ -58,14 +64,7 @@ fn vds_add_up_from_the_pvs_and_each_node_is_the_sum_of_its_children() {
         2 * 300 - 1,
         "a k-D tree down to one object a leaf"
     );
-    let cells: Vec<u32> = db
-        .visibility()
-        .unwrap()
-        .unwrap()
-        .cells
-        .iter()
-        .map(|c| c.id)
-        .collect();
+    let cells = walkable(&db);
     for &cell in cells.iter().step_by(7).take(6) {
         t.enter(&db, cell).unwrap();
         let pvs = db.pvs(cell).unwrap().unwrap();
@@ -87,14 +86,7 @@ fn vds_add_up_from_the_pvs_and_each_node_is_the_sum_of_its_children() {
 fn conv_draws_the_frustum_vsc_zero_the_visible_and_vsc_fewer_as_eta_grows() {
     let db = Database::open(&city().db).unwrap();
     let mut t = tree(&db);
-    let cells: Vec<u32> = db
-        .visibility()
-        .unwrap()
-        .unwrap()
-        .cells
-        .iter()
-        .map(|c| c.id)
-        .collect();
+    let cells = walkable(&db);
     let mut internal_seen = false;
     for (i, &cell) in cells.iter().enumerate().step_by(5).take(8) {
         t.enter(&db, cell).unwrap();
@@ -278,4 +270,23 @@ fn the_scene_tree_bench_sets_vsc_and_pb_beside_conv_and_writes_its_report() {
         said.contains("PB(3000)") && said.contains("within the budget"),
         "{said}"
     );
+}
+
+#[test]
+fn bad_settings_and_missing_parts_are_clear_errors() {
+    let e = Traversal::Pb { budget: 0 }.validate().unwrap_err();
+    assert!(e.to_string().contains("polygon budget of 0"), "{e}");
+    let e = Traversal::Vsc { eta: f32::NAN }.validate().unwrap_err();
+    assert!(e.to_string().contains("η"), "{e}");
+    let db = city().db.to_str().unwrap();
+    // A scheme that is not one, and a scene walk on a database without visibility.
+    let o = common::flaneur(&["walk", db, "--mode", "visual", "--scheme", "diagonal", "-q"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("diagonal") && !err.contains("panicked"), "{err}");
+    let plain = common::city(30, 2, &BuildOptions::default());
+    let o = common::flaneur(&["walk", plain.db.to_str().unwrap(), "--mode", "vsc", "-q"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--visibility") && !err.contains("panicked"), "{err}");
 }

@@ -386,15 +386,19 @@ impl Truth<'_> {
                 .map(|d| &d.1)
                 .collect();
             frames += 1;
-            missed += self.pvs[&cell]
-                .iter()
-                .filter(|id| {
-                    let b = &self.entries[id];
-                    full.overlaps_aabb(b)
-                        && !seen.contains(id)
-                        && !groups.iter().any(|g| contains(g, b))
-                })
-                .count();
+            for id in &self.pvs[&cell] {
+                let b = self.entries.get(id).ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "object {id} of viewcell {cell}'s PVS is not in the database's index"
+                    ))
+                })?;
+                if full.overlaps_aabb(b)
+                    && !seen.contains(id)
+                    && !groups.iter().any(|g| contains(g, b))
+                {
+                    missed += 1;
+                }
+            }
         }
         Ok(missed as f64 / frames.max(1) as f64)
     }
