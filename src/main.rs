@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 
 mod cli;
-use cli::{bench, build, demo, info, lod, query, shot, view, walk};
+use cli::{bench, build, demo, info, lod, query, serve, shot, view, walk};
 
 #[derive(Parser)]
 #[command(
@@ -43,6 +43,9 @@ enum Command {
     Walk(walk::WalkArgs),
     /// Rerun an experiment of the papers on a database.
     Bench(bench::BenchArgs),
+    /// Serve database files over HTTP with byte ranges, ETag and If-Match, for every
+    /// command to open by URL (any static server that honours Range does as well).
+    Serve(serve::ServeArgs),
 }
 
 fn main() {
@@ -63,5 +66,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Query(a) => a.run(),
         Command::Walk(a) => a.run(),
         Command::Bench(a) => a.run(),
+        Command::Serve(a) => a.run(),
     }
 }

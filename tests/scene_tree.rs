@@ -283,10 +283,16 @@ fn bad_settings_and_missing_parts_are_clear_errors() {
     let o = common::flaneur(&["walk", db, "--mode", "visual", "--scheme", "diagonal", "-q"]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("diagonal") && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("diagonal") && !err.contains("panicked"),
+        "{err}"
+    );
     let plain = common::city(30, 2, &BuildOptions::default());
     let o = common::flaneur(&["walk", plain.db.to_str().unwrap(), "--mode", "vsc", "-q"]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("--visibility") && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("--visibility") && !err.contains("panicked"),
+        "{err}"
+    );
 }

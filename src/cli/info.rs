@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use flaneur::Database;
+use super::source::{remote_line, SourceArgs};
 
 /// `flaneur info`'s arguments.
 #[derive(clap::Args)]
@@ -12,17 +12,19 @@ pub struct InfoArgs {
     db: PathBuf,
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    source: SourceArgs,
 }
 
 impl InfoArgs {
     /// Prints the database's figures.
     pub fn run(self) -> Result<()> {
-        info(&self.db, self.json)
+        info(&self.db, self.json, &self.source)
     }
 }
 
-fn info(path: &Path, json: bool) -> Result<()> {
-    let db = Database::open(path)?;
+fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
+    let db = source.open(path)?;
     let info = db.info()?;
     if json {
         println!("{}", serde_json::to_string_pretty(&info)?);
@@ -126,6 +128,9 @@ fn info(path: &Path, json: bool) -> Result<()> {
     );
     for (level, (n, e)) in info.tree.nodes.iter().zip(&info.tree.entries).enumerate() {
         println!("  level {level}   {n} nodes, {e} entries");
+    }
+    if let Some(stats) = db.remote_stats() {
+        println!("{}", remote_line(&stats));
     }
     Ok(())
 }

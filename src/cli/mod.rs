@@ -8,7 +8,9 @@ pub mod demo;
 pub mod info;
 pub mod lod;
 pub mod query;
+pub mod serve;
 pub mod shot;
+pub mod source;
 pub mod view;
 pub mod walk;
 

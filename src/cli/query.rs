@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::Result;
 
+use super::source::{remote_line, SourceArgs};
 use flaneur::geom::Aabb;
-use flaneur::{Backend, Database};
 
 /// `flaneur query`'s arguments.
 #[derive(clap::Args)]
@@ -19,8 +19,8 @@ pub struct QueryArgs {
     /// History cells for CSearch (repeatable).
     #[arg(long, value_name = "BOX")]
     history: Vec<Aabb>,
-    #[arg(long, default_value = "mmap")]
-    backend: Backend,
+    #[command(flatten)]
+    source: SourceArgs,
     #[arg(long)]
     json: bool,
 }
@@ -32,14 +32,20 @@ impl QueryArgs {
             &self.db,
             &self.query,
             &self.history,
-            self.backend,
+            &self.source,
             self.json,
         )
     }
 }
 
-fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bool) -> Result<()> {
-    let db = Database::open_with(path, backend)?;
+fn run_query(
+    path: &Path,
+    q: &Aabb,
+    history: &[Aabb],
+    source: &SourceArgs,
+    json: bool,
+) -> Result<()> {
+    let db = source.open(path)?;
     let t = Instant::now();
     let result = if history.is_empty() {
         db.range(q)?
@@ -49,13 +55,23 @@ fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bo
     let us = t.elapsed().as_secs_f64() * 1e6;
     let io = db.io();
     if json {
-        let v = serde_json::json!({
+        let mut v = serde_json::json!({
             "query": if history.is_empty() { "box" } else { "csearch" },
             "ids": result.ids(),
             "pages": result.pages,
             "page_reads": io.page_reads,
             "micros": us,
         });
+        if let Some(s) = db.remote_stats() {
+            v["http"] = serde_json::json!({
+                "requests": s.requests,
+                "round_trips": s.round_trips,
+                "bytes": s.bytes,
+                "retries": s.retries,
+                "page_reads": s.page_reads,
+                "pages_fetched": s.pages_fetched,
+            });
+        }
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -64,5 +80,8 @@ fn run_query(path: &Path, q: &Aabb, history: &[Aabb], backend: Backend, json: bo
     let pages: Vec<String> = result.pages.iter().map(u64::to_string).collect();
     println!("{} pages read: {}", pages.len(), pages.join(" "));
     println!("{:.0} µs", us);
+    if let Some(stats) = db.remote_stats() {
+        println!("{}", remote_line(&stats));
+    }
     Ok(())
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Result;
 
 use super::args::{parse_look, parse_size, parse_vec3};
-use flaneur::Database;
+use super::source::SourceArgs;
 
 /// `flaneur shot`'s arguments.
 #[derive(clap::Args)]
@@ -27,6 +27,8 @@ pub struct ShotArgs {
     fov: f32,
     #[arg(short, long, default_value = "shot.png")]
     out: PathBuf,
+    #[command(flatten)]
+    source: SourceArgs,
 }
 
 impl ShotArgs {
@@ -39,8 +41,9 @@ impl ShotArgs {
             size,
             fov,
             out,
+            source,
         } = self;
-        let db = Database::open(&db)?;
+        let db = source.open(&db)?;
         let camera = flaneur::geom::Camera::new(at, look.0.to_radians(), look.1.to_radians())?
             .with_fov(fov.to_radians(), fov.to_radians())?
             .fitted_to(size.0 as f32 / size.1 as f32)?;

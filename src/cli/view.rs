@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::args::{parse_look, parse_size, parse_vec3};
+use super::source::SourceArgs;
 use flaneur::walk::path::CameraPath;
 use flaneur::Database;
 use flaneur_render::{ViewMode, WalkWindow};
@@ -58,6 +59,8 @@ pub struct ViewArgs {
     /// The PB mode's polygon budget, triangles a frame.
     #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
     budget: u64,
+    #[command(flatten)]
+    source: SourceArgs,
 }
 
 impl ViewArgs {
@@ -78,6 +81,7 @@ impl ViewArgs {
             top_view,
             eta,
             budget,
+            source,
         } = self;
         let mode = match mode.as_str() {
             "review" => ViewMode::Review,
@@ -91,7 +95,7 @@ impl ViewArgs {
                 bail!("the window shows the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'")
             }
         };
-        let db = Database::open(&db)?;
+        let db = source.open(&db)?;
         let start = match at {
             Some(p) => flaneur::walk::path::Pose {
                 time: 0.0,

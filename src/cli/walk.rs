@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use super::args::{pace, parse_size};
+use super::source::SourceArgs;
 use super::write_file;
 use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::walk::path::motion::{self, Motion};
@@ -14,7 +15,7 @@ use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
-use flaneur::{Backend, Database};
+use flaneur::Database;
 
 /// `flaneur walk`'s arguments.
 #[derive(clap::Args)]
@@ -77,8 +78,8 @@ pub struct WalkArgs {
     /// Save the camera path as CSV (time, x, y, z, yaw, pitch).
     #[arg(long)]
     save_path: Option<PathBuf>,
-    #[arg(long, default_value = "mmap")]
-    backend: Backend,
+    #[command(flatten)]
+    source: SourceArgs,
     #[arg(long, short)]
     quiet: bool,
     /// Draw every frame headless (no window) as the walk selects it, and write them
@@ -141,7 +142,7 @@ impl WalkArgs {
             speed,
             csv,
             save_path,
-            backend,
+            source,
             quiet,
             prefetch,
             border,
@@ -177,7 +178,7 @@ impl WalkArgs {
                 seed,
                 rule,
                 csv.as_deref(),
-                backend,
+                &source,
                 quiet,
                 render.as_ref(),
             );
@@ -199,7 +200,7 @@ impl WalkArgs {
                 path.as_deref().unwrap_or("cells"),
                 (frames, fps, seed),
                 csv.as_deref(),
-                backend,
+                &source,
                 quiet,
                 render.as_ref(),
             );
@@ -230,7 +231,7 @@ impl WalkArgs {
                 path.as_deref().unwrap_or("cells"),
                 (frames, fps, seed),
                 csv.as_deref(),
-                backend,
+                &source,
                 quiet,
                 render.as_ref(),
             );
@@ -267,7 +268,7 @@ impl WalkArgs {
             seed,
             csv.as_deref(),
             save_path.as_deref(),
-            backend,
+            &source,
             quiet,
             render.as_ref(),
         )
@@ -284,11 +285,11 @@ fn walk_cmd(
     seed: u64,
     csv: Option<&Path>,
     save_path: Option<&Path>,
-    backend: Backend,
+    source: &SourceArgs,
     quiet: bool,
     render: Option<&RenderOpts>,
 ) -> Result<()> {
-    let db = Database::open_with(path, backend)?;
+    let db = source.open(path)?;
     let poses = camera_path(&db, camera, frames, fps, seed)?;
     if let Some(p) = save_path {
         poses.save_csv(p)?;
@@ -300,6 +301,7 @@ fn walk_cmd(
         write_file(p, &report.to_csv())?;
     }
     print_walk(&report);
+    print_remote(&db);
     print_render(drawn, render)
 }
 
@@ -447,11 +449,11 @@ fn pvs_walk_cmd(
     seed: u64,
     rule: PvsPrefetch,
     csv: Option<&Path>,
-    backend: Backend,
+    source: &SourceArgs,
     quiet: bool,
     render: Option<&RenderOpts>,
 ) -> Result<()> {
-    let db = Database::open_with(path, backend)?;
+    let db = source.open(path)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     // The PVS walk's cameras have the default frustum (`Pose::camera`).
     let (r, drawn) = rendered(
@@ -495,6 +497,7 @@ fn pvs_walk_cmd(
         "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
         r.mean_drawn, r.pages
     );
+    print_remote(&db);
     print_render(drawn, render)
 }
 
@@ -505,11 +508,11 @@ fn visual_walk_cmd(
     camera: &str,
     (frames, fps, seed): (usize, f32, u64),
     csv: Option<&Path>,
-    backend: Backend,
+    source: &SourceArgs,
     quiet: bool,
     render: Option<&RenderOpts>,
 ) -> Result<()> {
-    let db = Database::open_with(path, backend)?;
+    let db = source.open(path)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     let (r, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
         visual::walk_into(&db, &poses, cfg, tick, sink)
@@ -518,6 +521,7 @@ fn visual_walk_cmd(
         write_file(p, &r.to_csv())?;
     }
     print_visual(&r);
+    print_remote(&db);
     print_render(drawn, render)
 }
 
@@ -528,11 +532,11 @@ fn scene_walk_cmd(
     camera: &str,
     (frames, fps, seed): (usize, f32, u64),
     csv: Option<&Path>,
-    backend: Backend,
+    source: &SourceArgs,
     quiet: bool,
     render: Option<&RenderOpts>,
 ) -> Result<()> {
-    let db = Database::open_with(path, backend)?;
+    let db = source.open(path)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
     let started = std::time::Instant::now();
     let bars = super::bars::Bars::default();
@@ -582,6 +586,7 @@ fn scene_walk_cmd(
         write_file(p, &out)?;
     }
     print_scene(&r);
+    print_remote(&db);
     print_render(drawn, render)
 }
 
@@ -703,5 +708,12 @@ pub fn print_walk(r: &WalkReport) {
             cs.misses,
             cs.hit_rate() * 100.0
         );
+    }
+}
+
+/// For a database read over HTTP: what the network cost.
+fn print_remote(db: &Database) {
+    if let Some(stats) = db.remote_stats() {
+        println!("{}", super::source::remote_line(&stats));
     }
 }

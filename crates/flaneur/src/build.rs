@@ -296,8 +296,13 @@ fn build(
     };
     drop(kept);
     let objects = entries.len() as u64;
+    let hdov = match &opts.hdov {
+        Some(h) => Some(build_hdov(&mut store, entries.clone(), h, progress)?),
+        None => None,
+    };
+    // The R-tree goes last, its root on the last page: a reader over HTTP fetches the
+    // file's tail with its header, and with it the tree's upper levels.
     let before = store.page_count();
-    let hdov_entries = opts.hdov.as_ref().map(|_| entries.clone());
     let tree = if opts.insertion {
         let mut tree = RTree::bulk_load(&mut store, Vec::new(), opts.fill)?;
         for e in entries {
@@ -309,10 +314,6 @@ fn build(
     };
     kinds.rtree = store.page_count() - before;
     tree.save(&mut store)?;
-    let hdov = match (&opts.hdov, hdov_entries) {
-        (Some(h), Some(entries)) => Some(build_hdov(&mut store, entries, h, progress)?),
-        _ => None,
-    };
     save_meta(&mut store, objects, triangles, &bounds, &kinds)?;
     let pages = store.page_count();
     let page_size = store.page_size() as u64;

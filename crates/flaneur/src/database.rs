@@ -11,7 +11,7 @@ use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::Mesh;
-use crate::store::{Backend, IoStats, Store};
+use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, Store};
 use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 
 pub use crate::catalog::KindCounts;
@@ -172,6 +172,44 @@ impl Database {
     /// Opens read-only with the given backend.
     pub fn open_with(path: &Path, backend: Backend) -> Result<Database> {
         Database::from_store(Store::open(path, backend)?)
+    }
+
+    /// Opens a database on an HTTP server, read by byte ranges through a client page
+    /// cache, with the default [`HttpOptions`]: any static server that honours `Range`
+    /// (nginx, an object store, a CDN) will do. Every query answers as it would on the
+    /// local file, pages counted the same; [`Database::remote_stats`] says what the
+    /// network cost. See [`Store::open_url`] for the errors.
+    ///
+    /// ```no_run
+    /// # fn main() -> flaneur::Result<()> {
+    /// let db = flaneur::Database::open_url("https://example.org/cities/demo.flaneur")?;
+    /// println!("{} objects", db.objects());
+    /// println!("{:?}", db.remote_stats());
+    /// # Ok(()) }
+    /// ```
+    pub fn open_url(url: &str) -> Result<Database> {
+        Database::open_url_with(url, &HttpOptions::default())
+    }
+
+    /// [`Database::open_url`] with the client's cache, timeouts and retries chosen.
+    pub fn open_url_with(url: &str, opts: &HttpOptions) -> Result<Database> {
+        Database::from_store(Store::open_url(url, opts)?)
+    }
+
+    /// Opens `location`: a URL (`http://…`, `https://…`) over HTTP with `http`'s
+    /// settings, else a file path with `backend`. What a command that takes "a database"
+    /// calls.
+    pub fn open_location(location: &str, backend: Backend, http: &HttpOptions) -> Result<Database> {
+        if crate::store::is_url(location) {
+            Database::open_url_with(location, http)
+        } else {
+            Database::open_with(Path::new(location), backend)
+        }
+    }
+
+    /// What reading this database over HTTP has cost so far; `None` for a local file.
+    pub fn remote_stats(&self) -> Option<RemoteStats> {
+        self.store.remote_stats()
     }
 
     /// Opens for [`Database::insert`].

@@ -129,6 +129,28 @@ pub enum Error {
     /// The GPU: no adapter, a lost device, a frame that cannot be read back or saved.
     #[error("rendering: {0}")]
     Render(String),
+
+    /// A database read over HTTP failed: the server refused, the connection dropped (after
+    /// the retries), or the answer was not the bytes asked for (no range support, a short or
+    /// long body, a wrong `Content-Range`); the message names the pages.
+    #[error("{url}: {what}")]
+    Remote {
+        /// The database's URL.
+        url: String,
+        /// What went wrong, and which pages were being read.
+        what: String,
+    },
+
+    /// The file behind a URL changed while it was open: the server answered 412 to the
+    /// `If-Match` of the version first read, or sent another version's validator. Pages of
+    /// two files are never mixed; open the database again.
+    #[error("{url}: the database changed on the server while it was open ({what}); open it again")]
+    RemoteChanged {
+        /// The database's URL.
+        url: String,
+        /// What showed the change.
+        what: String,
+    },
 }
 
 impl Error {

@@ -14,7 +14,6 @@ use flaneur::walk::pvs_walk::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
 use flaneur::walk::scene_walk::SceneConfig;
 use flaneur::walk::visual::VisualConfig;
-use flaneur::Database;
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 
 /// `flaneur bench fidelity`'s arguments.
@@ -86,7 +85,7 @@ impl FidelityArgs {
                 "fidelity draws the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'"
             ),
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         if preset.is_none() && !db.has_visibility() {
             bail!(
                 "{} has no precomputed visibility for the {mode} mode (build it with --visibility)",

@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::bars::with_bar;
-use flaneur::Database;
 use flaneur_bench::hdov_cache::{self, HdovCacheConfig};
 
 /// `flaneur bench hdov-cache`'s arguments.
@@ -54,7 +53,7 @@ impl HdovCacheArgs {
             policies,
             seed,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = with_bar("hdov-cache", |tick| hdov_cache::run(&db, &cfg, tick))?;
         write_report(&out, &r)
     }

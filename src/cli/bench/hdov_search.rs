@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::bars::with_bar;
-use flaneur::Database;
 use flaneur_bench::hdov_search::{self, HdovSearchConfig};
 
 /// `flaneur bench hdov-search`'s arguments.
@@ -47,7 +46,7 @@ impl HdovSearchArgs {
             etas,
             seed,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = with_bar("hdov-search", |tick| hdov_search::run(&db, &cfg, tick))?;
         write_report(&out, &r)
     }

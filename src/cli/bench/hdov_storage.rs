@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use super::report::write_report;
-use flaneur::Database;
 use flaneur_bench::hdov_storage;
 
 /// `flaneur bench hdov-storage`'s arguments.
@@ -21,7 +20,7 @@ pub struct HdovStorageArgs {
 impl HdovStorageArgs {
     /// Reads the tree's head and writes the table.
     pub fn run(self) -> Result<()> {
-        let db = Database::open(&self.db)?;
+        let db = crate::cli::source::open(&self.db)?;
         let r = hdov_storage::run(&db)?;
         write_report(&self.out, &r)
     }

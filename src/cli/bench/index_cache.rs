@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
-use flaneur::Database;
 use flaneur_bench::index_cache::{self, IndexCacheConfig};
 
 /// `flaneur bench index-cache`'s arguments.
@@ -35,7 +34,7 @@ impl IndexCacheArgs {
             walk: walk.setup(IndexCacheConfig::default().walk),
             sizes,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = index_cache::run(&db, &cfg)?;
         write_report(&out, &r)
     }

@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
-use flaneur::Database;
 use flaneur_bench::patterns::{self, PatternsConfig};
 
 /// `flaneur bench patterns`'s arguments.
@@ -28,7 +27,7 @@ impl PatternsArgs {
             walk: walk.setup(d.walk),
             ..d
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = patterns::run(&db, &cfg)?;
         write_report(&out, &r)
     }

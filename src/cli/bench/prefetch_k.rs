@@ -7,7 +7,6 @@ use anyhow::Result;
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
 use crate::cli::args::or_default;
-use flaneur::Database;
 use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
 
 /// `flaneur bench prefetch-k`'s arguments.
@@ -42,7 +41,7 @@ impl PrefetchKArgs {
             ks: or_default(ks, d.ks),
             repeats,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = prefetch_k::run(&db, &cfg)?;
         write_report(&out, &r)
     }

@@ -7,7 +7,6 @@ use anyhow::Result;
 use super::report::write_report;
 use crate::cli::args::or_default;
 use flaneur::walk::path::routes::RouteConfig;
-use flaneur::Database;
 use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig, SyntheticConfig};
 
 /// `flaneur bench pvs-prefetch`'s arguments.
@@ -83,7 +82,7 @@ impl PvsPrefetchArgs {
         let r = pvs_prefetch::run(&cfg)?;
         write_report(&out, &r)?;
         if let Some(path) = db {
-            let db = Database::open(&path)?;
+            let db = crate::cli::source::open(&path)?;
             let name = path.display().to_string();
             let r = pvs_prefetch::run_on_database(&db, &name, &cfg)?;
             println!();

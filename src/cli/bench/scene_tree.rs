@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::bars::with_bar;
-use flaneur::Database;
 use flaneur_bench::scene_tree::{self, SceneTreeConfig};
 
 /// `flaneur bench scene-tree`'s arguments.
@@ -54,7 +53,7 @@ impl SceneTreeArgs {
             budgets,
             seed,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = with_bar("scene-tree", |tick| scene_tree::run(&db, &cfg, tick))?;
         write_report(&out, &r)
     }

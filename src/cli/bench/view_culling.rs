@@ -7,7 +7,6 @@ use anyhow::Result;
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
 use crate::cli::args::or_default;
-use flaneur::Database;
 use flaneur_bench::view_culling::{self, ViewCullingConfig};
 
 /// `flaneur bench view-culling`'s arguments.
@@ -33,7 +32,7 @@ impl ViewCullingArgs {
             sfs: or_default(sfs, d.sfs),
             ..d
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = view_culling::run(&db, &cfg)?;
         write_report(&out, &r)
     }

@@ -6,7 +6,6 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::bars::with_bar;
-use flaneur::Database;
 use flaneur_bench::visual_vs_review::{self, VisualVsReviewConfig};
 
 /// `flaneur bench visual-vs-review`'s arguments.
@@ -65,7 +64,7 @@ impl VisualVsReviewArgs {
             pace,
             seed,
         };
-        let db = Database::open(&db)?;
+        let db = crate::cli::source::open(&db)?;
         let r = with_bar("visual-vs-review", |tick| {
             visual_vs_review::run(&db, &cfg, tick)
         })?;

@@ -232,6 +232,14 @@ impl PageSource for BufferPool<'_> {
         self.store.path()
     }
 
+    fn will_read(&self, pages: &[u64]) {
+        self.store.announce(pages);
+    }
+
+    fn peek_node(&self, page: u64, buf: &mut Vec<u8>) -> bool {
+        self.store.peek_page_into(page, PageKind::RtreeNode, buf)
+    }
+
     /// DIST is measured against the latest search begun (with two threads searching
     /// at once, the last to begin).
     fn begin_search(&self, query: &Aabb) {

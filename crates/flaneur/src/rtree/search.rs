@@ -58,11 +58,50 @@ pub(crate) fn search<S: Selection, P: PageSource + ?Sized>(
     result
 }
 
+/// The most nodes a look-ahead visits: it only plans reads, and must stay cheap.
+const LOOK_AHEAD_NODES: usize = 4096;
+
+/// Looks ahead through the nodes held without a round trip (a remote store's cache,
+/// which its first round trip filled with the tree's upper levels) and fetches, together,
+/// every node the search will reach first that is not held. Over HTTP a first query then
+/// waits once for its leaves instead of once per node above them. Reads and counts
+/// nothing; a page that fails its checks is left for the traversal to name.
+fn fetch_frontier<S: Selection, P: PageSource + ?Sized>(tree: &RTree, pages: &P, sel: &S) {
+    let mut buf = Vec::new();
+    let mut frontier = Vec::new();
+    let mut queue = vec![(tree.root, tree.height.saturating_sub(1) as u16)];
+    let mut visited = 0;
+    while let Some((page, level)) = queue.pop() {
+        visited += 1;
+        if visited > LOOK_AHEAD_NODES {
+            break;
+        }
+        if !pages.peek_node(page, &mut buf) {
+            frontier.push(page);
+            continue;
+        }
+        let Ok(node) = NodeView::parse(&buf) else {
+            continue;
+        };
+        if node.level != level || node.is_leaf() {
+            continue;
+        }
+        for i in 0..node.len() {
+            let child = node.child(i);
+            if sel.descend(&child.mbr) {
+                queue.push((child.page, level - 1));
+            }
+        }
+    }
+    pages.will_read(&frontier);
+}
+
 fn traverse<S: Selection, P: PageSource + ?Sized>(
     tree: &RTree,
     pages: &P,
     sel: &S,
 ) -> Result<QueryResult> {
+    fetch_frontier(tree, pages, sel);
     let mut result = QueryResult::default();
     let mut buf = Vec::with_capacity(4096);
     let height = tree.height;
@@ -97,6 +136,7 @@ fn traverse<S: Selection, P: PageSource + ?Sized>(
                 }
             }
         } else {
+            let before = stack.len();
             for i in (0..node.len()).rev() {
                 let child = node.child(i);
                 if sel.descend(&child.mbr) {
@@ -110,6 +150,9 @@ fn traverse<S: Selection, P: PageSource + ?Sized>(
                     ));
                 }
             }
+            // The children this node sends the search to, fetched together.
+            let next: Vec<u64> = stack[before..].iter().map(|(p, _)| *p).collect();
+            pages.will_read(&next);
         }
     }
     Ok(result)

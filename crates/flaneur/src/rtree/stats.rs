@@ -48,9 +48,9 @@ pub(crate) fn collect(tree: &RTree, store: &Store) -> Result<TreeStats> {
         stats.entries[level as usize] += node.len() as u64;
         capacity += tree.fanout.max(level) as u64;
         if !node.is_leaf() {
-            for i in 0..node.len() {
-                stack.push((node.child(i).page, level - 1));
-            }
+            let children: Vec<u64> = (0..node.len()).map(|i| node.child(i).page).collect();
+            store.announce(&children);
+            stack.extend(children.into_iter().map(|p| (p, level - 1)));
         }
     }
     let used: u64 = stats.entries.iter().sum();

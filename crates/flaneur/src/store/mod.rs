@@ -6,6 +6,8 @@
 //! - `extent.rs`: blobs stored as runs of contiguous pages;
 //! - `counters.rs`: the read counters, the papers' currency;
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
+//! - `remote/`: a database on any HTTP server, read by byte ranges through a client
+//!   page cache;
 //! - `source.rs`: [`PageSource`], how a traversal reads node pages (from the store or
 //!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
 //! - `writer.rs`: buffered appends, overwrites and the commit.
@@ -24,6 +26,7 @@ mod extent;
 pub(crate) mod framing;
 mod header;
 mod page;
+mod remote;
 mod source;
 mod writer;
 
@@ -44,11 +47,13 @@ pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
 pub use header::{Header, Segment, DEFAULT_PAGE_SIZE};
 pub use page::{PageKind, PAGE_HEADER_LEN};
+pub use remote::{is_url, HttpOptions, RemoteStats};
 pub use source::{NodeHint, PageSource};
 
 use backend::{MmapSource, PreadSource, RawPageSource};
 use counters::Counters;
 use header::HeaderError;
+use remote::{HttpSource, RemoteError};
 use writer::Writer;
 
 /// How a store reads pages.
@@ -71,6 +76,9 @@ pub enum Backend {
         /// Open the file with O_DIRECT.
         direct: bool,
     },
+    /// Byte ranges from an HTTP server, through a client page cache: what a store opened
+    /// with [`Store::open_url`] reads with. Not a backend for a file.
+    Http,
 }
 
 impl Backend {
@@ -80,6 +88,7 @@ impl Backend {
             Backend::Mmap => "mmap",
             Backend::Pread { direct: false } => "pread",
             Backend::Pread { direct: true } => "direct",
+            Backend::Http => "http",
         }
     }
 }
@@ -98,6 +107,10 @@ impl FromStr for Backend {
             "mmap" => Ok(Backend::Mmap),
             "pread" => Ok(Backend::Pread { direct: false }),
             "direct" => Ok(Backend::Pread { direct: true }),
+            "http" => Err(Error::Invalid(
+                "the http backend is chosen by giving a URL (http://… or https://…) instead of a path"
+                    .to_string(),
+            )),
             other => Err(Error::Invalid(format!(
                 "unknown storage backend {other:?} (expected mmap, pread or direct)"
             ))),
@@ -169,8 +182,13 @@ fn temp_path(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// Reads and verifies page 0 of `file` (`len` bytes long).
-fn read_header(path: &Path, file: &File, len: u64) -> Result<Header> {
+/// Reads and verifies page 0 of a file `len` bytes long, through `read_at` (bytes at an
+/// offset); `path` names the file in errors.
+fn read_header(
+    path: &Path,
+    len: u64,
+    read_at: impl Fn(&mut [u8], u64) -> io::Result<()>,
+) -> Result<Header> {
     let not_db = |what: String| Error::NotADatabase {
         path: path.to_path_buf(),
         what,
@@ -185,8 +203,7 @@ fn read_header(path: &Path, file: &File, len: u64) -> Result<Header> {
         HeaderError::Corrupt(w) => corrupt(w),
     };
     let mut prefix = vec![0u8; len.min(header::PREFIX_LEN as u64) as usize];
-    file.read_exact_at(&mut prefix, 0)
-        .map_err(|e| Error::io(path, e))?;
+    read_at(&mut prefix, 0).map_err(|e| Error::io(path, e))?;
     let page_size = match Header::check_prefix(&prefix).map_err(map_header_err)? {
         Some(ps) => ps,
         None => {
@@ -203,9 +220,38 @@ fn read_header(path: &Path, file: &File, len: u64) -> Result<Header> {
         });
     }
     let mut page0 = vec![0u8; page_size];
-    file.read_exact_at(&mut page0, 0)
-        .map_err(|e| Error::io(path, e))?;
+    read_at(&mut page0, 0).map_err(|e| Error::io(path, e))?;
     Header::decode(&page0).map_err(map_header_err)
+}
+
+/// Checks a file of `len` bytes against its header's page count; `writable` files may
+/// hold uncommitted pages past it.
+fn check_length(path: &Path, header: &Header, len: u64, writable: bool) -> Result<()> {
+    let page_size = header.page_size();
+    let truncated = |what: String| Error::Truncated {
+        path: path.to_path_buf(),
+        what,
+    };
+    let needed = header
+        .page_count()
+        .checked_mul(page_size as u64)
+        .ok_or_else(|| Error::CorruptPage {
+            path: path.to_path_buf(),
+            page: 0,
+            what: format!("page count {} is impossibly large", header.page_count()),
+        })?;
+    if len < needed {
+        return Err(truncated(format!(
+            "the header says {} pages of {page_size} bytes ({needed} bytes), the file has {len} bytes",
+            header.page_count()
+        )));
+    }
+    if !writable && !len.is_multiple_of(page_size as u64) {
+        return Err(truncated(format!(
+            "the file is {len} bytes, not a whole number of {page_size}-byte pages"
+        )));
+    }
+    Ok(())
 }
 
 impl Store {
@@ -229,6 +275,46 @@ impl Store {
         Store::open_existing(path, backend, true)
     }
 
+    /// Opens a database on an HTTP server, read-only, by byte ranges: any static server
+    /// that honours `Range` will do. The first round trip fetches `opts.prefix_bytes` from
+    /// the start of the file (the header) and `opts.suffix_bytes` from its end (the
+    /// R-tree's upper levels), two requests at once, and pins the file's version: its
+    /// ETag goes back as `If-Match` on every later request, and an answer from another
+    /// version is [`Error::RemoteChanged`]. Pages are checked as on disk and counted the
+    /// same; [`Store::remote_stats`] says what the network cost.
+    ///
+    /// Errors: as [`Store::open`] for what the bytes hold, and [`Error::Remote`] for the
+    /// server (unreachable after the retries, no range support, a wrong answer).
+    pub fn open_url(url: &str, opts: &HttpOptions) -> Result<Store> {
+        let path = PathBuf::from(url);
+        let connected = HttpSource::connect(url, opts).map_err(|e| e.into_error(url))?;
+        let len = connected.ends.len;
+        let header = read_header(&path, len, |buf, at| {
+            let at = at as usize;
+            match connected.ends.head.get(at..at + buf.len()) {
+                Some(bytes) => {
+                    buf.copy_from_slice(bytes);
+                    Ok(())
+                }
+                None => Err(io::Error::new(
+                    io::ErrorKind::UnexpectedEof,
+                    "the header lies beyond the first request's bytes",
+                )),
+            }
+        })?;
+        check_length(&path, &header, len, false)?;
+        let page_size = header.page_size();
+        Ok(Store {
+            source: Box::new(HttpSource::new(connected, page_size, opts)),
+            path,
+            header,
+            page_size,
+            backend: Backend::Http,
+            writer: None,
+            counters: Counters::default(),
+        })
+    }
+
     fn open_existing(path: &Path, backend: Backend, writable: bool) -> Result<Store> {
         let io_err = |e| Error::io(path, e);
         let file = OpenOptions::new()
@@ -237,33 +323,13 @@ impl Store {
             .open(path)
             .map_err(io_err)?;
         let len = file.metadata().map_err(io_err)?.len();
-        let header = read_header(path, &file, len)?;
+        let header = read_header(path, len, |buf, at| file.read_exact_at(buf, at))?;
         let page_size = header.page_size();
-        let truncated = |what: String| Error::Truncated {
-            path: path.to_path_buf(),
-            what,
-        };
-        let needed = header
-            .page_count()
-            .checked_mul(page_size as u64)
-            .ok_or_else(|| Error::CorruptPage {
-                path: path.to_path_buf(),
-                page: 0,
-                what: format!("page count {} is impossibly large", header.page_count()),
-            })?;
-        if len < needed {
-            return Err(truncated(format!(
-                "the header says {} pages of {page_size} bytes ({needed} bytes), the file has {len} bytes",
-                header.page_count()
-            )));
-        }
+        check_length(path, &header, len, writable)?;
+        let needed = header.page_count() * page_size as u64;
         if writable && len > needed {
             // Pages appended after the last commit: not part of the database.
             file.set_len(needed).map_err(io_err)?;
-        } else if len % page_size as u64 != 0 {
-            return Err(truncated(format!(
-                "the file is {len} bytes, not a whole number of {page_size}-byte pages"
-            )));
         }
         let source: Box<dyn RawPageSource> = match backend {
             Backend::Mmap => Box::new(
@@ -275,6 +341,12 @@ impl Store {
             )),
             Backend::Pread { direct: true } => {
                 Box::new(PreadSource::direct(path, page_size).map_err(io_err)?)
+            }
+            Backend::Http => {
+                return Err(Error::Invalid(format!(
+                    "{}: the http backend reads URLs (Store::open_url), not files",
+                    path.display()
+                )))
             }
         };
         let writer = writable.then(|| Writer::new(file, page_size, header.page_count(), None));
@@ -461,6 +533,10 @@ impl Store {
     }
 
     fn read_error(&self, page: u64, e: io::Error) -> Error {
+        let e = match e.downcast::<RemoteError>() {
+            Ok(remote) => return remote.into_error(&self.path.to_string_lossy()),
+            Err(e) => e,
+        };
         if e.kind() == io::ErrorKind::UnexpectedEof {
             Error::Truncated {
                 path: self.path.clone(),
@@ -613,6 +689,13 @@ impl Store {
         let mut scratch = Vec::new();
         for i in first_index..=last_index {
             let page = ext.first_page + i as u64;
+            if ((i - first_index) as u64).is_multiple_of(remote::CHUNK_PAGES) {
+                // A remote source fetches the next chunk in one request.
+                let count = (last_index + 1 - i).min(remote::CHUNK_PAGES as usize) as u64;
+                self.source
+                    .will_read(&[(page, count)])
+                    .map_err(|e| self.read_error(page, e))?;
+            }
             let expect = (byte_len - i * payload).min(payload);
             let got = self.read_append(page, kind, &mut scratch, &mut out)?;
             if got != expect {
@@ -721,6 +804,78 @@ impl Store {
             page_count: pages,
             byte_len,
         })
+    }
+
+    /// Announces extents about to be read, so that a remote store fetches the pages it
+    /// lacks now, together: adjacent ones in one request, several requests in flight.
+    /// Reads nothing on a local store. Nothing is counted until the pages are read.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let path = dir.path().join("p.db");
+    /// # let mut store = flaneur::store::Store::create(&path, 4096)?;
+    /// # let ext = store.append_extent(flaneur::store::PageKind::Mesh, &[1; 9000])?;
+    /// # store.finish()?;
+    /// let store = flaneur::store::Store::open(&path, Default::default())?;
+    /// store.prefetch(&[ext])?;
+    /// assert_eq!(store.stats().page_reads, 0);
+    /// # Ok(()) }
+    /// ```
+    pub fn prefetch(&self, extents: &[Extent]) -> Result<()> {
+        let count = self.page_count();
+        let runs: Vec<(u64, u64)> = extents
+            .iter()
+            .filter(|e| e.page_count > 0 && e.first_page > 0 && e.end_page() <= count)
+            .map(|e| (e.first_page, u64::from(e.page_count)))
+            .collect();
+        if runs.is_empty() {
+            return Ok(());
+        }
+        let first = runs[0].0;
+        self.source
+            .will_read(&runs)
+            .map_err(|e| self.read_error(first, e))
+    }
+
+    /// Pages about to be read, one by one (a traversal's next nodes): a remote store
+    /// fetches those it lacks together. A hint: a failure shows when a page is read.
+    pub(crate) fn announce(&self, pages: &[u64]) {
+        let count = self.page_count();
+        let runs: Vec<(u64, u64)> = pages
+            .iter()
+            .filter(|&&p| p > 0 && p < count)
+            .map(|&p| (p, 1))
+            .collect();
+        if runs.len() > 1 {
+            let _ = self.source.will_read(&runs);
+        }
+    }
+
+    /// Page `page`'s payload into `buf` if a remote store holds it without a round trip,
+    /// checked but not counted: a traversal looking ahead for what to fetch together.
+    /// `false` on a local store, and for a page that fails its checks (the read proper
+    /// will name it).
+    pub(crate) fn peek_page_into(&self, page: u64, kind: PageKind, buf: &mut Vec<u8>) -> bool {
+        if self.backend != Backend::Http || self.check_range(page).is_err() {
+            return false;
+        }
+        buf.clear();
+        buf.resize(self.page_size, 0);
+        if !self.source.cached(page, buf) {
+            return false;
+        }
+        let Ok(len) = self.verify(page, buf, kind).map(<[u8]>::len) else {
+            return false;
+        };
+        buf.copy_within(PAGE_HEADER_LEN..PAGE_HEADER_LEN + len, 0);
+        buf.truncate(len);
+        true
+    }
+
+    /// What reading over HTTP has cost so far; `None` for a local file.
+    pub fn remote_stats(&self) -> Option<RemoteStats> {
+        self.source.remote_stats()
     }
 
     /// A snapshot of the read counters.

@@ -30,6 +30,17 @@ pub trait PageSource {
     /// The database file, for error messages.
     fn path(&self) -> &Path;
 
+    /// Node pages the traversal will read next: a source whose reads cost a round trip
+    /// fetches them together now. A hint only: nothing is counted, and a failure shows
+    /// when the page is read.
+    fn will_read(&self, _pages: &[u64]) {}
+
+    /// Node `page`'s payload into `buf` if it is held without a round trip, uncounted: a
+    /// traversal looks ahead through what is held to fetch the next level together.
+    fn peek_node(&self, _page: u64, _buf: &mut Vec<u8>) -> bool {
+        false
+    }
+
     /// A search of `query` starts (a cache measures distances against it).
     fn begin_search(&self, _query: &Aabb) {}
 
@@ -44,5 +55,13 @@ impl PageSource for Store {
 
     fn path(&self) -> &Path {
         Store::path(self)
+    }
+
+    fn will_read(&self, pages: &[u64]) {
+        self.announce(pages);
+    }
+
+    fn peek_node(&self, page: u64, buf: &mut Vec<u8>) -> bool {
+        self.peek_page_into(page, PageKind::RtreeNode, buf)
     }
 }

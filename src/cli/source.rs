@@ -1,0 +1,63 @@
+//! Where a command reads its database: a file, through a backend, or a URL on any HTTP
+//! server, by byte ranges through a client page cache.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use flaneur::store::{is_url, Backend, HttpOptions, RemoteStats};
+use flaneur::Database;
+
+/// How a command reaches its database.
+#[derive(clap::Args, Clone, Debug)]
+pub struct SourceArgs {
+    /// How a database file is read: mmap, pread, or direct (O_DIRECT, past the page
+    /// cache). A database given as a URL (http://… or https://…) is read over HTTP.
+    #[arg(long, default_value = "mmap")]
+    pub backend: Backend,
+    /// For a database given as a URL: the client page cache, in MiB.
+    #[arg(long, default_value_t = 256, value_name = "MIB")]
+    pub cache_mb: usize,
+}
+
+impl Default for SourceArgs {
+    fn default() -> SourceArgs {
+        SourceArgs {
+            backend: Backend::default(),
+            cache_mb: 256,
+        }
+    }
+}
+
+impl SourceArgs {
+    /// Opens `db`: a URL over HTTP, else the file with the chosen backend.
+    pub fn open(&self, db: &Path) -> Result<Database> {
+        let http = HttpOptions {
+            cache_bytes: self.cache_mb.saturating_mul(1 << 20),
+            ..HttpOptions::default()
+        };
+        Ok(match db.to_str() {
+            Some(location) if is_url(location) => Database::open_url_with(location, &http)?,
+            _ => Database::open_with(db, self.backend)?,
+        })
+    }
+}
+
+/// Opens `db`, a file or a URL, with the default settings (the benches' way).
+pub fn open(db: &Path) -> Result<Database> {
+    SourceArgs::default().open(db)
+}
+
+/// One line on what reading over HTTP cost, for a database given as a URL.
+pub fn remote_line(stats: &RemoteStats) -> String {
+    format!(
+        "http        {} requests in {} round trips, {:.2} MiB received, {} retried; page cache hit rate {:.1}% ({} of {} page reads fetched)",
+        stats.requests,
+        stats.round_trips,
+        stats.bytes as f64 / (1 << 20) as f64,
+        stats.retries,
+        100.0 * stats.hit_rate(),
+        stats.pages_fetched,
+        stats.page_reads
+    )
+}

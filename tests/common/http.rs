@@ -1,0 +1,264 @@
+//! HTTP servers for the network tests, on loopback only: nginx from the distribution's
+//! packages (`.ci/run` installs it), started on a free port over a folder and stopped
+//! when dropped; and a misbehaving server of our own on real TCP, for the answers no
+//! well-kept server gives (cut bodies, extra bytes, wrong ranges).
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+/// The nginx binary: on the PATH, else where Debian puts it.
+fn nginx_binary() -> PathBuf {
+    let on_path = std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|d| d.join("nginx"))
+            .find(|p| p.is_file())
+    });
+    on_path
+        .or_else(|| Some(PathBuf::from("/usr/sbin/nginx")).filter(|p| p.is_file()))
+        .expect("nginx is not installed: the network tests need it (.ci/run installs nginx-light)")
+}
+
+/// A port nothing listens on now.
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+fn wait_for(port: u16, what: &str) {
+    let start = Instant::now();
+    while TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "{what} did not start listening on 127.0.0.1:{port}"
+        );
+        thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// nginx serving `root` on 127.0.0.1.
+pub struct Nginx {
+    child: Child,
+    port: u16,
+    run: tempfile::TempDir,
+}
+
+/// How nginx is set up.
+#[derive(Clone, Copy, Default)]
+pub struct NginxConfig {
+    /// `max_ranges 0`: every Range request is answered 200 with the whole file.
+    pub no_ranges: bool,
+}
+
+impl Nginx {
+    pub fn start(root: &Path) -> Nginx {
+        Nginx::start_with(root, NginxConfig::default())
+    }
+
+    pub fn start_with(root: &Path, config: NginxConfig) -> Nginx {
+        let run = tempfile::tempdir().unwrap();
+        let port = free_port();
+        let d = run.path().display();
+        let ranges = if config.no_ranges {
+            "max_ranges 0;"
+        } else {
+            ""
+        };
+        // One process, no privilege drop: the test's own user reads the folder.
+        let conf = format!(
+            "daemon off;\nmaster_process off;\nworker_processes 1;\npid {d}/nginx.pid;\n\
+             error_log {d}/error.log warn;\nevents {{ worker_connections 512; }}\n\
+             http {{\n  access_log off;\n  client_body_temp_path {d}/body;\n  proxy_temp_path {d}/proxy;\n\
+               fastcgi_temp_path {d}/fastcgi;\n  uwsgi_temp_path {d}/uwsgi;\n  scgi_temp_path {d}/scgi;\n\
+               default_type application/octet-stream;\n  keepalive_requests 100000;\n\
+               server {{ listen 127.0.0.1:{port}; root {root}; {ranges} }}\n}}\n",
+            root = root.display()
+        );
+        std::fs::write(run.path().join("nginx.conf"), conf).unwrap();
+        let child = Command::new(nginx_binary())
+            .arg("-p")
+            .arg(run.path())
+            .arg("-e")
+            .arg(run.path().join("error.log"))
+            .arg("-c")
+            .arg(run.path().join("nginx.conf"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("nginx could not be started");
+        wait_for(port, "nginx");
+        Nginx { child, port, run }
+    }
+
+    /// The URL of `name` in the served folder.
+    pub fn url(&self, name: &str) -> String {
+        format!("http://127.0.0.1:{}/{name}", self.port)
+    }
+
+    /// Stops the server now (a server gone mid-walk).
+    pub fn stop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Nginx {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+/// What the misbehaving server does wrong, after it has answered `honest` requests well
+/// (a database's open is two).
+#[derive(Clone, Copy, Debug)]
+pub enum Fault {
+    /// Says Content-Length of the range, sends half of it, closes the connection.
+    CutBody,
+    /// Sends the range and then as many bytes again (Content-Length says so).
+    LongBody,
+    /// Says and sends fewer bytes than asked, with a Content-Range that matches them.
+    ShortRange,
+    /// Answers with this status and an empty body.
+    Status(u16),
+    /// Flips one byte of every body.
+    Garble,
+}
+
+/// A server of our own on real TCP, serving `bytes` as one file at any path, honest for
+/// its first `honest` requests and then `fault` on every one.
+pub struct Misbehaving {
+    port: u16,
+    stop: Arc<AtomicBool>,
+    /// Requests answered so far.
+    pub requests: Arc<AtomicUsize>,
+}
+
+impl Misbehaving {
+    pub fn start(bytes: Vec<u8>, honest: usize, fault: Fault) -> Misbehaving {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = listener.local_addr().unwrap().port();
+        listener.set_nonblocking(true).unwrap();
+        let stop = Arc::new(AtomicBool::new(false));
+        let requests = Arc::new(AtomicUsize::new(0));
+        let bytes = Arc::new(bytes);
+        {
+            let (stop, requests) = (stop.clone(), requests.clone());
+            thread::spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    match listener.accept() {
+                        Ok((stream, _)) => {
+                            let (bytes, requests) = (bytes.clone(), requests.clone());
+                            thread::spawn(move || serve(stream, &bytes, honest, fault, &requests));
+                        }
+                        Err(_) => thread::sleep(Duration::from_millis(5)),
+                    }
+                }
+            });
+        }
+        Misbehaving {
+            port,
+            stop,
+            requests,
+        }
+    }
+
+    pub fn url(&self) -> String {
+        format!("http://127.0.0.1:{}/city.flaneur", self.port)
+    }
+}
+
+impl Drop for Misbehaving {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+/// Answers requests on one connection until it closes.
+fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: &AtomicUsize) {
+    stream.set_nonblocking(false).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let mut reader = BufReader::new(stream.try_clone().unwrap());
+    let mut out = stream;
+    loop {
+        let mut range = None;
+        let mut line = String::new();
+        if reader.read_line(&mut line).unwrap_or(0) == 0 {
+            return;
+        }
+        loop {
+            let mut h = String::new();
+            if reader.read_line(&mut h).unwrap_or(0) == 0 {
+                return;
+            }
+            if h == "\r\n" {
+                break;
+            }
+            if let Some(v) = h.to_ascii_lowercase().strip_prefix("range: bytes=") {
+                let (a, b) = v.trim().split_once('-').unwrap();
+                range = Some(match (a.parse::<usize>(), b.parse::<usize>()) {
+                    (Ok(a), Ok(b)) => (a, b.min(file.len() - 1)),
+                    // A suffix: the last b bytes.
+                    (Err(_), Ok(b)) => (file.len().saturating_sub(b), file.len() - 1),
+                    _ => panic!("a range the client should not send: {h}"),
+                });
+            }
+        }
+        let n = requests.fetch_add(1, Ordering::Relaxed);
+        let (a, b) = range.unwrap_or((0, file.len() - 1));
+        let mut body = file[a..=b].to_vec();
+        let total = file.len();
+        let head = |len: usize, a: usize, b: usize| {
+            format!(
+                "HTTP/1.1 206 Partial Content\r\nContent-Length: {len}\r\nContent-Range: bytes {a}-{b}/{total}\r\nETag: \"v1\"\r\n\r\n"
+            )
+        };
+        if n < honest {
+            let _ = out.write_all(head(body.len(), a, b).as_bytes());
+            let _ = out.write_all(&body);
+            continue;
+        }
+        match fault {
+            Fault::CutBody => {
+                let _ = out.write_all(head(body.len(), a, b).as_bytes());
+                let _ = out.write_all(&body[..body.len() / 2]);
+                return;
+            }
+            Fault::LongBody => {
+                let len = body.len();
+                let _ = out.write_all(head(2 * len, a, b).as_bytes());
+                let _ = out.write_all(&body);
+                let _ = out.write_all(&body);
+            }
+            Fault::ShortRange => {
+                let cut = (body.len() / 2).max(1);
+                let _ = out.write_all(head(cut, a, a + cut - 1).as_bytes());
+                let _ = out.write_all(&body[..cut]);
+            }
+            Fault::Status(code) => {
+                let _ = out.write_all(
+                    format!("HTTP/1.1 {code} Oops\r\nContent-Length: 0\r\n\r\n").as_bytes(),
+                );
+            }
+            Fault::Garble => {
+                let mid = body.len() / 2;
+                body[mid] ^= 0x5a;
+                let _ = out.write_all(head(body.len(), a, b).as_bytes());
+                let _ = out.write_all(&body);
+            }
+        }
+        let _ = out.flush();
+        let _ = reader.get_mut().read(&mut []);
+    }
+}

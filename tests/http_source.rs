@@ -1,0 +1,427 @@
+//! A database read over HTTP by byte ranges answers exactly as the local file does, from
+//! nginx on loopback; and every way a server can fail is named, never a panic and never
+//! pages of two files mixed.
+
+mod common;
+#[path = "common/http.rs"]
+mod servers;
+
+use std::path::Path;
+use std::time::{Duration, SystemTime};
+
+use flaneur::geom::Aabb;
+use flaneur::store::HttpOptions;
+use flaneur::walk::path::motion::{self, Motion};
+use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::{BuildOptions, Database, Error};
+use glam::Vec3;
+use servers::{Fault, Misbehaving, Nginx, NginxConfig};
+
+/// A small city built into its own folder, which nginx serves.
+fn city(objects: u64, seed: u64) -> common::City {
+    common::city(
+        objects,
+        seed,
+        &BuildOptions {
+            page_size: 1024,
+            ..Default::default()
+        },
+    )
+}
+
+/// Quick to give up: the failure tests need not wait for the default backoff.
+fn impatient() -> HttpOptions {
+    HttpOptions {
+        retries: 2,
+        backoff: Duration::from_millis(10),
+        timeout: Duration::from_secs(5),
+        ..HttpOptions::default()
+    }
+}
+
+fn boxes(db: &Database, n: usize) -> Vec<Aabb> {
+    let b = db.bounds();
+    let (min, ext) = (b.min, b.extent());
+    (0..n)
+        .map(|i| {
+            let f = |k: usize| ((i * 7919 + k * 104_729) % 1000) as f32 / 1000.0;
+            let lo = min + Vec3::new(f(1), 0.0, f(2)) * ext * 0.8;
+            let size = Vec3::new(0.05 + 0.3 * f(3), 1.0, 0.05 + 0.3 * f(4)) * ext;
+            Aabb::new(lo.to_array(), (lo + size).to_array()).unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn queries_over_http_answer_as_the_local_file() {
+    let c = city(400, 3);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    let remote = Database::open_url(&server.url("city.flaneur")).unwrap();
+    let opened = remote.remote_stats().unwrap();
+    assert_eq!(
+        (opened.requests, opened.round_trips),
+        (2, 1),
+        "a cold open is one round trip: the file's head and tail together"
+    );
+    assert_eq!(
+        serde_json::to_value(local.info().unwrap()).unwrap(),
+        serde_json::to_value(remote.info().unwrap()).unwrap()
+    );
+    let mut history = Vec::new();
+    let queries = boxes(&local, 25);
+    for q in &queries {
+        let q = *q;
+        let (a, b) = (local.range(&q).unwrap(), remote.range(&q).unwrap());
+        assert_eq!(a.ids(), b.ids());
+        assert_eq!(a.pages, b.pages, "the same pages, in the same order");
+        let (a, b) = (
+            local.csearch(&q, &history).unwrap(),
+            remote.csearch(&q, &history).unwrap(),
+        );
+        assert_eq!((a.ids(), a.pages), (b.ids(), b.pages));
+        for o in a.objects.iter().take(5) {
+            assert_eq!(local.mesh(o).unwrap(), remote.mesh(o).unwrap());
+        }
+        history.push(q);
+    }
+    assert_eq!(
+        local.io().page_reads,
+        remote.io().page_reads,
+        "pages counted alike"
+    );
+    let first = remote.remote_stats().unwrap();
+    assert!(first.pages_fetched <= first.page_reads, "{first:?}");
+    // The client cache holds the whole small city: the same queries again cost nothing.
+    for (i, q) in queries.iter().enumerate() {
+        remote.range(q).unwrap();
+        let found = remote.csearch(q, &queries[..i]).unwrap();
+        for o in found.objects.iter().take(5) {
+            remote.mesh(o).unwrap();
+        }
+    }
+    let again = remote.remote_stats().unwrap();
+    assert_eq!(again.requests, first.requests, "{again:?}");
+    assert!(again.page_reads > first.page_reads && again.hit_rate() > first.hit_rate());
+}
+
+#[test]
+fn a_walk_over_http_reads_what_the_local_walk_reads() {
+    let c = city(400, 4);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    let remote = Database::open_url(&server.url("city.flaneur")).unwrap();
+    let path = motion::generate(&local.bounds(), Motion::Normal, 120, 30.0, 2).unwrap();
+    let cfg = ReviewConfig {
+        far: 150.0,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let a = review::walk(&local, &path, &cfg, |_| {}).unwrap();
+    let b = review::walk(&remote, &path, &cfg, |_| {}).unwrap();
+    let figures = |r: &review::WalkReport| -> Vec<_> {
+        r.frames
+            .iter()
+            .map(|f| {
+                (
+                    f.objects_loaded,
+                    f.objects_buffered,
+                    f.objects_drawn,
+                    f.triangles_drawn,
+                    f.index_pages,
+                    f.mesh_pages,
+                    f.visual_misses,
+                )
+            })
+            .collect()
+    };
+    assert_eq!(figures(&a), figures(&b));
+}
+
+#[test]
+fn the_cli_takes_a_url_wherever_it_takes_a_database() {
+    let c = city(200, 5);
+    let server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let db = c.db.to_str().unwrap();
+    let out = |args: &[&str]| {
+        let o = common::flaneur(args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8(o.stdout).unwrap()
+    };
+    // The same lines but the database's name, the time and the network's own line.
+    let same = |text: String| -> Vec<String> {
+        text.lines()
+            .filter(|l| !l.starts_with("database") && !l.starts_with("http") && !l.ends_with("µs"))
+            .map(str::to_string)
+            .collect()
+    };
+    let info = out(&["info", &url]);
+    assert_eq!(same(out(&["info", db])), same(info.clone()));
+    assert!(
+        info.contains("http        "),
+        "info reports the network: {info}"
+    );
+    let q = ["--box=-100,0,-100,100,30,100"];
+    assert_eq!(
+        same(out(&[&["query", db][..], &q].concat())),
+        same(out(&[&["query", &url][..], &q].concat()))
+    );
+    let walk = out(&["walk", &url, "--mode", "box", "--frames", "30", "--quiet"]);
+    assert!(
+        walk.contains("http "),
+        "the walk reports the network: {walk}"
+    );
+}
+
+#[test]
+fn a_server_without_range_support_is_named() {
+    let c = city(60, 6);
+    let server = Nginx::start_with(c.dir.path(), NginxConfig { no_ranges: true });
+    match Database::open_url_with(&server.url("city.flaneur"), &impatient()) {
+        Err(Error::Remote { url, what }) => {
+            assert!(url.ends_with("/city.flaneur"));
+            assert!(what.contains("does not serve byte ranges"), "{what}");
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("opened a database from a server that ignores Range"),
+    }
+}
+
+#[test]
+fn a_missing_file_and_a_file_that_is_not_a_database_are_named() {
+    let c = city(60, 7);
+    std::fs::write(c.dir.path().join("notes.txt"), vec![b'x'; 5000]).unwrap();
+    let server = Nginx::start(c.dir.path());
+    match Database::open_url_with(&server.url("nothing.flaneur"), &impatient()) {
+        Err(Error::Remote { what, .. }) => assert!(what.contains("404"), "{what}"),
+        other => panic!("{:?}", other.err()),
+    }
+    assert!(matches!(
+        Database::open_url_with(&server.url("notes.txt"), &impatient()),
+        Err(Error::NotADatabase { .. })
+    ));
+}
+
+/// Every object's mesh, read from `db`, or the first error.
+fn all_meshes(db: &Database) -> Result<Vec<flaneur::scene::Mesh>, Error> {
+    let all = db.range(&db.bounds())?;
+    all.objects.iter().map(|o| db.mesh(o)).collect()
+}
+
+#[test]
+fn a_file_swapped_mid_walk_is_refused_not_mixed() {
+    let c = city(300, 8);
+    let other = city(300, 9);
+    let server = Nginx::start(c.dir.path());
+    let db = Database::open_url_with(&server.url("city.flaneur"), &impatient()).unwrap();
+    // Replace the served file with another city's, as a deploy would (a rename), newer.
+    let staged = c.dir.path().join("staged");
+    std::fs::copy(&other.db, &staged).unwrap();
+    let later = SystemTime::now() + Duration::from_secs(60);
+    std::fs::File::options()
+        .write(true)
+        .open(&staged)
+        .unwrap()
+        .set_modified(later)
+        .unwrap();
+    std::fs::rename(&staged, &c.db).unwrap();
+    match all_meshes(&db) {
+        Err(Error::RemoteChanged { url, what }) => {
+            assert!(url.ends_with("/city.flaneur"));
+            assert!(what.contains("412"), "{what}");
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("read a whole city across a swap of its file"),
+    }
+}
+
+#[test]
+fn a_server_gone_mid_walk_is_an_error_naming_the_pages() {
+    let c = city(300, 10);
+    let mut server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let db = Database::open_url_with(&url, &impatient()).unwrap();
+    server.stop();
+    match all_meshes(&db) {
+        Err(Error::Remote { url: u, what }) => {
+            assert_eq!(u, url);
+            assert!(
+                what.contains("page") && what.contains("3 attempts"),
+                "{what}"
+            );
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("read a city from a stopped server"),
+    }
+    assert_eq!(db.remote_stats().unwrap().retries, 2);
+}
+
+/// The error reading every mesh from a misbehaving server that opens honestly.
+fn misbehaved(fault: Fault) -> Error {
+    let c = city(200, 11);
+    let server = Misbehaving::start(std::fs::read(&c.db).unwrap(), 2, fault);
+    let db = Database::open_url_with(&server.url(), &impatient()).unwrap();
+    all_meshes(&db).expect_err("a misbehaving server's pages were all accepted")
+}
+
+#[test]
+fn garbage_bytes_are_caught_by_the_page_checksums() {
+    match misbehaved(Fault::Garble) {
+        Error::CorruptPage { page, what, .. } => {
+            assert!(page > 0);
+            assert!(what.contains("checksum"), "{what}");
+        }
+        e => panic!("{e}"),
+    }
+}
+
+#[test]
+fn a_cut_body_is_retried_then_named() {
+    match misbehaved(Fault::CutBody) {
+        Error::Remote { what, .. } => assert!(what.contains("3 attempts"), "{what}"),
+        e => panic!("{e}"),
+    }
+}
+
+#[test]
+fn a_long_or_short_answer_is_refused() {
+    match misbehaved(Fault::LongBody) {
+        Error::Remote { what, .. } => assert!(what.contains("more than"), "{what}"),
+        e => panic!("{e}"),
+    }
+    match misbehaved(Fault::ShortRange) {
+        Error::Remote { what, .. } => assert!(what.contains("the server sent"), "{what}"),
+        e => panic!("{e}"),
+    }
+}
+
+#[test]
+fn server_errors_are_retried_and_client_errors_are_not() {
+    match misbehaved(Fault::Status(503)) {
+        Error::Remote { what, .. } => assert!(
+            what.contains("3 attempts") && what.contains("503"),
+            "{what}"
+        ),
+        e => panic!("{e}"),
+    }
+    match misbehaved(Fault::Status(403)) {
+        Error::Remote { what, .. } => {
+            assert!(what.contains("403") && !what.contains("attempts"), "{what}")
+        }
+        e => panic!("{e}"),
+    }
+    match misbehaved(Fault::Status(416)) {
+        Error::RemoteChanged { what, .. } => assert!(what.contains("416"), "{what}"),
+        e => panic!("{e}"),
+    }
+}
+
+#[test]
+fn a_local_path_is_not_taken_for_a_url() {
+    let c = city(60, 12);
+    let path: &Path = &c.db;
+    let db = Database::open_location(
+        path.to_str().unwrap(),
+        Default::default(),
+        &HttpOptions::default(),
+    )
+    .unwrap();
+    assert!(db.remote_stats().is_none());
+}
+
+#[test]
+fn a_cold_first_query_waits_for_two_round_trips_not_one_per_level() {
+    // A tree of three levels whose leaves lie beyond the first round trip's tail.
+    let c = city(2500, 13);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    assert_eq!(local.tree().height, 3);
+    let opts = HttpOptions {
+        suffix_bytes: 8 << 10,
+        ..HttpOptions::default()
+    };
+    let b = local.bounds();
+    let mid = b.min + b.extent() * 0.5;
+    let q = Aabb::new(
+        (mid - Vec3::new(150.0, 0.0, 150.0)).to_array(),
+        (mid + Vec3::new(150.0, 50.0, 150.0)).to_array(),
+    )
+    .unwrap();
+    let remote = Database::open_url_with(&server.url("city.flaneur"), &opts).unwrap();
+    let found = remote.range(&q).unwrap();
+    assert_eq!(found, local.range(&q).unwrap());
+    let leaves = found.pages.len() - 1 - 2;
+    assert!(leaves > 4, "the query reads {} nodes", found.pages.len());
+    let s = remote.remote_stats().unwrap();
+    assert_eq!(s.round_trips, 2, "{s:?}");
+    // Without the look-ahead each leaf would have cost one.
+    assert!(s.requests < 2 + leaves as u64, "{s:?}");
+}
+
+/// `flaneur serve` on a free port over `dbs`; the process and the URL of each.
+fn flaneur_serve(dbs: &[&Path]) -> (std::process::Child, Vec<String>) {
+    use std::io::BufRead;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .arg("serve")
+        .args(dbs)
+        .args(["--port", "0"])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    let urls = lines
+        .by_ref()
+        .map(|line| line.unwrap())
+        .filter_map(|line| {
+            let url = line.strip_prefix("serving ")?;
+            Some(url.split_whitespace().next().unwrap().to_string())
+        })
+        .take(dbs.len())
+        .collect();
+    // Keep reading what the server prints, so it never writes into a closed pipe.
+    std::thread::spawn(move || lines.for_each(drop));
+    (child, urls)
+}
+
+#[test]
+fn flaneur_serve_answers_as_nginx_does() {
+    let c = city(300, 14);
+    let (mut server, urls) = flaneur_serve(&[&c.db]);
+    let local = Database::open(&c.db).unwrap();
+    let remote = Database::open_url_with(&urls[0], &impatient()).unwrap();
+    for q in boxes(&local, 10) {
+        let (a, b) = (local.range(&q).unwrap(), remote.range(&q).unwrap());
+        assert_eq!((a.ids(), &a.pages), (b.ids(), &b.pages));
+        for o in a.objects.iter().take(3) {
+            assert_eq!(local.mesh(o).unwrap(), remote.mesh(o).unwrap());
+        }
+    }
+    // A new build copied over the served file: its ETag changes, If-Match fails.
+    let other = city(300, 15);
+    let staged = c.dir.path().join("staged");
+    std::fs::copy(&other.db, &staged).unwrap();
+    std::fs::rename(&staged, &c.db).unwrap();
+    let changed = all_meshes(&remote);
+    let _ = server.kill();
+    let _ = server.wait();
+    match changed {
+        Err(Error::RemoteChanged { .. }) => {}
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("read a whole city across a swap of its file"),
+    }
+}
+
+#[test]
+fn flaneur_serve_refuses_a_file_that_is_not_a_database() {
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.flaneur");
+    std::fs::write(&junk, b"not a city").unwrap();
+    let out = common::flaneur(&["serve", junk.to_str().unwrap(), "--port", "0"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("junk.flaneur"), "{err}");
+}
