@@ -425,3 +425,127 @@ fn flaneur_serve_refuses_a_file_that_is_not_a_database() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("junk.flaneur"), "{err}");
 }
+
+#[test]
+fn a_never_wait_walk_goes_on_without_its_server_and_says_so() {
+    let c = city(300, 16);
+    let mut server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let db = Database::open_url_with(&url, &impatient()).unwrap();
+    // The whole index is read while the server is up; then it goes, and no mesh can be.
+    db.range(&db.bounds()).unwrap();
+    server.stop();
+    let path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 2).unwrap();
+    let cfg = ReviewConfig {
+        far: 150.0,
+        pace: Some(8.0),
+        never_wait: true,
+        ..ReviewConfig::preset(Preset::Optimal)
+    };
+    let report = review::walk(&db, &path, &cfg, |_| {}).expect("the walk stopped");
+    let s = &report.summary;
+    assert_eq!(report.frames.len(), 60);
+    assert!(s.failed_loads >= 1, "{s:?}");
+    let said = s.last_load_error.as_deref().unwrap();
+    assert!(said.contains(&url) && said.contains("3 attempts"), "{said}");
+    assert!(s.visual_misses > 0 && s.first_complete_frame.is_none());
+    // The thesis's walk, which waits on its reads, stops with the error instead.
+    let waits = ReviewConfig {
+        never_wait: false,
+        ..cfg
+    };
+    match review::walk(&db, &path, &waits, |_| {}) {
+        Err(Error::Remote { url: u, .. }) => assert_eq!(u, url),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("a walk read meshes from a stopped server"),
+    }
+}
+
+#[test]
+fn bench_http_walks_through_a_link_of_set_round_trip() {
+    let c = city(300, 17);
+    let dir = c.dir.path().join("bench");
+    let out = common::flaneur(&[
+        "bench",
+        "http",
+        c.db.to_str().unwrap(),
+        "--frames",
+        "90",
+        "--fps",
+        "60",
+        "--far",
+        "150",
+        "--speed",
+        "8",
+        "--patterns",
+        "normal",
+        "--rtts",
+        "0,40",
+        "--mbits",
+        "100",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in flaneur_bench::http_walk::PLOTS
+        .iter()
+        .chain(&["http.csv", "http.md"])
+    {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("http.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let kinds: Vec<&str> = rows.iter().map(|r| r[col("source")]).collect();
+    assert_eq!(kinds, ["local", "local-waiting", "http", "http"]);
+    let num = |r: &Vec<&str>, name: &str| -> f64 { r[col(name)].parse().unwrap() };
+    for r in &rows[2..] {
+        // Never a search on the viewer's thread; every walk asked the server for pages.
+        assert_eq!(num(r, "sync_queries"), 0.0);
+        assert!(num(r, "requests") > 0.0 && num(r, "bytes") > 0.0, "{r:?}");
+        assert_eq!(num(r, "failed_loads"), 0.0);
+    }
+    // Opening over the 40 ms link took its first round trip at least.
+    assert!(num(&rows[3], "open_ms") >= 40.0, "{:?}", rows[3]);
+    assert!(num(&rows[2], "open_ms") < num(&rows[3], "open_ms"));
+}
+
+#[test]
+fn coarse_levels_over_http_come_in_a_few_round_trips() {
+    let c = city(300, 18);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    let remote = Database::open_url(&server.url("city.flaneur")).unwrap();
+    let objects = local.range(&local.bounds()).unwrap().objects;
+    remote.range(&remote.bounds()).unwrap();
+    let before = remote.remote_stats().unwrap();
+    let coarse = remote.coarsest_meshes(&objects).unwrap();
+    assert_eq!(local.coarsest_meshes(&objects).unwrap(), coarse);
+    assert!(coarse.iter().any(|(level, _)| *level > 0));
+    // The entry pages, the chains' first pages, the levels' other pages: three steps,
+    // each as many waves of parallel requests as its pages need, not a few round trips
+    // per object as reading them one by one takes.
+    let rt = remote.remote_stats().unwrap().round_trips - before.round_trips;
+    let one_by_one = Database::open_url(&server.url("city.flaneur")).unwrap();
+    one_by_one.range(&one_by_one.bounds()).unwrap();
+    let before = one_by_one.remote_stats().unwrap();
+    for o in &objects {
+        let levels = one_by_one.lod_levels(o.id).unwrap().unwrap();
+        one_by_one.lod_mesh(o.id, levels.len() - 1).unwrap();
+    }
+    let slow = one_by_one.remote_stats().unwrap().round_trips - before.round_trips;
+    assert!(
+        rt * 5 < slow,
+        "{rt} round trips together, {slow} one by one"
+    );
+    println!("{rt} round trips together, {slow} one by one");
+}

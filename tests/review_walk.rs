@@ -290,3 +290,43 @@ fn bad_settings_are_errors() {
     )
     .is_err());
 }
+
+#[test]
+fn a_never_wait_walk_never_searches_on_the_viewers_thread() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let p = path(&db, Motion::Fast, 240);
+    for preset in [Preset::Optimal, Preset::Np, Preset::Box] {
+        let report = review::walk(
+            &db,
+            &p,
+            &ReviewConfig {
+                never_wait: true,
+                ..cfg(preset)
+            },
+            |_| {},
+        )
+        .unwrap();
+        let s = &report.summary;
+        assert_eq!(s.sync_queries, 0, "{preset:?}");
+        assert!(report.frames.iter().all(|f| !f.sync_query));
+        // Frame 0 holds nothing: its search is queued and it draws nothing.
+        assert!(report.frames[0].outran, "{preset:?}");
+        assert!(s.queued_queries >= 1 && s.frames_outran >= 1, "{preset:?}");
+        assert!(s.cell_changes >= 1, "{preset:?} never entered a cell");
+        assert!(s.first_complete_frame.is_some(), "{preset:?}");
+        // A frame inside a cell it entered has all of that cell: misses only come while
+        // the viewer waits for its loader.
+        for f in &report.frames {
+            assert!(
+                f.visual_misses == 0 || f.outran,
+                "{preset:?}: frame {} missed {} objects inside its cell",
+                f.frame,
+                f.visual_misses
+            );
+        }
+        assert_eq!(s.failed_loads, 0);
+        // The viewer's own searches load coarse levels first on a database with LODs.
+        assert!(db.has_lods() && s.lod_pages > 0, "{preset:?}");
+    }
+}

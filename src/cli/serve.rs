@@ -4,10 +4,11 @@
 //! serves a database as well (the tests also read through nginx).
 
 use std::net::{IpAddr, SocketAddr};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
+use axum::serve::ListenerExt;
 use flaneur::Database;
 
 /// `flaneur serve`'s arguments.
@@ -58,9 +59,47 @@ impl ServeArgs {
             for (name, objects) in &served {
                 println!("serving http://{at}/{name} ({objects} objects)");
             }
-            axum::serve(listener, router)
+            axum::serve(listener.tap_io(no_delay), router)
                 .await
                 .context("serving the databases")
         })
     }
+}
+
+/// Serves `db` on a free loopback port from a thread of its own, for as long as the
+/// process runs (`flaneur bench http`'s origin server): its address and the name it is
+/// served under.
+pub fn spawn(db: &Path) -> Result<(SocketAddr, String)> {
+    let name = db
+        .file_name()
+        .and_then(|n| n.to_str())
+        .with_context(|| format!("{}: no file name to serve it under", db.display()))?
+        .to_string();
+    let router = axum::Router::new().route_service(
+        &format!("/{name}"),
+        tower_http::services::ServeFile::new(db),
+    );
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the server's runtime")?;
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind(("127.0.0.1", 0)))
+        .context("listening on loopback")?;
+    let at = listener.local_addr()?;
+    std::thread::Builder::new()
+        .name("serve".into())
+        .spawn(move || {
+            runtime.block_on(async move { axum::serve(listener.tap_io(no_delay), router).await })
+        })
+        .context("starting the server's thread")?;
+    Ok((at, name))
+}
+
+/// Sends each answer's bytes at once: a reader asks for many small ranges, and Nagle's
+/// algorithm against the client's delayed ACK would hold each small answer's tail back
+/// for tens of milliseconds (nginx sets the same, `tcp_nodelay on`).
+fn no_delay(tcp: &mut tokio::net::TcpStream) {
+    let _ = tcp.set_nodelay(true);
 }

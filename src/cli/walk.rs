@@ -72,6 +72,12 @@ pub struct WalkArgs {
     /// to back; the prefetch thread then rarely finishes in time).
     #[arg(long, default_value_t = review::DEFAULT_PACE)]
     speed: f32,
+    /// REVIEW and BOX: the viewer's thread never waits on a read (ours): a search the
+    /// viewer needs is queued on a loader thread of its own and the frame draws what
+    /// is loaded, its misses counted; a load that fails on the network is asked for
+    /// again and the walk goes on.
+    #[arg(long)]
+    never_wait: bool,
     /// Write one row per frame here.
     #[arg(long)]
     csv: Option<PathBuf>,
@@ -140,6 +146,7 @@ impl WalkArgs {
             far,
             budget_mb,
             speed,
+            never_wait,
             csv,
             save_path,
             source,
@@ -259,6 +266,7 @@ impl WalkArgs {
         cfg.far = far.unwrap_or(cfg.far);
         cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
         cfg.pace = pace(speed);
+        cfg.never_wait = never_wait;
         walk_cmd(
             &db,
             &cfg,
@@ -682,7 +690,12 @@ pub fn print_walk(r: &WalkReport) {
         (Some(_), None) => ", unpaced".to_string(),
         _ => String::new(),
     };
-    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}{pace}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
+    let waits = if c.never_wait {
+        ", never waits on a read (ours)"
+    } else {
+        ""
+    };
+    println!("walk: {:?} retrieval, index cache {cache}, prefetch {k}{pace}{waits}, SF {}, frustum {} m, budget {} MiB", c.retrieval, c.sf, c.far, c.memory_budget >> 20);
     println!(
         "  frames {}   first (cold) load {:.1} ms   then mean {:.2} ms   max {:.2} ms   variance {:.3}   over 50 ms: {}",
         s.frames, s.initial_load_ms, s.mean_frame_ms, s.max_frame_ms, s.frame_ms_variance, s.frames_over_50ms
@@ -707,6 +720,28 @@ pub fn print_walk(r: &WalkReport) {
             cs.hits,
             cs.misses,
             cs.hit_rate() * 100.0
+        );
+    }
+    if c.never_wait {
+        println!(
+            "  searches queued by the viewer {}   frames outside every loaded cell {}   first complete frame {}",
+            s.queued_queries,
+            s.frames_outran,
+            s.first_complete_frame
+                .map_or("none".to_string(), |f| f.to_string())
+        );
+    }
+    if s.coarse_draws > 0 || s.refined > 0 {
+        println!(
+            "  objects drawn coarse while their full mesh came {} (objects × frames)   full meshes put in place {}   LOD pages read {}",
+            s.coarse_draws, s.refined, s.lod_pages
+        );
+    }
+    if s.failed_loads > 0 {
+        println!(
+            "  {} loads failed and the walk went on without them; the last: {}",
+            s.failed_loads,
+            s.last_load_error.as_deref().unwrap_or("")
         );
     }
 }

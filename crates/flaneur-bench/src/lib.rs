@@ -11,7 +11,9 @@
 //! written as OBJ, one view's refinement measured). `pvs_prefetch` runs the neighbour
 //! PVS prefetchers (`flaneur::prefetch::pvs`) on the thesis's synthetic city and PVS
 //! table, which it draws itself, no database either, and
-//! `pvs_stats` measures the PVS tables it runs on.
+//! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
+//! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
+//! database over HTTP through.
 
 pub mod cell_size;
 pub mod city_series;
@@ -23,7 +25,9 @@ pub mod hdov_cache;
 pub mod hdov_scaling;
 pub mod hdov_search;
 pub mod hdov_storage;
+pub mod http_walk;
 pub mod index_cache;
+pub mod link;
 pub mod lod_dag;
 pub mod lod_dag_stats;
 pub mod lod_inspect;

@@ -412,6 +412,69 @@ impl Database {
         stored::level_mesh(&self.store, &e, level)
     }
 
+    /// The coarsest stored level of each of `objects` and its number (0, the full mesh,
+    /// for an object with no coarser level or no LOD data), in their order: what a
+    /// viewer draws first while finer levels come. The pages each step needs (the LOD
+    /// table's entry pages, the chains' first pages, the levels' remaining pages) are
+    /// asked for together, so that over HTTP a batch costs three steps of parallel
+    /// requests, not a few round trips per object. Counted like every read.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// # citygen::write_city(&city, &scene)?;
+    /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+    /// let db = flaneur::Database::open(&path)?;
+    /// let objects = db.range(&db.bounds())?.objects;
+    /// let coarse = db.coarsest_meshes(&objects)?;
+    /// for (o, (level, mesh)) in objects.iter().zip(&coarse) {
+    ///     let levels = db.lod_levels(o.id)?.unwrap();
+    ///     assert_eq!(*level, levels.len() - 1);
+    ///     assert_eq!(mesh.triangle_count(), levels[*level].triangles as usize);
+    /// }
+    /// # Ok(()) }
+    /// ```
+    pub fn coarsest_meshes(&self, objects: &[ObjectEntry]) -> Result<Vec<(usize, Mesh)>> {
+        let Some(table) = &self.lod else {
+            let _ = self
+                .store
+                .prefetch(&objects.iter().map(|o| o.mesh).collect::<Vec<_>>());
+            return objects.iter().map(|o| Ok((0, self.mesh(o)?))).collect();
+        };
+        let pages = objects
+            .iter()
+            .filter_map(|o| table.entry_page(&self.store, o.id).transpose())
+            .collect::<Result<Vec<u64>>>()?;
+        let mut pages = pages;
+        pages.dedup();
+        self.store.announce(&pages);
+        let mut entries = Vec::with_capacity(objects.len());
+        let mut bare = Vec::new();
+        for (i, o) in objects.iter().enumerate() {
+            match table.find(&self.store, o.id)? {
+                Some(e) => entries.push(e),
+                None => bare.push(i),
+            }
+        }
+        let mut coarse = stored::coarsest_levels(&self.store, &entries)?.into_iter();
+        // Objects without LOD data (inserted after the build) at full detail, in place.
+        objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                if bare.contains(&i) {
+                    Ok((0, self.mesh(o)?))
+                } else {
+                    coarse.next().ok_or_else(|| {
+                        Error::Invalid("a coarse level went missing in the batch".into())
+                    })
+                }
+            })
+            .collect()
+    }
+
     /// The progressive mesh and mini-redundant DAG of object `id`, stored for objects
     /// above the build's PM threshold (`--pm-threshold`); `None` for the others. Ready
     /// for [`crate::lod::Refiner::new`]: applying every split gives the object's full

@@ -8,6 +8,7 @@ mod hdov_cache;
 mod hdov_scaling;
 mod hdov_search;
 mod hdov_storage;
+mod http;
 mod index_cache;
 mod lod_dag;
 mod lod_parallel;
@@ -68,6 +69,11 @@ enum Experiment {
     Patterns(patterns::PatternsArgs),
     /// Index cache hit rate against cache size: LRU, DPLRU and Belady (Fig. 4.18).
     IndexCache(index_cache::IndexCacheArgs),
+    /// The normal and fast walks over HTTP through a loopback link of set round trip
+    /// and bandwidth, never waiting on a read, beside the local walks: frames over 50
+    /// ms, visual misses, time to the first complete frame, requests and bytes per
+    /// second, bytes moved over bytes used, cache hit rate (ours).
+    Http(http::HttpArgs),
     /// Pages read by BOX against CSearch along a walk of overlapping disk cells; then
     /// REVIEW walks: frame time and variance against cell size, Optimal / NC / NP / BOX
     /// (Fig. 4.19, 4.20), time per frame, Optimal against BOX (Fig. 4.21), and search
@@ -105,6 +111,7 @@ impl BenchArgs {
             Experiment::ViewCulling(a) => a.run(),
             Experiment::Patterns(a) => a.run(),
             Experiment::IndexCache(a) => a.run(),
+            Experiment::Http(a) => a.run(),
             Experiment::Csearch(a) => a.run(),
             Experiment::LodDag(a) => a.run(),
             Experiment::LodParallel(a) => a.run(),

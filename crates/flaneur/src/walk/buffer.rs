@@ -171,6 +171,22 @@ impl ObjectBuffer {
         }
     }
 
+    /// Puts `finer` in place of the same object held at a coarser level, if the budget
+    /// has room for the difference; whether it did. An object no longer held is not
+    /// brought back.
+    pub fn refine(&mut self, finer: Loaded) -> bool {
+        let Some(held) = self.objects.get_mut(&finer.entry.id) else {
+            return false;
+        };
+        let grown = self.bytes - held.bytes + finer.bytes;
+        if held.level <= finer.level || grown > self.budget {
+            return false;
+        }
+        *held = finer;
+        self.bytes = grown;
+        true
+    }
+
     /// Its objects, in no particular order.
     pub fn iter(&self) -> impl Iterator<Item = &Loaded> {
         self.objects.values()

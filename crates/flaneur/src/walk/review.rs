@@ -117,8 +117,15 @@ pub struct ReviewConfig {
     /// prefetch thread has the time a viewer would give it (scaled down: a speed-up
     /// only handicaps prefetching). `None` runs frames back to back, as fast as the CPU
     /// goes: prefetches then rarely finish before the viewer arrives. Walks without
-    /// prefetching are never paced (nothing runs beside them).
+    /// prefetching are never paced (nothing runs beside them), unless they never wait.
     pub pace: Option<f32>,
+    /// Ours: the viewer's thread never waits on a read. When the viewer outruns its
+    /// prefetch, its own search is queued on a loader thread of its own, ahead of any
+    /// prefetch, and the frame draws what the buffer holds (its misses counted); the
+    /// prefetch horizon grows with the loader's measured latency; a load that fails on
+    /// the network is counted and asked for again, and the walk goes on. `false` is the
+    /// thesis's walk: the viewer searches for itself, waiting for its reads.
+    pub never_wait: bool,
 }
 
 /// The thesis's index cache (§4.4): 1 MB, with distance-priority LRU.
@@ -156,6 +163,7 @@ impl ReviewConfig {
             far: DEFAULT_FAR,
             record_trace: false,
             pace: Some(DEFAULT_PACE),
+            never_wait: false,
         };
         match p {
             Preset::Optimal => base,
@@ -279,7 +287,12 @@ pub struct FrameStats {
     pub objects_buffered: usize,
     /// Objects drawn: those of the buffer in the view frustum.
     pub objects_drawn: usize,
-    /// Their triangles, at full detail.
+    /// Of those, objects drawn at a coarse stored level while their full mesh comes
+    /// (never-wait walks on a database with LODs).
+    pub coarse_drawn: usize,
+    /// Objects whose full mesh took the place of their coarse level on this frame.
+    pub refined: usize,
+    /// Their triangles, at the level each is held at (full detail unless coarse).
     pub triangles_drawn: u64,
     /// Objects in the view frustum that were not in memory.
     pub visual_misses: usize,
@@ -288,12 +301,18 @@ pub struct FrameStats {
     pub index_pages: u64,
     /// Physical reads of mesh pages this frame, on both threads (as `index_pages`).
     pub mesh_pages: u64,
+    /// Physical reads of LOD pages this frame (the coarse levels a never-wait walk
+    /// loads first), on every thread (as `index_pages`).
+    pub lod_pages: u64,
     /// Bytes the object buffer holds at the end of the frame.
     pub buffer_bytes: usize,
     /// Objects evicted from the buffer on this frame.
     pub evicted: usize,
     /// The latest cell's own objects did not fit the budget.
     pub overflow: bool,
+    /// With [`ReviewConfig::never_wait`]: the viewer was outside every cell it held, and
+    /// the frame drew what the buffer held while the loader searched for it.
+    pub outran: bool,
 }
 
 /// A whole walk. Frame 0 loads the first disk cell from nothing (the thesis's session
@@ -332,6 +351,8 @@ pub struct WalkSummary {
     pub index_pages: u64,
     /// Mesh pages read, all frames.
     pub mesh_pages: u64,
+    /// LOD pages read, all frames (never-wait walks' coarse levels).
+    pub lod_pages: u64,
     /// Index pages per query.
     pub index_pages_per_query: f64,
     /// Index and mesh pages per query: the thesis's "disk I/Os per query".
@@ -344,6 +365,24 @@ pub struct WalkSummary {
     pub peak_buffer_bytes: usize,
     /// The index cache's figures over the walk, when it had one.
     pub index_cache: Option<CacheStats>,
+    /// With [`ReviewConfig::never_wait`]: searches the viewer queued on the loader
+    /// instead of running them (counted among the adopted and dropped results).
+    pub queued_queries: usize,
+    /// Frames on which the viewer was outside every cell it held
+    /// ([`FrameStats::outran`]).
+    pub frames_outran: usize,
+    /// Objects drawn coarse while their full mesh came, summed over frames
+    /// ([`FrameStats::coarse_drawn`]).
+    pub coarse_draws: u64,
+    /// Full meshes put in place of coarse levels.
+    pub refined: usize,
+    /// The first frame with no visual miss: when the walk first drew all it should.
+    pub first_complete_frame: Option<usize>,
+    /// With [`ReviewConfig::never_wait`]: loads that failed on the network (and were
+    /// asked for again), and the last of their errors.
+    pub failed_loads: usize,
+    /// The last failed load's error.
+    pub last_load_error: Option<String>,
 }
 
 /// What a REVIEW or BOX walk did: its settings, every frame's figures, their summary.
@@ -364,11 +403,11 @@ impl WalkReport {
     /// One row per frame.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow\n",
+            "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow,outran,coarse_drawn,refined\n",
         );
         for f in &self.frames {
             s.push_str(&format!(
-                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 f.frame,
                 f.time,
                 f.frame_ms,
@@ -389,7 +428,10 @@ impl WalkReport {
                 f.mesh_pages,
                 f.buffer_bytes,
                 f.evicted,
-                f.overflow as u8
+                f.overflow as u8,
+                f.outran as u8,
+                f.coarse_drawn,
+                f.refined
             ));
         }
         s
@@ -445,11 +487,16 @@ pub(crate) fn walk_live_with<'db>(
 }
 
 /// Searches run along a walk, by where their results went.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Counts {
     pub sync: usize,
     pub adopted: usize,
     pub stale: usize,
+    /// Searches the viewer queued on the loader (never-wait walks).
+    pub queued: usize,
+    /// Loads that failed on the network, and the last error.
+    pub failed: usize,
+    pub last_failure: Option<String>,
     /// Index and mesh pages read by frame 0's own query (before any prefetch started).
     pub initial_load_pages: (u64, u64),
 }
@@ -487,11 +534,19 @@ pub(crate) fn summarize(
         prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
         index_pages,
         mesh_pages,
+        lod_pages: frames.iter().map(|f| f.lod_pages).sum(),
         index_pages_per_query: per_query(index_pages),
         io_per_query: per_query(index_pages + mesh_pages),
         visual_misses: frames.iter().map(|f| f.visual_misses as u64).sum(),
         overflow_frames: frames.iter().filter(|f| f.overflow).count(),
         peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
         index_cache: cache,
+        queued_queries: counts.queued,
+        frames_outran: frames.iter().filter(|f| f.outran).count(),
+        coarse_draws: frames.iter().map(|f| f.coarse_drawn as u64).sum(),
+        refined: frames.iter().map(|f| f.refined).sum(),
+        first_complete_frame: frames.iter().position(|f| f.visual_misses == 0),
+        failed_loads: counts.failed,
+        last_load_error: counts.last_failure,
     }
 }

@@ -7,6 +7,7 @@
 //! codec's complaint about bytes that passed their page checksums is reported against
 //! the extent's first page.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::scene::Mesh;
@@ -138,6 +139,55 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
     let head = read_chain_head(store, e)?;
     let what = format!("LOD level {level} of object {}", e.id);
     chain_level_of(store, &e.chain, &head, level, &what)
+}
+
+/// The coarsest stored level of each object of `entries`, with its number: the chains'
+/// first pages asked for together, then the pages their coarsest levels need beyond
+/// them, so that a remote store fetches each step's pages in parallel. Objects with no
+/// coarse level come at full detail (level 0), their meshes asked for together too.
+pub(crate) fn coarsest_levels(store: &Store, entries: &[LodEntry]) -> Result<Vec<(usize, Mesh)>> {
+    let (chained, whole): (Vec<&LodEntry>, Vec<&LodEntry>) =
+        entries.iter().partition(|e| !e.chain.is_empty());
+    store.announce(
+        &chained
+            .iter()
+            .map(|e| e.chain.first_page)
+            .collect::<Vec<_>>(),
+    );
+    // A failed fetch is the read's to report, naming its page.
+    let _ = store.prefetch(&whole.iter().map(|e| e.mesh).collect::<Vec<_>>());
+    let heads = chained
+        .iter()
+        .map(|e| read_chain_head(store, e))
+        .collect::<Result<Vec<_>>>()?;
+    let payload = store.payload_size();
+    let mut rest = Vec::new();
+    for (e, head) in chained.iter().zip(&heads) {
+        let (offset, length) = head.dir.level_range(e.levels as usize)?;
+        let have = head.prefix.len();
+        if offset + length > have {
+            let first = offset.max(have) / payload;
+            let last = (offset + length - 1) / payload;
+            rest.extend((first..=last).map(|p| e.chain.first_page + p as u64));
+        }
+    }
+    store.announce(&rest);
+    let mut heads = chained
+        .iter()
+        .map(|e| e.id)
+        .zip(heads)
+        .collect::<HashMap<_, _>>();
+    entries
+        .iter()
+        .map(|e| match heads.remove(&e.id) {
+            Some(head) => {
+                let level = e.levels as usize;
+                let what = format!("LOD level {level} of object {}", e.id);
+                Ok((level, chain_level_of(store, &e.chain, &head, level, &what)?))
+            }
+            None => Ok((0, level_mesh(store, e, 0)?)),
+        })
+        .collect()
 }
 
 /// One level of a group's chain (an HDoV node's internal LODs, numbered 1..=n finest

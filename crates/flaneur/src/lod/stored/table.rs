@@ -335,6 +335,15 @@ impl LodTable {
         Ok(self.head(store)?.stats)
     }
 
+    /// The page that holds object `id`'s entry, if the table covers its id (it may still
+    /// have none there): what [`LodTable::find`] will read, to ask for many at once.
+    /// Reads the head the first time.
+    pub(crate) fn entry_page(&self, store: &Store, id: u64) -> Result<Option<u64>> {
+        let head = self.head(store)?;
+        let k = head.fence.partition_point(|&first| first <= id);
+        Ok((k > 0).then(|| self.extent.first_page + head.head_pages + k as u64 - 1))
+    }
+
     /// The entry of object `id`, if it has LOD data: the head (once) and one entry page.
     pub(crate) fn find(&self, store: &Store, id: u64) -> Result<Option<LodEntry>> {
         let head = self.head(store)?;

@@ -41,7 +41,9 @@ pub struct HttpOptions {
     pub retries: u32,
     /// The wait before the first retry.
     pub backoff: Duration,
-    /// Requests in flight at once when several runs of pages are wanted together.
+    /// Requests in flight at once when several runs of pages are wanted together: more
+    /// than a browser's six per host, since a walk asks for many page-sized runs and a
+    /// link of 50 ms carries few of them a second otherwise.
     pub parallel: usize,
     /// The bytes the first round trip fetches from the start of the file: the header, its
     /// segment table, and whatever the build put behind them.
@@ -59,7 +61,7 @@ impl Default for HttpOptions {
             timeout: Duration::from_secs(20),
             retries: 3,
             backoff: Duration::from_millis(100),
-            parallel: 6,
+            parallel: 16,
             prefix_bytes: 64 << 10,
             suffix_bytes: 512 << 10,
         }

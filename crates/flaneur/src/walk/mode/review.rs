@@ -5,8 +5,18 @@
 //! viewer's thread; a prefetch of the cell predicted from the viewer's motion
 //! (`prefetch::motion`) is started on the prefetch thread when the frustum nears the
 //! disk cell's edge. The settings, figures and departures are `walk::review`'s.
+//!
+//! A never-wait walk ([`ReviewConfig::never_wait`], ours) has a second loader thread, the
+//! viewer's own lane: where the thesis's viewer searches for itself when it outruns the
+//! prefetch, this one queues the search there, ahead of whatever the prefetch lane is
+//! doing, and draws what the buffer holds meanwhile. Every search asks for its meshes'
+//! pages together, so that over HTTP they come in parallel. On a database with LODs the
+//! viewer's lane loads each object's coarsest stored level (a few pages) and a third
+//! thread then fetches the full meshes, whenever the viewer's lane is idle, and puts
+//! them in place of the coarse ones.
 
 use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -19,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
 use crate::prefetch::motion::{MotionTrack, ViewerMotion};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
-use crate::store::{IoStats, PageKind, PageSource};
+use crate::store::{Extent, IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
@@ -27,6 +37,13 @@ use crate::walk::mode::receive::receive;
 use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+
+/// A loader thread: the prefetch's, or the viewer's own (never-wait walks only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Lane {
+    Ahead = 0,
+    Now = 1,
+}
 
 /// A query's result with its meshes, loaded on the thread that ran it.
 struct Fetched {
@@ -42,6 +59,8 @@ struct Fetched {
 
 struct Request {
     cell: Aabb,
+    /// Load each object's coarsest stored level, not its full mesh.
+    coarse: bool,
     history: Vec<Aabb>,
     epoch: u64,
 }
@@ -84,21 +103,51 @@ pub(crate) fn walk_live<'db>(
         .skips_damaged()
         .then(|| Mutex::new(LeftOut::default()));
     let left_out = left_out.as_ref();
+    // Set when the walk ends: a loader stops reading for a result no one will take.
+    let ended = AtomicBool::new(false);
+    let ended = &ended;
+    // Set while the viewer's own lane loads: the refining thread gives way to it.
+    let now_busy = AtomicBool::new(false);
+    let now_busy = &now_busy;
     let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
-        let (req_tx, req_rx) = mpsc::channel::<Request>();
-        let (res_tx, res_rx) = mpsc::channel::<Result<Fetched>>();
-        if cfg.prefetch_k.is_some() {
+        let (res_tx, res_rx) = mpsc::channel::<(Lane, Result<Fetched>)>();
+        // One thread per lane, each taking its requests in turn.
+        let lane = |on: bool, lane: Lane| -> Option<mpsc::Sender<Request>> {
+            if !on {
+                return None;
+            }
+            let (req_tx, req_rx) = mpsc::channel::<Request>();
+            let res_tx = res_tx.clone();
             scope.spawn(move || {
                 for req in req_rx {
-                    let fetched = fetch(db, source, cfg.retrieval, &req, (resident, left_out));
-                    if res_tx.send(fetched).is_err() {
+                    let busy = lane == Lane::Now;
+                    now_busy.store(busy, Ordering::Relaxed);
+                    let fetched =
+                        fetch(db, source, cfg.retrieval, &req, (resident, left_out), ended);
+                    now_busy.store(false, Ordering::Relaxed);
+                    if res_tx.send((lane, fetched)).is_err() {
                         break;
                     }
                 }
             });
-        } else {
-            drop(req_rx);
-            drop(res_tx);
+            Some(req_tx)
+        };
+        let lanes = [
+            lane(cfg.prefetch_k.is_some(), Lane::Ahead),
+            lane(cfg.never_wait, Lane::Now),
+        ];
+        drop(res_tx);
+        let (fine_tx, fine_rx) = mpsc::channel::<Vec<ObjectEntry>>();
+        let (refined_tx, refined_rx) = mpsc::channel::<Result<Vec<Loaded>>>();
+        let refining = cfg.never_wait && db.has_lods();
+        if refining {
+            scope.spawn(move || {
+                for job in fine_rx {
+                    if refine(db, &job, (now_busy, ended), &refined_tx).is_err() {
+                        break;
+                    }
+                }
+            });
         }
         let mut mode = Review {
             db,
@@ -109,25 +158,34 @@ pub(crate) fn walk_live<'db>(
             history: History::default(),
             disk_cell: None,
             prefetched: None,
+            arrived: None,
             last_prediction: None,
             epoch: 0,
-            in_flight: None,
-            req_tx: cfg.prefetch_k.map(|_| req_tx),
+            in_flight: [None, None],
+            lanes,
             res_rx,
+            fine_tx: refining.then_some(fine_tx),
+            refined_rx,
+            latency_s: None,
             resident,
             left_out,
             counts: Counts::default(),
             track: MotionTrack::default(),
-            pace: cfg.pace.filter(|_| cfg.prefetch_k.is_some()),
+            pace: cfg
+                .pace
+                .filter(|_| cfg.prefetch_k.is_some() || cfg.never_wait),
             clock: Instant::now(),
             pending: None,
         };
-        let frames = session::run(&mut mode, viewer, lods, progress)?;
+        let frames = session::run(&mut mode, viewer, lods, progress);
+        ended.store(true, Ordering::Relaxed);
+        let frames = frames?;
         if frames.is_empty() {
             return Err(Error::Invalid("the walk had no poses".into()));
         }
-        // Closing the request channel ends the prefetch thread.
-        mode.req_tx = None;
+        // Closing the request channels ends the loader threads.
+        mode.lanes = [None, None];
+        mode.fine_tx = None;
         Ok((frames, mode.counts))
     })?;
     let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
@@ -156,14 +214,23 @@ struct Review<'a> {
     disk_cell: Option<Aabb>,
     /// The latest prefetched cell: its objects are in the buffer, the viewer not yet in it.
     prefetched: Option<Aabb>,
+    /// The latest cell the viewer's own lane loaded, not yet entered (never-wait walks).
+    arrived: Option<Aabb>,
     /// Centre of the latest prefetch asked for from this disk cell.
     last_prediction: Option<Vec3>,
     /// Bumped by every eviction: a result asked for before it may miss objects.
     epoch: u64,
-    /// The cell a prefetch is running for.
-    in_flight: Option<Aabb>,
-    req_tx: Option<mpsc::Sender<Request>>,
-    res_rx: mpsc::Receiver<Result<Fetched>>,
+    /// The cell each lane is loading, by [`Lane`].
+    in_flight: [Option<Aabb>; 2],
+    /// Each lane's requests, by [`Lane`]: the prefetch's when the walk prefetches, the
+    /// viewer's own when it never waits.
+    lanes: [Option<mpsc::Sender<Request>>; 2],
+    res_rx: mpsc::Receiver<(Lane, Result<Fetched>)>,
+    /// The refining thread's jobs (objects drawn coarse) and what it loaded.
+    fine_tx: Option<mpsc::Sender<Vec<ObjectEntry>>>,
+    refined_rx: mpsc::Receiver<Result<Vec<Loaded>>>,
+    /// The loaders' time per search, real seconds, smoothed (never-wait walks).
+    latency_s: Option<f64>,
     /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
     resident: &'a Mutex<HashSet<u64>>,
     /// With a viewer that walks on past unreadable objects, those left out.
@@ -221,10 +288,13 @@ impl Mode for Review<'_> {
         };
 
         self.collect_prefetch(None, camera.position, buffer, &mut stats)?;
-        if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
+        self.take_refined(buffer, &mut stats)?;
+        if self.cfg.never_wait {
+            self.retrieve_queued(&fcell, &mut stats);
+        } else if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
             stats.queried = true;
             if self.prefetched.is_none()
-                && self.in_flight.is_some_and(|c| contains_ground(&c, &fcell))
+                && self.in_flight[Lane::Ahead as usize].is_some_and(|c| contains_ground(&c, &fcell))
             {
                 let t = Instant::now();
                 self.collect_prefetch(
@@ -242,13 +312,14 @@ impl Mode for Review<'_> {
                 }
                 None => {
                     let cell = self.disk_cell_around(&fcell, fcell.center());
-                    let req = self.request(cell);
+                    let req = self.request(cell, false);
                     let f = fetch(
                         self.db,
                         self.source,
                         self.cfg.retrieval,
                         &req,
                         (self.resident, self.left_out),
+                        &AtomicBool::new(false),
                     )?;
                     self.counts.sync += 1;
                     stats.sync_query = true;
@@ -261,13 +332,13 @@ impl Mode for Review<'_> {
                     stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
                 }
             }
-            if i == 0 {
-                let io = self.db.io().since(&io_before);
-                self.counts.initial_load_pages = (
-                    io.reads_of(PageKind::RtreeNode),
-                    io.reads_of(PageKind::Mesh),
-                );
-            }
+        }
+        if stats.queried && i == 0 {
+            let io = self.db.io().since(&io_before);
+            self.counts.initial_load_pages = (
+                io.reads_of(PageKind::RtreeNode),
+                io.reads_of(PageKind::Mesh),
+            );
         }
         if let Some(k) = self.cfg.prefetch_k {
             self.maybe_prefetch(&camera, &fcell, motion, k);
@@ -298,6 +369,7 @@ impl Mode for Review<'_> {
         stats.cull_ms = culled.ms;
         let t = Instant::now();
         stats.objects_drawn = culled.drawn.len();
+        stats.coarse_drawn = culled.drawn.iter().filter(|o| o.level > 0).count();
         stats.triangles_drawn = culled
             .drawn
             .iter()
@@ -309,6 +381,7 @@ impl Mode for Review<'_> {
         let io = self.db.io().since(&io_before);
         stats.index_pages = io.reads_of(PageKind::RtreeNode);
         stats.mesh_pages = io.reads_of(PageKind::Mesh);
+        stats.lod_pages = io.reads_of(PageKind::Lod);
         stats.buffer_bytes = buffer.bytes();
         Ok(stats)
     }
@@ -322,7 +395,7 @@ impl Mode for Review<'_> {
             objects_drawn: f.objects_drawn,
             triangles: f.triangles_drawn,
             visual_misses: f.visual_misses,
-            prefetch_queue: self.in_flight.is_some() as usize,
+            prefetch_queue: self.in_flight.iter().flatten().count(),
             cache_hit_rate: self.pool.map(|p| p.stats().hit_rate()),
             cell: self.disk_cell.map_or_else(String::new, |c| {
                 format!(
@@ -348,16 +421,59 @@ impl Review<'_> {
     fn enter(&mut self, cell: Aabb) {
         self.disk_cell = Some(cell);
         self.prefetched = None;
+        self.arrived = None;
         self.last_prediction = None;
     }
 
-    fn request(&self, cell: Aabb) -> Request {
+    fn request(&self, cell: Aabb, coarse: bool) -> Request {
         let mut history = self.history.clone();
         history.filter(&cell);
         Request {
             cell,
+            coarse,
             history: history.cells(),
             epoch: self.epoch,
+        }
+    }
+
+    /// A never-wait frame's retrieval: enter a loaded cell that holds the frustum, or
+    /// queue the viewer's own search for one on its lane and draw what the buffer holds.
+    fn retrieve_queued(&mut self, fcell: &Aabb, stats: &mut FrameStats) {
+        if self.disk_cell.is_some_and(|d| contains_ground(&d, fcell)) {
+            return;
+        }
+        if let Some(cell) = self.prefetched.filter(|p| contains_ground(p, fcell)) {
+            stats.queried = true;
+            stats.prefetch_used = true;
+            self.enter(cell);
+            return;
+        }
+        if let Some(cell) = self.arrived.filter(|p| contains_ground(p, fcell)) {
+            stats.queried = true;
+            self.enter(cell);
+            return;
+        }
+        stats.outran = true;
+        if self
+            .in_flight
+            .iter()
+            .flatten()
+            .any(|c| contains_ground(c, fcell))
+        {
+            return;
+        }
+        let (now, Some(tx)) = (Lane::Now as usize, &self.lanes[Lane::Now as usize]) else {
+            return;
+        };
+        if self.in_flight[now].is_some() {
+            // The lane is still loading a cell the viewer has left: take it, then ask.
+            return;
+        }
+        let cell = self.disk_cell_around(fcell, fcell.center());
+        let req = self.request(cell, self.fine_tx.is_some());
+        if tx.send(req).is_ok() {
+            self.in_flight[now] = Some(cell);
+            self.counts.queued += 1;
         }
     }
 
@@ -370,40 +486,88 @@ impl Review<'_> {
         buffer: &mut ObjectBuffer,
         stats: &mut FrameStats,
     ) -> Result<()> {
-        if self.in_flight.is_none() {
+        let mut wait = wait;
+        while self.in_flight.iter().any(Option::is_some) {
+            let Some((lane, got)) = receive(&self.res_rx, wait.take())? else {
+                return Ok(());
+            };
+            self.in_flight[lane as usize] = None;
+            let fetched = match got {
+                Ok(f) => f,
+                // A never-wait walk goes on with what it has; the cell is asked for again
+                // when the viewer still needs it.
+                Err(e @ Error::Remote { .. }) if self.cfg.never_wait => {
+                    self.counts.failed += 1;
+                    self.counts.last_failure = Some(e.to_string());
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            let took = (fetched.query_ms + fetched.load_ms) / 1e3;
+            self.latency_s = Some(self.latency_s.map_or(took, |l| 0.7 * l + 0.3 * took));
+            if fetched.epoch != self.epoch {
+                // An eviction came between: the complement it computed may miss objects.
+                self.counts.stale += 1;
+                continue;
+            }
+            let t = Instant::now();
+            self.counts.adopted += 1;
+            stats.prefetch_adopted = true;
+            let cell = fetched.cell;
+            if self.adopt(fetched, eye, buffer, stats) {
+                match lane {
+                    Lane::Ahead => self.prefetched = Some(cell),
+                    Lane::Now => self.arrived = Some(cell),
+                }
+            }
+            stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
+        }
+        Ok(())
+    }
+
+    /// Puts the full meshes the refining thread has loaded in place of their coarse
+    /// levels, where the objects are still held and the budget has room.
+    fn take_refined(&mut self, buffer: &mut ObjectBuffer, stats: &mut FrameStats) -> Result<()> {
+        if self.fine_tx.is_none() {
             return Ok(());
         }
-        let Some(got) = receive(&self.res_rx, wait)? else {
-            return Ok(());
-        };
-        self.in_flight = None;
-        let fetched = got?;
-        if fetched.epoch != self.epoch {
-            // An eviction came between: the complement it computed may miss objects.
-            self.counts.stale += 1;
-            return Ok(());
+        while let Some(got) = receive(&self.refined_rx, None)? {
+            let finer = match got {
+                Ok(f) => f,
+                Err(e @ Error::Remote { .. }) => {
+                    self.counts.failed += 1;
+                    self.counts.last_failure = Some(e.to_string());
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            for o in finer {
+                stats.refined += usize::from(buffer.refine(o));
+            }
         }
-        let t = Instant::now();
-        self.counts.adopted += 1;
-        stats.prefetch_adopted = true;
-        let cell = fetched.cell;
-        if self.adopt(fetched, eye, buffer, stats) {
-            self.prefetched = Some(cell);
-        }
-        stats.load_ms += t.elapsed().as_secs_f64() * 1e3;
         Ok(())
     }
 
     fn maybe_prefetch(&mut self, camera: &Camera, fcell: &Aabb, motion: ViewerMotion, k: f32) {
-        let (Some(tx), Some(disk)) = (&self.req_tx, self.disk_cell) else {
+        let ahead_lane = Lane::Ahead as usize;
+        let (Some(tx), Some(disk)) = (&self.lanes[ahead_lane], self.disk_cell) else {
             return;
         };
-        if self.in_flight.is_some() {
+        if self.in_flight[ahead_lane].is_some() {
             return;
         }
+        // A never-wait walk looks as far ahead as its loads take (in the path's seconds),
+        // with a margin: a prefetch asked later would land after the viewer.
+        let (lookahead, k) = match (self.cfg.never_wait, self.latency_s) {
+            (true, Some(lat)) => {
+                let path_s = (lat * f64::from(self.pace.unwrap_or(1.0)) * LATENCY_MARGIN) as f32;
+                (LOOKAHEAD_S.max(path_s), k.max(path_s))
+            }
+            _ => (LOOKAHEAD_S, k),
+        };
         // Will the frustum cell leave the disk cell (and the cell already prefetched)
         // within the look-ahead?
-        let soon = motion.frustum_cell(camera, LOOKAHEAD_S);
+        let soon = motion.frustum_cell(camera, lookahead);
         let ahead = fcell.union(&soon);
         if contains_ground(&disk, &ahead)
             || self.prefetched.is_some_and(|p| contains_ground(&p, &ahead))
@@ -424,9 +588,9 @@ impl Review<'_> {
                 return;
             }
         }
-        let req = self.request(cell);
+        let req = self.request(cell, false);
         if tx.send(req).is_ok() {
-            self.in_flight = Some(cell);
+            self.in_flight[ahead_lane] = Some(cell);
             self.last_prediction = Some(center);
         }
     }
@@ -448,8 +612,17 @@ impl Review<'_> {
             *buffer = ObjectBuffer::new(self.cfg.memory_budget);
         }
         stats.objects_loaded += fetched.objects.len();
+        let coarse: Vec<ObjectEntry> = fetched
+            .objects
+            .iter()
+            .filter(|o| o.level > 0)
+            .map(|o| o.entry)
+            .collect();
         for o in fetched.objects {
             buffer.insert(o);
+        }
+        if let (Some(tx), false) = (&self.fine_tx, coarse.is_empty()) {
+            let _ = tx.send(coarse);
         }
         self.history.filter(&cell);
         self.history.record(cell, &fetched.retrieved);
@@ -488,6 +661,9 @@ impl Review<'_> {
             if self.prefetched.is_some_and(|p| p != cell) {
                 self.prefetched = None;
             }
+            if self.arrived.is_some_and(|p| p != cell) {
+                self.arrived = None;
+            }
         }
         if self.cfg.retrieval == Retrieval::CSearch {
             if let Ok(mut ids) = self.resident.lock() {
@@ -507,13 +683,51 @@ const LOOKAHEAD_S: f32 = 1.0;
 /// has, where the viewer's own complement against the cells it holds is small.
 const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
 
-/// Runs one query and loads the meshes of what it returned.
+/// A never-wait walk starts a prefetch this many load times before the viewer would
+/// need it: a load's time varies by the size of the cell's complement.
+const LATENCY_MARGIN: f64 = 2.0;
+
+/// Loads the full meshes of `job`'s objects, a batch at a time, each batch once the
+/// viewer's own lane is idle (`now_busy`), sending each batch's meshes on `tx`; stops
+/// when the walk has `ended`. An error only when no one takes the meshes any more.
+fn refine(
+    db: &Database,
+    job: &[ObjectEntry],
+    (now_busy, ended): (&AtomicBool, &AtomicBool),
+    tx: &mpsc::Sender<Result<Vec<Loaded>>>,
+) -> std::result::Result<(), mpsc::SendError<Result<Vec<Loaded>>>> {
+    for batch in job.chunks(MESHES_ASKED_TOGETHER) {
+        while now_busy.load(Ordering::Relaxed) && !ended.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        if ended.load(Ordering::Relaxed) {
+            return Ok(());
+        }
+        let _ = db
+            .store()
+            .prefetch(&batch.iter().map(|e| e.mesh).collect::<Vec<_>>());
+        let loaded = batch
+            .iter()
+            .map(|e| Ok(Loaded::new(*e, db.mesh(e)?)))
+            .collect::<Result<Vec<_>>>();
+        tx.send(loaded)?;
+    }
+    Ok(())
+}
+
+/// Meshes whose pages a loader asks for in one go: enough for a few full waves of
+/// parallel requests over HTTP, few enough that a walk that ends stops it soon.
+const MESHES_ASKED_TOGETHER: usize = 256;
+
+/// Runs one query and loads the meshes of what it returned (those it had time for, when
+/// `ended` says the walk is over and no one will take them).
 fn fetch(
     db: &Database,
     source: &(dyn PageSource + Sync),
     retrieval: Retrieval,
     req: &Request,
     (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
+    ended: &AtomicBool,
 ) -> Result<Fetched> {
     let t = Instant::now();
     let result: QueryResult = match retrieval {
@@ -525,24 +739,55 @@ fn fetch(
     };
     let query_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
-    let mut objects = Vec::with_capacity(result.objects.len());
-    for entry in &result.objects {
-        if resident.lock().is_ok_and(|r| r.contains(&entry.id))
-            || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id)))
-        {
-            continue;
+    let wanted: Vec<&ObjectEntry> = result
+        .objects
+        .iter()
+        .filter(|entry| {
+            !(resident.lock().is_ok_and(|r| r.contains(&entry.id))
+                || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id))))
+        })
+        .collect();
+    let mut objects = Vec::with_capacity(wanted.len());
+    for batch in wanted.chunks(MESHES_ASKED_TOGETHER) {
+        if ended.load(Ordering::Relaxed) {
+            break;
         }
-        let mesh = match (db.mesh(entry), left_out) {
-            (Ok(m), _) => m,
-            (Err(e), Some(l)) => {
-                if let Ok(mut l) = l.lock() {
-                    l.leave_out(entry.id, &e);
+        if req.coarse {
+            let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
+            match db.coarsest_meshes(&entries) {
+                Ok(meshes) => {
+                    objects.extend(
+                        entries
+                            .into_iter()
+                            .zip(meshes)
+                            .map(|(e, (level, mesh))| Loaded::at_level(e, mesh, level)),
+                    );
+                    continue;
                 }
-                continue;
+                Err(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => return Err(e),
+                // Damage somewhere in the batch: read it object by object below, which
+                // names (or, for a viewer that walks on, leaves out) the damaged one.
+                Err(_) => {}
             }
-            (Err(e), None) => return Err(e),
-        };
-        objects.push(Loaded::new(*entry, mesh));
+        }
+        // A batch's mesh pages asked for at once: over HTTP they come coalesced and in
+        // parallel rather than a round trip each (a local store reads them as it goes).
+        // A failure here is the mesh read's to report, with its page.
+        let extents: Vec<Extent> = batch.iter().map(|e| e.mesh).collect();
+        let _ = db.store().prefetch(&extents);
+        for entry in batch {
+            let mesh = match (db.mesh(entry), left_out) {
+                (Ok(m), _) => m,
+                (Err(e), Some(l)) => {
+                    if let Ok(mut l) = l.lock() {
+                        l.leave_out(entry.id, &e);
+                    }
+                    continue;
+                }
+                (Err(e), None) => return Err(e),
+            };
+            objects.push(Loaded::new(**entry, mesh));
+        }
     }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Fetched {

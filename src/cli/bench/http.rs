@@ -1,0 +1,64 @@
+//! `flaneur bench http` (ours): walks over HTTP at set round trips and bandwidths.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use super::report::write_report;
+use super::walk_setup::WalkSetupArgs;
+use crate::cli::args::or_default;
+use flaneur::Database;
+use flaneur_bench::http_walk::{self, HttpBenchConfig};
+
+/// `flaneur bench http`'s arguments.
+#[derive(clap::Args)]
+pub struct HttpArgs {
+    /// A local database file: it is served over HTTP (with `flaneur serve`'s server, on
+    /// loopback) and walked through the link, and walked locally beside.
+    db: PathBuf,
+    #[command(flatten)]
+    walk: WalkSetupArgs,
+    /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
+    #[arg(long, value_delimiter = ',')]
+    rtts: Vec<u32>,
+    /// Bandwidths of the link, Mbit/s, comma-separated (default 20, 100).
+    #[arg(long, value_delimiter = ',')]
+    mbits: Vec<f64>,
+    /// The client page cache, MiB.
+    #[arg(long)]
+    cache_mb: Option<usize>,
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+impl HttpArgs {
+    /// Serves the database, walks it at every setting and writes the report.
+    pub fn run(self) -> Result<()> {
+        let HttpArgs {
+            db,
+            walk,
+            rtts,
+            mbits,
+            cache_mb,
+            out,
+        } = self;
+        let d = HttpBenchConfig::default();
+        let cfg = HttpBenchConfig {
+            walk: walk.setup(d.walk),
+            rtts_ms: or_default(rtts, d.rtts_ms),
+            mbits: or_default(mbits, d.mbits),
+            cache_bytes: cache_mb.map_or(d.cache_bytes, |m| m << 20),
+        };
+        cfg.validate()?;
+        let local = Database::open(&db)?;
+        let (origin, name) = crate::cli::serve::spawn(&db)
+            .with_context(|| format!("serving {} for the walks", db.display()))?;
+        let walks = cfg.walk.patterns.len() * (2 + cfg.rtts_ms.len() * cfg.mbits.len());
+        let mut done = 0;
+        let r = http_walk::run(&local, origin, &name, &cfg, |what| {
+            done += 1;
+            eprintln!("walk {done} of {walks}: {what}");
+        })?;
+        write_report(&out, &r)
+    }
+}
