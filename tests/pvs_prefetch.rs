@@ -7,8 +7,8 @@ mod common;
 use common::flaneur;
 
 use flaneur_bench::pvs_prefetch::{
-    cumulative_plot, steps_plot, MISSES_PLOT, REGIONS_CSV, REGIONS_PLOT, ROUTES_CSV, ROUTES_PLOT,
-    STEPS_CSV,
+    cumulative_plot, steps_plot, LATENCY_CSV, LATENCY_MISSES_PLOT, LATENCY_SWAPS_PLOT, MISSES_PLOT,
+    REGIONS_CSV, REGIONS_PLOT, ROUTES_CSV, ROUTES_PLOT, STEPS_CSV,
 };
 
 fn is_png(path: &std::path::Path) -> bool {
@@ -18,7 +18,16 @@ fn is_png(path: &std::path::Path) -> bool {
 }
 
 /// A city of 10 × 10 blocks and routes of 400 steps: well under a second.
-const SMALL: [&str; 6] = ["--blocks", "10", "--steps", "400", "--borders", "0.1,0.25"];
+const SMALL: [&str; 8] = [
+    "--blocks",
+    "10",
+    "--steps",
+    "400",
+    "--borders",
+    "0.1,0.25",
+    "--latencies",
+    "0,3,5",
+];
 
 #[test]
 fn pvs_prefetch_writes_table_7_2_and_its_figures() {
@@ -66,6 +75,15 @@ fn pvs_prefetch_writes_table_7_2_and_its_figures() {
     }
     assert_eq!(get("2", "PBNP", "thesis_cache_swaps"), 828.0);
 
+    // SNP, PBNP and LANP at each latency asked for, on both routes.
+    let latency = std::fs::read_to_string(out_dir.join(LATENCY_CSV)).unwrap();
+    assert_eq!(latency.lines().count(), 1 + 2 * 3 * 3, "{latency}");
+    assert!(
+        latency.lines().any(|l| l.starts_with("2,LANP,5,")),
+        "{latency}"
+    );
+    assert!(stdout.contains("Under latency"), "{stdout}");
+
     for f in ["pvs-prefetch.md", STEPS_CSV, REGIONS_CSV, ROUTES_CSV] {
         assert!(out_dir.join(f).exists(), "{f} missing");
     }
@@ -76,6 +94,8 @@ fn pvs_prefetch_writes_table_7_2_and_its_figures() {
         ROUTES_PLOT.to_string(),
         REGIONS_PLOT.to_string(),
         MISSES_PLOT.to_string(),
+        LATENCY_MISSES_PLOT.to_string(),
+        LATENCY_SWAPS_PLOT.to_string(),
     ];
     for route in [1, 2] {
         pngs.push(cumulative_plot(route));
@@ -99,6 +119,8 @@ fn pvs_prefetch_refuses_bad_settings() {
         (["--steps", "0"], "steps"),
         (["--overlap", "1"], "overlap"),
         (["--share", "0"], "PVS share"),
+        (["--turn", "2"], "turn"),
+        (["--latencies", "5000"], "latency"),
     ] {
         let none = dir.path().join("none");
         let mut args = vec!["bench", "pvs-prefetch", "--out", none.to_str().unwrap()];

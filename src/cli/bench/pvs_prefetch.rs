@@ -33,6 +33,13 @@ pub struct PvsPrefetchArgs {
     /// Region sizes of PBNP's sweep, comma-separated [default: 0.1, 0.15, … 0.5].
     #[arg(long, value_delimiter = ',')]
     borders: Vec<f64>,
+    /// Latencies to walk SNP, PBNP and LANP at, steps from asking a transaction to
+    /// its answer, comma-separated [default: 0, 1, … 8].
+    #[arg(long, value_delimiter = ',')]
+    latencies: Vec<usize>,
+    /// LANP's turns foreseen, a share of its reach, in [0, 1].
+    #[arg(long, default_value_t = PvsPrefetchConfig::default().turn)]
+    turn: f64,
     /// Client cache entries (viewcells); at least 9.
     #[arg(long, default_value_t = PvsPrefetchConfig::default().capacity)]
     cache: usize,
@@ -49,7 +56,7 @@ pub struct PvsPrefetchArgs {
 }
 
 impl PvsPrefetchArgs {
-    /// Runs SNP and PBNP on the synthetic city, and on the database when given, and
+    /// Runs SNP and PBNP (and LANP under latency) on the synthetic city, and on the database when given, and
     /// writes the reports.
     pub fn run(self) -> Result<()> {
         let PvsPrefetchArgs {
@@ -60,6 +67,8 @@ impl PvsPrefetchArgs {
             step,
             border,
             borders,
+            latencies,
+            turn,
             cache,
             seed,
             db,
@@ -78,6 +87,8 @@ impl PvsPrefetchArgs {
             border,
             capacity: cache,
             borders: or_default(borders, d.borders),
+            latencies: or_default(latencies, d.latencies),
+            turn,
         };
         let r = pvs_prefetch::run(&cfg)?;
         write_report(&out, &r)?;

@@ -238,3 +238,97 @@ fn bad_routes_and_settings_are_errors() {
             .contains("region border"));
     }
 }
+
+/// Table 7.2's figures as this simulation measured them before latency was modelled
+/// (transactions, swaps, objects sent, per route and algorithm): answers that come at
+/// once must leave every count as it was, and LANP with no round trip is PBNP.
+#[test]
+fn no_latency_is_the_earlier_table() {
+    use super::simulate_with_latency;
+    let (city, r1, r2) = thesis();
+    let earlier = [
+        (r1, "SNP", 515, 1552, 13800, 130),
+        (r1, "PBNP", 411, 567, 5804, 30),
+        (r2, "SNP", 601, 1800, 16527, 114),
+        (r2, "PBNP", 601, 857, 10515, 65),
+    ];
+    let pbnp = Pbnp::default();
+    let lanp = flaneur::prefetch::pvs::Lanp::default();
+    for (route, alg, transactions, swaps, sent, first) in earlier {
+        let rule: &dyn PrefetchArea = if alg == "SNP" { &Snp } else { &pbnp };
+        let t = simulate_with_latency(city, rule, route, THESIS_CAPACITY, 0)
+            .unwrap()
+            .totals;
+        let got = (
+            t.transactions,
+            t.swaps,
+            t.objects_sent,
+            t.first_transaction_objects,
+        );
+        assert_eq!(got, (transactions, swaps, sent, first), "{alg}");
+        assert_eq!((t.visual_misses, t.miss_steps, t.start_up_wait), (0, 0, 0));
+        assert_eq!(
+            t,
+            simulate(city, rule, route, THESIS_CAPACITY).unwrap().totals
+        );
+        if alg == "PBNP" {
+            let l = simulate_with_latency(city, &lanp, route, THESIS_CAPACITY, 0)
+                .unwrap()
+                .totals;
+            assert_eq!(l, t);
+        }
+    }
+}
+
+/// Under latency SNP's and PBNP's caches change as before, but their answers come too
+/// late: PBNP's one-step band from 1 step on, SNP's whole cell from 5 (a cell is 5
+/// steps across). LANP looks as far ahead as it has measured: far fewer misses than
+/// either at 5 steps, with fewer cache swaps than SNP.
+#[test]
+fn latency_counts_misses_and_lanp_keeps_up() {
+    use super::simulate_with_latency;
+    let (city, r1, r2) = thesis();
+    let pbnp = Pbnp::default();
+    let lanp = flaneur::prefetch::pvs::Lanp::default();
+    let run = |rule: &dyn PrefetchArea, route: &[Position], l| {
+        simulate_with_latency(city, rule, route, THESIS_CAPACITY, l)
+            .unwrap()
+            .totals
+    };
+    for (name, route) in [("route 1", r1), ("route 2", r2)] {
+        let snp0 = run(&Snp, route, 0);
+        let pbnp0 = run(&pbnp, route, 0);
+        for l in [1, 3, 5] {
+            let snp = run(&Snp, route, l);
+            let pb = run(&pbnp, route, l);
+            assert_eq!(
+                (snp.transactions, snp.swaps),
+                (snp0.transactions, snp0.swaps)
+            );
+            assert_eq!(pb.objects_sent, pbnp0.objects_sent);
+            assert!(pb.visual_misses > 0 && pb.miss_steps > 0, "{name} L={l}");
+            assert!(pb.miss_steps <= pb.visual_misses);
+            assert_eq!(pb.start_up_wait, l);
+            assert_eq!(snp.visual_misses > 0, l >= 5, "{name} L={l}: {snp:?}");
+        }
+        let snp5 = run(&Snp, route, 5);
+        let pbnp5 = run(&pbnp, route, 5);
+        let lanp5 = run(&lanp, route, 5);
+        assert!(lanp5.swaps <= snp5.swaps, "{name}: {lanp5:?}");
+        assert!(
+            lanp5.visual_misses * 20 < snp5.visual_misses,
+            "{name}: {lanp5:?}"
+        );
+        assert!(
+            lanp5.visual_misses * 80 < pbnp5.visual_misses,
+            "{name}: {lanp5:?}"
+        );
+        assert!(lanp5.peak_cached_cells <= THESIS_CAPACITY);
+        // With answers a step away, at most one object's miss on a sharp turn.
+        assert!(run(&lanp, route, 1).visual_misses <= 2, "{name}");
+    }
+    // Route 2's straight lines: LANP misses nothing at 3 and 4 steps.
+    for l in [3, 4] {
+        assert_eq!(run(&lanp, r2, l).visual_misses, 0, "L={l}");
+    }
+}

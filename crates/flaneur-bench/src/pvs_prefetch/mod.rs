@@ -3,7 +3,8 @@
 //! delta-transmission for both, along a random route and a route of straight lines —
 //! prefetching transactions, cache swaps, objects sent per transaction and at each
 //! step, and visual misses; beside them, PBNP swept over its region size, which the
-//! thesis leaves open.
+//! thesis leaves open, and SNP, PBNP and LANP (ours, `flaneur::prefetch::pvs::Lanp`)
+//! with transactions answered 0 to 8 steps after they are asked (`simulate_with_latency`).
 //!
 //! It runs on the synthetic PVS table (`synthetic`, how it is drawn is named there,
 //! held in a `PvsTable`) and the two routes (`flaneur::walk::path::routes`); one seed
@@ -18,7 +19,8 @@ use std::path::Path;
 use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{
-    check_border, Pbnp, Position, PvsSource, Snp, StoredPvs, DEFAULT_BORDER, THESIS_CAPACITY,
+    check_border, Lanp, Pbnp, Position, PrefetchArea, PvsSource, Snp, StoredPvs, DEFAULT_BORDER,
+    DEFAULT_TURN, THESIS_CAPACITY,
 };
 use flaneur::walk::path::routes::{axis_route, random_route, straight_route, RouteConfig};
 
@@ -28,7 +30,7 @@ mod sim;
 pub mod synthetic;
 mod table;
 
-pub use sim::{simulate, SimReport, SimTotals, StepRecord};
+pub use sim::{simulate, simulate_with_latency, SimReport, SimTotals, StepRecord};
 pub use synthetic::{SyntheticCity, SyntheticConfig};
 pub use table::{PvsTable, MAX_CELLS};
 
@@ -98,6 +100,18 @@ pub const ROUTES_CSV: &str = "pvs-prefetch-routes.csv";
 pub const ROUTES_PLOT: &str = "pvs-prefetch-routes.png";
 pub const REGIONS_PLOT: &str = "pvs-prefetch-regions.png";
 pub const MISSES_PLOT: &str = "pvs-prefetch-regions-misses.png";
+pub const LATENCY_CSV: &str = "pvs-prefetch-latency.csv";
+pub const LATENCY_MISSES_PLOT: &str = "pvs-prefetch-latency-misses.png";
+pub const LATENCY_SWAPS_PLOT: &str = "pvs-prefetch-latency-swaps.png";
+
+/// The latencies swept by default, steps from asking a transaction to its answer.
+pub const DEFAULT_LATENCIES: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+
+/// The longest latency the experiment takes, steps: longer than a route is no walk.
+pub const MAX_LATENCY: usize = 1000;
+
+/// The algorithms of the latency sweep, in the order they are reported.
+pub const LATENCY_ALGORITHMS: [&str; 3] = ["SNP", "PBNP", "LANP"];
 
 /// The PNG of the objects sent at each step along `route` by `algorithm` (Figs. 7.7,
 /// 7.8), and of the objects sent so far by both.
@@ -121,6 +135,10 @@ pub struct PvsPrefetchConfig {
     pub capacity: usize,
     /// PBNP's region borders to sweep (none: no sweep).
     pub borders: Vec<f64>,
+    /// Latencies, steps, to walk SNP, PBNP and LANP at (none: no sweep).
+    pub latencies: Vec<usize>,
+    /// LANP's turns foreseen, a share of its reach (`Lanp::new`); its band is `border`.
+    pub turn: f64,
 }
 
 impl Default for PvsPrefetchConfig {
@@ -131,6 +149,8 @@ impl Default for PvsPrefetchConfig {
             border: DEFAULT_BORDER,
             capacity: THESIS_CAPACITY,
             borders: DEFAULT_BORDERS.to_vec(),
+            latencies: DEFAULT_LATENCIES.to_vec(),
+            turn: DEFAULT_TURN,
         }
     }
 }
@@ -143,6 +163,12 @@ impl PvsPrefetchConfig {
         check_border(self.border)?;
         for &b in &self.borders {
             check_border(b)?;
+        }
+        Lanp::new(self.border, self.turn)?;
+        if let Some(l) = self.latencies.iter().find(|&&l| l > MAX_LATENCY) {
+            return Err(Error::Pvs(format!(
+                "a latency of {l} steps is more than the {MAX_LATENCY} the experiment takes"
+            )));
         }
         if self.capacity < THESIS_CAPACITY {
             return Err(Error::Pvs(format!(
@@ -185,6 +211,16 @@ pub struct SweepRow {
     pub totals: SimTotals,
 }
 
+/// One algorithm along one route with answers `latency` steps away.
+#[derive(Clone, Debug)]
+pub struct LatencyRow {
+    pub route: u8,
+    pub latency: usize,
+    /// "SNP", "PBNP" or "LANP".
+    pub algorithm: &'static str,
+    pub totals: SimTotals,
+}
+
 /// Where the experiment ran.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Place {
@@ -205,6 +241,8 @@ pub struct PvsPrefetchReport {
     /// Route 1, then route 2.
     pub routes: Vec<RouteRun>,
     pub sweep: Vec<SweepRow>,
+    /// Route by route, latency by latency, SNP, PBNP then LANP.
+    pub latency: Vec<LatencyRow>,
 }
 
 /// Draws the city and the routes and walks them.
@@ -217,7 +255,7 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
         Ok(city.on_walkway(p))
     })?;
     let route2 = straight_route(&city.street_grid(), &cfg.route)?.positions;
-    let (routes, sweep) = walk(&city, [route1, route2], cfg, || None)?;
+    let (routes, sweep, latency) = walk(&city, [route1, route2], cfg, || None)?;
     let c = &cfg.city;
     let place = Place {
         name: "a synthetic city".into(),
@@ -249,6 +287,7 @@ pub fn run(cfg: &PvsPrefetchConfig) -> Result<PvsPrefetchReport> {
         stats,
         routes,
         sweep,
+        latency,
     })
 }
 
@@ -283,7 +322,8 @@ pub fn run_on_database(
     };
     let route1 = random_route(start, &cfg.route, walkable)?;
     let route2 = axis_route(start, &cfg.route, walkable)?;
-    let (routes, sweep) = walk(&source, [route1, route2], cfg, || Some(db.io().page_reads))?;
+    let (routes, sweep, latency) =
+        walk(&source, [route1, route2], cfg, || Some(db.io().page_reads))?;
     let cell = source.grid().cell_size();
     let place = Place {
         name: name.into(),
@@ -314,17 +354,21 @@ pub fn run_on_database(
         stats,
         routes,
         sweep,
+        latency,
     })
 }
 
-/// SNP and PBNP along both routes over `source`, then PBNP at each swept border;
-/// `pages` reads a page counter, if there is one.
+type Walked = (Vec<RouteRun>, Vec<SweepRow>, Vec<LatencyRow>);
+
+/// SNP and PBNP along both routes over `source`, then PBNP at each swept border, then
+/// SNP, PBNP and LANP at each swept latency; `pages` reads a page counter, if there
+/// is one.
 fn walk<S: PvsSource + ?Sized>(
     source: &S,
     positions: [Vec<Position>; 2],
     cfg: &PvsPrefetchConfig,
     pages: impl Fn() -> Option<u64>,
-) -> Result<(Vec<RouteRun>, Vec<SweepRow>)> {
+) -> Result<Walked> {
     let pbnp = Pbnp::new(cfg.border)?;
     let counted = |rule: &dyn flaneur::prefetch::pvs::PrefetchArea,
                    positions: &[Position]|
@@ -356,7 +400,24 @@ fn walk<S: PvsSource + ?Sized>(
             });
         }
     }
-    Ok((routes, sweep))
+    let lanp = Lanp::new(cfg.border, cfg.turn)?;
+    let rules: [&dyn PrefetchArea; 3] = [&Snp, &pbnp, &lanp];
+    let mut latency = Vec::new();
+    for r in &routes {
+        for &l in &cfg.latencies {
+            for rule in rules {
+                let totals =
+                    simulate_with_latency(source, rule, &r.positions, cfg.capacity, l)?.totals;
+                latency.push(LatencyRow {
+                    route: r.route,
+                    latency: l,
+                    algorithm: rule.name(),
+                    totals,
+                });
+            }
+        }
+    }
+    Ok((routes, sweep, latency))
 }
 
 /// The change from `from` to `to`, as a percentage of `from`.
@@ -425,6 +486,42 @@ impl PvsPrefetchReport {
             ));
         }
         s
+    }
+
+    /// SNP, PBNP and LANP against the latency.
+    pub fn latency_csv(&self) -> String {
+        let mut s = String::from(
+            "route,algorithm,latency,transactions,cache_swaps,objects_sent,objects_per_transaction,visual_misses,miss_steps,late_entries,cells_entered,cells_requested,peak_cached_cells,peak_held_objects\n",
+        );
+        for w in &self.latency {
+            let t = &w.totals;
+            s.push_str(&format!(
+                "{},{},{},{},{},{},{:.2},{},{},{},{},{},{},{}\n",
+                w.route,
+                w.algorithm,
+                w.latency,
+                t.transactions,
+                t.swaps,
+                t.objects_sent,
+                t.objects_per_transaction(),
+                t.visual_misses,
+                t.miss_steps,
+                t.late_entries,
+                t.cells_entered,
+                t.cells_requested,
+                t.peak_cached_cells,
+                t.peak_held_objects
+            ));
+        }
+        s
+    }
+
+    /// The latency sweep's row for `route`, `latency` and `algorithm`.
+    pub fn at_latency(&self, route: u8, latency: usize, algorithm: &str) -> Option<&SimTotals> {
+        self.latency
+            .iter()
+            .find(|w| w.route == route && w.latency == latency && w.algorithm == algorithm)
+            .map(|w| &w.totals)
     }
 
     /// The routes' positions (Fig. 7.6).
@@ -499,6 +596,7 @@ impl Report for PvsPrefetchReport {
             (STEPS_CSV, self.steps_csv()),
             (REGIONS_CSV, self.regions_csv()),
             (ROUTES_CSV, self.routes_csv()),
+            (LATENCY_CSV, self.latency_csv()),
         ]
     }
 
@@ -635,6 +733,45 @@ impl Report for PvsPrefetchReport {
                 ));
             }
         }
+        if !self.latency.is_empty() {
+            s.push_str(&format!(
+                "\nUnder latency (ours; the thesis does not time transactions): a transaction asked at step t is \
+                 answered at step t + L, so the frames of the next L steps draw without it; the viewer waits L \
+                 steps at the start for the start-up transaction. A visual miss is an object of the current \
+                 cell's PVS not on hand in a frame: objects summed over the route, and steps with any. LANP \
+                 (ours) asks for the cells within PBNP's {} m band of the path ahead, as far as the viewer goes in \
+                 the round trip it has measured at the speed it has measured (turns foreseen {} of the way); with \
+                 no round trip it is PBNP. SNP's and PBNP's transactions, swaps and objects do not depend on L: \
+                 at every L they are Table 7.2's above.\n\n\
+                 | route | L (steps) | SNP misses (steps) | PBNP misses (steps) | LANP misses (steps) | LANP cache swaps (SNP's) | LANP transactions (SNP's) | LANP objects per transaction |\n\
+                 |---|---|---|---|---|---|---|---|\n",
+                c.border * self.place.cell,
+                c.turn
+            ));
+            for r in &self.routes {
+                for &l in &c.latencies {
+                    let get = |a: &str| self.at_latency(r.route, l, a);
+                    let (Some(snp), Some(pbnp), Some(lanp)) =
+                        (get("SNP"), get("PBNP"), get("LANP"))
+                    else {
+                        continue;
+                    };
+                    let m = |t: &SimTotals| format!("{} ({})", t.visual_misses, t.miss_steps);
+                    s.push_str(&format!(
+                        "| {} | {l} | {} | {} | {} | {} ({}) | {} ({}) | {:.1} |\n",
+                        r.route,
+                        m(snp),
+                        m(pbnp),
+                        m(lanp),
+                        lanp.swaps,
+                        snp.swaps,
+                        lanp.transactions,
+                        snp.transactions,
+                        lanp.objects_per_transaction()
+                    ));
+                }
+            }
+        }
         s
     }
 
@@ -707,6 +844,43 @@ impl Report for PvsPrefetchReport {
                     .collect(),
             },
         )?;
+        if !self.latency.is_empty() {
+            let series = |f: fn(&SimTotals) -> f64| -> Vec<Series> {
+                let mut out = Vec::new();
+                for r in &self.routes {
+                    for alg in LATENCY_ALGORITHMS {
+                        out.push(Series {
+                            name: format!("{} {alg}", r.name()),
+                            points: self
+                                .latency
+                                .iter()
+                                .filter(|w| w.route == r.route && w.algorithm == alg)
+                                .map(|w| (w.latency as f64, f(&w.totals)))
+                                .collect(),
+                        });
+                    }
+                }
+                out
+            };
+            line_plot(
+                &dir.join(LATENCY_MISSES_PLOT),
+                &LinePlot {
+                    title: "Visual misses against latency".into(),
+                    x_label: "latency (steps from asking to the answer)".into(),
+                    y_label: "objects missing from frames, summed".into(),
+                    series: series(|t| t.visual_misses as f64),
+                },
+            )?;
+            line_plot(
+                &dir.join(LATENCY_SWAPS_PLOT),
+                &LinePlot {
+                    title: "Cache swaps against latency".into(),
+                    x_label: "latency (steps from asking to the answer)".into(),
+                    y_label: "cache swaps along the route".into(),
+                    series: series(|t| t.swaps as f64),
+                },
+            )?;
+        }
         if self.sweep.is_empty() {
             return Ok(());
         }

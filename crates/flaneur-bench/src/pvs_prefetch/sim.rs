@@ -1,6 +1,15 @@
 //! The simulation of §7.5: one client walks a route position by position, and every
-//! position's transaction is counted. Deterministic: the same table, rule and route
-//! give the same counts.
+//! position's transaction is counted. Deterministic: the same table, rule, route and
+//! latency give the same counts.
+//!
+//! Latency (ours): a transaction asked at step t is answered at step t + L, after that
+//! step's frame, so the frames of steps t + 1 … t + L draw without it and the frame of
+//! step t + L + 1 with it; L = 0 is the thesis's walk, every transaction complete
+//! before the next position. The viewer waits at the start until the start-up
+//! transaction is answered (the thesis's start-up time, L steps), and the walk's visual
+//! misses are counted from the first step on.
+
+use std::collections::VecDeque;
 
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{Cell, Position, PrefetchArea, PvsClient, PvsSource};
@@ -18,6 +27,7 @@ pub struct StepRecord {
     pub objects_sent: usize,
     /// Cache entries replaced.
     pub swaps: usize,
+    /// Objects of the cell's PVS not on hand in the frame drawn here.
     pub visual_misses: usize,
     /// Entries cached and objects held after the step.
     pub cached_cells: usize,
@@ -40,8 +50,12 @@ pub struct SimTotals {
     /// Cells entered after the start, and those entered before their PVS was held.
     pub cells_entered: usize,
     pub late_entries: usize,
-    /// Objects missing on entering a cell, summed over the route.
+    /// Objects of the current cell's PVS missing from a frame, summed over the route.
     pub visual_misses: usize,
+    /// Steps whose frame missed any object (at L = 0, the late entries).
+    pub miss_steps: usize,
+    /// Steps the viewer waited at the start for the start-up transaction (L).
+    pub start_up_wait: usize,
     pub peak_cached_cells: usize,
     pub peak_held_objects: usize,
 }
@@ -72,6 +86,8 @@ impl SimTotals {
 pub struct SimReport {
     pub algorithm: &'static str,
     pub capacity: usize,
+    /// Steps from asking a transaction to its answer.
+    pub latency: usize,
     pub steps: Vec<StepRecord>,
     pub totals: SimTotals,
 }
@@ -108,6 +124,41 @@ where
     S: PvsSource + ?Sized,
     A: PrefetchArea + ?Sized,
 {
+    simulate_with_latency(source, rule, route, capacity, 0)
+}
+
+/// [`simulate`] with every transaction answered `latency` steps after it is asked.
+///
+/// ```
+/// use flaneur::prefetch::pvs::{Cell, Pbnp, Position, Snp, ViewcellGrid};
+/// use flaneur_bench::pvs_prefetch::{simulate_with_latency, PvsTable};
+/// let grid = ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 3, 10)?;
+/// let mut table = PvsTable::new(grid, 100)?;
+/// for row in 0..3 {
+///     for col in 0..10u32 {
+///         table.insert(Cell::new(row, col), (col as u64 * 5..col as u64 * 5 + 20).collect())?;
+///     }
+/// }
+/// let route: Vec<Position> = (0..45).map(|i| Position::new(10.0 + 4.0 * i as f64, 30.0)).collect();
+/// // Answers 3 steps away: PBNP's one-step band is too late, SNP's whole cell is not.
+/// let snp = simulate_with_latency(&table, &Snp, &route, 9, 3)?;
+/// let pbnp = simulate_with_latency(&table, &Pbnp::default(), &route, 9, 3)?;
+/// assert_eq!(snp.totals.visual_misses, 0);
+/// assert!(pbnp.totals.visual_misses > 0 && pbnp.totals.miss_steps > 0);
+/// assert_eq!(pbnp.totals.start_up_wait, 3);
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+pub fn simulate_with_latency<S, A>(
+    source: &S,
+    rule: &A,
+    route: &[Position],
+    capacity: usize,
+    latency: usize,
+) -> Result<SimReport>
+where
+    S: PvsSource + ?Sized,
+    A: PrefetchArea + ?Sized,
+{
     if route.is_empty() {
         return Err(Error::Pvs("the route has no positions".into()));
     }
@@ -115,12 +166,29 @@ where
     let mut steps = Vec::with_capacity(route.len());
     let mut t = SimTotals {
         positions: route.len(),
+        start_up_wait: latency,
         ..SimTotals::default()
     };
-    for (step, &p) in route.iter().enumerate() {
+    // Transactions awaiting their answer: (the tick it comes at, id), oldest first.
+    let mut awaited: VecDeque<(usize, u64)> = VecDeque::new();
+    // Tick 0 is the start; the viewer stands there until tick `latency`.
+    let ticks = (0..=latency).map(|_| 0).chain(1..route.len());
+    for (tick, step) in ticks.enumerate() {
+        let p = route[step];
         let o = client
-            .step(p)
+            .look(p)
             .map_err(|e| Error::Pvs(format!("step {step}: {}", strip(&e))))?;
+        if let Some(x) = &o.transaction {
+            awaited.push_back((tick + latency, x.id));
+        }
+        while awaited.front().is_some_and(|&(at, _)| at <= tick) {
+            let (_, id) = awaited.pop_front().expect("checked");
+            client.deliver(id)?;
+        }
+        let waiting = step == 0 && tick > 0;
+        if waiting && o.transaction.is_none() {
+            continue;
+        }
         let (requested, sent, swaps) = o.transaction.as_ref().map_or((0, 0, 0), |x| {
             (x.requested.len(), x.sent.len(), x.evicted.len())
         });
@@ -133,30 +201,48 @@ where
         t.swaps += swaps;
         t.objects_sent += sent;
         t.cells_requested += requested;
-        t.visual_misses += o.visual_misses;
+        let misses = if step == 0 { 0 } else { o.visual_misses };
+        t.visual_misses += misses;
+        t.miss_steps += usize::from(misses > 0);
         t.cells_entered += usize::from(o.entered);
-        t.late_entries += usize::from(o.visual_misses > 0);
+        t.late_entries += usize::from(o.entered && misses > 0);
         let cache = client.cache();
         t.peak_cached_cells = t.peak_cached_cells.max(cache.len());
         t.peak_held_objects = t.peak_held_objects.max(cache.object_count());
-        steps.push(StepRecord {
+        let record = StepRecord {
             step,
             cell: o.cell,
             transaction: o.transaction.is_some(),
             cells_requested: requested,
             objects_sent: sent,
             swaps,
-            visual_misses: o.visual_misses,
+            visual_misses: misses,
             cached_cells: cache.len(),
             held_objects: cache.object_count(),
-        });
+        };
+        // A transaction asked while waiting at the start counts with the start's.
+        match steps.last_mut() {
+            Some(last) if waiting => merge(last, &record),
+            _ => steps.push(record),
+        }
     }
     Ok(SimReport {
         algorithm: rule.name(),
         capacity,
+        latency,
         steps,
         totals: t,
     })
+}
+
+/// Adds `more`'s costs to `into`'s, for two looks from one position.
+fn merge(into: &mut StepRecord, more: &StepRecord) {
+    into.transaction |= more.transaction;
+    into.cells_requested += more.cells_requested;
+    into.objects_sent += more.objects_sent;
+    into.swaps += more.swaps;
+    into.cached_cells = more.cached_cells;
+    into.held_objects = more.held_objects;
 }
 
 /// An error's message without the variant's prefix, to wrap it in another.

@@ -13,6 +13,7 @@ fn small() -> PvsPrefetchConfig {
             ..Default::default()
         },
         borders: vec![0.1, 0.25, 0.5],
+        latencies: vec![0, 5],
         ..Default::default()
     }
 }
@@ -39,6 +40,15 @@ fn small_run_writes_every_figure() {
     assert_eq!(r.steps_csv().lines().count(), 402);
     assert_eq!(r.regions_csv().lines().count(), 7);
     assert_eq!(r.routes_csv().lines().count(), 402);
+    // Two routes × two latencies × three algorithms, and a header.
+    assert_eq!(r.latency.len(), 12);
+    assert_eq!(r.latency_csv().lines().count(), 13);
+    for route in &r.routes {
+        let snp = r.at_latency(route.route, 0, "SNP").unwrap();
+        assert_eq!(snp, &route.snp.totals);
+        let late = r.at_latency(route.route, 5, "PBNP").unwrap();
+        assert!(late.visual_misses > 0);
+    }
     let md = r.markdown();
     for word in [
         "Table 7.2",
@@ -47,6 +57,8 @@ fn small_run_writes_every_figure() {
         "876",
         "route 2 PBNP",
         "| 0.25 | 5 |",
+        "Under latency",
+        "LANP misses (steps)",
     ] {
         assert!(md.contains(word), "{word} missing from\n{md}");
     }
@@ -58,7 +70,13 @@ fn small_run_writes_every_figure() {
         }
         assert!(dir.path().join(cumulative_plot(route)).exists());
     }
-    for f in [ROUTES_PLOT, REGIONS_PLOT, MISSES_PLOT] {
+    for f in [
+        ROUTES_PLOT,
+        REGIONS_PLOT,
+        MISSES_PLOT,
+        LATENCY_MISSES_PLOT,
+        LATENCY_SWAPS_PLOT,
+    ] {
         assert!(dir.path().join(f).exists(), "{f}");
     }
 }
@@ -76,6 +94,8 @@ fn bad_settings_are_named() {
     assert!(err(|c| c.route.steps = 0).contains("steps"));
     assert!(err(|c| c.city.cell = 0.0).contains("viewcell size"));
     assert!(err(|c| c.city.overlap = 1.0).contains("overlap"));
+    assert!(err(|c| c.turn = 1.5).contains("turn"));
+    assert!(err(|c| c.latencies = vec![3, MAX_LATENCY + 1]).contains("latency"));
 }
 
 #[test]

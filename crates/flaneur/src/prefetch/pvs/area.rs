@@ -31,11 +31,51 @@ impl Area {
     }
 }
 
-/// A prefetching rule: SNP ([`Snp`](super::Snp)) or PBNP ([`Pbnp`](super::Pbnp)).
+/// What the client has measured of the walk so far, for a rule that looks further
+/// ahead the longer its answers take and the faster the viewer goes
+/// ([`Lanp`](super::Lanp)). Both are measured by the client, never given: the round
+/// trip from the transactions it has had answered, the motion from the positions it
+/// has looked from.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Observed {
+    /// Steps from asking to holding, the longest of the recent answers (or the age of
+    /// the oldest unanswered transaction, if longer); 0 before any answer.
+    pub round_trip: u32,
+    /// The viewer's last step, metres (east, south); zero before it has moved.
+    pub heading: (f64, f64),
+    /// The viewer's speed, metres per step: the longest of its recent steps.
+    pub speed: f64,
+}
+
+/// A prefetching rule: SNP ([`Snp`](super::Snp)), PBNP ([`Pbnp`](super::Pbnp)) or ours,
+/// LANP ([`Lanp`](super::Lanp)).
 pub trait PrefetchArea {
     /// The area that must be cached while the viewer stands at `p`; an error for a
     /// position that is not finite or lies outside the grid.
     fn area(&self, grid: &ViewcellGrid, p: Position) -> Result<Area>;
+
+    /// The area at `p` given what the client has `seen` and which cells have a
+    /// viewcell (`walkable`); the cells come in the order they are wanted, in case the
+    /// cache cannot take them all. SNP and PBNP look at neither: their area is
+    /// [`area`](Self::area)'s.
+    fn area_seen(
+        &self,
+        grid: &ViewcellGrid,
+        p: Position,
+        seen: &Observed,
+        walkable: &dyn Fn(Cell) -> Result<bool>,
+    ) -> Result<Area> {
+        let _ = (seen, walkable);
+        self.area(grid, p)
+    }
+
+    /// Whether the cache may replace neighbours of the current cell that the area does
+    /// not want, when it has no other room for the cells the area does (§7.4 keeps every
+    /// neighbour; a rule whose area reaches past them may need their room). SNP and
+    /// PBNP: no.
+    fn replaces_neighbours(&self) -> bool {
+        false
+    }
 
     /// A short name for reports ("SNP", "PBNP").
     fn name(&self) -> &'static str;

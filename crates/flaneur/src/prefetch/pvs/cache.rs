@@ -138,6 +138,32 @@ impl ClientCache {
     /// and no change, when a new cell is cached already or there are not enough
     /// non-neighbours to replace.
     pub fn admit(&mut self, current: Cell, new: Vec<(Cell, Vec<ObjectId>)>) -> Result<Admitted> {
+        self.admit_keeping(current, new, &[], false)
+    }
+
+    /// New entries the cache can take with the viewer in `current` without replacing
+    /// a cell of `keep` or, unless `neighbours_go`, a neighbour of `current`.
+    pub fn room(&self, current: Cell, keep: &[Cell], neighbours_go: bool) -> usize {
+        let staying = self
+            .entries
+            .iter()
+            .filter(|e| keep.contains(&e.cell) || (!neighbours_go && current.is_neighbour(e.cell)))
+            .count();
+        self.capacity.saturating_sub(staying)
+    }
+
+    /// [`admit`](Self::admit), never replacing a cell of `keep` either, and when
+    /// `neighbours_go`, replacing neighbours of `current` once no other cell is left
+    /// to replace. A rule that looks further than the neighbours (`Lanp`) keeps the far
+    /// cells it has just asked for and may need the room its unwanted neighbours take;
+    /// SNP and PBNP ask only for neighbours, which stay anyway, and never run short.
+    pub fn admit_keeping(
+        &mut self,
+        current: Cell,
+        new: Vec<(Cell, Vec<ObjectId>)>,
+        keep: &[Cell],
+        neighbours_go: bool,
+    ) -> Result<Admitted> {
         for (i, (cell, _)) in new.iter().enumerate() {
             if self.contains(*cell) || new[..i].iter().any(|(c, _)| c == cell) {
                 return Err(Error::Pvs(format!(
@@ -149,7 +175,7 @@ impl ClientCache {
         let mut victims: Vec<&Entry> = self
             .entries
             .iter()
-            .filter(|e| !current.is_neighbour(e.cell))
+            .filter(|e| !keep.contains(&e.cell) && (neighbours_go || !current.is_neighbour(e.cell)))
             .collect();
         if victims.len() < need {
             return Err(Error::Pvs(format!(
@@ -159,6 +185,7 @@ impl ClientCache {
                 victims.len()
             )));
         }
+        // Farthest first puts the neighbours, if they may go, after every other cell.
         victims.sort_by_key(|e| (Reverse(current.chebyshev(e.cell)), e.used, e.cell));
         let evicted: Vec<Cell> = victims[..need].iter().map(|e| e.cell).collect();
 

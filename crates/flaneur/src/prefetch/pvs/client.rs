@@ -1,10 +1,21 @@
 //! One client of §7.4: before each frame it checks the viewer's position and, when the
 //! prefetching area there holds cells it has not cached, runs one prefetching
 //! transaction: the rows of those cells are requested, only ΔS is sent
-//! (delta-transmission), and the cache is updated. The rule that picks the area (SNP
-//! or PBNP) is the only thing that differs between the algorithms.
+//! (delta-transmission), and the cache is updated. The rule that picks the area (SNP,
+//! PBNP or LANP) is the only thing that differs between the algorithms.
+//!
+//! Latency (ours; the thesis counts transactions, it does not time them): a
+//! transaction may be answered later than it is asked ([`PvsClient::look`], then
+//! [`PvsClient::deliver`]). The cache's table changes when the client asks — the
+//! entries it asks for are reserved and the ones they replace go — so the cells held,
+//! the rows asked for, ΔS and the swaps do not depend on when answers come; only the
+//! objects *on hand*, those whose answer has come, do. A frame draws what is on hand,
+//! and an object of the current cell's PVS that is not is a visual miss. With every
+//! answer at once ([`PvsClient::step`]) the objects on hand are the cache's.
 
-use super::area::PrefetchArea;
+use std::collections::{HashSet, VecDeque};
+
+use super::area::{Observed, PrefetchArea};
 use super::cache::ClientCache;
 use super::delta::delta;
 use super::grid::{Cell, Position};
@@ -14,6 +25,9 @@ use crate::error::{Error, Result};
 /// One prefetching transaction.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Transaction {
+    /// The client's number for it, from 0 in the order asked: what
+    /// [`PvsClient::deliver`] takes.
+    pub id: u64,
     /// The cells whose PVS rows were requested: those of the area not cached.
     pub requested: Vec<Cell>,
     /// ΔS, the objects sent, ascending.
@@ -33,12 +47,24 @@ pub struct StepOutcome {
     /// first position of a walk, which starts from an empty cache).
     pub entered: bool,
     /// This position's prefetching transaction; `None` when every cell of its area was
-    /// already cached.
+    /// already cached or asked for.
     pub transaction: Option<Transaction>,
-    /// On entering a cell: objects of its PVS the client did not hold, which the
-    /// viewer would see missing until this position's transaction arrives.
+    /// Objects of `cell`'s PVS not on hand when the viewer stood here, before this
+    /// position's transaction: the frame drawn here lacks them. Not counted at the
+    /// first position, which starts from an empty cache.
     pub visual_misses: usize,
 }
+
+/// A transaction asked and not yet answered.
+struct InFlight {
+    id: u64,
+    asked: u64,
+    sent: Vec<ObjectId>,
+}
+
+/// The recent answers and steps the client measures the round trip and the speed
+/// over.
+const RECENT: usize = 8;
 
 /// A client walking over a PVS source with a prefetching rule.
 ///
@@ -68,6 +94,15 @@ pub struct StepOutcome {
 /// // Crossing into it costs nothing more: it was prefetched.
 /// let cross = client.step(Position::new(41.0, 10.0))?;
 /// assert!(cross.entered && cross.transaction.is_none() && cross.visual_misses == 0);
+/// // With answers that take time: object 1 is asked for when leaning west, but not on
+/// // hand until its answer comes.
+/// let back = client.look(Position::new(23.0, 10.0))?;
+/// let asked = back.transaction.unwrap();
+/// assert_eq!(asked.sent, [1]);
+/// assert!(!client.on_hand(1) && client.unanswered() == 1);
+/// client.deliver(asked.id)?;
+/// assert!(client.on_hand(1) && client.observed().round_trip == 0);
+/// assert!(client.deliver(asked.id).is_err());
 /// # Ok::<(), flaneur::Error>(())
 /// ```
 pub struct PvsClient<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> {
@@ -75,6 +110,16 @@ pub struct PvsClient<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> {
     rule: &'a A,
     cache: ClientCache,
     last: Option<Cell>,
+    /// Looks so far: the client's clock, in steps.
+    looks: u64,
+    next_id: u64,
+    in_flight: Vec<InFlight>,
+    /// The objects whose answer has come and which the cache still holds.
+    on_hand: HashSet<ObjectId>,
+    /// The latest round trips measured, steps.
+    trips: VecDeque<u64>,
+    /// The latest positions looked from.
+    seen_at: VecDeque<Position>,
 }
 
 impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
@@ -85,6 +130,12 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
             rule,
             cache: ClientCache::new(capacity)?,
             last: None,
+            looks: 0,
+            next_id: 0,
+            in_flight: Vec::new(),
+            on_hand: HashSet::new(),
+            trips: VecDeque::new(),
+            seen_at: VecDeque::new(),
         })
     }
 
@@ -93,52 +144,140 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         &self.cache
     }
 
-    /// The viewer is at `p`: prefetch what its area needs. An error for a position
+    /// Whether object `id` is on hand: held, and its answer come.
+    pub fn on_hand(&self, id: ObjectId) -> bool {
+        self.on_hand.contains(&id)
+    }
+
+    /// Transactions asked and not yet answered.
+    pub fn unanswered(&self) -> usize {
+        self.in_flight.len()
+    }
+
+    /// The viewer is at `p` and every answer comes at once: [`look`](Self::look), then
+    /// [`deliver`](Self::deliver) this position's transaction. An error for a position
     /// that is not finite, lies outside the grid or in a cell without a viewcell.
     pub fn step(&mut self, p: Position) -> Result<StepOutcome> {
-        let area = self.rule.area(self.source.grid(), p)?;
-        let current = area.current;
+        let out = self.look(p)?;
+        if let Some(t) = &out.transaction {
+            self.deliver(t.id)?;
+        }
+        Ok(out)
+    }
+
+    /// What the client has measured: the round trip and the viewer's motion.
+    pub fn observed(&self) -> Observed {
+        let oldest = self
+            .in_flight
+            .iter()
+            .map(|t| self.looks.saturating_sub(1) - t.asked)
+            .max()
+            .unwrap_or(0);
+        let round_trip = self.trips.iter().copied().max().unwrap_or(0).max(oldest);
+        let steps = self.seen_at.iter().zip(self.seen_at.iter().skip(1));
+        let speed = steps.map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+        let heading = match (self.seen_at.len(), self.seen_at.back()) {
+            (n, Some(b)) if n >= 2 => {
+                let a = self.seen_at[n - 2];
+                (b.x - a.x, b.z - a.z)
+            }
+            _ => (0.0, 0.0),
+        };
+        Observed {
+            round_trip: u32::try_from(round_trip).unwrap_or(u32::MAX),
+            heading,
+            speed,
+        }
+    }
+
+    /// One step of the client's clock with the viewer at `p`: the frame's visual
+    /// misses are counted, and the cells of the area not cached are asked for; their
+    /// objects are on hand once [`deliver`](Self::deliver) is told the answer came.
+    /// Errors as [`step`](Self::step)'s.
+    pub fn look(&mut self, p: Position) -> Result<StepOutcome> {
+        let grid = self.source.grid();
+        let current = grid.cell_of(p)?;
         if !self.source.is_viewcell(current)? {
             return Err(Error::Pvs(format!(
                 "position {p} lies in cell {current}, which has no viewcell (the viewer cannot stand there)"
             )));
         }
+        if self.seen_at.back() != Some(&p) {
+            if self.seen_at.len() > RECENT {
+                self.seen_at.pop_front();
+            }
+            self.seen_at.push_back(p);
+        }
+        let first = self.looks == 0;
+        self.looks += 1;
+        let source = self.source;
+        let walkable = |c: Cell| source.is_viewcell(c);
+        let area = self.rule.area_seen(grid, p, &self.observed(), &walkable)?;
         let mut wanted = Vec::with_capacity(area.cells.len());
         for cell in area.cells {
             if cell == current || self.source.is_viewcell(cell)? {
                 wanted.push(cell);
             }
         }
+        if wanted.first() != Some(&current) {
+            wanted.retain(|&c| c != current);
+            wanted.insert(0, current);
+        }
         self.cache.touch(&wanted);
         let entered = self.last.is_some_and(|l| l != current);
         self.last = Some(current);
-        let missing: Vec<Cell> = wanted
-            .into_iter()
+        let visual_misses = match (first, self.cache.pvs(current)) {
+            (true, _) => 0,
+            (false, Some(pvs)) => pvs.iter().filter(|id| !self.on_hand(**id)).count(),
+            (false, None) => self
+                .source
+                .pvs(current)?
+                .iter()
+                .filter(|id| !self.on_hand(**id))
+                .count(),
+        };
+        let mut missing: Vec<Cell> = wanted
+            .iter()
+            .copied()
             .filter(|&c| !self.cache.contains(c))
             .collect();
+        // A far-looking area may want more than the cache can take: the first wanted
+        // come first, and the current cell always fits (at most its neighbours stay).
+        let neighbours_go = self.rule.replaces_neighbours();
+        missing.truncate(self.cache.room(current, &wanted, neighbours_go));
         if missing.is_empty() {
             return Ok(StepOutcome {
                 cell: current,
                 entered,
                 transaction: None,
-                visual_misses: 0,
+                visual_misses,
             });
         }
         let rows = missing
             .iter()
             .map(|&c| Ok((c, self.source.pvs(c)?)))
             .collect::<Result<Vec<_>>>()?;
-        let visual_misses = match rows.iter().find(|(c, _)| *c == current) {
-            Some((_, pvs)) if entered => pvs.iter().filter(|&&id| !self.cache.holds(id)).count(),
-            _ => 0,
-        };
         let requested: Vec<&[ObjectId]> = rows.iter().map(|(_, r)| &r[..]).collect();
         let sent = delta(&requested, |id| self.cache.holds(id));
-        let admitted = self.cache.admit(current, rows)?;
+        let admitted = self
+            .cache
+            .admit_keeping(current, rows, &wanted, neighbours_go)?;
+        if admitted.dropped > 0 {
+            let cache = &self.cache;
+            self.on_hand.retain(|&id| cache.holds(id));
+        }
+        let id = self.next_id;
+        self.next_id += 1;
+        self.in_flight.push(InFlight {
+            id,
+            asked: self.looks - 1,
+            sent: sent.clone(),
+        });
         Ok(StepOutcome {
             cell: current,
             entered,
             transaction: Some(Transaction {
+                id,
                 requested: missing,
                 sent,
                 evicted: admitted.evicted,
@@ -146,5 +285,31 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
             }),
             visual_misses,
         })
+    }
+
+    /// Transaction `id`'s answer has come, at the client's latest look: its objects that
+    /// the cache still holds are on hand, and its round trip is measured. An error for a
+    /// transaction not asked or already answered.
+    pub fn deliver(&mut self, id: u64) -> Result<()> {
+        let i = self
+            .in_flight
+            .iter()
+            .position(|t| t.id == id)
+            .ok_or_else(|| {
+                Error::Pvs(format!(
+                    "transaction {id} is not awaiting an answer (not asked, or answered already)"
+                ))
+            })?;
+        let t = self.in_flight.swap_remove(i);
+        for o in t.sent {
+            if self.cache.holds(o) {
+                self.on_hand.insert(o);
+            }
+        }
+        if self.trips.len() == RECENT {
+            self.trips.pop_front();
+        }
+        self.trips.push_back(self.looks.saturating_sub(1) - t.asked);
+        Ok(())
     }
 }

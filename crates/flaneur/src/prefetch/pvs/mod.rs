@@ -5,7 +5,8 @@
 //! those of the neighbours it may enter next. SNP (`snp`, §7.2.1) fetches all eight
 //! neighbours on every cell change; PBNP (`pbnp`, §7.2.2) fetches only those the
 //! viewer leans towards, read from which of nine regions of its cell it stands in
-//! (h(R), Table 7.1). Both send only what the client lacks (`delta`, §7.3) and share
+//! (h(R), Table 7.1); LANP (`lanp`, ours) fetches along the path the viewer walks
+//! while an answer is on its way, as far as the measured round trip and speed take it. Both send only what the client lacks (`delta`, §7.3) and share
 //! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
 //! transaction. `stored` reads a database's precomputed visibility as the server's
 //! table; `walk::path::routes` draws the thesis's two routes. The simulation of §7.5
@@ -28,16 +29,20 @@
 //! - **Transactions**: one whenever the area at a position holds a cell not cached,
 //!   even if every object it sees is already held (its row is still sent). The start-up
 //!   transaction counts, and its objects count in the objects per transaction; it is
-//!   also reported apart, as the thesis does. Transactions complete before the next
-//!   position: the thesis counts them, it does not time them.
+//!   also reported apart, as the thesis does. The thesis counts transactions, it does
+//!   not time them: [`PvsClient::step`] completes one at once, [`PvsClient::look`] and
+//!   [`PvsClient::deliver`] let its answer come later (the table changes on asking,
+//!   the objects are on hand on the answer).
 //! - **Delta-transmission**: S_I is everything the client holds when it asks; an
 //!   object that a new cell and an evicted one both see is kept, not dropped and sent
 //!   again.
 //! - **Cells without a viewcell** (inside buildings, off the grid) are never requested
 //!   nor cached; a position in one is an error, as is a position that is not finite or
 //!   lies outside the grid.
-//! - **Visual misses**: on entering a cell after the start, the objects of its PVS the
-//!   client does not hold (none for SNP, whose area always holds every neighbour).
+//! - **Visual misses**: at each position after the start, the objects of the current
+//!   cell's PVS not on hand before that position's transaction. With answers at once
+//!   they arise only on entering a cell (none for SNP, whose area always holds every
+//!   neighbour).
 //! - **When the client looks**: once per position of the route, i.e. per step (the
 //!   thesis checks before every frame; between steps the position does not change).
 //! - **Cache size**: 9 entries as in the thesis; it may be set larger, never smaller,
@@ -52,15 +57,17 @@ mod cache;
 mod client;
 mod delta;
 mod grid;
+mod lanp;
 mod pbnp;
 mod snp;
 mod source;
 mod stored;
 
-pub use area::{Area, PrefetchArea};
+pub use area::{Area, Observed, PrefetchArea};
 pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
 pub use client::{PvsClient, StepOutcome, Transaction};
 pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
+pub use lanp::{Lanp, DEFAULT_TURN};
 pub use pbnp::Pbnp;
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};
