@@ -49,7 +49,7 @@ pub struct WalkArgs {
     fps: f32,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Index cache policy: lru, dplru, dov, dovtime.
+    /// Index cache policy: lru, dplru, dov, dovtime, path.
     #[arg(long)]
     policy: Option<String>,
     /// Index cache size in bytes (0: no index cache).

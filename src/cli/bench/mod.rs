@@ -67,7 +67,7 @@ enum Experiment {
     ViewCulling(view_culling::ViewCullingArgs),
     /// Disk I/Os per query, Optimal against BOX, on the five motion patterns (Table 4.1).
     Patterns(patterns::PatternsArgs),
-    /// Index cache hit rate against cache size: LRU, DPLRU and Belady (Fig. 4.18).
+    /// Index cache hit rate against cache size: LRU, DPLRU, the path policy and Belady (Fig. 4.18).
     IndexCache(index_cache::IndexCacheArgs),
     /// The normal and fast walks over HTTP through a loopback link of set round trip
     /// and bandwidth, never waiting on a read, beside the local walks: frames over 50

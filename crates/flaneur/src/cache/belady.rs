@@ -23,7 +23,7 @@ use super::trace::Trace;
 /// use flaneur::cache::{belady_replay, Access, Hint, Lru, Trace};
 /// use flaneur::geom::Aabb;
 /// let at = |page| Access { page, hint: Hint::UNKNOWN, query: Aabb::EMPTY, search: 0 };
-/// let t = Trace { accesses: [1, 2, 3, 1, 2, 3, 1, 2, 3].map(at).to_vec() };
+/// let t = Trace { accesses: [1, 2, 3, 1, 2, 3, 1, 2, 3].map(at).to_vec(), ..Default::default() };
 /// let best = belady_replay(&t, 2);
 /// assert_eq!(t.replay(Box::new(Lru::default()), 2).hits, 0); // LRU thrashes
 /// assert_eq!(best.hits, 4); // keeps 1 and 2, never caches 3
@@ -85,6 +85,7 @@ mod tests {
                     search: 0,
                 })
                 .collect(),
+            ..Default::default()
         }
     }
 

@@ -7,6 +7,7 @@ use std::collections::HashMap;
 
 use super::policy::{Hint, Policy};
 use super::stats::CacheStats;
+use super::Lookahead;
 use crate::geom::Aabb;
 
 /// Resident entries, their policy and counts: the pool's logic, with values `V`
@@ -81,6 +82,10 @@ impl<V> Frames<V> {
     pub(super) fn end_search(&mut self) {
         self.searches += 1;
         self.policy.end_search();
+    }
+
+    pub(super) fn look_ahead(&mut self, ahead: &Lookahead) {
+        self.policy.look_ahead(ahead);
     }
 
     pub(super) fn searches(&self) -> u64 {

@@ -7,7 +7,10 @@
 //!   the R-tree reads through;
 //! - `frames.rs`: the resident set, policy and counts, shared by the pool and a
 //!   trace's replay;
-//! - `policy/`: the [`Policy`] trait and [`Lru`], [`DpLru`], [`Dov`], [`DovTime`];
+//! - `policy/`: the [`Policy`] trait and [`Lru`], [`DpLru`], [`Dov`], [`DovTime`],
+//!   [`PathPolicy`];
+//! - `lookahead.rs`: [`Lookahead`], a walk's prediction of its next searches, which
+//!   the path policy evicts by;
 //! - `distance.rs`: [`block_distance`], the DIST of §4.2.4;
 //! - `trace.rs`: [`Trace`], recorded accesses, their CSV file and their replay;
 //! - `belady.rs`: [`belady_replay`], Belady's optimal offline replacement, the ceiling of
@@ -44,6 +47,7 @@
 mod belady;
 mod distance;
 mod frames;
+mod lookahead;
 mod policy;
 mod pool;
 mod stats;
@@ -51,9 +55,10 @@ mod trace;
 
 pub use belady::belady_replay;
 pub use distance::block_distance;
+pub use lookahead::Lookahead;
 pub use policy::{
-    policy_by_name, Dov, DovTime, DpLru, Hint, Lru, Policy, DEFAULT_KAPPA, POLICY_NAMES,
+    policy_by_name, Dov, DovTime, DpLru, Hint, Lru, PathPolicy, Policy, DEFAULT_KAPPA, POLICY_NAMES,
 };
 pub use pool::BufferPool;
 pub use stats::CacheStats;
-pub use trace::{Access, Trace};
+pub use trace::{Access, Trace, TracedLookahead};

@@ -24,7 +24,8 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 use super::frames::Frames;
 use super::policy::{Hint, Policy};
 use super::stats::CacheStats;
-use super::trace::{Access, Trace};
+use super::trace::{Access, Trace, TracedLookahead};
+use super::Lookahead;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::store::{NodeHint, PageKind, PageSource, Store};
@@ -37,13 +38,13 @@ struct Frame {
 
 struct Inner {
     frames: Frames<Frame>,
-    trace: Option<Vec<Access>>,
+    trace: Option<Trace>,
 }
 
 impl Inner {
     fn record(&mut self, page: u64, hint: &Hint) {
         if let Some(t) = &mut self.trace {
-            t.push(Access {
+            t.accesses.push(Access {
                 page,
                 hint: *hint,
                 query: self.frames.query(),
@@ -184,17 +185,33 @@ impl<'s> BufferPool<'s> {
         self.lock().frames.clear();
     }
 
-    /// Starts (discarding any earlier record) or stops recording accesses.
-    pub fn set_trace(&self, on: bool) {
-        self.lock().trace = on.then(Vec::new);
+    /// Gives the policy the walk's prediction of its next searches (see
+    /// [`Policy::look_ahead`](crate::cache::Policy::look_ahead)); a trace records it
+    /// where it came among the accesses, so that a replay gives it at the same point.
+    pub fn look_ahead(&self, ahead: &Lookahead) {
+        let mut g = self.lock();
+        g.frames.look_ahead(ahead);
+        let search = g.frames.searches();
+        if let Some(t) = &mut g.trace {
+            t.lookaheads.push(TracedLookahead {
+                at: t.accesses.len(),
+                search,
+                ahead: ahead.clone(),
+            });
+        }
     }
 
-    /// The accesses recorded since the trace was turned on or last taken; recording
-    /// goes on if it was on.
+    /// Starts (discarding any earlier record) or stops recording accesses and
+    /// lookaheads.
+    pub fn set_trace(&self, on: bool) {
+        self.lock().trace = on.then(Trace::default);
+    }
+
+    /// The accesses and lookaheads recorded since the trace was turned on or last
+    /// taken; recording goes on if it was on.
     pub fn take_trace(&self) -> Trace {
         let mut g = self.lock();
-        let accesses = g.trace.as_mut().map(std::mem::take).unwrap_or_default();
-        Trace { accesses }
+        g.trace.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
     /// The byte budget the pool was made with.

@@ -10,7 +10,9 @@
 //! ```
 //!
 //! Floats are written in their shortest exact form (an unknown box is `inf … -inf`),
-//! so a trace reads back equal. Search numbers never decrease.
+//! so a trace reads back equal. Search numbers never decrease. The file holds the
+//! accesses only: a trace read back has no lookaheads, so the path policy replays it
+//! as LRU that keeps the root.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -19,6 +21,7 @@ use std::path::Path;
 use super::frames::Frames;
 use super::policy::{Hint, Policy};
 use super::stats::CacheStats;
+use super::Lookahead;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
@@ -45,11 +48,24 @@ pub struct Access {
     pub search: u64,
 }
 
-/// An access sequence, in order.
+/// A walk's prediction of its next searches, as the pool was given it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TracedLookahead {
+    /// Accesses recorded before it came.
+    pub at: usize,
+    /// Searches the pool had ended before it came.
+    pub search: u64,
+    /// The prediction.
+    pub ahead: Lookahead,
+}
+
+/// An access sequence, in order, with the lookaheads given among the accesses.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trace {
     /// The accesses, in the order they were made.
     pub accesses: Vec<Access>,
+    /// The lookaheads, in the order they were given (`at` never decreases).
+    pub lookaheads: Vec<TracedLookahead>,
 }
 
 impl Trace {
@@ -75,24 +91,37 @@ impl Trace {
     /// Runs `policy` over the sequence in a pool of `capacity_pages` pages, with the
     /// pool's own logic: the same hits, misses and evictions a live pool that started
     /// empty had for the same single-threaded sequence. Between accesses of searches
-    /// `s` and `t`, `t − s` searches end; each access sees its own query box.
+    /// `s` and `t`, `t − s` searches end; each access sees its own query box; each
+    /// lookahead is given where it came, after the searches that had ended by then.
     ///
     /// ```
     /// use flaneur::cache::{Access, Hint, Lru, Trace};
     /// use flaneur::geom::Aabb;
     /// let at = |page| Access { page, hint: Hint::UNKNOWN, query: Aabb::EMPTY, search: 0 };
-    /// let t = Trace { accesses: [1, 2, 1, 3, 2].map(at).to_vec() };
+    /// let t = Trace { accesses: [1, 2, 1, 3, 2].map(at).to_vec(), ..Default::default() };
     /// let s = t.replay(Box::new(Lru::default()), 2);
     /// assert_eq!((s.hits, s.misses, s.evictions), (1, 4, 2));
     /// ```
     pub fn replay(&self, policy: Box<dyn Policy>, capacity_pages: usize) -> CacheStats {
         let mut frames: Frames<()> = Frames::new(policy, capacity_pages);
-        let mut search = self.accesses.first().map_or(0, |a| a.search);
-        for a in &self.accesses {
-            while search < a.search {
+        let first = |a: Option<u64>, l: Option<u64>| a.into_iter().chain(l).min().unwrap_or(0);
+        let mut search = first(
+            self.accesses.first().map(|a| a.search),
+            self.lookaheads.first().map(|l| l.search),
+        );
+        let end_until = |frames: &mut Frames<()>, search: &mut u64, to: u64| {
+            while *search < to {
                 frames.end_search();
-                search += 1;
+                *search += 1;
             }
+        };
+        let mut lookaheads = self.lookaheads.iter().peekable();
+        for (i, a) in self.accesses.iter().enumerate() {
+            while let Some(l) = lookaheads.next_if(|l| l.at <= i) {
+                end_until(&mut frames, &mut search, l.search);
+                frames.look_ahead(&l.ahead);
+            }
+            end_until(&mut frames, &mut search, a.search);
             frames.begin_search(&a.query);
             if frames.peek(a.page).is_some() {
                 frames.hit(a.page, &a.hint);
@@ -182,7 +211,10 @@ impl Trace {
             last = Some(a.search);
             accesses.push(a);
         }
-        Ok(Trace { accesses })
+        Ok(Trace {
+            accesses,
+            lookaheads: Vec::new(),
+        })
     }
 }
 
@@ -264,6 +296,7 @@ mod tests {
                     search: 6,
                 },
             ],
+            lookaheads: Vec::new(),
         }
     }
 
@@ -343,6 +376,7 @@ mod tests {
         };
         let t = Trace {
             accesses: vec![at(1, 10), at(2, 11), at(3, 12), at(2, 12), at(1, 12)],
+            ..Default::default()
         };
         let s = t.replay(Box::new(DpLru::new(0.0, 0.0, 1.0).unwrap()), 2);
         assert_eq!((s.hits, s.misses, s.evictions), (1, 4, 2));

@@ -5,18 +5,23 @@
 //! needs global knowledge of the tree or of the visibility data. The policies:
 //! - [`Lru`] (`lru.rs`): least recently used, the baseline of Shou 2002 §4.4 and §5.8;
 //! - [`DpLru`] (`dplru.rs`): distance-priority LRU, Shou 2002 §4.2.4;
-//! - [`Dov`], [`DovTime`] (`dov.rs`): the DoV and DoV-Time policies, Shou 2002 §5.7.
+//! - [`Dov`], [`DovTime`] (`dov.rs`): the DoV and DoV-Time policies, Shou 2002 §5.7;
+//! - [`PathPolicy`] (`path.rs`, ours): evicts the node the walk's predicted next
+//!   searches need last, from the [`Lookahead`] the walk gives it.
 //!
 //! Belady's offline optimum is not a `Policy` (it needs the future): see `belady.rs`.
 
 mod dov;
 mod dplru;
 mod lru;
+mod path;
 
 pub use dov::{Dov, DovTime, DEFAULT_KAPPA};
 pub use dplru::DpLru;
 pub use lru::Lru;
+pub use path::PathPolicy;
 
+use super::Lookahead;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::store::NodeHint;
@@ -62,7 +67,8 @@ impl Hint {
 /// A replacement policy over page keys. The pool calls `on_hit` for every access that
 /// finds its page resident, `on_insert` after a missed page was loaded and admitted,
 /// `victim` when it needs room, `on_remove` when it drops an entry itself (`clear`),
-/// and `end_search` after each search. `victim` forgets the key it returns.
+/// `end_search` after each search, and `look_ahead` whenever the walk predicts its next
+/// searches. `victim` forgets the key it returns.
 ///
 /// A policy keeps only keys and what the hints told it; the pool keeps the bytes. Every
 /// access passes its own [`Hint`] (level, tree height, MBR, DoV), so no policy needs
@@ -94,6 +100,9 @@ pub trait Policy: Send {
     fn on_remove(&mut self, key: u64);
     /// A search is over.
     fn end_search(&mut self) {}
+    /// The walk's prediction of its next searches, replacing the one before; a policy
+    /// that does not look ahead ignores it (the default).
+    fn look_ahead(&mut self, _ahead: &Lookahead) {}
     /// Entries the policy tracks (resident pages).
     fn len(&self) -> usize;
     /// Whether the policy tracks no entry.
@@ -109,7 +118,7 @@ impl std::fmt::Debug for dyn Policy + '_ {
 }
 
 /// The online policies by name, with their defaults: `"lru"`, `"dplru"` (α = β = γ =
-/// 1/3), `"dov"`, `"dovtime"` (κ = [`DEFAULT_KAPPA`]).
+/// 1/3), `"dov"`, `"dovtime"` (κ = [`DEFAULT_KAPPA`]), `"path"` ([`PathPolicy`]).
 ///
 /// ```
 /// let p = flaneur::cache::policy_by_name("dplru").unwrap();
@@ -122,6 +131,7 @@ pub fn policy_by_name(name: &str) -> Result<Box<dyn Policy>> {
         "dplru" => Ok(Box::new(DpLru::default())),
         "dov" => Ok(Box::new(Dov::default())),
         "dovtime" => Ok(Box::new(DovTime::default())),
+        "path" => Ok(Box::new(PathPolicy::default())),
         other => Err(Error::Invalid(format!(
             "unknown cache policy {other:?} (expected one of: {})",
             POLICY_NAMES.join(", ")
@@ -130,7 +140,7 @@ pub fn policy_by_name(name: &str) -> Result<Box<dyn Policy>> {
 }
 
 /// Every name [`policy_by_name`] accepts.
-pub const POLICY_NAMES: [&str; 4] = ["lru", "dplru", "dov", "dovtime"];
+pub const POLICY_NAMES: [&str; 5] = ["lru", "dplru", "dov", "dovtime", "path"];
 
 #[cfg(test)]
 mod tests {

@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
 
-use crate::cache::{policy_by_name, BufferPool};
+use crate::cache::{policy_by_name, BufferPool, Lookahead};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
@@ -34,7 +34,9 @@ use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::mode::receive::receive;
-use crate::walk::review::{summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
+use crate::walk::review::{
+    summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K,
+};
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 
@@ -289,6 +291,9 @@ impl Mode for Review<'_> {
 
         self.collect_prefetch(None, camera.position, buffer, &mut stats)?;
         self.take_refined(buffer, &mut stats)?;
+        if let Some(pool) = self.pool {
+            pool.look_ahead(&self.lookahead(&camera, &fcell, motion));
+        }
         if self.cfg.never_wait {
             self.retrieve_queued(&fcell, &mut stats);
         } else if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
@@ -415,6 +420,27 @@ impl Mode for Review<'_> {
 impl Review<'_> {
     fn disk_cell_around(&self, fcell: &Aabb, center: Vec3) -> Aabb {
         scaled_cell(&self.db.bounds(), fcell, center, self.cfg.sf)
+    }
+
+    /// What the index cache is told of the searches to come, from the motion so far:
+    /// the disk cell a search this frame would ask for, the one a prefetch would ask
+    /// for (around the predicted cell k seconds ahead, §4.2.5), then disk cells around
+    /// the frusta further along the motion, soonest first; and the cells the history
+    /// holds, which a complement search skips.
+    fn lookahead(&self, camera: &Camera, fcell: &Aabb, motion: ViewerMotion) -> Lookahead {
+        let k = self.cfg.prefetch_k.unwrap_or(DEFAULT_K);
+        let mut cells = vec![self.disk_cell_around(fcell, fcell.center()), {
+            let predicted = motion.predicted_cell(camera, fcell, k);
+            self.disk_cell_around(&predicted, predicted.center())
+        }];
+        for step in 2..=LOOKAHEAD_STEPS {
+            let ahead = motion.frustum_cell(camera, k * step as f32);
+            cells.push(self.disk_cell_around(&ahead, ahead.center()));
+        }
+        Lookahead {
+            cells,
+            held: self.history.cells(),
+        }
     }
 
     /// The viewer is now in `cell`, whose objects are all in the buffer.
@@ -673,6 +699,10 @@ impl Review<'_> {
         complete
     }
 }
+
+/// Predicted searches the index cache is told of, each k seconds of motion further
+/// than the one before (the first two: this frame's and the next prefetch's).
+const LOOKAHEAD_STEPS: usize = 4;
 
 /// How far ahead, in seconds of the viewer's motion, a prefetch is started: when the
 /// frustum would leave the disk cell within this time.
