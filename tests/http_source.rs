@@ -549,3 +549,44 @@ fn coarse_levels_over_http_come_in_a_few_round_trips() {
     );
     println!("{rt} round trips together, {slow} one by one");
 }
+
+#[test]
+fn a_second_visit_reads_the_pages_from_the_cache_folder() {
+    let c = city(300, 19);
+    let server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let folder = tempfile::tempdir().unwrap();
+    let opts = HttpOptions {
+        cache_dir: Some(folder.path().to_path_buf()),
+        ..HttpOptions::default()
+    };
+    let local = Database::open(&c.db).unwrap();
+    let want = all_meshes(&local).unwrap();
+    let first = Database::open_url_with(&url, &opts).unwrap();
+    assert_eq!(all_meshes(&first).unwrap(), want);
+    let cold = first.remote_stats().unwrap();
+    drop(first);
+    // Only the open's first round trip (which pins the version) goes to the server.
+    let second = Database::open_url_with(&url, &opts).unwrap();
+    assert_eq!(all_meshes(&second).unwrap(), want);
+    let warm = second.remote_stats().unwrap();
+    assert!(cold.requests > 2, "{cold:?}");
+    assert_eq!((warm.requests, warm.round_trips), (2, 1), "{warm:?}");
+    assert_eq!(warm.pages_fetched, 0);
+    // A new build of the file is another version: its pages are fetched, never mixed.
+    let other = city(300, 20);
+    let staged = c.dir.path().join("staged");
+    std::fs::copy(&other.db, &staged).unwrap();
+    std::fs::rename(&staged, &c.db).unwrap();
+    let third = Database::open_url_with(&url, &opts).unwrap();
+    let new_local = Database::open(&other.db).unwrap();
+    assert_eq!(all_meshes(&third).unwrap(), all_meshes(&new_local).unwrap());
+    assert!(third.remote_stats().unwrap().pages_fetched > 0);
+    // A cache folder that cannot be made is named.
+    let blocked = HttpOptions {
+        cache_dir: Some(c.db.join("not-a-folder")),
+        ..HttpOptions::default()
+    };
+    let err = Database::open_url_with(&url, &blocked).err().unwrap();
+    assert!(err.to_string().contains("cache folder"), "{err}");
+}

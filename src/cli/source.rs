@@ -1,7 +1,7 @@
 //! Where a command reads its database: a file, through a backend, or a URL on any HTTP
 //! server, by byte ranges through a client page cache.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
@@ -18,6 +18,10 @@ pub struct SourceArgs {
     /// For a database given as a URL: the client page cache, in MiB.
     #[arg(long, default_value_t = 256, value_name = "MIB")]
     pub cache_mb: usize,
+    /// For a database given as a URL: keep fetched pages in this folder, so that a
+    /// second visit to the same version of the file reads them there, not over HTTP.
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
 }
 
 impl Default for SourceArgs {
@@ -25,6 +29,7 @@ impl Default for SourceArgs {
         SourceArgs {
             backend: Backend::default(),
             cache_mb: 256,
+            cache_dir: None,
         }
     }
 }
@@ -34,6 +39,7 @@ impl SourceArgs {
     pub fn open(&self, db: &Path) -> Result<Database> {
         let http = HttpOptions {
             cache_bytes: self.cache_mb.saturating_mul(1 << 20),
+            cache_dir: self.cache_dir.clone(),
             ..HttpOptions::default()
         };
         Ok(match db.to_str() {

@@ -305,7 +305,12 @@ impl Store {
         check_length(&path, &header, len, false)?;
         let page_size = header.page_size();
         Ok(Store {
-            source: Box::new(HttpSource::new(connected, page_size, opts)),
+            source: Box::new(HttpSource::new(connected, page_size, opts).map_err(|e| {
+                Error::Io {
+                    path: path.clone(),
+                    source: e,
+                }
+            })?),
             path,
             header,
             page_size,

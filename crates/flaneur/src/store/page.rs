@@ -166,6 +166,22 @@ fn read_u32(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(w)
 }
 
+/// Whether one whole page is intact: written (kind byte not 0), its payload length
+/// within the page, its checksum right. What a cache of raw pages checks before it
+/// trusts one it kept (a hole in a sparse file reads as a blank page).
+pub(crate) fn intact(page: &[u8]) -> bool {
+    if page.len() < PAGE_HEADER_LEN || page[KIND_OFFSET] == 0 {
+        return false;
+    }
+    let len = read_u32(page, LEN_OFFSET) as usize;
+    len <= page.len() - PAGE_HEADER_LEN
+        && read_u32(page, CRC_OFFSET)
+            == page_crc(
+                &page[..CRC_OFFSET],
+                &page[PAYLOAD_OFFSET..PAYLOAD_OFFSET + len],
+            )
+}
+
 /// Checks one whole page (`page.len()` = page size) against its header and the
 /// expected kind, and returns its payload. The error says what is wrong, for
 /// `Error::CorruptPage`.

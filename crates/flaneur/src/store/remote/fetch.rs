@@ -82,6 +82,19 @@ impl Fetcher {
     /// The first round trip: the file's first `head` bytes and its last `tail` bytes (fewer
     /// when the file is shorter), asked for together, pinning the file's version. Returns
     /// the head, the tail with the offset it starts at, and the file's length.
+    /// The version the first answer pinned, as a key for a cache of its pages: its ETag,
+    /// else its Last-Modified; `None` before the open or when the server gave neither.
+    pub(crate) fn version_key(&self) -> Option<String> {
+        let v = self.version.get()?;
+        let tag = v.etag.as_deref().or(v.last_modified.as_deref())?;
+        Some(format!("{tag} {}", v.len))
+    }
+
+    /// The URL read.
+    pub(crate) fn url(&self) -> &str {
+        &self.url
+    }
+
     pub(crate) fn open(&self, head: u64, tail: u64) -> Result<Ends, RemoteError> {
         self.counters.round_trips.fetch_add(1, Ordering::Relaxed);
         let (first, last) = thread::scope(|s| {

@@ -8,17 +8,20 @@
 //!   for, of the version first opened: its ETag pinned and sent back as `If-Match`),
 //!   retried with backoff when the connection fails; several in flight at once;
 //! - `page_cache.rs`: the client's page cache, bounded in bytes;
+//! - `disk_cache.rs`: the optional cache on disk, one sparse file per version of a file;
 //! - `source.rs`: the page source the store reads through: cached pages, missing runs
 //!   coalesced into one request each.
 //!
 //! Pages come back as raw bytes; the store checks each one's checksum exactly as it does
 //! for a local file, so a proxy that garbles a byte is caught like a bad disk.
 
+mod disk_cache;
 mod fetch;
 mod page_cache;
 mod source;
 
 use std::fmt;
+use std::path::PathBuf;
 use std::time::Duration;
 
 pub(crate) use source::{HttpSource, CHUNK_PAGES};
@@ -52,6 +55,9 @@ pub struct HttpOptions {
     /// file, where a build puts the R-tree's upper levels (its root last): a first
     /// query then waits for one more round trip for its leaves, not one per level.
     pub suffix_bytes: usize,
+    /// A folder to keep fetched pages in, so that a second visit to the same version of
+    /// the file reads them there instead of asking the server; `None` for none.
+    pub cache_dir: Option<PathBuf>,
 }
 
 impl Default for HttpOptions {
@@ -64,6 +70,7 @@ impl Default for HttpOptions {
             parallel: 16,
             prefix_bytes: 64 << 10,
             suffix_bytes: 512 << 10,
+            cache_dir: None,
         }
     }
 }

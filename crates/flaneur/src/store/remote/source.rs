@@ -6,6 +6,7 @@
 use std::io;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::disk_cache::DiskCache;
 use super::fetch::{Ends, Fetcher};
 use super::page_cache::PageCache;
 use super::{HttpOptions, RemoteError, RemoteStats};
@@ -31,6 +32,7 @@ pub(crate) struct HttpSource {
     fetcher: Fetcher,
     page_size: usize,
     cache: PageCache,
+    disk: Option<DiskCache>,
     page_reads: AtomicU64,
     pages_fetched: AtomicU64,
 }
@@ -45,25 +47,65 @@ impl HttpSource {
         Ok(Connected { fetcher, ends })
     }
 
-    /// The source over a connection, its cache seeded with the whole pages it brought.
-    pub(crate) fn new(c: Connected, page_size: usize, opts: &HttpOptions) -> HttpSource {
-        let cache = PageCache::new(opts.cache_bytes, page_size);
+    /// The source over a connection, its cache seeded with the whole pages it brought;
+    /// with `opts.cache_dir`, the cache on disk of this version of the file opened (an
+    /// error when it cannot be).
+    pub(crate) fn new(
+        c: Connected,
+        page_size: usize,
+        opts: &HttpOptions,
+    ) -> io::Result<HttpSource> {
+        let disk = match (&opts.cache_dir, c.fetcher.version_key()) {
+            (Some(dir), Some(version)) => Some(
+                DiskCache::open(dir, c.fetcher.url(), &version, c.ends.len, page_size).map_err(
+                    |e| {
+                        io::Error::new(e.kind(), format!("the cache folder {}: {e}", dir.display()))
+                    },
+                )?,
+            ),
+            _ => None,
+        };
+        let source = HttpSource {
+            fetcher: c.fetcher,
+            page_size,
+            cache: PageCache::new(opts.cache_bytes, page_size),
+            disk,
+            page_reads: AtomicU64::new(0),
+            pages_fetched: AtomicU64::new(0),
+        };
         for (page, bytes) in c.ends.head.chunks_exact(page_size).enumerate() {
-            cache.insert(page as u64, bytes);
+            source.keep(page as u64, bytes);
         }
         let (at, tail) = &c.ends.tail;
         if at % page_size as u64 == 0 {
             let first = at / page_size as u64;
             for (i, bytes) in tail.chunks_exact(page_size).enumerate() {
-                cache.insert(first + i as u64, bytes);
+                source.keep(first + i as u64, bytes);
             }
         }
-        HttpSource {
-            fetcher: c.fetcher,
-            page_size,
-            cache,
-            page_reads: AtomicU64::new(0),
-            pages_fetched: AtomicU64::new(0),
+        Ok(source)
+    }
+
+    /// Keeps a fetched page, in memory and on disk.
+    fn keep(&self, page: u64, bytes: &[u8]) {
+        self.cache.insert(page, bytes);
+        if let Some(disk) = &self.disk {
+            disk.put(page, bytes);
+        }
+    }
+
+    /// Whether page `page` is held without a request: in memory, or on disk (then it is
+    /// brought into memory).
+    fn holds(&self, page: u64, buf: &mut [u8]) -> bool {
+        if self.cache.holds(page) {
+            return true;
+        }
+        match &self.disk {
+            Some(disk) if disk.get(page, buf) => {
+                self.cache.insert(page, buf);
+                true
+            }
+            _ => false,
         }
     }
 
@@ -75,7 +117,7 @@ impl HttpSource {
         for (&(first, count), answer) in runs.iter().zip(answers) {
             let bytes = answer.map_err(|e| pages_error(e, first, count))?;
             for (i, page) in bytes.chunks_exact(self.page_size).enumerate() {
-                self.cache.insert(first + i as u64, page);
+                self.keep(first + i as u64, page);
             }
         }
         Ok(())
@@ -98,6 +140,12 @@ impl RawPageSource for HttpSource {
         if self.cache.copy_out(page, buf) {
             return Ok(());
         }
+        if let Some(disk) = &self.disk {
+            if disk.get(page, buf) {
+                self.cache.insert(page, buf);
+                return Ok(());
+            }
+        }
         self.pages_fetched.fetch_add(1, Ordering::Relaxed);
         let ps = self.page_size as u64;
         let bytes = self
@@ -105,17 +153,18 @@ impl RawPageSource for HttpSource {
             .range(page * ps, ps)
             .map_err(|e| pages_error(e, page, 1))?;
         buf.copy_from_slice(&bytes);
-        self.cache.insert(page, &bytes);
+        self.keep(page, &bytes);
         Ok(())
     }
 
     fn will_read(&self, runs: &[(u64, u64)]) -> io::Result<()> {
         // The missing pages, as runs with short gaps bridged and long runs split.
         let max_pages = (MAX_REQUEST_BYTES / self.page_size as u64).max(1);
+        let mut buf = vec![0u8; self.page_size];
         let mut missing: Vec<u64> = runs
             .iter()
             .flat_map(|&(first, count)| first..first.saturating_add(count))
-            .filter(|&p| !self.cache.holds(p))
+            .filter(|&p| !self.holds(p, &mut buf))
             .collect();
         missing.sort_unstable();
         missing.dedup();
