@@ -241,7 +241,7 @@ pub fn run(
                 let t = Instant::now();
                 let report = review::walk(&db, &path, &cfg.review(), |_| {})?;
                 let took = t.elapsed();
-                let net = db.remote_stats().map(|s| since(&s, &before));
+                let net = db.remote_stats().map(|s| s.since(&before));
                 rows.push(row(pattern, source, &report, took, open_ms, net, page_size));
             }
         }
@@ -252,17 +252,6 @@ pub fn run(
         page_size,
         rows,
     })
-}
-
-fn since(now: &RemoteStats, before: &RemoteStats) -> RemoteStats {
-    RemoteStats {
-        requests: now.requests - before.requests,
-        round_trips: now.round_trips - before.round_trips,
-        bytes: now.bytes - before.bytes,
-        retries: now.retries - before.retries,
-        page_reads: now.page_reads - before.page_reads,
-        pages_fetched: now.pages_fetched - before.pages_fetched,
-    }
 }
 
 fn row(

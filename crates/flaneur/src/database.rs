@@ -437,40 +437,40 @@ impl Database {
     /// # Ok(()) }
     /// ```
     pub fn coarsest_meshes(&self, objects: &[ObjectEntry]) -> Result<Vec<(usize, Mesh)>> {
-        let Some(table) = &self.lod else {
-            let _ = self
-                .store
-                .prefetch(&objects.iter().map(|o| o.mesh).collect::<Vec<_>>());
-            return objects.iter().map(|o| Ok((0, self.mesh(o)?))).collect();
-        };
-        let pages = objects
-            .iter()
-            .filter_map(|o| table.entry_page(&self.store, o.id).transpose())
-            .collect::<Result<Vec<u64>>>()?;
-        let mut pages = pages;
-        pages.dedup();
-        self.store.announce(&pages);
-        let mut entries = Vec::with_capacity(objects.len());
-        let mut bare = Vec::new();
-        for (i, o) in objects.iter().enumerate() {
-            match table.find(&self.store, o.id)? {
-                Some(e) => entries.push(e),
-                None => bare.push(i),
+        let found: Vec<Option<stored::LodEntry>> = match &self.lod {
+            Some(table) => {
+                let mut pages = objects
+                    .iter()
+                    .filter_map(|o| table.entry_page(&self.store, o.id).transpose())
+                    .collect::<Result<Vec<u64>>>()?;
+                pages.dedup();
+                self.store.announce(&pages);
+                objects
+                    .iter()
+                    .map(|o| table.find(&self.store, o.id))
+                    .collect::<Result<_>>()?
             }
-        }
+            None => vec![None; objects.len()],
+        };
+        // Objects without LOD data (a database built without, or inserted after the
+        // build) come at full detail, their meshes asked for together too.
+        let bare: Vec<_> = objects
+            .iter()
+            .zip(&found)
+            .filter(|(_, e)| e.is_none())
+            .map(|(o, _)| o.mesh)
+            .collect();
+        let _ = self.store.prefetch(&bare);
+        let entries: Vec<_> = found.iter().flatten().copied().collect();
         let mut coarse = stored::coarsest_levels(&self.store, &entries)?.into_iter();
-        // Objects without LOD data (inserted after the build) at full detail, in place.
         objects
             .iter()
-            .enumerate()
-            .map(|(i, o)| {
-                if bare.contains(&i) {
-                    Ok((0, self.mesh(o)?))
-                } else {
-                    coarse.next().ok_or_else(|| {
-                        Error::Invalid("a coarse level went missing in the batch".into())
-                    })
-                }
+            .zip(&found)
+            .map(|(o, e)| match e {
+                None => Ok((0, self.mesh(o)?)),
+                Some(_) => coarse.next().ok_or_else(|| {
+                    Error::Invalid("a coarse level went missing in the batch".into())
+                }),
             })
             .collect()
     }

@@ -98,6 +98,18 @@ pub struct RemoteStats {
 }
 
 impl RemoteStats {
+    /// What was spent since `earlier`, a snapshot of the same reader.
+    pub fn since(&self, earlier: &RemoteStats) -> RemoteStats {
+        RemoteStats {
+            requests: self.requests.saturating_sub(earlier.requests),
+            round_trips: self.round_trips.saturating_sub(earlier.round_trips),
+            bytes: self.bytes.saturating_sub(earlier.bytes),
+            retries: self.retries.saturating_sub(earlier.retries),
+            page_reads: self.page_reads.saturating_sub(earlier.page_reads),
+            pages_fetched: self.pages_fetched.saturating_sub(earlier.pages_fetched),
+        }
+    }
+
     /// The share of page reads the client cache answered without a request (1 with no reads).
     pub fn hit_rate(&self) -> f64 {
         if self.page_reads == 0 {

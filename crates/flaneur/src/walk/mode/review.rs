@@ -520,14 +520,11 @@ impl Review<'_> {
             self.in_flight[lane as usize] = None;
             let fetched = match got {
                 Ok(f) => f,
-                // A never-wait walk goes on with what it has; the cell is asked for again
-                // when the viewer still needs it.
-                Err(e @ Error::Remote { .. }) if self.cfg.never_wait => {
-                    self.counts.failed += 1;
-                    self.counts.last_failure = Some(e.to_string());
+                // The cell is asked for again when the viewer still needs it.
+                Err(e) => {
+                    self.go_without(e)?;
                     continue;
                 }
-                Err(e) => return Err(e),
             };
             let took = (fetched.query_ms + fetched.load_ms) / 1e3;
             self.latency_s = Some(self.latency_s.map_or(took, |l| 0.7 * l + 0.3 * took));
@@ -551,6 +548,19 @@ impl Review<'_> {
         Ok(())
     }
 
+    /// A load's error: a never-wait walk goes on past one that failed on the network,
+    /// counting it and keeping its words for the summary; any other ends the walk.
+    fn go_without(&mut self, e: Error) -> Result<()> {
+        match e {
+            Error::Remote { .. } if self.cfg.never_wait => {
+                self.counts.failed += 1;
+                self.counts.last_failure = Some(e.to_string());
+                Ok(())
+            }
+            e => Err(e),
+        }
+    }
+
     /// Puts the full meshes the refining thread has loaded in place of their coarse
     /// levels, where the objects are still held and the budget has room.
     fn take_refined(&mut self, buffer: &mut ObjectBuffer, stats: &mut FrameStats) -> Result<()> {
@@ -560,12 +570,11 @@ impl Review<'_> {
         while let Some(got) = receive(&self.refined_rx, None)? {
             let finer = match got {
                 Ok(f) => f,
-                Err(e @ Error::Remote { .. }) => {
-                    self.counts.failed += 1;
-                    self.counts.last_failure = Some(e.to_string());
+                // The objects stay coarse.
+                Err(e) => {
+                    self.go_without(e)?;
                     continue;
                 }
-                Err(e) => return Err(e),
             };
             for o in finer {
                 stats.refined += usize::from(buffer.refine(o));
