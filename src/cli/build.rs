@@ -9,7 +9,7 @@ use super::bars::Bars;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::progress::{Progress, Silent};
 use flaneur::visibility::{SampleOptions, VisibilityOptions};
-use flaneur::BuildOptions;
+use flaneur::{BuildOptions, WriteOrder};
 
 /// `flaneur build`'s arguments.
 #[derive(clap::Args)]
@@ -58,6 +58,11 @@ pub struct BuildArgs {
     /// vertical and indexed, comma-separated.
     #[arg(long, value_name = "SCHEMES", value_delimiter = ',')]
     hdov: Option<Vec<flaneur::hdov::Scheme>>,
+    /// The order objects' meshes and LODs are written in: `hilbert`, along a Hilbert
+    /// curve over their positions, so that the objects of one cell lie in a few byte
+    /// runs (fewer requests over HTTP), or `input`, as the input lists them.
+    #[arg(long, default_value_t = WriteOrder::default())]
+    order: WriteOrder,
     #[arg(long, short)]
     quiet: bool,
 }
@@ -79,6 +84,7 @@ impl BuildArgs {
             sample_spacing,
             occluder_radius,
             hdov,
+            order,
             quiet,
         } = self;
         if hdov.is_some() && !visibility {
@@ -105,16 +111,18 @@ impl BuildArgs {
                 schemes,
                 ..Default::default()
             }),
+            order,
         };
         let summary = build(&inputs, &out, &opts, !quiet)?;
         println!(
-            "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, {:.1} s",
+            "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, written in {} order, {:.1} s",
             out.display(),
             summary.objects,
             summary.triangles,
             summary.pages,
             summary.bytes as f64 / (1 << 20) as f64,
             summary.height,
+            order,
             summary.seconds
         );
         print_lod_report(summary.lod.as_ref(), summary.bytes);

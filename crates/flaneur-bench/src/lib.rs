@@ -13,7 +13,8 @@
 //! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
-//! database over HTTP through.
+//! database over HTTP through; `layout` counts what the file's order costs a reader
+//! over HTTP.
 
 pub mod cell_size;
 pub mod city_series;
@@ -27,6 +28,7 @@ pub mod hdov_search;
 pub mod hdov_storage;
 pub mod http_walk;
 pub mod index_cache;
+pub mod layout;
 pub mod link;
 pub mod lod_dag;
 pub mod lod_dag_stats;

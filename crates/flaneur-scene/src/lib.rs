@@ -29,6 +29,6 @@ pub use mesh::Mesh;
 pub use obj_write::write_mesh_obj;
 pub use object::{ObjectKind, SceneObject};
 pub use scene_file::{
-    dequantize_normal, quantize_snorm8, SceneReader, SceneSummary, SceneWriter, MAX_INDICES,
-    MAX_VERTICES,
+    dequantize_normal, quantize_snorm8, RecordPos, SceneReader, SceneSummary, SceneWriter,
+    MAX_INDICES, MAX_VERTICES,
 };

@@ -537,61 +537,84 @@ impl SceneReader {
     }
 
     fn decode(&mut self, head: &RecordHead, buf: &[u8]) -> Result<SceneObject, SceneError> {
-        let body = buf.len() - CRC_LEN;
-        let stored = le_u32(buf, body);
-        if crc32fast::hash(&buf[..body]) != stored {
-            return Err(self.corrupt(format!(
-                "record checksum mismatch (id field reads {})",
-                head.id
-            )));
-        }
+        let stored = record_crc(head, buf).map_err(|w| self.corrupt(w))?;
         if let Some(last) = self.last_id {
             if head.id <= last {
                 return Err(self.corrupt(format!("id {} does not follow id {last}", head.id)));
             }
         }
-        let v = head.vertices as usize;
-        let mut at = RECORD_HEAD_LEN;
-        let positions: Vec<[f32; 3]> = buf[at..at + v * POSITION_LEN]
-            .chunks_exact(POSITION_LEN)
-            .map(|p| {
-                let f =
-                    |k: usize| f32::from_le_bytes(p[4 * k..4 * k + 4].try_into().expect("4 bytes"));
-                [f(0), f(1), f(2)]
-            })
-            .collect();
-        at += v * POSITION_LEN;
-        let normals: Vec<[f32; 3]> = buf[at..at + v * NORMAL_LEN]
-            .chunks_exact(NORMAL_LEN)
-            .map(|n| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8]))
-            .collect();
-        at += v * NORMAL_LEN;
-        let indices: Vec<u32> = if head.index_width() == 2 {
-            buf[at..body]
-                .chunks_exact(2)
-                .map(|i| u16::from_le_bytes([i[0], i[1]]) as u32)
-                .collect()
-        } else {
-            buf[at..body]
-                .chunks_exact(4)
-                .map(|i| u32::from_le_bytes([i[0], i[1], i[2], i[3]]))
-                .collect()
-        };
-        let mesh = Mesh {
-            positions,
-            normals,
-            indices,
-        };
-        mesh.validate()
-            .map_err(|w| self.corrupt(format!("invalid mesh: {w}")))?;
-        let kind = ObjectKind::from_u8(head.kind).expect("checked in the head");
+        let object = parse_record(head, buf).map_err(|w| self.corrupt(w))?;
         self.chain.update(&stored.to_le_bytes());
         self.last_id = Some(head.id);
-        Ok(SceneObject {
-            id: head.id,
-            kind,
-            mesh,
-        })
+        Ok(object)
+    }
+
+    /// Where the record [`next`](Iterator::next) reads next starts: with
+    /// [`read_at`](Self::read_at), a way back to it.
+    pub fn position(&self) -> RecordPos {
+        RecordPos {
+            index: self.next,
+            offset: self.pos,
+        }
+    }
+
+    /// Reads, checks and decodes the record at `at` (one [`position`](Self::position)
+    /// gave) without moving the iteration. A build that writes objects in an order of its
+    /// own reads them with this after one pass over the file, the pass that checked the
+    /// file's order and its chain of checksums; this checks the record's own checksum and
+    /// its mesh, and names the object by its place in the file when they fail.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use flaneur_scene::{ObjectKind, SceneObject, SceneReader, SceneWriter};
+    /// let dir = tempfile::tempdir()?;
+    /// let path = dir.path().join("two.scene");
+    /// let mut w = SceneWriter::create(&path)?;
+    /// for id in [4, 9] {
+    ///     w.write(&SceneObject { id, kind: ObjectKind::House, mesh: flaneur_scene::bunny() })?;
+    /// }
+    /// w.finish()?;
+    /// let mut r = SceneReader::open(&path)?;
+    /// let first = r.position();
+    /// let ids: Vec<u64> = r.by_ref().map(|o| o.map(|o| o.id)).collect::<Result<_, _>>()?;
+    /// assert_eq!(ids, [4, 9]);
+    /// assert_eq!(r.read_at(first)?.id, 4); // back to the first record, after the end
+    /// # Ok(()) }
+    /// ```
+    pub fn read_at(&mut self, at: RecordPos) -> Result<SceneObject, SceneError> {
+        let corrupt = |what| SceneError::Corrupt {
+            path: self.path.clone(),
+            object: at.index,
+            what,
+        };
+        if at.offset < HEADER_LEN as u64 || at.offset >= self.records_end {
+            return Err(corrupt(format!(
+                "no record starts at byte {}: records lie in bytes {HEADER_LEN}..{}",
+                at.offset, self.records_end
+            )));
+        }
+        let io = |e| SceneError::io(&self.path, e);
+        self.input.seek(SeekFrom::Start(at.offset)).map_err(io)?;
+        let mut head_bytes = [0u8; RECORD_HEAD_LEN];
+        let read = self.input.read_exact(&mut head_bytes).map_err(io);
+        let head = RecordHead::parse(&head_bytes);
+        let checked =
+            read.and_then(|()| head.check(self.records_end - at.offset).map_err(&corrupt));
+        let mut buf = std::mem::take(&mut self.buf);
+        let result = checked.and_then(|()| {
+            buf.clear();
+            buf.extend_from_slice(&head_bytes);
+            buf.resize(head.len() as usize, 0);
+            self.input
+                .read_exact(&mut buf[RECORD_HEAD_LEN..])
+                .map_err(io)?;
+            record_crc(&head, &buf).map_err(&corrupt)?;
+            parse_record(&head, &buf).map_err(corrupt)
+        });
+        self.buf = buf;
+        // Back to where the iteration was, whatever happened above.
+        self.input.seek(SeekFrom::Start(self.pos)).map_err(io)?;
+        result
     }
 
     /// The checks after the last record: it ends where the trailer starts, and the chain
@@ -612,6 +635,72 @@ impl SceneReader {
         }
         Ok(())
     }
+}
+
+/// Where one record of a scene file starts: its place among the records and its byte
+/// offset. [`SceneReader::position`] gives it and [`SceneReader::read_at`] goes back to it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RecordPos {
+    /// The record's place in the file, from 0.
+    pub index: u64,
+    /// The byte offset of its first byte.
+    pub offset: u64,
+}
+
+/// The record's stored checksum, once it matches the bytes before it.
+fn record_crc(head: &RecordHead, buf: &[u8]) -> Result<u32, String> {
+    let body = buf.len() - CRC_LEN;
+    let stored = le_u32(buf, body);
+    if crc32fast::hash(&buf[..body]) != stored {
+        return Err(format!(
+            "record checksum mismatch (id field reads {})",
+            head.id
+        ));
+    }
+    Ok(stored)
+}
+
+/// The object a checked record holds, its mesh validated.
+fn parse_record(head: &RecordHead, buf: &[u8]) -> Result<SceneObject, String> {
+    let body = buf.len() - CRC_LEN;
+    let v = head.vertices as usize;
+    let mut at = RECORD_HEAD_LEN;
+    let positions: Vec<[f32; 3]> = buf[at..at + v * POSITION_LEN]
+        .chunks_exact(POSITION_LEN)
+        .map(|p| {
+            let f = |k: usize| f32::from_le_bytes(p[4 * k..4 * k + 4].try_into().expect("4 bytes"));
+            [f(0), f(1), f(2)]
+        })
+        .collect();
+    at += v * POSITION_LEN;
+    let normals: Vec<[f32; 3]> = buf[at..at + v * NORMAL_LEN]
+        .chunks_exact(NORMAL_LEN)
+        .map(|n| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8]))
+        .collect();
+    at += v * NORMAL_LEN;
+    let indices: Vec<u32> = if head.index_width() == 2 {
+        buf[at..body]
+            .chunks_exact(2)
+            .map(|i| u16::from_le_bytes([i[0], i[1]]) as u32)
+            .collect()
+    } else {
+        buf[at..body]
+            .chunks_exact(4)
+            .map(|i| u32::from_le_bytes([i[0], i[1], i[2], i[3]]))
+            .collect()
+    };
+    let mesh = Mesh {
+        positions,
+        normals,
+        indices,
+    };
+    mesh.validate().map_err(|w| format!("invalid mesh: {w}"))?;
+    let kind = ObjectKind::from_u8(head.kind).expect("checked in the head");
+    Ok(SceneObject {
+        id: head.id,
+        kind,
+        mesh,
+    })
 }
 
 impl Iterator for SceneReader {
@@ -680,5 +769,75 @@ mod tests {
         assert_eq!(HEADER_LEN, 16);
         assert_eq!(RECORD_HEAD_LEN, 18);
         assert_eq!(TRAILER_LEN, 24);
+    }
+
+    /// A scene of three bunnies (ids 10, 11, 12) and where each record starts.
+    fn three(dir: &Path) -> (PathBuf, Vec<RecordPos>) {
+        let path = dir.join("three.scene");
+        let mut w = SceneWriter::create(&path).unwrap();
+        for id in 10..13 {
+            let mesh = crate::bunny();
+            w.write(&SceneObject {
+                id,
+                kind: ObjectKind::House,
+                mesh,
+            })
+            .unwrap();
+        }
+        w.finish().unwrap();
+        let mut r = SceneReader::open(&path).unwrap();
+        let mut at = Vec::new();
+        loop {
+            at.push(r.position());
+            if r.next().transpose().unwrap().is_none() {
+                break;
+            }
+        }
+        at.pop();
+        (path, at)
+    }
+
+    #[test]
+    fn read_at_goes_back_to_any_record_and_leaves_the_iteration_where_it_was() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, at) = three(dir.path());
+        let mut r = SceneReader::open(&path).unwrap();
+        assert_eq!(r.next().unwrap().unwrap().id, 10);
+        assert_eq!(r.read_at(at[2]).unwrap().id, 12);
+        assert_eq!(r.read_at(at[0]).unwrap().id, 10);
+        let rest: Vec<u64> = r.map(|o| o.unwrap().id).collect();
+        assert_eq!(rest, [11, 12]);
+    }
+
+    #[test]
+    fn read_at_names_a_damaged_record_and_refuses_an_offset_outside_the_records() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, at) = three(dir.path());
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[at[1].offset as usize + RECORD_HEAD_LEN + 5] ^= 0x40;
+        std::fs::write(&path, &bytes).unwrap();
+        let mut r = SceneReader::open(&path).unwrap();
+        assert_eq!(r.read_at(at[2]).unwrap().id, 12);
+        match r.read_at(at[1]) {
+            Err(SceneError::Corrupt { object, what, .. }) => {
+                assert_eq!(object, 1);
+                assert!(what.contains("checksum"), "{what}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let past = RecordPos {
+            index: 3,
+            offset: bytes.len() as u64,
+        };
+        assert!(matches!(
+            r.read_at(past),
+            Err(SceneError::Corrupt { object: 3, .. })
+        ));
+        // A position inside a record reads a head that does not add up.
+        let inside = RecordPos {
+            index: 0,
+            offset: at[0].offset + 3,
+        };
+        assert!(r.read_at(inside).is_err());
     }
 }

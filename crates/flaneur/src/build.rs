@@ -21,9 +21,10 @@ use crate::hdov::{build_hdov, HdovOptions, HdovReport};
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
-use crate::scene::{load_obj, Mesh, SceneReader, KIND_IMPORTED};
+use crate::scene::{load_obj, Mesh, SceneObject, SceneReader, KIND_IMPORTED};
 use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
+use crate::write_order::{hilbert_order, WriteOrder};
 
 /// How to build.
 ///
@@ -50,6 +51,10 @@ pub struct BuildOptions {
     /// Build the HDoV-tree over the objects, their LODs and the visibility this way
     /// (it needs `visibility`); `None` builds none.
     pub hdov: Option<HdovOptions>,
+    /// The order objects' meshes and LODs are written in (`--order`): along a Hilbert
+    /// curve over their positions by default, so that a cell's objects lie in few byte
+    /// runs; ids, the index and page counts do not depend on it.
+    pub order: WriteOrder,
 }
 
 impl Default for BuildOptions {
@@ -61,6 +66,7 @@ impl Default for BuildOptions {
             lod: Some(LodOptions::default()),
             visibility: None,
             hdov: None,
+            order: WriteOrder::default(),
         }
     }
 }
@@ -168,13 +174,45 @@ pub fn build_from_scene_with_progress(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
-    let reader = SceneReader::open(scene)?;
+    let mut reader = SceneReader::open(scene)?;
     let total = reader.object_count();
-    let objects = reader.map(|r| {
-        r.map(|o| (o.id, o.kind.as_u8(), o.mesh))
-            .map_err(Error::from)
-    });
-    build(objects, Some(total), db, opts, progress)
+    let unpack = |o: SceneObject| (o.id, o.kind.as_u8(), o.mesh);
+    match opts.order {
+        WriteOrder::Input => {
+            let objects = reader.map(|r| r.map(unpack).map_err(Error::from));
+            build(objects, Some(total), db, opts, progress)
+        }
+        WriteOrder::Hilbert => {
+            // One pass to learn where each object stands (and to check the whole file),
+            // then each record read again where it lies, in the curve's order.
+            let mut places = Vec::with_capacity(total.min(10_000_000) as usize);
+            let mut centres = Vec::with_capacity(places.capacity());
+            loop {
+                let at = reader.position();
+                let Some(object) = reader.next().transpose()? else {
+                    break;
+                };
+                places.push(at);
+                centres.push(ground_centre(&object.mesh));
+                progress.update(Step::Ordering, places.len() as u64, Some(total));
+            }
+            progress.finish(Step::Ordering);
+            let objects = hilbert_order(&centres)
+                .into_iter()
+                .map(move |i| reader.read_at(places[i]).map(unpack).map_err(Error::from));
+            build(objects, Some(total), db, opts, progress)
+        }
+    }
+}
+
+/// The centre of a mesh's box seen from above (x, z); the origin for a mesh with no
+/// vertices, which the build refuses anyway.
+fn ground_centre(mesh: &Mesh) -> [f32; 2] {
+    if mesh.positions.is_empty() {
+        return [0.0; 2];
+    }
+    let (min, max) = mesh.bounds();
+    [(min[0] + max[0]) / 2.0, (min[2] + max[2]) / 2.0]
 }
 
 /// Builds a database from OBJ files: every object or group becomes an object, with
@@ -223,10 +261,15 @@ pub fn build_from_obj_with_progress(
         meshes.extend(load_obj(f)?.into_iter().map(|(_, m)| m));
     }
     let total = meshes.len() as u64;
-    let objects = meshes
-        .into_iter()
-        .enumerate()
-        .map(|(i, m)| Ok((i as u64, KIND_IMPORTED, m)));
+    let order: Vec<usize> = match opts.order {
+        WriteOrder::Input => (0..meshes.len()).collect(),
+        WriteOrder::Hilbert => hilbert_order(&meshes.iter().map(ground_centre).collect::<Vec<_>>()),
+    };
+    let mut meshes: Vec<Option<Mesh>> = meshes.into_iter().map(Some).collect();
+    let objects = order.into_iter().map(move |i| {
+        let mesh = meshes[i].take().expect("each index once");
+        Ok((i as u64, KIND_IMPORTED, mesh))
+    });
     build(objects, Some(total), db, opts, progress)
 }
 
@@ -288,6 +331,7 @@ fn build(
     }
     let visibility = match &opts.visibility {
         Some(v) => {
+            kept.sort_unstable_by_key(|(id, _)| *id);
             let report = store_visibility(&mut store, &kept, v, progress)?;
             kinds.visibility = report.pages;
             Some(report)
@@ -295,6 +339,9 @@ fn build(
         None => None,
     };
     drop(kept);
+    // What follows sees the objects in id order, whatever order they were written in,
+    // so that the index (and the HDoV-tree) are the same for every write order.
+    entries.sort_unstable_by_key(|e| e.id);
     let objects = entries.len() as u64;
     let hdov = match &opts.hdov {
         Some(h) => Some(build_hdov(&mut store, entries.clone(), h, progress)?),

@@ -46,6 +46,7 @@ pub mod scene;
 pub mod store;
 pub mod visibility;
 pub mod walk;
+mod write_order;
 
 pub use build::{
     build_from_obj, build_from_obj_with_progress, build_from_scene, build_from_scene_with_progress,
@@ -55,6 +56,7 @@ pub use database::{Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};
 pub use rtree::{History, ObjectEntry, QueryResult};
 pub use store::Backend;
+pub use write_order::WriteOrder;
 
 /// The README's examples, compiled as doc tests so they stay true.
 #[doc = include_str!("../../../README.md")]

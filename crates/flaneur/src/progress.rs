@@ -6,6 +6,9 @@
 /// A step of a long job whose progress is reported.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Step {
+    /// A build reading its scene once to learn where each object stands, before it
+    /// writes them in their order along the curve; counted in objects.
+    Ordering,
     /// A build writing objects (their meshes and LODs); counted in objects.
     Objects,
     /// A build precomputing visibility; counted in viewcells.
@@ -24,7 +27,7 @@ impl Step {
     /// What the step counts, in the plural: "objects", "cells".
     pub fn unit(self) -> &'static str {
         match self {
-            Step::Objects => "objects",
+            Step::Ordering | Step::Objects => "objects",
             Step::Visibility => "cells",
             Step::HdovLods => "nodes",
             Step::HdovCells => "cells",
@@ -36,6 +39,7 @@ impl Step {
     /// A short name for the step: "building", "visibility".
     pub fn name(self) -> &'static str {
         match self {
+            Step::Ordering => "ordering",
             Step::Objects => "building",
             Step::Visibility => "visibility",
             Step::HdovLods => "HDoV LODs",

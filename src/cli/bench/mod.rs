@@ -10,6 +10,7 @@ mod hdov_search;
 mod hdov_storage;
 mod http;
 mod index_cache;
+mod layout;
 mod lod_dag;
 mod lod_parallel;
 mod lod_refine;
@@ -74,6 +75,11 @@ enum Experiment {
     /// ms, visual misses, time to the first complete frame, requests and bytes per
     /// second, bytes moved over bytes used, cache hit rate (ours).
     Http(http::HttpArgs),
+    /// The same city in files of different object orders (`build --order`), served over
+    /// HTTP and asked the same range queries from cold clients: pages, requests, round
+    /// trips and bytes per query for the query, the coarse levels and the full meshes
+    /// (ours).
+    Layout(layout::LayoutArgs),
     /// Pages read by BOX against CSearch along a walk of overlapping disk cells; then
     /// REVIEW walks: frame time and variance against cell size, Optimal / NC / NP / BOX
     /// (Fig. 4.19, 4.20), time per frame, Optimal against BOX (Fig. 4.21), and search
@@ -112,6 +118,7 @@ impl BenchArgs {
             Experiment::Patterns(a) => a.run(),
             Experiment::IndexCache(a) => a.run(),
             Experiment::Http(a) => a.run(),
+            Experiment::Layout(a) => a.run(),
             Experiment::Csearch(a) => a.run(),
             Experiment::LodDag(a) => a.run(),
             Experiment::LodParallel(a) => a.run(),

@@ -6,8 +6,8 @@ mod mesh_codec;
 mod obj;
 
 pub use flaneur_scene::{
-    bunny, write_mesh_obj, Mesh, ObjectKind, SceneError, SceneObject, SceneReader, SceneSummary,
-    SceneWriter,
+    bunny, write_mesh_obj, Mesh, ObjectKind, RecordPos, SceneError, SceneObject, SceneReader,
+    SceneSummary, SceneWriter,
 };
 pub(crate) use mesh_codec::{decode_mesh, encode_mesh};
 pub use obj::load_obj;
