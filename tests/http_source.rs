@@ -137,6 +137,77 @@ fn a_walk_over_http_reads_what_the_local_walk_reads() {
     assert_eq!(figures(&a), figures(&b));
 }
 
+/// Plays a path and keeps each frame's network figures, as the window's HUD gets them.
+struct Recorder<'p> {
+    path: &'p flaneur::walk::path::CameraPath,
+    remote: Vec<Option<flaneur::store::RemoteStats>>,
+}
+
+impl flaneur::walk::FrameSink for Recorder<'_> {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &flaneur::geom::Camera,
+        _: &flaneur::walk::ObjectBuffer,
+        _: &mut flaneur::walk::Selection<'_>,
+    ) -> flaneur::Result<()> {
+        Ok(())
+    }
+}
+
+impl flaneur::walk::Viewer for Recorder<'_> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
+        Ok(self.path.poses.get(frame).cloned())
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.remote.push(figures.remote);
+    }
+}
+
+#[test]
+fn each_frame_over_http_reports_the_client_cache() {
+    let c = city(200, 5);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    let remote = Database::open_url(&server.url("city.flaneur")).unwrap();
+    let path = motion::generate(&local.bounds(), Motion::Normal, 60, 30.0, 2).unwrap();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let mut here = Recorder {
+        path: &path,
+        remote: Vec::new(),
+    };
+    review::walk_live(&local, &cfg, |_| {}, &mut here).unwrap();
+    assert_eq!(here.remote.len(), 60);
+    assert!(
+        here.remote.iter().all(Option::is_none),
+        "a local file has no network figures"
+    );
+    let mut there = Recorder {
+        path: &path,
+        remote: Vec::new(),
+    };
+    review::walk_live(&remote, &cfg, |_| {}, &mut there).unwrap();
+    let seen: Vec<_> = there
+        .remote
+        .iter()
+        .map(|r| r.expect("figures over HTTP"))
+        .collect();
+    assert_eq!(seen.len(), 60);
+    // Cumulative, and the last frame's are the reader's own.
+    assert!(seen.windows(2).all(|w| w[1].page_reads >= w[0].page_reads));
+    let last = seen[59];
+    assert_eq!(Some(last), remote.remote_stats());
+    assert!(
+        last.page_reads > last.pages_fetched && last.pages_fetched > 0,
+        "{last:?}"
+    );
+    assert!((0.0..1.0).contains(&last.hit_rate()));
+}
+
 #[test]
 fn the_cli_takes_a_url_wherever_it_takes_a_database() {
     let c = city(200, 5);

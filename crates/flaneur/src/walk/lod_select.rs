@@ -516,6 +516,11 @@ impl<'db> WalkLods<'db> {
         }
     }
 
+    /// What reading the database over HTTP has cost so far; `None` for a local file.
+    pub(crate) fn remote_stats(&self) -> Option<crate::store::RemoteStats> {
+        self.db.and_then(Database::remote_stats)
+    }
+
     /// The frame's selection of `culled` (the objects of `buffer` in view of `camera`)
     /// as `want` says.
     pub(crate) fn select<'f>(

@@ -118,6 +118,7 @@ pub(crate) fn run<M: Mode + ?Sized>(
         }
         viewer.figures(&FrameFigures {
             lod_pages,
+            remote: lods.remote_stats(),
             ..mode.figures(&frame, &buffer)
         });
         frames.push(frame);

@@ -143,6 +143,9 @@ pub struct FrameFigures {
     /// Objects found unreadable on this frame and left out, each with why (only when
     /// the viewer [skips damaged ones](Viewer::skips_damaged)).
     pub damaged: Vec<String>,
+    /// What reading the database over HTTP has cost so far (its client cache's hit rate
+    /// among it); `None` for a local file.
+    pub remote: Option<crate::store::RemoteStats>,
 }
 
 /// A recorded path played to a sink: the viewer of a walk along a fixed path.
