@@ -661,3 +661,54 @@ fn a_second_visit_reads_the_pages_from_the_cache_folder() {
     let err = Database::open_url_with(&url, &blocked).err().unwrap();
     assert!(err.to_string().contains("cache folder"), "{err}");
 }
+
+#[test]
+fn a_crowd_of_walkers_reads_one_nginx_without_errors() {
+    use flaneur_bench::crowd::{self, CrowdConfig};
+    use flaneur_bench::walk_setup::WalkSetup;
+    let c = city(300, 19);
+    let server = flaneur_bench::nginx::Nginx::start(c.dir.path(), NginxConfig::default()).unwrap();
+    let cfg = CrowdConfig {
+        walk: WalkSetup {
+            frames: 60,
+            fps: 60.0,
+            far: 150.0,
+            pace: Some(8.0),
+            patterns: vec![Motion::Normal, Motion::Fast],
+            ..WalkSetup::default()
+        },
+        walkers: 4,
+        cache_bytes: 16 << 20,
+    };
+    let r = crowd::run(&server.url("city.flaneur"), "nginx", &cfg, || {
+        server.cpu_seconds()
+    })
+    .unwrap();
+    assert_eq!(r.rows.len(), 4);
+    assert_eq!(
+        r.errors(),
+        0,
+        "{:?}",
+        r.rows.iter().map(|w| &w.error).collect::<Vec<_>>()
+    );
+    for (i, w) in r.rows.iter().enumerate() {
+        assert_eq!((w.walker, w.frames), (i, 60));
+        assert_eq!(w.pattern, [Motion::Normal, Motion::Fast][i % 2]);
+        assert_eq!(w.seed, 1 + i as u64);
+        assert!(w.requests > 0 && w.bytes > 0, "{w:?}");
+        assert!(w.p50_ms > 0.0 && w.p50_ms <= w.p99_ms, "{w:?}");
+    }
+    // Every request of every walker is in the merged times, and nothing else.
+    assert_eq!(r.requests, r.rows.iter().map(|w| w.requests).sum::<u64>());
+    assert!(r.p50_ms <= r.p99_ms && r.p99_ms <= r.max_ms);
+    let cpu = r.server_cpu_s.expect("nginx's CPU time is known");
+    assert!(cpu > 0.0 && cpu < r.wall_s * 2.0, "{cpu} s of {}", r.wall_s);
+    assert!(r.client_cpu_s > 0.0);
+    // A URL nothing serves is one clear error, before any walker starts.
+    let gone = crowd::run("http://127.0.0.1:9/none.flaneur", "nobody", &cfg, || None);
+    assert!(
+        matches!(gone, Err(Error::Remote { .. })),
+        "{:?}",
+        gone.err()
+    );
+}

@@ -6,58 +6,17 @@
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::thread;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// The nginx binary: on the PATH, else where Debian puts it.
-fn nginx_binary() -> PathBuf {
-    let on_path = std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths)
-            .map(|d| d.join("nginx"))
-            .find(|p| p.is_file())
-    });
-    on_path
-        .or_else(|| Some(PathBuf::from("/usr/sbin/nginx")).filter(|p| p.is_file()))
-        .expect("nginx is not installed: the network tests need it (.ci/run installs nginx-light)")
-}
+/// nginx serving `root` on 127.0.0.1 (`flaneur_bench::nginx`, which the crowd bench
+/// starts too), a test's failure when it cannot start.
+pub struct Nginx(flaneur_bench::nginx::Nginx);
 
-/// A port nothing listens on now.
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-fn wait_for(port: u16, what: &str) {
-    let start = Instant::now();
-    while TcpStream::connect(("127.0.0.1", port)).is_err() {
-        assert!(
-            start.elapsed() < Duration::from_secs(10),
-            "{what} did not start listening on 127.0.0.1:{port}"
-        );
-        thread::sleep(Duration::from_millis(20));
-    }
-}
-
-/// nginx serving `root` on 127.0.0.1.
-pub struct Nginx {
-    child: Child,
-    port: u16,
-    run: tempfile::TempDir,
-}
-
-/// How nginx is set up.
-#[derive(Clone, Copy, Default)]
-pub struct NginxConfig {
-    /// `max_ranges 0`: every Range request is answered 200 with the whole file.
-    pub no_ranges: bool,
-}
+pub use flaneur_bench::nginx::NginxConfig;
 
 impl Nginx {
     pub fn start(root: &Path) -> Nginx {
@@ -65,56 +24,21 @@ impl Nginx {
     }
 
     pub fn start_with(root: &Path, config: NginxConfig) -> Nginx {
-        let run = tempfile::tempdir().unwrap();
-        let port = free_port();
-        let d = run.path().display();
-        let ranges = if config.no_ranges {
-            "max_ranges 0;"
-        } else {
-            ""
-        };
-        // One process, no privilege drop: the test's own user reads the folder.
-        let conf = format!(
-            "daemon off;\nmaster_process off;\nworker_processes 1;\npid {d}/nginx.pid;\n\
-             error_log {d}/error.log warn;\nevents {{ worker_connections 512; }}\n\
-             http {{\n  access_log off;\n  client_body_temp_path {d}/body;\n  proxy_temp_path {d}/proxy;\n\
-               fastcgi_temp_path {d}/fastcgi;\n  uwsgi_temp_path {d}/uwsgi;\n  scgi_temp_path {d}/scgi;\n\
-               default_type application/octet-stream;\n  keepalive_requests 100000;\n\
-               server {{ listen 127.0.0.1:{port}; root {root}; {ranges} }}\n}}\n",
-            root = root.display()
-        );
-        std::fs::write(run.path().join("nginx.conf"), conf).unwrap();
-        let child = Command::new(nginx_binary())
-            .arg("-p")
-            .arg(run.path())
-            .arg("-e")
-            .arg(run.path().join("error.log"))
-            .arg("-c")
-            .arg(run.path().join("nginx.conf"))
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("nginx could not be started");
-        wait_for(port, "nginx");
-        Nginx { child, port, run }
+        Nginx(
+            flaneur_bench::nginx::Nginx::start(root, config).unwrap_or_else(|e| {
+                panic!("{e}: the network tests need it (.ci/run installs nginx-light)")
+            }),
+        )
     }
 
     /// The URL of `name` in the served folder.
     pub fn url(&self, name: &str) -> String {
-        format!("http://127.0.0.1:{}/{name}", self.port)
+        self.0.url(name)
     }
 
     /// Stops the server now (a server gone mid-walk).
     pub fn stop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-impl Drop for Nginx {
-    fn drop(&mut self) {
-        self.stop();
+        self.0.stop()
     }
 }
 

@@ -14,10 +14,12 @@
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
 //! database over HTTP through; `layout` counts what the file's order costs a reader
-//! over HTTP.
+//! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
+//! starts.
 
 pub mod cell_size;
 pub mod city_series;
+pub mod crowd;
 pub mod csearch;
 pub mod db_size;
 pub mod fidelity;
@@ -36,6 +38,7 @@ pub mod lod_inspect;
 pub mod lod_orbit;
 pub mod lod_parallel;
 pub mod lod_refine;
+pub mod nginx;
 pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;

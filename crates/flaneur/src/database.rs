@@ -11,7 +11,7 @@ use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::Mesh;
-use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, Store};
+use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, RequestTimes, Store};
 use crate::visibility::{CellPvs, TableHead, VisibilityTable};
 
 pub use crate::catalog::KindCounts;
@@ -210,6 +210,12 @@ impl Database {
     /// What reading this database over HTTP has cost so far; `None` for a local file.
     pub fn remote_stats(&self) -> Option<RemoteStats> {
         self.store.remote_stats()
+    }
+
+    /// How long each of this reader's requests over HTTP took (sent to last body byte),
+    /// for p50/p99 figures; `None` for a local file.
+    pub fn remote_request_times(&self) -> Option<RequestTimes> {
+        self.store.remote_request_times()
     }
 
     /// Opens for [`Database::insert`].

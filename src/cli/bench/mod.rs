@@ -2,6 +2,7 @@
 //! configuration from the arguments, runs it in `flaneur_bench`, and hands the report to
 //! [`report::write_report`].
 
+mod crowd;
 mod csearch;
 mod fidelity;
 mod hdov_cache;
@@ -80,6 +81,9 @@ enum Experiment {
     /// trips and bytes per query for the query, the coarse levels and the full meshes
     /// (ours).
     Layout(layout::LayoutArgs),
+    /// Many walkers at once (32 by default) against one nginx on loopback, or any URL:
+    /// errors, bytes per walker, p50/p99 request time, and the server's CPU (ours).
+    Crowd(crowd::CrowdArgs),
     /// Pages read by BOX against CSearch along a walk of overlapping disk cells; then
     /// REVIEW walks: frame time and variance against cell size, Optimal / NC / NP / BOX
     /// (Fig. 4.19, 4.20), time per frame, Optimal against BOX (Fig. 4.21), and search
@@ -119,6 +123,7 @@ impl BenchArgs {
             Experiment::IndexCache(a) => a.run(),
             Experiment::Http(a) => a.run(),
             Experiment::Layout(a) => a.run(),
+            Experiment::Crowd(a) => a.run(),
             Experiment::Csearch(a) => a.run(),
             Experiment::LodDag(a) => a.run(),
             Experiment::LodParallel(a) => a.run(),

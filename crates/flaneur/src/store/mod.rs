@@ -47,7 +47,7 @@ pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
 pub use header::{Header, Segment, DEFAULT_PAGE_SIZE};
 pub use page::{PageKind, PAGE_HEADER_LEN};
-pub use remote::{is_url, HttpOptions, RemoteStats};
+pub use remote::{is_url, HttpOptions, RemoteStats, RequestTimes};
 pub use source::{NodeHint, PageSource};
 
 use backend::{MmapSource, PreadSource, RawPageSource};
@@ -881,6 +881,11 @@ impl Store {
     /// What reading over HTTP has cost so far; `None` for a local file.
     pub fn remote_stats(&self) -> Option<RemoteStats> {
         self.source.remote_stats()
+    }
+
+    /// How long each request over HTTP took so far; `None` for a local file.
+    pub fn remote_request_times(&self) -> Option<RequestTimes> {
+        self.source.request_times()
     }
 
     /// A snapshot of the read counters.

@@ -44,4 +44,9 @@ pub(crate) trait RawPageSource: Send + Sync {
     fn remote_stats(&self) -> Option<crate::store::RemoteStats> {
         None
     }
+
+    /// How long each request took, for a remote source.
+    fn request_times(&self) -> Option<crate::store::RequestTimes> {
+        None
+    }
 }

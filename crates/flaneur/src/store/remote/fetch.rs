@@ -9,13 +9,13 @@
 
 use std::fmt;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use std::thread;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use ureq::http::{HeaderMap, StatusCode};
 
-use super::{HttpOptions, RemoteError, RemoteStats};
+use super::{HttpOptions, RemoteError, RemoteStats, RequestTimes};
 
 /// The version of the file the first answer came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -60,6 +60,7 @@ pub(crate) struct Fetcher {
     opts: HttpOptions,
     version: OnceLock<Version>,
     counters: Counters,
+    times: Mutex<RequestTimes>,
 }
 
 impl Fetcher {
@@ -76,6 +77,7 @@ impl Fetcher {
             opts: opts.clone(),
             version: OnceLock::new(),
             counters: Counters::default(),
+            times: Mutex::new(RequestTimes::default()),
         }
     }
 
@@ -189,12 +191,22 @@ impl Fetcher {
         }
     }
 
+    /// How long each request took so far, from sending it to its body's last byte.
+    pub(crate) fn request_times(&self) -> RequestTimes {
+        self.times.lock().map(|t| t.clone()).unwrap_or_default()
+    }
+
     /// One range, tried again after failures that may pass; its bytes and where they start.
     fn get(&self, span: Span, first: bool) -> Result<(u64, Vec<u8>), RemoteError> {
         let mut wait = self.opts.backoff;
         let mut attempt = 0;
         loop {
-            match self.attempt(span, first) {
+            let started = Instant::now();
+            let answer = self.attempt(span, first);
+            if let Ok(mut t) = self.times.lock() {
+                t.record(started.elapsed());
+            }
+            match answer {
                 Ok(bytes) => return Ok(bytes),
                 Err(Failure::Final(e)) => return Err(e),
                 Err(Failure::Retry(why)) if attempt >= self.opts.retries => {

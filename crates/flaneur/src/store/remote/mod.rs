@@ -9,6 +9,7 @@
 //!   retried with backoff when the connection fails; several in flight at once;
 //! - `page_cache.rs`: the client's page cache, bounded in bytes;
 //! - `disk_cache.rs`: the optional cache on disk, one sparse file per version of a file;
+//! - `request_times.rs`: how long each request took, as a histogram;
 //! - `source.rs`: the page source the store reads through: cached pages, missing runs
 //!   coalesced into one request each.
 //!
@@ -18,12 +19,14 @@
 mod disk_cache;
 mod fetch;
 mod page_cache;
+mod request_times;
 mod source;
 
 use std::fmt;
 use std::path::PathBuf;
 use std::time::Duration;
 
+pub use request_times::RequestTimes;
 pub(crate) use source::{HttpSource, CHUNK_PAGES};
 
 /// How a database is read over HTTP.

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::disk_cache::DiskCache;
 use super::fetch::{Ends, Fetcher};
 use super::page_cache::PageCache;
-use super::{HttpOptions, RemoteError, RemoteStats};
+use super::{HttpOptions, RemoteError, RemoteStats, RequestTimes};
 use crate::store::backend::RawPageSource;
 
 /// The most pages the store announces at once when it reads a long extent.
@@ -189,6 +189,10 @@ impl RawPageSource for HttpSource {
 
     fn cached(&self, page: u64, buf: &mut [u8]) -> bool {
         self.cache.copy_out(page, buf)
+    }
+
+    fn request_times(&self) -> Option<RequestTimes> {
+        Some(self.fetcher.request_times())
     }
 
     fn remote_stats(&self) -> Option<RemoteStats> {
