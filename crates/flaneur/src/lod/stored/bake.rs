@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use rayon::Yield;
 
-use super::chain::encode_chain;
+use super::chain::{encode_chain, head_len};
 use super::table::{encode_table, LodEntry, LodStats, LodTable};
 use crate::error::{Error, Result};
 use crate::lod::dag::{Dag, DagConstruction};
@@ -244,9 +244,10 @@ impl LodWriter {
     }
 
     /// Writes, in order, the LODs of every object before `end`, waiting for those still
-    /// in flight.
+    /// in flight: first the heads of all their chains, side by side, then the rest of
+    /// each object's data.
     fn write_up_to(&mut self, store: &mut Store, end: u64) -> Result<usize> {
-        let mut written = 0;
+        let mut batch = Vec::new();
         while self.next < end {
             let done = match self.ready.remove(&self.next) {
                 Some(done) => done,
@@ -257,10 +258,18 @@ impl LodWriter {
                 }
             };
             self.next += 1;
-            written += 1;
             self.task_seconds += done.task_seconds;
-            self.write(store, done)?;
+            match done.baked {
+                Ok(baked) => batch.push((done.id, done.mesh_extent, done.triangles, baked)),
+                Err(e) => {
+                    self.stats.refused += 1;
+                    self.first_refusal
+                        .get_or_insert_with(|| format!("object {}: {e}", done.id));
+                }
+            }
         }
+        let written = batch.len();
+        self.write_batch(store, batch)?;
         Ok(written)
     }
 
@@ -288,42 +297,56 @@ impl LodWriter {
         }
     }
 
-    fn write(&mut self, store: &mut Store, done: Done) -> Result<()> {
-        let b = match done.baked {
-            Ok(b) => b,
-            Err(e) => {
-                self.stats.refused += 1;
-                self.first_refusal
-                    .get_or_insert_with(|| format!("object {}: {e}", done.id));
-                return Ok(());
+    /// Writes the LODs of a batch of objects, in order: the heads of their chains
+    /// first, so that the coarsest levels of neighbouring objects (the build's order is
+    /// along a space-filling curve) are one run of pages, then each one's chain rest,
+    /// progressive mesh and DAG.
+    fn write_batch(
+        &mut self,
+        store: &mut Store,
+        batch: Vec<(u64, Extent, u32, Baked)>,
+    ) -> Result<()> {
+        let payload = store.payload_size();
+        let mut pages = 0;
+        let mut append = |store: &mut Store, bytes: &[u8]| -> Result<Extent> {
+            if bytes.is_empty() {
+                return Ok(Extent::default());
             }
-        };
-        let mut append = |bytes: &[u8]| -> Result<Extent> {
             let e = store.append_extent(PageKind::Lod, bytes)?;
-            self.stats.pages += e.page_count as u64;
+            pages += e.page_count as u64;
             Ok(e)
         };
-        let chain = match &b.chain {
-            Some(bytes) => append(bytes)?,
-            None => Extent::default(),
-        };
-        let (pm, dag) = match &b.pm_dag {
-            Some((pm, dag)) => (append(pm)?, append(dag)?),
-            None => (Extent::default(), Extent::default()),
-        };
-        self.stats.objects += 1;
-        self.stats.levels += b.levels as u64;
-        self.stats.with_levels += (b.levels > 0) as u64;
-        self.stats.with_pm += b.pm_dag.is_some() as u64;
-        self.entries.push(LodEntry {
-            id: done.id,
-            mesh: done.mesh_extent,
-            chain,
-            pm,
-            dag,
-            triangles: done.triangles,
-            levels: b.levels,
-        });
+        let mut heads = Vec::with_capacity(batch.len());
+        for (_, _, _, b) in &batch {
+            let split = match &b.chain {
+                Some(bytes) => head_len(bytes, payload)?,
+                None => 0,
+            };
+            let chain = b.chain.as_deref().unwrap_or(&[]);
+            heads.push((append(store, &chain[..split])?, split));
+        }
+        for ((id, mesh, triangles, b), (chain, split)) in batch.into_iter().zip(heads) {
+            let chain_rest = append(store, b.chain.as_deref().map_or(&[], |c| &c[split..]))?;
+            let (pm, dag) = match &b.pm_dag {
+                Some((pm, dag)) => (append(store, pm)?, append(store, dag)?),
+                None => (Extent::default(), Extent::default()),
+            };
+            self.stats.objects += 1;
+            self.stats.levels += b.levels as u64;
+            self.stats.with_levels += (b.levels > 0) as u64;
+            self.stats.with_pm += b.pm_dag.is_some() as u64;
+            self.entries.push(LodEntry {
+                id,
+                mesh,
+                chain,
+                chain_rest,
+                pm,
+                dag,
+                triangles,
+                levels: b.levels,
+            });
+        }
+        self.stats.pages += pages;
         Ok(())
     }
 

@@ -342,6 +342,19 @@ impl ChainDirectory {
     }
 }
 
+/// Bytes of the head of the encoded chain `bytes`, stored in pages of `payload` bytes:
+/// its header, directory and coarsest level, rounded up to whole pages, or the whole
+/// chain where that is no shorter. A build stores the head and the rest apart, so that
+/// the heads of neighbouring objects lie side by side (`table`).
+pub(crate) fn head_len(bytes: &[u8], payload: usize) -> Result<usize> {
+    let dir = ChainDirectory::decode(bytes, bytes.len())?;
+    let (offset, length) = dir.level_range(dir.stored_levels())?;
+    Ok((offset + length)
+        .div_ceil(payload.max(1))
+        .saturating_mul(payload)
+        .min(bytes.len()))
+}
+
 /// Decodes a whole chain: its directory and every stored level, level 1 first.
 #[cfg(test)]
 pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
@@ -394,6 +407,25 @@ mod tests {
         assert_eq!(offset, directory_len(coarsest as u64) as usize);
         assert!(dir.level_range(0).is_err());
         assert!(dir.level_range(coarsest + 1).is_err());
+    }
+
+    #[test]
+    fn the_head_ends_on_the_page_that_ends_the_coarsest_level() {
+        let (_, bytes) = chain_of(&crate::scene::bunny());
+        let dir = ChainDirectory::decode(&bytes, bytes.len()).unwrap();
+        let (offset, length) = dir.level_range(dir.stored_levels()).unwrap();
+        let end = offset + length;
+        for payload in [64, 1012, end, end + 1, 4084] {
+            let head = head_len(&bytes, payload).unwrap();
+            assert!(head >= end, "{payload}: the head holds the coarsest level");
+            if head < bytes.len() {
+                assert_eq!(head % payload, 0, "{payload}: whole pages before a rest");
+                assert!(head - end < payload, "{payload}: no page more than needed");
+            }
+        }
+        // A page as long as the chain: one extent, no rest.
+        assert_eq!(head_len(&bytes, bytes.len()).unwrap(), bytes.len());
+        assert!(head_len(&bytes[..10], 1012).is_err());
     }
 
     #[test]

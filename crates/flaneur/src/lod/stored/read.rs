@@ -51,19 +51,79 @@ fn about_at(path: &Path, ext: &Extent, what: &str, e: Error) -> Error {
     }
 }
 
+/// Where a chain's bytes lie: an object's in two extents, its head (the directory and
+/// the coarsest level, in whole pages) and the rest (`table`); an HDoV node's in one.
+/// Read as one run of bytes; a codec's complaint is reported against the head.
+#[derive(Clone, Copy, Debug)]
+struct ChainPlace {
+    head: Extent,
+    rest: Extent,
+}
+
+impl ChainPlace {
+    fn of(e: &LodEntry) -> ChainPlace {
+        ChainPlace {
+            head: e.chain,
+            rest: e.chain_rest,
+        }
+    }
+
+    fn single(ext: &Extent) -> ChainPlace {
+        ChainPlace {
+            head: *ext,
+            rest: Extent::default(),
+        }
+    }
+
+    /// The chain's length in bytes.
+    fn len(&self) -> usize {
+        self.head.byte_len as usize + self.rest.byte_len as usize
+    }
+
+    /// The chain's bytes `start..start + len`, from whichever extents hold them.
+    fn read(&self, store: &Store, start: usize, len: usize) -> Result<Vec<u8>> {
+        let split = self.head.byte_len as usize;
+        let end = start.saturating_add(len);
+        let range = |ext: &Extent, from: usize, to: usize| {
+            store.read_extent_range(ext, PageKind::Lod, from, to - from)
+        };
+        if end <= split {
+            return range(&self.head, start, end);
+        }
+        if start >= split {
+            return range(&self.rest, start - split, end - split);
+        }
+        let mut b = range(&self.head, start, split)?;
+        b.extend(range(&self.rest, 0, end - split)?);
+        Ok(b)
+    }
+
+    /// The file's page that holds page `p` of the chain (the head is whole pages
+    /// whenever a rest follows it: the table checks it).
+    fn page(&self, p: u64) -> u64 {
+        let head_pages = u64::from(self.head.page_count);
+        if p < head_pages {
+            self.head.first_page + p
+        } else {
+            self.rest.first_page + (p - head_pages)
+        }
+    }
+}
+
 /// The head of a chain read so far: its first bytes, whole pages (or the whole chain).
 struct ChainHead {
     dir: ChainDirectory,
     prefix: Vec<u8>,
 }
 
-/// The chain at `ext`'s directory and first pages, `what` naming it in errors.
-fn read_chain(store: &Store, ext: &Extent, what: &str) -> Result<ChainHead> {
-    let total = ext.byte_len as usize;
+/// The chain at `place`'s directory and first pages, `what` naming it in errors.
+fn read_chain(store: &Store, place: &ChainPlace, what: &str) -> Result<ChainHead> {
+    let total = place.len();
     let payload = store.payload_size();
+    let ext = &place.head;
     let read = |start: usize, len: usize| {
-        store
-            .read_extent_range(ext, PageKind::Lod, start, len)
+        place
+            .read(store, start, len)
             .map_err(|err| about(store, ext, what, err))
     };
     // The first page holds the header, usually the directory, often the coarsest level.
@@ -83,7 +143,7 @@ fn read_chain(store: &Store, ext: &Extent, what: &str) -> Result<ChainHead> {
 fn read_chain_head(store: &Store, e: &LodEntry) -> Result<ChainHead> {
     let what = format!("LOD chain of object {}", e.id);
     let ext = &e.chain;
-    let ChainHead { dir, prefix } = read_chain(store, ext, &what)?;
+    let ChainHead { dir, prefix } = read_chain(store, &ChainPlace::of(e), &what)?;
     if dir.object != e.id
         || dir.full_triangles != e.triangles
         || dir.stored_levels() != e.levels as usize
@@ -138,24 +198,27 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
     }
     let head = read_chain_head(store, e)?;
     let what = format!("LOD level {level} of object {}", e.id);
-    chain_level_of(store, &e.chain, &head, level, &what)
+    chain_level_of(store, &ChainPlace::of(e), &head, level, &what)
 }
 
 /// The coarsest stored level of each object of `entries`, with its number: the chains'
-/// first pages asked for together, then the pages their coarsest levels need beyond
-/// them, so that a remote store fetches each step's pages in parallel. Objects with no
-/// coarse level come at full detail (level 0), their meshes asked for together too.
+/// heads asked for together (then any page a coarsest level needs beyond its head,
+/// which a build of this version never leaves), so that a remote store fetches them in
+/// a few parallel runs. Objects with no coarse level come at full detail (level 0),
+/// their meshes asked for together with the heads.
 pub(crate) fn coarsest_levels(store: &Store, entries: &[LodEntry]) -> Result<Vec<(usize, Mesh)>> {
     let (chained, whole): (Vec<&LodEntry>, Vec<&LodEntry>) =
         entries.iter().partition(|e| !e.chain.is_empty());
-    store.announce(
-        &chained
-            .iter()
-            .map(|e| e.chain.first_page)
-            .collect::<Vec<_>>(),
-    );
-    // A failed fetch is the read's to report, naming its page.
-    let _ = store.prefetch(&whole.iter().map(|e| e.mesh).collect::<Vec<_>>());
+    // A chain's head is its directory and its coarsest level, and a batch's heads lie
+    // side by side (`bake`): asked for whole, they come in a few runs, with the meshes
+    // of the objects that have no coarse level. A failed fetch is the read's to report,
+    // naming its page.
+    let heads_and_meshes: Vec<Extent> = chained
+        .iter()
+        .map(|e| e.chain)
+        .chain(whole.iter().map(|e| e.mesh))
+        .collect();
+    let _ = store.prefetch(&heads_and_meshes);
     let heads = chained
         .iter()
         .map(|e| read_chain_head(store, e))
@@ -168,7 +231,8 @@ pub(crate) fn coarsest_levels(store: &Store, entries: &[LodEntry]) -> Result<Vec
         if offset + length > have {
             let first = offset.max(have) / payload;
             let last = (offset + length - 1) / payload;
-            rest.extend((first..=last).map(|p| e.chain.first_page + p as u64));
+            let place = ChainPlace::of(e);
+            rest.extend((first..=last).map(|p| place.page(p as u64)));
         }
     }
     store.announce(&rest);
@@ -183,7 +247,10 @@ pub(crate) fn coarsest_levels(store: &Store, entries: &[LodEntry]) -> Result<Vec
             Some(head) => {
                 let level = e.levels as usize;
                 let what = format!("LOD level {level} of object {}", e.id);
-                Ok((level, chain_level_of(store, &e.chain, &head, level, &what)?))
+                Ok((
+                    level,
+                    chain_level_of(store, &ChainPlace::of(e), &head, level, &what)?,
+                ))
             }
             None => Ok((0, level_mesh(store, e, 0)?)),
         })
@@ -199,32 +266,36 @@ pub(crate) fn chain_level(
     what: &str,
     pick: impl FnOnce(&[LevelInfo]) -> usize,
 ) -> Result<(LevelInfo, Mesh)> {
-    let head = read_chain(store, ext, what)?;
+    let place = ChainPlace::single(ext);
+    let head = read_chain(store, &place, what)?;
     let levels = head.dir.levels();
     let level = pick(&levels[1..]) + 1;
     let info = *levels.get(level).ok_or_else(|| {
         Error::Invalid(format!("{what}: no level {level} of {}", levels.len() - 1))
     })?;
     let what = format!("{what}, level {level}");
-    Ok((info, chain_level_of(store, ext, &head, level, &what)?))
+    Ok((info, chain_level_of(store, &place, &head, level, &what)?))
 }
 
 /// The levels of a group's chain (an HDoV node's internal LODs, 1..=n finest first),
 /// from its directory. `what` names the chain in errors.
 pub(crate) fn chain_levels(store: &Store, ext: &Extent, what: &str) -> Result<Vec<LevelInfo>> {
-    let mut levels = read_chain(store, ext, what)?.dir.levels();
+    let mut levels = read_chain(store, &ChainPlace::single(ext), what)?
+        .dir
+        .levels();
     levels.remove(0);
     Ok(levels)
 }
 
-/// Stored level `level` of the chain at `ext` whose head is read.
+/// Stored level `level` of the chain at `place` whose head is read.
 fn chain_level_of(
     store: &Store,
-    ext: &Extent,
+    place: &ChainPlace,
     head: &ChainHead,
     level: usize,
     what: &str,
 ) -> Result<Mesh> {
+    let ext = &place.head;
     let (offset, length) = head.dir.level_range(level)?;
     let end = offset + length;
     let have = head.prefix.len();
@@ -233,8 +304,8 @@ fn chain_level_of(
     } else {
         // Only the pages the prefix lacks: the finer levels before this one are skipped.
         let from = offset.max(have);
-        let rest = store
-            .read_extent_range(ext, PageKind::Lod, from, end - from)
+        let rest = place
+            .read(store, from, end - from)
             .map_err(|err| about(store, ext, what, err))?;
         let mut b = head.prefix.get(offset..).unwrap_or(&[]).to_vec();
         b.extend(rest);

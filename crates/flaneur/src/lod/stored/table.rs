@@ -33,13 +33,24 @@
 //! entry page k (pages H + k): entries kE .. min(n, (k+1)E), ENTRY_LEN bytes each:
 //!       0      8  object id          u64, ascending over the whole table
 //!       8     16  mesh extent        the object's full mesh (level 0)
-//!      24     16  chain extent       its coarse levels (`chain`), empty when none
-//!      40     16  PM extent          its progressive mesh (`pm::codec`), empty below
+//!      24     16  chain head         its coarse levels (`chain`), empty when none: the
+//!                                    chain's first bytes, up to the end of the coarsest
+//!                                    level's page
+//!      40     16  chain rest         the chain's other bytes (its finer levels), empty
+//!                                    when the head holds them all
+//!      56     16  PM extent          its progressive mesh (`pm::codec`), empty below
 //!                                    the threshold
-//!      56     16  DAG extent         its DAG (`dag::codec`), empty iff the PM's is
-//!      72      4  triangles          u32, of the full mesh
-//!      76      4  levels             u32, coarse levels in the chain (0 iff empty)
+//!      72     16  DAG extent         its DAG (`dag::codec`), empty iff the PM's is
+//!      88      4  triangles          u32, of the full mesh
+//!      92      4  levels             u32, coarse levels in the chain (0 iff empty)
 //! ```
+//!
+//! A chain is stored in two extents so that a build can put the heads of a batch of
+//! objects side by side (`bake`): the coarsest levels of the objects of one cell, all a
+//! distant view needs, are then one run of pages, one request over HTTP. The head ends
+//! on a page boundary (whole pages) whenever a rest follows, so the two extents hold the
+//! chain in as many pages as one would, and page `p` of the chain is page `p` of the
+//! head or page `p - head pages` of the rest.
 //!
 //! An extent is 16 bytes as `store::Extent` encodes it. The store checks each page's
 //! checksum; the table checks what a page cannot: the head's own checksum, the fence
@@ -58,7 +69,7 @@ pub const LOD_SEGMENT: &str = "lodtable";
 /// The first four bytes of the table.
 pub const TABLE_MAGIC: [u8; 4] = *b"FLDT";
 /// The table version this build writes and reads.
-pub const TABLE_VERSION: u32 = 1;
+pub const TABLE_VERSION: u32 = 2;
 
 const MAGIC_OFFSET: usize = 0;
 const VERSION_OFFSET: usize = MAGIC_OFFSET + TABLE_MAGIC.len();
@@ -79,7 +90,8 @@ const FENCE_OFFSET: usize = PM_THRESHOLD_OFFSET + 8;
 const ID_AT: usize = 0;
 const MESH_AT: usize = ID_AT + 8;
 const CHAIN_AT: usize = MESH_AT + Extent::ENCODED_LEN;
-const PM_AT: usize = CHAIN_AT + Extent::ENCODED_LEN;
+const CHAIN_REST_AT: usize = CHAIN_AT + Extent::ENCODED_LEN;
+const PM_AT: usize = CHAIN_REST_AT + Extent::ENCODED_LEN;
 const DAG_AT: usize = PM_AT + Extent::ENCODED_LEN;
 const TRIANGLES_AT: usize = DAG_AT + Extent::ENCODED_LEN;
 const LEVELS_AT: usize = TRIANGLES_AT + 4;
@@ -92,8 +104,11 @@ pub struct LodEntry {
     pub id: u64,
     /// The object's full mesh: level 0.
     pub mesh: Extent,
-    /// Its coarse levels (`chain`); empty when no level is coarser than the full mesh.
+    /// Its coarse levels (`chain`): the chain's head, its first bytes up to the end of
+    /// its coarsest level's page; empty when no level is coarser than the full mesh.
     pub chain: Extent,
+    /// The rest of its chain (its finer levels); empty when the head holds it all.
+    pub chain_rest: Extent,
     /// Its progressive mesh; empty when the object is not above the PM threshold.
     pub pm: Extent,
     /// Its DAG; empty exactly when `pm` is.
@@ -155,7 +170,7 @@ fn shape(n: u64, payload: usize) -> (u64, u64, u64) {
 impl LodEntry {
     fn encode(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.id.to_le_bytes());
-        for e in [self.mesh, self.chain, self.pm, self.dag] {
+        for e in [self.mesh, self.chain, self.chain_rest, self.pm, self.dag] {
             out.extend_from_slice(&e.to_le_bytes());
         }
         out.extend_from_slice(&self.triangles.to_le_bytes());
@@ -167,6 +182,7 @@ impl LodEntry {
             id: u64_at(b, ID_AT),
             mesh: extent_at(b, MESH_AT),
             chain: extent_at(b, CHAIN_AT),
+            chain_rest: extent_at(b, CHAIN_REST_AT),
             pm: extent_at(b, PM_AT),
             dag: extent_at(b, DAG_AT),
             triangles: u32_at(b, TRIANGLES_AT),
@@ -180,6 +196,7 @@ impl LodEntry {
         let extents = [
             ("mesh", self.mesh),
             ("chain", self.chain),
+            ("chain rest", self.chain_rest),
             ("PM", self.pm),
             ("DAG", self.dag),
         ];
@@ -197,6 +214,13 @@ impl LodEntry {
             return Some(format!(
                 "{} levels in a chain of {} bytes",
                 self.levels, self.chain.byte_len
+            ));
+        }
+        let whole_pages = self.chain.byte_len as usize == self.chain.page_count as usize * payload;
+        if !self.chain_rest.is_empty() && (self.chain.is_empty() || !whole_pages) {
+            return Some(format!(
+                "the rest of a chain follows a head of {} bytes, not of whole pages",
+                self.chain.byte_len
             ));
         }
         if self.pm.is_empty() != self.dag.is_empty() {
@@ -429,7 +453,15 @@ impl LodTable {
                 FENCE_OFFSET + CRC_LEN
             )));
         }
-        bytes::magic_and_version(&b, "a LOD table", TABLE_MAGIC, TABLE_VERSION).map_err(corrupt)?;
+        bytes::magic_and_version(&b, "a LOD table", TABLE_MAGIC, TABLE_VERSION).map_err(|w| {
+            // Version 1 kept each chain in one extent; a build of this version splits it.
+            let rebuild = if w.starts_with("version") {
+                ": the database was built by another version of flaneur; build it again"
+            } else {
+                ""
+            };
+            corrupt(format!("{w}{rebuild}"))
+        })?;
         let entries = u64_at(&b, ENTRIES_OFFSET);
         let (per_page, entry_pages, head_pages) = shape(entries, payload);
         let stored = (
@@ -508,7 +540,8 @@ mod tests {
         LodEntry {
             id,
             mesh: ext(first, 3000),
-            chain: ext(first + 3, 1500),
+            chain: ext(first + 3, 1012),
+            chain_rest: ext(first + 4, 500),
             pm: if id.is_multiple_of(7) {
                 ext(first + 5, 2000)
             } else {
@@ -644,5 +677,13 @@ mod tests {
         let mut e = entries[7];
         e.dag = Extent::default();
         assert!(e.problem(s.page_count(), payload).unwrap().contains("DAG"));
+        // A chain's rest behind a head that ends inside a page: the chain's pages would
+        // not be numbered through.
+        let mut e = entries[3];
+        e.chain.byte_len -= 1;
+        assert!(e
+            .problem(s.page_count(), payload)
+            .unwrap()
+            .contains("whole pages"));
     }
 }
