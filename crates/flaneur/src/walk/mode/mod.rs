@@ -3,10 +3,12 @@
 //! and BOX (Shou 2002 §4.1–4.4); `pvs`: the PVS client with SNP or PBNP (Zheng 2007
 //! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
 //! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
-//! answer for REVIEW and VISUAL.
+//! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
+//! the full meshes of the objects it drew coarse.
 
 pub(crate) mod pvs;
 mod receive;
+mod refining;
 pub(crate) mod review;
 pub(crate) mod scene;
 pub(crate) mod visual;

@@ -34,6 +34,7 @@ use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::mode::receive::receive;
+use crate::walk::mode::refining::{refine, Refined, MESHES_ASKED_TOGETHER};
 use crate::walk::review::{
     summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K,
 };
@@ -140,12 +141,12 @@ pub(crate) fn walk_live<'db>(
         ];
         drop(res_tx);
         let (fine_tx, fine_rx) = mpsc::channel::<Vec<ObjectEntry>>();
-        let (refined_tx, refined_rx) = mpsc::channel::<Result<Vec<Loaded>>>();
+        let (refined_tx, refined_rx) = mpsc::channel::<Refined>();
         let refining = cfg.never_wait && db.has_lods();
         if refining {
             scope.spawn(move || {
                 for job in fine_rx {
-                    if refine(db, &job, (now_busy, ended), &refined_tx).is_err() {
+                    if refine(db, &job, left_out, (now_busy, ended), &refined_tx).is_err() {
                         break;
                     }
                 }
@@ -230,7 +231,7 @@ struct Review<'a> {
     res_rx: mpsc::Receiver<(Lane, Result<Fetched>)>,
     /// The refining thread's jobs (objects drawn coarse) and what it loaded.
     fine_tx: Option<mpsc::Sender<Vec<ObjectEntry>>>,
-    refined_rx: mpsc::Receiver<Result<Vec<Loaded>>>,
+    refined_rx: mpsc::Receiver<Refined>,
     /// The loaders' time per search, real seconds, smoothed (never-wait walks).
     latency_s: Option<f64>,
     /// The ids in `buffer` (CSearch only: BOX reloads its whole cell by definition).
@@ -727,38 +728,6 @@ const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
 /// A never-wait walk starts a prefetch this many load times before the viewer would
 /// need it: a load's time varies by the size of the cell's complement.
 const LATENCY_MARGIN: f64 = 2.0;
-
-/// Loads the full meshes of `job`'s objects, a batch at a time, each batch once the
-/// viewer's own lane is idle (`now_busy`), sending each batch's meshes on `tx`; stops
-/// when the walk has `ended`. An error only when no one takes the meshes any more.
-fn refine(
-    db: &Database,
-    job: &[ObjectEntry],
-    (now_busy, ended): (&AtomicBool, &AtomicBool),
-    tx: &mpsc::Sender<Result<Vec<Loaded>>>,
-) -> std::result::Result<(), mpsc::SendError<Result<Vec<Loaded>>>> {
-    for batch in job.chunks(MESHES_ASKED_TOGETHER) {
-        while now_busy.load(Ordering::Relaxed) && !ended.load(Ordering::Relaxed) {
-            std::thread::sleep(Duration::from_millis(2));
-        }
-        if ended.load(Ordering::Relaxed) {
-            return Ok(());
-        }
-        let _ = db
-            .store()
-            .prefetch(&batch.iter().map(|e| e.mesh).collect::<Vec<_>>());
-        let loaded = batch
-            .iter()
-            .map(|e| Ok(Loaded::new(*e, db.mesh(e)?)))
-            .collect::<Result<Vec<_>>>();
-        tx.send(loaded)?;
-    }
-    Ok(())
-}
-
-/// Meshes whose pages a loader asks for in one go: enough for a few full waves of
-/// parallel requests over HTTP, few enough that a walk that ends stops it soon.
-const MESHES_ASKED_TOGETHER: usize = 256;
 
 /// Runs one query and loads the meshes of what it returned (those it had time for, when
 /// `ended` says the walk is over and no one will take them).

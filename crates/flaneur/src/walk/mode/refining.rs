@@ -1,0 +1,140 @@
+//! The refining lane of a never-wait REVIEW walk: the full meshes of objects drawn at
+//! their coarsest level, read on a thread of their own while the viewer's lane is idle,
+//! and handed back to take the coarse levels' place.
+//!
+//! One object's failure costs that object, not its batch: the meshes read are handed
+//! back, and each failure after them on its own. A mesh that cannot be read where the
+//! viewer walks on past damage is left out (the object stays drawn coarse, and is told
+//! of once); any other failure goes back to the walk, which goes on past a network's
+//! and stops at the rest.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Mutex};
+use std::time::Duration;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::rtree::ObjectEntry;
+use crate::walk::sink::LeftOut;
+use crate::walk::Loaded;
+
+/// Meshes whose pages a loader asks for in one go: enough for a few full waves of
+/// parallel requests over HTTP, few enough that a walk that ends stops it soon.
+pub(super) const MESHES_ASKED_TOGETHER: usize = 256;
+
+/// What the lane hands back: a batch's meshes, or one object's failure.
+pub(super) type Refined = Result<Vec<Loaded>>;
+
+/// Reads the full meshes of `job`, a batch at a time, each batch once the viewer's lane
+/// (`now_busy`) is idle, until the walk has `ended`. `Err` when the walk no longer
+/// listens.
+pub(super) fn refine(
+    db: &Database,
+    job: &[ObjectEntry],
+    left_out: Option<&Mutex<LeftOut>>,
+    (now_busy, ended): (&AtomicBool, &AtomicBool),
+    tx: &mpsc::Sender<Refined>,
+) -> std::result::Result<(), mpsc::SendError<Refined>> {
+    for batch in job.chunks(MESHES_ASKED_TOGETHER) {
+        while now_busy.load(Ordering::Relaxed) && !ended.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        if ended.load(Ordering::Relaxed) {
+            return Ok(());
+        }
+        // A failed fetch is the mesh read's to report, naming its page.
+        let _ = db
+            .store()
+            .prefetch(&batch.iter().map(|e| e.mesh).collect::<Vec<_>>());
+        let mut loaded = Vec::with_capacity(batch.len());
+        let mut failed: Vec<Error> = Vec::new();
+        for e in batch {
+            match (db.mesh(e), left_out) {
+                (Ok(mesh), _) => loaded.push(Loaded::new(*e, mesh)),
+                (Err(err @ Error::Remote { .. }), _) | (Err(err), None) => failed.push(err),
+                (Err(err), Some(l)) => {
+                    if let Ok(mut l) = l.lock() {
+                        l.leave_out(e.id, &err);
+                    }
+                }
+            }
+        }
+        tx.send(Ok(loaded))?;
+        for err in failed {
+            tx.send(Err(err))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::BuildOptions;
+
+    /// A small city's database with the first mesh page of one object flipped; the
+    /// objects, and the damaged one.
+    fn damaged() -> (tempfile::TempDir, Database, Vec<ObjectEntry>, ObjectEntry) {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("c.scene");
+        let config = citygen::CityConfig {
+            objects: 40,
+            seed: 5,
+            ..Default::default()
+        };
+        citygen::write_city(&config, &scene).unwrap();
+        let path = dir.path().join("c.flaneur");
+        let opts = BuildOptions {
+            page_size: 1024,
+            lod: None,
+            ..Default::default()
+        };
+        crate::build_from_scene(&scene, &path, &opts).unwrap();
+        let db = Database::open(&path).unwrap();
+        let all = db.range(&db.bounds()).unwrap().objects;
+        let victim = all[all.len() / 2];
+        let offset = victim.mesh.first_page * db.store().page_size() as u64 + 40;
+        drop(db);
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[offset as usize] ^= 0x5a;
+        std::fs::write(&path, bytes).unwrap();
+        (dir, Database::open(&path).unwrap(), all, victim)
+    }
+
+    fn run(db: &Database, job: &[ObjectEntry], left_out: Option<&Mutex<LeftOut>>) -> Vec<Refined> {
+        let (tx, rx) = mpsc::channel();
+        let idle = AtomicBool::new(false);
+        refine(db, job, left_out, (&idle, &idle), &tx).unwrap();
+        drop(tx);
+        rx.into_iter().collect()
+    }
+
+    #[test]
+    fn one_damaged_mesh_costs_that_object_not_its_batch() {
+        let (_dir, db, all, victim) = damaged();
+        // A walk that stops at damage: every other mesh, then the failure, naming the page.
+        let got = run(&db, &all, None);
+        assert_eq!(got.len(), 2, "{got:?}");
+        let loaded = got[0].as_ref().unwrap();
+        assert_eq!(loaded.len(), all.len() - 1);
+        assert!(loaded.iter().all(|o| o.entry.id != victim.id));
+        assert!(
+            matches!(&got[1], Err(Error::CorruptPage { page, .. }) if *page == victim.mesh.first_page),
+            "{:?}",
+            got[1]
+        );
+        // A walk that goes on past damage: the others, and the victim left out, told once.
+        let left = Mutex::new(LeftOut::default());
+        let got = run(&db, &all, Some(&left));
+        assert_eq!(got.len(), 1);
+        assert_eq!(got[0].as_ref().unwrap().len(), all.len() - 1);
+        let mut left = left.into_inner().unwrap();
+        assert!(left.contains(victim.id));
+        let told = left.take_untold();
+        assert_eq!(told.len(), 1);
+        assert!(
+            told[0].contains(&format!("object {} left out", victim.id)),
+            "{told:?}"
+        );
+    }
+}
