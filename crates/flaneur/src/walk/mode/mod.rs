@@ -4,8 +4,10 @@
 //! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
 //! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
-//! the full meshes of the objects it drew coarse.
+//! the full meshes of the objects it drew coarse, and `load_order` the order its loads
+//! come in.
 
+mod load_order;
 pub(crate) mod pvs;
 mod receive;
 mod refining;

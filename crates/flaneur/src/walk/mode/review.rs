@@ -33,6 +33,7 @@ use crate::store::{Extent, IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
+use crate::walk::mode::load_order::{load_order, take_part};
 use crate::walk::mode::receive::receive;
 use crate::walk::mode::refining::{refine, Refined, MESHES_ASKED_TOGETHER};
 use crate::walk::review::{
@@ -66,6 +67,18 @@ struct Request {
     coarse: bool,
     history: Vec<Aabb>,
     epoch: u64,
+    /// Where the viewer stood and looked when it asked (never-wait walks): the objects
+    /// are loaded in view first, nearest first, and handed over a batch at a time.
+    priority: Option<(Vec3, Vec3)>,
+}
+
+/// What a loader thread hands back for a request.
+enum Answer {
+    /// A batch of the request's objects, loaded before the rest (never-wait walks): drawn
+    /// at once, and handed over again with the whole result.
+    Part { epoch: u64, objects: Vec<Loaded> },
+    /// The whole result.
+    Done(Result<Fetched>),
 }
 
 /// A REVIEW walk under `cfg` with the poses coming from `viewer`: the walk session with
@@ -113,7 +126,7 @@ pub(crate) fn walk_live<'db>(
     let now_busy = AtomicBool::new(false);
     let now_busy = &now_busy;
     let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
-        let (res_tx, res_rx) = mpsc::channel::<(Lane, Result<Fetched>)>();
+        let (res_tx, res_rx) = mpsc::channel::<(Lane, Answer)>();
         // One thread per lane, each taking its requests in turn.
         let lane = |on: bool, lane: Lane| -> Option<mpsc::Sender<Request>> {
             if !on {
@@ -125,10 +138,24 @@ pub(crate) fn walk_live<'db>(
                 for req in req_rx {
                     let busy = lane == Lane::Now;
                     now_busy.store(busy, Ordering::Relaxed);
-                    let fetched =
-                        fetch(db, source, cfg.retrieval, &req, (resident, left_out), ended);
+                    let mut part = |objects: &[Loaded]| {
+                        let part = Answer::Part {
+                            epoch: req.epoch,
+                            objects: objects.to_vec(),
+                        };
+                        let _ = res_tx.send((lane, part));
+                    };
+                    let fetched = fetch(
+                        db,
+                        source,
+                        cfg.retrieval,
+                        &req,
+                        (resident, left_out),
+                        ended,
+                        &mut part,
+                    );
                     now_busy.store(false, Ordering::Relaxed);
-                    if res_tx.send((lane, fetched)).is_err() {
+                    if res_tx.send((lane, Answer::Done(fetched))).is_err() {
                         break;
                     }
                 }
@@ -228,7 +255,7 @@ struct Review<'a> {
     /// Each lane's requests, by [`Lane`]: the prefetch's when the walk prefetches, the
     /// viewer's own when it never waits.
     lanes: [Option<mpsc::Sender<Request>>; 2],
-    res_rx: mpsc::Receiver<(Lane, Result<Fetched>)>,
+    res_rx: mpsc::Receiver<(Lane, Answer)>,
     /// The refining thread's jobs (objects drawn coarse) and what it loaded.
     fine_tx: Option<mpsc::Sender<Vec<ObjectEntry>>>,
     refined_rx: mpsc::Receiver<Refined>,
@@ -296,7 +323,7 @@ impl Mode for Review<'_> {
             pool.look_ahead(&self.lookahead(&camera, &fcell, motion));
         }
         if self.cfg.never_wait {
-            self.retrieve_queued(&fcell, &mut stats);
+            self.retrieve_queued(&camera, &fcell, &mut stats);
         } else if self.disk_cell.is_none_or(|d| !contains_ground(&d, &fcell)) {
             stats.queried = true;
             if self.prefetched.is_none()
@@ -318,7 +345,7 @@ impl Mode for Review<'_> {
                 }
                 None => {
                     let cell = self.disk_cell_around(&fcell, fcell.center());
-                    let req = self.request(cell, false);
+                    let req = self.request(cell, false, None);
                     let f = fetch(
                         self.db,
                         self.source,
@@ -326,6 +353,7 @@ impl Mode for Review<'_> {
                         &req,
                         (self.resident, self.left_out),
                         &AtomicBool::new(false),
+                        &mut |_| {},
                     )?;
                     self.counts.sync += 1;
                     stats.sync_query = true;
@@ -454,7 +482,7 @@ impl Review<'_> {
         self.last_prediction = None;
     }
 
-    fn request(&self, cell: Aabb, coarse: bool) -> Request {
+    fn request(&self, cell: Aabb, coarse: bool, priority: Option<(Vec3, Vec3)>) -> Request {
         let mut history = self.history.clone();
         history.filter(&cell);
         Request {
@@ -462,12 +490,20 @@ impl Review<'_> {
             coarse,
             history: history.cells(),
             epoch: self.epoch,
+            priority,
         }
+    }
+
+    /// Where a never-wait walk's loads start from: the camera's eye and aim.
+    fn priority(&self, camera: &Camera) -> Option<(Vec3, Vec3)> {
+        self.cfg
+            .never_wait
+            .then(|| (camera.position, camera.forward()))
     }
 
     /// A never-wait frame's retrieval: enter a loaded cell that holds the frustum, or
     /// queue the viewer's own search for one on its lane and draw what the buffer holds.
-    fn retrieve_queued(&mut self, fcell: &Aabb, stats: &mut FrameStats) {
+    fn retrieve_queued(&mut self, camera: &Camera, fcell: &Aabb, stats: &mut FrameStats) {
         if self.disk_cell.is_some_and(|d| contains_ground(&d, fcell)) {
             return;
         }
@@ -499,7 +535,7 @@ impl Review<'_> {
             return;
         }
         let cell = self.disk_cell_around(fcell, fcell.center());
-        let req = self.request(cell, self.fine_tx.is_some());
+        let req = self.request(cell, self.fine_tx.is_some(), self.priority(camera));
         if tx.send(req).is_ok() {
             self.in_flight[now] = Some(cell);
             self.counts.queued += 1;
@@ -517,8 +553,18 @@ impl Review<'_> {
     ) -> Result<()> {
         let mut wait = wait;
         while self.in_flight.iter().any(Option::is_some) {
-            let Some((lane, got)) = receive(&self.res_rx, wait.take())? else {
+            let Some((lane, answer)) = receive(&self.res_rx, wait.take())? else {
                 return Ok(());
+            };
+            let got = match answer {
+                Answer::Part { epoch, objects } => {
+                    // Counted as loaded with the whole result.
+                    if epoch == self.epoch {
+                        take_part(objects, buffer);
+                    }
+                    continue;
+                }
+                Answer::Done(got) => got,
             };
             self.in_flight[lane as usize] = None;
             let fetched = match got {
@@ -626,7 +672,7 @@ impl Review<'_> {
                 return;
             }
         }
-        let req = self.request(cell, false);
+        let req = self.request(cell, false, self.priority(camera));
         if tx.send(req).is_ok() {
             self.in_flight[ahead_lane] = Some(cell);
             self.last_prediction = Some(center);
@@ -738,6 +784,7 @@ fn fetch(
     req: &Request,
     (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
     ended: &AtomicBool,
+    part: &mut dyn FnMut(&[Loaded]),
 ) -> Result<Fetched> {
     let t = Instant::now();
     let result: QueryResult = match retrieval {
@@ -749,7 +796,7 @@ fn fetch(
     };
     let query_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
-    let wanted: Vec<&ObjectEntry> = result
+    let mut wanted: Vec<&ObjectEntry> = result
         .objects
         .iter()
         .filter(|entry| {
@@ -757,10 +804,20 @@ fn fetch(
                 || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id))))
         })
         .collect();
+    if let Some((eye, aim)) = req.priority {
+        wanted.sort_by(|a, b| load_order(a, eye, aim).total_cmp(&load_order(b, eye, aim)));
+    }
     let mut objects = Vec::with_capacity(wanted.len());
+    // Objects handed over as parts so far (never-wait walks): each batch is drawn while
+    // the next loads; the last comes with the whole result.
+    let mut handed = 0;
     for batch in wanted.chunks(MESHES_ASKED_TOGETHER) {
         if ended.load(Ordering::Relaxed) {
             break;
+        }
+        if req.priority.is_some() && objects.len() > handed {
+            part(&objects[handed..]);
+            handed = objects.len();
         }
         if req.coarse {
             let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
