@@ -4,10 +4,13 @@
 //! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
 //! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
-//! the full meshes of the objects it drew coarse, and `load_order` the order its loads
-//! come in.
+//! the full meshes of the objects it drew coarse, `loader` what its loader threads are asked and
+//! hand back, `load_order` the order their loads come in, and `oracle` the ground truth
+//! of its visual misses.
 
 mod load_order;
+mod loader;
+mod oracle;
 pub(crate) mod pvs;
 mod receive;
 mod refining;

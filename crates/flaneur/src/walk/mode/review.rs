@@ -21,21 +21,22 @@ use std::sync::{mpsc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree as RStar, RTreeObject, AABB};
 
 use crate::cache::{policy_by_name, BufferPool, Lookahead};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
 use crate::prefetch::motion::{MotionTrack, ViewerMotion};
-use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult};
-use crate::store::{Extent, IoStats, PageKind, PageSource};
+use crate::rtree::{History, ObjectEntry};
+use crate::store::{IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::lod_select::WalkLods;
-use crate::walk::mode::load_order::{load_order, take_part};
+use crate::walk::mode::load_order::take_part;
+use crate::walk::mode::loader::{fetch, Answer, Fetched, Request};
+use crate::walk::mode::oracle::Oracle;
 use crate::walk::mode::receive::receive;
-use crate::walk::mode::refining::{refine, Refined, MESHES_ASKED_TOGETHER};
+use crate::walk::mode::refining::{refine, Refined};
 use crate::walk::review::{
     summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K,
 };
@@ -47,38 +48,6 @@ use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 enum Lane {
     Ahead = 0,
     Now = 1,
-}
-
-/// A query's result with its meshes, loaded on the thread that ran it.
-struct Fetched {
-    cell: Aabb,
-    epoch: u64,
-    objects: Vec<Loaded>,
-    /// What CSearch retrieved for the cell (for the history).
-    retrieved: Vec<ObjectEntry>,
-    /// Time in the index, and reading meshes, on the thread that fetched.
-    query_ms: f64,
-    load_ms: f64,
-}
-
-struct Request {
-    cell: Aabb,
-    /// Load each object's coarsest stored level, not its full mesh.
-    coarse: bool,
-    history: Vec<Aabb>,
-    epoch: u64,
-    /// Where the viewer stood and looked when it asked (never-wait walks): the objects
-    /// are loaded in view first, nearest first, and handed over a batch at a time.
-    priority: Option<(Vec3, Vec3)>,
-}
-
-/// What a loader thread hands back for a request.
-enum Answer {
-    /// A batch of the request's objects, loaded before the rest (never-wait walks): drawn
-    /// at once, and handed over again with the whole result.
-    Part { epoch: u64, objects: Vec<Loaded> },
-    /// The whole result.
-    Done(Result<Fetched>),
 }
 
 /// A REVIEW walk under `cfg` with the poses coming from `viewer`: the walk session with
@@ -774,137 +743,3 @@ const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
 /// A never-wait walk starts a prefetch this many load times before the viewer would
 /// need it: a load's time varies by the size of the cell's complement.
 const LATENCY_MARGIN: f64 = 2.0;
-
-/// Runs one query and loads the meshes of what it returned (those it had time for, when
-/// `ended` says the walk is over and no one will take them).
-fn fetch(
-    db: &Database,
-    source: &(dyn PageSource + Sync),
-    retrieval: Retrieval,
-    req: &Request,
-    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
-    ended: &AtomicBool,
-    part: &mut dyn FnMut(&[Loaded]),
-) -> Result<Fetched> {
-    let t = Instant::now();
-    let result: QueryResult = match retrieval {
-        Retrieval::Box => db.tree().range(source, &req.cell)?,
-        Retrieval::CSearch => {
-            db.tree()
-                .csearch_with(source, &req.cell, &req.history, Coverlap::default())?
-        }
-    };
-    let query_ms = t.elapsed().as_secs_f64() * 1e3;
-    let t = Instant::now();
-    let mut wanted: Vec<&ObjectEntry> = result
-        .objects
-        .iter()
-        .filter(|entry| {
-            !(resident.lock().is_ok_and(|r| r.contains(&entry.id))
-                || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id))))
-        })
-        .collect();
-    if let Some((eye, aim)) = req.priority {
-        wanted.sort_by(|a, b| load_order(a, eye, aim).total_cmp(&load_order(b, eye, aim)));
-    }
-    let mut objects = Vec::with_capacity(wanted.len());
-    // Objects handed over as parts so far (never-wait walks): each batch is drawn while
-    // the next loads; the last comes with the whole result.
-    let mut handed = 0;
-    for batch in wanted.chunks(MESHES_ASKED_TOGETHER) {
-        if ended.load(Ordering::Relaxed) {
-            break;
-        }
-        if req.priority.is_some() && objects.len() > handed {
-            part(&objects[handed..]);
-            handed = objects.len();
-        }
-        if req.coarse {
-            let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
-            match db.coarsest_meshes(&entries) {
-                Ok(meshes) => {
-                    objects.extend(
-                        entries
-                            .into_iter()
-                            .zip(meshes)
-                            .map(|(e, (level, mesh))| Loaded::at_level(e, mesh, level)),
-                    );
-                    continue;
-                }
-                Err(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => return Err(e),
-                // Damage somewhere in the batch: read it object by object below, which
-                // names (or, for a viewer that walks on, leaves out) the damaged one.
-                Err(_) => {}
-            }
-        }
-        // A batch's mesh pages asked for at once: over HTTP they come coalesced and in
-        // parallel rather than a round trip each (a local store reads them as it goes).
-        // A failure here is the mesh read's to report, with its page.
-        let extents: Vec<Extent> = batch.iter().map(|e| e.mesh).collect();
-        let _ = db.store().prefetch(&extents);
-        for entry in batch {
-            let mesh = match (db.mesh(entry), left_out) {
-                (Ok(m), _) => m,
-                (Err(e), Some(l)) => {
-                    if let Ok(mut l) = l.lock() {
-                        l.leave_out(entry.id, &e);
-                    }
-                    continue;
-                }
-                (Err(e), None) => return Err(e),
-            };
-            objects.push(Loaded::new(**entry, mesh));
-        }
-    }
-    let load_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok(Fetched {
-        cell: req.cell,
-        epoch: req.epoch,
-        objects,
-        retrieved: result.objects,
-        query_ms,
-        load_ms,
-    })
-}
-
-/// Ground truth for visual misses: every object's box, in memory, outside the counted
-/// store reads.
-struct Oracle {
-    tree: RStar<GeomWithData<Rectangle<[f32; 3]>, u64>>,
-}
-
-impl Oracle {
-    fn new(db: &Database) -> Result<Oracle> {
-        let all = db.range(&db.bounds())?.objects;
-        Ok(Oracle {
-            tree: RStar::bulk_load(
-                all.iter()
-                    .map(|o| {
-                        GeomWithData::new(
-                            Rectangle::from_corners(
-                                o.bounds.min.to_array(),
-                                o.bounds.max.to_array(),
-                            ),
-                            o.id,
-                        )
-                    })
-                    .collect(),
-            ),
-        })
-    }
-
-    fn misses(&self, frustum: &Frustum, fcell: &Aabb, buffer: &ObjectBuffer) -> usize {
-        let q = AABB::from_corners(fcell.min.to_array(), fcell.max.to_array());
-        self.tree
-            .locate_in_envelope_intersecting(&q)
-            .filter(|g| !buffer.contains(g.data))
-            .filter(|g| {
-                let e = g.geom().envelope();
-                frustum.overlaps_aabb(&Aabb {
-                    min: Vec3::from(e.lower()),
-                    max: Vec3::from(e.upper()),
-                })
-            })
-            .count()
-    }
-}

@@ -1,0 +1,147 @@
+//! A REVIEW walk's loader: what a loader thread is asked for (a disk cell, searched with
+//! BOX or CSearch against the history) and what it hands back, the cell's new objects
+//! with their meshes (or, for a never-wait walk on a database with LODs, their coarsest
+//! levels), a batch at a time in the order `load_order` gives when the walk never waits.
+
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use glam::Vec3;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::geom::Aabb;
+use crate::rtree::{Coverlap, ObjectEntry, QueryResult};
+use crate::store::{Extent, PageSource};
+use crate::walk::buffer::Loaded;
+use crate::walk::mode::load_order::load_order;
+use crate::walk::mode::refining::MESHES_ASKED_TOGETHER;
+use crate::walk::review::Retrieval;
+use crate::walk::sink::LeftOut;
+
+/// A query's result with its meshes, loaded on the thread that ran it.
+pub(super) struct Fetched {
+    pub(super) cell: Aabb,
+    pub(super) epoch: u64,
+    pub(super) objects: Vec<Loaded>,
+    /// What CSearch retrieved for the cell (for the history).
+    pub(super) retrieved: Vec<ObjectEntry>,
+    /// Time in the index, and reading meshes, on the thread that fetched.
+    pub(super) query_ms: f64,
+    pub(super) load_ms: f64,
+}
+
+/// What a loader is asked for: a cell, and how to load its objects.
+pub(super) struct Request {
+    pub(super) cell: Aabb,
+    /// Load each object's coarsest stored level, not its full mesh.
+    pub(super) coarse: bool,
+    pub(super) history: Vec<Aabb>,
+    pub(super) epoch: u64,
+    /// Where the viewer stood and looked when it asked (never-wait walks): the objects
+    /// are loaded in view first, nearest first, and handed over a batch at a time.
+    pub(super) priority: Option<(Vec3, Vec3)>,
+}
+
+/// What a loader thread hands back for a request.
+pub(super) enum Answer {
+    /// A batch of the request's objects, loaded before the rest (never-wait walks): drawn
+    /// at once, and handed over again with the whole result.
+    Part { epoch: u64, objects: Vec<Loaded> },
+    /// The whole result.
+    Done(Result<Fetched>),
+}
+
+/// Runs one query and loads the meshes of what it returned (those it had time for, when
+/// `ended` says the walk is over and no one will take them).
+pub(super) fn fetch(
+    db: &Database,
+    source: &(dyn PageSource + Sync),
+    retrieval: Retrieval,
+    req: &Request,
+    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
+    ended: &AtomicBool,
+    part: &mut dyn FnMut(&[Loaded]),
+) -> Result<Fetched> {
+    let t = Instant::now();
+    let result: QueryResult = match retrieval {
+        Retrieval::Box => db.tree().range(source, &req.cell)?,
+        Retrieval::CSearch => {
+            db.tree()
+                .csearch_with(source, &req.cell, &req.history, Coverlap::default())?
+        }
+    };
+    let query_ms = t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let mut wanted: Vec<&ObjectEntry> = result
+        .objects
+        .iter()
+        .filter(|entry| {
+            !(resident.lock().is_ok_and(|r| r.contains(&entry.id))
+                || left_out.is_some_and(|l| l.lock().is_ok_and(|l| l.contains(entry.id))))
+        })
+        .collect();
+    if let Some((eye, aim)) = req.priority {
+        wanted.sort_by(|a, b| load_order(a, eye, aim).total_cmp(&load_order(b, eye, aim)));
+    }
+    let mut objects = Vec::with_capacity(wanted.len());
+    // Objects handed over as parts so far (never-wait walks): each batch is drawn while
+    // the next loads; the last comes with the whole result.
+    let mut handed = 0;
+    for batch in wanted.chunks(MESHES_ASKED_TOGETHER) {
+        if ended.load(Ordering::Relaxed) {
+            break;
+        }
+        if req.priority.is_some() && objects.len() > handed {
+            part(&objects[handed..]);
+            handed = objects.len();
+        }
+        if req.coarse {
+            let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
+            match db.coarsest_meshes(&entries) {
+                Ok(meshes) => {
+                    objects.extend(
+                        entries
+                            .into_iter()
+                            .zip(meshes)
+                            .map(|(e, (level, mesh))| Loaded::at_level(e, mesh, level)),
+                    );
+                    continue;
+                }
+                Err(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => return Err(e),
+                // Damage somewhere in the batch: read it object by object below, which
+                // names (or, for a viewer that walks on, leaves out) the damaged one.
+                Err(_) => {}
+            }
+        }
+        // A batch's mesh pages asked for at once: over HTTP they come coalesced and in
+        // parallel rather than a round trip each (a local store reads them as it goes).
+        // A failure here is the mesh read's to report, with its page.
+        let extents: Vec<Extent> = batch.iter().map(|e| e.mesh).collect();
+        let _ = db.store().prefetch(&extents);
+        for entry in batch {
+            let mesh = match (db.mesh(entry), left_out) {
+                (Ok(m), _) => m,
+                (Err(e), Some(l)) => {
+                    if let Ok(mut l) = l.lock() {
+                        l.leave_out(entry.id, &e);
+                    }
+                    continue;
+                }
+                (Err(e), None) => return Err(e),
+            };
+            objects.push(Loaded::new(**entry, mesh));
+        }
+    }
+    let load_ms = t.elapsed().as_secs_f64() * 1e3;
+    Ok(Fetched {
+        cell: req.cell,
+        epoch: req.epoch,
+        objects,
+        retrieved: result.objects,
+        query_ms,
+        load_ms,
+    })
+}
