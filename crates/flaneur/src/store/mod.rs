@@ -5,11 +5,14 @@
 //! - `page.rs`: every other page's header (kind, length, checksum) and its codec;
 //! - `extent.rs`: blobs stored as runs of contiguous pages;
 //! - `counters.rs`: the read counters, the papers' currency;
+//! - `backend_kind.rs`: [`Backend`], the choice of how a file is read;
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
 //! - `remote/`: a database on any HTTP server, read by byte ranges through a client
 //!   page cache;
 //! - `source.rs`: [`PageSource`], how a traversal reads node pages (from the store or
 //!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
+//! - `append.rs`: the store's writes as a build makes them (pages, extents, overwrites),
+//!   checked;
 //! - `writer.rs`: buffered appends, overwrites and the commit.
 //!
 //! Every read goes through [`Store`], which checks the page (range, kind, length,
@@ -20,7 +23,9 @@
 //! [`Store::finish`]; the header (page 0) is the commit point, written last and
 //! fsynced. Pages past the header's page count are not part of the database.
 
+mod append;
 mod backend;
+mod backend_kind;
 mod counters;
 mod extent;
 pub(crate) mod framing;
@@ -38,10 +43,10 @@ use std::fs::{File, OpenOptions};
 use std::io;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
 use crate::error::{Error, Result};
 
+pub use backend_kind::Backend;
 pub use counters::IoStats;
 pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
@@ -55,68 +60,6 @@ use counters::Counters;
 use header::HeaderError;
 use remote::{HttpSource, RemoteError};
 use writer::Writer;
-
-/// How a store reads pages.
-///
-/// ```
-/// use flaneur::store::Backend;
-/// assert_eq!("mmap".parse::<Backend>().unwrap(), Backend::Mmap);
-/// assert_eq!("direct".parse::<Backend>().unwrap(), Backend::Pread { direct: true });
-/// assert_eq!(Backend::Pread { direct: false }.to_string(), "pread");
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Backend {
-    /// The whole file memory-mapped; pages are copied out of the map. The fast default.
-    #[default]
-    Mmap,
-    /// One positioned read per page; with `direct`, the file is opened with O_DIRECT
-    /// so reads bypass the page cache (cold-cache experiments; not every filesystem
-    /// allows it).
-    Pread {
-        /// Open the file with O_DIRECT.
-        direct: bool,
-    },
-    /// Byte ranges from an HTTP server, through a client page cache: what a store opened
-    /// with [`Store::open_url`] reads with. Not a backend for a file.
-    Http,
-}
-
-impl Backend {
-    /// The name `FromStr` accepts: `"mmap"`, `"pread"` or `"direct"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Backend::Mmap => "mmap",
-            Backend::Pread { direct: false } => "pread",
-            Backend::Pread { direct: true } => "direct",
-            Backend::Http => "http",
-        }
-    }
-}
-
-impl fmt::Display for Backend {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Backend {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Backend> {
-        match s {
-            "mmap" => Ok(Backend::Mmap),
-            "pread" => Ok(Backend::Pread { direct: false }),
-            "direct" => Ok(Backend::Pread { direct: true }),
-            "http" => Err(Error::Invalid(
-                "the http backend is chosen by giving a URL (http://… or https://…) instead of a path"
-                    .to_string(),
-            )),
-            other => Err(Error::Invalid(format!(
-                "unknown storage backend {other:?} (expected mmap, pread or direct)"
-            ))),
-        }
-    }
-}
 
 /// One database file of fixed-size pages: page 0 is the [`Header`], every other page
 /// carries its [`PageKind`], payload length and a checksum verified on every read.
@@ -713,102 +656,6 @@ impl Store {
         out.drain(..skip);
         out.truncate(len);
         Ok(out)
-    }
-
-    fn check_write(&self, kind: PageKind, payload: usize, what: &str) -> Result<()> {
-        if self.writer.is_none() {
-            return Err(self.read_only(what));
-        }
-        if kind == PageKind::Header {
-            return Err(Error::Invalid(format!(
-                "{}: cannot {what} of kind header: only page 0 is the header",
-                self.path.display()
-            )));
-        }
-        if payload > self.payload_size() {
-            return Err(Error::Invalid(format!(
-                "{}: cannot {what}: payload of {payload} bytes exceeds the {} bytes a page holds",
-                self.path.display(),
-                self.payload_size()
-            )));
-        }
-        Ok(())
-    }
-
-    fn write_error(&self, e: io::Error) -> Error {
-        let file = self
-            .writer
-            .as_ref()
-            .and_then(|w| w.temp())
-            .unwrap_or(&self.path);
-        Error::io(file, e)
-    }
-
-    /// Appends one page of `kind` holding `payload` and returns its page id. Errors:
-    /// read-only store, kind `Header`, payload over [`Store::payload_size`].
-    pub fn append_page(&mut self, kind: PageKind, payload: &[u8]) -> Result<u64> {
-        self.check_write(kind, payload.len(), "append a page")?;
-        let id = self.header.page_count();
-        if let Some(w) = self.writer.as_mut() {
-            if let Err(e) = w.append(kind, payload) {
-                return Err(self.write_error(e));
-            }
-        }
-        self.header.page_count += 1;
-        Ok(id)
-    }
-
-    /// Overwrites existing data page `page` with a page of `kind` holding `payload`.
-    /// Errors: read-only store, page 0 or beyond the page count, kind `Header`,
-    /// payload too long.
-    pub fn write_page(&mut self, page: u64, kind: PageKind, payload: &[u8]) -> Result<()> {
-        self.check_write(kind, payload.len(), "write a page")?;
-        if page == 0 || page >= self.header.page_count() {
-            return Err(Error::Invalid(format!(
-                "{}: cannot overwrite page {page}: data pages are 1..{}",
-                self.path.display(),
-                self.header.page_count()
-            )));
-        }
-        if let Some(w) = self.writer.as_mut() {
-            if let Err(e) = w.overwrite(page, kind, payload) {
-                return Err(self.write_error(e));
-            }
-        }
-        Ok(())
-    }
-
-    /// Appends `bytes` as an extent: contiguous pages of `kind`, all full but the
-    /// last. An empty blob takes no pages. Errors: as `append_page`, and blobs over
-    /// 4 GiB - 1 bytes.
-    pub fn append_extent(&mut self, kind: PageKind, bytes: &[u8]) -> Result<Extent> {
-        self.check_write(kind, 0, "append an extent")?;
-        let byte_len = u32::try_from(bytes.len()).map_err(|_| {
-            Error::Invalid(format!(
-                "{}: cannot append an extent of {} bytes: at most {} bytes",
-                self.path.display(),
-                bytes.len(),
-                u32::MAX
-            ))
-        })?;
-        let first_page = self.header.page_count();
-        let payload = self.payload_size();
-        let mut pages = 0u32;
-        for chunk in bytes.chunks(payload) {
-            if let Some(w) = self.writer.as_mut() {
-                if let Err(e) = w.append(kind, chunk) {
-                    return Err(self.write_error(e));
-                }
-            }
-            // Count as we go, so a failed write leaves page_count matching the buffer.
-            self.header.page_count += 1;
-            pages += 1;
-        }
-        Ok(Extent {
-            first_page,
-            page_count: pages,
-            byte_len,
-        })
     }
 
     /// Announces extents about to be read, so that a remote store fetches the pages it
