@@ -107,12 +107,21 @@ fn errors_are_messages_not_panics() {
         vec!["query", "no-such.flaneur", "--box", "0,0,0,1,1,1"],
         vec!["info", c.scene.to_str().unwrap()],
         vec!["build", "no-such.scene", "--out", "x.flaneur"],
+        // A walk that cannot keep the promise is refused, not walked waiting.
+        vec!["walk", db, "--mode", "pvs", "--never-wait"],
+        vec!["walk", db, "--mode", "vsc", "--never-wait"],
     ] {
         let out = flaneur(&args);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains("error"), "{args:?}: {err}");
+        if args.contains(&"--never-wait") {
+            assert!(
+                err.contains("--never-wait is for --mode review and box"),
+                "{err}"
+            );
+        }
     }
 }
 

@@ -171,6 +171,12 @@ impl WalkArgs {
             every,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         });
+        if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box") {
+            bail!(
+                "--never-wait is for --mode review and box; the {mode} walk still waits on its \
+                 reads"
+            );
+        }
         if mode == "pvs" && config.is_none() {
             let rule = match prefetch.as_str() {
                 "snp" => PvsPrefetch::Snp,
