@@ -101,6 +101,21 @@ pub trait LiveViewer: Viewer {
 /// Fig. 6.7's smallest, 20,000 triangles.
 pub const DEFAULT_BUDGET: u64 = 20_000;
 
+/// The REVIEW settings a live walk in `mode` takes: Optimal (BOX for [`ViewMode::Box`]),
+/// unpaced, and over HTTP (`remote`) never waiting on a read, so that a round trip never
+/// holds up a frame at the window (the missing objects are counted and drawn when they
+/// come, coarse levels first).
+fn review_config(mode: ViewMode, remote: bool) -> ReviewConfig {
+    ReviewConfig {
+        pace: None,
+        never_wait: remote,
+        ..ReviewConfig::preset(match mode {
+            ViewMode::Box => Preset::Box,
+            _ => Preset::Optimal,
+        })
+    }
+}
+
 /// Tells `viewer` `what` and shows it mode `to`, which the session walks from now on.
 fn fall_back<V: LiveViewer>(viewer: &mut V, what: String, to: ViewMode) -> ViewMode {
     viewer.report(what);
@@ -114,7 +129,8 @@ fn shown(mode: ViewMode) -> String {
 }
 
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
-/// as [`review::walk_live`] walks them (unpaced: a person sets the pace), PVS as
+/// as [`review::walk_live`] walks them (unpaced: a person sets the pace; over HTTP never
+/// waiting on a read, [`ReviewConfig::never_wait`]), PVS as
 /// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
 /// database without visibility), VISUAL as [`visual::walk_live`] does under the
 /// viewer's [η](LiveViewer::eta) (PVS instead, said so, on a database without the
@@ -130,13 +146,8 @@ fn shown(mode: ViewMode) -> String {
 /// # Ok(()) }
 /// ```
 pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Result<()> {
-    let preset = |m: ViewMode| ReviewConfig {
-        pace: None,
-        ..ReviewConfig::preset(match m {
-            ViewMode::Box => Preset::Box,
-            _ => Preset::Optimal,
-        })
-    };
+    let remote = db.remote_stats().is_some();
+    let preset = |m: ViewMode| review_config(m, remote);
     let mut mode = mode;
     let mut cfg = preset(mode);
     viewer.show_mode(mode);
@@ -248,5 +259,26 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
             None => {}
         }
         viewer.resume();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_live_walk_over_http_never_waits_and_a_local_one_walks_as_the_thesis() {
+        for mode in [ViewMode::Review, ViewMode::Box] {
+            let local = review_config(mode, false);
+            let remote = review_config(mode, true);
+            assert!(!local.never_wait && remote.never_wait, "{mode:?}");
+            assert_eq!((local.pace, remote.pace), (None, None));
+            assert_eq!(local.retrieval, remote.retrieval);
+            assert_eq!(local.index_cache, remote.index_cache);
+            assert_eq!(local.prefetch_k, remote.prefetch_k);
+        }
+        let retrieval = |m| review_config(m, false).retrieval;
+        assert_eq!(retrieval(ViewMode::Box), review::Retrieval::Box);
+        assert_eq!(retrieval(ViewMode::Review), review::Retrieval::CSearch);
     }
 }
