@@ -161,3 +161,64 @@ fn the_build_command_takes_the_order_and_says_which() {
         String::from_utf8_lossy(&bad.stderr)
     );
 }
+
+#[test]
+fn bench_layout_asks_both_files_the_same_queries_over_http() {
+    let a = common::city(300, 6, &BuildOptions::default());
+    let input = a.dir.path().join("input.flaneur");
+    let opts = BuildOptions {
+        order: WriteOrder::Input,
+        ..Default::default()
+    };
+    flaneur::build_from_scene(&a.scene, &input, &opts).unwrap();
+    let out = a.dir.path().join("bench");
+    let (db, other) = (a.db.to_str().unwrap(), input.to_str().unwrap());
+    let ran = common::flaneur(&[
+        "bench",
+        "layout",
+        db,
+        other,
+        "--queries",
+        "6",
+        "--sides",
+        "100,300",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        ran.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    assert!(out.join("layout.md").exists());
+    let csv = std::fs::read_to_string(out.join("layout.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |row: &str, name: &str| -> u64 {
+        let i = head.iter().position(|h| *h == name).unwrap();
+        row.split(',').nth(i).unwrap().parse().unwrap()
+    };
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for pair in rows.chunks(2) {
+        // The same city, the same queries: the same objects and the same pages read.
+        for name in ["objects", "query_reads", "coarse_reads", "full_reads"] {
+            assert_eq!(col(pair[0], name), col(pair[1], name), "{name}: {csv}");
+        }
+        for row in pair {
+            assert!(
+                col(row, "objects") > 0 && col(row, "full_requests") > 0,
+                "{row}"
+            );
+            assert!(col(row, "coarse_requests") < col(row, "objects"), "{row}");
+        }
+    }
+    // Files of two cities are not compared.
+    let b = common::city(120, 7, &BuildOptions::default());
+    let mixed = common::flaneur(&["bench", "layout", db, b.db.to_str().unwrap()]);
+    assert!(!mixed.status.success());
+    assert!(
+        String::from_utf8_lossy(&mixed.stderr).contains("different cities"),
+        "{}",
+        String::from_utf8_lossy(&mixed.stderr)
+    );
+}
