@@ -720,3 +720,45 @@ fn a_crowd_of_walkers_reads_one_nginx_without_errors() {
         gone.err()
     );
 }
+
+#[test]
+fn bench_crowd_serves_the_file_with_nginx_and_writes_its_report() {
+    let c = city(150, 21);
+    let dir = c.dir.path().join("bench");
+    let db = c.db.to_str().unwrap();
+    let out = common::flaneur(&[
+        "bench",
+        "crowd",
+        db,
+        "--walkers",
+        "3",
+        "--frames",
+        "30",
+        "--fps",
+        "60",
+        "--far",
+        "150",
+        "--speed",
+        "8",
+        "--patterns",
+        "normal,fast",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("crowd.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3, "{csv}");
+    let md = std::fs::read_to_string(dir.join("crowd.md")).unwrap();
+    assert!(
+        md.contains("| errors (walkers stopped + loads failed) | 0 |"),
+        "{md}"
+    );
+    assert!(md.contains("one nginx"), "{md}");
+    let none = common::flaneur(&["bench", "crowd", db, "--walkers", "0"]);
+    assert!(!none.status.success());
+    assert!(String::from_utf8_lossy(&none.stderr).contains("walkers"));
+}
