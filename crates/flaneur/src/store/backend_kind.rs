@@ -26,7 +26,7 @@ pub enum Backend {
         direct: bool,
     },
     /// Byte ranges from an HTTP server, through a client page cache: what a store opened
-    /// with [`Store::open_url`] reads with. Not a backend for a file.
+    /// with [`Store::open_url`](super::Store::open_url) reads with. Not a backend for a file.
     Http,
 }
 
