@@ -45,7 +45,20 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         objects,
         ..Default::default()
     };
-    if !db_path.exists() {
+    // A database cached by another version of flaneur may not be readable by this one
+    // (its LOD table, say): built again rather than failing halfway through the demo.
+    let stale = db_path.exists()
+        && match Database::open(&db_path).and_then(|db| db.lod_stats()) {
+            Ok(_) => false,
+            Err(e) => {
+                println!(
+                    "{} cannot be read by this version of flaneur ({e}): building it again",
+                    db_path.display()
+                );
+                true
+            }
+        };
+    if !db_path.exists() || stale {
         if !scene.exists() {
             println!(
                 "generating a city of {objects} objects into {}",
