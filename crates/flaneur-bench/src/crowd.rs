@@ -242,13 +242,14 @@ fn process_cpu_seconds() -> f64 {
     secs(usage.ru_utime) + secs(usage.ru_stime)
 }
 
-fn failed(i: usize, cfg: &CrowdConfig, why: String) -> WalkerRow {
+/// Walker `i`'s row before it has walked: who it is, every figure 0.
+fn blank(i: usize, cfg: &CrowdConfig) -> WalkerRow {
     let (pattern, seed) = cfg.walker(i);
     WalkerRow {
         walker: i,
         pattern,
         seed,
-        error: Some(why),
+        error: None,
         frames: 0,
         frames_over_50ms: 0,
         max_frame_ms: 0.0,
@@ -264,6 +265,14 @@ fn failed(i: usize, cfg: &CrowdConfig, why: String) -> WalkerRow {
     }
 }
 
+/// Walker `i`'s row when it stopped for `why`.
+fn failed(i: usize, cfg: &CrowdConfig, why: String) -> WalkerRow {
+    WalkerRow {
+        error: Some(why),
+        ..blank(i, cfg)
+    }
+}
+
 /// One walker: its own open, its own walk.
 fn walker(
     i: usize,
@@ -273,7 +282,6 @@ fn walker(
     path: &flaneur::walk::path::CameraPath,
     walk_cfg: &ReviewConfig,
 ) -> WalkerRow {
-    let (pattern, seed) = cfg.walker(i);
     let t = Instant::now();
     let walked = Database::open_url_with(url, opts)
         .and_then(|db| review::walk(&db, path, walk_cfg, |_| {}).map(|r| (db, r)));
@@ -285,10 +293,6 @@ fn walker(
     let times = db.remote_request_times().unwrap_or_default();
     let s = &report.summary;
     WalkerRow {
-        walker: i,
-        pattern,
-        seed,
-        error: None,
         frames: s.frames,
         frames_over_50ms: s.frames_over_50ms,
         max_frame_ms: s.max_frame_ms,
@@ -301,6 +305,7 @@ fn walker(
         p99_ms: times.quantile_ms(0.99),
         walk_s: t.elapsed().as_secs_f64(),
         times: Some(times),
+        ..blank(i, cfg)
     }
 }
 
