@@ -47,18 +47,24 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     };
     // A database cached by another version of flaneur may not be readable by this one
     // (its LOD table, say): built again rather than failing halfway through the demo.
-    let stale = db_path.exists()
-        && match Database::open(&db_path).and_then(|db| db.lod_stats()) {
-            Ok(_) => false,
+    let cached = if db_path.exists() {
+        match Database::open(&db_path).and_then(|db| db.lod_stats().map(|_| db)) {
+            Ok(db) => Some(db),
             Err(e) => {
                 println!(
                     "{} cannot be read by this version of flaneur ({e}): building it again",
                     db_path.display()
                 );
-                true
+                None
             }
-        };
-    if !db_path.exists() || stale {
+        }
+    } else {
+        None
+    };
+    let db = if let Some(db) = cached {
+        println!("using {} (delete it to rebuild)", db_path.display());
+        db
+    } else {
         if !scene.exists() {
             println!(
                 "generating a city of {objects} objects into {}",
@@ -86,10 +92,8 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             b.pages, b.height, b.seconds
         );
         print_lod_report(b.lod.as_ref(), b.bytes);
-    } else {
-        println!("using {} (delete it to rebuild)", db_path.display());
-    }
-    let db = Database::open(&db_path)?;
+        Database::open(&db_path)?
+    };
     let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
     println!(
         "walking {frames} frames ({:.0} s of path, played {}x faster) of the 'normal' pattern in REVIEW mode, then with plain BOX queries",
