@@ -625,6 +625,27 @@ mod tests {
     }
 
     #[test]
+    fn a_table_of_another_version_asks_for_a_rebuild() {
+        let (dir, s, _) = store_with(&[1, 2, 3]);
+        let table_page = LodTable::open(&s).unwrap().unwrap().first_page();
+        let mut head = s.read_page(table_page, PageKind::Lod).unwrap();
+        drop(s);
+        // A version-1 table, as builds before the split chains wrote: intact pages.
+        head[VERSION_OFFSET..VERSION_OFFSET + 4].copy_from_slice(&1u32.to_le_bytes());
+        let path = dir.path().join("t.db");
+        let mut w = Store::open_writable(&path, crate::store::Backend::Mmap).unwrap();
+        w.write_page(table_page, PageKind::Lod, &head).unwrap();
+        w.finish().unwrap();
+        let s = Store::open(&path, crate::store::Backend::Mmap).unwrap();
+        let t = LodTable::open(&s).unwrap().unwrap();
+        let e = t.find(&s, 2).unwrap_err().to_string();
+        assert!(
+            e.contains("version 1, this build reads version 2") && e.contains("build it again"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn damaged_tables_are_named_errors() {
         let ids: Vec<u64> = (0..100).collect();
         let (dir, s, entries) = store_with(&ids);
