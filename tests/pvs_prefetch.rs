@@ -119,7 +119,7 @@ fn pvs_prefetch_refuses_bad_settings() {
         (["--steps", "0"], "steps"),
         (["--overlap", "1"], "overlap"),
         (["--share", "0"], "PVS share"),
-        (["--turn", "2"], "turn"),
+        (["--step", "0"], "step length"),
         (["--latencies", "5000"], "latency"),
     ] {
         let none = dir.path().join("none");

@@ -24,7 +24,7 @@ pub struct PvsPrefetchArgs {
     /// Steps of each route.
     #[arg(long, default_value_t = RouteConfig::default().steps)]
     steps: usize,
-    /// Metres per step.
+    /// Metres per step (LANP takes the viewer to set off at one step a step).
     #[arg(long, default_value_t = RouteConfig::default().step)]
     step: f64,
     /// PBNP's side and corner regions, a fraction of a cell's side, in (0, 0.5].
@@ -37,9 +37,6 @@ pub struct PvsPrefetchArgs {
     /// its answer, comma-separated [default: 0, 1, … 8].
     #[arg(long, value_delimiter = ',')]
     latencies: Vec<usize>,
-    /// LANP's turns foreseen, a share of its reach, in [0, 1].
-    #[arg(long, default_value_t = PvsPrefetchConfig::default().turn)]
-    turn: f64,
     /// Client cache entries (viewcells); at least 9.
     #[arg(long, default_value_t = PvsPrefetchConfig::default().capacity)]
     cache: usize,
@@ -68,7 +65,6 @@ impl PvsPrefetchArgs {
             border,
             borders,
             latencies,
-            turn,
             cache,
             seed,
             db,
@@ -88,7 +84,6 @@ impl PvsPrefetchArgs {
             capacity: cache,
             borders: or_default(borders, d.borders),
             latencies: or_default(latencies, d.latencies),
-            turn,
         };
         let r = pvs_prefetch::run(&cfg)?;
         write_report(&out, &r)?;

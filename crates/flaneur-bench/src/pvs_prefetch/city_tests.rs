@@ -282,14 +282,16 @@ fn no_latency_is_the_earlier_table() {
 
 /// Under latency SNP's and PBNP's caches change as before, but their answers come too
 /// late: PBNP's one-step band from 1 step on, SNP's whole cell from 5 (a cell is 5
-/// steps across). LANP looks as far ahead as it has measured: far fewer misses than
-/// either at 5 steps, with fewer cache swaps than SNP.
+/// steps across). LANP holds what the viewer may reach in the round trip it has
+/// measured: no miss at any latency up to 8 steps, moving no more objects than SNP
+/// (within 1 % on route 2's straight lines at 5 steps) and, at 5 steps, no more cache
+/// swaps on route 1 and 4 % more on route 2.
 #[test]
 fn latency_counts_misses_and_lanp_keeps_up() {
     use super::simulate_with_latency;
     let (city, r1, r2) = thesis();
     let pbnp = Pbnp::default();
-    let lanp = flaneur::prefetch::pvs::Lanp::default();
+    let lanp = flaneur::prefetch::pvs::Lanp::new(0.25, RouteConfig::default().step).unwrap();
     let run = |rule: &dyn PrefetchArea, route: &[Position], l| {
         simulate_with_latency(city, rule, route, THESIS_CAPACITY, l)
             .unwrap()
@@ -311,24 +313,34 @@ fn latency_counts_misses_and_lanp_keeps_up() {
             assert_eq!(pb.start_up_wait, l);
             assert_eq!(snp.visual_misses > 0, l >= 5, "{name} L={l}: {snp:?}");
         }
+        for l in 0..=8 {
+            let lanp = run(&lanp, route, l);
+            assert_eq!(
+                (lanp.visual_misses, lanp.miss_steps),
+                (0, 0),
+                "{name} L={l}: {lanp:?}"
+            );
+            // Up to 4 steps the reach fits the thesis's cache.
+            assert_eq!(
+                lanp.peak_cached_cells <= THESIS_CAPACITY,
+                l <= 4,
+                "{name} L={l}"
+            );
+        }
         let snp5 = run(&Snp, route, 5);
-        let pbnp5 = run(&pbnp, route, 5);
         let lanp5 = run(&lanp, route, 5);
-        assert!(lanp5.swaps <= snp5.swaps, "{name}: {lanp5:?}");
         assert!(
-            lanp5.visual_misses * 20 < snp5.visual_misses,
-            "{name}: {lanp5:?}"
+            lanp5.objects_sent * 100 <= snp5.objects_sent * 101,
+            "{name}: {lanp5:?} {snp5:?}"
         );
         assert!(
-            lanp5.visual_misses * 80 < pbnp5.visual_misses,
-            "{name}: {lanp5:?}"
+            lanp5.swaps * 100 <= snp5.swaps * 104,
+            "{name}: {lanp5:?} {snp5:?}"
         );
-        assert!(lanp5.peak_cached_cells <= THESIS_CAPACITY);
-        // With answers a step away, at most one object's miss on a sharp turn.
-        assert!(run(&lanp, route, 1).visual_misses <= 2, "{name}");
-    }
-    // Route 2's straight lines: LANP misses nothing at 3 and 4 steps.
-    for l in [3, 4] {
-        assert_eq!(run(&lanp, r2, l).visual_misses, 0, "L={l}");
+        if name == "route 1" {
+            assert!(lanp5.swaps <= snp5.swaps, "{lanp5:?} {snp5:?}");
+        }
+        assert!(lanp5.peak_cached_cells <= 13, "{name}: {lanp5:?}");
+        assert!(run(&lanp, route, 4).swaps <= snp5.swaps, "{name}");
     }
 }

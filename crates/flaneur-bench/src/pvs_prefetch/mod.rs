@@ -21,7 +21,7 @@ use crate::report::Report;
 use flaneur::error::{Error, Result};
 use flaneur::prefetch::pvs::{
     check_border, Lanp, Pbnp, Position, PrefetchArea, PvsSource, Snp, StoredPvs, DEFAULT_BORDER,
-    DEFAULT_TURN, THESIS_CAPACITY,
+    THESIS_CAPACITY,
 };
 use flaneur::walk::path::routes::{axis_route, random_route, straight_route, RouteConfig};
 
@@ -137,10 +137,9 @@ pub struct PvsPrefetchConfig {
     pub capacity: usize,
     /// PBNP's region borders to sweep (none: no sweep).
     pub borders: Vec<f64>,
-    /// Latencies, steps, to walk SNP, PBNP and LANP at (none: no sweep).
+    /// Latencies, steps, to walk SNP, PBNP and LANP at (none: no sweep). LANP's band is
+    /// `border`, and the viewer is taken to set off at a route's step (`Lanp::new`).
     pub latencies: Vec<usize>,
-    /// LANP's turns foreseen, a share of its reach (`Lanp::new`); its band is `border`.
-    pub turn: f64,
 }
 
 impl Default for PvsPrefetchConfig {
@@ -152,7 +151,6 @@ impl Default for PvsPrefetchConfig {
             capacity: THESIS_CAPACITY,
             borders: DEFAULT_BORDERS.to_vec(),
             latencies: DEFAULT_LATENCIES.to_vec(),
-            turn: DEFAULT_TURN,
         }
     }
 }
@@ -166,7 +164,7 @@ impl PvsPrefetchConfig {
         for &b in &self.borders {
             check_border(b)?;
         }
-        Lanp::new(self.border, self.turn)?;
+        Lanp::new(self.border, self.route.step)?;
         if let Some(l) = self.latencies.iter().find(|&&l| l > MAX_LATENCY) {
             return Err(Error::Pvs(format!(
                 "a latency of {l} steps is more than the {MAX_LATENCY} the experiment takes"
@@ -402,7 +400,7 @@ fn walk<S: PvsSource + ?Sized>(
             });
         }
     }
-    let lanp = Lanp::new(cfg.border, cfg.turn)?;
+    let lanp = Lanp::new(cfg.border, cfg.route.step)?;
     let rules: [&dyn PrefetchArea; 3] = [&Snp, &pbnp, &lanp];
     let mut latency = Vec::new();
     for r in &routes {

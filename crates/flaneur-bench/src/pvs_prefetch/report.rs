@@ -191,14 +191,13 @@ impl Report for PvsPrefetchReport {
                  answered at step t + L, so the frames of the next L steps draw without it; the viewer waits L \
                  steps at the start for the start-up transaction. A visual miss is an object of the current \
                  cell's PVS not on hand in a frame: objects summed over the route, and steps with any. LANP \
-                 (ours) asks for the cells within PBNP's {} m band of the path ahead, as far as the viewer goes in \
-                 the round trip it has measured at the speed it has measured (turns foreseen {} of the way); with \
-                 no round trip it is PBNP. SNP's and PBNP's transactions, swaps and objects do not depend on L: \
-                 at every L they are Table 7.2's above.\n\n\
-                 | route | L (steps) | SNP misses (steps) | PBNP misses (steps) | LANP misses (steps) | LANP cache swaps (SNP's) | LANP transactions (SNP's) | LANP objects per transaction |\n\
-                 |---|---|---|---|---|---|---|---|\n",
-                c.border * self.place.cell,
-                c.turn
+                 (ours) asks for PBNP's area and every walkable cell within the viewer's reach, as far as it goes \
+                 in the round trip it has measured at the speed it has measured ({} m a step before it has \
+                 moved), and its cache grows to hold them. With no round trip it is PBNP. SNP's and PBNP's \
+                 transactions, swaps and objects do not depend on L: at every L they are Table 7.2's above.\n\n\
+                 | route | L (steps) | SNP misses (steps) | PBNP misses (steps) | LANP misses (steps) | LANP cache swaps (SNP's) | LANP objects sent (SNP's) | LANP transactions (SNP's) | LANP peak cells, objects held (SNP's) |\n\
+                 |---|---|---|---|---|---|---|---|---|\n",
+                c.route.step
             ));
             for r in &self.routes {
                 for &l in &c.latencies {
@@ -210,16 +209,21 @@ impl Report for PvsPrefetchReport {
                     };
                     let m = |t: &SimTotals| format!("{} ({})", t.visual_misses, t.miss_steps);
                     s.push_str(&format!(
-                        "| {} | {l} | {} | {} | {} | {} ({}) | {} ({}) | {:.1} |\n",
+                        "| {} | {l} | {} | {} | {} | {} ({}) | {} ({}) | {} ({}) | {}, {} ({}, {}) |\n",
                         r.route,
                         m(snp),
                         m(pbnp),
                         m(lanp),
                         lanp.swaps,
                         snp.swaps,
+                        lanp.objects_sent,
+                        snp.objects_sent,
                         lanp.transactions,
                         snp.transactions,
-                        lanp.objects_per_transaction()
+                        lanp.peak_cached_cells,
+                        lanp.peak_held_objects,
+                        snp.peak_cached_cells,
+                        snp.peak_held_objects
                     ));
                 }
             }

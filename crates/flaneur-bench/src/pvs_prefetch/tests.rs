@@ -94,7 +94,7 @@ fn bad_settings_are_named() {
     assert!(err(|c| c.route.steps = 0).contains("steps"));
     assert!(err(|c| c.city.cell = 0.0).contains("viewcell size"));
     assert!(err(|c| c.city.overlap = 1.0).contains("overlap"));
-    assert!(err(|c| c.turn = 1.5).contains("turn"));
+    assert!(err(|c| c.route.step = f64::NAN).contains("step length"));
     assert!(err(|c| c.latencies = vec![3, MAX_LATENCY + 1]).contains("latency"));
 }
 

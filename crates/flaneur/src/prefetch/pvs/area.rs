@@ -77,6 +77,14 @@ pub trait PrefetchArea {
         false
     }
 
+    /// Whether the client's cache grows to hold the rule's whole area when it is
+    /// larger than the cache (never shrinking again): a rule whose area is what the
+    /// viewer may reach before an answer comes (`Lanp`). SNP and PBNP: no, their
+    /// area always fits the thesis's 9 entries.
+    fn grows_cache(&self) -> bool {
+        false
+    }
+
     /// A short name for reports ("SNP", "PBNP").
     fn name(&self) -> &'static str;
 }

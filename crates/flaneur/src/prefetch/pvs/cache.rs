@@ -80,6 +80,12 @@ impl ClientCache {
         self.capacity
     }
 
+    /// Raises the capacity to `entries`, if it is below: a rule whose whole area must
+    /// be held (`PrefetchArea::grows_cache`). The capacity never falls.
+    pub fn grow_to(&mut self, entries: usize) {
+        self.capacity = self.capacity.max(entries);
+    }
+
     /// Cached entries (viewcells).
     pub fn len(&self) -> usize {
         self.entries.len()

@@ -66,6 +66,11 @@ struct InFlight {
 /// over.
 const RECENT: usize = 8;
 
+/// The most entries a growing cache (`PrefetchArea::grows_cache`) grows to: an area
+/// wider than this is cut, the nearest of its cells kept (4,096 viewcells is a reach of
+/// about 36 cells every way).
+const MAX_GROWN: usize = 4096;
+
 /// A client walking over a PVS source with a prefetching rule.
 ///
 /// ```
@@ -222,6 +227,9 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         if wanted.first() != Some(&current) {
             wanted.retain(|&c| c != current);
             wanted.insert(0, current);
+        }
+        if self.rule.grows_cache() {
+            self.cache.grow_to(wanted.len().min(MAX_GROWN));
         }
         self.cache.touch(&wanted);
         let entered = self.last.is_some_and(|l| l != current);

@@ -161,6 +161,19 @@ impl Region {
     }
 }
 
+/// A cell's eight neighbours, as (row, column) offsets: SNP's block and the steps of
+/// LANP's flood fill.
+pub(crate) const NEIGHBOURS: [(i32, i32); 8] = [
+    (-1, -1),
+    (-1, 0),
+    (-1, 1),
+    (0, -1),
+    (0, 1),
+    (1, -1),
+    (1, 0),
+    (1, 1),
+];
+
 /// The default width of a cell's side and corner regions, as a fraction of the cell's
 /// side: a quarter, so the middle region is half the side across (a quarter of the
 /// cell's area). On the thesis's 20 m cells that is a 5 m band, more than one 4 m

@@ -4,26 +4,32 @@
 //!
 //! PBNP asks for a neighbour once the viewer stands within a band of the border to it,
 //! so its answer has the time the viewer takes to cross the band, about one step. When
-//! answers take longer, the viewer is in the cell before its objects are. LANP asks for
-//! every cell within PBNP's band of the path the viewer will walk while an answer is on
-//! its way: from its position along its last step's heading, as far as it goes in the
-//! measured round trip (the longest of the recent answers, in steps) at its measured
-//! speed (its longest recent step), less the band, which already covers one step.
-//! Neither is given to it: the client measures both (`Observed`). Before any answer,
-//! or standing still, the path is empty and LANP is PBNP.
+//! answers take longer, the viewer is in the cell before its objects are. An answer
+//! asked now is first drawn round trip + 1 steps on, and by then the viewer may have
+//! gone anywhere within its speed times those steps: a walker turns round, or into a
+//! side street, without warning. So LANP asks for PBNP's area and every walkable cell
+//! within that reach of the viewer (its nearest point no farther; reached through
+//! walkable cells, eight ways, as a step can cut a corner), the nearest first and,
+//! between equally near ones, those ahead of its last step first. The round trip (the
+//! longest of the recent answers, in steps) and the speed (its longest recent step)
+//! are measured by the client (`Observed`), never given; before the viewer has moved
+//! its speed is taken to be `start_speed`, what the viewer may set off at.
 //!
-//! Turns: the viewer may leave the path sideways. A turn into the next street is
-//! foreseen by widening the path sideways by `turn` times what is left of the reach at
-//! each point (a viewer that turns there has that much of the round trip left to walk
-//! sideways); 0 foresees none, 1 every turn at the measured speed.
+//! Why a disc and not the path ahead: a path along the last heading (LANP's first
+//! form, with turns foreseen where streets open) missed 173 objects at a round trip of
+//! 5 steps on the thesis's random route, every one on a reversal or a new heading taken
+//! mid-street, which no heading foresees.
+//!
+//! The reach holds more cells than the thesis's 9-entry cache at round trips beyond
+//! about 4 steps of 4 m on 20 m cells: the cache grows to hold the whole area
+//! (`grows_cache`), and the peak it reaches is what LANP pays in memory for hiding
+//! the latency. With no round trip, at a step no longer than PBNP's band, the disc lies
+//! inside PBNP's area and LANP is PBNP.
 
 use super::area::{Area, Observed, PrefetchArea};
-use super::grid::{check_border, Cell, Position, ViewcellGrid, DEFAULT_BORDER};
+use super::grid::{check_border, Cell, Position, ViewcellGrid, NEIGHBOURS};
+use super::pbnp::Pbnp;
 use crate::error::{Error, Result};
-
-/// The spacing of the points the path is sampled at, as a share of the band: fine
-/// enough that the band around the samples covers the band around the path.
-const SAMPLES_PER_BAND: f64 = 4.0;
 
 /// The latency-aware neighbour prefetch.
 ///
@@ -33,57 +39,69 @@ const SAMPLES_PER_BAND: f64 = 4.0;
 /// let lanp = Lanp::new(0.25, 0.0)?;
 /// let p = Position::new(50.0, 50.0); // the middle of cell (2, 2)
 /// let everywhere = |_: Cell| Ok(true);
-/// // No answer yet: PBNP's area, the cell alone.
+/// // No answer yet and standing still: PBNP's area, the cell alone.
 /// let still = lanp.area_seen(&grid, p, &Observed::default(), &everywhere)?;
 /// assert_eq!(still.cells, [Cell::new(2, 2)]);
-/// // Walking east at 4 m a step with answers 8 steps away: 36 m on, two cells east.
-/// let seen = Observed { round_trip: 8, heading: (4.0, 0.0), speed: 4.0 };
+/// // Walking east at 4 m a step with answers 2 steps away: 12 m round, so the four
+/// // side neighbours (10 m away), east first; the corners are 14.1 m away.
+/// let seen = Observed { round_trip: 2, heading: (4.0, 0.0), speed: 4.0 };
 /// let ahead = lanp.area_seen(&grid, p, &seen, &everywhere)?;
-/// assert_eq!(ahead.cells, [Cell::new(2, 2), Cell::new(2, 3), Cell::new(2, 4)]);
+/// assert_eq!(ahead.cells[..2], [Cell::new(2, 2), Cell::new(2, 3)]);
+/// assert_eq!(ahead.cells.len(), 5);
 /// # Ok::<(), flaneur::Error>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lanp {
-    border: f64,
-    turn: f64,
+    pbnp: Pbnp,
+    start_speed: f64,
 }
 
 impl Lanp {
-    /// LANP with PBNP's band `border` (a share of the cell's side, in (0, 0.5]) and
-    /// turns foreseen `turn` (in [0, 1]) of the way.
-    pub fn new(border: f64, turn: f64) -> Result<Lanp> {
+    /// LANP with PBNP's band `border` (a share of the cell's side, in (0, 0.5]) and the
+    /// viewer taken to set off at `start_speed` metres a step (0 or more; 0: PBNP's
+    /// area until it has moved).
+    pub fn new(border: f64, start_speed: f64) -> Result<Lanp> {
         check_border(border)?;
-        if !(0.0..=1.0).contains(&turn) {
+        if !(start_speed.is_finite() && start_speed >= 0.0) {
             return Err(Error::Pvs(format!(
-                "LANP's turn {turn} must lie between 0 (no turn foreseen) and 1"
+                "LANP's start speed {start_speed} must be a finite number of metres a step, 0 or more"
             )));
         }
-        Ok(Lanp { border, turn })
+        Ok(Lanp {
+            pbnp: Pbnp::new(border)?,
+            start_speed,
+        })
     }
 
     /// PBNP's band, a share of the cell's side.
     pub fn border(&self) -> f64 {
-        self.border
+        self.pbnp.border()
     }
 
-    /// How far sideways turns are foreseen, a share of the reach left.
-    pub fn turn(&self) -> f64 {
-        self.turn
+    /// The speed the viewer is taken to set off at, metres a step.
+    pub fn start_speed(&self) -> f64 {
+        self.start_speed
+    }
+
+    /// How far the viewer may be when an answer asked now is first drawn, metres.
+    pub fn reach(&self, seen: &Observed) -> f64 {
+        let speed = if seen.speed > 0.0 && seen.speed.is_finite() {
+            seen.speed
+        } else {
+            self.start_speed
+        };
+        speed * (f64::from(seen.round_trip) + 1.0)
     }
 }
 
 impl Default for Lanp {
     fn default() -> Lanp {
         Lanp {
-            border: DEFAULT_BORDER,
-            turn: DEFAULT_TURN,
+            pbnp: Pbnp::default(),
+            start_speed: 0.0,
         }
     }
 }
-
-/// Turns foreseen by default: all of the reach, so a viewer turning at the measured
-/// speed into a street that opens beside the path finds its cells asked for in time.
-pub const DEFAULT_TURN: f64 = 1.0;
 
 impl PrefetchArea for Lanp {
     fn area(&self, grid: &ViewcellGrid, p: Position) -> Result<Area> {
@@ -97,98 +115,65 @@ impl PrefetchArea for Lanp {
         seen: &Observed,
         walkable: &dyn Fn(Cell) -> Result<bool>,
     ) -> Result<Area> {
-        let current = grid.cell_of(p)?;
+        let mut area = self.pbnp.area(grid, p)?;
+        let reach = self.reach(seen);
+        if reach <= 0.0 {
+            return Ok(area);
+        }
         let size = grid.cell_size();
         let o = grid.origin();
-        let (u, v) = ((p.x - o.x) / size, (p.z - o.z) / size);
-        let (hx, hz) = seen.heading;
-        let len = hx.hypot(hz);
-        // An answer asked now is first drawn round trip + 1 steps on; the band covers
-        // the last of them.
-        let ahead = if len > 0.0 && seen.speed.is_finite() {
-            (seen.speed * (f64::from(seen.round_trip) + 1.0) / size - self.border).max(0.0)
-        } else {
-            0.0
+        let gap = |c: Cell| {
+            let (x0, z0) = (o.x + f64::from(c.col) * size, o.z + f64::from(c.row) * size);
+            let dx = (x0 - p.x).max(p.x - x0 - size).max(0.0);
+            let dz = (z0 - p.z).max(p.z - z0 - size).max(0.0);
+            dx.hypot(dz)
         };
-        let (du, dv) = if len > 0.0 {
-            (hx / len, hz / len)
-        } else {
-            (0.0, 0.0)
-        };
-        let cell_at = |qu: f64, qv: f64| -> Option<Cell> {
-            let (r, c) = (qv.floor(), qu.floor());
-            if r < 0.0 || c < 0.0 || r >= f64::from(grid.rows()) || c >= f64::from(grid.cols()) {
-                return None;
-            }
-            Some(Cell::new(r as u32, c as u32))
-        };
-        // A street opens sideways at a point where the cells one and two out are
-        // walkable, and two out the cells a cell back and on along the path too: the
-        // middle of a street to turn into, not the edge of the one walked along nor
-        // the first or last cell of the one crossed.
-        let opens = |qu: f64, qv: f64, su: f64, sv: f64| -> Result<bool> {
-            let out = [(1.0, 0.0), (2.0, 0.0), (2.0, -1.0), (2.0, 1.0)];
-            for (k, t) in out {
-                match cell_at(qu + su * k + du * t, qv + sv * k + dv * t) {
-                    Some(c) if walkable(c)? => {}
-                    _ => return Ok(false),
-                }
-            }
-            Ok(true)
-        };
-        let delta = self.border / SAMPLES_PER_BAND;
-        let b = self.border;
-        let mut cells = vec![current];
-        let mut push = |cell: Cell| {
-            if !cells.contains(&cell) {
-                cells.push(cell);
-            }
-        };
-        let n = (ahead / delta).ceil() as usize;
-        let along = |i: usize| ahead.min(i as f64 * delta);
-        // The path straight ahead first, the turns after: when the cache cannot take
-        // both, going on is likelier than turning.
-        for i in 0..=n {
-            let (qu, qv) = (u + du * along(i), v + dv * along(i));
-            for r in (qv - b).floor() as i64..=(qv + b).floor() as i64 {
-                for c in (qu - b).floor() as i64..=(qu + b).floor() as i64 {
-                    if let (Ok(row), Ok(col)) = (u32::try_from(r), u32::try_from(c)) {
-                        if grid.contains(Cell::new(row, col)) {
-                            push(Cell::new(row, col));
-                        }
-                    }
-                }
-            }
-        }
-        // A turn is walked from the path's own cells, so it is widened by the band
-        // sideways only: along the path the band would take in the next street's
-        // cells too, which a viewer turning in the middle of a street never enters.
-        for i in 0..=n {
-            let s = along(i);
-            let (qu, qv) = (u + du * s, v + dv * s);
-            let side = self.turn * (ahead - s);
-            if side <= 0.0 {
-                continue;
-            }
-            for (su, sv) in [(-dv, du), (dv, -du)] {
-                if !opens(qu, qv, su, sv)? {
+        // Flooded from the current cell through walkable cells within the reach.
+        let mut found: Vec<(f64, Cell)> = vec![(0.0, area.current)];
+        let mut next = 0;
+        while next < found.len() {
+            let c = found[next].1;
+            next += 1;
+            for (dr, dc) in NEIGHBOURS {
+                let Some(n) = grid.offset(c, dr, dc) else {
+                    continue;
+                };
+                if found.iter().any(|&(_, f)| f == n) {
                     continue;
                 }
-                let m = ((side + b) / delta).ceil() as usize;
-                for j in 1..=m {
-                    let w = (side + b).min(j as f64 * delta);
-                    if let Some(cell) = cell_at(qu + su * w, qv + sv * w) {
-                        push(cell);
-                    }
+                let d = gap(n);
+                if d <= reach && walkable(n)? {
+                    found.push((d, n));
                 }
             }
         }
-        Ok(Area { current, cells })
+        let (hx, hz) = seen.heading;
+        let behind = |c: Cell| {
+            let q = grid.centre(c);
+            -((q.x - p.x) * hx + (q.z - p.z) * hz)
+        };
+        found.sort_by(|a, b| {
+            a.0.total_cmp(&b.0)
+                .then(behind(a.1).total_cmp(&behind(b.1)))
+                .then(a.1.cmp(&b.1))
+        });
+        for (_, c) in found {
+            if !area.cells.contains(&c) {
+                area.cells.push(c);
+            }
+        }
+        Ok(area)
     }
 
-    /// Its area reaches past the neighbours, and the cache of 9 cannot hold that
-    /// reach and every neighbour at once.
+    /// Its area reaches past the neighbours, and the neighbours it does not want may
+    /// give up their room to the cells it does.
     fn replaces_neighbours(&self) -> bool {
+        true
+    }
+
+    /// Its area is what the viewer may reach before an answer asked now arrives: all of
+    /// it must be held.
+    fn grows_cache(&self) -> bool {
         true
     }
 
@@ -202,7 +187,7 @@ mod tests {
     use std::collections::BTreeSet;
 
     use super::*;
-    use crate::prefetch::pvs::Pbnp;
+    use crate::prefetch::pvs::DEFAULT_BORDER;
 
     fn grid() -> ViewcellGrid {
         ViewcellGrid::new(Position::new(0.0, 0.0), 20.0, 9, 9).unwrap()
@@ -218,7 +203,7 @@ mod tests {
     fn without_latency_it_is_pbnp() {
         let g = grid();
         let pbnp = Pbnp::new(0.25).unwrap();
-        let lanp = Lanp::new(0.25, 1.0).unwrap();
+        let lanp = Lanp::new(0.25, 4.9).unwrap();
         let quick = Observed {
             round_trip: 0,
             heading: (3.0, -2.0),
@@ -228,6 +213,8 @@ mod tests {
             for j in 0..40 {
                 let p = Position::new(80.0 + i as f64 * 0.5, 80.0 + j as f64 * 0.5);
                 let want = set(&pbnp.area(&g, p).unwrap());
+                assert_eq!(set(&Lanp::default().area(&g, p).unwrap()), want, "{p}");
+                // Standing still, set off at just under the band's width: still PBNP.
                 assert_eq!(set(&lanp.area(&g, p).unwrap()), want, "{p}");
                 assert_eq!(
                     set(&lanp.area_seen(&g, p, &quick, &|_| Ok(true)).unwrap()),
@@ -238,64 +225,88 @@ mod tests {
         }
     }
 
-    /// The reach grows with the round trip and with the speed.
+    /// Every walkable cell within the reach, and no other: the reach grows with the
+    /// round trip and the speed, in every direction.
     #[test]
     fn reach_grows_with_round_trip_and_speed() {
         let g = grid();
         let lanp = Lanp::new(0.25, 0.0).unwrap();
-        let p = g.centre(Cell::new(4, 1));
-        let east = |round_trip, speed| {
+        let p = Position::new(90.0, 90.0); // the middle of (4, 4)
+        let cells = |round_trip, speed| {
             let seen = Observed {
                 round_trip,
                 heading: (1.0, 0.0),
                 speed,
             };
-            let a = lanp.area_seen(&g, p, &seen, &|_| Ok(true)).unwrap();
-            a.cells.iter().map(|c| c.col).max().unwrap() - 1
+            set(&lanp.area_seen(&g, p, &seen, &|_| Ok(true)).unwrap())
         };
-        // From the middle of a cell, (round trip + 1) × speed ahead: 0.2 cells (the band
-        // reaches further), 0.6, 1.2, 2.4, 1.8 and 2.6.
-        assert_eq!(east(0, 4.0), 0);
-        assert_eq!(east(2, 4.0), 1);
-        assert_eq!(east(5, 4.0), 1);
-        assert_eq!(east(5, 8.0), 2);
-        assert_eq!(east(8, 4.0), 2);
-        assert_eq!(east(12, 4.0), 3);
-        // Every cell wanted lies in the row walked along: no turn foreseen.
+        // The side neighbours lie 10 m off, the corners 14.1 m, the next ring 30 m.
+        assert_eq!(cells(1, 4.0).len(), 1);
+        assert_eq!(cells(2, 4.0).len(), 5);
+        assert_eq!(cells(3, 4.0).len(), 9);
+        assert_eq!(cells(1, 8.0).len(), 9);
+        assert_eq!(cells(6, 4.0).len(), 9);
+        assert_eq!(cells(5, 5.0).len(), 13);
+        // The cells are exactly those whose nearest point lies within the reach.
         let seen = Observed {
-            round_trip: 8,
+            round_trip: 9,
             heading: (1.0, 0.0),
             speed: 4.0,
         };
-        assert!(lanp
-            .area_seen(&g, p, &seen, &|_| Ok(true))
-            .unwrap()
-            .cells
-            .iter()
-            .all(|c| c.row == 4));
-        // Foreseeing turns asks for the side cells within the reach where a street
-        // opens: here rows 2 to 6 of column 2 are a street across, the rest of rows
-        // 2, 6 and beyond buildings.
-        let turning = Lanp::new(0.25, 1.0).unwrap();
-        let street = |c: Cell| Ok((3..=5).contains(&c.row) || (1..=3).contains(&c.col));
-        let a = turning.area_seen(&g, p, &seen, &street).unwrap();
-        assert!(a.cells.contains(&Cell::new(3, 2)) && a.cells.contains(&Cell::new(5, 2)));
-        // Along the street walked, its edge cells are no turn.
-        assert!(!a.cells.contains(&Cell::new(3, 1)) && !a.cells.contains(&Cell::new(5, 3)));
-        // The path straight ahead comes first.
+        let got = set(&lanp.area_seen(&g, p, &seen, &|_| Ok(true)).unwrap());
+        for r in 0..9 {
+            for c in 0..9 {
+                let (dr, dc) = ((r as f64 - 4.0).abs(), (c as f64 - 4.0).abs());
+                let gap = ((dr * 20.0 - 10.0).max(0.0)).hypot((dc * 20.0 - 10.0).max(0.0));
+                assert_eq!(got.contains(&Cell::new(r, c)), gap <= 40.0, "({r}, {c})");
+            }
+        }
+        // Standing still at the start, the start speed sets the reach.
+        let off = Lanp::new(0.25, 4.0).unwrap();
+        let still = Observed {
+            round_trip: 2,
+            ..Observed::default()
+        };
         assert_eq!(
-            a.cells[..3],
-            [Cell::new(4, 1), Cell::new(4, 2), Cell::new(4, 3)]
+            off.area_seen(&g, p, &still, &|_| Ok(true))
+                .unwrap()
+                .cells
+                .len(),
+            5
         );
+    }
+
+    /// Cells behind a building are reached only round it, and the nearest come first,
+    /// ahead before behind.
+    #[test]
+    fn flooded_through_walkable_cells_nearest_first() {
+        let g = grid();
+        let lanp = Lanp::new(0.25, 0.0).unwrap();
+        let p = Position::new(90.0, 90.0);
+        let seen = Observed {
+            round_trip: 9,
+            heading: (4.0, 0.0),
+            speed: 4.0,
+        };
+        // 40 m round, but a street along row 4 only, and a lone walkable cell at
+        // (2, 4), 30 m off beyond the buildings of row 3.
+        let street = |c: Cell| Ok(c.row == 4 || c == Cell::new(2, 4));
+        let a = lanp.area_seen(&g, p, &seen, &street).unwrap();
+        assert!(!a.cells.contains(&Cell::new(2, 4)));
+        assert!(a.cells.iter().all(|c| c.row == 4));
+        // Columns 2 to 6, the nearer first, east before west.
+        let row4 = |cols: [u32; 5]| cols.map(|c| Cell::new(4, c));
+        assert_eq!(a.cells, row4([4, 5, 3, 6, 2]));
     }
 
     #[test]
     fn bad_settings_are_errors() {
         assert!(Lanp::new(0.0, 0.0).is_err());
-        for t in [-0.1, 1.1, f64::NAN] {
-            let e = Lanp::new(0.25, t).unwrap_err().to_string();
-            assert!(e.contains("turn"), "{e}");
+        for s in [-0.1, f64::NAN, f64::INFINITY] {
+            let e = Lanp::new(0.25, s).unwrap_err().to_string();
+            assert!(e.contains("start speed"), "{e}");
         }
         assert_eq!(Lanp::default().border(), DEFAULT_BORDER);
+        assert_eq!(Lanp::new(0.3, 2.0).unwrap().start_speed(), 2.0);
     }
 }

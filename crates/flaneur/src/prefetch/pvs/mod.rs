@@ -5,10 +5,11 @@
 //! those of the neighbours it may enter next. SNP (`snp`, §7.2.1) fetches all eight
 //! neighbours on every cell change; PBNP (`pbnp`, §7.2.2) fetches only those the
 //! viewer leans towards, read from which of nine regions of its cell it stands in
-//! (h(R), Table 7.1); LANP (`lanp`, ours) fetches along the path the viewer walks
-//! while an answer is on its way, as far as the measured round trip and speed take it. Both send only what the client lacks (`delta`, §7.3) and share
-//! one cache and replacement rule (`cache`, §7.4); `client` runs one position's
-//! transaction. `stored` reads a database's precomputed visibility as the server's
+//! (h(R), Table 7.1); LANP (`lanp`, ours) fetches every cell the viewer may reach
+//! before an answer asked now arrives, as far as the measured round trip and speed
+//! take it, and lets the cache grow to hold them. All send only what the client lacks
+//! (`delta`, §7.3) and share one cache and replacement rule (`cache`, §7.4); `client`
+//! runs one position's transaction. `stored` reads a database's precomputed visibility as the server's
 //! table; `walk::path::routes` draws the thesis's two routes. The simulation of §7.5
 //! (a whole route's counts), the thesis's synthetic city and its in-memory PVS table
 //! are the `pvs-prefetch` experiment's, in `flaneur-bench`.
@@ -46,7 +47,8 @@
 //! - **When the client looks**: once per position of the route, i.e. per step (the
 //!   thesis checks before every frame; between steps the position does not change).
 //! - **Cache size**: 9 entries as in the thesis; it may be set larger, never smaller,
-//!   since the current cell and its eight neighbours must fit.
+//!   since the current cell and its eight neighbours must fit. LANP's grows to its
+//!   area when that is larger (`PrefetchArea::grows_cache`).
 //! - **Orientation**: columns grow east (+x), rows south (+z); (a − 1, b + 1) is
 //!   north-east of (a, b), as in Fig. 7.1.
 //! - **The routes**: see [`routes`](crate::walk::path::routes); the synthetic table is
@@ -67,7 +69,7 @@ pub use area::{Area, Observed, PrefetchArea};
 pub use cache::{Admitted, ClientCache, THESIS_CAPACITY};
 pub use client::{PvsClient, StepOutcome, Transaction};
 pub use grid::{check_border, Cell, Position, Region, ViewcellGrid, DEFAULT_BORDER};
-pub use lanp::{Lanp, DEFAULT_TURN};
+pub use lanp::Lanp;
 pub use pbnp::Pbnp;
 pub use snp::Snp;
 pub use source::{ObjectId, PvsSource};

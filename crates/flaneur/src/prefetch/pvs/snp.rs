@@ -3,20 +3,8 @@
 //! crossing a side brings in three new cells and crossing a corner five.
 
 use super::area::{Area, PrefetchArea};
-use super::grid::{Position, ViewcellGrid};
+use super::grid::{Position, ViewcellGrid, NEIGHBOURS};
 use crate::error::Result;
-
-/// The 3 × 3 block around the current cell.
-const BLOCK: [(i32, i32); 8] = [
-    (-1, -1),
-    (-1, 0),
-    (-1, 1),
-    (0, -1),
-    (0, 1),
-    (1, -1),
-    (1, 0),
-    (1, 1),
-];
 
 /// The simple neighbour prefetch.
 ///
@@ -35,7 +23,7 @@ pub struct Snp;
 
 impl PrefetchArea for Snp {
     fn area(&self, grid: &ViewcellGrid, p: Position) -> Result<Area> {
-        Ok(Area::around(grid, grid.cell_of(p)?, &BLOCK))
+        Ok(Area::around(grid, grid.cell_of(p)?, &NEIGHBOURS))
     }
 
     fn name(&self) -> &'static str {
