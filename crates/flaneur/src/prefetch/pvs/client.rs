@@ -115,16 +115,17 @@ pub struct PvsClient<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> {
     rule: &'a A,
     cache: ClientCache,
     last: Option<Cell>,
-    /// Looks so far: the client's clock, in steps.
-    looks: u64,
+    /// The client's clock at its latest look, in steps; `None` before the first.
+    now: Option<u64>,
     next_id: u64,
     in_flight: Vec<InFlight>,
     /// The objects whose answer has come and which the cache still holds.
     on_hand: HashSet<ObjectId>,
     /// The latest round trips measured, steps.
     trips: VecDeque<u64>,
-    /// The latest positions looked from.
-    seen_at: VecDeque<Position>,
+    /// The latest positions looked from, each with the last time the viewer stood
+    /// there.
+    seen_at: VecDeque<(Position, u64)>,
 }
 
 impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
@@ -135,7 +136,7 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
             rule,
             cache: ClientCache::new(capacity)?,
             last: None,
-            looks: 0,
+            now: None,
             next_id: 0,
             in_flight: Vec::new(),
             on_hand: HashSet::new(),
@@ -175,15 +176,17 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         let oldest = self
             .in_flight
             .iter()
-            .map(|t| self.looks.saturating_sub(1) - t.asked)
+            .map(|t| self.clock() - t.asked)
             .max()
             .unwrap_or(0);
         let round_trip = self.trips.iter().copied().max().unwrap_or(0).max(oldest);
         let steps = self.seen_at.iter().zip(self.seen_at.iter().skip(1));
-        let speed = steps.map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+        let speed = steps
+            .map(|((a, ta), (b, tb))| a.distance(*b) / (tb - ta).max(1) as f64)
+            .fold(0.0, f64::max);
         let heading = match (self.seen_at.len(), self.seen_at.back()) {
-            (n, Some(b)) if n >= 2 => {
-                let a = self.seen_at[n - 2];
+            (n, Some((b, _))) if n >= 2 => {
+                let a = self.seen_at[n - 2].0;
                 (b.x - a.x, b.z - a.z)
             }
             _ => (0.0, 0.0),
@@ -195,11 +198,30 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         }
     }
 
+    /// The clock of the latest look (0 before the first).
+    fn clock(&self) -> u64 {
+        self.now.unwrap_or(0)
+    }
+
     /// One step of the client's clock with the viewer at `p`: the frame's visual
     /// misses are counted, and the cells of the area not cached are asked for; their
     /// objects are on hand once [`deliver`](Self::deliver) is told the answer came.
     /// Errors as [`step`](Self::step)'s.
     pub fn look(&mut self, p: Position) -> Result<StepOutcome> {
+        self.look_at(p, self.now.map_or(0, |n| n + 1))
+    }
+
+    /// [`look`](Self::look) at time `at` of a clock of the caller's (a walk's frame
+    /// number), for a client that does not look at every step: round trips and speed
+    /// are then measured in that clock's steps. An error for a time before the last
+    /// look's.
+    pub fn look_at(&mut self, p: Position, at: u64) -> Result<StepOutcome> {
+        if self.now.is_some_and(|n| at < n) {
+            return Err(Error::Invalid(format!(
+                "a PVS client looked at step {at}, before its last look at step {}",
+                self.clock()
+            )));
+        }
         let grid = self.source.grid();
         let current = grid.cell_of(p)?;
         if !self.source.is_viewcell(current)? {
@@ -207,14 +229,17 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
                 "position {p} lies in cell {current}, which has no viewcell (the viewer cannot stand there)"
             )));
         }
-        if self.seen_at.back() != Some(&p) {
-            if self.seen_at.len() > RECENT {
-                self.seen_at.pop_front();
+        match self.seen_at.back_mut() {
+            Some((q, t)) if *q == p => *t = at,
+            _ => {
+                if self.seen_at.len() > RECENT {
+                    self.seen_at.pop_front();
+                }
+                self.seen_at.push_back((p, at));
             }
-            self.seen_at.push_back(p);
         }
-        let first = self.looks == 0;
-        self.looks += 1;
+        let first = self.now.is_none();
+        self.now = Some(at);
         let source = self.source;
         let walkable = |c: Cell| source.is_viewcell(c);
         let area = self.rule.area_seen(grid, p, &self.observed(), &walkable)?;
@@ -278,7 +303,7 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         self.next_id += 1;
         self.in_flight.push(InFlight {
             id,
-            asked: self.looks - 1,
+            asked: at,
             sent: sent.clone(),
         });
         Ok(StepOutcome {
@@ -299,6 +324,12 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
     /// the cache still holds are on hand, and its round trip is measured. An error for a
     /// transaction not asked or already answered.
     pub fn deliver(&mut self, id: u64) -> Result<()> {
+        self.deliver_at(id, self.clock())
+    }
+
+    /// [`deliver`](Self::deliver) at time `at` of the clock [`look_at`](Self::look_at)
+    /// is given (a time before the latest look counts as that look's).
+    pub fn deliver_at(&mut self, id: u64, at: u64) -> Result<()> {
         let i = self
             .in_flight
             .iter()
@@ -317,7 +348,75 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
         if self.trips.len() == RECENT {
             self.trips.pop_front();
         }
-        self.trips.push_back(self.looks.saturating_sub(1) - t.asked);
+        self.trips.push_back(at.max(self.clock()) - t.asked);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::prefetch::pvs::{Snp, ViewcellGrid};
+
+    /// A street of `n` cells west to east, cell `c` seeing objects c..c+3.
+    struct Street(ViewcellGrid);
+
+    impl PvsSource for Street {
+        fn grid(&self) -> &ViewcellGrid {
+            &self.0
+        }
+        fn scene_objects(&self) -> u64 {
+            100
+        }
+        fn is_viewcell(&self, cell: Cell) -> Result<bool> {
+            Ok(self.0.contains(cell))
+        }
+        fn pvs(&self, cell: Cell) -> Result<Vec<ObjectId>> {
+            let first = u64::from(cell.col);
+            Ok((first..first + 3).collect())
+        }
+    }
+
+    fn street() -> Street {
+        Street(ViewcellGrid::new(Position::new(0.0, 0.0), 10.0, 1, 20).unwrap())
+    }
+
+    #[test]
+    fn a_callers_clock_measures_round_trips_and_speed_in_its_steps() {
+        let table = street();
+        let mut client = PvsClient::new(&table, &Snp, 9).unwrap();
+        // Looks at frames 0 and 10, 6 m apart; the second's answer comes at frame 14.
+        let first = client.look_at(Position::new(5.0, 5.0), 0).unwrap();
+        client.deliver_at(first.transaction.unwrap().id, 0).unwrap();
+        let t = client.look_at(Position::new(11.0, 5.0), 10).unwrap();
+        let t = t.transaction.expect("cell 2 is new");
+        assert_eq!(client.observed().speed, 0.6);
+        client.deliver_at(t.id, 14).unwrap();
+        assert_eq!(client.observed().round_trip, 4);
+        // Standing still, then a step of 3 m in one frame: 3 m a step, not 3 m over
+        // the frames stood.
+        client.look_at(Position::new(11.0, 5.0), 20).unwrap();
+        client.look_at(Position::new(14.0, 5.0), 21).unwrap();
+        assert_eq!(client.observed().speed, 3.0);
+        // An unanswered transaction's age counts as soon as it exceeds the answers'.
+        let far = client.look_at(Position::new(45.0, 5.0), 22).unwrap();
+        assert!(far.transaction.is_some());
+        client.look_at(Position::new(45.0, 5.0), 30).unwrap();
+        assert_eq!(client.observed().round_trip, 8);
+    }
+
+    #[test]
+    fn a_clock_that_runs_back_is_refused() {
+        let table = street();
+        let mut client = PvsClient::new(&table, &Snp, 9).unwrap();
+        client.look_at(Position::new(5.0, 5.0), 7).unwrap();
+        let e = client.look_at(Position::new(5.0, 5.0), 6).unwrap_err();
+        assert!(
+            e.to_string().contains("before its last look at step 7"),
+            "{e}"
+        );
+        // Plain looks go on from the caller's clock.
+        client.look(Position::new(5.0, 5.0)).unwrap();
+        client.look_at(Position::new(5.0, 5.0), 8).unwrap();
     }
 }
