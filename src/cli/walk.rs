@@ -11,7 +11,7 @@ use super::write_file;
 use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::{cell_walk, CameraPath};
-use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
@@ -37,10 +37,12 @@ pub struct WalkArgs {
     /// file. Default: normal.
     #[arg(long)]
     path: Option<String>,
-    /// With --mode pvs: which neighbours' PVS the client prefetches, snp or pbnp.
+    /// With --mode pvs: which neighbours' PVS the client prefetches, snp, pbnp or lanp
+    /// (ours: PBNP's and every cell the viewer may reach in the measured round trip).
     #[arg(long, default_value = "pbnp")]
     prefetch: String,
-    /// With --mode pvs and pbnp: the border regions' width, a share of the cell's side.
+    /// With --mode pvs and pbnp or lanp: the border regions' width, a share of the
+    /// cell's side.
     #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER)]
     border: f64,
     #[arg(long, default_value_t = 600)]
@@ -72,10 +74,10 @@ pub struct WalkArgs {
     /// to back; the prefetch thread then rarely finishes in time).
     #[arg(long, default_value_t = review::DEFAULT_PACE)]
     speed: f32,
-    /// REVIEW and BOX: the viewer's thread never waits on a read (ours): a search the
-    /// viewer needs is queued on a loader thread of its own and the frame draws what
-    /// is loaded, its misses counted; a load that fails on the network is asked for
-    /// again and the walk goes on.
+    /// REVIEW, BOX and PVS: the viewer's thread never waits on a read (ours): a search
+    /// the viewer needs (PVS: the client and its rows) is queued on a loader thread of
+    /// its own and the frame draws what is loaded, its misses counted; a load that
+    /// fails on the network is asked for again and the walk goes on.
     #[arg(long)]
     never_wait: bool,
     /// Write one row per frame here.
@@ -171,18 +173,26 @@ impl WalkArgs {
             every,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
         });
-        if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box") {
+        if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box" | "pvs") {
             bail!(
-                "--never-wait is for --mode review and box; the {mode} walk still waits on its \
-                 reads"
+                "--never-wait is for --mode review, box and pvs; the {mode} walk still waits on \
+                 its reads"
             );
         }
         if mode == "pvs" && config.is_none() {
-            let rule = match prefetch.as_str() {
+            let prefetch = match prefetch.as_str() {
                 "snp" => PvsPrefetch::Snp,
                 "pbnp" => PvsPrefetch::Pbnp { border },
-                other => bail!("unknown prefetch '{other}' (snp, pbnp)"),
+                "lanp" => PvsPrefetch::Lanp { border },
+                other => bail!("unknown prefetch '{other}' (snp, pbnp, lanp)"),
             };
+            let rule = PvsWalkConfig {
+                prefetch,
+                never_wait,
+                // A waiting PVS walk plays its frames back to back, as the thesis's.
+                pace: if never_wait { pace(speed) } else { None },
+            };
+            rule.validate()?;
             return pvs_walk_cmd(
                 &db,
                 path.as_deref().unwrap_or("cells"),
@@ -461,7 +471,7 @@ fn pvs_walk_cmd(
     frames: usize,
     fps: f32,
     seed: u64,
-    rule: PvsPrefetch,
+    rule: PvsWalkConfig,
     csv: Option<&Path>,
     source: &SourceArgs,
     quiet: bool,
@@ -511,6 +521,26 @@ fn pvs_walk_cmd(
         "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
         r.mean_drawn, r.pages
     );
+    println!(
+        "  frame time on the viewer's thread: mean {:.2} ms   max {:.2} ms   over 50 ms: {}",
+        r.mean_frame_ms, r.max_frame_ms, r.frames_over_50ms
+    );
+    if r.never_wait {
+        println!(
+            "  never waits on a read (ours): round trip measured up to {} frames   first complete frame {}   visual misses after it {}",
+            r.round_trip_frames,
+            r.first_complete_frame
+                .map_or("none".to_string(), |f| f.to_string()),
+            r.visual_misses_after_start
+        );
+    }
+    if r.failed_loads > 0 {
+        println!(
+            "  {} loads failed on the network and were asked for again; the last: {}",
+            r.failed_loads,
+            r.last_load_error.as_deref().unwrap_or("")
+        );
+    }
     print_remote(&db);
     print_render(drawn, render)
 }

@@ -13,7 +13,7 @@
 //! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
-//! database over HTTP through; `layout` counts what the file's order costs a reader
+//! database over HTTP through, and `pvs_http` the PVS walk's prefetchers; `layout` counts what the file's order costs a reader
 //! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
 //! starts.
 
@@ -42,6 +42,7 @@ pub mod nginx;
 pub mod patterns;
 pub mod plot;
 pub mod prefetch_k;
+pub mod pvs_http;
 pub mod pvs_prefetch;
 pub mod pvs_stats;
 pub mod report;

@@ -17,6 +17,7 @@ mod lod_parallel;
 mod lod_refine;
 mod patterns;
 mod prefetch_k;
+mod pvs_http;
 mod pvs_prefetch;
 mod report;
 mod scene_tree;
@@ -76,6 +77,11 @@ enum Experiment {
     /// ms, visual misses, time to the first complete frame, requests and bytes per
     /// second, bytes moved over bytes used, cache hit rate (ours).
     Http(http::HttpArgs),
+    /// The PVS walk's prefetchers, SNP, PBNP and LANP, never waiting on a read, over
+    /// HTTP through a loopback link of set round trips, beside the local walks: visual
+    /// misses, frames over 50 ms, swaps, objects sent, the measured round trip (ours).
+    /// Needs a database built with --visibility.
+    PvsHttp(pvs_http::PvsHttpArgs),
     /// The same city in files of different object orders (`build --order`), served over
     /// HTTP and asked the same range queries from cold clients: pages, requests, round
     /// trips and bytes per query for the query, the coarse levels and the full meshes
@@ -122,6 +128,7 @@ impl BenchArgs {
             Experiment::Patterns(a) => a.run(),
             Experiment::IndexCache(a) => a.run(),
             Experiment::Http(a) => a.run(),
+            Experiment::PvsHttp(a) => a.run(),
             Experiment::Layout(a) => a.run(),
             Experiment::Crowd(a) => a.run(),
             Experiment::Csearch(a) => a.run(),

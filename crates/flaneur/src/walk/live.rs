@@ -7,7 +7,7 @@
 //! and with what; the window only supplies poses and draws frames.
 
 use super::lod_select::WalkLods;
-use super::pvs_walk::{self, PvsPrefetch};
+use super::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
 use super::review::{self, Preset, ReviewConfig};
 use super::scene_walk::{self, SceneConfig};
 use super::visual::{self, VisualConfig, DEFAULT_ETA};
@@ -131,8 +131,8 @@ fn shown(mode: ViewMode) -> String {
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
 /// as [`review::walk_live`] walks them (unpaced: a person sets the pace; over HTTP never
 /// waiting on a read, [`ReviewConfig::never_wait`]), PVS as
-/// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (REVIEW instead, said so, on a
-/// database without visibility), VISUAL as [`visual::walk_live`] does under the
+/// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (over HTTP LANP, never
+/// waiting; REVIEW instead, said so, on a database without visibility), VISUAL as [`visual::walk_live`] does under the
 /// viewer's [η](LiveViewer::eta) (PVS instead, said so, on a database without the
 /// HDoV-tree), VSC, PB and CONV as [`scene_walk::walk_live`] does over the memory scene
 /// tree, loaded when first shown (REVIEW instead, said so, without visibility).
@@ -216,10 +216,19 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                 visual::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Pvs => {
-                let rule = PvsPrefetch::Pbnp {
-                    border: DEFAULT_BORDER,
+                // Over HTTP the client looks as far ahead as the round trip asks, and
+                // the viewer never waits on it.
+                let border = DEFAULT_BORDER;
+                let cfg = PvsWalkConfig {
+                    prefetch: if remote {
+                        PvsPrefetch::Lanp { border }
+                    } else {
+                        PvsPrefetch::Pbnp { border }
+                    },
+                    never_wait: remote,
+                    pace: None,
                 };
-                pvs_walk::walk_pvs_live_with(db, rule, &mut lods, |_| {}, viewer).map(|_| ())
+                pvs_walk::walk_pvs_live_with(db, cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             _ => review::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ()),
         };

@@ -12,14 +12,23 @@
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
 //!
+//! Never waiting ([`PvsWalkConfig::never_wait`], ours): the client runs on a loader
+//! thread of its own, which reads the rows and meshes it asks for while the viewer's
+//! thread only takes what has arrived, so a slow disk or a round trip over HTTP shows as
+//! visual misses, never as a long frame. The client's round trip is then measured in
+//! frames, and LANP ([`PvsPrefetch::Lanp`]) looks as far ahead as the viewer may go in
+//! it (`prefetch::pvs::Lanp`).
+//!
 //! Here: the settings, the entry points and the figures a walk reports. The frame loop
 //! is the walk session's (`walk/session.rs`), the client the PVS mode's
-//! (`walk/mode/pvs.rs`).
+//! (`walk/mode/pvs.rs`; never waiting, `walk/mode/pvs_never_wait.rs` and its loader
+//! `walk/mode/pvs_loader.rs`).
 
 use serde::Serialize;
 
 use crate::database::Database;
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::prefetch::pvs::{Lanp, Pbnp, PrefetchArea, Snp};
 use crate::walk::lod_select::WalkLods;
 use crate::walk::path::CameraPath;
 use crate::walk::sink::Played;
@@ -36,14 +45,88 @@ pub enum PvsPrefetch {
         /// (0, 0.5] ([`DEFAULT_BORDER`](crate::prefetch::pvs::DEFAULT_BORDER): 0.25).
         border: f64,
     },
+    /// PBNP's cells and every cell the viewer may reach before an answer comes, at its
+    /// measured speed and round trip (ours, `prefetch::pvs::Lanp`).
+    Lanp {
+        /// PBNP's border, as above.
+        border: f64,
+    },
 }
 
 impl PvsPrefetch {
-    /// The rule's name, as the CLI's `--prefetch` spells it: `snp` or `pbnp`.
+    /// The rule's name, as the CLI's `--prefetch` spells it: `snp`, `pbnp` or `lanp`.
     pub fn name(&self) -> &'static str {
         match self {
             PvsPrefetch::Snp => "snp",
             PvsPrefetch::Pbnp { .. } => "pbnp",
+            PvsPrefetch::Lanp { .. } => "lanp",
+        }
+    }
+
+    /// The rule itself. LANP is taken to start standing still: until the viewer has
+    /// moved it looks as far as PBNP. An error for a border outside (0, 0.5].
+    pub fn rule(&self) -> Result<Box<dyn PrefetchArea + Sync>> {
+        Ok(match *self {
+            PvsPrefetch::Snp => Box::new(Snp),
+            PvsPrefetch::Pbnp { border } => Box::new(Pbnp::new(border)?),
+            PvsPrefetch::Lanp { border } => Box::new(Lanp::new(border, 0.0)?),
+        })
+    }
+}
+
+/// How a PVS walk runs: its prefetching rule, and whether the viewer waits on reads.
+/// A [`PvsPrefetch`] alone is a waiting, unpaced walk, as the thesis's.
+///
+/// ```
+/// use flaneur::walk::pvs_walk::{PvsPrefetch, PvsWalkConfig};
+/// let cfg = PvsWalkConfig::never_waiting(PvsPrefetch::Lanp { border: 0.25 });
+/// assert!(cfg.never_wait && cfg.pace == Some(4.0));
+/// assert!(cfg.validate().is_ok());
+/// let thesis: PvsWalkConfig = PvsPrefetch::Snp.into();
+/// assert!(!thesis.never_wait && thesis.pace.is_none());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PvsWalkConfig {
+    /// Which neighbours the client prefetches.
+    pub prefetch: PvsPrefetch,
+    /// The viewer's thread never waits on a read (ours): the client and its reads run
+    /// on a loader thread, and each frame draws what has arrived.
+    pub never_wait: bool,
+    /// The path's clock runs this many times faster than real time: a never-wait
+    /// walk's loader works in real time, so frames are played at their poses' times
+    /// over this. `None`: frames back to back.
+    pub pace: Option<f32>,
+}
+
+impl From<PvsPrefetch> for PvsWalkConfig {
+    fn from(prefetch: PvsPrefetch) -> PvsWalkConfig {
+        PvsWalkConfig {
+            prefetch,
+            never_wait: false,
+            pace: None,
+        }
+    }
+}
+
+impl PvsWalkConfig {
+    /// A never-wait walk with `prefetch`, played at
+    /// [`DEFAULT_PACE`](crate::walk::review::DEFAULT_PACE) times real time.
+    pub fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
+        PvsWalkConfig {
+            prefetch,
+            never_wait: true,
+            pace: Some(crate::walk::review::DEFAULT_PACE),
+        }
+    }
+
+    /// Checks the rule's border and the pace (finite, above 0).
+    pub fn validate(&self) -> Result<()> {
+        self.prefetch.rule()?;
+        match self.pace {
+            Some(p) if !(p.is_finite() && p > 0.0) => Err(Error::Invalid(format!(
+                "a PVS walk's pace must be a finite number of times real time above 0, not {p}"
+            ))),
+            _ => Ok(()),
         }
     }
 }
@@ -62,9 +145,12 @@ pub struct PvsFrame {
     /// Its cache swaps: entries of the client's cache (a viewcell's PVS each) replaced
     /// to make room.
     pub swaps: usize,
-    /// On entering a cell, objects of its PVS the client did not hold.
+    /// Objects of the current cell's PVS the frame lacks: waiting, on entering a cell,
+    /// those the client did not hold; never waiting, at every frame, those not yet
+    /// arrived (all of them while the cell's row has not).
     pub visual_misses: usize,
-    /// Pages read during the frame (visibility pages included).
+    /// Pages read during the frame (visibility pages included; never waiting, by the
+    /// loader too).
     pub pages: u64,
 }
 
@@ -73,6 +159,8 @@ pub struct PvsFrame {
 pub struct PvsWalkReport {
     /// The prefetching rule walked.
     pub prefetch: PvsPrefetch,
+    /// Whether the viewer's thread never waited on a read.
+    pub never_wait: bool,
     /// Every frame's figures, in order.
     pub frames: Vec<PvsFrame>,
     /// Frames whose eye was in no walkable viewcell.
@@ -91,6 +179,25 @@ pub struct PvsWalkReport {
     pub mean_drawn: f64,
     /// Pages read, summed over frames.
     pub pages: u64,
+    /// The viewer's thread's time per frame, from taking the pose to culling, ms, on
+    /// average.
+    pub mean_frame_ms: f64,
+    /// The longest frame on the viewer's thread, ms.
+    pub max_frame_ms: f64,
+    /// Frames that took the viewer's thread over 50 ms.
+    pub frames_over_50ms: usize,
+    /// The first frame inside a walkable cell without a visual miss.
+    pub first_complete_frame: Option<usize>,
+    /// Visual misses after that frame: what the prefetching missed once the start's
+    /// first cell had arrived (the whole sum when no frame was complete).
+    pub visual_misses_after_start: usize,
+    /// The longest round trip the client measured, frames from asking to holding (0
+    /// when waiting: every answer comes in the frame that asks).
+    pub round_trip_frames: u32,
+    /// Loads that failed on the network and were asked for again (never waiting).
+    pub failed_loads: usize,
+    /// The last of those failures.
+    pub last_load_error: Option<String>,
 }
 
 impl PvsWalkReport {
@@ -100,56 +207,74 @@ impl PvsWalkReport {
     }
 }
 
-/// Walks `path` over `db`'s precomputed visibility with `prefetch`, calling `tick`
-/// after each frame.
+/// Walks `path` over `db`'s precomputed visibility as `cfg` says (a [`PvsPrefetch`]
+/// alone: waiting, as the thesis), calling `tick` after each frame.
 pub fn walk_pvs(
     db: &Database,
     path: &CameraPath,
-    prefetch: PvsPrefetch,
+    cfg: impl Into<PvsWalkConfig>,
     tick: impl FnMut(usize),
 ) -> Result<PvsWalkReport> {
-    walk_pvs_into(db, path, prefetch, tick, &mut NoSink)
+    walk_pvs_into(db, path, cfg, tick, &mut NoSink)
 }
 
 /// [`walk_pvs`], handing each frame to `sink` (a renderer).
 pub fn walk_pvs_into(
     db: &Database,
     path: &CameraPath,
-    prefetch: PvsPrefetch,
+    cfg: impl Into<PvsWalkConfig>,
     tick: impl FnMut(usize),
     sink: &mut dyn FrameSink,
 ) -> Result<PvsWalkReport> {
-    walk_pvs_live(db, prefetch, tick, &mut Played { path, sink })
+    walk_pvs_live(db, cfg, tick, &mut Played { path, sink })
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a
 /// window), until it has no more.
 pub fn walk_pvs_live(
     db: &Database,
-    prefetch: PvsPrefetch,
+    cfg: impl Into<PvsWalkConfig>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
-    walk_pvs_live_with(db, prefetch, &mut WalkLods::new(db), tick, viewer)
+    walk_pvs_live_with(db, cfg.into(), &mut WalkLods::new(db), tick, viewer)
 }
 
 /// [`walk_pvs_live`] with LOD selection `lods` kept from an earlier walk (one before it
 /// at the same window), so that what it read and refined stays so.
 pub(crate) fn walk_pvs_live_with<'db>(
     db: &'db Database,
-    prefetch: PvsPrefetch,
+    cfg: PvsWalkConfig,
     lods: &mut WalkLods<'db>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
-    let frames = super::mode::pvs::walk_live(db, prefetch, lods, tick, viewer)?;
+    cfg.validate()?;
+    let run = super::mode::pvs::walk_live(db, cfg, lods, tick, viewer)?;
+    let frames = run.frames;
     let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
     let cells_entered = frames
         .windows(2)
         .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
         .count();
+    let ms = &run.frame_ms;
+    let first_complete_frame = frames
+        .iter()
+        .position(|f| f.cell.is_some() && f.visual_misses == 0);
     Ok(PvsWalkReport {
-        prefetch,
+        prefetch: cfg.prefetch,
+        never_wait: cfg.never_wait,
+        mean_frame_ms: ms.iter().sum::<f64>() / ms.len().max(1) as f64,
+        max_frame_ms: ms.iter().copied().fold(0.0, f64::max),
+        frames_over_50ms: ms.iter().filter(|&&t| t > 50.0).count(),
+        first_complete_frame,
+        visual_misses_after_start: frames[first_complete_frame.unwrap_or(0)..]
+            .iter()
+            .map(|f| f.visual_misses)
+            .sum(),
+        round_trip_frames: run.round_trip,
+        failed_loads: run.failed_loads,
+        last_load_error: run.last_load_error,
         frames_outside: frames.len() - inside.len(),
         cells_entered,
         transactions: frames.iter().filter(|f| f.transaction).count(),

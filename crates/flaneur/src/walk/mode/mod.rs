@@ -1,7 +1,8 @@
 //! The walk modes: the retrieval strategies the walk session (`walk::session`) plays,
 //! one file each, each implementing [`Mode`](super::session::Mode). `review`: REVIEW
-//! and BOX (Shou 2002 §4.1–4.4); `pvs`: the PVS client with SNP or PBNP (Zheng 2007
-//! ch. 7); `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
+//! and BOX (Shou 2002 §4.1–4.4); `pvs`: the PVS client with SNP, PBNP or LANP (Zheng
+//! 2007 ch. 7), and `pvs_never_wait` with its `pvs_loader` the same walk never waiting
+//! on a read; `visual`: VISUAL over the HDoV-tree (Shou 2002 §5.8.5); `scene`: VSC, PB and
 //! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
 //! the full meshes of the objects it drew coarse, `loader` what its loader threads are asked and
@@ -12,6 +13,8 @@ mod load_order;
 mod loader;
 mod oracle;
 pub(crate) mod pvs;
+mod pvs_loader;
+mod pvs_never_wait;
 mod receive;
 mod refining;
 pub(crate) mod review;

@@ -4,44 +4,50 @@
 //! a viewer that draws gets the objects the client holds loaded into the buffer (after
 //! the frame's page count, so those reads are the renderer's), and draws the PVS of the
 //! current cell (the last one, outside cells). The settings and figures are
-//! `walk::pvs_walk`'s.
+//! `walk::pvs_walk`'s; the walk that never waits is `pvs_never_wait`'s.
 
 use std::collections::HashMap;
+use std::time::Instant;
 
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Camera;
-use crate::prefetch::pvs::{
-    Cell, Pbnp, Position, PrefetchArea, PvsClient, Snp, StoredPvs, THESIS_CAPACITY,
-};
+use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsClient, StoredPvs, THESIS_CAPACITY};
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::lod_select::WalkLods;
-use crate::walk::pvs_walk::{PvsFrame, PvsPrefetch};
+use crate::walk::pvs_walk::{PvsFrame, PvsWalkConfig};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 
-/// A PVS walk over `db`'s precomputed visibility with `prefetch`, the poses coming from
-/// `viewer`: the walk session with the PVS mode. Each frame's figures.
+/// What a PVS walk's frames did, and what its client measured.
+#[derive(Debug, Default)]
+pub(crate) struct PvsRun {
+    pub frames: Vec<PvsFrame>,
+    /// The viewer's thread's time per frame, ms.
+    pub frame_ms: Vec<f64>,
+    /// The longest round trip the client measured, frames.
+    pub round_trip: u32,
+    pub failed_loads: usize,
+    pub last_load_error: Option<String>,
+}
+
+/// A PVS walk over `db`'s precomputed visibility as `cfg` says, the poses coming from
+/// `viewer`: the walk session with the PVS mode (or, never waiting, its form with a
+/// loader thread).
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
-    prefetch: PvsPrefetch,
+    cfg: PvsWalkConfig,
     lods: &mut WalkLods<'db>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
-) -> Result<Vec<PvsFrame>> {
+) -> Result<PvsRun> {
     let source = StoredPvs::new(db)?;
-    let (snp, pbnp);
-    let rule: &dyn PrefetchArea = match prefetch {
-        PvsPrefetch::Snp => {
-            snp = Snp;
-            &snp
-        }
-        PvsPrefetch::Pbnp { border } => {
-            pbnp = Pbnp::new(border)?;
-            &pbnp
-        }
-    };
+    let rule = cfg.prefetch.rule()?;
+    if cfg.never_wait {
+        return super::pvs_never_wait::walk_live(db, &source, &*rule, cfg.pace, lods, tick, viewer);
+    }
+    let rule: &dyn PrefetchArea = &*rule;
     let client = PvsClient::new(&source, rule, THESIS_CAPACITY)?;
     // For a renderer: every object's index entry, to load what the client holds.
     let entries: HashMap<u64, ObjectEntry> = if viewer.draws() {
@@ -61,7 +67,13 @@ pub(crate) fn walk_live<'db>(
         shown: None,
         pending: None,
     };
-    session::run(&mut mode, viewer, lods, tick)
+    let timed = session::run(&mut mode, viewer, lods, tick)?;
+    let (frames, frame_ms) = timed.into_iter().unzip();
+    Ok(PvsRun {
+        frames,
+        frame_ms,
+        ..PvsRun::default()
+    })
 }
 
 /// The PVS mode: the client, and what a drawing viewer needs beside it.
@@ -73,12 +85,13 @@ struct Pvs<'a> {
     left_out: Option<LeftOut>,
     /// The cell whose PVS the frames draw: the current one, or the last one outside cells.
     shown: Option<Cell>,
-    /// The frame retrieved and not yet finished.
-    pending: Option<PvsFrame>,
+    /// The frame retrieved and not yet finished, and when it started.
+    pending: Option<(PvsFrame, Instant)>,
 }
 
 impl Mode for Pvs<'_> {
-    type Frame = PvsFrame;
+    /// The frame's figures and its time on the viewer's thread, ms.
+    type Frame = (PvsFrame, f64);
 
     /// What the client holds is bounded by its cache, not by the buffer.
     fn memory_budget(&self) -> usize {
@@ -87,6 +100,7 @@ impl Mode for Pvs<'_> {
 
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
         let pose = at.pose;
+        let started = Instant::now();
         let before = self.db.io().page_reads;
         let mut frame = PvsFrame::default();
         if let Some(id) = self.db.viewcell_at(pose.position)? {
@@ -103,7 +117,7 @@ impl Mode for Pvs<'_> {
             }
         }
         frame.pages = self.db.io().page_reads - before;
-        self.pending = Some(frame);
+        self.pending = Some((frame, started));
         if !at.draws {
             return Ok(None);
         }
@@ -119,29 +133,42 @@ impl Mode for Pvs<'_> {
         )
     }
 
-    fn finish(&mut self, _: &Culled<'_>, _: &ObjectBuffer) -> Result<PvsFrame> {
-        self.pending
-            .take()
-            .ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))
+    fn finish(&mut self, _: &Culled<'_>, _: &ObjectBuffer) -> Result<(PvsFrame, f64)> {
+        finish_timed(self.pending.take())
     }
 
-    fn figures(&mut self, frame: &PvsFrame, buffer: &ObjectBuffer) -> FrameFigures {
-        FrameFigures {
-            pages: frame.pages,
-            objects_buffered: buffer.len(),
-            objects_drawn: frame.drawn,
-            visual_misses: frame.visual_misses,
-            cell: frame.cell.map_or_else(
-                || "outside every viewcell".into(),
-                |c| format!("viewcell {c}"),
-            ),
-            damaged: self
-                .left_out
-                .as_mut()
-                .map(LeftOut::take_untold)
-                .unwrap_or_default(),
-            ..Default::default()
-        }
+    fn figures(&mut self, frame: &(PvsFrame, f64), buffer: &ObjectBuffer) -> FrameFigures {
+        let damaged = self.left_out.as_mut().map(LeftOut::take_untold);
+        figures(frame, buffer, damaged.unwrap_or_default())
+    }
+}
+
+/// A PVS frame retrieved at `started`, finished now: its figures and its time, ms.
+pub(super) fn finish_timed(pending: Option<(PvsFrame, Instant)>) -> Result<(PvsFrame, f64)> {
+    let (frame, started) =
+        pending.ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))?;
+    Ok((frame, started.elapsed().as_secs_f64() * 1e3))
+}
+
+/// What a PVS frame cost, for a display beside the picture; `damaged`, the objects
+/// left out since the last frame.
+pub(super) fn figures(
+    (frame, ms): &(PvsFrame, f64),
+    buffer: &ObjectBuffer,
+    damaged: Vec<String>,
+) -> FrameFigures {
+    FrameFigures {
+        pages: frame.pages,
+        walk_ms: *ms,
+        objects_buffered: buffer.len(),
+        objects_drawn: frame.drawn,
+        visual_misses: frame.visual_misses,
+        cell: frame.cell.map_or_else(
+            || "outside every viewcell".into(),
+            |c| format!("viewcell {c}"),
+        ),
+        damaged,
+        ..Default::default()
     }
 }
 

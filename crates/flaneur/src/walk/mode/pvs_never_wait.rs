@@ -1,0 +1,221 @@
+//! The PVS mode that never waits on a read (ours): the viewer's side. Each frame it
+//! finds the eye's viewcell from the visibility directory (read before the walk), posts
+//! where it stands to the loader thread (`pvs_loader`), takes what has arrived (rows,
+//! meshes, the cache's evictions) and draws the current cell's PVS of what it holds.
+//! What has not arrived is a visual miss, counted at every frame: all of the cell's PVS
+//! while its row has not come, the frame then drawing the last cell's.
+
+use std::collections::HashMap;
+use std::sync::{mpsc, Mutex};
+use std::time::{Duration, Instant};
+
+use super::pvs::{self, PvsRun};
+use super::pvs_loader::{self, Mailbox, Stand, Update};
+use super::receive::receive;
+use crate::database::Database;
+use crate::error::Result;
+use crate::geom::Camera;
+use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsSource, StoredPvs};
+use crate::walk::buffer::ObjectBuffer;
+use crate::walk::lod_select::WalkLods;
+use crate::walk::pvs_walk::PvsFrame;
+use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
+use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+
+/// A never-wait PVS walk over `source` (`db`'s visibility) with `rule`, the poses
+/// played at `pace` times real time (`None`: back to back).
+pub(crate) fn walk_live<'db>(
+    db: &'db Database,
+    source: &StoredPvs<'db>,
+    rule: &(dyn PrefetchArea + Sync),
+    pace: Option<f32>,
+    lods: &mut WalkLods<'db>,
+    tick: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+) -> Result<PvsRun> {
+    let mailbox = Mailbox::default();
+    let left_out = viewer
+        .skips_damaged()
+        .then(|| Mutex::new(LeftOut::default()));
+    let (tx, rx) = mpsc::channel();
+    std::thread::scope(|scope| {
+        let (mb, lo) = (&mailbox, left_out.as_ref());
+        scope.spawn(move || pvs_loader::run(db, source, rule, mb, lo, tx));
+        let mut mode = NeverWait {
+            db,
+            source,
+            mailbox: &mailbox,
+            rx,
+            left_out: left_out.as_ref(),
+            rows: HashMap::new(),
+            shown: None,
+            pace,
+            start: None,
+            clock: Instant::now(),
+            pending: None,
+            page_reads: db.io().page_reads,
+            run: PvsRun::default(),
+        };
+        let walked = session::run(&mut mode, viewer, lods, tick);
+        mailbox.end();
+        let (frames, frame_ms) = walked?.into_iter().unzip();
+        Ok(PvsRun {
+            frames,
+            frame_ms,
+            ..mode.run
+        })
+    })
+}
+
+/// The viewer's side of the walk.
+struct NeverWait<'a> {
+    db: &'a Database,
+    source: &'a StoredPvs<'a>,
+    mailbox: &'a Mailbox,
+    rx: mpsc::Receiver<Update>,
+    left_out: Option<&'a Mutex<LeftOut>>,
+    /// The rows the client's cache holds, as the loader has told them.
+    rows: HashMap<Cell, Vec<u64>>,
+    /// The cell whose PVS the frames draw: the current one once its row has come, else
+    /// the last one that had.
+    shown: Option<Cell>,
+    pace: Option<f32>,
+    /// The first pose's time, seconds.
+    start: Option<f64>,
+    clock: Instant,
+    pending: Option<(PvsFrame, Instant)>,
+    /// Pages read by the walk's start or its last frame.
+    page_reads: u64,
+    /// The loader's figures so far.
+    run: PvsRun,
+}
+
+impl Mode for NeverWait<'_> {
+    type Frame = (PvsFrame, f64);
+
+    /// What the viewer holds is bounded by the client's cache, not by the buffer.
+    fn memory_budget(&self) -> usize {
+        usize::MAX
+    }
+
+    fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
+        let pose = at.pose;
+        let start = *self.start.get_or_insert(pose.time);
+        if let Some(speed) = self.pace {
+            let due = Duration::from_secs_f64(((pose.time - start) / f64::from(speed)).max(0.0));
+            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let started = Instant::now();
+        let mut frame = PvsFrame::default();
+        let camera = pose.camera()?;
+        let here = match self.db.viewcell_at(pose.position)? {
+            Some(id) => {
+                let p = Position::new(f64::from(pose.position.x), f64::from(pose.position.z));
+                self.mailbox.post(Stand {
+                    frame: at.index as u64,
+                    at: p,
+                    eye: camera.position,
+                    aim: camera.forward(),
+                });
+                frame.cell = Some(id);
+                Some(self.source.grid().cell_of(p)?)
+            }
+            None => None,
+        };
+        self.take_updates(buffer, &mut frame)?;
+        if let Some(cell) = here {
+            if self.rows.contains_key(&cell) {
+                self.shown = Some(cell);
+            }
+            // The cell the client stands in, as it finds it (on a cell's side it may be
+            // the neighbour of the one the frame is counted in).
+            let pvs = self.db.visibility()?.map_or(0, |h| {
+                h.cell(h.grid.id(cell.row, cell.col))
+                    .map_or(0, |e| e.count as usize)
+            });
+            let held = self
+                .rows
+                .get(&cell)
+                .map_or(0, |r| r.iter().filter(|&&o| buffer.contains(o)).count());
+            frame.visual_misses = pvs.saturating_sub(held);
+        }
+        frame.drawn = self
+            .shown_row()
+            .iter()
+            .filter(|&&o| buffer.contains(o))
+            .count();
+        // Every page read since the last frame's count, the loader's included.
+        let reads = self.db.io().page_reads;
+        frame.pages = reads - std::mem::replace(&mut self.page_reads, reads);
+        self.pending = Some((frame, started));
+        Ok(at.draws.then_some(camera))
+    }
+
+    fn drawable(&self) -> Drawable<'_> {
+        Drawable::Only(self.shown_row())
+    }
+
+    fn finish(&mut self, _: &Culled<'_>, _: &ObjectBuffer) -> Result<(PvsFrame, f64)> {
+        pvs::finish_timed(self.pending.take())
+    }
+
+    fn figures(&mut self, frame: &(PvsFrame, f64), buffer: &ObjectBuffer) -> FrameFigures {
+        let damaged = self
+            .left_out
+            .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()));
+        pvs::figures(frame, buffer, damaged.unwrap_or_default())
+    }
+}
+
+impl NeverWait<'_> {
+    fn shown_row(&self) -> &[u64] {
+        self.shown
+            .and_then(|c| self.rows.get(&c))
+            .map_or(&[], |r| &r[..])
+    }
+
+    /// Takes everything the loader has sent since the last frame, in order.
+    fn take_updates(&mut self, buffer: &mut ObjectBuffer, frame: &mut PvsFrame) -> Result<()> {
+        while let Some(update) = receive(&self.rx, None)? {
+            match update {
+                Update::Asked {
+                    rows,
+                    evicted,
+                    dropped,
+                    sent,
+                    swaps,
+                } => {
+                    for c in evicted {
+                        self.rows.remove(&c);
+                    }
+                    self.rows.extend(rows);
+                    for id in dropped {
+                        buffer.remove(id);
+                    }
+                    frame.transaction = true;
+                    frame.sent += sent;
+                    frame.swaps += swaps;
+                }
+                Update::Loaded(objects) => {
+                    for o in objects {
+                        // A full mesh comes after the coarse level the viewer holds.
+                        if buffer.contains(o.entry.id) {
+                            buffer.refine(o);
+                        } else {
+                            buffer.insert(o);
+                        }
+                    }
+                }
+                Update::RoundTrip(trip) => self.run.round_trip = self.run.round_trip.max(trip),
+                Update::Retrying(why) => {
+                    self.run.failed_loads += 1;
+                    self.run.last_load_error = Some(why);
+                }
+                Update::Stopped(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+}

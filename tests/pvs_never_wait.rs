@@ -1,0 +1,247 @@
+//! The PVS walk that never waits on a read: the client on a loader thread, the viewer
+//! drawing what has arrived; locally and over HTTP from nginx, through a server that
+//! goes away, from the command line and in `bench pvs-http`.
+
+mod common;
+#[path = "common/http.rs"]
+mod servers;
+
+use std::time::Duration;
+
+use flaneur::prefetch::pvs::DEFAULT_BORDER;
+use flaneur::store::HttpOptions;
+use flaneur::walk::path::{cell_walk, CameraPath};
+use flaneur::walk::pvs_walk::{walk_pvs, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::{BuildOptions, Database};
+use servers::Nginx;
+
+const BORDER: f64 = DEFAULT_BORDER;
+
+fn rules() -> [PvsPrefetch; 3] {
+    [
+        PvsPrefetch::Snp,
+        PvsPrefetch::Pbnp { border: BORDER },
+        PvsPrefetch::Lanp { border: BORDER },
+    ]
+}
+
+/// A small city with visibility and LODs (so objects come coarse first).
+fn city(seed: u64) -> common::City {
+    common::city(
+        120,
+        seed,
+        &BuildOptions {
+            lod: BuildOptions::default().lod,
+            ..common::with_visibility()
+        },
+    )
+}
+
+/// A walk through the viewcells that then stands still for two seconds at its end, so
+/// that a loader has time to bring all of the last cell's PVS.
+fn walk_then_stand(db: &Database) -> CameraPath {
+    let mut path = cell_walk(db, 90, 1.0, 30.0, 3).unwrap();
+    let last = *path.poses.last().unwrap();
+    for i in 1..=60 {
+        path.poses.push(flaneur::walk::path::Pose {
+            time: last.time + f64::from(i) / 30.0,
+            ..last
+        });
+    }
+    path
+}
+
+fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
+    PvsWalkConfig {
+        pace: Some(1.0),
+        ..PvsWalkConfig::never_waiting(prefetch)
+    }
+}
+
+/// What must hold of a never-wait walk of `path` against the waiting walk of the same
+/// rule on the local file: the same frames in the same cells, nothing failed, and the
+/// last frame complete, drawing its cell's whole PVS as the waiting walk does.
+fn check_against_waiting(path: &CameraPath, r: &PvsWalkReport, waits: &PvsWalkReport) {
+    assert!(r.never_wait && !waits.never_wait);
+    assert_eq!(r.frames.len(), path.poses.len());
+    let cells = |r: &PvsWalkReport| r.frames.iter().map(|f| f.cell).collect::<Vec<_>>();
+    assert_eq!(cells(r), cells(waits), "{:?}", r.prefetch);
+    assert_eq!(r.failed_loads, 0, "{:?}", r.last_load_error);
+    let last = r.frames.last().unwrap();
+    let count = waits.frames.last().unwrap().drawn;
+    assert!(last.cell.is_some() && count > 0);
+    assert_eq!(
+        (last.visual_misses, last.drawn),
+        (0, count),
+        "{:?}",
+        r.prefetch
+    );
+    assert!(r.first_complete_frame.is_some());
+    assert!(r.visual_misses >= r.visual_misses_after_start);
+    // The waiting walk's answers come in the frame that asks.
+    assert_eq!(waits.round_trip_frames, 0);
+    assert!(r.transactions >= 1 && r.objects_sent >= count);
+}
+
+#[test]
+fn a_never_wait_pvs_walk_draws_what_arrives_and_ends_with_its_whole_pvs() {
+    let c = city(21);
+    let db = Database::open(&c.db).unwrap();
+    let path = walk_then_stand(&db);
+    for prefetch in rules() {
+        let waits = walk_pvs(&db, &path, prefetch, |_| {}).unwrap();
+        let r = walk_pvs(&db, &path, never_waiting(prefetch), |_| {}).unwrap();
+        check_against_waiting(&path, &r, &waits);
+        // The loader's reads are the walk's: every object's coarse level and mesh.
+        assert!(r.pages > waits.pages, "{} against {}", r.pages, waits.pages);
+    }
+}
+
+#[test]
+fn a_never_wait_pvs_walk_over_http_ends_as_the_local_one() {
+    let c = city(22);
+    let server = Nginx::start(c.dir.path());
+    let local = Database::open(&c.db).unwrap();
+    let path = walk_then_stand(&local);
+    for prefetch in rules() {
+        let waits = walk_pvs(&local, &path, prefetch, |_| {}).unwrap();
+        let db = Database::open_url(&server.url("city.flaneur")).unwrap();
+        let r = walk_pvs(&db, &path, never_waiting(prefetch), |_| {}).unwrap();
+        check_against_waiting(&path, &r, &waits);
+        assert!(db.remote_stats().unwrap().requests > 2);
+    }
+}
+
+#[test]
+fn a_never_wait_pvs_walk_goes_on_without_its_server_and_says_so() {
+    let c = city(23);
+    let mut server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let opts = HttpOptions {
+        retries: 2,
+        backoff: Duration::from_millis(10),
+        timeout: Duration::from_secs(5),
+        ..HttpOptions::default()
+    };
+    let db = Database::open_url_with(&url, &opts).unwrap();
+    // The index and the visibility directory are read while the server is up; then it
+    // goes, and no row or mesh can be.
+    db.range(&db.bounds()).unwrap();
+    db.visibility().unwrap();
+    server.stop();
+    let path = cell_walk(&db, 30, 1.0, 30.0, 3).unwrap();
+    let cfg = PvsWalkConfig {
+        pace: Some(4.0),
+        ..PvsWalkConfig::never_waiting(PvsPrefetch::Lanp { border: BORDER })
+    };
+    let r = walk_pvs(&db, &path, cfg, |_| {}).expect("the walk stopped");
+    assert_eq!(r.frames.len(), 30);
+    assert!(r.failed_loads >= 1);
+    let said = r.last_load_error.as_deref().unwrap();
+    assert!(said.contains(&url), "{said}");
+    assert!(r.first_complete_frame.is_none() && r.visual_misses > 0);
+}
+
+#[test]
+fn a_bad_pace_is_refused_before_the_walk() {
+    let c = common::city(40, 24, &common::with_visibility());
+    let db = Database::open(&c.db).unwrap();
+    let path = cell_walk(&db, 5, 1.0, 30.0, 3).unwrap();
+    for pace in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let cfg = PvsWalkConfig {
+            pace: Some(pace),
+            ..PvsWalkConfig::never_waiting(PvsPrefetch::Snp)
+        };
+        let e = walk_pvs(&db, &path, cfg, |_| {}).unwrap_err();
+        assert!(e.to_string().contains("pace"), "{e}");
+    }
+}
+
+#[test]
+fn the_cli_walks_pvs_never_waiting_with_lanp_and_benches_it_over_http() {
+    let c = common::city(60, 25, &common::with_visibility());
+    let db = c.db.to_str().unwrap();
+    let out = common::flaneur(&[
+        "walk",
+        db,
+        "--mode",
+        "pvs",
+        "--prefetch",
+        "lanp",
+        "--never-wait",
+        "--frames",
+        "60",
+        "--speed",
+        "8",
+    ]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        said.contains("lanp prefetch") && said.contains("never waits"),
+        "{said}"
+    );
+    let out = common::flaneur(&["walk", db, "--mode", "pvs", "--prefetch", "far"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("snp, pbnp, lanp"));
+
+    let dir = c.dir.path().join("bench");
+    let out = common::flaneur(&[
+        "bench",
+        "pvs-http",
+        db,
+        "--frames",
+        "60",
+        "--speed",
+        "8",
+        "--rtts",
+        "0,40",
+        "--rules",
+        "pbnp,lanp",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in flaneur_bench::pvs_http::PLOTS
+        .iter()
+        .chain(&["pvs-http.csv", "pvs-http.md"])
+    {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("pvs-http.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let kinds: Vec<(&str, &str)> = rows
+        .iter()
+        .map(|r| (r[col("rule")], r[col("source")]))
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            ("pbnp", "local-waiting"),
+            ("pbnp", "local"),
+            ("lanp", "local-waiting"),
+            ("lanp", "local"),
+            ("pbnp", "http"),
+            ("lanp", "http"),
+            ("pbnp", "http"),
+            ("lanp", "http"),
+        ]
+    );
+    for r in &rows[4..] {
+        let n = |name: &str| r[col(name)].parse::<f64>().unwrap();
+        assert!(n("requests") > 0.0 && n("bytes") > 0.0, "{r:?}");
+        assert_eq!(n("failed_loads"), 0.0);
+    }
+}
