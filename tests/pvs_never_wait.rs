@@ -245,3 +245,48 @@ fn the_cli_walks_pvs_never_waiting_with_lanp_and_benches_it_over_http() {
         assert_eq!(n("failed_loads"), 0.0);
     }
 }
+
+#[test]
+fn a_transactions_rows_come_over_http_in_one_round_trip_not_one_each() {
+    let c = common::city(
+        300,
+        26,
+        &BuildOptions {
+            page_size: 1024,
+            ..common::with_visibility()
+        },
+    );
+    let server = Nginx::start(c.dir.path());
+    // A first round trip that brings the header and the R-tree's root, not the whole
+    // visibility table with them (as the default's half megabyte of the file's end
+    // would of a city this small).
+    let opts = HttpOptions {
+        prefix_bytes: 4 << 10,
+        suffix_bytes: 4 << 10,
+        ..HttpOptions::default()
+    };
+    let db = Database::open_url_with(&server.url("city.flaneur"), &opts).unwrap();
+    let head = db.visibility().unwrap().unwrap();
+    // Cells far apart in the file, so that no two records share a page.
+    let ids: Vec<u32> = head.cells.iter().map(|c| c.id).step_by(16).collect();
+    assert!(ids.len() >= 16, "{} cells", head.cells.len());
+    let (one_by_one, together) = (&ids[..8], &ids[8..16]);
+    let trips = |read: &dyn Fn()| {
+        let before = db.remote_stats().unwrap();
+        read();
+        db.remote_stats().unwrap().since(&before).round_trips
+    };
+    let apart = trips(&|| {
+        for &id in one_by_one {
+            db.pvs(id).unwrap().unwrap();
+        }
+    });
+    let announced = trips(&|| {
+        db.announce_pvs(together).unwrap();
+        for &id in together {
+            db.pvs(id).unwrap().unwrap();
+        }
+    });
+    assert_eq!(apart, 8);
+    assert_eq!(announced, 1);
+}

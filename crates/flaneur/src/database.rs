@@ -630,6 +630,16 @@ impl Database {
         }
     }
 
+    /// The PVS records of viewcells `cells` are about to be read ([`pvs`](Self::pvs)):
+    /// over HTTP their pages are fetched together. A hint: reads nothing on a local
+    /// file, and nothing without visibility.
+    pub fn announce_pvs(&self, cells: &[u32]) -> Result<()> {
+        match &self.visibility {
+            Some(t) => t.announce(&self.store, cells),
+            None => Ok(()),
+        }
+    }
+
     /// The walkable viewcell under `p`, if there is one (and visibility at all).
     pub fn viewcell_at(&self, p: glam::Vec3) -> Result<Option<u32>> {
         match &self.visibility {

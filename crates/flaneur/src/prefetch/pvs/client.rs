@@ -286,6 +286,8 @@ impl<'a, S: PvsSource + ?Sized, A: PrefetchArea + ?Sized> PvsClient<'a, S, A> {
                 visual_misses,
             });
         }
+        // A hint: a row that cannot be fetched fails when it is read below.
+        let _ = self.source.announce(&missing);
         let rows = missing
             .iter()
             .map(|&c| Ok((c, self.source.pvs(c)?)))

@@ -59,4 +59,11 @@ pub trait PvsSource {
     /// The PVS of the viewcell at `cell`: object ids, ascending, without repeats. An
     /// error when no viewcell lies there or the table cannot be read.
     fn pvs(&self, cell: Cell) -> Result<Vec<ObjectId>>;
+
+    /// The rows of `cells` are about to be read, one [`pvs`](Self::pvs) each: a source
+    /// that reads over a network may fetch them together. A hint; by default nothing.
+    fn announce(&self, cells: &[Cell]) -> Result<()> {
+        let _ = cells;
+        Ok(())
+    }
 }

@@ -96,6 +96,14 @@ impl PvsSource for StoredPvs<'_> {
         Ok(head.cell(id).is_some())
     }
 
+    fn announce(&self, cells: &[Cell]) -> Result<()> {
+        let ids = cells
+            .iter()
+            .map(|&c| self.id(c))
+            .collect::<Result<Vec<u32>>>()?;
+        self.db.announce_pvs(&ids)
+    }
+
     fn pvs(&self, cell: Cell) -> Result<Vec<ObjectId>> {
         let id = self.id(cell)?;
         self.db

@@ -195,7 +195,8 @@ impl<'a, 't> Loader<'a, 't> {
     /// One turn: look from the viewer's latest position if it moved, then load one
     /// batch; waits for a position when there is nothing to load.
     fn turn(&mut self, mailbox: &Mailbox) -> Result<()> {
-        if let Some(stand) = mailbox.take(self.queue.is_empty()) {
+        let idle = self.queue.is_empty() && self.fine.is_empty();
+        if let Some(stand) = mailbox.take(idle) {
             if self.last != Some(stand.at) {
                 self.look(stand)?;
             }
