@@ -10,11 +10,12 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use super::mesh_batch::read_meshes;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::{Coverlap, ObjectEntry, QueryResult};
-use crate::store::{Extent, PageSource};
+use crate::store::PageSource;
 use crate::walk::buffer::Loaded;
 use crate::walk::mode::load_order::load_order;
 use crate::walk::mode::refining::MESHES_ASKED_TOGETHER;
@@ -116,24 +117,21 @@ pub(super) fn fetch(
                 Err(_) => {}
             }
         }
-        // A batch's mesh pages asked for at once: over HTTP they come coalesced and in
-        // parallel rather than a round trip each (a local store reads them as it goes).
-        // A failure here is the mesh read's to report, with its page.
-        let extents: Vec<Extent> = batch.iter().map(|e| e.mesh).collect();
-        let _ = db.store().prefetch(&extents);
-        for entry in batch {
-            let mesh = match (db.mesh(entry), left_out) {
-                (Ok(m), _) => m,
-                (Err(e), Some(l)) => {
+        // A viewer that walks on past damage walks on past a network's failure too.
+        objects.extend(read_meshes(
+            db,
+            batch.iter().copied(),
+            left_out,
+            |e, err| match left_out {
+                Some(l) => {
                     if let Ok(mut l) = l.lock() {
-                        l.leave_out(entry.id, &e);
+                        l.leave_out(e.id, &err);
                     }
-                    continue;
+                    Ok(())
                 }
-                (Err(e), None) => return Err(e),
-            };
-            objects.push(Loaded::new(**entry, mesh));
-        }
+                None => Err(err),
+            },
+        )?);
     }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Fetched {

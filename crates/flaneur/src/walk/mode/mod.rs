@@ -7,11 +7,13 @@
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
 //! the full meshes of the objects it drew coarse, `loader` what its loader threads are asked and
 //! hand back, `load_order` the order their loads come in, and `oracle` the ground truth
-//! of its visual misses.
+//! of its visual misses; `pace` plays a paced walk's poses at their times.
 
 mod load_order;
 mod loader;
+mod mesh_batch;
 mod oracle;
+mod pace;
 pub(crate) mod pvs;
 mod pvs_loader;
 mod pvs_never_wait;

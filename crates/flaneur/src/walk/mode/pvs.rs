@@ -20,6 +20,28 @@ use crate::walk::pvs_walk::{PvsFrame, PvsWalkConfig};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 
+/// Every object's index entry by id: what a PVS walk reads the meshes of the objects a
+/// row names through.
+#[derive(Debug, Default)]
+pub(super) struct IndexEntries(HashMap<u64, ObjectEntry>);
+
+impl IndexEntries {
+    /// The whole index of `db`, read once.
+    pub(super) fn read(db: &Database) -> Result<IndexEntries> {
+        let all = db.range(&db.bounds())?.objects;
+        Ok(IndexEntries(all.into_iter().map(|o| (o.id, o)).collect()))
+    }
+
+    /// Object `id`'s entry; an error for an id a PVS names and the index does not hold.
+    pub(super) fn get(&self, id: u64) -> Result<&ObjectEntry> {
+        self.0.get(&id).ok_or_else(|| {
+            Error::Invalid(format!(
+                "object {id} of a PVS is not in the database's index"
+            ))
+        })
+    }
+}
+
 /// What a PVS walk's frames did, and what its client measured.
 #[derive(Debug, Default)]
 pub(crate) struct PvsRun {
@@ -50,14 +72,10 @@ pub(crate) fn walk_live<'db>(
     let rule: &dyn PrefetchArea = &*rule;
     let client = PvsClient::new(&source, rule, THESIS_CAPACITY)?;
     // For a renderer: every object's index entry, to load what the client holds.
-    let entries: HashMap<u64, ObjectEntry> = if viewer.draws() {
-        db.range(&db.bounds())?
-            .objects
-            .into_iter()
-            .map(|o| (o.id, o))
-            .collect()
+    let entries = if viewer.draws() {
+        IndexEntries::read(db)?
     } else {
-        HashMap::new()
+        IndexEntries::default()
     };
     let mut mode = Pvs {
         db,
@@ -80,7 +98,7 @@ pub(crate) fn walk_live<'db>(
 struct Pvs<'a> {
     db: &'a Database,
     client: PvsClient<'a, StoredPvs<'a>, dyn PrefetchArea + 'a>,
-    entries: HashMap<u64, ObjectEntry>,
+    entries: IndexEntries,
     /// Objects whose meshes could not be read, when the viewer walks on without them.
     left_out: Option<LeftOut>,
     /// The cell whose PVS the frames draw: the current one, or the last one outside cells.
@@ -187,11 +205,7 @@ impl Pvs<'_> {
         }
         for id in cache.objects() {
             if held.get(id).is_none() && !self.left_out.as_ref().is_some_and(|l| l.contains(id)) {
-                let entry = self.entries.get(&id).ok_or_else(|| {
-                    Error::Invalid(format!(
-                        "object {id} of a PVS is not in the database's index"
-                    ))
-                })?;
+                let entry = self.entries.get(id)?;
                 let mesh = match (self.db.mesh(entry), self.left_out.as_mut()) {
                     (Ok(m), _) => m,
                     (Err(e), Some(l)) => {

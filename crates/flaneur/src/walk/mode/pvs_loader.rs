@@ -14,20 +14,21 @@
 //! when the last of its objects has arrived (or has been left out as damaged, or
 //! dropped by the cache).
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::{HashSet, VecDeque};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{mpsc, Condvar, Mutex};
 use std::time::Duration;
 
 use glam::Vec3;
 
+use super::mesh_batch::read_meshes;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsClient, StoredPvs, THESIS_CAPACITY};
 use crate::rtree::ObjectEntry;
-use crate::store::Extent;
 use crate::walk::buffer::Loaded;
 use crate::walk::mode::load_order::load_order;
+use crate::walk::mode::pvs::IndexEntries;
 use crate::walk::mode::refining::MESHES_ASKED_TOGETHER;
 use crate::walk::sink::LeftOut;
 
@@ -145,7 +146,7 @@ pub(super) fn run(
 struct Loader<'a, 't> {
     db: &'a Database,
     client: PvsClient<'a, StoredPvs<'a>, dyn PrefetchArea + Sync + 'a>,
-    entries: HashMap<u64, ObjectEntry>,
+    entries: IndexEntries,
     left_out: Option<&'a Mutex<LeftOut>>,
     tx: &'t mpsc::Sender<Update>,
     /// Objects to load, in order.
@@ -171,16 +172,10 @@ impl<'a, 't> Loader<'a, 't> {
     ) -> Result<Self> {
         // Every object's index entry, to read the meshes of what the client holds:
         // read here, so that the viewer's first frame does not wait on the index.
-        let entries = db
-            .range(&db.bounds())?
-            .objects
-            .into_iter()
-            .map(|o| (o.id, o))
-            .collect();
         Ok(Loader {
             db,
             client: PvsClient::new(source, rule, THESIS_CAPACITY)?,
-            entries,
+            entries: IndexEntries::read(db)?,
             left_out,
             tx,
             queue: VecDeque::new(),
@@ -274,11 +269,7 @@ impl<'a, 't> Loader<'a, 't> {
     }
 
     fn entry(&self, id: u64) -> Result<&ObjectEntry> {
-        self.entries.get(&id).ok_or_else(|| {
-            Error::Invalid(format!(
-                "object {id} of a PVS is not in the database's index"
-            ))
-        })
+        self.entries.get(id)
     }
 
     /// Loads the next batch, of the queue or else of the full meshes to come, and hands
@@ -350,37 +341,29 @@ impl<'a, 't> Loader<'a, 't> {
         batch: Vec<ObjectEntry>,
         fine: bool,
     ) -> Result<(Vec<Loaded>, Vec<u64>)> {
-        let extents: Vec<Extent> = batch.iter().map(|e| e.mesh).collect();
-        // A failure here is the mesh read's to report, with its page.
-        let _ = self.db.store().prefetch(&extents);
-        let mut loaded = Vec::with_capacity(batch.len());
-        let mut done = Vec::with_capacity(batch.len());
+        let mut again = Vec::new();
         let mut failed = None;
-        for entry in batch {
-            match (self.db.mesh(&entry), self.left_out) {
-                (Ok(mesh), _) => {
-                    loaded.push(Loaded::new(entry, mesh));
-                    done.push(entry.id);
-                }
-                (Err(e @ Error::Remote { .. }), _) => {
-                    match fine {
-                        true => self.fine.push_back(entry.id),
-                        false => self.queue.push_back(entry.id),
-                    }
-                    failed = Some(e.to_string());
-                }
-                (Err(e), Some(l)) => {
-                    if let Ok(mut l) = l.lock() {
-                        l.leave_out(entry.id, &e);
-                    }
-                    done.push(entry.id);
-                }
-                (Err(e), None) => return Err(e),
+        let loaded = read_meshes(self.db, &batch, self.left_out, |e, err| match err {
+            Error::Remote { .. } => {
+                again.push(e.id);
+                failed = Some(err.to_string());
+                Ok(())
             }
+            other => Err(other),
+        })?;
+        match fine {
+            true => self.fine.extend(&again),
+            false => self.queue.extend(&again),
         }
         if let Some(why) = failed {
             let _ = self.tx.send(Update::Retrying(why));
         }
+        // Loaded, or left out as damaged: all but those asked for again.
+        let done = batch
+            .iter()
+            .map(|e| e.id)
+            .filter(|id| !again.contains(id))
+            .collect();
         Ok((loaded, done))
     }
 

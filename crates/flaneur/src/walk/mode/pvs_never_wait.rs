@@ -7,8 +7,9 @@
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
+use super::pace::wait_until_due;
 use super::pvs::{self, PvsRun};
 use super::pvs_loader::{self, Mailbox, Stand, Update};
 use super::receive::receive;
@@ -102,10 +103,7 @@ impl Mode for NeverWait<'_> {
         let pose = at.pose;
         let start = *self.start.get_or_insert(pose.time);
         if let Some(speed) = self.pace {
-            let due = Duration::from_secs_f64(((pose.time - start) / f64::from(speed)).max(0.0));
-            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
-                std::thread::sleep(wait);
-            }
+            wait_until_due(pose.time, start, speed, self.clock);
         }
         let started = Instant::now();
         let mut frame = PvsFrame::default();

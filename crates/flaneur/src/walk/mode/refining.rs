@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::Duration;
 
+use super::mesh_batch::read_meshes;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::rtree::ObjectEntry;
@@ -42,24 +43,12 @@ pub(super) fn refine(
         if ended.load(Ordering::Relaxed) {
             return Ok(());
         }
-        // A failed fetch is the mesh read's to report, naming its page.
-        let _ = db
-            .store()
-            .prefetch(&batch.iter().map(|e| e.mesh).collect::<Vec<_>>());
-        let mut loaded = Vec::with_capacity(batch.len());
         let mut failed: Vec<Error> = Vec::new();
-        for e in batch {
-            match (db.mesh(e), left_out) {
-                (Ok(mesh), _) => loaded.push(Loaded::new(*e, mesh)),
-                (Err(err @ Error::Remote { .. }), _) | (Err(err), None) => failed.push(err),
-                (Err(err), Some(l)) => {
-                    if let Ok(mut l) = l.lock() {
-                        l.leave_out(e.id, &err);
-                    }
-                }
-            }
-        }
-        tx.send(Ok(loaded))?;
+        let loaded = read_meshes(db, batch, left_out, |_, err| {
+            failed.push(err);
+            Ok(())
+        });
+        tx.send(loaded)?;
         for err in failed {
             tx.send(Err(err))?;
         }

@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use super::pace::wait_until_due;
 use crate::cache::{policy_by_name, BufferPool, Lookahead};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -267,10 +268,7 @@ impl Mode for Review<'_> {
         // meanwhile is this frame's.
         let io_before = self.db.io();
         if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
-            let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
-            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
-                std::thread::sleep(wait);
-            }
+            wait_until_due(pose.time, start, speed, self.clock);
         }
         let motion = self.track.motion();
         let camera = Camera {

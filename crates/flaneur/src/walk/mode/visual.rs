@@ -9,6 +9,7 @@ use std::collections::{HashMap, HashSet};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use super::pace::wait_until_due;
 use crate::cache::{policy_by_name, BufferPool, CacheStats};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -304,10 +305,7 @@ impl Mode for Visual<'_> {
         // meanwhile is this frame's.
         let io_before = self.db.io();
         if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
-            let due = Duration::from_secs_f64(((pose.time - start) / speed as f64).max(0.0));
-            if let Some(wait) = due.checked_sub(self.clock.elapsed()) {
-                std::thread::sleep(wait);
-            }
+            wait_until_due(pose.time, start, speed, self.clock);
         }
         let camera = Camera {
             far: self.cfg.far,

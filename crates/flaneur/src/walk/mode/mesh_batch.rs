@@ -1,0 +1,41 @@
+//! Reading a batch of full meshes, as each loader thread of a walk does: the batch's
+//! pages asked for at once (over HTTP coalesced and in parallel rather than a round trip
+//! each; a local store reads them as it goes), then each mesh read and checked. A
+//! damaged mesh where the viewer walks on past damage is left out; every other failure
+//! is the caller's to decide on: the REVIEW loader, its refining lane and the PVS loader
+//! each do something else with a network's.
+
+use std::sync::Mutex;
+
+use crate::database::Database;
+use crate::error::{Error, Result};
+use crate::rtree::ObjectEntry;
+use crate::walk::buffer::Loaded;
+use crate::walk::sink::LeftOut;
+
+/// The meshes of `batch` that could be read, in order. Damage is left out in
+/// `left_out` when it is kept; a network failure, or any failure when it is not, goes
+/// to `failed`, which stops the batch by returning its error.
+pub(super) fn read_meshes<'e>(
+    db: &Database,
+    batch: impl IntoIterator<Item = &'e ObjectEntry> + Clone,
+    left_out: Option<&Mutex<LeftOut>>,
+    mut failed: impl FnMut(&ObjectEntry, Error) -> Result<()>,
+) -> Result<Vec<Loaded>> {
+    // A failed fetch is the mesh read's to report, naming its page.
+    let extents: Vec<_> = batch.clone().into_iter().map(|e| e.mesh).collect();
+    let _ = db.store().prefetch(&extents);
+    let mut loaded = Vec::with_capacity(extents.len());
+    for e in batch {
+        match (db.mesh(e), left_out) {
+            (Ok(mesh), _) => loaded.push(Loaded::new(*e, mesh)),
+            (Err(err @ Error::Remote { .. }), _) | (Err(err), None) => failed(e, err)?,
+            (Err(err), Some(l)) => {
+                if let Ok(mut l) = l.lock() {
+                    l.leave_out(e.id, &err);
+                }
+            }
+        }
+    }
+    Ok(loaded)
+}
