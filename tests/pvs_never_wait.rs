@@ -290,3 +290,29 @@ fn a_transactions_rows_come_over_http_in_one_round_trip_not_one_each() {
     assert_eq!(apart, 8);
     assert_eq!(announced, 1);
 }
+
+#[test]
+fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
+    let c = city(27);
+    let other = city(28);
+    let server = Nginx::start(c.dir.path());
+    let db = Database::open_url(&server.url("city.flaneur")).unwrap();
+    let path = walk_then_stand(&db);
+    // Replace the served file with another city's, as a deploy would (a rename), newer.
+    let staged = c.dir.path().join("staged");
+    std::fs::copy(&other.db, &staged).unwrap();
+    let later = std::time::SystemTime::now() + Duration::from_secs(60);
+    std::fs::File::options()
+        .write(true)
+        .open(&staged)
+        .unwrap()
+        .set_modified(later)
+        .unwrap();
+    std::fs::rename(&staged, &c.db).unwrap();
+    let cfg = never_waiting(PvsPrefetch::Lanp { border: BORDER });
+    match walk_pvs(&db, &path, cfg, |_| {}) {
+        Err(flaneur::Error::RemoteChanged { url, .. }) => assert!(url.ends_with("/city.flaneur")),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("walked a city across a swap of its file"),
+    }
+}

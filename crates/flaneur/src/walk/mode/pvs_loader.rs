@@ -310,6 +310,8 @@ impl<'a, 't> Loader<'a, 't> {
                 let _ = self.tx.send(Update::Retrying(e.to_string()));
                 return Ok(());
             }
+            // The file changed under the walk: never mix its pages with the old ones'.
+            Err(e @ Error::RemoteChanged { .. }) => return Err(e),
             // Damage somewhere in the batch: read it object by object, which names (or,
             // for a viewer that walks on, leaves out) the damaged one.
             Err(_) => self.load_full(batch, false)?,
