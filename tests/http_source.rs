@@ -283,13 +283,8 @@ fn all_meshes(db: &Database) -> Result<Vec<flaneur::scene::Mesh>, Error> {
     all.objects.iter().map(|o| db.mesh(o)).collect()
 }
 
-#[test]
-fn a_file_swapped_mid_walk_is_refused_not_mixed() {
-    let c = city(300, 8);
-    let other = city(300, 9);
-    let server = Nginx::start(c.dir.path());
-    let db = Database::open_url_with(&server.url("city.flaneur"), &impatient()).unwrap();
-    // Replace the served file with another city's, as a deploy would (a rename), newer.
+/// Replaces the file `c` serves with `other`'s, as a deploy would (a rename), newer.
+fn swap_served(c: &common::City, other: &common::City) {
     let staged = c.dir.path().join("staged");
     std::fs::copy(&other.db, &staged).unwrap();
     let later = SystemTime::now() + Duration::from_secs(60);
@@ -300,6 +295,15 @@ fn a_file_swapped_mid_walk_is_refused_not_mixed() {
         .set_modified(later)
         .unwrap();
     std::fs::rename(&staged, &c.db).unwrap();
+}
+
+#[test]
+fn a_file_swapped_mid_walk_is_refused_not_mixed() {
+    let c = city(300, 8);
+    let other = city(300, 9);
+    let server = Nginx::start(c.dir.path());
+    let db = Database::open_url_with(&server.url("city.flaneur"), &impatient()).unwrap();
+    swap_served(&c, &other);
     match all_meshes(&db) {
         Err(Error::RemoteChanged { url, what }) => {
             assert!(url.ends_with("/city.flaneur"));
@@ -761,4 +765,124 @@ fn bench_crowd_serves_the_file_with_nginx_and_writes_its_report() {
     let none = common::flaneur(&["bench", "crowd", db, "--walkers", "0"]);
     assert!(!none.status.success());
     assert!(String::from_utf8_lossy(&none.stderr).contains("walkers"));
+}
+
+/// A person at a window: walks a path, and would rather walk on past what cannot be read
+/// than stop (`Viewer::skips_damaged`); keeps what it was told was left out.
+struct AtAWindow<'p> {
+    path: &'p flaneur::walk::path::CameraPath,
+    damaged: Vec<String>,
+}
+
+impl flaneur::walk::FrameSink for AtAWindow<'_> {
+    fn frame(
+        &mut self,
+        _: usize,
+        _: &flaneur::geom::Camera,
+        _: &flaneur::walk::ObjectBuffer,
+        _: &mut flaneur::walk::Selection<'_>,
+    ) -> flaneur::Result<()> {
+        Ok(())
+    }
+}
+
+impl flaneur::walk::Viewer for AtAWindow<'_> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
+        Ok(self.path.poses.get(frame).copied())
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.damaged.extend(figures.damaged.iter().cloned());
+    }
+
+    fn skips_damaged(&self) -> bool {
+        true
+    }
+}
+
+#[test]
+fn a_never_wait_walk_asks_again_for_what_an_outage_kept_from_it() {
+    // Full meshes only, so that the outage falls on the loader's reads of meshes.
+    let c = common::city(
+        300,
+        17,
+        &BuildOptions {
+            page_size: 1024,
+            lod: None,
+            ..Default::default()
+        },
+    );
+    let bytes = std::fs::read(&c.db).unwrap();
+    let open = |url: &str| {
+        let db = Database::open_url_with(url, &impatient()).unwrap();
+        db.range(&db.bounds()).unwrap();
+        db
+    };
+    // The requests that open the database and read its whole index, counted on an
+    // honest server: the outage starts at the walk's first.
+    let before_walk = {
+        let honest = Misbehaving::start(bytes.clone(), usize::MAX, Fault::Garble);
+        open(&honest.url());
+        honest.requests.load(std::sync::atomic::Ordering::Relaxed)
+    };
+    let server = Misbehaving::start(bytes, before_walk, Fault::Outage(60));
+    let db = open(&server.url());
+    let mut path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 2).unwrap();
+    // Then the viewer stands, long enough for what it lacks to come.
+    let last = *path.poses.last().unwrap();
+    path.poses
+        .extend((1..=120).map(|i| flaneur::walk::path::Pose {
+            time: last.time + f64::from(i) / 30.0,
+            ..last
+        }));
+    let cfg = ReviewConfig {
+        far: 150.0,
+        pace: Some(2.0),
+        never_wait: true,
+        ..ReviewConfig::preset(Preset::Optimal)
+    };
+    let mut viewer = AtAWindow {
+        path: &path,
+        damaged: Vec::new(),
+    };
+    let report = review::walk_live(&db, &cfg, |_| {}, &mut viewer).expect("the walk stopped");
+    let s = &report.summary;
+    assert!(s.failed_loads >= 1, "the outage missed the walk: {s:?}");
+    let said = s.last_load_error.as_deref().unwrap();
+    assert!(said.contains(&server.url()), "{said}");
+    // Nothing was taken for damage, and the standing viewer ends with all it sees.
+    assert!(viewer.damaged.is_empty(), "{:?}", viewer.damaged);
+    assert_eq!(report.frames.last().unwrap().visual_misses, 0, "{s:?}");
+}
+
+#[test]
+fn a_file_swapped_under_a_walk_at_a_window_stops_it_though_damage_would_not() {
+    let full_meshes = BuildOptions {
+        page_size: 1024,
+        lod: None,
+        ..Default::default()
+    };
+    let c = common::city(300, 18, &full_meshes);
+    let other = common::city(300, 19, &full_meshes);
+    let server = Nginx::start(c.dir.path());
+    let db = Database::open_url_with(&server.url("city.flaneur"), &impatient()).unwrap();
+    // The index is read before the swap, so that the walk meets it reading meshes.
+    db.range(&db.bounds()).unwrap();
+    swap_served(&c, &other);
+    let path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 2).unwrap();
+    let cfg = ReviewConfig {
+        far: 150.0,
+        pace: Some(8.0),
+        never_wait: true,
+        ..ReviewConfig::preset(Preset::Optimal)
+    };
+    let mut viewer = AtAWindow {
+        path: &path,
+        damaged: Vec::new(),
+    };
+    match review::walk_live(&db, &cfg, |_| {}, &mut viewer) {
+        Err(Error::RemoteChanged { url, .. }) => assert!(url.ends_with("/city.flaneur")),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("walked on across a swap of its file: {:?}", viewer.damaged),
+    }
 }

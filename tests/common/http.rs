@@ -56,10 +56,14 @@ pub enum Fault {
     Status(u16),
     /// Flips one byte of every body.
     Garble,
+    /// Answers this many requests with 503 and an empty body, then well again (a server
+    /// that was away for a while).
+    Outage(usize),
 }
 
 /// A server of our own on real TCP, serving `bytes` as one file at any path, honest for
-/// its first `honest` requests and then `fault` on every one.
+/// its first `honest` requests and then `fault` on every one (an outage's, on as many as
+/// it lasts).
 pub struct Misbehaving {
     port: u16,
     stop: Arc<AtomicBool>,
@@ -148,7 +152,8 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
                 "HTTP/1.1 206 Partial Content\r\nContent-Length: {len}\r\nContent-Range: bytes {a}-{b}/{total}\r\nETag: \"v1\"\r\n\r\n"
             )
         };
-        if n < honest {
+        let back = matches!(fault, Fault::Outage(away) if n >= honest + away);
+        if n < honest || back {
             let _ = out.write_all(head(body.len(), a, b).as_bytes());
             let _ = out.write_all(&body);
             continue;
@@ -169,6 +174,9 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
                 let cut = (body.len() / 2).max(1);
                 let _ = out.write_all(head(cut, a, a + cut - 1).as_bytes());
                 let _ = out.write_all(&body[..cut]);
+            }
+            Fault::Outage(_) => {
+                let _ = out.write_all(b"HTTP/1.1 503 Away\r\nContent-Length: 0\r\n\r\n");
             }
             Fault::Status(code) => {
                 let _ = out.write_all(

@@ -29,6 +29,11 @@ pub(super) struct Fetched {
     pub(super) objects: Vec<Loaded>,
     /// What CSearch retrieved for the cell (for the history).
     pub(super) retrieved: Vec<ObjectEntry>,
+    /// Objects of `retrieved` the network failed to bring, where the viewer walks on
+    /// past a failure (then the cell is not held whole, and is asked for again), and the
+    /// last such failure's words.
+    pub(super) unloaded: usize,
+    pub(super) failure: Option<String>,
     /// Time in the index, and reading meshes, on the thread that fetched.
     pub(super) query_ms: f64,
     pub(super) load_ms: f64,
@@ -91,6 +96,7 @@ pub(super) fn fetch(
     // Objects handed over as parts so far (never-wait walks): each batch is drawn while
     // the next loads; the last comes with the whole result.
     let mut handed = 0;
+    let (mut unloaded, mut failure) = (0, None);
     for batch in wanted.chunks(MESHES_ASKED_TOGETHER) {
         if ended.load(Ordering::Relaxed) {
             break;
@@ -117,19 +123,19 @@ pub(super) fn fetch(
                 Err(_) => {}
             }
         }
-        // A viewer that walks on past damage walks on past a network's failure too.
+        // A viewer that walks on past damage walks on past a network's failure too, but
+        // without the object only until the cell is asked for again.
         objects.extend(read_meshes(
             db,
             batch.iter().copied(),
             left_out,
-            |e, err| match left_out {
-                Some(l) => {
-                    if let Ok(mut l) = l.lock() {
-                        l.leave_out(e.id, &err);
-                    }
+            |_, err| match (err, left_out) {
+                (err @ Error::Remote { .. }, Some(_)) => {
+                    unloaded += 1;
+                    failure = Some(err.to_string());
                     Ok(())
                 }
-                None => Err(err),
+                (err, _) => Err(err),
             },
         )?);
     }
@@ -139,6 +145,8 @@ pub(super) fn fetch(
         epoch: req.epoch,
         objects,
         retrieved: result.objects,
+        unloaded,
+        failure,
         query_ms,
         load_ms,
     })

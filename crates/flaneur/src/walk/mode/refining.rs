@@ -6,7 +6,8 @@
 //! back, and each failure after them on its own. A mesh that cannot be read where the
 //! viewer walks on past damage is left out (the object stays drawn coarse, and is told
 //! of once); any other failure goes back to the walk, which goes on past a network's
-//! and stops at the rest.
+//! and stops at the rest. The meshes a network failed to bring are asked for again
+//! once the job's others are read, a pause later, until they come or the walk ends.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Mutex};
@@ -36,24 +37,47 @@ pub(super) fn refine(
     (now_busy, ended): (&AtomicBool, &AtomicBool),
     tx: &mpsc::Sender<Refined>,
 ) -> std::result::Result<(), mpsc::SendError<Refined>> {
-    for batch in job.chunks(MESHES_ASKED_TOGETHER) {
-        while now_busy.load(Ordering::Relaxed) && !ended.load(Ordering::Relaxed) {
-            std::thread::sleep(Duration::from_millis(2));
+    let mut job = job.to_vec();
+    while !job.is_empty() {
+        let mut again = Vec::new();
+        for batch in job.chunks(MESHES_ASKED_TOGETHER) {
+            while now_busy.load(Ordering::Relaxed) && !ended.load(Ordering::Relaxed) {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            if ended.load(Ordering::Relaxed) {
+                return Ok(());
+            }
+            let mut failed: Vec<Error> = Vec::new();
+            let loaded = read_meshes(db, batch, left_out, |e, err| {
+                if matches!(err, Error::Remote { .. }) {
+                    again.push(*e);
+                }
+                failed.push(err);
+                Ok(())
+            });
+            tx.send(loaded)?;
+            for err in failed {
+                tx.send(Err(err))?;
+            }
         }
-        if ended.load(Ordering::Relaxed) {
-            return Ok(());
-        }
-        let mut failed: Vec<Error> = Vec::new();
-        let loaded = read_meshes(db, batch, left_out, |_, err| {
-            failed.push(err);
-            Ok(())
-        });
-        tx.send(loaded)?;
-        for err in failed {
-            tx.send(Err(err))?;
+        job = again;
+        if !job.is_empty() {
+            pause(ended);
         }
     }
     Ok(())
+}
+
+/// How long the lane waits before it asks again for meshes the network failed to
+/// bring (each ask already retried with the client's backoff).
+const ASK_AGAIN_AFTER: Duration = Duration::from_millis(200);
+
+/// Waits [`ASK_AGAIN_AFTER`], or less when the walk ends meanwhile.
+fn pause(ended: &AtomicBool) {
+    let until = std::time::Instant::now() + ASK_AGAIN_AFTER;
+    while std::time::Instant::now() < until && !ended.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
 }
 
 #[cfg(test)]

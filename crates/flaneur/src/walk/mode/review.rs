@@ -648,8 +648,9 @@ impl Review<'_> {
 
     /// Takes a query's objects into the buffer and its cell into the history, evicting
     /// by Fig. 4.8 when over budget. False if the budget could not hold all of the
-    /// cell's objects beside the viewer's (then the cell is not in the history, so a
-    /// later search fetches what was dropped).
+    /// cell's objects beside the viewer's, or the network failed to bring some (then the
+    /// cell is not in the history, so a later search fetches what is missing: a
+    /// never-wait viewer asks for the cell again at once, as it has not arrived).
     fn adopt(
         &mut self,
         fetched: Fetched,
@@ -675,9 +676,16 @@ impl Review<'_> {
         if let (Some(tx), false) = (&self.fine_tx, coarse.is_empty()) {
             let _ = tx.send(coarse);
         }
+        let held_whole = fetched.unloaded == 0;
+        if !held_whole {
+            self.counts.failed += 1;
+            self.counts.last_failure = fetched.failure;
+        }
         self.history.filter(&cell);
-        self.history.record(cell, &fetched.retrieved);
-        let mut complete = true;
+        if held_whole {
+            self.history.record(cell, &fetched.retrieved);
+        }
+        let mut complete = held_whole;
         if buffer.over_budget() {
             // Keep the cell the viewer is in as well as the new one (a prefetch lands
             // before the viewer gets there).
@@ -702,7 +710,7 @@ impl Review<'_> {
             self.history.clear();
             for (c, n) in keep.iter().zip(whole) {
                 let kept = overlapping(buffer, c);
-                if kept.len() == n {
+                if kept.len() == n && (held_whole || *c != cell) {
                     self.history.record(*c, &kept);
                 } else if *c == cell {
                     complete = false;
