@@ -558,6 +558,10 @@ fn bench_http_walks_through_a_link_of_set_round_trip() {
         "0,40",
         "--mbits",
         "100",
+        "--policy",
+        "path",
+        "--index-cache-kb",
+        "8",
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -572,23 +576,24 @@ fn bench_http_walks_through_a_link_of_set_round_trip() {
     {
         assert!(dir.join(f).exists(), "{f} missing");
     }
-    let csv = std::fs::read_to_string(dir.join("http.csv")).unwrap();
-    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
-    let kinds: Vec<&str> = rows.iter().map(|r| r[col("source")]).collect();
+    let csv = common::Csv::read(&dir.join("http.csv"));
+    let rows = &csv.rows;
+    let kinds: Vec<&str> = rows.iter().map(|r| csv.get(r, "source")).collect();
     assert_eq!(kinds, ["local", "local-waiting", "http", "http"]);
-    let num = |r: &Vec<&str>, name: &str| -> f64 { r[col(name)].parse().unwrap() };
+    let num = |r: &[String], name: &str| csv.num(r, name);
     for r in &rows[2..] {
         // Never a search on the viewer's thread; every walk asked the server for pages.
         assert_eq!(num(r, "sync_queries"), 0.0);
         assert!(num(r, "requests") > 0.0 && num(r, "bytes") > 0.0, "{r:?}");
         assert_eq!(num(r, "failed_loads"), 0.0);
     }
+    for r in rows {
+        // The index cache asked for: 8 pages of 1 KiB under the path policy.
+        let hit_rate = num(r, "index_hit_rate");
+        assert!((0.0..=1.0).contains(&hit_rate), "{r:?}");
+    }
+    let md = std::fs::read_to_string(dir.join("http.md")).unwrap();
+    assert!(md.contains("index cache path, 8 KiB"), "{md}");
     // Opening over the 40 ms link took its first round trip at least.
     assert!(num(&rows[3], "open_ms") >= 40.0, "{:?}", rows[3]);
     assert!(num(&rows[2], "open_ms") < num(&rows[3], "open_ms"));

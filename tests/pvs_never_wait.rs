@@ -214,17 +214,11 @@ fn the_cli_walks_pvs_never_waiting_with_lanp_and_benches_it_over_http() {
     {
         assert!(dir.join(f).exists(), "{f} missing");
     }
-    let csv = std::fs::read_to_string(dir.join("pvs-http.csv")).unwrap();
-    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let csv = common::Csv::read(&dir.join("pvs-http.csv"));
+    let rows = &csv.rows;
     let kinds: Vec<(&str, &str)> = rows
         .iter()
-        .map(|r| (r[col("rule")], r[col("source")]))
+        .map(|r| (csv.get(r, "rule"), csv.get(r, "source")))
         .collect();
     assert_eq!(
         kinds,
@@ -240,7 +234,7 @@ fn the_cli_walks_pvs_never_waiting_with_lanp_and_benches_it_over_http() {
         ]
     );
     for r in &rows[4..] {
-        let n = |name: &str| r[col(name)].parse::<f64>().unwrap();
+        let n = |name: &str| csv.num(r, name);
         assert!(n("requests") > 0.0 && n("bytes") > 0.0, "{r:?}");
         assert_eq!(n("failed_loads"), 0.0);
     }

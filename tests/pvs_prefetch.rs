@@ -52,18 +52,15 @@ fn pvs_prefetch_writes_table_7_2_and_its_figures() {
         assert!(stdout.contains(word), "{word} missing from\n{stdout}");
     }
 
-    let csv = std::fs::read_to_string(out_dir.join("pvs-prefetch.csv")).unwrap();
-    let mut lines = csv.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 4);
+    let csv = common::Csv::read(&out_dir.join("pvs-prefetch.csv"));
+    assert_eq!(csv.rows.len(), 4);
     let get = |route: &str, alg: &str, name: &str| -> f64 {
-        let r = rows
+        let r = csv
+            .rows
             .iter()
             .find(|r| r[0] == route && r[1] == alg)
             .unwrap_or_else(|| panic!("no row for {route} {alg}"));
-        r[col(name)].parse().unwrap()
+        csv.num(r, name)
     };
     for route in ["1", "2"] {
         assert!(get(route, "PBNP", "cache_swaps") < get(route, "SNP", "cache_swaps"));

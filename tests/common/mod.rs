@@ -15,6 +15,40 @@ pub fn flaneur(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// A bench's CSV file read back, each field found by its column's name.
+pub struct Csv {
+    head: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Csv {
+    pub fn read(path: &std::path::Path) -> Csv {
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut lines = text
+            .lines()
+            .map(|l| l.split(',').map(String::from).collect());
+        Csv {
+            head: lines.next().unwrap_or_default(),
+            rows: lines.collect(),
+        }
+    }
+
+    /// Field `name` of `row`.
+    pub fn get<'r>(&self, row: &'r [String], name: &str) -> &'r str {
+        let col = self.head.iter().position(|h| h == name);
+        &row[col.unwrap_or_else(|| panic!("no column {name} in {:?}", self.head))]
+    }
+
+    /// Field `name` of `row`, a number.
+    pub fn num(&self, row: &[String], name: &str) -> f64 {
+        let field = self.get(row, name);
+        field
+            .parse()
+            .unwrap_or_else(|_| panic!("{name} is not a number: {field:?}"))
+    }
+}
+
 pub struct City {
     pub dir: tempfile::TempDir,
     pub scene: PathBuf,

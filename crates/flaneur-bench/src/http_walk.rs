@@ -23,9 +23,9 @@ use std::net::SocketAddr;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::link::{Link, LinkSpec};
 use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
+use crate::through_link::{check_link, open_through};
 use crate::walk_setup::{num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -44,6 +44,10 @@ pub struct HttpBenchConfig {
     pub mbits: Vec<f64>,
     /// The client page cache, bytes.
     pub cache_bytes: usize,
+    /// The index cache's policy and bytes, in place of the Optimal configuration's
+    /// (DPLRU, 1 MiB): over HTTP an index page the index cache and the client cache both
+    /// lack costs a request on the loader's thread.
+    pub index_cache: Option<(String, usize)>,
 }
 
 impl Default for HttpBenchConfig {
@@ -57,6 +61,7 @@ impl Default for HttpBenchConfig {
             rtts_ms: vec![0, 20, 50, 100, 200],
             mbits: vec![20.0, 100.0],
             cache_bytes: HttpOptions::default().cache_bytes,
+            index_cache: None,
         }
     }
 }
@@ -70,24 +75,26 @@ impl HttpBenchConfig {
                 "http: give at least one round trip and one bandwidth".into(),
             ));
         }
-        if let Some(m) = self.mbits.iter().find(|m| !(m.is_finite() && **m > 0.0)) {
-            return Err(Error::Invalid(format!(
-                "http: a bandwidth must be above 0 Mbit/s, not {m}"
-            )));
-        }
-        if self.cache_bytes == 0 {
-            return Err(Error::Invalid(
-                "http: the client cache must hold more than 0 bytes".into(),
-            ));
+        check_link("http", &self.mbits, self.cache_bytes)?;
+        if let Some((policy, bytes)) = &self.index_cache {
+            flaneur::cache::policy_by_name(policy)?;
+            if *bytes == 0 {
+                return Err(Error::Invalid(
+                    "http: the index cache must hold more than 0 bytes".into(),
+                ));
+            }
         }
         Ok(())
     }
 
-    /// The walk of every row: Optimal with this experiment's walk, never waiting.
+    /// The walk of every row: Optimal with this experiment's walk and index cache,
+    /// never waiting.
     pub fn review(&self) -> ReviewConfig {
+        let optimal = self.walk.review(Preset::Optimal);
         ReviewConfig {
             never_wait: true,
-            ..self.walk.review(Preset::Optimal)
+            index_cache: self.index_cache.clone().or(optimal.index_cache.clone()),
+            ..optimal
         }
     }
 }
@@ -145,6 +152,10 @@ pub struct HttpRow {
     /// The client page cache's hit rate over the walk (HTTP only).
     pub hit_rate: Option<f64>,
     pub failed_loads: usize,
+    /// Index pages the walk read past its index cache (its misses), and that cache's
+    /// hit rate.
+    pub index_pages: u64,
+    pub index_hit_rate: Option<f64>,
 }
 
 impl HttpRow {
@@ -217,23 +228,9 @@ pub fn run(
             for &mbit in &cfg.mbits {
                 let source = Source::Http { rtt_ms, mbit };
                 progress(&format!("{} {}", pattern.name(), source.describe()));
-                let link = Link::start(
-                    origin,
-                    LinkSpec {
-                        rtt: Duration::from_millis(u64::from(rtt_ms)),
-                        mbit: Some(mbit),
-                    },
-                )
-                .map_err(|e| Error::Invalid(format!("http: starting the link: {e}")))?;
-                let url = format!("http://{}/{name}", link.addr());
                 let t = Instant::now();
-                let db = Database::open_url_with(
-                    &url,
-                    &HttpOptions {
-                        cache_bytes: cfg.cache_bytes,
-                        ..HttpOptions::default()
-                    },
-                )?;
+                let (_link, db) =
+                    open_through("http", origin, name, (rtt_ms, mbit), cfg.cache_bytes)?;
                 // The oracle's read of the whole index, before the walk's figures start.
                 db.range(&db.bounds())?;
                 let open_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -289,6 +286,8 @@ fn row(
         coarse_draws: s.coarse_draws,
         hit_rate: net.map(|n| n.hit_rate()),
         failed_loads: s.failed_loads,
+        index_pages: s.index_pages,
+        index_hit_rate: s.index_cache.map(|c| c.hit_rate()),
     }
 }
 
@@ -308,7 +307,7 @@ impl Report for HttpReport {
     }
 
     fn to_csv(&self) -> String {
-        let mut s = String::from("pattern,source,rtt_ms,mbit,frames,frames_over_50ms,max_frame_ms,visual_misses,frames_missing,frames_outran,first_complete_s,sync_queries,open_ms,walk_s,requests,round_trips,bytes,used_bytes,requests_per_s,bytes_per_s,moved_over_used,hit_rate,failed_loads,coarse_draws\n");
+        let mut s = String::from("pattern,source,rtt_ms,mbit,frames,frames_over_50ms,max_frame_ms,visual_misses,frames_missing,frames_outran,first_complete_s,sync_queries,open_ms,walk_s,requests,round_trips,bytes,used_bytes,requests_per_s,bytes_per_s,moved_over_used,hit_rate,failed_loads,coarse_draws,index_pages,index_hit_rate\n");
         for r in &self.rows {
             let (kind, rtt, mbit) = match r.source {
                 Source::Local => ("local", String::new(), String::new()),
@@ -317,7 +316,7 @@ impl Report for HttpReport {
             };
             let opt = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.4}"));
             s.push_str(&format!(
-                "{},{kind},{rtt},{mbit},{},{},{:.3},{},{},{},{},{},{:.1},{:.3},{},{},{},{},{:.2},{:.0},{},{},{},{}\n",
+                "{},{kind},{rtt},{mbit},{},{},{:.3},{},{},{},{},{},{:.1},{:.3},{},{},{},{},{:.2},{:.0},{},{},{},{},{},{}\n",
                 r.pattern.name(),
                 r.frames,
                 r.frames_over_50ms,
@@ -338,7 +337,9 @@ impl Report for HttpReport {
                 opt(r.moved_over_used()),
                 opt(r.hit_rate),
                 r.failed_loads,
-                r.coarse_draws
+                r.coarse_draws,
+                r.index_pages,
+                opt(r.index_hit_rate)
             ));
         }
         s
@@ -350,21 +351,24 @@ impl Report for HttpReport {
             "# A walk over HTTP (ours)\n\n{} objects, {} B pages. {}, played {}. REVIEW's \
              Optimal configuration that never waits on a read (`--never-wait`), through a \
              loopback link of the round trip and bandwidth given, each walk from a cold \
-             client cache of {} MiB; beside it the walks of the local file.\n\n",
+             client cache of {} MiB, index cache {}; beside it the walks of the local file.\n\n",
             self.objects,
             self.page_size,
             c.walk.describe(),
             c.walk
                 .pace
                 .map_or("unpaced".to_string(), |p| format!("{p}x real time")),
-            c.cache_bytes >> 20
+            c.cache_bytes >> 20,
+            c.review()
+                .index_cache
+                .map_or("none".to_string(), |(p, b)| format!("{p}, {} KiB", b >> 10))
         );
-        md.push_str("| pattern | source | frames > 50 ms | max frame ms | visual misses | frames missing | frames outside | coarse draws | first complete s | viewer's own searches | requests/s | KiB/s | moved / used | hit rate | failed loads |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        md.push_str("| pattern | source | frames > 50 ms | max frame ms | visual misses | frames missing | frames outside | coarse draws | first complete s | viewer's own searches | requests/s | KiB/s | moved / used | hit rate | failed loads | index pages read (index cache hit rate) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for r in &self.rows {
             let opt =
                 |x: Option<f64>, d: usize| x.map_or("–".to_string(), |x| format!("{x:.d$}"));
             md.push_str(&format!(
-                "| {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {:.1} | {:.0} | {} | {} | {} |\n",
+                "| {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {:.1} | {:.0} | {} | {} | {} | {} ({}) |\n",
                 r.pattern.name(),
                 r.source.describe(),
                 r.frames_over_50ms,
@@ -379,7 +383,9 @@ impl Report for HttpReport {
                 r.bytes_per_s() / 1024.0,
                 opt(r.moved_over_used(), 2),
                 opt(r.hit_rate, 3),
-                r.failed_loads
+                r.failed_loads,
+                r.index_pages,
+                opt(r.index_hit_rate, 3)
             ));
         }
         let http = || {

@@ -47,6 +47,7 @@ pub mod pvs_prefetch;
 pub mod pvs_stats;
 pub mod report;
 pub mod scene_tree;
+pub mod through_link;
 pub mod view_culling;
 pub mod visual_vs_review;
 pub mod walk_setup;

@@ -18,9 +18,9 @@ use std::net::SocketAddr;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::link::{Link, LinkSpec};
 use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
+use crate::through_link::{check_link, open_through};
 use crate::walk_setup::WalkSetup;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -77,18 +77,7 @@ impl PvsHttpConfig {
         for &prefetch in &self.rules {
             self.walk_config(prefetch).validate()?;
         }
-        if !(self.mbit.is_finite() && self.mbit > 0.0) {
-            return Err(Error::Invalid(format!(
-                "pvs-http: a bandwidth must be above 0 Mbit/s, not {}",
-                self.mbit
-            )));
-        }
-        if self.cache_bytes == 0 {
-            return Err(Error::Invalid(
-                "pvs-http: the client cache must hold more than 0 bytes".into(),
-            ));
-        }
-        Ok(())
+        check_link("pvs-http", &[self.mbit], self.cache_bytes)
     }
 
     /// The never-wait walk of `prefetch`, at this experiment's pace.
@@ -202,21 +191,12 @@ pub fn run(
         }
         for &rtt_ms in &cfg.rtts_ms {
             for &prefetch in &cfg.rules {
-                let link = Link::start(
+                let (_link, db) = open_through(
+                    "pvs-http",
                     origin,
-                    LinkSpec {
-                        rtt: Duration::from_millis(u64::from(rtt_ms)),
-                        mbit: Some(cfg.mbit),
-                    },
-                )
-                .map_err(|e| Error::Invalid(format!("pvs-http: starting the link: {e}")))?;
-                let url = format!("http://{}/{name}", link.addr());
-                let db = Database::open_url_with(
-                    &url,
-                    &HttpOptions {
-                        cache_bytes: cfg.cache_bytes,
-                        ..HttpOptions::default()
-                    },
+                    name,
+                    (rtt_ms, cfg.mbit),
+                    cfg.cache_bytes,
                 )?;
                 walk(&db, Source::Http { rtt_ms }, cfg.walk_config(prefetch))?;
             }

@@ -27,6 +27,13 @@ pub struct HttpArgs {
     /// The client page cache, MiB.
     #[arg(long)]
     cache_mb: Option<usize>,
+    /// The index cache's policy: lru, dplru, dov, dovtime, path (default: the Optimal
+    /// configuration's, DPLRU).
+    #[arg(long)]
+    policy: Option<String>,
+    /// The index cache's size, KiB (default: the Optimal configuration's, 1024).
+    #[arg(long)]
+    index_cache_kb: Option<usize>,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -40,14 +47,18 @@ impl HttpArgs {
             rtts,
             mbits,
             cache_mb,
+            policy,
+            index_cache_kb,
             out,
         } = self;
         let d = HttpBenchConfig::default();
+        let index_cache = index_cache(policy, index_cache_kb, &d);
         let cfg = HttpBenchConfig {
             walk: walk.setup(d.walk),
             rtts_ms: or_default(rtts, d.rtts_ms),
             mbits: or_default(mbits, d.mbits),
             cache_bytes: cache_mb.map_or(d.cache_bytes, |m| m << 20),
+            index_cache,
         };
         cfg.validate()?;
         let local = Database::open(&db)?;
@@ -61,4 +72,18 @@ impl HttpArgs {
         })?;
         write_report(&out, &r)
     }
+}
+
+/// The index cache `--policy` and `--index-cache-kb` ask for, each defaulting to the
+/// Optimal configuration's; `None` when neither is given.
+fn index_cache(
+    policy: Option<String>,
+    kb: Option<usize>,
+    d: &HttpBenchConfig,
+) -> Option<(String, usize)> {
+    if policy.is_none() && kb.is_none() {
+        return None;
+    }
+    let (p, bytes) = d.review().index_cache.unwrap_or(("dplru".into(), 1 << 20));
+    Some((policy.unwrap_or(p), kb.map_or(bytes, |k| k << 10)))
 }

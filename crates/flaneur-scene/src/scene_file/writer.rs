@@ -50,7 +50,7 @@ impl SceneWriter {
     }
 
     /// Appends one object. Ids must be strictly increasing and the mesh must pass
-    /// [`Mesh::validate`]; anything else is refused and nothing is written.
+    /// [`Mesh::validate`](crate::Mesh::validate); anything else is refused and nothing is written.
     pub fn write(&mut self, obj: &SceneObject) -> Result<(), SceneError> {
         let refuse = |what: String| SceneError::Corrupt {
             path: self.path.clone(),
