@@ -261,8 +261,10 @@ fn a_transactions_rows_come_over_http_in_one_round_trip_not_one_each() {
     };
     let db = Database::open_url_with(&server.url("city.flaneur"), &opts).unwrap();
     let head = db.visibility().unwrap().unwrap();
-    // Cells far apart in the file, so that no two records share a page.
-    let ids: Vec<u32> = head.cells.iter().map(|c| c.id).step_by(16).collect();
+    // Cells far apart in the file, so that no two records share a page, and from the
+    // table's end: the head was read with the table's first pages, and any records in
+    // them came along.
+    let ids: Vec<u32> = head.cells.iter().rev().map(|c| c.id).step_by(16).collect();
     assert!(ids.len() >= 16, "{} cells", head.cells.len());
     let (one_by_one, together) = (&ids[..8], &ids[8..16]);
     let trips = |read: &dyn Fn()| {
@@ -309,4 +311,26 @@ fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("walked a city across a swap of its file"),
     }
+}
+
+#[test]
+fn a_cold_info_of_a_city_with_lods_and_visibility_takes_two_round_trips() {
+    let c = city(29);
+    let server = Nginx::start(c.dir.path());
+    // The first round trip's two ends kept short, so that the LOD and visibility
+    // tables' heads lie between them, as they do in a large city's file.
+    let opts = HttpOptions {
+        prefix_bytes: 4 << 10,
+        suffix_bytes: 16 << 10,
+        ..HttpOptions::default()
+    };
+    let db = Database::open_url_with(&server.url("city.flaneur"), &opts).unwrap();
+    let local = Database::open(&c.db).unwrap();
+    let bytes = db.store().page_count() * db.store().page_size() as u64;
+    assert!(bytes > 64 << 10, "a city too small to test: {bytes} bytes");
+    let info = db.info().unwrap();
+    assert_eq!(format!("{info:?}"), format!("{:?}", local.info().unwrap()));
+    assert!(info.lod.is_some() && info.visibility.is_some());
+    let s = db.remote_stats().unwrap();
+    assert_eq!(s.round_trips, 2, "{s:?}");
 }

@@ -587,6 +587,15 @@ impl Database {
 
     /// Objects, triangles, pages by kind, tree shape (walks the whole tree).
     pub fn info(&self) -> Result<DatabaseInfo> {
+        // The tables' heads that follow, asked for together: a cold info over HTTP then
+        // takes the open's round trip and one more.
+        let heads: Vec<u64> = self
+            .lod
+            .iter()
+            .map(LodTable::first_page)
+            .chain(self.visibility.iter().flat_map(VisibilityTable::head_pages))
+            .collect();
+        self.store.announce(&heads);
         let tree = self.tree.stats(&self.store)?;
         let (b, page_size) = (self.bounds, self.store.page_size());
         Ok(DatabaseInfo {

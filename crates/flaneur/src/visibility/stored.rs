@@ -11,6 +11,9 @@ use super::table::{
 use crate::error::{Error, Result};
 use crate::store::{Extent, PageKind, Store};
 
+/// The pages of a table's start announced before its head is read.
+const HEAD_PAGES_ASKED: u64 = 16;
+
 /// The visibility table of an open database: where it lies, and its head once read.
 #[derive(Debug)]
 pub struct VisibilityTable {
@@ -58,11 +61,22 @@ impl VisibilityTable {
         self.extent.page_count as u64
     }
 
-    /// The head: grid, settings, stats, directory. Read the first time.
+    /// The pages the head most likely lies in, for a remote store to fetch in one
+    /// request with whatever else is wanted then: the table's first pages, up to
+    /// [`HEAD_PAGES_ASKED`] (a directory of some 3,000 cells at 4 KiB pages).
+    pub(crate) fn head_pages(&self) -> impl Iterator<Item = u64> {
+        let first = self.extent.first_page;
+        first..first + self.pages().min(HEAD_PAGES_ASKED)
+    }
+
+    /// The head: grid, settings, stats, directory. Read the first time: its fixed part,
+    /// then the directory whose length that gives, announced together beforehand so
+    /// that over HTTP both come in one round trip, not two.
     pub fn head(&self, store: &Store) -> Result<&TableHead> {
         if let Some(h) = self.head.get() {
             return Ok(h);
         }
+        store.announce(&self.head_pages().collect::<Vec<_>>());
         let ext = &self.extent;
         let len = ext.byte_len as usize;
         if len < HEAD_FIXED {

@@ -348,8 +348,7 @@ impl LodTable {
         self.pages
     }
 
-    /// The first page of the table.
-    #[cfg(test)]
+    /// The first page of the table, where its head starts.
     pub(crate) fn first_page(&self) -> u64 {
         self.extent.first_page
     }
