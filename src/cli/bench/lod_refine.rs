@@ -17,7 +17,7 @@ pub struct LodRefineArgs {
     #[arg(long, default_value_t = lod_refine::DEFAULT_FRAMES)]
     frames: usize,
     /// Screen-space errors τ, fractions of the viewport, comma-separated; one run each
-    /// [default: 0.001 (the thesis's), 0.0003, 0.0001].
+    /// [default: 0.001 (the thesis's), 0.0003, 0.0002, 0.0001].
     #[arg(long, value_delimiter = ',')]
     taus: Vec<f32>,
     /// Triangle budget (0: none, fidelity alone).
