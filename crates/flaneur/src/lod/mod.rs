@@ -47,8 +47,8 @@ pub use pm::{
     SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE,
 };
 pub use refine::{
-    CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, PassStats,
-    RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+    CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, NodeOperator,
+    PassStats, RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{

@@ -99,12 +99,32 @@ impl CompactMesh {
     /// The base mesh of `pm`, every array element marked changed (the first upload).
     /// An `Err` when the base is not a valid mesh or its numbers pass 32 bits.
     pub fn new(pm: &ProgressiveMesh) -> Result<CompactMesh> {
-        let base = &pm.base;
+        CompactMesh::from_base(&pm.base, pm.splits.len())
+    }
+
+    /// The base mesh of a progressive mesh of `splits` vertex splits, as a client that
+    /// holds no hierarchy starts from it (the splits then come one by one, with
+    /// [`CompactMesh::apply_split`]). An `Err` as for [`CompactMesh::new`].
+    ///
+    /// ```
+    /// use flaneur::lod::{CompactMesh, ProgressiveMesh};
+    /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+    /// let mut mesh = CompactMesh::from_base(&pm.base, pm.splits.len())?;
+    /// for (i, s) in pm.splits.iter().enumerate() {
+    ///     mesh.apply_split(i, s)?;
+    /// }
+    /// assert_eq!(mesh.triangle_count(), pm.triangles_after(pm.splits.len()));
+    /// # Ok::<(), flaneur::Error>(())
+    /// ```
+    pub fn from_base(base: &Mesh, splits: usize) -> Result<CompactMesh> {
         base.validate()
             .map_err(|e| Error::Invalid(format!("progressive mesh base: {e}")))?;
         let (nv, nt) = (base.positions.len(), base.triangle_count());
-        let (all_v, all_t) = (pm.vertex_count(), pm.triangle_slots());
-        if all_v as u64 >= NONE as u64 || 3 * all_t as u64 >= NONE as u64 {
+        let (all_v, all_t) = (
+            nv.saturating_add(splits),
+            nt.saturating_add(splits.saturating_mul(2)),
+        );
+        if all_v as u64 >= NONE as u64 || (all_t as u64).saturating_mul(3) >= NONE as u64 {
             return Err(Error::Invalid(format!(
                 "progressive mesh of {all_v} vertices and {all_t} triangle slots: too many \
                  for 32-bit indices"
@@ -328,6 +348,20 @@ impl CompactMesh {
             }
         }
         Ok(())
+    }
+
+    /// Applies vertex split `index` of the progressive mesh, `s` its record: the
+    /// operator a server streams. Checked against the arrays before anything changes
+    /// (a split whose vertex is present, whose pivots or adjusted triangles are not, is
+    /// an `Err` and leaves the mesh as it was).
+    pub fn apply_split(&mut self, index: usize, s: &VertexSplit) -> Result<()> {
+        self.split(index, s)
+    }
+
+    /// Undoes vertex split `index`, `s` its record (the edge collapse), checked as
+    /// [`CompactMesh::apply_split`] is.
+    pub fn apply_collapse(&mut self, index: usize, s: &VertexSplit) -> Result<()> {
+        self.collapse(index, s)
     }
 
     fn split(&mut self, index: usize, s: &VertexSplit) -> Result<()> {

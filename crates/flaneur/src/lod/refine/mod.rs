@@ -16,6 +16,7 @@ pub use criteria::{Criteria, View};
 pub use fronts::Fronts;
 pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
 pub use refiner::{
-    FrameReport, FrameStats, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
+    FrameReport, FrameStats, NodeOperator, RefineParams, Refiner, THESIS_BUDGET, THESIS_MAX_WORK,
+    THESIS_TAU,
 };
 pub use traversal::{PassStats, Traversal};

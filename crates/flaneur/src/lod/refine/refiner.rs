@@ -92,6 +92,17 @@ impl Default for RefineParams {
     }
 }
 
+/// One operator of a frame: a DAG node split or collapsed, which applies or undoes the
+/// node's run of vertex splits ([`Dag::splits`]); what a server streams to a client
+/// that holds no hierarchy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeOperator {
+    /// The DAG node.
+    pub node: u32,
+    /// Split (its vertex splits in order) or collapse (them undone in reverse).
+    pub split: bool,
+}
+
 /// One frame's figures (a row of Zheng 2007 Table 4.1, and Table 4.3's front sizes).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameStats {
@@ -342,6 +353,15 @@ impl Refiner<'_> {
     #[cfg(test)]
     pub(crate) fn node_geometry(&self, node: u32) -> NodeGeometry {
         self.nodes[node as usize].geometry
+    }
+
+    /// The operators the last frame applied, in the order it applied them (its
+    /// collapses, then its splits); none after a frame that failed.
+    pub fn operators(&self) -> impl ExactSizeIterator<Item = NodeOperator> + '_ {
+        self.ops.iter().map(|op| NodeOperator {
+            node: op.node,
+            split: op.pass == Pass::Split,
+        })
     }
 
     /// The selective mesh.

@@ -1,0 +1,202 @@
+//! The stream client: it holds only each object's selective mesh (Zheng 2007 §8.2.1),
+//! in the compact arrays a renderer draws (§4.5), and the vertex splits of the nodes it
+//! has split, which a later collapse undoes. It sends views and applies the batches
+//! the server answers with.
+//!
+//! Every batch is checked before it changes a mesh: a collapse of a node the client
+//! never split, a split of one it holds split, an object the session does not have, a
+//! batch for another frame than the one asked, each is an error naming it. A vertex
+//! split that does not fit the mesh is refused by the mesh itself
+//! ([`CompactMesh::apply_split`]). After an error the session's meshes are no longer
+//! the server's: connect again.
+
+use std::collections::HashMap;
+use std::net::{TcpStream, ToSocketAddrs};
+use std::time::Duration;
+
+use crate::error::StreamError;
+use crate::protocol::{receive, send, Hello, Message, NodeSplit, ViewPacket, MAX_TO_CLIENT};
+use flaneur::lod::CompactMesh;
+
+/// The most vertex splits a client makes room for in one object: its mesh's ID maps
+/// take 12 bytes a split, so a hostile WELCOME cannot make it reserve more than about
+/// 800 MiB an object.
+pub const MAX_SPLITS: u32 = 1 << 26;
+
+/// One object as the client holds it.
+#[derive(Debug)]
+pub struct StreamedObject {
+    pub id: u64,
+    mesh: CompactMesh,
+    /// The nodes split, with the runs they applied.
+    held: HashMap<u32, NodeSplit>,
+}
+
+impl StreamedObject {
+    /// The selective mesh, as the batches so far made it.
+    pub fn mesh(&self) -> &CompactMesh {
+        &self.mesh
+    }
+
+    fn collapse(&mut self, node: u32) -> Result<(), StreamError> {
+        let split = self.held.remove(&node).ok_or_else(|| {
+            StreamError::Malformed(format!(
+                "object {}: a collapse of node {node}, which this client never split",
+                self.id
+            ))
+        })?;
+        for (i, s) in split.run.iter().enumerate().rev() {
+            self.mesh.apply_collapse(split.first as usize + i, s)?;
+        }
+        Ok(())
+    }
+
+    fn split(&mut self, split: NodeSplit) -> Result<(), StreamError> {
+        if self.held.contains_key(&split.node) {
+            return Err(StreamError::Malformed(format!(
+                "object {}: a split of node {}, which this client holds split",
+                self.id, split.node
+            )));
+        }
+        for (i, s) in split.run.iter().enumerate() {
+            self.mesh.apply_split(split.first as usize + i, s)?;
+        }
+        self.held.insert(split.node, split);
+        Ok(())
+    }
+}
+
+/// What one batch did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BatchReport {
+    pub frame: u32,
+    /// Nodes collapsed and split, over every object.
+    pub collapses: usize,
+    pub splits: usize,
+    /// The batch's bytes on the wire.
+    pub bytes: usize,
+    /// The bytes of its largest object's part ([`ObjectUpdates::wire_len`](crate::protocol::ObjectUpdates::wire_len)).
+    pub largest_object: usize,
+}
+
+/// A session with a stream server.
+#[derive(Debug)]
+pub struct StreamClient {
+    stream: TcpStream,
+    objects: Vec<StreamedObject>,
+    /// The frame of the VIEW sent and not yet answered.
+    pending: Option<u32>,
+}
+
+impl StreamClient {
+    /// Connects, says `hello`, and takes the server's objects; `timeout` bounds each
+    /// wait for the server.
+    pub fn connect(
+        addr: impl ToSocketAddrs,
+        hello: Hello,
+        timeout: Duration,
+    ) -> Result<StreamClient, StreamError> {
+        let mut stream = TcpStream::connect(addr)?;
+        stream.set_read_timeout(Some(timeout))?;
+        stream.set_nodelay(true)?;
+        send(&mut stream, &Message::Hello(hello))?;
+        let objects = match receive(&mut stream, MAX_TO_CLIENT)? {
+            Some((Message::Welcome(objects), _)) => objects,
+            Some((Message::Refused(why), _)) => return Err(StreamError::Refused(why)),
+            Some((other, _)) => {
+                return Err(StreamError::Malformed(format!(
+                    "the server answered HELLO with {other:?}"
+                )))
+            }
+            None => return Err(StreamError::Refused("closed before WELCOME".into())),
+        };
+        let objects = objects
+            .into_iter()
+            .map(|o| {
+                if o.splits > MAX_SPLITS {
+                    return Err(StreamError::Malformed(format!(
+                        "object {}: {} vertex splits, above the {MAX_SPLITS} a client holds",
+                        o.id, o.splits
+                    )));
+                }
+                Ok(StreamedObject {
+                    id: o.id,
+                    mesh: CompactMesh::from_base(&o.base, o.splits as usize)?,
+                    held: HashMap::new(),
+                })
+            })
+            .collect::<Result<Vec<_>, StreamError>>()?;
+        Ok(StreamClient {
+            stream,
+            objects,
+            pending: None,
+        })
+    }
+
+    /// The session's objects, in the server's order.
+    pub fn objects(&self) -> &[StreamedObject] {
+        &self.objects
+    }
+
+    /// Sends `view`; its batch is [`StreamClient::receive_batch`]'s. One view is
+    /// pending at a time (Zheng Fig. 5.3b: no request until the last was answered).
+    pub fn send_view(&mut self, view: &ViewPacket) -> Result<(), StreamError> {
+        if let Some(frame) = self.pending {
+            return Err(StreamError::Malformed(format!(
+                "frame {frame}'s batch has not come yet"
+            )));
+        }
+        send(&mut self.stream, &Message::View(*view))?;
+        self.pending = Some(view.frame);
+        Ok(())
+    }
+
+    /// Waits for the pending view's batch and applies it.
+    pub fn receive_batch(&mut self) -> Result<BatchReport, StreamError> {
+        let asked = self
+            .pending
+            .ok_or_else(|| StreamError::Malformed("no view is waiting for a batch".into()))?;
+        let (frame, objects, bytes) = match receive(&mut self.stream, MAX_TO_CLIENT)? {
+            Some((Message::Batch { frame, objects }, bytes)) => (frame, objects, bytes),
+            Some((Message::Refused(why), _)) => return Err(StreamError::Refused(why)),
+            Some((other, _)) => {
+                return Err(StreamError::Malformed(format!(
+                    "a {other:?} where frame {asked}'s batch was due"
+                )))
+            }
+            None => return Err(StreamError::Refused("closed mid-session".into())),
+        };
+        if frame != asked {
+            return Err(StreamError::Malformed(format!(
+                "the batch of frame {frame} where frame {asked}'s was due"
+            )));
+        }
+        self.pending = None;
+        let mut report = BatchReport {
+            frame,
+            bytes,
+            ..Default::default()
+        };
+        for o in objects {
+            let object = self.objects.get_mut(o.index as usize).ok_or_else(|| {
+                StreamError::Malformed(format!("updates for object {}, not in WELCOME", o.index))
+            })?;
+            report.largest_object = report.largest_object.max(o.wire_len());
+            report.collapses += o.collapses.len();
+            report.splits += o.splits.len();
+            for node in o.collapses {
+                object.collapse(node)?;
+            }
+            for split in o.splits {
+                object.split(split)?;
+            }
+        }
+        Ok(report)
+    }
+
+    /// Ends the session.
+    pub fn bye(mut self) -> Result<(), StreamError> {
+        send(&mut self.stream, &Message::Bye)?;
+        Ok(())
+    }
+}

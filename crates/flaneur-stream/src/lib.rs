@@ -1,0 +1,45 @@
+//! The papers' client-server view-dependent rendering (Zheng 2007 ch. 5–6 and §8.2;
+//! El-Sana's server of one thread per client): a server that holds each landmark's
+//! progressive mesh and DAG once, read-only, and per client the fronts and counters of
+//! its traversal; a client that holds only its selective meshes and applies the
+//! batches of edge collapses and vertex splits the server answers its views with.
+//!
+//! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
+//! documentation); `server` the sessions; `client` the selective meshes' side; `wire`
+//! the bounded field reader both decode with.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use std::time::Duration;
+//! use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, Traversal};
+//! use flaneur_stream::{Hello, Landmark, ServerConfig, StreamClient, StreamServer, ViewPacket};
+//!
+//! let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+//! let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+//! let bunny = Landmark { id: 1, pm: Arc::new(pm), dag: Arc::new(dag) };
+//! let server = StreamServer::bind("127.0.0.1:0", vec![bunny], ServerConfig::default())?.spawn()?;
+//!
+//! let hello = Hello { traversal: Traversal::Priority, fov: 1.0, budget: Some(60_000),
+//!                     out_of_view: true, back_face: true };
+//! let mut client = StreamClient::connect(server.addr(), hello, Duration::from_secs(5))?;
+//! let base = client.objects()[0].mesh().triangle_count();
+//! let view = ViewPacket { frame: 0, eye: [0.0, 0.1, 0.4], aim: [0.0, 0.1, 0.0], tau: 0.001,
+//!                         budget_mode: true, n: 500 };
+//! client.send_view(&view)?;
+//! let batch = client.receive_batch()?;
+//! assert!(batch.splits > 0);
+//! assert!(client.objects()[0].mesh().triangle_count() > base);
+//! client.bye()?;
+//! # Ok::<(), flaneur_stream::StreamError>(())
+//! ```
+
+mod client;
+mod error;
+pub mod protocol;
+mod server;
+mod wire;
+
+pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
+pub use error::StreamError;
+pub use protocol::{Hello, Message, ViewPacket};
+pub use server::{Landmark, RunningServer, ServerConfig, SessionEnd, StreamServer};

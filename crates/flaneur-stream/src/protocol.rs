@@ -1,0 +1,555 @@
+//! The stream protocol, version 1: length-prefixed messages over one TCP connection.
+//!
+//! Every message is a frame: a `u32` length `L` (the bytes after it), then `L` bytes,
+//! the first of them the message's kind. All numbers are little-endian; floats are
+//! IEEE 754 `f32` and must be finite. A receiver refuses a frame longer than its bound
+//! ([`MAX_TO_SERVER`], [`MAX_TO_CLIENT`]) before reading it.
+//!
+//! ```text
+//! client → server
+//!   0x01 HELLO    magic "FLANEURS" (8)  version u16  traversal u8 (0 priority, 1 linear,
+//!                 2 constant-time)  fov f32 (the view cone's full angle, radians)
+//!                 budget u32 (triangles per object in budget mode; 0: none)
+//!                 criteria u8 (bit 0 out-of-view, bit 1 back-face)             20 bytes
+//!   0x02 VIEW     frame u32 (strictly increasing)  then Zheng's 33 bytes (§8.2.1):
+//!                 eye 3×f32  aim-at 3×f32  τ f32  mode u8 (0 free, 1 budget)  N u32
+//!                                                                              37 bytes
+//!   0x03 BYE      nothing
+//! server → client
+//!   0x81 WELCOME  magic (8)  version u16  objects u32, then each:
+//!                 id u64  splits u32  base vertices u32  positions 3×f32 each
+//!                 normals 3×f32 each  base triangles u32  corners 3×u32 each
+//!   0x82 BATCH    frame u32 (the VIEW's)  objects u32, then each object with updates:
+//!                 index u32 (in WELCOME's order)
+//!                 collapses u32, then each: node u32
+//!                 splits u32, then each: node u32  first split u32  run length u32,
+//!                   then the run's vertex splits, each: v_p u32  position 3×f32
+//!                   normal 3×f32  v_l u32  v_r u32 (u32::MAX: none)  corners 2×u8
+//!                   adjusted u32, then that many triangle numbers u32
+//!   0x83 REFUSED  reason, UTF-8, to the frame's end; the server closes after it
+//! ```
+//!
+//! A session: HELLO, WELCOME, then VIEW and BATCH in turn (the server answers every
+//! VIEW with one BATCH of its collapses then its splits, at most N of each), until BYE
+//! or the connection closes. A collapse names a node the client split earlier: it undoes
+//! the run that node's split brought, in reverse, so it carries no geometry.
+
+use crate::error::StreamError;
+use crate::wire::{Reader, Writer};
+use flaneur::lod::{Traversal, VertexSplit};
+use flaneur::scene::Mesh;
+
+/// The first bytes of HELLO and WELCOME.
+pub const MAGIC: [u8; 8] = *b"FLANEURS";
+/// The protocol's version; a peer of another is refused.
+pub const VERSION: u16 = 1;
+/// The longest frame a server reads: a VIEW is 38 bytes, a HELLO 21.
+pub const MAX_TO_SERVER: usize = 4 << 10;
+/// The longest frame a client reads (a WELCOME carries every object's base mesh).
+pub const MAX_TO_CLIENT: usize = 64 << 20;
+/// The most operators of each kind a VIEW may ask for (Zheng's 500 + 500, §5.4.1).
+pub const MAX_N: u32 = 500;
+
+const HELLO: u8 = 0x01;
+const VIEW: u8 = 0x02;
+const BYE: u8 = 0x03;
+const WELCOME: u8 = 0x81;
+const BATCH: u8 = 0x82;
+const REFUSED: u8 = 0x83;
+
+/// What a client asks for once, at the session's start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hello {
+    pub traversal: Traversal,
+    /// The view cone's full angle, radians, in (0, π).
+    pub fov: f32,
+    /// Triangles per object in budget mode; `None` for no budget.
+    pub budget: Option<u32>,
+    pub out_of_view: bool,
+    pub back_face: bool,
+}
+
+/// One frame's view parameters (Zheng 2007 §8.2.1: E, A, τ, mode, N).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewPacket {
+    /// The client's frame number; each VIEW's is above the last.
+    pub frame: u32,
+    pub eye: [f32; 3],
+    /// The point looked at.
+    pub aim: [f32; 3],
+    /// The screen-space error threshold, a fraction of the viewport.
+    pub tau: f32,
+    /// Budget mode (the HELLO's budget bounds the mesh) or free mode.
+    pub budget_mode: bool,
+    /// The most collapses and the most splits of the reply (1 to [`MAX_N`]).
+    pub n: u32,
+}
+
+/// An object a session may stream: its id and the base mesh its splits refine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WelcomeObject {
+    pub id: u64,
+    /// Vertex splits of its progressive mesh.
+    pub splits: u32,
+    pub base: Mesh,
+}
+
+/// A node split: the node and the run of vertex splits it applies, in order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeSplit {
+    pub node: u32,
+    /// The run's first vertex split's number in the progressive mesh.
+    pub first: u32,
+    pub run: Vec<VertexSplit>,
+}
+
+/// One object's updates in a batch.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjectUpdates {
+    /// The object's place in WELCOME's list.
+    pub index: u32,
+    /// Nodes to collapse, in order, before the splits.
+    pub collapses: Vec<u32>,
+    pub splits: Vec<NodeSplit>,
+}
+
+impl ObjectUpdates {
+    /// The bytes this object's part of a BATCH takes on the wire. Zheng's batches were
+    /// at most 64 KiB for N = 500 (§5.4.1); here each object's part is its own batch of
+    /// at most N + N operators.
+    pub fn wire_len(&self) -> usize {
+        let split = |s: &VertexSplit| SPLIT_MIN + 4 * s.adjusted.len();
+        let node = |n: &NodeSplit| 12 + n.run.iter().map(split).sum::<usize>();
+        12 + 4 * self.collapses.len() + self.splits.iter().map(node).sum::<usize>()
+    }
+}
+
+/// A message of the protocol.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Message {
+    Hello(Hello),
+    View(ViewPacket),
+    Bye,
+    Welcome(Vec<WelcomeObject>),
+    Batch {
+        frame: u32,
+        objects: Vec<ObjectUpdates>,
+    },
+    Refused(String),
+}
+
+fn traversal_code(t: Traversal) -> u8 {
+    match t {
+        Traversal::Priority => 0,
+        Traversal::Linear => 1,
+        Traversal::ConstantTime => 2,
+    }
+}
+
+impl Message {
+    /// The frame: length, kind, body.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut w = Writer::default();
+        w.u32(0);
+        match self {
+            Message::Hello(h) => {
+                w.u8(HELLO);
+                w.raw(&MAGIC);
+                w.u16(VERSION);
+                w.u8(traversal_code(h.traversal));
+                w.f32(h.fov);
+                w.u32(h.budget.unwrap_or(0));
+                w.u8(u8::from(h.out_of_view) | (u8::from(h.back_face) << 1));
+            }
+            Message::View(v) => {
+                w.u8(VIEW);
+                w.u32(v.frame);
+                w.vec3(v.eye);
+                w.vec3(v.aim);
+                w.f32(v.tau);
+                w.u8(u8::from(v.budget_mode));
+                w.u32(v.n);
+            }
+            Message::Bye => w.u8(BYE),
+            Message::Welcome(objects) => {
+                w.u8(WELCOME);
+                w.raw(&MAGIC);
+                w.u16(VERSION);
+                w.count(objects.len());
+                for o in objects {
+                    w.u64(o.id);
+                    w.u32(o.splits);
+                    w.count(o.base.positions.len());
+                    o.base.positions.iter().for_each(|p| w.vec3(*p));
+                    o.base.normals.iter().for_each(|n| w.vec3(*n));
+                    w.count(o.base.indices.len() / 3);
+                    o.base.indices.iter().for_each(|&i| w.u32(i));
+                }
+            }
+            Message::Batch { frame, objects } => {
+                w.u8(BATCH);
+                w.u32(*frame);
+                w.count(objects.len());
+                for o in objects {
+                    w.u32(o.index);
+                    w.count(o.collapses.len());
+                    o.collapses.iter().for_each(|&n| w.u32(n));
+                    w.count(o.splits.len());
+                    for s in &o.splits {
+                        w.u32(s.node);
+                        w.u32(s.first);
+                        w.count(s.run.len());
+                        s.run.iter().for_each(|v| write_split(&mut w, v));
+                    }
+                }
+            }
+            Message::Refused(why) => {
+                w.u8(REFUSED);
+                w.raw(why.as_bytes());
+            }
+        }
+        let len = (w.bytes.len() - 4) as u32;
+        w.bytes[..4].copy_from_slice(&len.to_le_bytes());
+        w.bytes
+    }
+
+    /// The message in `body` (a frame's bytes after its length).
+    pub fn decode(body: &[u8]) -> Result<Message, StreamError> {
+        let (&kind, rest) = body
+            .split_first()
+            .ok_or_else(|| StreamError::Malformed("an empty frame".into()))?;
+        let m = match kind {
+            HELLO => {
+                let mut r = Reader::new(rest, "HELLO");
+                magic_and_version(&mut r)?;
+                let traversal = match r.u8()? {
+                    0 => Traversal::Priority,
+                    1 => Traversal::Linear,
+                    2 => Traversal::ConstantTime,
+                    t => return Err(r.bad(format!("traversal {t}, not 0, 1 or 2"))),
+                };
+                let fov = r.f32()?;
+                let budget = r.u32()?;
+                let criteria = r.u8()?;
+                if criteria > 3 {
+                    return Err(r.bad(format!("criteria bits {criteria:#x}")));
+                }
+                r.end()?;
+                Message::Hello(Hello {
+                    traversal,
+                    fov,
+                    budget: (budget > 0).then_some(budget),
+                    out_of_view: criteria & 1 != 0,
+                    back_face: criteria & 2 != 0,
+                })
+            }
+            VIEW => {
+                let mut r = Reader::new(rest, "VIEW");
+                let frame = r.u32()?;
+                let eye = r.vec3()?;
+                let aim = r.vec3()?;
+                let tau = r.f32()?;
+                let budget_mode = match r.u8()? {
+                    0 => false,
+                    1 => true,
+                    m => return Err(r.bad(format!("mode {m}, not 0 (free) or 1 (budget)"))),
+                };
+                let n = r.u32()?;
+                r.end()?;
+                Message::View(ViewPacket {
+                    frame,
+                    eye,
+                    aim,
+                    tau,
+                    budget_mode,
+                    n,
+                })
+            }
+            BYE => {
+                Reader::new(rest, "BYE").end()?;
+                Message::Bye
+            }
+            WELCOME => decode_welcome(rest)?,
+            BATCH => decode_batch(rest)?,
+            REFUSED => Message::Refused(String::from_utf8_lossy(rest).into_owned()),
+            k => {
+                return Err(StreamError::Malformed(format!(
+                    "a message of kind {k:#04x}"
+                )))
+            }
+        };
+        Ok(m)
+    }
+}
+
+fn magic_and_version(r: &mut Reader) -> Result<(), StreamError> {
+    if r.raw(MAGIC.len())? != MAGIC {
+        return Err(r.bad("not a flaneur stream (bad magic)"));
+    }
+    match r.u16()? {
+        VERSION => Ok(()),
+        v => Err(r.bad(format!("protocol version {v}; this side speaks {VERSION}"))),
+    }
+}
+
+fn write_split(w: &mut Writer, s: &VertexSplit) {
+    w.u32(s.v_p);
+    w.vec3(s.position);
+    w.vec3(s.normal);
+    w.u32(s.v_l.unwrap_or(u32::MAX));
+    w.u32(s.v_r.unwrap_or(u32::MAX));
+    w.u8(s.corners[0]);
+    w.u8(s.corners[1]);
+    w.count(s.adjusted.len());
+    s.adjusted.iter().for_each(|&t| w.u32(t));
+}
+
+/// The fewest bytes one vertex split takes on the wire (no adjusted triangle).
+const SPLIT_MIN: usize = 4 + 12 + 12 + 4 + 4 + 2 + 4;
+
+fn read_split(r: &mut Reader) -> Result<VertexSplit, StreamError> {
+    let v_p = r.u32()?;
+    let position = r.vec3()?;
+    let normal = r.vec3()?;
+    let pivot = |v: u32| (v != u32::MAX).then_some(v);
+    let v_l = pivot(r.u32()?);
+    let v_r = pivot(r.u32()?);
+    let corners = [r.u8()?, r.u8()?];
+    if corners.iter().any(|&c| c > 2) {
+        return Err(r.bad(format!("corners {corners:?}, each 0 to 2")));
+    }
+    let n = r.count(4)?;
+    let adjusted = (0..n).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?;
+    Ok(VertexSplit {
+        v_p,
+        position,
+        normal,
+        v_l,
+        v_r,
+        adjusted,
+        corners,
+        // Neither is read by a client applying the split.
+        error: 0.0,
+        joins_previous: false,
+    })
+}
+
+fn decode_welcome(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "WELCOME");
+    magic_and_version(&mut r)?;
+    let n = r.count(8 + 4 + 4 + 4)?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let id = r.u64()?;
+        let splits = r.u32()?;
+        let nv = r.count(24)?;
+        let positions = (0..nv).map(|_| r.vec3()).collect::<Result<Vec<_>, _>>()?;
+        let normals = (0..nv).map(|_| r.vec3()).collect::<Result<Vec<_>, _>>()?;
+        let nt = r.count(12)?;
+        let indices = (0..3 * nt)
+            .map(|_| r.u32())
+            .collect::<Result<Vec<_>, _>>()?;
+        let base = Mesh {
+            positions,
+            normals,
+            indices,
+        };
+        base.validate()
+            .map_err(|e| r.bad(format!("object {id}'s base mesh: {e}")))?;
+        objects.push(WelcomeObject { id, splits, base });
+    }
+    r.end()?;
+    Ok(Message::Welcome(objects))
+}
+
+fn decode_batch(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "BATCH");
+    let frame = r.u32()?;
+    let n = r.count(12)?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let index = r.u32()?;
+        let nc = r.count(4)?;
+        let collapses = (0..nc).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?;
+        let ns = r.count(12)?;
+        let mut splits = Vec::with_capacity(ns);
+        for _ in 0..ns {
+            let node = r.u32()?;
+            let first = r.u32()?;
+            let len = r.count(SPLIT_MIN)?;
+            let run = (0..len)
+                .map(|_| read_split(&mut r))
+                .collect::<Result<Vec<_>, _>>()?;
+            splits.push(NodeSplit { node, first, run });
+        }
+        objects.push(ObjectUpdates {
+            index,
+            collapses,
+            splits,
+        });
+    }
+    r.end()?;
+    Ok(Message::Batch { frame, objects })
+}
+
+/// Writes `m` as one frame.
+pub fn send(out: &mut impl std::io::Write, m: &Message) -> Result<usize, StreamError> {
+    let bytes = m.encode();
+    out.write_all(&bytes)?;
+    out.flush()?;
+    Ok(bytes.len())
+}
+
+/// Reads one frame of at most `max` bytes and decodes it; `Ok(None)` when the peer
+/// closed the connection between frames. Also returns the frame's length on the wire.
+pub fn receive(
+    input: &mut impl std::io::Read,
+    max: usize,
+) -> Result<Option<(Message, usize)>, StreamError> {
+    let mut len = [0u8; 4];
+    match input.read_exact(&mut len) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(None),
+        Err(e) => return Err(e.into()),
+    }
+    let len = u32::from_le_bytes(len) as usize;
+    if len > max {
+        return Err(StreamError::Malformed(format!(
+            "a frame of {len} bytes, above the {max} this side reads"
+        )));
+    }
+    let mut body = vec![0u8; len];
+    input.read_exact(&mut body)?;
+    Ok(Some((Message::decode(&body)?, 4 + len)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn split(adjusted: Vec<u32>) -> VertexSplit {
+        VertexSplit {
+            v_p: 3,
+            position: [1.0, 2.0, 3.0],
+            normal: [0.0, 1.0, 0.0],
+            v_l: Some(4),
+            v_r: None,
+            adjusted,
+            corners: [0, 2],
+            error: 0.0,
+            joins_previous: false,
+        }
+    }
+
+    fn every_kind() -> Vec<Message> {
+        vec![
+            Message::Hello(Hello {
+                traversal: Traversal::Linear,
+                fov: 1.0,
+                budget: Some(60_000),
+                out_of_view: true,
+                back_face: false,
+            }),
+            Message::View(ViewPacket {
+                frame: 7,
+                eye: [1.0, 2.0, 3.0],
+                aim: [0.0, 0.0, 0.0],
+                tau: 0.001,
+                budget_mode: true,
+                n: 500,
+            }),
+            Message::Bye,
+            Message::Welcome(vec![WelcomeObject {
+                id: 9,
+                splits: 10,
+                base: Mesh {
+                    positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                    normals: vec![[0.0, 0.0, 1.0]; 3],
+                    indices: vec![0, 1, 2],
+                },
+            }]),
+            Message::Batch {
+                frame: 7,
+                objects: vec![ObjectUpdates {
+                    index: 0,
+                    collapses: vec![5, 6],
+                    splits: vec![NodeSplit {
+                        node: 2,
+                        first: 4,
+                        run: vec![split(vec![1, 2]), split(vec![])],
+                    }],
+                }],
+            },
+            Message::Refused("no".into()),
+        ]
+    }
+
+    #[test]
+    fn every_message_reads_back_as_written() {
+        for m in every_kind() {
+            let bytes = m.encode();
+            let mut input = &bytes[..];
+            let (back, len) = receive(&mut input, MAX_TO_CLIENT).unwrap().unwrap();
+            assert_eq!(back, m);
+            assert_eq!(len, bytes.len());
+        }
+    }
+
+    #[test]
+    fn an_objects_wire_length_is_what_it_takes_in_a_batch() {
+        let Message::Batch { objects, .. } = &every_kind()[4] else {
+            unreachable!()
+        };
+        let whole = every_kind()[4].encode().len();
+        // Length, kind, frame and the object count, then the one object.
+        assert_eq!(whole, 4 + 1 + 4 + 4 + objects[0].wire_len());
+    }
+
+    #[test]
+    fn a_view_is_zhengs_33_bytes_after_its_frame_number() {
+        let view = &every_kind()[1];
+        assert_eq!(view.encode().len(), 4 + 1 + 4 + 33);
+    }
+
+    #[test]
+    fn every_cut_of_every_message_is_an_error_not_a_panic() {
+        for m in every_kind() {
+            let bytes = m.encode();
+            for cut in 4..bytes.len() {
+                let body = &bytes[4..cut];
+                if let Ok(back) = Message::decode(body) {
+                    // Only REFUSED reads any prefix (its reason runs to the end).
+                    assert!(matches!(back, Message::Refused(_)), "{back:?} from {cut}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn counts_beyond_the_bytes_are_refused_before_anything_is_reserved() {
+        let mut bytes = every_kind()[4].encode();
+        // The object count, just after the kind and the frame number.
+        bytes[9..13].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = Message::decode(&bytes[4..]).unwrap_err();
+        assert!(e.to_string().contains("a count of 4294967295"), "{e}");
+    }
+
+    #[test]
+    fn bad_fields_are_named() {
+        let mut hello = every_kind()[0].encode();
+        hello[5] = b'X';
+        let e = Message::decode(&hello[4..]).unwrap_err().to_string();
+        assert!(e.contains("bad magic"), "{e}");
+        let mut view = every_kind()[1].encode();
+        view[9..13].copy_from_slice(&f32::NAN.to_le_bytes());
+        let e = Message::decode(&view[4..]).unwrap_err().to_string();
+        assert!(e.contains("not finite"), "{e}");
+        let e = Message::decode(&[0x7f]).unwrap_err().to_string();
+        assert!(e.contains("kind 0x7f"), "{e}");
+        let long = (MAX_TO_SERVER as u32 + 1).to_le_bytes();
+        let e = receive(&mut &long[..], MAX_TO_SERVER)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("above the 4096"), "{e}");
+    }
+}

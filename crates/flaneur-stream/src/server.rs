@@ -1,0 +1,353 @@
+//! The stream server: one thread per client over a shared, read-only set of landmarks
+//! (El-Sana's interface thread per client, §5), each session holding its own fronts
+//! and counters (Zheng 2007 §8.2.1) and running the traversal for every view it is sent.
+//!
+//! Plain threads, not an async runtime: a session's work is the traversal, which is
+//! CPU-bound and short (well under a millisecond a frame for the thesis's settings,
+//! `bench lod-refine`), between blocking reads of 38-byte views; a thread per client
+//! keeps one client's slow link or stall from holding back another's traversal, with
+//! no executor to starve.
+//!
+//! A session that sends what the protocol does not allow (bytes that are not a
+//! message, a frame over the bound, a VIEW before HELLO, frames out of order, a view
+//! the engine refuses) is answered REFUSED with the reason and closed; its reason goes
+//! to the server's log of session ends, and no other session notices.
+
+use std::io;
+use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::thread;
+use std::time::Duration;
+
+use glam::Vec3;
+
+use crate::error::StreamError;
+use crate::protocol::{
+    receive, send, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject, MAX_N,
+    MAX_TO_SERVER,
+};
+use flaneur::lod::{Criteria, Dag, ProgressiveMesh, RefineParams, Refiner, View};
+
+/// An object a server streams: its progressive mesh and DAG, shared read-only by every
+/// session.
+#[derive(Clone, Debug)]
+pub struct Landmark {
+    pub id: u64,
+    pub pm: Arc<ProgressiveMesh>,
+    pub dag: Arc<Dag>,
+}
+
+/// How a server treats its sessions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ServerConfig {
+    /// A session that sends nothing for this long is closed.
+    pub idle_timeout: Duration,
+}
+
+impl Default for ServerConfig {
+    fn default() -> ServerConfig {
+        ServerConfig {
+            idle_timeout: Duration::from_secs(60),
+        }
+    }
+}
+
+/// How one session ended, for the server's log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SessionEnd {
+    pub peer: SocketAddr,
+    /// Views answered.
+    pub frames: u64,
+    /// Bytes sent to the client.
+    pub bytes_out: u64,
+    /// Why the server closed it; `None` when the client said BYE or closed.
+    pub reason: Option<String>,
+}
+
+/// A server bound to its address, not yet accepting.
+pub struct StreamServer {
+    listener: TcpListener,
+    landmarks: Arc<[Landmark]>,
+    config: ServerConfig,
+}
+
+/// A server accepting on a thread of its own; dropped, it stops accepting (sessions
+/// under way run to their end).
+pub struct RunningServer {
+    addr: SocketAddr,
+    stop: Arc<AtomicBool>,
+    ends: mpsc::Receiver<SessionEnd>,
+}
+
+impl StreamServer {
+    /// Binds `addr` for `landmarks` (an empty list is refused: nothing to stream).
+    pub fn bind(
+        addr: impl ToSocketAddrs,
+        landmarks: Vec<Landmark>,
+        config: ServerConfig,
+    ) -> Result<StreamServer, StreamError> {
+        if landmarks.is_empty() {
+            return Err(StreamError::Malformed(
+                "a stream server needs at least one landmark to stream".into(),
+            ));
+        }
+        for l in &landmarks {
+            if l.pm.splits.len() != l.dag.split_count() || l.pm.splits.len() > u32::MAX as usize {
+                return Err(StreamError::Malformed(format!(
+                    "landmark {}: a DAG of {} splits over a progressive mesh of {}",
+                    l.id,
+                    l.dag.split_count(),
+                    l.pm.splits.len()
+                )));
+            }
+        }
+        Ok(StreamServer {
+            listener: TcpListener::bind(addr)?,
+            landmarks: landmarks.into(),
+            config,
+        })
+    }
+
+    /// The address it listens on.
+    pub fn local_addr(&self) -> io::Result<SocketAddr> {
+        self.listener.local_addr()
+    }
+
+    /// Accepts clients on a thread of its own, a session thread each; each session's
+    /// end comes out of [`RunningServer::ends`].
+    pub fn spawn(self) -> Result<RunningServer, StreamError> {
+        let addr = self.listener.local_addr()?;
+        self.listener.set_nonblocking(true)?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let (tx, ends) = mpsc::channel();
+        let flag = stop.clone();
+        thread::Builder::new()
+            .name("stream-accept".into())
+            .spawn(move || self.accept_until(&flag, &tx))?;
+        Ok(RunningServer { addr, stop, ends })
+    }
+
+    fn accept_until(&self, stop: &AtomicBool, ends: &mpsc::Sender<SessionEnd>) {
+        let welcome = Arc::new(welcome(&self.landmarks).encode());
+        while !stop.load(Ordering::Relaxed) {
+            match self.listener.accept() {
+                Ok((stream, peer)) => {
+                    let (landmarks, welcome) = (self.landmarks.clone(), welcome.clone());
+                    let (config, ends) = (self.config, ends.clone());
+                    let _ =
+                        thread::Builder::new()
+                            .name(format!("stream-{peer}"))
+                            .spawn(move || {
+                                let end = session(stream, peer, &landmarks, &welcome, config);
+                                let _ = ends.send(end);
+                            });
+                }
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    thread::sleep(Duration::from_millis(5))
+                }
+                Err(_) => thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    }
+}
+
+impl RunningServer {
+    /// Where clients connect.
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The ends of the sessions so far, as they come.
+    pub fn ends(&self) -> &mpsc::Receiver<SessionEnd> {
+        &self.ends
+    }
+}
+
+impl Drop for RunningServer {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+/// WELCOME for `landmarks`.
+fn welcome(landmarks: &[Landmark]) -> Message {
+    Message::Welcome(
+        landmarks
+            .iter()
+            .map(|l| WelcomeObject {
+                id: l.id,
+                splits: l.pm.splits.len() as u32,
+                base: l.pm.base.clone(),
+            })
+            .collect(),
+    )
+}
+
+/// A session's state: its HELLO, one refiner per landmark, what it has done.
+struct Session {
+    hello: Hello,
+    refiners: Vec<Refiner<'static>>,
+    last_frame: Option<u32>,
+    frames: u64,
+    bytes_out: u64,
+}
+
+/// Runs one client's session to its end.
+fn session(
+    mut stream: TcpStream,
+    peer: SocketAddr,
+    landmarks: &[Landmark],
+    welcome: &[u8],
+    config: ServerConfig,
+) -> SessionEnd {
+    let mut s = None;
+    let reason = run(&mut stream, landmarks, welcome, config, &mut s)
+        .err()
+        .map(|e| {
+            let why = match &e {
+                StreamError::Io(io)
+                    if matches!(
+                        io.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    format!("idle for {:?}", config.idle_timeout)
+                }
+                e => e.to_string(),
+            };
+            // The client hears why, if it still listens.
+            let _ = send(&mut stream, &Message::Refused(why.clone()));
+            why
+        });
+    let (frames, bytes_out) = s.map_or((0, 0), |s: Session| (s.frames, s.bytes_out));
+    SessionEnd {
+        peer,
+        frames,
+        bytes_out,
+        reason,
+    }
+}
+
+/// The session's loop; `Ok` when the client said BYE or closed.
+fn run(
+    stream: &mut TcpStream,
+    landmarks: &[Landmark],
+    welcome: &[u8],
+    config: ServerConfig,
+    state: &mut Option<Session>,
+) -> Result<(), StreamError> {
+    stream.set_nonblocking(false)?;
+    stream.set_read_timeout(Some(config.idle_timeout))?;
+    stream.set_nodelay(true)?;
+    let hello = match receive(stream, MAX_TO_SERVER)? {
+        Some((Message::Hello(h), _)) => h,
+        Some((m, _)) => return Err(out_of_place("HELLO", &m)),
+        None => return Ok(()),
+    };
+    if !(hello.fov.is_finite() && hello.fov > 0.0 && hello.fov < std::f32::consts::PI) {
+        return Err(StreamError::Malformed(format!(
+            "HELLO: a view cone of {} radians; it must be within (0, π)",
+            hello.fov
+        )));
+    }
+    let refiners = landmarks
+        .iter()
+        .map(|l| Refiner::shared(l.pm.clone(), l.dag.clone()))
+        .collect::<Result<Vec<_>, _>>()?;
+    io::Write::write_all(stream, welcome)?;
+    let s = state.insert(Session {
+        hello,
+        refiners,
+        last_frame: None,
+        frames: 0,
+        bytes_out: welcome.len() as u64,
+    });
+    loop {
+        match receive(stream, MAX_TO_SERVER)? {
+            Some((Message::View(v), _)) => {
+                let batch = s.answer(&v)?;
+                s.bytes_out += send(stream, &batch)? as u64;
+                s.frames += 1;
+            }
+            Some((Message::Bye, _)) | None => return Ok(()),
+            Some((m, _)) => return Err(out_of_place("VIEW or BYE", &m)),
+        }
+    }
+}
+
+fn out_of_place(wanted: &str, got: &Message) -> StreamError {
+    let kind = match got {
+        Message::Hello(_) => "HELLO",
+        Message::View(_) => "VIEW",
+        Message::Bye => "BYE",
+        Message::Welcome(_) => "WELCOME",
+        Message::Batch { .. } => "BATCH",
+        Message::Refused(_) => "REFUSED",
+    };
+    StreamError::Malformed(format!("{kind} where {wanted} was due"))
+}
+
+impl Session {
+    /// The BATCH for view `v`: each landmark refined for it, its collapses then its
+    /// splits with their vertex splits.
+    fn answer(&mut self, v: &ViewPacket) -> Result<Message, StreamError> {
+        if let Some(last) = self.last_frame.filter(|&l| v.frame <= l) {
+            return Err(StreamError::Malformed(format!(
+                "VIEW of frame {} after frame {last}: frames must increase",
+                v.frame
+            )));
+        }
+        if !(1..=MAX_N).contains(&v.n) {
+            return Err(StreamError::Malformed(format!(
+                "VIEW of frame {}: N = {}, not within 1 to {MAX_N}",
+                v.frame, v.n
+            )));
+        }
+        let eye = Vec3::from(v.eye);
+        let view = View::new(eye, Vec3::from(v.aim) - eye, self.hello.fov)?;
+        let params = RefineParams {
+            traversal: self.hello.traversal,
+            tau: v.tau,
+            budget: v
+                .budget_mode
+                .then_some(self.hello.budget)
+                .flatten()
+                .map(|b| b as usize),
+            max_work: v.n as usize,
+            criteria: Criteria {
+                out_of_view: self.hello.out_of_view,
+                back_face: self.hello.back_face,
+            },
+        };
+        let mut objects = Vec::new();
+        for (index, refiner) in self.refiners.iter_mut().enumerate() {
+            refiner.refine(&view, &params)?;
+            let mut updates = ObjectUpdates {
+                index: index as u32,
+                ..Default::default()
+            };
+            let (pm, dag) = (refiner.progressive_mesh(), refiner.dag());
+            for op in refiner.operators() {
+                if op.split {
+                    let run = dag.splits(op.node);
+                    updates.splits.push(NodeSplit {
+                        node: op.node,
+                        first: run.start as u32,
+                        run: pm.splits[run].to_vec(),
+                    });
+                } else {
+                    updates.collapses.push(op.node);
+                }
+            }
+            if !(updates.collapses.is_empty() && updates.splits.is_empty()) {
+                objects.push(updates);
+            }
+        }
+        self.last_frame = Some(v.frame);
+        Ok(Message::Batch {
+            frame: v.frame,
+            objects,
+        })
+    }
+}

@@ -1,0 +1,297 @@
+//! Stream sessions over real TCP on loopback: the client's meshes against a local
+//! refiner's, and what a session that breaks the protocol gets.
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::sync::Arc;
+use std::time::Duration;
+
+use flaneur::lod::{
+    bumpy_torus, Criteria, Dag, DagConstruction, ProgressiveMesh, RefineParams, Refiner, Traversal,
+    View,
+};
+use flaneur_stream::protocol::{receive, Message, MAX_N, MAX_TO_CLIENT};
+use flaneur_stream::{
+    Hello, Landmark, RunningServer, ServerConfig, StreamClient, StreamError, StreamServer,
+    ViewPacket,
+};
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const FOV: f32 = 1.0;
+const BUDGET: u32 = 6_000;
+
+/// Two landmarks: the bunny, and a bumpy torus beside it.
+fn landmarks() -> Vec<Landmark> {
+    let mut torus = bumpy_torus(20_000);
+    for p in &mut torus.positions {
+        p[0] += 3.0;
+    }
+    [flaneur::scene::bunny(), torus]
+        .into_iter()
+        .enumerate()
+        .map(|(i, mesh)| {
+            let pm = ProgressiveMesh::build(&mesh).unwrap();
+            let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+            Landmark {
+                id: 10 + i as u64,
+                pm: Arc::new(pm),
+                dag: Arc::new(dag),
+            }
+        })
+        .collect()
+}
+
+fn serve(landmarks: &[Landmark], config: ServerConfig) -> RunningServer {
+    StreamServer::bind("127.0.0.1:0", landmarks.to_vec(), config)
+        .unwrap()
+        .spawn()
+        .unwrap()
+}
+
+fn hello(traversal: Traversal) -> Hello {
+    Hello {
+        traversal,
+        fov: FOV,
+        budget: Some(BUDGET),
+        out_of_view: true,
+        back_face: true,
+    }
+}
+
+/// Views from anywhere around the two objects, at any τ, mode and N.
+fn random_views(seed: u64, frames: u32) -> Vec<ViewPacket> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..frames)
+        .map(|frame| {
+            let at = |rng: &mut ChaCha8Rng, r: f32| {
+                [
+                    rng.gen_range(-r..r) + 1.5,
+                    rng.gen_range(-r..r),
+                    rng.gen_range(-r..r),
+                ]
+            };
+            ViewPacket {
+                frame: 2 * frame + rng.gen_range(0..2),
+                eye: at(&mut rng, 6.0),
+                aim: at(&mut rng, 1.5),
+                tau: 10f32.powf(rng.gen_range(-4.0..-2.0)),
+                budget_mode: rng.gen_bool(0.7),
+                n: rng.gen_range(1..=MAX_N),
+            }
+        })
+        .collect()
+}
+
+/// What a local refiner does with `v` under `h`.
+fn params(h: &Hello, v: &ViewPacket) -> (View, RefineParams) {
+    let eye = Vec3::from(v.eye);
+    let view = View::new(eye, Vec3::from(v.aim) - eye, h.fov).unwrap();
+    let params = RefineParams {
+        traversal: h.traversal,
+        tau: v.tau,
+        budget: v.budget_mode.then_some(BUDGET as usize),
+        max_work: v.n as usize,
+        criteria: Criteria {
+            out_of_view: h.out_of_view,
+            back_face: h.back_face,
+        },
+    };
+    (view, params)
+}
+
+#[test]
+fn after_random_views_each_client_mesh_is_the_local_refiners_triangle_for_triangle() {
+    let landmarks = landmarks();
+    let server = serve(&landmarks, ServerConfig::default());
+    for (seed, traversal) in Traversal::ALL.into_iter().enumerate() {
+        let h = hello(traversal);
+        let mut client = StreamClient::connect(server.addr(), h, Duration::from_secs(20)).unwrap();
+        let ids: Vec<u64> = client.objects().iter().map(|o| o.id).collect();
+        assert_eq!(ids, [10, 11]);
+        let mut local: Vec<Refiner> = landmarks
+            .iter()
+            .map(|l| Refiner::new(&l.pm, &l.dag).unwrap())
+            .collect();
+        let (mut splits, mut collapses, mut largest) = (0, 0, 0);
+        for v in random_views(seed as u64, 400) {
+            client.send_view(&v).unwrap();
+            let batch = client.receive_batch().unwrap();
+            largest = largest.max(batch.largest_object);
+            (splits, collapses) = (splits + batch.splits, collapses + batch.collapses);
+            let (view, p) = params(&h, &v);
+            for (refiner, streamed) in local.iter_mut().zip(client.objects()) {
+                refiner.refine(&view, &p).unwrap();
+                let (mine, theirs) = (refiner.mesh(), streamed.mesh());
+                assert_eq!(
+                    mine.triangle_count(),
+                    theirs.triangle_count(),
+                    "frame {}",
+                    v.frame
+                );
+                assert_eq!(theirs.shared_with(mine), 1.0, "frame {}", v.frame);
+            }
+        }
+        // Each object's part of a batch within Zheng's 64 KiB at N up to 500.
+        assert!(largest <= 64 << 10, "an object's part of {largest} bytes");
+        // The views moved both ways through the hierarchy.
+        assert!(
+            splits > 1000 && collapses > 1000,
+            "{splits} splits, {collapses} collapses"
+        );
+        client.bye().unwrap();
+    }
+    // Each session ended at the client's word, every view answered.
+    for _ in Traversal::ALL {
+        let end = server.ends().recv_timeout(Duration::from_secs(10)).unwrap();
+        assert_eq!((end.frames, end.reason), (400, None));
+    }
+}
+
+/// Sends `bytes` on a new connection and reads what comes back until the server closes:
+/// the REFUSED reason, if one came.
+fn refusal_of(server: &RunningServer, bytes: &[u8]) -> Option<String> {
+    let mut s = TcpStream::connect(server.addr()).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    s.write_all(bytes).unwrap();
+    let mut reason = None;
+    while let Ok(Some((m, _))) = receive(&mut s, MAX_TO_CLIENT) {
+        if let Message::Refused(why) = m {
+            reason = Some(why);
+        }
+    }
+    reason
+}
+
+#[test]
+fn a_session_that_breaks_the_protocol_is_closed_with_its_reason_and_no_other_notices() {
+    let landmarks = landmarks();
+    let server = serve(&landmarks, ServerConfig::default());
+    let h = hello(Traversal::Linear);
+    let mut good = StreamClient::connect(server.addr(), h, Duration::from_secs(20)).unwrap();
+    let mut local: Vec<Refiner> = landmarks
+        .iter()
+        .map(|l| Refiner::new(&l.pm, &l.dag).unwrap())
+        .collect();
+    let views = random_views(7, 60);
+    let hello_bytes = Message::Hello(h).encode();
+    let view = |frame: u32| Message::View(ViewPacket { frame, ..views[0] }).encode();
+    let cases: Vec<(Vec<u8>, &str)> = vec![
+        (b"GET / HTTP/1.1\r\n\r\n".to_vec(), "above the 4096"),
+        (vec![3, 0, 0, 0, 0x55, 1, 2], "kind 0x55"),
+        (view(1), "VIEW where HELLO was due"),
+        (
+            [hello_bytes.clone(), view(5), view(5)].concat(),
+            "frames must increase",
+        ),
+        (
+            [hello_bytes.clone(), hello_bytes.clone()].concat(),
+            "HELLO where VIEW",
+        ),
+        (
+            [hello_bytes.clone(), {
+                let mut v = view(1);
+                v[9..13].copy_from_slice(&f32::INFINITY.to_le_bytes());
+                v
+            }]
+            .concat(),
+            "not finite",
+        ),
+        (
+            [
+                hello_bytes.clone(),
+                Message::View(ViewPacket { n: 0, ..views[0] }).encode(),
+            ]
+            .concat(),
+            "N = 0",
+        ),
+    ];
+    for (i, (bytes, why)) in cases.iter().enumerate() {
+        let said = refusal_of(&server, bytes).unwrap_or_else(|| panic!("case {i}: no REFUSED"));
+        assert!(said.contains(why), "case {i}: {said}");
+        // The good session goes on as before, between the bad ones.
+        for v in &views[i * 6..i * 6 + 6] {
+            good.send_view(v).unwrap();
+            good.receive_batch().unwrap();
+            let (view, p) = params(&h, v);
+            for (refiner, streamed) in local.iter_mut().zip(good.objects()) {
+                refiner.refine(&view, &p).unwrap();
+                assert_eq!(streamed.mesh().shared_with(refiner.mesh()), 1.0);
+                assert_eq!(
+                    streamed.mesh().triangle_count(),
+                    refiner.mesh().triangle_count()
+                );
+            }
+        }
+    }
+    // The server's log names each bad session's reason.
+    let reasons: Vec<String> = (0..cases.len())
+        .map(|_| {
+            let end = server.ends().recv_timeout(Duration::from_secs(10)).unwrap();
+            end.reason.expect("a bad session ended with a reason")
+        })
+        .collect();
+    for (_, why) in &cases {
+        assert!(
+            reasons.iter().any(|r| r.contains(why)),
+            "{why} not in {reasons:?}"
+        );
+    }
+}
+
+#[test]
+fn a_session_that_says_nothing_is_closed_when_idle() {
+    let server = serve(
+        &landmarks()[..1],
+        ServerConfig {
+            idle_timeout: Duration::from_millis(300),
+        },
+    );
+    let said = refusal_of(&server, &Message::Hello(hello(Traversal::Linear)).encode());
+    assert!(said.is_some_and(|s| s.contains("idle for 300ms")));
+    let end = server.ends().recv_timeout(Duration::from_secs(10)).unwrap();
+    assert_eq!(end.frames, 0);
+}
+
+#[test]
+fn a_client_refuses_a_batch_that_does_not_fit_its_mesh() {
+    // A server of our own that answers with a collapse of a node never split.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    let landmarks = landmarks();
+    let welcome = Message::Welcome(vec![flaneur_stream::protocol::WelcomeObject {
+        id: 1,
+        splits: landmarks[0].pm.splits.len() as u32,
+        base: landmarks[0].pm.base.clone(),
+    }]);
+    std::thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        let mut buf = [0u8; 25];
+        s.read_exact(&mut buf).unwrap();
+        s.write_all(&welcome.encode()).unwrap();
+        let mut view = [0u8; 42];
+        s.read_exact(&mut view).unwrap();
+        let batch = Message::Batch {
+            frame: 0,
+            objects: vec![flaneur_stream::protocol::ObjectUpdates {
+                index: 0,
+                collapses: vec![3],
+                splits: vec![],
+            }],
+        };
+        s.write_all(&batch.encode()).unwrap();
+    });
+    let mut client =
+        StreamClient::connect(addr, hello(Traversal::Priority), Duration::from_secs(10)).unwrap();
+    client
+        .send_view(&ViewPacket {
+            frame: 0,
+            ..random_views(1, 1)[0]
+        })
+        .unwrap();
+    match client.receive_batch() {
+        Err(StreamError::Malformed(why)) => assert!(why.contains("never split"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+}
