@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 
 mod cli;
-use cli::{bench, build, demo, info, lod, query, serve, shot, view, walk};
+use cli::{bench, build, demo, info, lod, query, serve, serve_stream, shot, view, walk};
 
 #[derive(Parser)]
 #[command(
@@ -46,6 +46,10 @@ enum Command {
     /// Serve database files over HTTP with byte ranges, ETag and If-Match, for every
     /// command to open by URL (any static server that honours Range does as well).
     Serve(serve::ServeArgs),
+    /// Stream a database's landmarks (its objects with progressive meshes) to clients
+    /// over TCP: each client sends its views and gets batches of edge collapses and
+    /// vertex splits for them (Zheng 2007 ch. 5-6, §8.2).
+    ServeStream(serve_stream::ServeStreamArgs),
 }
 
 fn main() {
@@ -67,5 +71,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Walk(a) => a.run(),
         Command::Bench(a) => a.run(),
         Command::Serve(a) => a.run(),
+        Command::ServeStream(a) => a.run(),
     }
 }

@@ -9,6 +9,7 @@ pub mod info;
 pub mod lod;
 pub mod query;
 pub mod serve;
+pub mod serve_stream;
 pub mod shot;
 pub mod source;
 pub mod view;

@@ -13,7 +13,7 @@
 //! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
-//! database over HTTP through, and `pvs_http` the PVS walk's prefetchers; `layout` counts what the file's order costs a reader
+//! database over HTTP through (`through_link` opens one by URL through a link of its own), and `pvs_http` the PVS walk's prefetchers; `layout` counts what the file's order costs a reader
 //! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
 //! starts.
 

@@ -5,7 +5,7 @@
 //! batches of edge collapses and vertex splits the server answers its views with.
 //!
 //! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
-//! documentation); `server` the sessions; `client` the selective meshes' side; `wire`
+//! documentation); `landmark` what a server streams; `server` the sessions; `client` the selective meshes' side; `wire`
 //! the bounded field reader both decode with.
 //!
 //! ```
@@ -35,11 +35,13 @@
 
 mod client;
 mod error;
+mod landmark;
 pub mod protocol;
 mod server;
 mod wire;
 
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
 pub use error::StreamError;
+pub use landmark::Landmark;
 pub use protocol::{Hello, Message, ViewPacket};
-pub use server::{Landmark, RunningServer, ServerConfig, SessionEnd, StreamServer};
+pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};

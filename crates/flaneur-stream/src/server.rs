@@ -23,20 +23,12 @@ use std::time::Duration;
 use glam::Vec3;
 
 use crate::error::StreamError;
+use crate::landmark::Landmark;
 use crate::protocol::{
     receive, send, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject, MAX_N,
     MAX_TO_SERVER,
 };
-use flaneur::lod::{Criteria, Dag, ProgressiveMesh, RefineParams, Refiner, View};
-
-/// An object a server streams: its progressive mesh and DAG, shared read-only by every
-/// session.
-#[derive(Clone, Debug)]
-pub struct Landmark {
-    pub id: u64,
-    pub pm: Arc<ProgressiveMesh>,
-    pub dag: Arc<Dag>,
-}
+use flaneur::lod::{Criteria, RefineParams, Refiner, View};
 
 /// How a server treats its sessions.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,79 @@
+//! `flaneur serve-stream`: the papers' stateful server over a database's landmarks (the
+//! objects its build stored a progressive mesh and DAG for), one thread per client. It
+//! prints each session's end, with the reason when the server closed it.
+
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+
+use flaneur::Database;
+use flaneur_stream::{Landmark, ServerConfig, StreamServer};
+
+/// `flaneur serve-stream`'s arguments.
+#[derive(clap::Args)]
+pub struct ServeStreamArgs {
+    /// The database (a local file): built with LODs, its objects above `--pm-threshold`
+    /// have the progressive meshes it streams.
+    db: PathBuf,
+    /// The port to listen on; 0 picks a free one (printed).
+    #[arg(long, default_value_t = 7878)]
+    port: u16,
+    /// The address to listen on: loopback by default, 0.0.0.0 for every interface.
+    #[arg(long, default_value = "127.0.0.1")]
+    bind: IpAddr,
+    /// Stream at most this many landmarks, the largest.
+    #[arg(long, default_value_t = 64)]
+    landmarks: usize,
+    /// Close a session that sends nothing for this many seconds.
+    #[arg(long, default_value_t = 60.0)]
+    idle_s: f64,
+}
+
+impl ServeStreamArgs {
+    /// Loads the landmarks and serves them until the process is stopped.
+    pub fn run(self) -> Result<()> {
+        if !(self.idle_s.is_finite() && self.idle_s > 0.0) {
+            bail!(
+                "--idle-s must be a positive number of seconds, not {}",
+                self.idle_s
+            );
+        }
+        let db = Database::open(&self.db)?;
+        let landmarks = Landmark::all_in(&db, self.landmarks)
+            .with_context(|| format!("reading the landmarks of {}", self.db.display()))?;
+        if landmarks.is_empty() {
+            bail!(
+                "{} has no object with a progressive mesh to stream: build it with LODs \
+                 (objects above --pm-threshold get one)",
+                self.db.display()
+            );
+        }
+        let triangles: usize = landmarks.iter().map(Landmark::triangles).sum();
+        let count = landmarks.len();
+        let config = ServerConfig {
+            idle_timeout: Duration::from_secs_f64(self.idle_s),
+        };
+        let server = StreamServer::bind(SocketAddr::new(self.bind, self.port), landmarks, config)
+            .with_context(|| format!("listening on {}:{}", self.bind, self.port))?
+            .spawn()?;
+        println!(
+            "streaming {count} landmarks ({triangles} triangles in full) on tcp://{}; stop with Ctrl-C",
+            server.addr()
+        );
+        for end in server.ends() {
+            match end.reason {
+                None => println!(
+                    "{}: {} views answered, {} bytes sent; the client ended it",
+                    end.peer, end.frames, end.bytes_out
+                ),
+                Some(why) => println!(
+                    "{}: {} views answered, {} bytes sent; closed: {why}",
+                    end.peer, end.frames, end.bytes_out
+                ),
+            }
+        }
+        Ok(())
+    }
+}

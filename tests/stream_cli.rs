@@ -1,0 +1,109 @@
+//! `flaneur serve-stream` as a user runs it: a real process on loopback, a stream
+//! client against it.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::time::Duration;
+
+use flaneur::lod::{LodOptions, Traversal};
+use flaneur::{BuildOptions, Database};
+use flaneur_stream::{Hello, Landmark, StreamClient, ViewPacket};
+
+/// The server's process, killed when dropped, and its printed lines.
+struct Served {
+    child: Child,
+    lines: std::io::Lines<BufReader<ChildStdout>>,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve_stream(db: &std::path::Path, extra: &[&str]) -> Served {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .args(["serve-stream", db.to_str().unwrap(), "--port", "0"])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    Served { child, lines }
+}
+
+#[test]
+fn serve_stream_streams_a_databases_landmarks_to_a_client() {
+    let every_object = BuildOptions {
+        lod: Some(LodOptions {
+            pm_threshold: 0,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let c = common::city(40, 31, &every_object);
+    let db = Database::open(&c.db).unwrap();
+    let landmarks = Landmark::all_in(&db, 8).unwrap();
+    assert_eq!(landmarks.len(), 8);
+    let mut served = serve_stream(&c.db, &["--landmarks", "8"]);
+    let first = served.lines.next().unwrap().unwrap();
+    assert!(first.starts_with("streaming 8 landmarks"), "{first}");
+    let addr = first
+        .split("tcp://")
+        .nth(1)
+        .and_then(|rest| rest.split(';').next())
+        .unwrap()
+        .to_string();
+    let hello = Hello {
+        traversal: Traversal::Priority,
+        fov: 1.0,
+        budget: None,
+        out_of_view: false,
+        back_face: false,
+    };
+    let mut client = StreamClient::connect(&addr, hello, Duration::from_secs(20)).unwrap();
+    // The eight largest, by id, each from its base mesh.
+    let ids: Vec<u64> = client.objects().iter().map(|o| o.id).collect();
+    assert_eq!(ids, landmarks.iter().map(|l| l.id).collect::<Vec<_>>());
+    for (o, l) in client.objects().iter().zip(&landmarks) {
+        assert_eq!(o.mesh().triangle_count(), l.pm.base.triangle_count());
+    }
+    let b = db.bounds();
+    let view = ViewPacket {
+        frame: 1,
+        eye: (b.center() + glam::Vec3::new(0.0, 200.0, 0.0)).to_array(),
+        aim: b.center().to_array(),
+        tau: 0.0001,
+        budget_mode: false,
+        n: 500,
+    };
+    client.send_view(&view).unwrap();
+    assert!(client.receive_batch().unwrap().splits > 0);
+    client.bye().unwrap();
+    let end = served.lines.next().unwrap().unwrap();
+    assert!(
+        end.contains("1 views answered") && end.ends_with("the client ended it"),
+        "{end}"
+    );
+}
+
+#[test]
+fn serve_stream_says_when_there_is_nothing_to_stream() {
+    let c = common::city(
+        20,
+        32,
+        &BuildOptions {
+            lod: None,
+            ..Default::default()
+        },
+    );
+    let out = common::flaneur(&["serve-stream", c.db.to_str().unwrap(), "--port", "0"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no object with a progressive mesh"), "{err}");
+    let out = common::flaneur(&["serve-stream", c.db.to_str().unwrap(), "--idle-s", "0"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--idle-s"));
+}
