@@ -107,3 +107,46 @@ fn serve_stream_says_when_there_is_nothing_to_stream() {
     let out = common::flaneur(&["serve-stream", c.db.to_str().unwrap(), "--idle-s", "0"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--idle-s"));
 }
+
+#[test]
+fn bench_stream_hides_the_round_trip_that_the_sequential_client_waits_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::flaneur(&[
+        "bench",
+        "stream",
+        "--triangles",
+        "20000",
+        "--frames",
+        "60",
+        "--frame-ms",
+        "20",
+        "--rtts",
+        "100",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.path().join(flaneur_bench::stream::PLOT).exists());
+    let csv = common::Csv::read(&dir.path().join("stream.csv"));
+    let [sequential, predictive] = &csv.rows[..] else {
+        panic!("{} rows", csv.rows.len())
+    };
+    assert_eq!(csv.get(sequential, "mode"), "Sequential");
+    // The sequential client waits the round trip every frame, its mesh the reference's.
+    assert!(csv.num(sequential, "mean_frame_ms") >= 100.0);
+    assert_eq!(csv.num(sequential, "accuracy_all"), 1.0);
+    // The predictive one keeps the frame period, predicting as many frames ahead as the
+    // round trip spans (100 ms over 20 ms frames, and the traversal's time).
+    assert!(
+        csv.num(predictive, "mean_frame_ms") < 50.0,
+        "{predictive:?}"
+    );
+    let span = csv.num(predictive, "final_span");
+    assert!((5.0..=8.0).contains(&span), "{predictive:?}");
+    let accuracy = csv.num(predictive, "accuracy");
+    assert!(accuracy > 0.0 && accuracy < 1.0, "{predictive:?}");
+}

@@ -15,7 +15,9 @@ use std::net::{TcpStream, ToSocketAddrs};
 use std::time::Duration;
 
 use crate::error::StreamError;
-use crate::protocol::{receive, send, Hello, Message, NodeSplit, ViewPacket, MAX_TO_CLIENT};
+use crate::protocol::{
+    receive, send, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, MAX_TO_CLIENT,
+};
 use flaneur::lod::CompactMesh;
 
 /// The most vertex splits a client makes room for in one object: its mesh's ID maps
@@ -36,6 +38,17 @@ impl StreamedObject {
     /// The selective mesh, as the batches so far made it.
     pub fn mesh(&self) -> &CompactMesh {
         &self.mesh
+    }
+
+    /// Applies this object's part of a batch: its collapses, then its splits.
+    pub(crate) fn apply(&mut self, updates: ObjectUpdates) -> Result<(), StreamError> {
+        for node in updates.collapses {
+            self.collapse(node)?;
+        }
+        for split in updates.splits {
+            self.split(split)?;
+        }
+        Ok(())
     }
 
     fn collapse(&mut self, node: u32) -> Result<(), StreamError> {
@@ -184,14 +197,14 @@ impl StreamClient {
             report.largest_object = report.largest_object.max(o.wire_len());
             report.collapses += o.collapses.len();
             report.splits += o.splits.len();
-            for node in o.collapses {
-                object.collapse(node)?;
-            }
-            for split in o.splits {
-                object.split(split)?;
-            }
+            object.apply(o)?;
         }
         Ok(report)
+    }
+
+    /// The connection and the objects, for a client that takes the session over.
+    pub(crate) fn into_parts(self) -> (TcpStream, Vec<StreamedObject>) {
+        (self.stream, self.objects)
     }
 
     /// Ends the session.

@@ -5,7 +5,8 @@
 //! batches of edge collapses and vertex splits the server answers its views with.
 //!
 //! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
-//! documentation); `landmark` what a server streams; `server` the sessions; `client` the selective meshes' side; `wire`
+//! documentation); `landmark` what a server streams; `server` the sessions; `client` the selective meshes' side, and `predictive` the
+//! client that hides the round trip by prediction (Zheng ch. 5–6); `wire`
 //! the bounded field reader both decode with.
 //!
 //! ```
@@ -36,6 +37,7 @@
 mod client;
 mod error;
 mod landmark;
+mod predictive;
 pub mod protocol;
 mod server;
 mod wire;
@@ -43,5 +45,6 @@ mod wire;
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
 pub use error::StreamError;
 pub use landmark::Landmark;
+pub use predictive::{PredictiveClient, PredictiveFrame, Refinement, ADJUST_EVERY, MAX_SPAN};
 pub use protocol::{Hello, Message, ViewPacket};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};

@@ -21,6 +21,7 @@ mod pvs_http;
 mod pvs_prefetch;
 mod report;
 mod scene_tree;
+mod stream;
 mod view_culling;
 mod visual_vs_review;
 mod walk_setup;
@@ -110,6 +111,11 @@ enum Experiment {
     /// two routes: transactions, cache swaps, objects sent, visual misses (Zheng Table
     /// 7.2, Figs. 7.6–7.8), and PBNP against its region size. No database.
     PvsPrefetch(pvs_prefetch::PvsPrefetchArgs),
+    /// A landmark streamed from the stream server through a loopback link at set round
+    /// trips, the client sequential or predicting f frames ahead: frame time, prediction
+    /// span, accuracy against the traversal at the actual view (Zheng Tables 5.1, 6.1,
+    /// Fig. 6.6). No database.
+    Stream(stream::StreamArgs),
 }
 
 impl BenchArgs {
@@ -136,6 +142,7 @@ impl BenchArgs {
             Experiment::LodParallel(a) => a.run(),
             Experiment::LodRefine(a) => a.run(),
             Experiment::PvsPrefetch(a) => a.run(),
+            Experiment::Stream(a) => a.run(),
         }
     }
 }

@@ -1,0 +1,48 @@
+//! `flaneur bench stream` (Zheng 2007 Tables 5.1, 6.1, Fig. 6.6): a landmark streamed at
+//! set round trips, sequential against predictive.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::report::write_report;
+use crate::cli::args::or_default;
+use flaneur_bench::stream::{self, StreamBenchConfig};
+
+/// `flaneur bench stream`'s arguments.
+#[derive(clap::Args)]
+pub struct StreamArgs {
+    /// Triangles of the bumpy-torus landmark.
+    #[arg(long, default_value_t = StreamBenchConfig::default().triangles)]
+    triangles: usize,
+    #[arg(long, default_value_t = StreamBenchConfig::default().frames)]
+    frames: usize,
+    /// The client's frame period, ms.
+    #[arg(long, default_value_t = StreamBenchConfig::default().frame_ms)]
+    frame_ms: f64,
+    /// Round trips of the link, ms, comma-separated [default: 80, 170, 260, 350 (Table 6.1)].
+    #[arg(long, value_delimiter = ',')]
+    rtts: Vec<u32>,
+    /// τ, a fraction of the viewport.
+    #[arg(long, default_value_t = StreamBenchConfig::default().tau)]
+    tau: f32,
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+impl StreamArgs {
+    /// Runs every walk and writes the report.
+    pub fn run(self) -> Result<()> {
+        let d = StreamBenchConfig::default();
+        let cfg = StreamBenchConfig {
+            triangles: self.triangles,
+            frames: self.frames,
+            frame_ms: self.frame_ms,
+            rtts_ms: or_default(self.rtts, d.rtts_ms.clone()),
+            tau: self.tau,
+            ..d
+        };
+        let r = stream::run(&cfg, |what| eprintln!("stream: {what}"))?;
+        write_report(&self.out, &r)
+    }
+}
