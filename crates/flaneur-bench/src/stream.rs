@@ -30,8 +30,8 @@ use flaneur::lod::{
     View,
 };
 use flaneur_stream::{
-    Hello, Landmark, PredictiveClient, Refinement, ServerConfig, StreamClient, StreamServer,
-    ViewPacket,
+    Hello, Landmark, PredictiveClient, Predictor, Refinement, ServerConfig, StreamClient,
+    StreamServer, ViewPacket,
 };
 
 /// Zheng's Table 6.1: round trip (ms), prediction span, accuracy.
@@ -61,6 +61,11 @@ pub struct StreamBenchConfig {
     pub budget: u32,
     /// The view cone, degrees.
     pub fov_degrees: f32,
+    /// The predictive clients walked at each round trip, one per predictor.
+    #[serde(skip)]
+    pub predictors: Vec<Predictor>,
+    /// Walk the sequential client too (most of the experiment's time at long round trips).
+    pub sequential: bool,
 }
 
 impl Default for StreamBenchConfig {
@@ -75,6 +80,8 @@ impl Default for StreamBenchConfig {
             n: flaneur_stream::protocol::MAX_N,
             budget: flaneur::lod::THESIS_BUDGET as u32,
             fov_degrees: crate::lod_refine::DEFAULT_FOV_DEGREES,
+            predictors: vec![Predictor::Linear, Predictor::Quadratic],
+            sequential: true,
         }
     }
 }
@@ -97,23 +104,40 @@ impl StreamBenchConfig {
                 self.n, self.tau
             )));
         }
+        if self.predictors.is_empty() && !self.sequential {
+            return Err(Error::Invalid(
+                "stream: no client to walk (give a predictor, or the sequential client)".into(),
+            ));
+        }
         check_sweep("round trip", &self.rtts_ms, |_| Ok(()))
     }
 }
 
 /// How the client got its batches.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ClientMode {
     /// Each frame sends its view and waits for its batch (Zheng Fig. 5.1).
     Sequential,
-    /// f frames ahead, never waiting (Figs. 6.1–6.5).
-    Predictive,
+    /// f frames ahead, never waiting (Figs. 6.1–6.5), predicting so.
+    Predictive(Predictor),
+}
+
+impl ClientMode {
+    /// "sequential", "linear" or "quadratic".
+    pub fn name(self) -> &'static str {
+        match self {
+            ClientMode::Sequential => "sequential",
+            ClientMode::Predictive(Predictor::Linear) => "linear",
+            ClientMode::Predictive(Predictor::Quadratic) => "quadratic",
+        }
+    }
 }
 
 /// One walk's figures.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct StreamRow {
     pub rtt_ms: u32,
+    #[serde(skip)]
     pub mode: ClientMode,
     pub frames: usize,
     pub mean_frame_ms: f64,
@@ -179,8 +203,13 @@ pub fn run(cfg: &StreamBenchConfig, mut progress: impl FnMut(&str)) -> Result<St
     .map_err(stream_error)?;
     let mut rows = Vec::new();
     for &rtt_ms in &cfg.rtts_ms {
-        for mode in [ClientMode::Sequential, ClientMode::Predictive] {
-            progress(&format!("{mode:?} client, {rtt_ms} ms round trip"));
+        let modes = cfg
+            .sequential
+            .then_some(ClientMode::Sequential)
+            .into_iter()
+            .chain(cfg.predictors.iter().map(|&p| ClientMode::Predictive(p)));
+        for mode in modes {
+            progress(&format!("{} client, {rtt_ms} ms round trip", mode.name()));
             let link = Link::start(
                 server.addr(),
                 LinkSpec {
@@ -247,11 +276,12 @@ fn walk(
         ClientMode::Sequential => {
             sequential = Some(StreamClient::connect(addr, hello, timeout).map_err(stream_error)?)
         }
-        ClientMode::Predictive => {
+        ClientMode::Predictive(predictor) => {
             let refinement = Refinement {
                 tau: cfg.tau,
                 n: cfg.n,
                 initial_span: 1,
+                predictor,
             };
             predictive = Some(
                 PredictiveClient::connect(addr, hello, refinement, timeout)
@@ -352,12 +382,12 @@ impl Report for StreamReport {
     }
 
     fn to_csv(&self) -> String {
-        let mut s = String::from("rtt_ms,mode,frames,mean_frame_ms,max_frame_ms,final_span,mean_span,unmodified,accuracy,accuracy_all,round_trip_ms,bytes\n");
+        let mut s = String::from("rtt_ms,client,frames,mean_frame_ms,max_frame_ms,final_span,mean_span,unmodified,accuracy,accuracy_all,round_trip_ms,bytes\n");
         for r in &self.rows {
             s.push_str(&format!(
-                "{},{:?},{},{:.2},{:.2},{},{:.2},{},{:.4},{:.4},{},{}\n",
+                "{},{},{},{:.2},{:.2},{},{:.2},{},{:.4},{:.4},{},{}\n",
                 r.rtt_ms,
-                r.mode,
+                r.mode.name(),
                 r.frames,
                 r.mean_frame_ms,
                 r.max_frame_ms,
@@ -396,16 +426,16 @@ impl Report for StreamReport {
         for r in &self.rows {
             let thesis = THESIS_TABLE_6_1.iter().find(|t| t.0 == r.rtt_ms);
             let (span, acc) = match (r.mode, thesis) {
-                (ClientMode::Predictive, Some(t)) => {
+                (ClientMode::Predictive(_), Some(t)) => {
                     (t.1.to_string(), format!("{:.0} %", 100.0 * t.2))
                 }
                 _ => ("–".into(), "–".into()),
             };
             let secs = r.mean_frame_ms * r.frames as f64 / 1e3;
             md.push_str(&format!(
-                "| {} ms | {:?} | {:.1} ({:.1}) | {} ({:.1}) | {span} | {} | {:.1} % | {acc} | {:.1} % | {} | {:.0} |\n",
+                "| {} ms | {} | {:.1} ({:.1}) | {} ({:.1}) | {span} | {} | {:.1} % | {acc} | {:.1} % | {} | {:.0} |\n",
                 r.rtt_ms,
-                r.mode,
+                r.mode.name(),
                 r.mean_frame_ms,
                 r.max_frame_ms,
                 r.final_span,
@@ -421,7 +451,9 @@ impl Report for StreamReport {
             "\nThe sequential client waits a round trip every frame (Table 5.1's sequential \
              method), so its frame time is the round trip and more, and its mesh is the \
              reference's; the predictive one keeps its frame period and pays in accuracy \
-             (Table 6.1). Frame times are wall-clock on this machine; the link adds its round \
+             (Table 6.1). `linear` predicts as Zheng does (first order); `quadratic` is ours, \
+             of second order, which follows a turn where the first order leaves it by its \
+             tangent. Frame times are wall-clock on this machine; the link adds its round \
              trip to every byte.\n",
         );
         md
@@ -431,9 +463,9 @@ impl Report for StreamReport {
         let series = self
             .rows
             .iter()
-            .filter(|r| r.mode == ClientMode::Predictive)
+            .filter(|r| r.mode != ClientMode::Sequential)
             .map(|r| Series {
-                name: format!("{} ms (span {})", r.rtt_ms, r.final_span),
+                name: format!("{}, {} ms (span {})", r.mode.name(), r.rtt_ms, r.final_span),
                 points: r
                     .accuracies
                     .iter()

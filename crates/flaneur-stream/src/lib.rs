@@ -45,6 +45,8 @@ mod wire;
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
 pub use error::StreamError;
 pub use landmark::Landmark;
-pub use predictive::{PredictiveClient, PredictiveFrame, Refinement, ADJUST_EVERY, MAX_SPAN};
+pub use predictive::{
+    PredictiveClient, PredictiveFrame, Predictor, Refinement, ADJUST_EVERY, MAX_SPAN,
+};
 pub use protocol::{Hello, Message, ViewPacket};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};

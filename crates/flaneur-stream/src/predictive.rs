@@ -1,8 +1,8 @@
 //! Latency hidden by prediction — Zheng 2007 ch. 5–6: the client's getting of updates
 //! (PGU) runs on a thread of its own beside its rendering (PRD), and each frame sends the
 //! view predicted for the frame its batch will arrive at, E' = E_c + f·(E_c − E_p) (and
-//! A' for the aim-at point, §6.2), so that every frame finds the batch for its own view
-//! already there.
+//! A' for the aim-at point, §6.2; or ours of second order, [`Predictor`]), so that every
+//! frame finds the batch for its own view already there.
 //!
 //! - **The prediction span** f = ⌈T_g / (T_r + T_u)⌉ (eq. 6.3.1): T_g is measured per
 //!   batch from its request to its arrival, T_r + T_u is the caller's frame period (the
@@ -45,6 +45,18 @@ pub const ADJUST_EVERY: u32 = 10;
 /// The longest prediction span.
 pub const MAX_SPAN: usize = 64;
 
+/// How a view f frames ahead is predicted from the last frames'.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Predictor {
+    /// Zheng's first order (§5.3, §6.2): E' = E_c + f·(E_c − E_p).
+    Linear,
+    /// Ours, second order: E' = E_c + f·v + f²/2·a with v = E_c − E_p and
+    /// a = E_c − 2E_p + E_pp, the same for the aim-at point. A turn is a curve the first
+    /// order leaves by its tangent, f² times the curvature off after f frames; the second
+    /// follows it to f³.
+    Quadratic,
+}
+
 /// What a predictive client asks of each traversal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Refinement {
@@ -54,6 +66,8 @@ pub struct Refinement {
     pub n: u32,
     /// The first prediction span, before any round trip is measured.
     pub initial_span: usize,
+    /// How views are predicted.
+    pub predictor: Predictor,
 }
 
 /// What one frame did.
@@ -98,9 +112,10 @@ pub struct PredictiveClient {
     last_target: Option<u32>,
     /// The client's frame counter.
     frame: u32,
-    /// The last two frames' eye and aim-at point.
+    /// The last three frames' eye and aim-at point, newest first.
     now: Option<(Vec3, Vec3)>,
     before: Option<(Vec3, Vec3)>,
+    earlier: Option<(Vec3, Vec3)>,
     round_trip: Option<f64>,
     period: Option<f64>,
     last_call: Option<Instant>,
@@ -161,6 +176,7 @@ impl PredictiveClient {
             frame: 0,
             now: None,
             before: None,
+            earlier: None,
             round_trip: None,
             period: None,
             last_call: None,
@@ -181,6 +197,7 @@ impl PredictiveClient {
             let p = started.duration_since(last).as_secs_f64();
             self.period = Some(self.period.map_or(p, |q| 0.8 * q + 0.2 * p));
         }
+        self.earlier = self.before;
         self.before = self.now.replace((eye, aim));
         let mut report = PredictiveFrame::default();
         let arrived = match self.batches.try_recv() {
@@ -264,12 +281,15 @@ impl PredictiveClient {
         let (eye, aim) = self.now.expect("a frame's view is taken first");
         // At the start the motion is not known: the current view stands for the first
         // f frames (§6.2).
-        let (e, a) = match (self.before, start) {
-            (Some((ep, ap)), false) => {
-                let f = (target - self.frame) as f32;
-                (eye + f * (eye - ep), aim + f * (aim - ap))
+        let f = (target - self.frame) as f32;
+        let (e, a) = match (self.before, self.earlier, start, self.refinement.predictor) {
+            (_, _, true, _) | (None, _, _, _) => (eye, aim),
+            (Some((ep, ap)), Some((epp, app)), false, Predictor::Quadratic) => {
+                let ahead =
+                    |c: Vec3, p: Vec3, pp: Vec3| c + f * (c - p) + 0.5 * f * f * (c - 2.0 * p + pp);
+                (ahead(eye, ep, epp), ahead(aim, ap, app))
             }
-            _ => (eye, aim),
+            (Some((ep, ap)), _, false, _) => (eye + f * (eye - ep), aim + f * (aim - ap)),
         };
         let view = ViewPacket {
             frame: target,

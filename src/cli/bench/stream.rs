@@ -3,11 +3,12 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use super::report::write_report;
 use crate::cli::args::or_default;
 use flaneur_bench::stream::{self, StreamBenchConfig};
+use flaneur_stream::Predictor;
 
 /// `flaneur bench stream`'s arguments.
 #[derive(clap::Args)]
@@ -26,6 +27,14 @@ pub struct StreamArgs {
     /// τ, a fraction of the viewport.
     #[arg(long, default_value_t = StreamBenchConfig::default().tau)]
     tau: f32,
+    /// The predictive clients, comma-separated: linear (Zheng's first order), quadratic
+    /// (ours) [default: both].
+    #[arg(long, value_delimiter = ',')]
+    predictors: Vec<String>,
+    /// Leave out the sequential client (whose walks take most of the time at long round
+    /// trips).
+    #[arg(long)]
+    no_sequential: bool,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -34,12 +43,23 @@ impl StreamArgs {
     /// Runs every walk and writes the report.
     pub fn run(self) -> Result<()> {
         let d = StreamBenchConfig::default();
+        let predictors = self
+            .predictors
+            .iter()
+            .map(|p| match p.as_str() {
+                "linear" => Ok(Predictor::Linear),
+                "quadratic" => Ok(Predictor::Quadratic),
+                other => bail!("--predictors: {other:?} is not linear or quadratic"),
+            })
+            .collect::<Result<Vec<_>>>()?;
         let cfg = StreamBenchConfig {
             triangles: self.triangles,
             frames: self.frames,
             frame_ms: self.frame_ms,
             rtts_ms: or_default(self.rtts, d.rtts_ms.clone()),
             tau: self.tau,
+            predictors: or_default(predictors, d.predictors.clone()),
+            sequential: !self.no_sequential,
             ..d
         };
         let r = stream::run(&cfg, |what| eprintln!("stream: {what}"))?;
