@@ -153,3 +153,35 @@ fn bench_stream_hides_the_round_trip_that_the_sequential_client_waits_for() {
         assert!(accuracy > 0.0 && accuracy < 1.0, "{predictive:?}");
     }
 }
+
+#[test]
+fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::flaneur(&[
+        "bench",
+        "stream-crowd",
+        "--clients",
+        "4",
+        "--triangles",
+        "20000",
+        "--frames",
+        "60",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = common::Csv::read(&dir.path().join("stream-crowd.csv"));
+    let row = &csv.rows[0];
+    assert_eq!(csv.num(row, "clients"), 4.0);
+    assert_eq!(csv.num(row, "failed"), 0.0);
+    // The session threads were found and measured, each session's memory counted.
+    assert!(csv.num(row, "server_cpu_s") > 0.0, "{row:?}");
+    assert!(csv.num(row, "memory_mean") > 0.0, "{row:?}");
+    assert!(csv.num(row, "round_trip_p50_ms") > 0.0, "{row:?}");
+    let md = std::fs::read_to_string(dir.path().join("stream-crowd.md")).unwrap();
+    assert!(md.contains("4 predictive clients"), "{md}");
+}

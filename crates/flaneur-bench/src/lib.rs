@@ -15,7 +15,8 @@
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
 //! database over HTTP through (`through_link` opens one by URL through a link of its own), and `pvs_http` the PVS walk's prefetchers; `layout` counts what the file's order costs a reader
 //! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
-//! starts; `stream` streams a landmark from `flaneur_stream`'s server through the link.
+//! starts; `stream` streams a landmark from `flaneur_stream`'s server through the link,
+//! and `stream_crowd` many clients from one server at once.
 
 pub mod cell_size;
 pub mod city_series;
@@ -48,6 +49,7 @@ pub mod pvs_stats;
 pub mod report;
 pub mod scene_tree;
 pub mod stream;
+pub mod stream_crowd;
 pub mod through_link;
 pub mod view_culling;
 pub mod visual_vs_review;

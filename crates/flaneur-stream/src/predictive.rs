@@ -83,8 +83,10 @@ pub struct PredictiveFrame {
     pub in_flight: usize,
     /// Time to apply the batch (T_u).
     pub update: Duration,
-    /// The last measured time from a request to its batch (T_g), smoothed.
+    /// The time from a request to its batch (T_g), smoothed.
     pub round_trip: Option<Duration>,
+    /// The applied batch's own time from its request to its arrival.
+    pub batch_round_trip: Option<Duration>,
     /// The batch's bytes.
     pub bytes: usize,
     /// Budget mode was asked for in this frame's requests.
@@ -218,6 +220,7 @@ impl PredictiveClient {
                 )));
             }
             let g = batch.at.duration_since(sent).as_secs_f64();
+            report.batch_round_trip = Some(batch.at.duration_since(sent));
             self.round_trip = Some(self.round_trip.map_or(g, |r| 0.8 * r + 0.2 * g));
             let t = Instant::now();
             for o in batch.objects {

@@ -53,6 +53,10 @@ pub struct SessionEnd {
     pub frames: u64,
     /// Bytes sent to the client.
     pub bytes_out: u64,
+    /// The session's own memory at its end: its refiners' (the landmarks are shared).
+    pub memory: usize,
+    /// The time to answer each view (the traversal and the batch's encoding), in order.
+    pub answer_times: Vec<Duration>,
     /// Why the server closed it; `None` when the client said BYE or closed.
     pub reason: Option<String>,
 }
@@ -183,6 +187,7 @@ struct Session {
     last_frame: Option<u32>,
     frames: u64,
     bytes_out: u64,
+    answer_times: Vec<Duration>,
 }
 
 /// Runs one client's session to its end.
@@ -212,11 +217,19 @@ fn session(
             let _ = send(&mut stream, &Message::Refused(why.clone()));
             why
         });
-    let (frames, bytes_out) = s.map_or((0, 0), |s: Session| (s.frames, s.bytes_out));
+    let (frames, bytes_out, memory, answer_times) = s.map_or_else(
+        || (0, 0, 0, Vec::new()),
+        |s: Session| {
+            let memory = s.refiners.iter().map(Refiner::memory).sum();
+            (s.frames, s.bytes_out, memory, s.answer_times)
+        },
+    );
     SessionEnd {
         peer,
         frames,
         bytes_out,
+        memory,
+        answer_times,
         reason,
     }
 }
@@ -254,11 +267,14 @@ fn run(
         last_frame: None,
         frames: 0,
         bytes_out: welcome.len() as u64,
+        answer_times: Vec::new(),
     });
     loop {
         match receive(stream, MAX_TO_SERVER)? {
             Some((Message::View(v), _)) => {
+                let started = std::time::Instant::now();
                 let batch = s.answer(&v)?;
+                s.answer_times.push(started.elapsed());
                 s.bytes_out += send(stream, &batch)? as u64;
                 s.frames += 1;
             }

@@ -22,6 +22,7 @@ mod pvs_prefetch;
 mod report;
 mod scene_tree;
 mod stream;
+mod stream_crowd;
 mod view_culling;
 mod visual_vs_review;
 mod walk_setup;
@@ -116,6 +117,10 @@ enum Experiment {
     /// span, accuracy against the traversal at the actual view (Zheng Tables 5.1, 6.1,
     /// Fig. 6.6). No database.
     Stream(stream::StreamArgs),
+    /// Many predictive clients on one stream server at once, each walking its own orbit
+    /// at 30 Hz: the server's CPU, memory per session, answer time and round trip
+    /// (p50, p99), unmodified frames of the worst-served client (ours). No database.
+    StreamCrowd(stream_crowd::StreamCrowdArgs),
 }
 
 impl BenchArgs {
@@ -143,6 +148,7 @@ impl BenchArgs {
             Experiment::LodRefine(a) => a.run(),
             Experiment::PvsPrefetch(a) => a.run(),
             Experiment::Stream(a) => a.run(),
+            Experiment::StreamCrowd(a) => a.run(),
         }
     }
 }

@@ -76,6 +76,11 @@ impl Fronts {
         }
     }
 
+    /// Bytes held: the per-node states and the two queues.
+    pub fn memory(&self) -> usize {
+        4 * (self.state.capacity() + self.queue_s.capacity() + self.queue_c.capacity())
+    }
+
     /// The number of nodes.
     pub fn node_count(&self) -> usize {
         self.state.len()

@@ -364,6 +364,18 @@ impl Refiner<'_> {
         })
     }
 
+    /// Bytes this refiner holds of its own (the progressive mesh and DAG it reads are
+    /// not counted: they may be shared): the selective mesh's arrays and maps, the
+    /// fronts, each DAG node's record of geometry, and the frame's operators.
+    pub fn memory(&self) -> usize {
+        let m = self.mesh.memory();
+        m.render
+            + m.aux
+            + self.fronts.memory()
+            + self.nodes.capacity() * std::mem::size_of::<FrontNode>()
+            + self.ops.capacity() * std::mem::size_of::<Op>()
+    }
+
     /// The selective mesh.
     pub fn mesh(&self) -> &CompactMesh {
         &self.mesh

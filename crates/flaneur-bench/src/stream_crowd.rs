@@ -1,0 +1,331 @@
+//! The `stream-crowd` experiment (ours; the scale the stream issue asks for): many
+//! predictive clients on one stream server at once, each walking its own orbit of the
+//! landmark at 30 Hz. Server side: the CPU its session threads used, each session's
+//! memory, the time to answer a view (p50, p99); client side: every batch's round trip
+//! (p50, p99), and the unmodified frames after the warm-up of the worst-served client
+//! (a starved client would have many).
+//!
+//! Clients and server share this process, over loopback: the session threads' CPU is
+//! read from `/proc/self/task/*/schedstat` (the server names them `stream-<peer>`) just
+//! before the clients end their sessions.
+
+use std::path::Path;
+use std::sync::{Arc, Barrier};
+use std::time::{Duration, Instant};
+
+use glam::{Quat, Vec3};
+
+use crate::lod_orbit::orbit_path;
+use crate::report::Report;
+use flaneur::error::{Error, Result};
+use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal};
+use flaneur_stream::{
+    Hello, Landmark, PredictiveClient, Predictor, Refinement, ServerConfig, StreamServer,
+};
+
+/// The settings of the experiment.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct StreamCrowdConfig {
+    pub clients: usize,
+    pub triangles: usize,
+    pub frames: usize,
+    /// Each client's frame period, ms.
+    pub frame_ms: f64,
+    pub tau: f32,
+    pub n: u32,
+    pub budget: u32,
+}
+
+impl Default for StreamCrowdConfig {
+    fn default() -> StreamCrowdConfig {
+        StreamCrowdConfig {
+            clients: 32,
+            triangles: crate::lod_refine::DEFAULT_TRIANGLES,
+            frames: crate::lod_refine::DEFAULT_FRAMES,
+            frame_ms: 1000.0 / 30.0,
+            tau: 0.0002,
+            n: flaneur_stream::protocol::MAX_N,
+            budget: flaneur::lod::THESIS_BUDGET as u32,
+        }
+    }
+}
+
+/// What the crowd did.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StreamCrowdReport {
+    pub config: StreamCrowdConfig,
+    pub model_triangles: usize,
+    /// CPU seconds the session threads used, and the walk's wall seconds.
+    pub server_cpu_s: f64,
+    pub wall_s: f64,
+    /// Each session's own memory at its end, bytes: mean and largest.
+    pub memory_mean: f64,
+    pub memory_max: usize,
+    /// Time to answer a view, ms: p50, p99, max over every session.
+    pub answer_ms: [f64; 3],
+    /// Every batch's round trip, ms: p50, p99, max over every client.
+    pub round_trip_ms: [f64; 3],
+    /// Unmodified frames after the warm-up: the fewest, the mean, the most of a client.
+    pub unmodified: [f64; 3],
+    pub warm_up: usize,
+    /// Clients whose session failed, with the first error.
+    pub failed: usize,
+    pub first_error: Option<String>,
+}
+
+/// p50, p99 and the largest of `xs`.
+fn spread(mut xs: Vec<f64>) -> [f64; 3] {
+    if xs.is_empty() {
+        return [0.0; 3];
+    }
+    xs.sort_by(f64::total_cmp);
+    let at = |q: f64| xs[((xs.len() - 1) as f64 * q).round() as usize];
+    [at(0.5), at(0.99), xs[xs.len() - 1]]
+}
+
+/// CPU seconds of this process's threads whose names start with `prefix`.
+fn threads_cpu_seconds(prefix: &str) -> f64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0.0;
+    };
+    tasks
+        .flatten()
+        .filter(|t| {
+            std::fs::read_to_string(t.path().join("comm")).is_ok_and(|c| c.starts_with(prefix))
+        })
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .sum::<f64>()
+        / 1e9
+}
+
+/// Runs the crowd: one server, `clients` predictive clients, each on its own thread
+/// walking the orbit turned by its share of a circle.
+pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<StreamCrowdReport> {
+    if cfg.clients == 0 || cfg.frames < 10 || !(cfg.frame_ms.is_finite() && cfg.frame_ms > 0.0) {
+        return Err(Error::Invalid(format!(
+            "stream-crowd: {} clients of {} frames at {} ms; give at least one client and 10 \
+             frames of a positive period",
+            cfg.clients, cfg.frames, cfg.frame_ms
+        )));
+    }
+    progress("building the landmark's progressive mesh and DAG");
+    let mesh = bumpy_torus(cfg.triangles);
+    let pm = ProgressiveMesh::build(&mesh)?;
+    let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+    let landmark = Landmark {
+        id: 0,
+        pm: Arc::new(pm),
+        dag: Arc::new(dag),
+    };
+    let model_triangles = landmark.triangles();
+    let (lo, hi) = mesh.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let (centre, radius) = (0.5 * (lo + hi), 0.5 * (hi - lo).length());
+    let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
+    let views = Arc::new(orbit_path(centre, radius, cfg.frames, fov)?);
+    let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
+        .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?
+        .spawn()
+        .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?;
+    let addr = server.addr();
+    let warm_up = cfg.frames * 50 / 180;
+    progress(&format!("{} clients walking", cfg.clients));
+    // All walk, then the server's threads are read, then all say goodbye.
+    let walked = Arc::new(Barrier::new(cfg.clients + 1));
+    let read = Arc::new(Barrier::new(cfg.clients + 1));
+    let started = Instant::now();
+    let handles: Vec<_> = (0..cfg.clients)
+        .map(|k| {
+            let (views, walked, read, cfg) =
+                (views.clone(), walked.clone(), read.clone(), cfg.clone());
+            std::thread::spawn(move || {
+                let turn =
+                    Quat::from_rotation_y(std::f32::consts::TAU * k as f32 / cfg.clients as f32);
+                let walk =
+                    || -> std::result::Result<(PredictiveClient, Vec<f64>, usize), String> {
+                        let hello = Hello {
+                            traversal: Traversal::Priority,
+                            fov,
+                            budget: Some(cfg.budget),
+                            out_of_view: true,
+                            back_face: true,
+                        };
+                        let refinement = Refinement {
+                            tau: cfg.tau,
+                            n: cfg.n,
+                            initial_span: 1,
+                            predictor: Predictor::Quadratic,
+                        };
+                        let mut c = PredictiveClient::connect(
+                            addr,
+                            hello,
+                            refinement,
+                            Duration::from_secs(60),
+                        )
+                        .map_err(|e| e.to_string())?;
+                        let period = Duration::from_secs_f64(cfg.frame_ms / 1e3);
+                        let (mut trips, mut unmodified) = (Vec::new(), 0);
+                        let mut next = Instant::now();
+                        for (f, v) in views.iter().enumerate() {
+                            let eye = centre + turn * (v.eye - centre);
+                            let aim = eye + turn * v.look * (centre - v.eye).length().max(1e-3);
+                            let got = c.frame(eye, aim).map_err(|e| e.to_string())?;
+                            if let Some(t) = got.batch_round_trip {
+                                trips.push(t.as_secs_f64() * 1e3);
+                            }
+                            unmodified += usize::from(f >= warm_up && !got.modified);
+                            next += period;
+                            match next.checked_duration_since(Instant::now()) {
+                                Some(wait) => std::thread::sleep(wait),
+                                None => next = Instant::now(),
+                            }
+                        }
+                        Ok((c, trips, unmodified))
+                    };
+                let result = walk();
+                walked.wait();
+                read.wait();
+                result.map(|(c, trips, unmodified)| {
+                    let _ = c.bye();
+                    (trips, unmodified)
+                })
+            })
+        })
+        .collect();
+    walked.wait();
+    let wall_s = started.elapsed().as_secs_f64();
+    let server_cpu_s = threads_cpu_seconds("stream-127");
+    read.wait();
+    let (mut trips, mut unmodified, mut failed, mut first_error) =
+        (Vec::new(), Vec::new(), 0, None);
+    for h in handles {
+        match h.join() {
+            Ok(Ok((t, u))) => {
+                trips.extend(t);
+                unmodified.push(u as f64);
+            }
+            Ok(Err(e)) => {
+                failed += 1;
+                first_error.get_or_insert(e);
+            }
+            Err(_) => {
+                failed += 1;
+                first_error.get_or_insert_with(|| "a client thread panicked".into());
+            }
+        }
+    }
+    let mut memories = Vec::new();
+    let mut answers = Vec::new();
+    for _ in 0..cfg.clients - failed {
+        let end = server
+            .ends()
+            .recv_timeout(Duration::from_secs(30))
+            .map_err(|_| Error::Invalid("stream-crowd: a session never ended".into()))?;
+        memories.push(end.memory);
+        answers.extend(end.answer_times.iter().map(|t| t.as_secs_f64() * 1e3));
+    }
+    let unmodified_spread = if unmodified.is_empty() {
+        [0.0; 3]
+    } else {
+        let mean = unmodified.iter().sum::<f64>() / unmodified.len() as f64;
+        let (min, max) = unmodified
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &u| (a.min(u), b.max(u)));
+        [min, mean, max]
+    };
+    Ok(StreamCrowdReport {
+        config: cfg.clone(),
+        model_triangles,
+        server_cpu_s,
+        wall_s,
+        memory_mean: memories.iter().sum::<usize>() as f64 / memories.len().max(1) as f64,
+        memory_max: memories.iter().copied().max().unwrap_or(0),
+        answer_ms: spread(answers),
+        round_trip_ms: spread(trips),
+        unmodified: unmodified_spread,
+        warm_up,
+        failed,
+        first_error,
+    })
+}
+
+impl Report for StreamCrowdReport {
+    fn name(&self) -> &'static str {
+        "stream-crowd"
+    }
+
+    fn to_csv(&self) -> String {
+        format!(
+            "clients,frames,frame_ms,server_cpu_s,wall_s,memory_mean,memory_max,answer_p50_ms,answer_p99_ms,answer_max_ms,round_trip_p50_ms,round_trip_p99_ms,round_trip_max_ms,unmodified_min,unmodified_mean,unmodified_max,failed\n{},{},{:.2},{:.3},{:.3},{:.0},{},{:.3},{:.3},{:.3},{:.2},{:.2},{:.2},{},{:.1},{},{}\n",
+            self.config.clients,
+            self.config.frames,
+            self.config.frame_ms,
+            self.server_cpu_s,
+            self.wall_s,
+            self.memory_mean,
+            self.memory_max,
+            self.answer_ms[0],
+            self.answer_ms[1],
+            self.answer_ms[2],
+            self.round_trip_ms[0],
+            self.round_trip_ms[1],
+            self.round_trip_ms[2],
+            self.unmodified[0],
+            self.unmodified[1],
+            self.unmodified[2],
+            self.failed
+        )
+    }
+
+    fn markdown(&self) -> String {
+        let c = &self.config;
+        format!(
+            "# stream-crowd — many clients on one stream server (ours)\n\n\
+             {} predictive clients (second-order prediction) on one server over loopback, each \
+             walking the {}-frame orbit of a {}-triangle torus turned by its share of a circle, \
+             at {:.1} ms frames; τ = {} %, N = {}, a budget of {}. Clients and server share this \
+             machine's cores.\n\n\
+             | figure | value |\n|---|---|\n\
+             | server CPU (session threads) | {:.2} s in {:.2} s of walking: {:.0} % of one core |\n\
+             | memory per session, mean (largest) | {:.1} MiB ({:.1} MiB) |\n\
+             | time to answer a view, p50 / p99 / max | {:.2} / {:.2} / {:.2} ms |\n\
+             | a batch's round trip, p50 / p99 / max | {:.1} / {:.1} / {:.1} ms |\n\
+             | unmodified frames after frame {}, fewest / mean / most of a client | {} / {:.1} / {} |\n\
+             | clients failed | {}{} |\n\n\
+             A starved client would show as many unmodified frames; the landmark's progressive \
+             mesh and DAG are held once, so a session's memory is its own fronts, node records \
+             and selective mesh.\n",
+            c.clients,
+            c.frames,
+            self.model_triangles,
+            c.frame_ms,
+            100.0 * c.tau,
+            c.n,
+            c.budget,
+            self.server_cpu_s,
+            self.wall_s,
+            100.0 * self.server_cpu_s / self.wall_s.max(1e-9),
+            self.memory_mean / 1048576.0,
+            self.memory_max as f64 / 1048576.0,
+            self.answer_ms[0],
+            self.answer_ms[1],
+            self.answer_ms[2],
+            self.round_trip_ms[0],
+            self.round_trip_ms[1],
+            self.round_trip_ms[2],
+            self.warm_up,
+            self.unmodified[0],
+            self.unmodified[1],
+            self.unmodified[2],
+            self.failed,
+            self.first_error
+                .as_ref()
+                .map_or(String::new(), |e| format!(" (first: {e})"))
+        )
+    }
+
+    fn plot(&self, _dir: &Path) -> Result<()> {
+        Ok(())
+    }
+}

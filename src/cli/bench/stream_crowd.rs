@@ -1,0 +1,41 @@
+//! `flaneur bench stream-crowd` (ours): many clients on one stream server.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::report::write_report;
+use flaneur_bench::stream_crowd::{self, StreamCrowdConfig};
+
+/// `flaneur bench stream-crowd`'s arguments.
+#[derive(clap::Args)]
+pub struct StreamCrowdArgs {
+    /// Clients at once.
+    #[arg(long, default_value_t = StreamCrowdConfig::default().clients)]
+    clients: usize,
+    /// Triangles of the bumpy-torus landmark.
+    #[arg(long, default_value_t = StreamCrowdConfig::default().triangles)]
+    triangles: usize,
+    #[arg(long, default_value_t = StreamCrowdConfig::default().frames)]
+    frames: usize,
+    /// Each client's frame period, ms.
+    #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms)]
+    frame_ms: f64,
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+impl StreamCrowdArgs {
+    /// Runs the crowd and writes the report.
+    pub fn run(self) -> Result<()> {
+        let cfg = StreamCrowdConfig {
+            clients: self.clients,
+            triangles: self.triangles,
+            frames: self.frames,
+            frame_ms: self.frame_ms,
+            ..StreamCrowdConfig::default()
+        };
+        let r = stream_crowd::run(&cfg, |what| eprintln!("stream-crowd: {what}"))?;
+        write_report(&self.out, &r)
+    }
+}
