@@ -11,6 +11,25 @@ use flaneur::lod::{LodOptions, Traversal};
 use flaneur::{BuildOptions, Database};
 use flaneur_stream::{Hello, Landmark, StreamClient, ViewPacket};
 
+/// Runs `flaneur bench` with `args` into a folder of its own, which it returns; a test's
+/// failure, with the command's words, when the command fails.
+fn bench(args: &[&str]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().to_str().unwrap().to_string();
+    let all: Vec<&str> = ["bench"]
+        .into_iter()
+        .chain(args.iter().copied())
+        .chain(["--out", out_dir.as_str()])
+        .collect();
+    let out = common::flaneur(&all);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir
+}
+
 /// The server's process, killed when dropped, and its printed lines.
 struct Served {
     child: Child,
@@ -110,9 +129,7 @@ fn serve_stream_says_when_there_is_nothing_to_stream() {
 
 #[test]
 fn bench_stream_hides_the_round_trip_that_the_sequential_client_waits_for() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = common::flaneur(&[
-        "bench",
+    let dir = bench(&[
         "stream",
         "--triangles",
         "20000",
@@ -122,14 +139,7 @@ fn bench_stream_hides_the_round_trip_that_the_sequential_client_waits_for() {
         "20",
         "--rtts",
         "100",
-        "--out",
-        dir.path().to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(dir.path().join(flaneur_bench::stream::PLOT).exists());
     let csv = common::Csv::read(&dir.path().join("stream.csv"));
     let [sequential, linear, quadratic] = &csv.rows[..] else {
@@ -156,9 +166,7 @@ fn bench_stream_hides_the_round_trip_that_the_sequential_client_waits_for() {
 
 #[test]
 fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = common::flaneur(&[
-        "bench",
+    let dir = bench(&[
         "stream-crowd",
         "--clients",
         "4",
@@ -166,14 +174,7 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
         "20000",
         "--frames",
         "60",
-        "--out",
-        dir.path().to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let csv = common::Csv::read(&dir.path().join("stream-crowd.csv"));
     let row = &csv.rows[0];
     assert_eq!(csv.num(row, "clients"), 4.0);

@@ -172,25 +172,30 @@ fn warm_up(frames: usize) -> usize {
     frames * 50 / 180
 }
 
-/// Builds the landmark, serves it on loopback and walks the orbit through a link at each
-/// round trip, sequential then predictive. `progress` is told each walk as it starts.
-pub fn run(cfg: &StreamBenchConfig, mut progress: impl FnMut(&str)) -> Result<StreamReport> {
-    cfg.validate()?;
-    progress("building the landmark's progressive mesh and DAG");
-    let mesh = bumpy_torus(cfg.triangles);
+/// The experiments' landmark: a bumpy torus of about `triangles` triangles with its
+/// progressive mesh and DAG, and the centre and radius of its bounding sphere (the
+/// orbit's).
+pub fn torus_landmark(triangles: usize) -> Result<(Landmark, Vec3, f32)> {
+    let mesh = bumpy_torus(triangles);
     let pm = ProgressiveMesh::build(&mesh)?;
     let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+    let (lo, hi) = mesh.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let landmark = Landmark {
         id: 0,
         pm: Arc::new(pm),
         dag: Arc::new(dag),
     };
+    Ok((landmark, 0.5 * (lo + hi), 0.5 * (hi - lo).length()))
+}
+
+/// Builds the landmark, serves it on loopback and walks the orbit through a link at each
+/// round trip, sequential then predictive. `progress` is told each walk as it starts.
+pub fn run(cfg: &StreamBenchConfig, mut progress: impl FnMut(&str)) -> Result<StreamReport> {
+    cfg.validate()?;
+    progress("building the landmark's progressive mesh and DAG");
+    let (landmark, centre, radius) = torus_landmark(cfg.triangles)?;
     let model_triangles = landmark.triangles();
-    let (lo, hi) = mesh.bounds();
-    let (centre, radius) = {
-        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-        (0.5 * (lo + hi), 0.5 * (hi - lo).length())
-    };
     let fov = cfg.fov_degrees.to_radians();
     let views = orbit_path(centre, radius, cfg.frames, fov)?;
     let server = StreamServer::bind(

@@ -13,15 +13,13 @@ use std::path::Path;
 use std::sync::{Arc, Barrier};
 use std::time::{Duration, Instant};
 
-use glam::{Quat, Vec3};
+use glam::Quat;
 
 use crate::lod_orbit::orbit_path;
 use crate::report::Report;
 use flaneur::error::{Error, Result};
-use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal};
-use flaneur_stream::{
-    Hello, Landmark, PredictiveClient, Predictor, Refinement, ServerConfig, StreamServer,
-};
+use flaneur::lod::Traversal;
+use flaneur_stream::{Hello, PredictiveClient, Predictor, Refinement, ServerConfig, StreamServer};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -110,18 +108,8 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         )));
     }
     progress("building the landmark's progressive mesh and DAG");
-    let mesh = bumpy_torus(cfg.triangles);
-    let pm = ProgressiveMesh::build(&mesh)?;
-    let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
-    let landmark = Landmark {
-        id: 0,
-        pm: Arc::new(pm),
-        dag: Arc::new(dag),
-    };
+    let (landmark, centre, radius) = crate::stream::torus_landmark(cfg.triangles)?;
     let model_triangles = landmark.triangles();
-    let (lo, hi) = mesh.bounds();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let (centre, radius) = (0.5 * (lo + hi), 0.5 * (hi - lo).length());
     let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
     let views = Arc::new(orbit_path(centre, radius, cfg.frames, fov)?);
     let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
