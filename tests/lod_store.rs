@@ -520,6 +520,15 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
     lods.settle().unwrap();
     assert_eq!(lods.counts.decoded, large.len() as u64 - 1);
     assert!(lods.refined_mesh(large[0]).is_none());
+    // A settling selector refines them from the first frame, the frame waiting.
+    let drawn: Vec<&Loaded> = buffer.iter().collect();
+    let mut lods = LodSelector::new(&db, 0.001).unwrap().settling();
+    let first = lods.select(&camera, &buffer, &drawn).unwrap();
+    for d in &first {
+        assert_eq!(d.level == REFINED, large[1..].contains(&d.id), "object {}", d.id);
+    }
+    assert_eq!(lods.counts.drawn_while_decoding, 0);
+    assert_eq!(lods.counts.decoded, large.len() as u64 - 1);
 }
 
 /// LOD selection meeting a damaged chain page: the frame's error, naming the page; or,

@@ -286,6 +286,10 @@ impl FrameSink for Checked<'_> {
     fn lod_tau(&self) -> Option<f32> {
         self.writer.lod_tau()
     }
+
+    fn lod_settled(&self) -> bool {
+        self.writer.lod_settled()
+    }
 }
 
 #[test]
@@ -520,6 +524,10 @@ impl FrameSink for AtLevels<'_> {
     fn lod_tau(&self) -> Option<f32> {
         self.writer.lod_tau()
     }
+
+    fn lod_settled(&self) -> bool {
+        self.writer.lod_settled()
+    }
 }
 
 /// Drawn with LOD selection, a walk's far objects come from the database's coarse
@@ -694,10 +702,13 @@ fn large_objects_are_refined_view_by_view() {
         ..ReviewConfig::preset(Preset::Box)
     };
     let path = motion::generate(&db.bounds(), Motion::Normal, 90, 30.0, 5).unwrap();
+    // Each large object refined from its first frame, whatever the decoding threads'
+    // speed, so that the walk is the same on a loaded machine.
     let writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
         .unwrap()
         .with_lod_tau(0.001)
-        .unwrap();
+        .unwrap()
+        .settling_lods();
     let mut sink = AtLevels {
         writer,
         full: Vec::new(),
@@ -706,6 +717,7 @@ fn large_objects_are_refined_view_by_view() {
     review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
     let lod = sink.writer.times.lod.unwrap();
     assert!(lod.refined_draws > 0 && lod.refine_ops > 0, "{lod:?}");
+    assert_eq!(lod.drawn_while_decoding, 0, "{lod:?}");
     let refined: Vec<_> = sink
         .writer
         .resident()

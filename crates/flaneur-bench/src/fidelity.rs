@@ -194,6 +194,10 @@ impl FrameSink for Twice<'_> {
     fn lod_tau(&self) -> Option<f32> {
         self.mode.lod_tau()
     }
+
+    fn lod_settled(&self) -> bool {
+        self.mode.lod_settled()
+    }
 }
 
 /// Walks `path` through `db` with `walk` (`mode` names it in the report), drawing each

@@ -66,6 +66,8 @@ pub struct FrameWriter<'a> {
     out: Option<(PathBuf, usize)>,
     /// The τ the walk's LOD selection draws under; `None`: every object at full detail.
     lod_tau: Option<f32>,
+    /// Whether LOD selection refines a large object from its first frame.
+    lod_settled: bool,
     pub times: FrameTimes,
 }
 
@@ -105,6 +107,7 @@ impl<'a> FrameWriter<'a> {
             meshes: GpuMeshes::default(),
             out: None,
             lod_tau: None,
+            lod_settled: false,
             times: FrameTimes::default(),
         })
     }
@@ -122,6 +125,16 @@ impl<'a> FrameWriter<'a> {
             },
             ..self
         })
+    }
+
+    /// The same writer asking the walk to refine each large object from the frame it is
+    /// first drawn, waiting for its decoding ([`FrameSink::lod_settled`]): its pictures
+    /// then follow from the path alone, whatever the thread pool's speed.
+    pub fn settling_lods(self) -> FrameWriter<'a> {
+        FrameWriter {
+            lod_settled: true,
+            ..self
+        }
     }
 
     /// The meshes on the GPU now.
@@ -192,6 +205,10 @@ impl FrameSink for FrameWriter<'_> {
 
     fn lod_tau(&self) -> Option<f32> {
         self.lod_tau
+    }
+
+    fn lod_settled(&self) -> bool {
+        self.lod_settled
     }
 }
 

@@ -227,6 +227,9 @@ pub struct LodSelector<'a> {
     /// than the frame failing, and what was found so since [`LodSelector::take_damaged`].
     tolerant: bool,
     damaged: Vec<String>,
+    /// Whether a large object is refined from the frame it is first drawn, the frame
+    /// waiting for its decoding.
+    settling: bool,
     /// What it read and chose so far.
     pub counts: LodCounts,
 }
@@ -244,6 +247,7 @@ impl<'a> LodSelector<'a> {
             decoded: channel(),
             tolerant: false,
             damaged: Vec::new(),
+            settling: false,
             counts: LodCounts::default(),
         })
     }
@@ -255,6 +259,18 @@ impl<'a> LodSelector<'a> {
     pub fn tolerating_damage(self) -> LodSelector<'a> {
         LodSelector {
             tolerant: true,
+            ..self
+        }
+    }
+
+    /// The same selector refining a large object from the frame it is first drawn: the
+    /// frame waits for its progressive mesh and DAG to decode instead of drawing it at
+    /// its discrete levels meanwhile. A walk's pictures then depend on its path alone,
+    /// not on how fast the thread pool decodes; for a viewer that compares pictures
+    /// rather than one that must not wait.
+    pub fn settling(self) -> LodSelector<'a> {
+        LodSelector {
+            settling: true,
             ..self
         }
     }
@@ -314,6 +330,9 @@ impl<'a> LodSelector<'a> {
                     self.damage(id, e, "at full detail")?;
                     self.decoding.remove(&id);
                     self.objects.insert(id, ObjectLevels::full_only());
+                }
+                if self.settling {
+                    self.settle()?;
                 }
             }
             if let Some(d) = self.refine(camera, o)? {
@@ -505,6 +524,9 @@ pub(crate) struct LodWanted {
     /// Whether an object whose LOD data cannot be read is drawn at full detail, told
     /// of, rather than the frame failing ([`LodSelector::tolerating_damage`]).
     pub tolerant: bool,
+    /// Whether a large object is refined from the frame it is first drawn
+    /// ([`LodSelector::settling`]).
+    pub settled: bool,
 }
 
 impl<'db> WalkLods<'db> {
@@ -533,12 +555,14 @@ impl<'db> WalkLods<'db> {
         if want.restart || self.selector.as_ref().map(LodSelector::tau) != want.tau {
             self.selector = match (want.tau, self.db) {
                 (Some(tau), Some(db)) => {
-                    let s = LodSelector::new(db, tau)?;
-                    Some(if want.tolerant {
-                        s.tolerating_damage()
-                    } else {
-                        s
-                    })
+                    let mut s = LodSelector::new(db, tau)?;
+                    if want.tolerant {
+                        s = s.tolerating_damage();
+                    }
+                    if want.settled {
+                        s = s.settling();
+                    }
+                    Some(s)
                 }
                 _ => None,
             };

@@ -111,6 +111,7 @@ pub(crate) fn run<M: Mode + ?Sized>(
                 tau: viewer.lod_tau(),
                 restart: viewer.lod_restart(),
                 tolerant: viewer.skips_damaged(),
+                settled: viewer.lod_settled(),
             };
             let mut selection = lods.select(want, camera, &buffer, &culled.drawn)?;
             lod_pages = selection.pages;

@@ -38,6 +38,16 @@ pub trait FrameSink {
     fn lod_restart(&mut self) -> bool {
         false
     }
+
+    /// Whether LOD selection refines a large object from the frame it is first drawn,
+    /// the frame waiting for its progressive mesh and DAG to decode, rather than drawing
+    /// it at its discrete levels meanwhile
+    /// ([`LodSelector::settling`](super::lod_select::LodSelector::settling)): for a
+    /// viewer whose pictures must follow from the path alone (a comparison of pictures,
+    /// a test); a person at a window would rather not wait.
+    fn lod_settled(&self) -> bool {
+        false
+    }
 }
 
 /// What a frame draws: the objects in view, each at the level LOD selection chose.
@@ -175,6 +185,10 @@ impl FrameSink for Played<'_> {
 
     fn lod_restart(&mut self) -> bool {
         self.sink.lod_restart()
+    }
+
+    fn lod_settled(&self) -> bool {
+        self.sink.lod_settled()
     }
 }
 
