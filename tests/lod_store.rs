@@ -525,7 +525,12 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
     let mut lods = LodSelector::new(&db, 0.001).unwrap().settling();
     let first = lods.select(&camera, &buffer, &drawn).unwrap();
     for d in &first {
-        assert_eq!(d.level == REFINED, large[1..].contains(&d.id), "object {}", d.id);
+        assert_eq!(
+            d.level == REFINED,
+            large[1..].contains(&d.id),
+            "object {}",
+            d.id
+        );
     }
     assert_eq!(lods.counts.drawn_while_decoding, 0);
     assert_eq!(lods.counts.decoded, large.len() as u64 - 1);
