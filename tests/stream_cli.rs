@@ -182,6 +182,7 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
     // The session threads were found and measured, each session's memory counted.
     assert!(csv.num(row, "server_cpu_s") > 0.0, "{row:?}");
     assert!(csv.num(row, "memory_mean") > 0.0, "{row:?}");
+    assert!(csv.num(row, "shared_memory") > 0.0, "{row:?}");
     assert!(csv.num(row, "round_trip_p50_ms") > 0.0, "{row:?}");
     let md = std::fs::read_to_string(dir.path().join("stream-crowd.md")).unwrap();
     assert!(md.contains("4 predictive clients"), "{md}");

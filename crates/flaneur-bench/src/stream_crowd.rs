@@ -59,6 +59,9 @@ pub struct StreamCrowdReport {
     /// Each session's own memory at its end, bytes: mean and largest.
     pub memory_mean: f64,
     pub memory_max: usize,
+    /// Bytes the sessions share besides the landmark's progressive mesh and DAG (each
+    /// DAG node's record, made once).
+    pub shared_memory: usize,
     /// Time to answer a view, ms: p50, p99, max over every session.
     pub answer_ms: [f64; 3],
     /// Every batch's round trip, ms: p50, p99, max over every client.
@@ -113,7 +116,9 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
     let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
     let views = Arc::new(orbit_path(centre, radius, cfg.frames, fov)?);
     let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
-        .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?
+        .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?;
+    let shared_memory = server.shared_memory();
+    let server = server
         .spawn()
         .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?;
     let addr = server.addr();
@@ -229,6 +234,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         wall_s,
         memory_mean: memories.iter().sum::<usize>() as f64 / memories.len().max(1) as f64,
         memory_max: memories.iter().copied().max().unwrap_or(0),
+        shared_memory,
         answer_ms: spread(answers),
         round_trip_ms: spread(trips),
         unmodified: unmodified_spread,
@@ -245,7 +251,7 @@ impl Report for StreamCrowdReport {
 
     fn to_csv(&self) -> String {
         format!(
-            "clients,frames,frame_ms,server_cpu_s,wall_s,memory_mean,memory_max,answer_p50_ms,answer_p99_ms,answer_max_ms,round_trip_p50_ms,round_trip_p99_ms,round_trip_max_ms,unmodified_min,unmodified_mean,unmodified_max,failed\n{},{},{:.2},{:.3},{:.3},{:.0},{},{:.3},{:.3},{:.3},{:.2},{:.2},{:.2},{},{:.1},{},{}\n",
+            "clients,frames,frame_ms,server_cpu_s,wall_s,memory_mean,memory_max,shared_memory,answer_p50_ms,answer_p99_ms,answer_max_ms,round_trip_p50_ms,round_trip_p99_ms,round_trip_max_ms,unmodified_min,unmodified_mean,unmodified_max,failed\n{},{},{:.2},{:.3},{:.3},{:.0},{},{},{:.3},{:.3},{:.3},{:.2},{:.2},{:.2},{},{:.1},{},{}\n",
             self.config.clients,
             self.config.frames,
             self.config.frame_ms,
@@ -253,6 +259,7 @@ impl Report for StreamCrowdReport {
             self.wall_s,
             self.memory_mean,
             self.memory_max,
+            self.shared_memory,
             self.answer_ms[0],
             self.answer_ms[1],
             self.answer_ms[2],
@@ -277,13 +284,14 @@ impl Report for StreamCrowdReport {
              | figure | value |\n|---|---|\n\
              | server CPU (session threads) | {:.2} s in {:.2} s of walking: {:.0} % of one core |\n\
              | memory per session, mean (largest) | {:.1} MiB ({:.1} MiB) |\n\
+             | shared by every session: the DAG nodes' records | {:.1} MiB |\n\
              | time to answer a view, p50 / p99 / max | {:.2} / {:.2} / {:.2} ms |\n\
              | a batch's round trip, p50 / p99 / max | {:.1} / {:.1} / {:.1} ms |\n\
              | unmodified frames after frame {}, fewest / mean / most of a client | {} / {:.1} / {} |\n\
              | clients failed | {}{} |\n\n\
              A starved client would show as many unmodified frames; the landmark's progressive \
-             mesh and DAG are held once, so a session's memory is its own fronts, node records \
-             and selective mesh.\n",
+             mesh and DAG, and each DAG node's record, are held once, so a session's memory is \
+             its own fronts, ID maps and selective mesh.\n",
             c.clients,
             c.frames,
             self.model_triangles,
@@ -296,6 +304,7 @@ impl Report for StreamCrowdReport {
             100.0 * self.server_cpu_s / self.wall_s.max(1e-9),
             self.memory_mean / 1048576.0,
             self.memory_max as f64 / 1048576.0,
+            self.shared_memory as f64 / 1048576.0,
             self.answer_ms[0],
             self.answer_ms[1],
             self.answer_ms[2],

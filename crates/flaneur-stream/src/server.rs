@@ -13,7 +13,7 @@
 //! the engine refuses) is answered REFUSED with the reason and closed; its reason goes
 //! to the server's log of session ends, and no other session notices.
 
-use std::io;
+use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
@@ -53,7 +53,8 @@ pub struct SessionEnd {
     pub frames: u64,
     /// Bytes sent to the client.
     pub bytes_out: u64,
-    /// The session's own memory at its end: its refiners' (the landmarks are shared).
+    /// The session's own memory at its end: its refiners' (the landmarks and their
+    /// node records are shared by every session).
     pub memory: usize,
     /// The time to answer each view (the traversal and the batch's encoding), in order.
     pub answer_times: Vec<Duration>,
@@ -65,6 +66,9 @@ pub struct SessionEnd {
 pub struct StreamServer {
     listener: TcpListener,
     landmarks: Arc<[Landmark]>,
+    /// A refiner per landmark at its base mesh, which each session's are made from,
+    /// sharing its node records.
+    templates: Arc<[Refiner<'static>]>,
     config: ServerConfig,
 }
 
@@ -98,9 +102,14 @@ impl StreamServer {
                 )));
             }
         }
+        let templates = landmarks
+            .iter()
+            .map(|l| Refiner::shared(l.pm.clone(), l.dag.clone()))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(StreamServer {
             listener: TcpListener::bind(addr)?,
             landmarks: landmarks.into(),
+            templates: templates.into(),
             config,
         })
     }
@@ -108,6 +117,15 @@ impl StreamServer {
     /// The address it listens on.
     pub fn local_addr(&self) -> io::Result<SocketAddr> {
         self.listener.local_addr()
+    }
+
+    /// Bytes every session shares besides the landmarks' progressive meshes and DAGs:
+    /// each DAG node's record, made once per landmark rather than once per session.
+    pub fn shared_memory(&self) -> usize {
+        self.templates
+            .iter()
+            .map(Refiner::node_records_memory)
+            .sum()
     }
 
     /// Accepts clients on a thread of its own, a session thread each; each session's
@@ -124,18 +142,50 @@ impl StreamServer {
         Ok(RunningServer { addr, stop, ends })
     }
 
+    /// One session, on the caller's thread, to its end: the client's messages read
+    /// from `input`, the server's written to `output`. What each accepted client's
+    /// thread runs over its connection once its idle timeout is set, open to any byte
+    /// stream (a test's or a fuzzer's bytes). `peer` names the client in its end.
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh};
+    /// use flaneur_stream::{Landmark, ServerConfig, StreamServer};
+    ///
+    /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+    /// let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+    /// let bunny = Landmark { id: 1, pm: Arc::new(pm), dag: Arc::new(dag) };
+    /// let server = StreamServer::bind("127.0.0.1:0", vec![bunny], ServerConfig::default())?;
+    /// // Bytes that are not a message: the session is refused, and says why.
+    /// let (input, mut output) = (&[1u8, 0, 0, 0, 0x7f][..], Vec::new());
+    /// let end = server.serve(input, &mut output, "127.0.0.1:9".parse().unwrap());
+    /// assert!(end.reason.unwrap().contains("0x7f"));
+    /// assert!(!output.is_empty(), "REFUSED, with the reason");
+    /// # Ok::<(), flaneur_stream::StreamError>(())
+    /// ```
+    pub fn serve(&self, input: impl Read, output: impl Write, peer: SocketAddr) -> SessionEnd {
+        let welcome = welcome(&self.landmarks).encode();
+        serve(
+            (input, output),
+            peer,
+            &self.templates,
+            &welcome,
+            self.config,
+        )
+    }
+
     fn accept_until(&self, stop: &AtomicBool, ends: &mpsc::Sender<SessionEnd>) {
         let welcome = Arc::new(welcome(&self.landmarks).encode());
         while !stop.load(Ordering::Relaxed) {
             match self.listener.accept() {
                 Ok((stream, peer)) => {
-                    let (landmarks, welcome) = (self.landmarks.clone(), welcome.clone());
+                    let (templates, welcome) = (self.templates.clone(), welcome.clone());
                     let (config, ends) = (self.config, ends.clone());
                     let _ =
                         thread::Builder::new()
                             .name(format!("stream-{peer}"))
                             .spawn(move || {
-                                let end = session(stream, peer, &landmarks, &welcome, config);
+                                let end = session(stream, peer, &templates, &welcome, config);
                                 let _ = ends.send(end);
                             });
                 }
@@ -190,33 +240,56 @@ struct Session {
     answer_times: Vec<Duration>,
 }
 
-/// Runs one client's session to its end.
+/// Runs one TCP client's session to its end.
 fn session(
-    mut stream: TcpStream,
+    stream: TcpStream,
     peer: SocketAddr,
-    landmarks: &[Landmark],
+    templates: &[Refiner<'static>],
+    welcome: &[u8],
+    config: ServerConfig,
+) -> SessionEnd {
+    let set_up = stream
+        .set_nonblocking(false)
+        .and_then(|()| stream.set_read_timeout(Some(config.idle_timeout)))
+        .and_then(|()| stream.set_nodelay(true));
+    match set_up {
+        Ok(()) => serve((&stream, &stream), peer, templates, welcome, config),
+        Err(e) => SessionEnd {
+            peer,
+            frames: 0,
+            bytes_out: 0,
+            memory: 0,
+            answer_times: Vec::new(),
+            reason: Some(format!("the connection could not be set up: {e}")),
+        },
+    }
+}
+
+/// Runs one session over `stream` (its input, its output) to its end.
+fn serve<R: Read, W: Write>(
+    mut stream: (R, W),
+    peer: SocketAddr,
+    templates: &[Refiner<'static>],
     welcome: &[u8],
     config: ServerConfig,
 ) -> SessionEnd {
     let mut s = None;
-    let reason = run(&mut stream, landmarks, welcome, config, &mut s)
-        .err()
-        .map(|e| {
-            let why = match &e {
-                StreamError::Io(io)
-                    if matches!(
-                        io.kind(),
-                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    format!("idle for {:?}", config.idle_timeout)
-                }
-                e => e.to_string(),
-            };
-            // The client hears why, if it still listens.
-            let _ = send(&mut stream, &Message::Refused(why.clone()));
-            why
-        });
+    let reason = run(&mut stream, templates, welcome, &mut s).err().map(|e| {
+        let why = match &e {
+            StreamError::Io(io)
+                if matches!(
+                    io.kind(),
+                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                ) =>
+            {
+                format!("idle for {:?}", config.idle_timeout)
+            }
+            e => e.to_string(),
+        };
+        // The client hears why, if it still listens.
+        let _ = send(&mut stream.1, &Message::Refused(why.clone()));
+        why
+    });
     let (frames, bytes_out, memory, answer_times) = s.map_or_else(
         || (0, 0, 0, Vec::new()),
         |s: Session| {
@@ -235,17 +308,13 @@ fn session(
 }
 
 /// The session's loop; `Ok` when the client said BYE or closed.
-fn run(
-    stream: &mut TcpStream,
-    landmarks: &[Landmark],
+fn run<R: Read, W: Write>(
+    (input, output): &mut (R, W),
+    templates: &[Refiner<'static>],
     welcome: &[u8],
-    config: ServerConfig,
     state: &mut Option<Session>,
 ) -> Result<(), StreamError> {
-    stream.set_nonblocking(false)?;
-    stream.set_read_timeout(Some(config.idle_timeout))?;
-    stream.set_nodelay(true)?;
-    let hello = match receive(stream, MAX_TO_SERVER)? {
+    let hello = match receive(input, MAX_TO_SERVER)? {
         Some((Message::Hello(h), _)) => h,
         Some((m, _)) => return Err(out_of_place("HELLO", &m)),
         None => return Ok(()),
@@ -256,11 +325,11 @@ fn run(
             hello.fov
         )));
     }
-    let refiners = landmarks
+    let refiners = templates
         .iter()
-        .map(|l| Refiner::shared(l.pm.clone(), l.dag.clone()))
+        .map(Refiner::fresh)
         .collect::<Result<Vec<_>, _>>()?;
-    io::Write::write_all(stream, welcome)?;
+    output.write_all(welcome)?;
     let s = state.insert(Session {
         hello,
         refiners,
@@ -270,12 +339,12 @@ fn run(
         answer_times: Vec::new(),
     });
     loop {
-        match receive(stream, MAX_TO_SERVER)? {
+        match receive(input, MAX_TO_SERVER)? {
             Some((Message::View(v), _)) => {
                 let started = std::time::Instant::now();
                 let batch = s.answer(&v)?;
                 s.answer_times.push(started.elapsed());
-                s.bytes_out += send(stream, &batch)? as u64;
+                s.bytes_out += send(output, &batch)? as u64;
                 s.frames += 1;
             }
             Some((Message::Bye, _)) | None => return Ok(()),

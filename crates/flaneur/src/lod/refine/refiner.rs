@@ -186,7 +186,9 @@ pub struct FrameReport {
 pub struct Refiner<'a> {
     pm: Held<'a, ProgressiveMesh>,
     dag: Held<'a, Dag>,
-    nodes: Vec<FrontNode>,
+    /// Each DAG node's record, read-only: shared by the refiners made with
+    /// [`Refiner::fresh`] (a server's sessions over one landmark).
+    nodes: Arc<[FrontNode]>,
     fronts: Fronts,
     mesh: CompactMesh,
     ops: Vec<Op>,
@@ -201,9 +203,34 @@ impl<'a> Refiner<'a> {
         Refiner::holding(Held::Borrowed(pm), Held::Borrowed(dag))
     }
 
+    /// Another refiner of the same progressive mesh and DAG, at the base mesh, sharing
+    /// this one's read-only node records rather than building its own: what a server
+    /// makes for each client of one landmark.
+    ///
+    /// ```
+    /// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, Refiner};
+    /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+    /// let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+    /// let first = Refiner::new(&pm, &dag)?;
+    /// let second = first.fresh()?;
+    /// assert_eq!(second.mesh().triangle_count(), pm.base.triangle_count());
+    /// # Ok::<(), flaneur::Error>(())
+    /// ```
+    pub fn fresh(&self) -> Result<Refiner<'a>> {
+        Ok(Refiner {
+            pm: self.pm.clone(),
+            dag: self.dag.clone(),
+            nodes: self.nodes.clone(),
+            fronts: Fronts::new(&self.dag),
+            mesh: CompactMesh::new(&self.pm)?,
+            ops: Vec::new(),
+            scratch: Scratch::default(),
+        })
+    }
+
     fn holding(pm: Held<'a, ProgressiveMesh>, dag: Held<'a, Dag>) -> Result<Refiner<'a>> {
         let (p, d) = (&*pm, &*dag);
-        let nodes = front_nodes(p, d)?;
+        let nodes = front_nodes(p, d)?.into();
         let mesh = CompactMesh::new(p)?;
         let fronts = Fronts::new(d);
         Ok(Refiner {
@@ -364,16 +391,19 @@ impl Refiner<'_> {
         })
     }
 
-    /// Bytes this refiner holds of its own (the progressive mesh and DAG it reads are
-    /// not counted: they may be shared): the selective mesh's arrays and maps, the
-    /// fronts, each DAG node's record of geometry, and the frame's operators.
+    /// Bytes this refiner holds of its own: the selective mesh's arrays and maps, the
+    /// fronts and the frame's operators. What it may share with other refiners is not
+    /// counted: the progressive mesh, the DAG, and each DAG node's record
+    /// ([`Refiner::node_records_memory`]).
     pub fn memory(&self) -> usize {
         let m = self.mesh.memory();
-        m.render
-            + m.aux
-            + self.fronts.memory()
-            + self.nodes.capacity() * std::mem::size_of::<FrontNode>()
-            + self.ops.capacity() * std::mem::size_of::<Op>()
+        m.render + m.aux + self.fronts.memory() + self.ops.capacity() * std::mem::size_of::<Op>()
+    }
+
+    /// Bytes of the DAG nodes' records, which the refiners made with [`Refiner::fresh`]
+    /// share.
+    pub fn node_records_memory(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<FrontNode>()
     }
 
     /// The selective mesh.
