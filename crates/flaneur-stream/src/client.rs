@@ -9,14 +9,20 @@
 //! split that does not fit the mesh is refused by the mesh itself
 //! ([`CompactMesh::apply_split`]). After an error the session's meshes are no longer
 //! the server's: connect again.
+//!
+//! A client whose connection broke, or whose server stalled, reconnects and resumes
+//! ([`StreamClient::reconnect`]): it tells a new session the nodes it holds split, and
+//! the server goes on from the meshes the client holds, whatever batches were lost.
 
 use std::collections::HashMap;
-use std::net::{TcpStream, ToSocketAddrs};
+use std::io;
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::Duration;
 
 use crate::error::StreamError;
 use crate::protocol::{
-    receive, send, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, MAX_TO_CLIENT,
+    receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
+    MAX_RESUME, MAX_TO_CLIENT,
 };
 use flaneur::lod::CompactMesh;
 
@@ -29,6 +35,8 @@ pub const MAX_SPLITS: u32 = 1 << 26;
 #[derive(Debug)]
 pub struct StreamedObject {
     pub id: u64,
+    /// Vertex splits of its progressive mesh, as WELCOME said.
+    splits: u32,
     mesh: CompactMesh,
     /// The nodes split, with the runs they applied.
     held: HashMap<u32, NodeSplit>,
@@ -38,6 +46,13 @@ impl StreamedObject {
     /// The selective mesh, as the batches so far made it.
     pub fn mesh(&self) -> &CompactMesh {
         &self.mesh
+    }
+
+    /// The DAG nodes it holds split, in order: what a RESUME tells a new session.
+    pub fn held_nodes(&self) -> Vec<u32> {
+        let mut nodes: Vec<u32> = self.held.keys().copied().collect();
+        nodes.sort_unstable();
+        nodes
     }
 
     /// Applies this object's part of a batch: its collapses, then its splits.
@@ -79,6 +94,25 @@ impl StreamedObject {
     }
 }
 
+/// Opens a session on `stream`: HELLO, then the server's WELCOME.
+fn greet(
+    mut stream: TcpStream,
+    hello: Hello,
+    timeout: Duration,
+) -> Result<(TcpStream, Vec<WelcomeObject>), StreamError> {
+    stream.set_read_timeout(Some(timeout))?;
+    stream.set_nodelay(true)?;
+    send(&mut stream, &Message::Hello(hello))?;
+    match receive(&mut stream, MAX_TO_CLIENT)? {
+        Some((Message::Welcome(objects), _)) => Ok((stream, objects)),
+        Some((Message::Refused(why), _)) => Err(StreamError::Refused(why)),
+        Some((other, _)) => Err(StreamError::Malformed(format!(
+            "the server answered HELLO with {other:?}"
+        ))),
+        None => Err(StreamError::Refused("closed before WELCOME".into())),
+    }
+}
+
 /// What one batch did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BatchReport {
@@ -99,6 +133,12 @@ pub struct StreamClient {
     objects: Vec<StreamedObject>,
     /// The frame of the VIEW sent and not yet answered.
     pending: Option<u32>,
+    /// The lowest frame the next VIEW may have (one past the last sent).
+    next_frame: u32,
+    /// What a reconnection needs: the server, the HELLO, the wait bound.
+    server: SocketAddr,
+    hello: Hello,
+    timeout: Duration,
 }
 
 impl StreamClient {
@@ -109,21 +149,10 @@ impl StreamClient {
         hello: Hello,
         timeout: Duration,
     ) -> Result<StreamClient, StreamError> {
-        let mut stream = TcpStream::connect(addr)?;
-        stream.set_read_timeout(Some(timeout))?;
-        stream.set_nodelay(true)?;
-        send(&mut stream, &Message::Hello(hello))?;
-        let objects = match receive(&mut stream, MAX_TO_CLIENT)? {
-            Some((Message::Welcome(objects), _)) => objects,
-            Some((Message::Refused(why), _)) => return Err(StreamError::Refused(why)),
-            Some((other, _)) => {
-                return Err(StreamError::Malformed(format!(
-                    "the server answered HELLO with {other:?}"
-                )))
-            }
-            None => return Err(StreamError::Refused("closed before WELCOME".into())),
-        };
-        let objects = objects
+        let stream = TcpStream::connect(addr)?;
+        let server = stream.peer_addr()?;
+        let (stream, welcome) = greet(stream, hello, timeout)?;
+        let objects = welcome
             .into_iter()
             .map(|o| {
                 if o.splits > MAX_SPLITS {
@@ -134,6 +163,7 @@ impl StreamClient {
                 }
                 Ok(StreamedObject {
                     id: o.id,
+                    splits: o.splits,
                     mesh: CompactMesh::from_base(&o.base, o.splits as usize)?,
                     held: HashMap::new(),
                 })
@@ -143,7 +173,56 @@ impl StreamClient {
             stream,
             objects,
             pending: None,
+            next_frame: 0,
+            server,
+            hello,
+            timeout,
         })
+    }
+
+    /// Connects to the server again, on a new connection, and resumes the session
+    /// from the meshes this client holds (RESUME): after a broken connection, or to
+    /// give up on a batch that does not come. A view sent and not answered is
+    /// forgotten; the next VIEW's frame must still be above it. An `Err`, the client
+    /// left as it was, when the server cannot be reached or now streams other objects.
+    pub fn reconnect(&mut self) -> Result<(), StreamError> {
+        let stream = TcpStream::connect(self.server)?;
+        let (mut stream, welcome) = greet(stream, self.hello, self.timeout)?;
+        let same = welcome.len() == self.objects.len()
+            && welcome
+                .iter()
+                .zip(&self.objects)
+                .all(|(w, o)| w.id == o.id && w.splits == o.splits);
+        if !same {
+            return Err(StreamError::Malformed(
+                "the server now streams other objects than this session's: connect afresh".into(),
+            ));
+        }
+        let objects = self
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !o.held.is_empty())
+            .map(|(index, o)| HeldNodes {
+                index: index as u32,
+                nodes: o.held_nodes(),
+            })
+            .collect();
+        let resume = Message::Resume {
+            next_frame: self.next_frame,
+            objects,
+        };
+        let bytes = resume.encode();
+        if bytes.len() - 4 > MAX_RESUME {
+            return Err(StreamError::Malformed(format!(
+                "a RESUME of {} bytes, above the {MAX_RESUME} a server reads: connect afresh",
+                bytes.len() - 4
+            )));
+        }
+        io::Write::write_all(&mut stream, &bytes)?;
+        self.stream = stream;
+        self.pending = None;
+        Ok(())
     }
 
     /// The session's objects, in the server's order.
@@ -161,6 +240,7 @@ impl StreamClient {
         }
         send(&mut self.stream, &Message::View(*view))?;
         self.pending = Some(view.frame);
+        self.next_frame = self.next_frame.max(view.frame.saturating_add(1));
         Ok(())
     }
 

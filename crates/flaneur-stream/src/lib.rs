@@ -48,5 +48,5 @@ pub use landmark::Landmark;
 pub use predictive::{
     PredictiveClient, PredictiveFrame, Predictor, Refinement, ADJUST_EVERY, MAX_SPAN,
 };
-pub use protocol::{Hello, Message, ViewPacket};
+pub use protocol::{HeldNodes, Hello, Message, ViewPacket};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};

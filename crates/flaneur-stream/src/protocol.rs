@@ -1,4 +1,4 @@
-//! The stream protocol, version 1: length-prefixed messages over one TCP connection.
+//! The stream protocol, version 2: length-prefixed messages over one TCP connection.
 //!
 //! Every message is a frame: a `u32` length `L` (the bytes after it), then `L` bytes,
 //! the first of them the message's kind. All numbers are little-endian; floats are
@@ -15,6 +15,9 @@
 //!                 eye 3×f32  aim-at 3×f32  τ f32  mode u8 (0 free, 1 budget)  N u32
 //!                                                                              37 bytes
 //!   0x03 BYE      nothing
+//!   0x04 RESUME   next frame u32 (the lowest frame the next VIEW may have)
+//!                 objects u32, then each: index u32 (in WELCOME's order)
+//!                 nodes u32, then each: node u32 (a DAG node the client holds split)
 //! server → client
 //!   0x81 WELCOME  magic (8)  version u16  objects u32, then each:
 //!                 id u64  splits u32  base vertices u32  positions 3×f32 each
@@ -33,6 +36,17 @@
 //! VIEW with one BATCH of its collapses then its splits, at most N of each), until BYE
 //! or the connection closes. A collapse names a node the client split earlier: it undoes
 //! the run that node's split brought, in reverse, so it carries no geometry.
+//!
+//! A client that lost its connection resumes on a new one: HELLO, WELCOME (the same
+//! objects as before, or it gives up), then RESUME, its first message after WELCOME and
+//! the only one that may be longer than [`MAX_TO_SERVER`] (up to [`MAX_RESUME`]). RESUME
+//! names, per object, the nodes the client holds split; the server splits the same ones
+//! in a fresh session, so that its next BATCH starts from the meshes the client holds,
+//! whatever batches were lost with the old connection. Nothing answers RESUME; a RESUME
+//! the server cannot follow (a node out of range, or split with a parent that is not)
+//! is refused as any other bad message is.
+//!
+//! Version 2 added RESUME; version 1 peers are refused by version.
 
 use crate::error::StreamError;
 use crate::wire::{Reader, Writer};
@@ -42,9 +56,12 @@ use flaneur::scene::Mesh;
 /// The first bytes of HELLO and WELCOME.
 pub const MAGIC: [u8; 8] = *b"FLANEURS";
 /// The protocol's version; a peer of another is refused.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 2;
 /// The longest frame a server reads: a VIEW is 38 bytes, a HELLO 21.
 pub const MAX_TO_SERVER: usize = 4 << 10;
+/// The longest RESUME a server reads: 4 bytes a node held split, so about four million
+/// nodes over every object.
+pub const MAX_RESUME: usize = 16 << 20;
 /// The longest frame a client reads (a WELCOME carries every object's base mesh).
 pub const MAX_TO_CLIENT: usize = 64 << 20;
 /// The most operators of each kind a VIEW may ask for (Zheng's 500 + 500, §5.4.1).
@@ -53,6 +70,7 @@ pub const MAX_N: u32 = 500;
 const HELLO: u8 = 0x01;
 const VIEW: u8 = 0x02;
 const BYE: u8 = 0x03;
+const RESUME: u8 = 0x04;
 const WELCOME: u8 = 0x81;
 const BATCH: u8 = 0x82;
 const REFUSED: u8 = 0x83;
@@ -83,6 +101,15 @@ pub struct ViewPacket {
     pub budget_mode: bool,
     /// The most collapses and the most splits of the reply (1 to [`MAX_N`]).
     pub n: u32,
+}
+
+/// One object's nodes a resuming client holds split (RESUME).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct HeldNodes {
+    /// The object's place in WELCOME's list.
+    pub index: u32,
+    /// The DAG nodes split, in any order.
+    pub nodes: Vec<u32>,
 }
 
 /// An object a session may stream: its id and the base mesh its splits refine.
@@ -130,6 +157,12 @@ pub enum Message {
     Hello(Hello),
     View(ViewPacket),
     Bye,
+    /// A client resuming its session on a new connection: the lowest frame its next
+    /// VIEW may have, and what it holds of each object.
+    Resume {
+        next_frame: u32,
+        objects: Vec<HeldNodes>,
+    },
     Welcome(Vec<WelcomeObject>),
     Batch {
         frame: u32,
@@ -171,6 +204,19 @@ impl Message {
                 w.u32(v.n);
             }
             Message::Bye => w.u8(BYE),
+            Message::Resume {
+                next_frame,
+                objects,
+            } => {
+                w.u8(RESUME);
+                w.u32(*next_frame);
+                w.count(objects.len());
+                for o in objects {
+                    w.u32(o.index);
+                    w.count(o.nodes.len());
+                    o.nodes.iter().for_each(|&n| w.u32(n));
+                }
+            }
             Message::Welcome(objects) => {
                 w.u8(WELCOME);
                 w.raw(&MAGIC);
@@ -269,6 +315,7 @@ impl Message {
                 Reader::new(rest, "BYE").end()?;
                 Message::Bye
             }
+            RESUME => decode_resume(rest)?,
             WELCOME => decode_welcome(rest)?,
             BATCH => decode_batch(rest)?,
             REFUSED => Message::Refused(String::from_utf8_lossy(rest).into_owned()),
@@ -331,6 +378,24 @@ fn read_split(r: &mut Reader) -> Result<VertexSplit, StreamError> {
         // Neither is read by a client applying the split.
         error: 0.0,
         joins_previous: false,
+    })
+}
+
+fn decode_resume(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "RESUME");
+    let next_frame = r.u32()?;
+    let n = r.count(8)?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let index = r.u32()?;
+        let len = r.count(4)?;
+        let nodes = (0..len).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?;
+        objects.push(HeldNodes { index, nodes });
+    }
+    r.end()?;
+    Ok(Message::Resume {
+        next_frame,
+        objects,
     })
 }
 
@@ -481,6 +546,19 @@ mod tests {
                 }],
             },
             Message::Refused("no".into()),
+            Message::Resume {
+                next_frame: 8,
+                objects: vec![
+                    HeldNodes {
+                        index: 0,
+                        nodes: vec![3, 1, 4],
+                    },
+                    HeldNodes {
+                        index: 1,
+                        nodes: vec![],
+                    },
+                ],
+            },
         ]
     }
 

@@ -12,6 +12,10 @@
 //! message, a frame over the bound, a VIEW before HELLO, frames out of order, a view
 //! the engine refuses) is answered REFUSED with the reason and closed; its reason goes
 //! to the server's log of session ends, and no other session notices.
+//!
+//! A client that reconnects resumes with RESUME: a fresh session's refiners split the
+//! nodes the client holds ([`Refiner::restore`]), so that the session goes on from the
+//! meshes the client has, whatever batches the lost connection took with it.
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
@@ -25,8 +29,8 @@ use glam::Vec3;
 use crate::error::StreamError;
 use crate::landmark::Landmark;
 use crate::protocol::{
-    receive, send, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject, MAX_N,
-    MAX_TO_SERVER,
+    receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
+    MAX_N, MAX_RESUME, MAX_TO_SERVER,
 };
 use flaneur::lod::{Criteria, RefineParams, Refiner, View};
 
@@ -338,8 +342,20 @@ fn run<R: Read, W: Write>(
         bytes_out: welcome.len() as u64,
         answer_times: Vec::new(),
     });
+    // The first message after WELCOME may be a RESUME, the only long one.
+    let mut first = true;
     loop {
-        match receive(input, MAX_TO_SERVER)? {
+        let bound = if first { MAX_RESUME } else { MAX_TO_SERVER };
+        match receive(input, bound)? {
+            Some((
+                Message::Resume {
+                    next_frame,
+                    objects,
+                },
+                _,
+            )) if first => {
+                s.resume(next_frame, objects)?;
+            }
             Some((Message::View(v), _)) => {
                 let started = std::time::Instant::now();
                 let batch = s.answer(&v)?;
@@ -350,6 +366,7 @@ fn run<R: Read, W: Write>(
             Some((Message::Bye, _)) | None => return Ok(()),
             Some((m, _)) => return Err(out_of_place("VIEW or BYE", &m)),
         }
+        first = false;
     }
 }
 
@@ -358,6 +375,7 @@ fn out_of_place(wanted: &str, got: &Message) -> StreamError {
         Message::Hello(_) => "HELLO",
         Message::View(_) => "VIEW",
         Message::Bye => "BYE",
+        Message::Resume { .. } => "RESUME",
         Message::Welcome(_) => "WELCOME",
         Message::Batch { .. } => "BATCH",
         Message::Refused(_) => "REFUSED",
@@ -366,6 +384,32 @@ fn out_of_place(wanted: &str, got: &Message) -> StreamError {
 }
 
 impl Session {
+    /// The session a resuming client left: each object's refiner with the nodes it
+    /// holds split, and the frames it may send from `next_frame` on.
+    fn resume(&mut self, next_frame: u32, objects: Vec<HeldNodes>) -> Result<(), StreamError> {
+        let mut seen = vec![false; self.refiners.len()];
+        for o in objects {
+            let refiner = self.refiners.get_mut(o.index as usize).ok_or_else(|| {
+                StreamError::Malformed(format!(
+                    "RESUME: object {}, not in WELCOME's {}",
+                    o.index,
+                    seen.len()
+                ))
+            })?;
+            if std::mem::replace(&mut seen[o.index as usize], true) {
+                return Err(StreamError::Malformed(format!(
+                    "RESUME: object {} named twice",
+                    o.index
+                )));
+            }
+            refiner
+                .restore(&o.nodes)
+                .map_err(|e| StreamError::Malformed(format!("RESUME: object {}: {e}", o.index)))?;
+        }
+        self.last_frame = next_frame.checked_sub(1);
+        Ok(())
+    }
+
     /// The BATCH for view `v`: each landmark refined for it, its collapses then its
     /// splits with their vertex splits.
     fn answer(&mut self, v: &ViewPacket) -> Result<Message, StreamError> {

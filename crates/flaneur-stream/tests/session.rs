@@ -12,8 +12,8 @@ use flaneur::lod::{
 };
 use flaneur_stream::protocol::{receive, Message, MAX_N, MAX_TO_CLIENT};
 use flaneur_stream::{
-    Hello, Landmark, RunningServer, ServerConfig, StreamClient, StreamError, StreamServer,
-    ViewPacket,
+    HeldNodes, Hello, Landmark, RunningServer, ServerConfig, StreamClient, StreamError,
+    StreamServer, ViewPacket,
 };
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -149,6 +149,104 @@ fn after_random_views_each_client_mesh_is_the_local_refiners_triangle_for_triang
     }
 }
 
+/// A client whose connection breaks, a batch lost with it, reconnects and resumes: the
+/// new session goes on from the meshes the client holds, and they stay, frame by frame
+/// and triangle for triangle, those of a local refiner restored from the same nodes and
+/// sent the same views.
+#[test]
+fn a_reconnect_resumes_to_the_same_mesh() {
+    let landmarks = landmarks();
+    let server = serve(&landmarks, ServerConfig::default());
+    for (seed, traversal) in Traversal::ALL.into_iter().enumerate() {
+        let h = hello(traversal);
+        let mut client = StreamClient::connect(server.addr(), h, Duration::from_secs(20)).unwrap();
+        let views = random_views(20 + seed as u64, 240);
+        for v in &views[..80] {
+            client.send_view(v).unwrap();
+            client.receive_batch().unwrap();
+        }
+        // The server answers view 80, but its batch never reaches the client.
+        client.send_view(&views[80]).unwrap();
+        let before: Vec<_> = client.objects().iter().map(|o| o.mesh().clone()).collect();
+        let held: Vec<Vec<u32>> = client.objects().iter().map(|o| o.held_nodes()).collect();
+        assert!(
+            held.iter().all(|h| h.len() > 10),
+            "{traversal:?}: little held"
+        );
+        client.reconnect().unwrap();
+        // Reconnecting changes nothing the client holds.
+        for (o, mesh) in client.objects().iter().zip(&before) {
+            assert_eq!(o.mesh().shared_with(mesh), 1.0);
+            assert_eq!(o.mesh().triangle_count(), mesh.triangle_count());
+        }
+        let mut local: Vec<Refiner> = landmarks
+            .iter()
+            .zip(&held)
+            .map(|(l, nodes)| {
+                let mut r = Refiner::new(&l.pm, &l.dag).unwrap();
+                r.restore(nodes).unwrap();
+                r
+            })
+            .collect();
+        let (mut splits, mut collapses) = (0, 0);
+        for v in &views[81..] {
+            client.send_view(v).unwrap();
+            let batch = client.receive_batch().unwrap();
+            (splits, collapses) = (splits + batch.splits, collapses + batch.collapses);
+            let (view, p) = params(&h, v);
+            for (refiner, streamed) in local.iter_mut().zip(client.objects()) {
+                refiner.refine(&view, &p).unwrap();
+                let (mine, theirs) = (refiner.mesh(), streamed.mesh());
+                assert_eq!(
+                    mine.triangle_count(),
+                    theirs.triangle_count(),
+                    "{traversal:?} frame {}",
+                    v.frame
+                );
+                assert_eq!(
+                    theirs.shared_with(mine),
+                    1.0,
+                    "{traversal:?} frame {}",
+                    v.frame
+                );
+            }
+        }
+        assert!(
+            splits > 100 && collapses > 100,
+            "{splits} splits, {collapses} collapses"
+        );
+        // A frame at or below the one lost is refused: frames go on increasing.
+        let stale = ViewPacket {
+            frame: views[80].frame,
+            ..views[0]
+        };
+        client.send_view(&stale).unwrap();
+        match client.receive_batch() {
+            Err(StreamError::Refused(why)) => assert!(why.contains("must increase"), "{why}"),
+            other => panic!("{other:?}"),
+        }
+    }
+    // Each traversal's two sessions: the first ended by the broken connection, having
+    // answered the 80 views whose batches came and perhaps the lost one (its batch
+    // may meet the closed connection); the second refused at the stale frame.
+    let ends: Vec<_> = (0..2 * Traversal::ALL.len())
+        .map(|_| server.ends().recv_timeout(Duration::from_secs(10)).unwrap())
+        .collect();
+    let (second, first): (Vec<_>, Vec<_>) = ends.iter().partition(|e| e.frames > 100);
+    assert_eq!(first.len(), Traversal::ALL.len());
+    assert!(
+        first.iter().all(|e| (80..=81).contains(&e.frames)),
+        "{first:?}"
+    );
+    for e in second {
+        assert_eq!(e.frames, 159);
+        assert!(e
+            .reason
+            .as_ref()
+            .is_some_and(|r| r.contains("must increase")));
+    }
+}
+
 /// Sends `bytes` on a new connection and reads what comes back until the server closes:
 /// the REFUSED reason, if one came.
 fn refusal_of(server: &RunningServer, bytes: &[u8]) -> Option<String> {
@@ -174,9 +272,20 @@ fn a_session_that_breaks_the_protocol_is_closed_with_its_reason_and_no_other_not
         .iter()
         .map(|l| Refiner::new(&l.pm, &l.dag).unwrap())
         .collect();
-    let views = random_views(7, 60);
+    let views = random_views(7, 72);
     let hello_bytes = Message::Hello(h).encode();
     let view = |frame: u32| Message::View(ViewPacket { frame, ..views[0] }).encode();
+    let resume = |index: u32, nodes: Vec<u32>| {
+        Message::Resume {
+            next_frame: 0,
+            objects: vec![HeldNodes { index, nodes }],
+        }
+        .encode()
+    };
+    let dag = &landmarks[0].dag;
+    let below_a_root = (0..dag.node_count() as u32)
+        .find(|&n| !dag.parents(n).is_empty())
+        .unwrap();
     let cases: Vec<(Vec<u8>, &str)> = vec![
         (b"GET / HTTP/1.1\r\n\r\n".to_vec(), "above the 4096"),
         (vec![3, 0, 0, 0, 0x55, 1, 2], "kind 0x55"),
@@ -205,6 +314,27 @@ fn a_session_that_breaks_the_protocol_is_closed_with_its_reason_and_no_other_not
             ]
             .concat(),
             "N = 0",
+        ),
+        (resume(0, vec![]), "RESUME where HELLO was due"),
+        (
+            [hello_bytes.clone(), view(1), resume(0, vec![])].concat(),
+            "RESUME where VIEW or BYE was due",
+        ),
+        (
+            [hello_bytes.clone(), resume(2, vec![])].concat(),
+            "object 2, not in WELCOME",
+        ),
+        (
+            [
+                hello_bytes.clone(),
+                resume(0, vec![dag.node_count() as u32]),
+            ]
+            .concat(),
+            "past the DAG",
+        ),
+        (
+            [hello_bytes.clone(), resume(0, vec![below_a_root])].concat(),
+            "is named split but its parent",
         ),
     ];
     for (i, (bytes, why)) in cases.iter().enumerate() {

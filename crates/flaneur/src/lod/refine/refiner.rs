@@ -362,6 +362,95 @@ impl Refiner<'_> {
         })
     }
 
+    /// Splits exactly the nodes of `split`, parents before children, on a refiner at
+    /// its base mesh: the state of another refiner of the same DAG whose split nodes
+    /// these are, as a stream server resumes a client's session from the nodes the
+    /// client holds. An `Err`, the refiner left at its base mesh, when it has split
+    /// anything already, when a node is out of range or named twice, or when a node's
+    /// parent is not among them (no frame could have split it).
+    ///
+    /// The fronts' queues are in the order this restoring made them, not the order the
+    /// other refiner's frames did: the linear and constant-time traversals, which resume
+    /// where their queues stopped, may then choose otherwise than it would have.
+    ///
+    /// ```
+    /// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, RefineParams, Refiner, View};
+    /// use glam::Vec3;
+    /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+    /// let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+    /// let mut first = Refiner::new(&pm, &dag)?;
+    /// let view = View::new(Vec3::new(0.0, 0.1, 0.4), Vec3::new(0.0, 0.0, -1.0), 1.0)?;
+    /// first.refine(&view, &RefineParams::default())?;
+    /// let split: Vec<u32> = (0..dag.node_count() as u32)
+    ///     .filter(|&n| first.fronts().is_split(n))
+    ///     .collect();
+    /// let mut second = first.fresh()?;
+    /// second.restore(&split)?;
+    /// assert_eq!(second.mesh().shared_with(first.mesh()), 1.0);
+    /// # Ok::<(), flaneur::Error>(())
+    /// ```
+    pub fn restore(&mut self, split: &[u32]) -> Result<()> {
+        if self.fronts.split_count() > 0 {
+            return Err(Error::Invalid(format!(
+                "restore: this refiner has {} nodes split already; restore a fresh one",
+                self.fronts.split_count()
+            )));
+        }
+        let count = self.dag.node_count();
+        let mut wanted = vec![false; count];
+        for &node in split {
+            let slot = wanted.get_mut(node as usize).ok_or_else(|| {
+                Error::Invalid(format!(
+                    "restore: node {node}, past the DAG's {count} nodes"
+                ))
+            })?;
+            if std::mem::replace(slot, true) {
+                return Err(Error::Invalid(format!("restore: node {node} named twice")));
+            }
+        }
+        let restored = self.split_wanted(&wanted);
+        let unreached = split.len() - self.fronts.split_count();
+        if restored.is_err() || unreached > 0 {
+            self.fronts = Fronts::new(&self.dag);
+            self.mesh = CompactMesh::new(&self.pm)?;
+            restored?;
+            // The nodes left collapsed hang below one whose parent was not named.
+            let (node, parent) = split
+                .iter()
+                .find_map(|&n| {
+                    let p = self.dag.parents(n).iter().find(|&&p| !wanted[p as usize])?;
+                    Some((n, *p))
+                })
+                .expect("an unreached node below one whose parent is not named");
+            return Err(Error::Invalid(format!(
+                "restore: node {node} is named split but its parent {parent} is not"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Splits the nodes `wanted` marks, each once its parents are split; those below a
+    /// node not marked stay collapsed.
+    fn split_wanted(&mut self, wanted: &[bool]) -> Result<()> {
+        let mut ready: Vec<u32> = self
+            .dag
+            .roots()
+            .iter()
+            .copied()
+            .filter(|&r| wanted[r as usize])
+            .collect();
+        while let Some(node) = ready.pop() {
+            self.mesh.split_node(&self.dag, &self.pm, node)?;
+            self.fronts.split(&self.dag, node);
+            for &c in self.dag.children(node) {
+                if wanted[c as usize] && self.fronts.in_split_front(c) {
+                    ready.push(c);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Undoes the frame whose first `applied` operators reached the mesh.
     fn undo(&mut self, applied: usize) {
         for op in self.ops[..applied].iter().rev() {

@@ -534,3 +534,67 @@ fn the_priority_traversal_takes_the_largest_error_first() {
         "{splits} splits, {collapses} collapses"
     );
 }
+
+/// A refiner restored from another's split nodes holds its mesh and fronts, and goes
+/// on refining validly; named nodes that no frame could have split are refused.
+#[test]
+fn a_refiner_restored_from_split_nodes_holds_the_same_mesh() {
+    let model = Model::new("bumpy torus", bumpy_torus(6_000));
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for traversal in Traversal::ALL {
+        let mut first = Refiner::new(&model.pm, &model.dag).unwrap();
+        for _ in 0..20 {
+            let view = random_view(&mut rng, &model);
+            // Fine enough that much is split, and some of it collapsed again.
+            let params = RefineParams {
+                traversal,
+                tau: 10f32.powf(rng.gen_range(-4.0..-3.0)),
+                budget: None,
+                ..random_params(&mut rng, &model)
+            };
+            first.refine(&view, &params).unwrap();
+        }
+        let split: Vec<u32> = (0..model.dag.node_count() as u32)
+            .filter(|&n| first.fronts().is_split(n))
+            .collect();
+        assert!(split.len() > 10, "{traversal:?}: {} split", split.len());
+        let mut second = first.fresh().unwrap();
+        // Any order will do: children may come before their parents.
+        let reversed: Vec<u32> = split.iter().rev().copied().collect();
+        second.restore(&reversed).unwrap();
+        assert_eq!(second.fronts().split_count(), split.len());
+        assert_eq!(second.mesh().shared_with(first.mesh()), 1.0);
+        check_fronts(&model.dag, second.fronts());
+        check_against_dag(&model, &second);
+        for _ in 0..10 {
+            let view = random_view(&mut rng, &model);
+            second
+                .refine(&view, &random_params(&mut rng, &model))
+                .unwrap();
+            check_fronts(&model.dag, second.fronts());
+            check_against_dag(&model, &second);
+        }
+        // Restoring twice is refused: it starts from the base mesh.
+        let e = second.restore(&split).unwrap_err().to_string();
+        assert!(e.contains("fresh"), "{e}");
+    }
+    let fresh = || Refiner::new(&model.pm, &model.dag).unwrap();
+    let count = model.dag.node_count() as u32;
+    // A node below a root, named without its parent.
+    let child = (0..count)
+        .find(|&n| !model.dag.parents(n).is_empty())
+        .unwrap();
+    let parent = model.dag.parents(child)[0];
+    for (nodes, says) in [
+        (vec![count], "past the DAG"),
+        (vec![child, child], "named twice"),
+        (vec![child], &*format!("parent {parent} is not")),
+    ] {
+        let mut r = fresh();
+        let e = r.restore(&nodes).unwrap_err().to_string();
+        assert!(e.contains(says), "{nodes:?}: {e}");
+        // Left at its base mesh.
+        assert_eq!(r.fronts().split_count(), 0);
+        assert_eq!(r.mesh().triangle_count(), model.pm.base.triangle_count());
+    }
+}
