@@ -174,15 +174,22 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
         "20000",
         "--frames",
         "60",
+        "--traversal",
+        "constant",
     ]);
     let csv = common::Csv::read(&dir.path().join("stream-crowd.csv"));
     let row = &csv.rows[0];
     assert_eq!(csv.num(row, "clients"), 4.0);
+    assert_eq!(csv.get(row, "traversal"), "constant");
     assert_eq!(csv.num(row, "failed"), 0.0);
     // The session threads were found and measured, each session's memory counted.
     assert!(csv.num(row, "server_cpu_s") > 0.0, "{row:?}");
     assert!(csv.num(row, "memory_mean") > 0.0, "{row:?}");
     assert!(csv.num(row, "shared_memory") > 0.0, "{row:?}");
+    // The constant-time traversal evaluates at most 2N nodes a view, and was timed.
+    let (n, evaluated) = (csv.num(row, "n"), csv.num(row, "most_evaluated"));
+    assert!(evaluated > 0.0 && evaluated <= 2.0 * n, "{row:?}");
+    assert!(csv.num(row, "traversal_p95_ms") > 0.0, "{row:?}");
     assert!(csv.num(row, "round_trip_p50_ms") > 0.0, "{row:?}");
     let md = std::fs::read_to_string(dir.path().join("stream-crowd.md")).unwrap();
     assert!(md.contains("4 predictive clients"), "{md}");

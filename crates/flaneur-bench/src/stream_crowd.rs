@@ -1,9 +1,10 @@
 //! The `stream-crowd` experiment (ours; the scale the stream issue asks for): many
 //! predictive clients on one stream server at once, each walking its own orbit of the
 //! landmark at 30 Hz. Server side: the CPU its session threads used, each session's
-//! memory, the time to answer a view (p50, p99); client side: every batch's round trip
-//! (p50, p99), and the unmodified frames after the warm-up of the worst-served client
-//! (a starved client would have many).
+//! memory, the time to answer a view and the traversal's share of it (p50, p95, p99),
+//! the most front nodes a traversal evaluated (the constant-time traversal's bound, 2N);
+//! client side: every batch's round trip (p50, p95, p99), and the unmodified frames
+//! after the warm-up of the worst-served client (a starved client would have many).
 //!
 //! Clients and server share this process, over loopback: the session threads' CPU is
 //! read from `/proc/self/task/*/schedstat` (the server names them `stream-<peer>`) just
@@ -32,6 +33,17 @@ pub struct StreamCrowdConfig {
     pub tau: f32,
     pub n: u32,
     pub budget: u32,
+    /// The sessions' traversal (the priority-oriented one by default, as in `bench
+    /// stream`; the constant-time one for its bound).
+    #[serde(serialize_with = "traversal_name")]
+    pub traversal: Traversal,
+}
+
+fn traversal_name<S: serde::Serializer>(
+    t: &Traversal,
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_str(t.name())
 }
 
 impl Default for StreamCrowdConfig {
@@ -44,6 +56,7 @@ impl Default for StreamCrowdConfig {
             tau: 0.0002,
             n: flaneur_stream::protocol::MAX_N,
             budget: flaneur::lod::THESIS_BUDGET as u32,
+            traversal: Traversal::Priority,
         }
     }
 }
@@ -62,10 +75,14 @@ pub struct StreamCrowdReport {
     /// Bytes the sessions share besides the landmark's progressive mesh and DAG (each
     /// DAG node's record, made once).
     pub shared_memory: usize,
-    /// Time to answer a view, ms: p50, p99, max over every session.
-    pub answer_ms: [f64; 3],
-    /// Every batch's round trip, ms: p50, p99, max over every client.
-    pub round_trip_ms: [f64; 3],
+    /// Time to answer a view, ms: p50, p95, p99, max over every session.
+    pub answer_ms: [f64; 4],
+    /// The traversals' share of it, ms: p50, p95, p99, max.
+    pub traversal_ms: [f64; 4],
+    /// The most front nodes one traversal evaluated for one view, over every session.
+    pub most_evaluated: usize,
+    /// Every batch's round trip, ms: p50, p95, p99, max over every client.
+    pub round_trip_ms: [f64; 4],
     /// Unmodified frames after the warm-up: the fewest, the mean, the most of a client.
     pub unmodified: [f64; 3],
     pub warm_up: usize,
@@ -74,14 +91,19 @@ pub struct StreamCrowdReport {
     pub first_error: Option<String>,
 }
 
-/// p50, p99 and the largest of `xs`.
-fn spread(mut xs: Vec<f64>) -> [f64; 3] {
+/// `xs` as "a / b / c / d", each to `digits` decimals.
+fn slashed(xs: &[f64; 4], digits: usize) -> String {
+    xs.map(|x| format!("{x:.digits$}")).join(" / ")
+}
+
+/// p50, p95, p99 and the largest of `xs`.
+fn spread(mut xs: Vec<f64>) -> [f64; 4] {
     if xs.is_empty() {
-        return [0.0; 3];
+        return [0.0; 4];
     }
     xs.sort_by(f64::total_cmp);
     let at = |q: f64| xs[((xs.len() - 1) as f64 * q).round() as usize];
-    [at(0.5), at(0.99), xs[xs.len() - 1]]
+    [at(0.5), at(0.95), at(0.99), xs[xs.len() - 1]]
 }
 
 /// CPU seconds of this process's threads whose names start with `prefix`.
@@ -138,7 +160,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
                 let walk =
                     || -> std::result::Result<(PredictiveClient, Vec<f64>, usize), String> {
                         let hello = Hello {
-                            traversal: Traversal::Priority,
+                            traversal: cfg.traversal,
                             fov,
                             budget: Some(cfg.budget),
                             out_of_view: true,
@@ -209,7 +231,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         }
     }
     let mut memories = Vec::new();
-    let mut answers = Vec::new();
+    let (mut answers, mut traversals, mut most_evaluated) = (Vec::new(), Vec::new(), 0);
     for _ in 0..cfg.clients - failed {
         let end = server
             .ends()
@@ -217,6 +239,8 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
             .map_err(|_| Error::Invalid("stream-crowd: a session never ended".into()))?;
         memories.push(end.memory);
         answers.extend(end.answer_times.iter().map(|t| t.as_secs_f64() * 1e3));
+        traversals.extend(end.traversal_times.iter().map(|t| t.as_secs_f64() * 1e3));
+        most_evaluated = most_evaluated.max(end.most_evaluated);
     }
     let unmodified_spread = if unmodified.is_empty() {
         [0.0; 3]
@@ -236,6 +260,8 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         memory_max: memories.iter().copied().max().unwrap_or(0),
         shared_memory,
         answer_ms: spread(answers),
+        traversal_ms: spread(traversals),
+        most_evaluated,
         round_trip_ms: spread(trips),
         unmodified: unmodified_spread,
         warm_up,
@@ -250,22 +276,29 @@ impl Report for StreamCrowdReport {
     }
 
     fn to_csv(&self) -> String {
+        let c = &self.config;
+        let spread = |xs: &[f64; 4]| xs.map(|x| format!("{x:.3}")).join(",");
         format!(
-            "clients,frames,frame_ms,server_cpu_s,wall_s,memory_mean,memory_max,shared_memory,answer_p50_ms,answer_p99_ms,answer_max_ms,round_trip_p50_ms,round_trip_p99_ms,round_trip_max_ms,unmodified_min,unmodified_mean,unmodified_max,failed\n{},{},{:.2},{:.3},{:.3},{:.0},{},{},{:.3},{:.3},{:.3},{:.2},{:.2},{:.2},{},{:.1},{},{}\n",
-            self.config.clients,
-            self.config.frames,
-            self.config.frame_ms,
+            "clients,frames,frame_ms,traversal,n,server_cpu_s,wall_s,memory_mean,memory_max,shared_memory,\
+             answer_p50_ms,answer_p95_ms,answer_p99_ms,answer_max_ms,\
+             traversal_p50_ms,traversal_p95_ms,traversal_p99_ms,traversal_max_ms,most_evaluated,\
+             round_trip_p50_ms,round_trip_p95_ms,round_trip_p99_ms,round_trip_max_ms,\
+             unmodified_min,unmodified_mean,unmodified_max,failed\n\
+             {},{},{:.2},{},{},{:.3},{:.3},{:.0},{},{},{},{},{},{},{},{:.1},{},{}\n",
+            c.clients,
+            c.frames,
+            c.frame_ms,
+            c.traversal.name(),
+            c.n,
             self.server_cpu_s,
             self.wall_s,
             self.memory_mean,
             self.memory_max,
             self.shared_memory,
-            self.answer_ms[0],
-            self.answer_ms[1],
-            self.answer_ms[2],
-            self.round_trip_ms[0],
-            self.round_trip_ms[1],
-            self.round_trip_ms[2],
+            spread(&self.answer_ms),
+            spread(&self.traversal_ms),
+            self.most_evaluated,
+            spread(&self.round_trip_ms),
             self.unmodified[0],
             self.unmodified[1],
             self.unmodified[2],
@@ -279,14 +312,16 @@ impl Report for StreamCrowdReport {
             "# stream-crowd — many clients on one stream server (ours)\n\n\
              {} predictive clients (second-order prediction) on one server over loopback, each \
              walking the {}-frame orbit of a {}-triangle torus turned by its share of a circle, \
-             at {:.1} ms frames; τ = {} %, N = {}, a budget of {}. Clients and server share this \
-             machine's cores.\n\n\
+             at {:.1} ms frames; the {} traversal, τ = {} %, N = {}, a budget of {}. Clients and \
+             server share this machine's cores.\n\n\
              | figure | value |\n|---|---|\n\
              | server CPU (session threads) | {:.2} s in {:.2} s of walking: {:.0} % of one core |\n\
              | memory per session, mean (largest) | {:.1} MiB ({:.1} MiB) |\n\
              | shared by every session: the DAG nodes' records | {:.1} MiB |\n\
-             | time to answer a view, p50 / p99 / max | {:.2} / {:.2} / {:.2} ms |\n\
-             | a batch's round trip, p50 / p99 / max | {:.1} / {:.1} / {:.1} ms |\n\
+             | time to answer a view, p50 / p95 / p99 / max | {} ms |\n\
+             | its traversals, p50 / p95 / p99 / max | {} ms |\n\
+             | most front nodes one traversal evaluated for a view (2N = {}) | {} |\n\
+             | a batch's round trip, p50 / p95 / p99 / max | {} ms |\n\
              | unmodified frames after frame {}, fewest / mean / most of a client | {} / {:.1} / {} |\n\
              | clients failed | {}{} |\n\n\
              A starved client would show as many unmodified frames; the landmark's progressive \
@@ -296,6 +331,7 @@ impl Report for StreamCrowdReport {
             c.frames,
             self.model_triangles,
             c.frame_ms,
+            c.traversal.name(),
             100.0 * c.tau,
             c.n,
             c.budget,
@@ -305,12 +341,11 @@ impl Report for StreamCrowdReport {
             self.memory_mean / 1048576.0,
             self.memory_max as f64 / 1048576.0,
             self.shared_memory as f64 / 1048576.0,
-            self.answer_ms[0],
-            self.answer_ms[1],
-            self.answer_ms[2],
-            self.round_trip_ms[0],
-            self.round_trip_ms[1],
-            self.round_trip_ms[2],
+            slashed(&self.answer_ms, 2),
+            slashed(&self.traversal_ms, 2),
+            2 * c.n,
+            self.most_evaluated,
+            slashed(&self.round_trip_ms, 1),
             self.warm_up,
             self.unmodified[0],
             self.unmodified[1],

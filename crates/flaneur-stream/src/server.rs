@@ -62,6 +62,11 @@ pub struct SessionEnd {
     pub memory: usize,
     /// The time to answer each view (the traversal and the batch's encoding), in order.
     pub answer_times: Vec<Duration>,
+    /// The traversals' time for each view, over every landmark, in order.
+    pub traversal_times: Vec<Duration>,
+    /// The most front nodes one landmark's traversal evaluated for one view: at most
+    /// 2N with the constant-time traversal (Zheng §4.4.3, N per pass).
+    pub most_evaluated: usize,
     /// Why the server closed it; `None` when the client said BYE or closed.
     pub reason: Option<String>,
 }
@@ -242,6 +247,8 @@ struct Session {
     frames: u64,
     bytes_out: u64,
     answer_times: Vec<Duration>,
+    traversal_times: Vec<Duration>,
+    most_evaluated: usize,
 }
 
 /// Runs one TCP client's session to its end.
@@ -258,14 +265,37 @@ fn session(
         .and_then(|()| stream.set_nodelay(true));
     match set_up {
         Ok(()) => serve((&stream, &stream), peer, templates, welcome, config),
-        Err(e) => SessionEnd {
+        Err(e) => ended(
+            peer,
+            None,
+            Some(format!("the connection could not be set up: {e}")),
+        ),
+    }
+}
+
+/// How a session of `peer` ended, `s` what it did (`None` before WELCOME).
+fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> SessionEnd {
+    let Some(s) = s else {
+        return SessionEnd {
             peer,
             frames: 0,
             bytes_out: 0,
             memory: 0,
             answer_times: Vec::new(),
-            reason: Some(format!("the connection could not be set up: {e}")),
-        },
+            traversal_times: Vec::new(),
+            most_evaluated: 0,
+            reason,
+        };
+    };
+    SessionEnd {
+        peer,
+        frames: s.frames,
+        bytes_out: s.bytes_out,
+        memory: s.refiners.iter().map(Refiner::memory).sum(),
+        answer_times: s.answer_times,
+        traversal_times: s.traversal_times,
+        most_evaluated: s.most_evaluated,
+        reason,
     }
 }
 
@@ -294,21 +324,7 @@ fn serve<R: Read, W: Write>(
         let _ = send(&mut stream.1, &Message::Refused(why.clone()));
         why
     });
-    let (frames, bytes_out, memory, answer_times) = s.map_or_else(
-        || (0, 0, 0, Vec::new()),
-        |s: Session| {
-            let memory = s.refiners.iter().map(Refiner::memory).sum();
-            (s.frames, s.bytes_out, memory, s.answer_times)
-        },
-    );
-    SessionEnd {
-        peer,
-        frames,
-        bytes_out,
-        memory,
-        answer_times,
-        reason,
-    }
+    ended(peer, s, reason)
 }
 
 /// The session's loop; `Ok` when the client said BYE or closed.
@@ -341,6 +357,8 @@ fn run<R: Read, W: Write>(
         frames: 0,
         bytes_out: welcome.len() as u64,
         answer_times: Vec::new(),
+        traversal_times: Vec::new(),
+        most_evaluated: 0,
     });
     // The first message after WELCOME may be a RESUME, the only long one.
     let mut first = true;
@@ -442,8 +460,11 @@ impl Session {
             },
         };
         let mut objects = Vec::new();
+        let mut traversal = Duration::ZERO;
         for (index, refiner) in self.refiners.iter_mut().enumerate() {
-            refiner.refine(&view, &params)?;
+            let stats = refiner.refine(&view, &params)?.stats;
+            traversal += stats.traversal;
+            self.most_evaluated = self.most_evaluated.max(stats.evaluated());
             let mut updates = ObjectUpdates {
                 index: index as u32,
                 ..Default::default()
@@ -466,6 +487,7 @@ impl Session {
             }
         }
         self.last_frame = Some(v.frame);
+        self.traversal_times.push(traversal);
         Ok(Message::Batch {
             frame: v.frame,
             objects,

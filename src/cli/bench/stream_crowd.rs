@@ -5,7 +5,16 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use super::report::write_report;
+use flaneur::lod::Traversal;
 use flaneur_bench::stream_crowd::{self, StreamCrowdConfig};
+
+/// A traversal by its short name.
+fn parse_traversal(name: &str) -> std::result::Result<Traversal, String> {
+    Traversal::ALL
+        .into_iter()
+        .find(|t| t.name() == name)
+        .ok_or_else(|| format!("no traversal {name:?}: give priority, linear or constant"))
+}
 
 /// `flaneur bench stream-crowd`'s arguments.
 #[derive(clap::Args)]
@@ -21,6 +30,10 @@ pub struct StreamCrowdArgs {
     /// Each client's frame period, ms.
     #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms)]
     frame_ms: f64,
+    /// The sessions' traversal: priority, linear or constant (constant-time, whose
+    /// evaluations N bounds).
+    #[arg(long, default_value = "priority", value_parser = parse_traversal)]
+    traversal: Traversal,
     #[arg(long, default_value = "bench-out")]
     out: PathBuf,
 }
@@ -33,6 +46,7 @@ impl StreamCrowdArgs {
             triangles: self.triangles,
             frames: self.frames,
             frame_ms: self.frame_ms,
+            traversal: self.traversal,
             ..StreamCrowdConfig::default()
         };
         let r = stream_crowd::run(&cfg, |what| eprintln!("stream-crowd: {what}"))?;
