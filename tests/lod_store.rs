@@ -584,3 +584,74 @@ fn lod_selection_meets_a_damaged_lod_page() {
         }
     }
 }
+
+/// Adapting ahead, each frame draws its refined objects as refined for the view
+/// predicted from the two frames before, by a traversal run on the thread pool once
+/// the frame before was uploaded: over three frames whose cameras move in a straight
+/// line, exactly the meshes a selector refining on the frame's thread makes for the
+/// views c0, c0, c2 (the first prediction has one camera to go on).
+#[test]
+fn adapting_ahead_refines_for_the_predicted_view_off_the_frames_thread() {
+    use flaneur::walk::lod_select::{LodSelector, REFINED};
+    use flaneur::walk::Loaded;
+    let city = common::city(
+        30,
+        5,
+        &with_lods(LodOptions {
+            pm_threshold: 1_000,
+            ..Default::default()
+        }),
+    );
+    let db = Database::open(&city.db).unwrap();
+    let buffer = all_loaded(&db);
+    let drawn: Vec<&Loaded> = buffer.iter().collect();
+    let b = db.bounds();
+    let at = |k: f32| {
+        let step = glam::Vec3::new(0.05 * b.extent().x, 0.0, 0.0);
+        flaneur::geom::Camera::new(
+            b.center() + glam::Vec3::new(0.0, b.extent().max_element(), 0.0) + k * step,
+            0.0,
+            -1.4,
+        )
+        .unwrap()
+    };
+    let mut ahead = LodSelector::new(&db, 0.001)
+        .unwrap()
+        .settling()
+        .adapting_ahead();
+    let mut here = LodSelector::new(&db, 0.001).unwrap().settling();
+    for (k, view_here) in [(0.0, 0.0), (1.0, 0.0), (2.0, 2.0)] {
+        let frame = ahead.select(&at(k), &buffer, &drawn).unwrap();
+        here.select(&at(view_here), &buffer, &drawn).unwrap();
+        let refined: Vec<u64> = frame
+            .iter()
+            .filter(|d| d.level == REFINED)
+            .map(|d| d.id)
+            .collect();
+        assert!(!refined.is_empty(), "frame {k}: nothing refined");
+        for id in refined {
+            let (a, h) = (
+                ahead.refined_mesh(id).unwrap(),
+                here.refined_mesh(id).unwrap(),
+            );
+            assert_eq!(
+                a.triangle_count(),
+                h.triangle_count(),
+                "frame {k}, object {id}"
+            );
+            assert_eq!(a.shared_with(h), 1.0, "frame {k}, object {id}");
+        }
+        // Uploaded: the traversals for the next frame start, and the refined objects
+        // are away until the next selection takes them back.
+        ahead.launch_ahead().unwrap();
+        assert!(frame
+            .iter()
+            .filter(|d| d.level == REFINED)
+            .all(|d| ahead.refined_mesh(d.id).is_none()));
+        // A second call in the same frame does nothing.
+        ahead.launch_ahead().unwrap();
+    }
+    assert_eq!(ahead.counts.refined_draws, here.counts.refined_draws);
+    assert_eq!(ahead.counts.refine_ops, here.counts.refine_ops);
+    assert!(here.counts.refine_ops > 0);
+}

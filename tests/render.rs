@@ -834,3 +834,60 @@ fn fidelity_of_the_scene_tree_traversals() {
         p.rows
     );
 }
+
+/// `walk --render --adapt-ahead`: the walk refines its landmarks off the frame's
+/// thread and says what it drew refined; without --render the flag is refused.
+#[test]
+fn walk_adapts_ahead_when_drawn() {
+    let dir = tempfile::tempdir().unwrap();
+    let lod = flaneur::lod::LodOptions {
+        pm_threshold: 1_000,
+        ..Default::default()
+    };
+    let opts = BuildOptions {
+        lod: Some(lod),
+        ..Default::default()
+    };
+    build(dir.path(), &opts);
+    let (db, frames) = (dir.path().join("c.flaneur"), dir.path().join("frames"));
+    let db = db.to_str().unwrap();
+    let walk = |extra: &[&str]| {
+        let mut args = vec![
+            "walk",
+            db,
+            "--frames",
+            "60",
+            "--quiet",
+            "--lod-tau",
+            "0.001",
+        ];
+        args.extend_from_slice(extra);
+        common::flaneur(&args)
+    };
+    let out = walk(&[
+        "--render",
+        "--adapt-ahead",
+        "--size",
+        "64x64",
+        "--frames-dir",
+        frames.to_str().unwrap(),
+        "--every",
+        "1000",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let refined: u64 = text
+        .split(" draws refined view by view")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(refined > 0, "{text}");
+    let out = walk(&["--adapt-ahead"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--adapt-ahead is for a walk drawn"));
+}

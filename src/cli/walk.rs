@@ -128,6 +128,11 @@ pub struct WalkArgs {
     /// drawn at the coarsest stored level under it (0: full detail).
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
     lod_tau: f32,
+    /// With --render: objects refined view by view are refined on the thread pool once
+    /// a frame is drawn, for the view predicted for the next (El-Sana–Varshney's Adapt
+    /// and Display), not on the frame's thread.
+    #[arg(long)]
+    adapt_ahead: bool,
 }
 
 impl WalkArgs {
@@ -166,13 +171,18 @@ impl WalkArgs {
             budget,
             dov_tau,
             finer_by_tau,
+            adapt_ahead,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
             size,
             every,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+            adapt_ahead,
         });
+        if adapt_ahead && render.is_none() {
+            bail!("--adapt-ahead is for a walk drawn with --render: only it refines objects");
+        }
         if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box" | "pvs") {
             bail!(
                 "--never-wait is for --mode review, box and pvs; the {mode} walk still waits on \
@@ -362,6 +372,9 @@ fn rendered<R>(
     if let Some(tau) = r.lod_tau {
         writer = writer.with_lod_tau(tau)?;
     }
+    if r.adapt_ahead {
+        writer = writer.adapting_ahead();
+    }
     let result = walk(&mut writer, &mut tick)?;
     bar.finish_and_clear();
     Ok((
@@ -431,6 +444,7 @@ struct RenderOpts {
     size: (u32, u32),
     every: usize,
     lod_tau: Option<f32>,
+    adapt_ahead: bool,
 }
 
 /// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable

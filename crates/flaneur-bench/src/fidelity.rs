@@ -198,6 +198,10 @@ impl FrameSink for Twice<'_> {
     fn lod_settled(&self) -> bool {
         self.mode.lod_settled()
     }
+
+    fn lod_adapt_ahead(&self) -> bool {
+        self.mode.lod_adapt_ahead()
+    }
 }
 
 /// Walks `path` through `db` with `walk` (`mode` names it in the report), drawing each

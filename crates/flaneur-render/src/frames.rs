@@ -68,6 +68,8 @@ pub struct FrameWriter<'a> {
     lod_tau: Option<f32>,
     /// Whether LOD selection refines a large object from its first frame.
     lod_settled: bool,
+    /// Whether refined objects adapt ahead on the thread pool.
+    lod_adapt_ahead: bool,
     pub times: FrameTimes,
 }
 
@@ -108,6 +110,7 @@ impl<'a> FrameWriter<'a> {
             out: None,
             lod_tau: None,
             lod_settled: false,
+            lod_adapt_ahead: false,
             times: FrameTimes::default(),
         })
     }
@@ -133,6 +136,16 @@ impl<'a> FrameWriter<'a> {
     pub fn settling_lods(self) -> FrameWriter<'a> {
         FrameWriter {
             lod_settled: true,
+            ..self
+        }
+    }
+
+    /// The same writer asking the walk to refine each object drawn refined view by
+    /// view on the thread pool once a frame is drawn, for the next frame's predicted
+    /// view ([`FrameSink::lod_adapt_ahead`]): the traversal leaves the frame's thread.
+    pub fn adapting_ahead(self) -> FrameWriter<'a> {
+        FrameWriter {
+            lod_adapt_ahead: true,
             ..self
         }
     }
@@ -165,8 +178,14 @@ impl FrameWriter<'_> {
         self.times.uploads += f.uploads;
         self.times.evictions += f.freed;
         let upload = started.elapsed();
-        let started = Instant::now();
         let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
+        let (triangles, coarse) = (
+            selected.iter().map(|d| d.triangles as u64).sum(),
+            selected.iter().filter(|d| d.is_coarse()).count(),
+        );
+        // What adapts ahead refines for the next frame while this one draws.
+        selection.uploaded()?;
+        let started = Instant::now();
         let frame = self
             .target
             .render_camera(self.gpu, camera, &self.meshes, &keys)?;
@@ -177,10 +196,8 @@ impl FrameWriter<'_> {
         t.upload_ms.push(ms(upload));
         t.draw_ms.push(ms(draw));
         t.peak_gpu_bytes = t.peak_gpu_bytes.max(self.meshes.bytes());
-        t.triangles
-            .push(selected.iter().map(|d| d.triangles as u64).sum());
-        t.coarse
-            .push(selected.iter().filter(|d| d.is_coarse()).count());
+        t.triangles.push(triangles);
+        t.coarse.push(coarse);
         Ok(frame)
     }
 }
@@ -209,6 +226,10 @@ impl FrameSink for FrameWriter<'_> {
 
     fn lod_settled(&self) -> bool {
         self.lod_settled
+    }
+
+    fn lod_adapt_ahead(&self) -> bool {
+        self.lod_adapt_ahead
     }
 }
 

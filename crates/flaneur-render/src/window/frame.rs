@@ -35,6 +35,10 @@ impl WalkWindow {
         let followed = s
             .meshes
             .follow(&s.gpu, |id| buffer.contains(id), selected, refinements)?;
+        let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
+        // What adapts ahead refines for the next frame while this one draws.
+        selection.uploaded()?;
+        let selected = &selection.drawn[..];
         self.summary.over_budget += followed.over_budget as usize;
         self.summary.peak_gpu_bytes = self.summary.peak_gpu_bytes.max(s.meshes.bytes());
         let cpu = started.elapsed();
@@ -70,7 +74,6 @@ impl WalkWindow {
         // The walk's square view, centred.
         let side = w.min(h) as f32;
         let viewport = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
-        let keys: Vec<_> = selected.iter().map(|d| (d.id, d.level)).collect();
         let view_proj = if self.top_view {
             top_view(camera)
         } else {

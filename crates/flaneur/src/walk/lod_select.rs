@@ -45,6 +45,7 @@ use crate::lod::{
 use crate::scene::Mesh;
 use crate::store::PageKind;
 
+use super::adapt_ahead::AdaptAhead;
 use super::buffer::{Loaded, ObjectBuffer};
 
 /// The thesis's screen-space error: 0.1 % of the viewport.
@@ -205,11 +206,22 @@ pub fn check_tau(tau: f32) -> Result<()> {
 pub trait Refinements {
     /// Object `id`'s refinement, when it is drawn refined view by view.
     fn refined(&mut self, id: u64) -> Option<&mut RefinedObject>;
+
+    /// The renderer has taken this frame's changes and reads the selective meshes no
+    /// more until the next frame: what adapts ahead may start
+    /// ([`LodSelector::launch_ahead`]).
+    fn uploaded(&mut self) -> Result<()> {
+        Ok(())
+    }
 }
 
 impl Refinements for LodSelector<'_> {
     fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
         LodSelector::refined(self, id)
+    }
+
+    fn uploaded(&mut self) -> Result<()> {
+        self.launch_ahead()
     }
 }
 
@@ -230,6 +242,10 @@ pub struct LodSelector<'a> {
     /// Whether a large object is refined from the frame it is first drawn, the frame
     /// waiting for its decoding.
     settling: bool,
+    /// The refined objects' traversals run ahead on the thread pool, when it adapts
+    /// ahead ([`LodSelector::adapting_ahead`]), and the camera of the last selection.
+    ahead: Option<AdaptAhead>,
+    camera: Option<Camera>,
     /// What it read and chose so far.
     pub counts: LodCounts,
 }
@@ -248,6 +264,8 @@ impl<'a> LodSelector<'a> {
             tolerant: false,
             damaged: Vec::new(),
             settling: false,
+            ahead: None,
+            camera: None,
             counts: LodCounts::default(),
         })
     }
@@ -272,6 +290,33 @@ impl<'a> LodSelector<'a> {
         LodSelector {
             settling: true,
             ..self
+        }
+    }
+
+    /// The same selector adapting ahead (El-Sana–Varshney's Adapt and Display): once a
+    /// frame's refined meshes are uploaded ([`LodSelector::launch_ahead`]), each object
+    /// it drew refined view by view is refined on the thread pool for the view
+    /// predicted for the next frame, while the frame draws and the walk retrieves and
+    /// culls the next; the next selection takes the result instead of running the
+    /// traversal on the frame's thread. The next view is
+    /// predicted from the last two frames' cameras, to first order (Zheng 2007 §6.3,
+    /// one frame ahead); an object is drawn as refined for it.
+    pub fn adapting_ahead(self) -> LodSelector<'a> {
+        LodSelector {
+            ahead: Some(AdaptAhead::new()),
+            ..self
+        }
+    }
+
+    /// The last selection's refined meshes are uploaded (or its frame done): when
+    /// adapting ahead, the traversals of the objects it drew refined start on the
+    /// thread pool for the next frame's predicted view, once a frame. Nothing
+    /// otherwise. Until the next selection those objects are not
+    /// [`refined`](LodSelector::refined).
+    pub fn launch_ahead(&mut self) -> Result<()> {
+        match (&mut self.ahead, &self.camera) {
+            (Some(a), Some(camera)) => a.launch(&mut self.refined, camera),
+            _ => Ok(()),
         }
     }
 
@@ -304,6 +349,12 @@ impl<'a> LodSelector<'a> {
         buffer: &ObjectBuffer,
         drawn: &[&Loaded],
     ) -> Result<Vec<Drawn>> {
+        // The objects adapting ahead come back first, to be kept or forgotten with the
+        // rest.
+        if let Some(a) = &mut self.ahead {
+            a.collect(&mut self.refined, &mut self.counts.refine_ops)?;
+        }
+        self.camera = Some(*camera);
         self.objects.retain(|id, _| buffer.contains(*id));
         self.refined.retain(|id, _| buffer.contains(*id));
         // An object evicted while decoding is forgotten; its result, when it comes, is
@@ -474,14 +525,20 @@ impl LodSelector<'_> {
             budget: Some(THESIS_BUDGET),
             ..RefineParams::thesis(Traversal::ConstantTime)
         };
-        let frame = r.refiner.refine(&view, &params)?;
+        // Adapted ahead for this frame already, or refined here.
+        if !self.ahead.as_mut().is_some_and(|a| a.take_ready(id)) {
+            let frame = r.refiner.refine(&view, &params)?;
+            self.counts.refine_ops += frame.stats.updates() as u64;
+            let c = frame.changes;
+            r.pending.vertices.extend(c.vertices);
+            r.pending.indices.extend(c.indices);
+            r.pending.vertex_len = c.vertex_len;
+            r.pending.index_len = c.index_len;
+        }
+        if let Some(a) = &mut self.ahead {
+            a.drawn(id, params);
+        }
         self.counts.refined_draws += 1;
-        self.counts.refine_ops += frame.stats.updates() as u64;
-        let c = frame.changes;
-        r.pending.vertices.extend(c.vertices);
-        r.pending.indices.extend(c.indices);
-        r.pending.vertex_len = c.vertex_len;
-        r.pending.index_len = c.index_len;
         Ok(Some(Drawn {
             id,
             bounds: o.entry.bounds,
@@ -527,6 +584,8 @@ pub(crate) struct LodWanted {
     /// Whether a large object is refined from the frame it is first drawn
     /// ([`LodSelector::settling`]).
     pub settled: bool,
+    /// Whether refined objects adapt ahead ([`LodSelector::adapting_ahead`]).
+    pub ahead: bool,
 }
 
 impl<'db> WalkLods<'db> {
@@ -535,6 +594,15 @@ impl<'db> WalkLods<'db> {
         WalkLods {
             db: Some(db),
             selector: None,
+        }
+    }
+
+    /// The frame is drawn: what adapts ahead starts for the next, if the viewer did
+    /// not start it when it uploaded.
+    pub(crate) fn frame_drawn(&mut self) -> Result<()> {
+        match &mut self.selector {
+            Some(s) => s.launch_ahead(),
+            None => Ok(()),
         }
     }
 
@@ -561,6 +629,9 @@ impl<'db> WalkLods<'db> {
                     }
                     if want.settled {
                         s = s.settling();
+                    }
+                    if want.ahead {
+                        s = s.adapting_ahead();
                     }
                     Some(s)
                 }

@@ -62,6 +62,7 @@
 //! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
 //!   mouse, at [`WALK_SPEED`].
 
+mod adapt_ahead;
 mod buffer;
 mod cells;
 mod frame_times;

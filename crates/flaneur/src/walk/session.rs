@@ -112,10 +112,12 @@ pub(crate) fn run<M: Mode + ?Sized>(
                 restart: viewer.lod_restart(),
                 tolerant: viewer.skips_damaged(),
                 settled: viewer.lod_settled(),
+                ahead: viewer.lod_adapt_ahead(),
             };
             let mut selection = lods.select(want, camera, &buffer, &culled.drawn)?;
             lod_pages = selection.pages;
             viewer.frame(index, camera, &buffer, &mut selection)?;
+            lods.frame_drawn()?;
         }
         viewer.figures(&FrameFigures {
             lod_pages,

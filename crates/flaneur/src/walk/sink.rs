@@ -48,6 +48,15 @@ pub trait FrameSink {
     fn lod_settled(&self) -> bool {
         false
     }
+
+    /// Whether objects refined view by view are refined on the thread pool for the
+    /// next frame once a frame is drawn (Adapt and Display,
+    /// [`LodSelector::adapting_ahead`](super::lod_select::LodSelector::adapting_ahead)):
+    /// the traversal leaves the frame's thread, and each such object is drawn as
+    /// refined for a view predicted one frame ahead.
+    fn lod_adapt_ahead(&self) -> bool {
+        false
+    }
 }
 
 /// What a frame draws: the objects in view, each at the level LOD selection chose.
@@ -75,6 +84,17 @@ pub struct Selection<'f> {
 }
 
 impl<'f> Selection<'f> {
+    /// The renderer has uploaded this frame's refined meshes and will not read them
+    /// again this frame: objects that [adapt ahead](FrameSink::lod_adapt_ahead) may be
+    /// refined for the next frame while this one draws. Without it they are once the
+    /// frame is done.
+    pub fn uploaded(&mut self) -> Result<()> {
+        match &mut self.refinements {
+            Some(r) => r.uploaded(),
+            None => Ok(()),
+        }
+    }
+
     /// What to draw, and where the objects drawn refined find their selective mesh and
     /// its changed ranges (to upload them); apart so that both are borrowed at once.
     pub fn parts(&mut self) -> (&[Drawn], Option<&mut dyn Refinements>) {
@@ -189,6 +209,10 @@ impl FrameSink for Played<'_> {
 
     fn lod_settled(&self) -> bool {
         self.sink.lod_settled()
+    }
+
+    fn lod_adapt_ahead(&self) -> bool {
+        self.sink.lod_adapt_ahead()
     }
 }
 
