@@ -24,8 +24,9 @@
 //!                 normals 3×f32 each  base triangles u32  corners 3×u32 each
 //!   0x82 BATCH    frame u32 (the VIEW's)  objects u32, then each object with updates:
 //!                 index u32 (in WELCOME's order)
-//!                 collapses u32, then each: node u32
-//!                 splits u32, then each: node u32  first split u32  run length u32,
+//!                 collapses u32 (at most N), then each: node u32
+//!                 splits u32 (at most N), then each: node u32  first split u32
+//!                   run length u32 (at least 1),
 //!                   then the run's vertex splits, each: v_p u32  position 3×f32
 //!                   normal 3×f32  v_l u32  v_r u32 (u32::MAX: none)  corners 2×u8
 //!                   adjusted u32, then that many triangle numbers u32
@@ -66,6 +67,10 @@ pub const MAX_RESUME: usize = 16 << 20;
 pub const MAX_TO_CLIENT: usize = 64 << 20;
 /// The most operators of each kind a VIEW may ask for (Zheng's 500 + 500, §5.4.1).
 pub const MAX_N: u32 = 500;
+/// The most objects a session streams: WELCOME, BATCH and RESUME list no more, so that
+/// what a frame decodes to stays near its bytes (a hostile peer's frame of empty
+/// entries would otherwise decode to several times its length).
+pub const MAX_OBJECTS: usize = 1 << 16;
 
 const HELLO: u8 = 0x01;
 const VIEW: u8 = 0x02;
@@ -384,7 +389,7 @@ fn read_split(r: &mut Reader) -> Result<VertexSplit, StreamError> {
 fn decode_resume(body: &[u8]) -> Result<Message, StreamError> {
     let mut r = Reader::new(body, "RESUME");
     let next_frame = r.u32()?;
-    let n = r.count(8)?;
+    let n = r.count_at_most(8, MAX_OBJECTS, "objects")?;
     let mut objects = Vec::with_capacity(n);
     for _ in 0..n {
         let index = r.u32()?;
@@ -402,7 +407,7 @@ fn decode_resume(body: &[u8]) -> Result<Message, StreamError> {
 fn decode_welcome(body: &[u8]) -> Result<Message, StreamError> {
     let mut r = Reader::new(body, "WELCOME");
     magic_and_version(&mut r)?;
-    let n = r.count(8 + 4 + 4 + 4)?;
+    let n = r.count_at_most(8 + 4 + 4 + 4, MAX_OBJECTS, "objects")?;
     let mut objects = Vec::with_capacity(n);
     for _ in 0..n {
         let id = r.u64()?;
@@ -430,18 +435,24 @@ fn decode_welcome(body: &[u8]) -> Result<Message, StreamError> {
 fn decode_batch(body: &[u8]) -> Result<Message, StreamError> {
     let mut r = Reader::new(body, "BATCH");
     let frame = r.u32()?;
-    let n = r.count(12)?;
+    let n = r.count_at_most(12, MAX_OBJECTS, "objects")?;
     let mut objects = Vec::with_capacity(n);
     for _ in 0..n {
         let index = r.u32()?;
-        let nc = r.count(4)?;
+        let nc = r.count_at_most(4, MAX_N as usize, "collapses")?;
         let collapses = (0..nc).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?;
-        let ns = r.count(12)?;
+        let ns = r.count_at_most(12, MAX_N as usize, "splits")?;
+        if nc + ns == 0 {
+            return Err(r.bad(format!("object {index}'s part has no update")));
+        }
         let mut splits = Vec::with_capacity(ns);
         for _ in 0..ns {
             let node = r.u32()?;
             let first = r.u32()?;
             let len = r.count(SPLIT_MIN)?;
+            if len == 0 {
+                return Err(r.bad(format!("node {node}'s split has no vertex split")));
+            }
             let run = (0..len)
                 .map(|_| read_split(&mut r))
                 .collect::<Result<Vec<_>, _>>()?;
@@ -610,6 +621,56 @@ mod tests {
         bytes[9..13].copy_from_slice(&u32::MAX.to_le_bytes());
         let e = Message::decode(&bytes[4..]).unwrap_err();
         assert!(e.to_string().contains("a count of 4294967295"), "{e}");
+    }
+
+    /// A frame of many empty entries would decode to several times its bytes: the
+    /// counts that allow it are refused.
+    #[test]
+    fn what_a_frame_decodes_to_stays_near_its_bytes() {
+        let batch = |objects: Vec<ObjectUpdates>| Message::Batch { frame: 1, objects }.encode();
+        let empty = |index| ObjectUpdates {
+            index,
+            ..Default::default()
+        };
+        let refused = |bytes: Vec<u8>| Message::decode(&bytes[4..]).unwrap_err().to_string();
+        let e = refused(batch(vec![empty(0)]));
+        assert!(e.contains("object 0's part has no update"), "{e}");
+        let many = (0..=MAX_OBJECTS as u32)
+            .map(|index| ObjectUpdates {
+                index,
+                collapses: vec![1],
+                splits: vec![],
+            })
+            .collect();
+        let e = refused(batch(many));
+        assert!(e.contains("65537 objects, above the 65536"), "{e}");
+        let e = refused(batch(vec![ObjectUpdates {
+            index: 0,
+            collapses: vec![1; MAX_N as usize + 1],
+            splits: vec![],
+        }]));
+        assert!(e.contains("501 collapses"), "{e}");
+        let e = refused(batch(vec![ObjectUpdates {
+            index: 0,
+            collapses: vec![],
+            splits: vec![NodeSplit {
+                node: 4,
+                first: 0,
+                run: vec![],
+            }],
+        }]));
+        assert!(e.contains("node 4's split has no vertex split"), "{e}");
+        let resume = Message::Resume {
+            next_frame: 0,
+            objects: (0..=MAX_OBJECTS as u32)
+                .map(|index| HeldNodes {
+                    index,
+                    nodes: vec![],
+                })
+                .collect(),
+        };
+        let e = refused(resume.encode());
+        assert!(e.contains("above the 65536"), "{e}");
     }
 
     #[test]

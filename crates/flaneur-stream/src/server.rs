@@ -30,7 +30,7 @@ use crate::error::StreamError;
 use crate::landmark::Landmark;
 use crate::protocol::{
     receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
-    MAX_N, MAX_RESUME, MAX_TO_SERVER,
+    MAX_N, MAX_OBJECTS, MAX_RESUME, MAX_TO_SERVER,
 };
 use flaneur::lod::{Criteria, RefineParams, Refiner, View};
 
@@ -100,6 +100,12 @@ impl StreamServer {
             return Err(StreamError::Malformed(
                 "a stream server needs at least one landmark to stream".into(),
             ));
+        }
+        if landmarks.len() > MAX_OBJECTS {
+            return Err(StreamError::Malformed(format!(
+                "{} landmarks, above the {MAX_OBJECTS} a session streams",
+                landmarks.len()
+            )));
         }
         for l in &landmarks {
             if l.pm.splits.len() != l.dag.split_count() || l.pm.splits.len() > u32::MAX as usize {

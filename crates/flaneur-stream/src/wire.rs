@@ -114,6 +114,21 @@ impl<'a> Reader<'a> {
         Ok(n)
     }
 
+    /// A count as [`Reader::count`] reads it, refused above `max` (`what` names what
+    /// is counted).
+    pub(crate) fn count_at_most(
+        &mut self,
+        min_len: usize,
+        max: usize,
+        what: &str,
+    ) -> Result<usize, StreamError> {
+        let n = self.count(min_len)?;
+        if n > max {
+            return Err(self.bad(format!("{n} {what}, above the {max} allowed")));
+        }
+        Ok(n)
+    }
+
     /// The body is read whole.
     pub(crate) fn end(&self) -> Result<(), StreamError> {
         let left = self.bytes.len() - self.at;
