@@ -12,6 +12,10 @@ pub enum StreamError {
     /// The server refused the session or closed it, saying why.
     #[error("the stream server closed the session: {0}")]
     Refused(String),
+    /// The peer stopped reading: what was sent to it filled the connection and stayed
+    /// unread past the timeout.
+    #[error("the peer stopped reading")]
+    Stalled,
     /// The engine refused what the session asked of it (a view, a mesh update).
     #[error(transparent)]
     Engine(#[from] flaneur::Error),

@@ -37,7 +37,8 @@ use flaneur::lod::{Criteria, RefineParams, Refiner, View};
 /// How a server treats its sessions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ServerConfig {
-    /// A session that sends nothing for this long is closed.
+    /// A session that sends nothing for this long, or does not read what it is sent
+    /// for this long (a stalled client, whose batches fill the connection), is closed.
     pub idle_timeout: Duration,
 }
 
@@ -268,6 +269,7 @@ fn session(
     let set_up = stream
         .set_nonblocking(false)
         .and_then(|()| stream.set_read_timeout(Some(config.idle_timeout)))
+        .and_then(|()| stream.set_write_timeout(Some(config.idle_timeout)))
         .and_then(|()| stream.set_nodelay(true));
     match set_up {
         Ok(()) => serve((&stream, &stream), peer, templates, welcome, config),
@@ -324,6 +326,10 @@ fn serve<R: Read, W: Write>(
             {
                 format!("idle for {:?}", config.idle_timeout)
             }
+            StreamError::Stalled => format!(
+                "not reading for {:?}: its batches filled the connection",
+                config.idle_timeout
+            ),
             e => e.to_string(),
         };
         // The client hears why, if it still listens.
@@ -355,7 +361,7 @@ fn run<R: Read, W: Write>(
         .iter()
         .map(Refiner::fresh)
         .collect::<Result<Vec<_>, _>>()?;
-    output.write_all(welcome)?;
+    output.write_all(welcome).map_err(|e| stalled(e.into()))?;
     let s = state.insert(Session {
         hello,
         refiners,
@@ -384,13 +390,28 @@ fn run<R: Read, W: Write>(
                 let started = std::time::Instant::now();
                 let batch = s.answer(&v)?;
                 s.answer_times.push(started.elapsed());
-                s.bytes_out += send(output, &batch)? as u64;
+                s.bytes_out += send(output, &batch).map_err(stalled)? as u64;
                 s.frames += 1;
             }
             Some((Message::Bye, _)) | None => return Ok(()),
             Some((m, _)) => return Err(out_of_place("VIEW or BYE", &m)),
         }
         first = false;
+    }
+}
+
+/// A write that timed out is a client that stopped reading.
+fn stalled(e: StreamError) -> StreamError {
+    match e {
+        StreamError::Io(io)
+            if matches!(
+                io.kind(),
+                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+            ) =>
+        {
+            StreamError::Stalled
+        }
+        e => e,
     }
 }
 

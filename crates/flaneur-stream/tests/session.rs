@@ -425,3 +425,65 @@ fn a_client_refuses_a_batch_that_does_not_fit_its_mesh() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A client that sends views and never reads their batches stalls only its own
+/// session: another client is served meanwhile, view for view, and the stalled one is
+/// closed once its batches have filled the connection for the idle timeout.
+#[test]
+fn a_stalled_client_holds_back_no_other_and_is_closed() {
+    let landmarks = landmarks();
+    let server = serve(
+        &landmarks,
+        ServerConfig {
+            idle_timeout: Duration::from_millis(500),
+        },
+    );
+    let h = hello(Traversal::Priority);
+    // The stalled client: HELLO and thousands of views on a thread of its own (its
+    // writes block once the server stops reading), never a read.
+    let stalled = TcpStream::connect(server.addr()).unwrap();
+    let mut writer = stalled.try_clone().unwrap();
+    let writes = std::thread::spawn(move || {
+        let mut bytes = Message::Hello(h).encode();
+        for (frame, v) in random_views(31, 4000).into_iter().enumerate() {
+            let v = ViewPacket {
+                frame: frame as u32,
+                tau: 1e-4,
+                budget_mode: false,
+                n: MAX_N,
+                ..v
+            };
+            bytes.extend(Message::View(v).encode());
+        }
+        let _ = writer.write_all(&bytes);
+    });
+    // Meanwhile a good client is served, its meshes the local refiner's.
+    let mut good = StreamClient::connect(server.addr(), h, Duration::from_secs(20)).unwrap();
+    let mut local: Vec<Refiner> = landmarks
+        .iter()
+        .map(|l| Refiner::new(&l.pm, &l.dag).unwrap())
+        .collect();
+    for v in random_views(32, 60) {
+        good.send_view(&v).unwrap();
+        good.receive_batch().unwrap();
+        let (view, p) = params(&h, &v);
+        for (refiner, streamed) in local.iter_mut().zip(good.objects()) {
+            refiner.refine(&view, &p).unwrap();
+            assert_eq!(streamed.mesh().shared_with(refiner.mesh()), 1.0);
+        }
+    }
+    good.bye().unwrap();
+    let ends: Vec<_> = (0..2)
+        .map(|_| server.ends().recv_timeout(Duration::from_secs(30)).unwrap())
+        .collect();
+    let stalled_end = ends.iter().find(|e| e.reason.is_some()).expect("closed");
+    let why = stalled_end.reason.as_ref().unwrap();
+    assert!(why.contains("not reading for 500ms"), "{why}");
+    assert!(
+        stalled_end.frames > 0 && stalled_end.frames < 4000,
+        "{stalled_end:?}"
+    );
+    assert!(ends.iter().any(|e| e.frames == 60 && e.reason.is_none()));
+    drop(stalled);
+    writes.join().unwrap();
+}
