@@ -492,8 +492,7 @@ impl FrameSink for AtLevels<'_> {
         for d in selected {
             if d.level == flaneur::walk::lod_select::REFINED {
                 let r = refinements.as_mut().and_then(|r| r.refined(d.id));
-                self.refined
-                    .extend(r.map(|r| (d.id, r.refiner.mesh().clone())));
+                self.refined.extend(r.map(|r| (d.id, r.mesh.clone())));
             }
         }
         let (selected, drawn) = (&selection.drawn, selection.culled);
@@ -890,4 +889,121 @@ fn walk_adapts_ahead_when_drawn() {
     let out = walk(&["--adapt-ahead"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--adapt-ahead is for a walk drawn"));
+}
+
+/// Records each streamed mesh as the renderer takes it.
+struct Recorded {
+    inner: flaneur_stream::StreamedLandmarks,
+    meshes: std::sync::Arc<std::sync::Mutex<HashMap<u64, flaneur::lod::CompactMesh>>>,
+}
+
+impl flaneur::walk::RemoteRefinements for Recorded {
+    fn refines(&self, id: u64) -> bool {
+        self.inner.refines(id)
+    }
+
+    fn frame(&mut self, camera: &Camera) -> flaneur::Result<()> {
+        self.inner.frame(camera)
+    }
+
+    fn triangles(&self, id: u64) -> usize {
+        self.inner.triangles(id)
+    }
+
+    fn refined(&mut self, id: u64) -> Option<flaneur::walk::lod_select::RefinedView<'_>> {
+        let view = self.inner.refined(id)?;
+        self.meshes.lock().unwrap().insert(id, view.mesh.clone());
+        Some(view)
+    }
+}
+
+/// A walk whose landmarks come from a stream server: the GPU ends holding, for each,
+/// exactly the selective mesh the batches made, after a walk of incremental uploads of
+/// the ranges they changed; the other objects are drawn as ever.
+#[test]
+fn landmarks_streamed_into_a_walk_reach_the_gpu_as_the_batches_made_them() {
+    use flaneur::walk::lod_select::REFINED;
+    let dir = tempfile::tempdir().unwrap();
+    let lod = flaneur::lod::LodOptions {
+        pm_threshold: 1_000,
+        ..Default::default()
+    };
+    let db = build(
+        dir.path(),
+        &BuildOptions {
+            lod: Some(lod),
+            ..Default::default()
+        },
+    );
+    let landmarks = flaneur_stream::Landmark::all_in(&db, 64).unwrap();
+    assert!(!landmarks.is_empty());
+    let server = flaneur_stream::StreamServer::bind(
+        "127.0.0.1:0",
+        landmarks,
+        flaneur_stream::ServerConfig::default(),
+    )
+    .unwrap()
+    .spawn()
+    .unwrap();
+    let hello = flaneur_stream::Hello {
+        traversal: flaneur::lod::Traversal::Priority,
+        fov: flaneur::geom::DEFAULT_FOV,
+        budget: Some(flaneur::lod::THESIS_BUDGET as u32),
+        out_of_view: true,
+        back_face: true,
+    };
+    let refinement = flaneur_stream::Refinement {
+        tau: 0.001,
+        n: 500,
+        initial_span: 1,
+        predictor: flaneur_stream::Predictor::Quadratic,
+    };
+    let client = flaneur_stream::PredictiveClient::connect(
+        server.addr(),
+        hello,
+        refinement,
+        std::time::Duration::from_secs(20),
+    )
+    .unwrap();
+    let (inner, figures) = flaneur_stream::StreamedLandmarks::new(client);
+    let meshes = std::sync::Arc::new(std::sync::Mutex::new(HashMap::new()));
+    let recorded = Recorded {
+        inner,
+        meshes: meshes.clone(),
+    };
+    let gpu = gpu();
+    let cfg = ReviewConfig {
+        pace: None,
+        ..ReviewConfig::preset(Preset::Box)
+    };
+    let path = motion::generate(&db.bounds(), Motion::Normal, 90, 30.0, 5).unwrap();
+    let mut writer = FrameWriter::drawing(&gpu, (64, 64), (&db.bounds(), cfg.far))
+        .unwrap()
+        .with_lod_tau(0.001)
+        .unwrap()
+        .with_remote(Box::new(recorded));
+    review::walk_into(&db, &path, &cfg, |_| {}, &mut writer).unwrap();
+    let lod = writer.times.lod.unwrap();
+    assert!(lod.streamed_draws > 0, "{lod:?}");
+    let f = figures.lock().unwrap().clone();
+    assert_eq!(f.frames, 90);
+    assert!(f.modified > 0 && f.bytes > 0, "{f:?}");
+    let streamed: Vec<_> = writer
+        .resident()
+        .keys()
+        .filter(|k| k.1 == REFINED)
+        .collect();
+    assert!(!streamed.is_empty());
+    let meshes = meshes.lock().unwrap();
+    for key in streamed {
+        let mesh = &meshes[&key.0];
+        assert!(mesh.triangle_count() > 0);
+        let (vertices, indices) = writer.resident().read_back(&gpu, key).unwrap();
+        assert_eq!(indices, mesh.indices(), "object {}", key.0);
+        for &i in &indices {
+            let v = vertices[i as usize];
+            assert_eq!(v.position, mesh.positions()[i as usize], "object {}", key.0);
+            assert_eq!(v.normal, mesh.normals()[i as usize]);
+        }
+    }
 }

@@ -194,3 +194,81 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
     let md = std::fs::read_to_string(dir.path().join("stream-crowd.md")).unwrap();
     assert!(md.contains("4 predictive clients"), "{md}");
 }
+
+/// `flaneur walk --render --stream`: the walk draws its landmarks from a stream server
+/// of the same database, says what the session did, and refuses the flag without
+/// --render.
+#[test]
+fn walk_draws_its_landmarks_from_a_stream_server() {
+    let opts = BuildOptions {
+        lod: Some(LodOptions {
+            pm_threshold: 1_000,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let c = common::city(60, 3, &opts);
+    let mut served = serve_stream(&c.db, &[]);
+    let first = served.lines.next().unwrap().unwrap();
+    let addr = first
+        .split("tcp://")
+        .nth(1)
+        .and_then(|rest| rest.split(';').next())
+        .unwrap()
+        .to_string();
+    let frames = c.dir.path().join("frames");
+    let walk = |extra: &[&str]| {
+        let mut args = vec![
+            "walk",
+            c.db.to_str().unwrap(),
+            "--config",
+            "box",
+            "--frames",
+            "90",
+            "--seed",
+            "5",
+            "--quiet",
+            "--lod-tau",
+            "0.001",
+            "--stream",
+            &addr,
+        ];
+        args.extend_from_slice(extra);
+        common::flaneur(&args)
+    };
+    let out = walk(&[
+        "--render",
+        "--size",
+        "64x64",
+        "--frames-dir",
+        frames.to_str().unwrap(),
+        "--every",
+        "1000",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let number_before = |what: &str| -> u64 {
+        text.split(what)
+            .next()
+            .and_then(|s| s.rsplit(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no '{what}' in {text}"))
+    };
+    // Landmarks were drawn from the stream, and batches came for them.
+    assert!(
+        number_before(" draws of landmarks from the stream") > 0,
+        "{text}"
+    );
+    assert!(number_before(" of 90 frames applied a batch") > 0, "{text}");
+    assert!(
+        text.contains(&format!("streamed landmarks from {addr}")),
+        "{text}"
+    );
+    let out = walk(&[]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--stream is for a walk drawn"));
+}

@@ -133,6 +133,11 @@ pub struct WalkArgs {
     /// and Display), not on the frame's thread.
     #[arg(long)]
     adapt_ahead: bool,
+    /// With --render: draw the city's landmarks from a stream server (`flaneur
+    /// serve-stream` of the same database) at this address (host:port), the rest as
+    /// ever; the predictive client hides the round trip (Zheng ch. 5-6).
+    #[arg(long, value_name = "HOST:PORT")]
+    stream: Option<String>,
 }
 
 impl WalkArgs {
@@ -172,6 +177,7 @@ impl WalkArgs {
             dov_tau,
             finer_by_tau,
             adapt_ahead,
+            stream,
         } = self;
         let render = render.then_some(RenderOpts {
             dir: frames_dir,
@@ -179,9 +185,16 @@ impl WalkArgs {
             every,
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
             adapt_ahead,
+            stream: stream.clone(),
         });
         if adapt_ahead && render.is_none() {
             bail!("--adapt-ahead is for a walk drawn with --render: only it refines objects");
+        }
+        if stream.is_some() && (render.is_none() || lod_tau == 0.0) {
+            bail!(
+                "--stream is for a walk drawn with --render under a --lod-tau above 0: only \
+                 it draws landmarks refined view by view"
+            );
         }
         if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box" | "pvs") {
             bail!(
@@ -375,8 +388,31 @@ fn rendered<R>(
     if r.adapt_ahead {
         writer = writer.adapting_ahead();
     }
+    let mut streamed = None;
+    if let (Some(addr), Some(tau)) = (&r.stream, r.lod_tau) {
+        let (landmarks, figures) = stream_landmarks(addr, tau)?;
+        streamed = Some((addr.as_str(), figures));
+        writer = writer.with_remote(Box::new(landmarks));
+    }
     let result = walk(&mut writer, &mut tick)?;
     bar.finish_and_clear();
+    if let Some((addr, figures)) = streamed {
+        let f = figures.lock().unwrap_or_else(|p| p.into_inner());
+        println!(
+            "streamed landmarks from {addr}: {} of {} frames applied a batch, {} views sent, \
+             {:.1} KiB of batches (largest {:.1} KiB), round trip {}, prediction span {} frames",
+            f.modified,
+            f.frames,
+            f.views,
+            f.bytes as f64 / 1024.0,
+            f.largest_batch as f64 / 1024.0,
+            f.round_trip.map_or("not measured".into(), |t| format!(
+                "{:.1} ms",
+                t.as_secs_f64() * 1e3
+            )),
+            f.span
+        );
+    }
     Ok((
         result,
         Some(Drawn {
@@ -384,6 +420,39 @@ fn rendered<R>(
             times: writer.times,
         }),
     ))
+}
+
+/// A predictive stream session with the server at `addr`, refining under `tau`, as
+/// the landmarks a walk draws; and where its figures are kept.
+fn stream_landmarks(
+    addr: &str,
+    tau: f32,
+) -> Result<(
+    flaneur_stream::StreamedLandmarks,
+    std::sync::Arc<std::sync::Mutex<flaneur_stream::StreamFigures>>,
+)> {
+    let default = flaneur::geom::Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?;
+    let hello = flaneur_stream::Hello {
+        traversal: flaneur::lod::Traversal::Priority,
+        fov: default.fov_x.max(default.fov_y),
+        budget: Some(flaneur::lod::THESIS_BUDGET as u32),
+        out_of_view: true,
+        back_face: true,
+    };
+    let refinement = flaneur_stream::Refinement {
+        tau,
+        n: flaneur_stream::protocol::MAX_N,
+        initial_span: 1,
+        predictor: flaneur_stream::Predictor::Quadratic,
+    };
+    let client = flaneur_stream::PredictiveClient::connect(
+        addr,
+        hello,
+        refinement,
+        std::time::Duration::from_secs(30),
+    )
+    .with_context(|| format!("connecting to the stream server at {addr}"))?;
+    Ok(flaneur_stream::StreamedLandmarks::new(client))
 }
 
 /// What drew a walk, and what it cost.
@@ -433,6 +502,9 @@ fn print_render(drawn: Option<Drawn>, r: Option<&RenderOpts>) -> Result<()> {
             "  LOD selection: {} draws coarser than full detail, {} levels read; {} draws refined view by view ({} vertex splits and edge collapses), {} progressive meshes decoded off the frame's thread ({} draws at discrete levels meanwhile); {} pages",
             c.coarse_draws, c.levels_read, c.refined_draws, c.refine_ops, c.decoded, c.drawn_while_decoding, c.pages
         );
+        if r.stream.is_some() {
+            println!("  {} draws of landmarks from the stream", c.streamed_draws);
+        }
     }
     println!("  per-frame times in {}", csv.display());
     Ok(())
@@ -445,6 +517,7 @@ struct RenderOpts {
     every: usize,
     lod_tau: Option<f32>,
     adapt_ahead: bool,
+    stream: Option<String>,
 }
 
 /// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable

@@ -70,6 +70,8 @@ pub struct FrameWriter<'a> {
     lod_settled: bool,
     /// Whether refined objects adapt ahead on the thread pool.
     lod_adapt_ahead: bool,
+    /// Objects refined elsewhere, handed to the walk when it starts.
+    remote: Option<Box<dyn flaneur::walk::RemoteRefinements>>,
     pub times: FrameTimes,
 }
 
@@ -111,6 +113,7 @@ impl<'a> FrameWriter<'a> {
             lod_tau: None,
             lod_settled: false,
             lod_adapt_ahead: false,
+            remote: None,
             times: FrameTimes::default(),
         })
     }
@@ -146,6 +149,16 @@ impl<'a> FrameWriter<'a> {
     pub fn adapting_ahead(self) -> FrameWriter<'a> {
         FrameWriter {
             lod_adapt_ahead: true,
+            ..self
+        }
+    }
+
+    /// The same writer handing the walk objects refined elsewhere to draw from there
+    /// ([`FrameSink::lod_remote`]): a stream server's landmarks. Only with a τ
+    /// ([`FrameWriter::with_lod_tau`]): a walk at full detail draws every object whole.
+    pub fn with_remote(self, remote: Box<dyn flaneur::walk::RemoteRefinements>) -> FrameWriter<'a> {
+        FrameWriter {
+            remote: Some(remote),
             ..self
         }
     }
@@ -230,6 +243,10 @@ impl FrameSink for FrameWriter<'_> {
 
     fn lod_adapt_ahead(&self) -> bool {
         self.lod_adapt_ahead
+    }
+
+    fn lod_remote(&mut self) -> Option<Box<dyn flaneur::walk::RemoteRefinements>> {
+        self.remote.take()
     }
 }
 

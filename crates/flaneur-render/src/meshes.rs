@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 use crate::Gpu;
 use flaneur::error::{Error, Result};
 use flaneur::scene::Mesh;
-use flaneur::walk::lod_select::{Drawn, RefinedObject, Refinements, REFINED};
+use flaneur::walk::lod_select::{Drawn, RefinedView, Refinements, REFINED};
 
 /// One vertex as the shader reads it: position, normal, the object's slot (what the id
 /// target shows) and the key its tint comes from (its id folded to 32 bits, so that an
@@ -172,10 +172,9 @@ impl GpuMeshes {
     /// sized for the full mesh (so that refinement never reallocates them) filled with
     /// the selective mesh; after that, only the ranges that changed. Whether it
     /// allocated.
-    pub fn upload_refined(&mut self, gpu: &Gpu, id: u64, r: &mut RefinedObject) -> Result<bool> {
+    pub fn upload_refined(&mut self, gpu: &Gpu, id: u64, r: RefinedView<'_>) -> Result<bool> {
         let key = (id, REFINED);
-        let pending = std::mem::take(&mut r.pending);
-        let mesh = r.refiner.mesh();
+        let (pending, mesh) = (r.pending, r.mesh);
         let (positions, normals, indices) = (mesh.positions(), mesh.normals(), mesh.indices());
         let (vertex_cap, triangle_cap) = r.capacity;
         if positions.len() > vertex_cap || indices.len() > 3 * triangle_cap {

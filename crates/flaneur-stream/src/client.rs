@@ -24,7 +24,7 @@ use crate::protocol::{
     receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
     MAX_RESUME, MAX_TO_CLIENT,
 };
-use flaneur::lod::CompactMesh;
+use flaneur::lod::{CompactMesh, MeshChanges};
 
 /// The most vertex splits a client makes room for in one object: its mesh's ID maps
 /// take 12 bytes a split, so a hostile WELCOME cannot make it reserve more than about
@@ -37,6 +37,8 @@ pub struct StreamedObject {
     pub id: u64,
     /// Vertex splits of its progressive mesh, as WELCOME said.
     splits: u32,
+    /// The most vertices and triangles its mesh may reach.
+    capacity: (usize, usize),
     mesh: CompactMesh,
     /// The nodes split, with the runs they applied.
     held: HashMap<u32, NodeSplit>,
@@ -46,6 +48,18 @@ impl StreamedObject {
     /// The selective mesh, as the batches so far made it.
     pub fn mesh(&self) -> &CompactMesh {
         &self.mesh
+    }
+
+    /// The ranges of the mesh's arrays the batches changed since the last call, for a
+    /// renderer to upload; taken.
+    pub fn take_changes(&mut self) -> MeshChanges {
+        self.mesh.take_changes()
+    }
+
+    /// The most vertices and triangles its mesh may reach (the full mesh's: each vertex
+    /// split adds a vertex and at most two triangles), to size a renderer's buffers once.
+    pub fn capacity(&self) -> (usize, usize) {
+        self.capacity
     }
 
     /// The DAG nodes it holds split, in order: what a RESUME tells a new session.
@@ -161,9 +175,14 @@ impl StreamClient {
                         o.id, o.splits
                     )));
                 }
+                let splits = o.splits as usize;
                 Ok(StreamedObject {
                     id: o.id,
                     splits: o.splits,
+                    capacity: (
+                        o.base.positions.len() + splits,
+                        o.base.triangle_count() + 2 * splits,
+                    ),
                     mesh: CompactMesh::from_base(&o.base, o.splits as usize)?,
                     held: HashMap::new(),
                 })

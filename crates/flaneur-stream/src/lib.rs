@@ -7,7 +7,8 @@
 //! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
 //! documentation); `landmark` what a server streams; `server` the sessions; `client` the selective meshes' side, and `predictive` the
 //! client that hides the round trip by prediction (Zheng ch. 5–6); `wire`
-//! the bounded field reader both decode with.
+//! the bounded field reader both decode with; `walk_source` a session as the landmarks a
+//! walk draws (`flaneur walk --stream`).
 //!
 //! ```
 //! use std::sync::Arc;
@@ -40,6 +41,7 @@ mod landmark;
 mod predictive;
 pub mod protocol;
 mod server;
+mod walk_source;
 mod wire;
 
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
@@ -50,3 +52,4 @@ pub use predictive::{
 };
 pub use protocol::{HeldNodes, Hello, Message, ViewPacket};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};
+pub use walk_source::{StreamFigures, StreamedLandmarks};

@@ -190,6 +190,11 @@ impl PredictiveClient {
         &self.objects
     }
 
+    /// The session's objects, to take their changes ([`StreamedObject::take_changes`]).
+    pub fn objects_mut(&mut self) -> &mut [StreamedObject] {
+        &mut self.objects
+    }
+
     /// One frame at the viewer's actual `eye` looking at `aim`: applies the oldest batch
     /// that has arrived, if any, and sends the requests the frame should (see the module
     /// comment). Call it once per rendered frame.

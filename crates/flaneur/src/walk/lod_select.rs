@@ -47,6 +47,7 @@ use crate::store::PageKind;
 
 use super::adapt_ahead::AdaptAhead;
 use super::buffer::{Loaded, ObjectBuffer};
+use super::remote::RemoteRefinements;
 
 /// The thesis's screen-space error: 0.1 % of the viewport.
 pub const DEFAULT_TAU: f32 = 0.001;
@@ -131,6 +132,9 @@ pub struct LodCounts {
     /// Draws at discrete levels of objects whose progressive mesh and DAG were still
     /// being decoded.
     pub drawn_while_decoding: u64,
+    /// Objects drawn as refined elsewhere (a stream server's landmarks,
+    /// [`RemoteRefinements`]), summed over frames.
+    pub streamed_draws: u64,
 }
 
 /// The stored levels of the objects a walk has drawn.
@@ -187,6 +191,17 @@ pub struct RefinedObject {
     pub capacity: (usize, usize),
 }
 
+impl RefinedObject {
+    /// As a renderer uploads it, its changes taken.
+    pub fn view(&mut self) -> RefinedView<'_> {
+        RefinedView {
+            pending: std::mem::take(&mut self.pending),
+            mesh: self.refiner.mesh(),
+            capacity: self.capacity,
+        }
+    }
+}
+
 /// A large object's refiner as its decoding on the thread pool left it.
 type Decoded = (u64, Result<RefinedObject>);
 
@@ -201,11 +216,25 @@ pub fn check_tau(tau: f32) -> Result<()> {
     Ok(())
 }
 
+/// An object drawn [`REFINED`] as a renderer uploads it: its selective mesh, the ranges
+/// changed since the renderer last asked (now taken), and the most vertices and
+/// triangles the mesh may reach (every one of the full mesh), to size its buffers once.
+#[derive(Debug)]
+pub struct RefinedView<'r> {
+    /// The selective mesh.
+    pub mesh: &'r crate::lod::CompactMesh,
+    /// The ranges of its arrays changed since the renderer last asked.
+    pub pending: MeshChanges,
+    /// Every vertex and triangle of the full mesh: the arrays' largest sizes.
+    pub capacity: (usize, usize),
+}
+
 /// Where a renderer finds the refinement of an object drawn [`REFINED`]: its selective
 /// mesh, and the changes not yet uploaded.
 pub trait Refinements {
-    /// Object `id`'s refinement, when it is drawn refined view by view.
-    fn refined(&mut self, id: u64) -> Option<&mut RefinedObject>;
+    /// Object `id`'s refinement, when it is drawn refined view by view; its changes are
+    /// taken, so that the next call has only those made after.
+    fn refined(&mut self, id: u64) -> Option<RefinedView<'_>>;
 
     /// The renderer has taken this frame's changes and reads the selective meshes no
     /// more until the next frame: what adapts ahead may start
@@ -216,8 +245,8 @@ pub trait Refinements {
 }
 
 impl Refinements for LodSelector<'_> {
-    fn refined(&mut self, id: u64) -> Option<&mut RefinedObject> {
-        LodSelector::refined(self, id)
+    fn refined(&mut self, id: u64) -> Option<RefinedView<'_>> {
+        LodSelector::refined(self, id).map(RefinedObject::view)
     }
 
     fn uploaded(&mut self) -> Result<()> {
@@ -571,6 +600,10 @@ impl LodSelector<'_> {
 pub(crate) struct WalkLods<'db> {
     db: Option<&'db Database>,
     selector: Option<LodSelector<'db>>,
+    /// Objects refined elsewhere (a stream server's landmarks), drawn from there, and
+    /// how many draws so far.
+    remote: Option<Box<dyn RemoteRefinements>>,
+    streamed_draws: u64,
 }
 
 /// What a viewer wants of LOD selection on a frame.
@@ -594,7 +627,14 @@ impl<'db> WalkLods<'db> {
         WalkLods {
             db: Some(db),
             selector: None,
+            remote: None,
+            streamed_draws: 0,
         }
+    }
+
+    /// Draws the objects `remote` refines from it from now on (in place of any before).
+    pub(crate) fn set_remote(&mut self, remote: Box<dyn RemoteRefinements>) {
+        self.remote = Some(remote);
     }
 
     /// The frame is drawn: what adapts ahead starts for the next, if the viewer did
@@ -641,10 +681,28 @@ impl<'db> WalkLods<'db> {
         let full = || culled.iter().map(|o| Drawn::full(o)).collect();
         let pages_before = self.selector.as_ref().map_or(0, |s| s.counts.pages);
         let started = std::time::Instant::now();
+        // Objects refined elsewhere are drawn from there, with LOD selection only.
+        let remote = match (&mut self.remote, &self.selector) {
+            (Some(r), Some(_)) => {
+                r.frame(camera)?;
+                Some(&**r)
+            }
+            _ => None,
+        };
+        let from_remote =
+            |o: &Loaded| remote.is_some_and(|r| !o.is_group() && r.refines(o.entry.id));
+        let local: Vec<&Loaded> = match remote {
+            Some(_) => culled.iter().copied().filter(|o| !from_remote(o)).collect(),
+            None => Vec::new(),
+        };
         let (drawn, damaged, failed) = match &mut self.selector {
             None => (full(), Vec::new(), None),
             Some(s) => {
-                let chosen = s.select(camera, buffer, culled);
+                let chosen = s.select(
+                    camera,
+                    buffer,
+                    if remote.is_some() { &local } else { culled },
+                );
                 let damaged = s.take_damaged();
                 match chosen {
                     Ok(d) => (d, damaged, None),
@@ -653,17 +711,60 @@ impl<'db> WalkLods<'db> {
                 }
             }
         };
+        // In the culled order: each object from elsewhere where it stands.
+        let drawn = match remote {
+            Some(r) if failed.is_none() => {
+                let mut chosen = drawn.into_iter();
+                self.streamed_draws += (culled.len() - local.len()) as u64;
+                culled
+                    .iter()
+                    .map(|o| match from_remote(o) {
+                        true => Some(Drawn {
+                            id: o.entry.id,
+                            bounds: o.entry.bounds,
+                            level: REFINED,
+                            mesh: o.mesh.clone(),
+                            triangles: r.triangles(o.entry.id),
+                        }),
+                        false => chosen.next(),
+                    })
+                    .collect::<Option<Vec<_>>>()
+                    .expect("one choice for each object drawn here")
+            }
+            _ => drawn,
+        };
         let select_ms = started.elapsed().as_secs_f64() * 1e3;
         Ok(super::Selection {
             culled,
             drawn,
             select_ms,
             pages: self.selector.as_ref().map_or(0, |s| s.counts.pages) - pages_before,
-            lod: self.selector.as_ref().map(|s| s.counts),
+            lod: self.selector.as_ref().map(|s| LodCounts {
+                streamed_draws: self.streamed_draws,
+                ..s.counts
+            }),
             damaged,
             failed,
-            refinements: self.selector.as_mut().map(|s| s as &mut dyn Refinements),
+            refinements: Some(self as &mut dyn Refinements),
         })
+    }
+}
+
+/// A renderer finds an object refined elsewhere there, and the rest with the selector.
+impl Refinements for WalkLods<'_> {
+    fn refined(&mut self, id: u64) -> Option<RefinedView<'_>> {
+        match (&mut self.remote, &mut self.selector) {
+            (Some(r), Some(_)) if r.refines(id) => r.refined(id),
+            (_, Some(s)) => Refinements::refined(s, id),
+            (_, None) => None,
+        }
+    }
+
+    fn uploaded(&mut self) -> Result<()> {
+        match &mut self.selector {
+            Some(s) => s.launch_ahead(),
+            None => Ok(()),
+        }
     }
 }
 

@@ -71,6 +71,7 @@ pub mod lod_select;
 mod mode;
 pub mod path;
 pub mod pvs_walk;
+mod remote;
 pub mod review;
 pub mod scene_walk;
 mod session;
@@ -81,6 +82,7 @@ pub mod visual;
 
 pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer, GROUP_ID};
 pub use cells::{contains_ground, disk_cell, scaled_cell};
+pub use remote::RemoteRefinements;
 pub use sink::{FrameFigures, FrameSink, NoSink, Selection, Viewer};
 pub use start::busiest_street;
 pub use steer::{Move, Steer, WALK_SPEED};

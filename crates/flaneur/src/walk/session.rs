@@ -90,6 +90,9 @@ pub(crate) fn run<M: Mode + ?Sized>(
 ) -> Result<Vec<M::Frame>> {
     let mut buffer = ObjectBuffer::new(mode.memory_budget());
     let mut frames = Vec::new();
+    if let Some(remote) = viewer.lod_remote() {
+        lods.set_remote(remote);
+    }
     for index in 0.. {
         let Some(pose) = viewer.next_pose(index)? else {
             break;

@@ -57,6 +57,13 @@ pub trait FrameSink {
     fn lod_adapt_ahead(&self) -> bool {
         false
     }
+
+    /// Objects refined elsewhere that the walk is to draw from there (a stream
+    /// server's landmarks, [`RemoteRefinements`](super::RemoteRefinements)); asked once,
+    /// as the walk starts, and taken.
+    fn lod_remote(&mut self) -> Option<Box<dyn super::RemoteRefinements>> {
+        None
+    }
 }
 
 /// What a frame draws: the objects in view, each at the level LOD selection chose.
@@ -213,6 +220,10 @@ impl FrameSink for Played<'_> {
 
     fn lod_adapt_ahead(&self) -> bool {
         self.sink.lod_adapt_ahead()
+    }
+
+    fn lod_remote(&mut self) -> Option<Box<dyn super::RemoteRefinements>> {
+        self.sink.lod_remote()
     }
 }
 
