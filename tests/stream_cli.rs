@@ -272,3 +272,29 @@ fn walk_draws_its_landmarks_from_a_stream_server() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--stream is for a walk drawn"));
 }
+
+/// `flaneur view --stream` refuses a walk at full detail, and names a server it cannot
+/// reach, before any window opens.
+#[test]
+fn view_with_a_stream_says_what_is_wrong_before_opening_a_window() {
+    let c = common::city(20, 3, &BuildOptions::default());
+    let db = c.db.to_str().unwrap();
+    let out = common::flaneur(&["view", db, "--stream", "127.0.0.1:1", "--lod-tau", "0"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("give a --lod-tau above 0"), "{err}");
+    // A port nobody listens on (bound, then let go).
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    let out = common::flaneur(&["view", db, "--stream", &addr]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("connecting to the stream server at {addr}")),
+        "{err}"
+    );
+}

@@ -132,7 +132,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         );
         let start = flaneur::walk::busiest_street(&db)?;
         let opts = window_options(&db, start);
-        match view(&db, opts, ViewMode::Review, (false, false), None) {
+        match view(&db, opts, ViewMode::Review, (false, false), None, None) {
             Ok(()) => return Ok(()),
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }

@@ -12,6 +12,7 @@ pub mod serve;
 pub mod serve_stream;
 pub mod shot;
 pub mod source;
+pub mod stream_client;
 pub mod view;
 pub mod walk;
 

@@ -59,6 +59,11 @@ pub struct ViewArgs {
     /// The PB mode's polygon budget, triangles a frame.
     #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
     budget: u64,
+    /// Draw the city's landmarks from a stream server (`flaneur serve-stream` of the same
+    /// database) at this address (host:port), its round trip, prediction span and
+    /// bytes/s on the HUD; the rest as ever.
+    #[arg(long, value_name = "HOST:PORT")]
+    stream: Option<String>,
     #[command(flatten)]
     source: SourceArgs,
 }
@@ -81,6 +86,7 @@ impl ViewArgs {
             top_view,
             eta,
             budget,
+            stream,
             source,
         } = self;
         let mode = match mode.as_str() {
@@ -118,7 +124,25 @@ impl ViewArgs {
             polygon_budget: budget,
             ..window_options(&db, start)
         };
-        view(&db, opts, mode, (boxes, top_view), record.as_deref())
+        let remote = match &stream {
+            Some(_) if lod_tau == 0.0 => {
+                bail!("--stream draws landmarks refined view by view: give a --lod-tau above 0")
+            }
+            Some(addr) => {
+                let (landmarks, _) = super::stream_client::stream_landmarks(addr, lod_tau)?;
+                println!("drawing the landmarks streamed from {addr}");
+                Some(Box::new(landmarks) as Box<dyn flaneur::walk::RemoteRefinements>)
+            }
+            None => None,
+        };
+        view(
+            &db,
+            opts,
+            mode,
+            (boxes, top_view),
+            record.as_deref(),
+            remote,
+        )
     }
 }
 
@@ -136,16 +160,21 @@ pub fn window_options(
 
 /// A session at the window (the walk engine's `walk::live` session): walks run one
 /// after another from where the viewer stands, until the window closes; what it drew
-/// said after, and the poses walked saved to `record`.
+/// said after, and the poses walked saved to `record`. Objects `remote` refines are
+/// drawn from there.
 pub fn view(
     db: &Database,
     opts: flaneur_render::ViewOptions,
     mode: ViewMode,
     (boxes, top_view): (bool, bool),
     record: Option<&Path>,
+    remote: Option<Box<dyn flaneur::walk::RemoteRefinements>>,
 ) -> Result<()> {
     let start = opts.start;
     let mut window = WalkWindow::open(opts, mode)?.telling(|m| eprintln!("{m}"));
+    if let Some(r) = remote {
+        window = window.with_remote(r);
+    }
     window.boxes = boxes;
     window.top_view = top_view;
     if let Some(a) = window.adapter() {

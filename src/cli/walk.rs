@@ -390,7 +390,7 @@ fn rendered<R>(
     }
     let mut streamed = None;
     if let (Some(addr), Some(tau)) = (&r.stream, r.lod_tau) {
-        let (landmarks, figures) = stream_landmarks(addr, tau)?;
+        let (landmarks, figures) = super::stream_client::stream_landmarks(addr, tau)?;
         streamed = Some((addr.as_str(), figures));
         writer = writer.with_remote(Box::new(landmarks));
     }
@@ -420,39 +420,6 @@ fn rendered<R>(
             times: writer.times,
         }),
     ))
-}
-
-/// A predictive stream session with the server at `addr`, refining under `tau`, as
-/// the landmarks a walk draws; and where its figures are kept.
-fn stream_landmarks(
-    addr: &str,
-    tau: f32,
-) -> Result<(
-    flaneur_stream::StreamedLandmarks,
-    std::sync::Arc<std::sync::Mutex<flaneur_stream::StreamFigures>>,
-)> {
-    let default = flaneur::geom::Camera::new(glam::Vec3::ZERO, 0.0, 0.0)?;
-    let hello = flaneur_stream::Hello {
-        traversal: flaneur::lod::Traversal::Priority,
-        fov: default.fov_x.max(default.fov_y),
-        budget: Some(flaneur::lod::THESIS_BUDGET as u32),
-        out_of_view: true,
-        back_face: true,
-    };
-    let refinement = flaneur_stream::Refinement {
-        tau,
-        n: flaneur_stream::protocol::MAX_N,
-        initial_span: 1,
-        predictor: flaneur_stream::Predictor::Quadratic,
-    };
-    let client = flaneur_stream::PredictiveClient::connect(
-        addr,
-        hello,
-        refinement,
-        std::time::Duration::from_secs(30),
-    )
-    .with_context(|| format!("connecting to the stream server at {addr}"))?;
-    Ok(flaneur_stream::StreamedLandmarks::new(client))
 }
 
 /// What drew a walk, and what it cost.

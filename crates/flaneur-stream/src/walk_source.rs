@@ -8,9 +8,9 @@
 //! The session's figures (batches, bytes, round trip, prediction span) are kept where
 //! the caller can read them during and after the walk ([`StreamFigures`]).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use flaneur::geom::Camera;
 use flaneur::walk::lod_select::RefinedView;
@@ -42,6 +42,9 @@ pub struct StreamedLandmarks {
     /// Each streamed object's place in the session, by its id.
     index: HashMap<u64, usize>,
     figures: Arc<Mutex<StreamFigures>>,
+    /// The batches of the last second: when each came and its bytes.
+    recent: VecDeque<(Instant, usize)>,
+    last: StreamFigures,
 }
 
 impl StreamedLandmarks {
@@ -59,6 +62,8 @@ impl StreamedLandmarks {
             client,
             index,
             figures: figures.clone(),
+            recent: VecDeque::new(),
+            last: StreamFigures::default(),
         };
         (landmarks, figures)
     }
@@ -83,7 +88,32 @@ impl RemoteRefinements for StreamedLandmarks {
         s.largest_batch = s.largest_batch.max(f.bytes);
         s.round_trip = f.round_trip;
         s.span = f.span;
+        self.last = s.clone();
+        let now = Instant::now();
+        if f.modified {
+            self.recent.push_back((now, f.bytes));
+        }
+        while self
+            .recent
+            .front()
+            .is_some_and(|(at, _)| now.duration_since(*at) > Duration::from_secs(1))
+        {
+            self.recent.pop_front();
+        }
         Ok(())
+    }
+
+    fn status(&self) -> Option<String> {
+        let s = &self.last;
+        let per_second: usize = self.recent.iter().map(|(_, b)| b).sum();
+        Some(format!(
+            "round trip {}, span {}, {} batches in the last second, {:.1} KiB/s",
+            s.round_trip
+                .map_or("-".into(), |t| format!("{:.1} ms", t.as_secs_f64() * 1e3)),
+            s.span,
+            self.recent.len(),
+            per_second as f64 / 1024.0
+        ))
     }
 
     fn triangles(&self, id: u64) -> usize {

@@ -186,6 +186,10 @@ impl FrameSink for WalkWindow {
     fn lod_restart(&mut self) -> bool {
         std::mem::take(&mut self.lod_restart)
     }
+
+    fn lod_remote(&mut self) -> Option<Box<dyn flaneur::walk::RemoteRefinements>> {
+        self.remote.take()
+    }
 }
 
 /// The view from 400 m above the viewer, looking down, the viewer's heading up the

@@ -88,6 +88,7 @@ pub(super) fn hud_content(
         format!("{} at {:.0}, {:.1}, {:.0}", f.cell, p.x, p.y, p.z),
     ];
     lines.extend(network_line(f));
+    lines.extend(f.streamed.as_ref().map(|s| format!("stream: {s}")));
     lines.push(format!(
             "WASD shift F fly  1 review 2 box 3 pvs 4 visual 5 vsc 6 pb 7 conv  [ ] tau  - = budget  H hud  B boxes  T top{}  Q quit",
             if wireframe { "  G lines" } else { "" }
@@ -116,5 +117,29 @@ mod tests {
             network_line(&f).as_deref(),
             Some("HTTP client cache hits 75%, 12 requests, 3.0 MiB, 0 retries")
         );
+    }
+
+    #[test]
+    fn a_walk_with_streamed_landmarks_shows_the_stream_line() {
+        let mut f = FrameFigures::default();
+        let lines = |f: &FrameFigures| {
+            let gpu = GpuMeshes::default();
+            hud_content(
+                f,
+                ViewMode::Review,
+                Some(0.001),
+                (&[], &gpu),
+                (false, glam::Vec3::ZERO, 0.0),
+                None,
+                &VecDeque::new(),
+                false,
+            )
+            .lines
+        };
+        assert!(!lines(&f).iter().any(|l| l.starts_with("stream:")));
+        f.streamed = Some("round trip 80.0 ms, span 3".into());
+        assert!(lines(&f)
+            .iter()
+            .any(|l| l == "stream: round trip 80.0 ms, span 3"));
     }
 }

@@ -97,6 +97,8 @@ pub struct WalkWindow {
     /// Where problems are told as they happen (the HUD shows them too); the library
     /// never prints, so by default nowhere.
     tell: Box<dyn FnMut(&str)>,
+    /// Objects refined elsewhere (a stream server's landmarks), handed to the first walk.
+    remote: Option<Box<dyn flaneur::walk::RemoteRefinements>>,
     pub summary: ViewSummary,
 }
 
@@ -181,6 +183,7 @@ impl WalkWindow {
             played: 0,
             play_clock: None,
             tell: Box::new(|_| {}),
+            remote: None,
             quit: false,
             last_frame: None,
             frame_ms: VecDeque::with_capacity(GRAPH_FRAMES),
@@ -240,6 +243,13 @@ impl WalkWindow {
     /// that failed and restarted): the CLI prints them on stderr.
     pub fn telling(mut self, tell: impl FnMut(&str) + 'static) -> Self {
         self.tell = Box::new(tell);
+        self
+    }
+
+    /// Draws the objects `remote` refines from there (a stream server's landmarks),
+    /// its status on the HUD: the walks at this window hand it on from one to the next.
+    pub fn with_remote(mut self, remote: Box<dyn flaneur::walk::RemoteRefinements>) -> Self {
+        self.remote = Some(remote);
         self
     }
 

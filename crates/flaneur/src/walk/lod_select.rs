@@ -637,6 +637,11 @@ impl<'db> WalkLods<'db> {
         self.remote = Some(remote);
     }
 
+    /// What the objects refined elsewhere did lately, in words.
+    pub(crate) fn remote_status(&self) -> Option<String> {
+        self.remote.as_ref().and_then(|r| r.status())
+    }
+
     /// The frame is drawn: what adapts ahead starts for the next, if the viewer did
     /// not start it when it uploaded.
     pub(crate) fn frame_drawn(&mut self) -> Result<()> {

@@ -27,4 +27,10 @@ pub trait RemoteRefinements {
     /// Object `id`'s selective mesh, its changes since the last call taken, as a
     /// renderer uploads it.
     fn refined(&mut self, id: u64) -> Option<RefinedView<'_>>;
+
+    /// What it did lately, in a line for a display beside the picture; `None` for
+    /// nothing to say.
+    fn status(&self) -> Option<String> {
+        None
+    }
 }

@@ -125,6 +125,7 @@ pub(crate) fn run<M: Mode + ?Sized>(
         viewer.figures(&FrameFigures {
             lod_pages,
             remote: lods.remote_stats(),
+            streamed: lods.remote_status(),
             ..mode.figures(&frame, &buffer)
         });
         frames.push(frame);

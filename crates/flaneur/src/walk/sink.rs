@@ -183,6 +183,10 @@ pub struct FrameFigures {
     /// What reading the database over HTTP has cost so far (its client cache's hit rate
     /// among it); `None` for a local file.
     pub remote: Option<crate::store::RemoteStats>,
+    /// What the objects refined elsewhere did lately, in words (a stream session's
+    /// round trip, prediction span, batches); `None` without them
+    /// ([`RemoteRefinements::status`](super::RemoteRefinements::status)).
+    pub streamed: Option<String>,
 }
 
 /// A recorded path played to a sink: the viewer of a walk along a fixed path.

@@ -409,8 +409,9 @@ impl Mode for Review<'_> {
                 .left_out
                 .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
                 .unwrap_or_default(),
-            // The session adds what reading over HTTP cost.
+            // The session adds what reading over HTTP cost, and what the stream did.
             remote: None,
+            streamed: None,
         }
     }
 }
