@@ -873,18 +873,8 @@ fn walk_adapts_ahead_when_drawn() {
         "--every",
         "1000",
     ]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let refined: u64 = text
-        .split(" draws refined view by view")
-        .next()
-        .and_then(|s| s.rsplit(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{text}"));
+    let text = common::succeeded(&out);
+    let refined = common::number_before(&text, " draws refined view by view");
     assert!(refined > 0, "{text}");
     let out = walk(&["--adapt-ahead"]);
     assert!(!out.status.success());

@@ -36,6 +36,20 @@ struct Served {
     lines: std::io::Lines<BufReader<ChildStdout>>,
 }
 
+impl Served {
+    /// The server's first line, and the address it names (after `tcp://`).
+    fn first_line(&mut self) -> (String, String) {
+        let first = self.lines.next().unwrap().unwrap();
+        let addr = first
+            .split("tcp://")
+            .nth(1)
+            .and_then(|rest| rest.split(';').next())
+            .unwrap()
+            .to_string();
+        (first, addr)
+    }
+}
+
 impl Drop for Served {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -68,14 +82,8 @@ fn serve_stream_streams_a_databases_landmarks_to_a_client() {
     let landmarks = Landmark::all_in(&db, 8).unwrap();
     assert_eq!(landmarks.len(), 8);
     let mut served = serve_stream(&c.db, &["--landmarks", "8"]);
-    let first = served.lines.next().unwrap().unwrap();
+    let (first, addr) = served.first_line();
     assert!(first.starts_with("streaming 8 landmarks"), "{first}");
-    let addr = first
-        .split("tcp://")
-        .nth(1)
-        .and_then(|rest| rest.split(';').next())
-        .unwrap()
-        .to_string();
     let hello = Hello {
         traversal: Traversal::Priority,
         fov: 1.0,
@@ -209,13 +217,7 @@ fn walk_draws_its_landmarks_from_a_stream_server() {
     };
     let c = common::city(60, 3, &opts);
     let mut served = serve_stream(&c.db, &[]);
-    let first = served.lines.next().unwrap().unwrap();
-    let addr = first
-        .split("tcp://")
-        .nth(1)
-        .and_then(|rest| rest.split(';').next())
-        .unwrap()
-        .to_string();
+    let (_, addr) = served.first_line();
     let frames = c.dir.path().join("frames");
     let walk = |extra: &[&str]| {
         let mut args = vec![
@@ -245,19 +247,8 @@ fn walk_draws_its_landmarks_from_a_stream_server() {
         "--every",
         "1000",
     ]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let number_before = |what: &str| -> u64 {
-        text.split(what)
-            .next()
-            .and_then(|s| s.rsplit(' ').next())
-            .and_then(|n| n.parse().ok())
-            .unwrap_or_else(|| panic!("no '{what}' in {text}"))
-    };
+    let text = common::succeeded(&out);
+    let number_before = |what: &str| common::number_before(&text, what);
     // Landmarks were drawn from the stream, and batches came for them.
     assert!(
         number_before(" draws of landmarks from the stream") > 0,

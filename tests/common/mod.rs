@@ -15,6 +15,27 @@ pub fn flaneur(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// The standard output of a command that must have succeeded (a test's failure with
+/// its standard error otherwise).
+pub fn succeeded(out: &std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The number just before `what` in `text` (a count in a command's report).
+pub fn number_before(text: &str, what: &str) -> u64 {
+    text.split(what)
+        .next()
+        .filter(|before| before.len() < text.len())
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no number before '{what}' in {text}"))
+}
+
 /// A bench's CSV file read back, each field found by its column's name.
 pub struct Csv {
     head: Vec<String>,
