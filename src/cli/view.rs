@@ -64,6 +64,10 @@ pub struct ViewArgs {
     /// bytes/s on the HUD; the rest as ever.
     #[arg(long, value_name = "HOST:PORT")]
     stream: Option<String>,
+    /// Refine the landmarks for the next frame on the thread pool while a frame draws
+    /// (El-Sana–Varshney's Adapt and Display), not on the frame's thread.
+    #[arg(long)]
+    adapt_ahead: bool,
     #[command(flatten)]
     source: SourceArgs,
 }
@@ -87,6 +91,7 @@ impl ViewArgs {
             eta,
             budget,
             stream,
+            adapt_ahead,
             source,
         } = self;
         let mode = match mode.as_str() {
@@ -122,6 +127,7 @@ impl ViewArgs {
             speed,
             eta,
             polygon_budget: budget,
+            adapt_ahead,
             ..window_options(&db, start)
         };
         let remote = match &stream {

@@ -190,6 +190,10 @@ impl FrameSink for WalkWindow {
     fn lod_remote(&mut self) -> Option<Box<dyn flaneur::walk::RemoteRefinements>> {
         self.remote.take()
     }
+
+    fn lod_adapt_ahead(&self) -> bool {
+        self.opts.adapt_ahead
+    }
 }
 
 /// The view from 400 m above the viewer, looking down, the viewer's heading up the

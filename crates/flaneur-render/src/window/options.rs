@@ -30,6 +30,11 @@ pub struct ViewOptions {
     pub eta: f32,
     /// The PB mode's polygon budget, triangles a frame.
     pub polygon_budget: u64,
+    /// Whether the landmarks are refined for the next frame on the thread pool while a
+    /// frame draws (Adapt and Display, [`FrameSink::lod_adapt_ahead`]).
+    ///
+    /// [`FrameSink::lod_adapt_ahead`]: flaneur::walk::FrameSink::lod_adapt_ahead
+    pub adapt_ahead: bool,
 }
 
 impl ViewOptions {
@@ -51,6 +56,7 @@ impl ViewOptions {
             speed: flaneur::walk::WALK_SPEED,
             eta: flaneur::walk::visual::DEFAULT_ETA,
             polygon_budget: flaneur::walk::live::DEFAULT_BUDGET,
+            adapt_ahead: false,
         }
     }
 }
