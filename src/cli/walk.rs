@@ -412,6 +412,15 @@ fn rendered<R>(
             )),
             f.span
         );
+        if f.broken_frames > 0 {
+            println!(
+                "  the session broke: {} frames drawn with the landmarks as they stood, {} \
+                 reconnections; the last failure: {}",
+                f.broken_frames,
+                f.reconnects,
+                f.last_failure.as_deref().unwrap_or("?")
+            );
+        }
     }
     Ok((
         result,

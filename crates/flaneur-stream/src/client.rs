@@ -108,6 +108,50 @@ impl StreamedObject {
     }
 }
 
+/// A new session with the server at `server`, resumed from `objects` as the client
+/// holds them (RESUME), its next VIEW's frame at least `next_frame`; the connection.
+/// An `Err` when the server cannot be reached, or streams other objects now.
+pub(crate) fn resume_session(
+    (server, hello, timeout): (SocketAddr, Hello, Duration),
+    objects: &[StreamedObject],
+    next_frame: u32,
+) -> Result<TcpStream, StreamError> {
+    let stream = TcpStream::connect_timeout(&server, timeout)?;
+    let (mut stream, welcome) = greet(stream, hello, timeout)?;
+    let same = welcome.len() == objects.len()
+        && welcome
+            .iter()
+            .zip(objects)
+            .all(|(w, o)| w.id == o.id && w.splits == o.splits);
+    if !same {
+        return Err(StreamError::Malformed(
+            "the server now streams other objects than this session's: connect afresh".into(),
+        ));
+    }
+    let held = objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| !o.held.is_empty())
+        .map(|(index, o)| HeldNodes {
+            index: index as u32,
+            nodes: o.held_nodes(),
+        })
+        .collect();
+    let resume = Message::Resume {
+        next_frame,
+        objects: held,
+    };
+    let bytes = resume.encode();
+    if bytes.len() - 4 > MAX_RESUME {
+        return Err(StreamError::Malformed(format!(
+            "a RESUME of {} bytes, above the {MAX_RESUME} a server reads: connect afresh",
+            bytes.len() - 4
+        )));
+    }
+    io::Write::write_all(&mut stream, &bytes)?;
+    Ok(stream)
+}
+
 /// Opens a session on `stream`: HELLO, then the server's WELCOME.
 fn greet(
     mut stream: TcpStream,
@@ -205,41 +249,8 @@ impl StreamClient {
     /// forgotten; the next VIEW's frame must still be above it. An `Err`, the client
     /// left as it was, when the server cannot be reached or now streams other objects.
     pub fn reconnect(&mut self) -> Result<(), StreamError> {
-        let stream = TcpStream::connect(self.server)?;
-        let (mut stream, welcome) = greet(stream, self.hello, self.timeout)?;
-        let same = welcome.len() == self.objects.len()
-            && welcome
-                .iter()
-                .zip(&self.objects)
-                .all(|(w, o)| w.id == o.id && w.splits == o.splits);
-        if !same {
-            return Err(StreamError::Malformed(
-                "the server now streams other objects than this session's: connect afresh".into(),
-            ));
-        }
-        let objects = self
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| !o.held.is_empty())
-            .map(|(index, o)| HeldNodes {
-                index: index as u32,
-                nodes: o.held_nodes(),
-            })
-            .collect();
-        let resume = Message::Resume {
-            next_frame: self.next_frame,
-            objects,
-        };
-        let bytes = resume.encode();
-        if bytes.len() - 4 > MAX_RESUME {
-            return Err(StreamError::Malformed(format!(
-                "a RESUME of {} bytes, above the {MAX_RESUME} a server reads: connect afresh",
-                bytes.len() - 4
-            )));
-        }
-        io::Write::write_all(&mut stream, &bytes)?;
-        self.stream = stream;
+        let peer = (self.server, self.hello, self.timeout);
+        self.stream = resume_session(peer, &self.objects, self.next_frame)?;
         self.pending = None;
         Ok(())
     }
@@ -301,9 +312,10 @@ impl StreamClient {
         Ok(report)
     }
 
-    /// The connection and the objects, for a client that takes the session over.
-    pub(crate) fn into_parts(self) -> (TcpStream, Vec<StreamedObject>) {
-        (self.stream, self.objects)
+    /// The connection, the objects and where the server is, for a client that takes
+    /// the session over.
+    pub(crate) fn into_parts(self) -> (TcpStream, Vec<StreamedObject>, SocketAddr, Duration) {
+        (self.stream, self.objects, self.server, self.timeout)
     }
 
     /// Ends the session.

@@ -52,4 +52,4 @@ pub use predictive::{
 };
 pub use protocol::{HeldNodes, Hello, Message, ViewPacket};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};
-pub use walk_source::{StreamFigures, StreamedLandmarks};
+pub use walk_source::{StreamFigures, StreamedLandmarks, RETRY_AFTER};

@@ -26,7 +26,7 @@
 //! will be applied.
 
 use std::collections::VecDeque;
-use std::net::{TcpStream, ToSocketAddrs};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
@@ -101,9 +101,48 @@ struct Arrived {
     at: Instant,
 }
 
+/// The batches that arrive on `stream`, read on a thread of their own until the
+/// connection ends or fails (the failure sent last).
+fn get_updates(
+    stream: &TcpStream,
+) -> Result<mpsc::Receiver<Result<Arrived, StreamError>>, StreamError> {
+    stream.set_read_timeout(None)?;
+    let mut reader = stream.try_clone()?;
+    let (tx, batches) = mpsc::channel();
+    thread::Builder::new()
+        .name("stream-get-updates".into())
+        .spawn(move || loop {
+            let got = match receive(&mut reader, MAX_TO_CLIENT) {
+                Ok(Some((Message::Batch { frame, objects }, bytes))) => Ok(Arrived {
+                    frame,
+                    objects,
+                    bytes,
+                    at: Instant::now(),
+                }),
+                Ok(Some((Message::Refused(why), _))) => Err(StreamError::Refused(why)),
+                Ok(Some((other, _))) => Err(StreamError::Malformed(format!(
+                    "a {other:?} where a batch was due"
+                ))),
+                Ok(None) => return,
+                Err(e) => Err(e),
+            };
+            let stop = got.is_err();
+            if tx.send(got).is_err() || stop {
+                return;
+            }
+        })?;
+    Ok(batches)
+}
+
 /// A stream client that hides the round trip by prediction.
 pub struct PredictiveClient {
     writer: TcpStream,
+    /// Where the server is and how long to wait for it, to reconnect.
+    server: SocketAddr,
+    timeout: Duration,
+    /// Whether the next frame tops the requests up (after a reconnection, none is in
+    /// flight and no batch will come to make the frame a modified one).
+    resumed: bool,
     batches: mpsc::Receiver<Result<Arrived, StreamError>>,
     objects: Vec<StreamedObject>,
     hello: Hello,
@@ -140,34 +179,14 @@ impl PredictiveClient {
                 refinement.n, refinement.tau
             )));
         }
-        let (stream, objects) = StreamClient::connect(addr, hello, timeout)?.into_parts();
-        stream.set_read_timeout(None)?;
-        let mut reader = stream.try_clone()?;
-        let (tx, batches) = mpsc::channel();
-        thread::Builder::new()
-            .name("stream-get-updates".into())
-            .spawn(move || loop {
-                let got = match receive(&mut reader, MAX_TO_CLIENT) {
-                    Ok(Some((Message::Batch { frame, objects }, bytes))) => Ok(Arrived {
-                        frame,
-                        objects,
-                        bytes,
-                        at: Instant::now(),
-                    }),
-                    Ok(Some((Message::Refused(why), _))) => Err(StreamError::Refused(why)),
-                    Ok(Some((other, _))) => Err(StreamError::Malformed(format!(
-                        "a {other:?} where a batch was due"
-                    ))),
-                    Ok(None) => return,
-                    Err(e) => Err(e),
-                };
-                let stop = got.is_err();
-                if tx.send(got).is_err() || stop {
-                    return;
-                }
-            })?;
+        let (stream, objects, server, timeout) =
+            StreamClient::connect(addr, hello, timeout)?.into_parts();
+        let batches = get_updates(&stream)?;
         Ok(PredictiveClient {
             writer: stream,
+            server,
+            timeout,
+            resumed: false,
             batches,
             objects,
             hello,
@@ -183,6 +202,23 @@ impl PredictiveClient {
             period: None,
             last_call: None,
         })
+    }
+
+    /// Connects to the server again, on a new connection, and resumes the session
+    /// from the meshes this client holds (RESUME): after the connection broke (a
+    /// [`PredictiveClient::frame`] that failed), or the server restarted. The requests
+    /// in flight are forgotten; the next frame sends the span's worth again, predicted
+    /// as ever. An `Err`, the client as it was, when the server cannot be reached or now
+    /// streams other objects.
+    pub fn reconnect(&mut self) -> Result<(), StreamError> {
+        let next_frame = self.last_target.map_or(0, |t| t.saturating_add(1));
+        let peer = (self.server, self.hello, self.timeout);
+        let stream = crate::client::resume_session(peer, &self.objects, next_frame)?;
+        self.batches = get_updates(&stream)?;
+        self.writer = stream;
+        self.in_flight.clear();
+        self.resumed = true;
+        Ok(())
     }
 
     /// The session's objects, as the batches so far made them.
@@ -247,7 +283,7 @@ impl PredictiveClient {
         // The start sends f requests (RENDER-WAN); afterwards an unmodified frame sends
         // nothing, and a modified one tops the requests in flight up to f.
         let start = self.frame == 0;
-        if start || report.modified {
+        if start || report.modified || std::mem::take(&mut self.resumed) {
             report.budget_mode = self.alarm();
             while self.in_flight.len() < self.span {
                 self.request(report.budget_mode, start)?;

@@ -7,6 +7,11 @@
 //!
 //! The session's figures (batches, bytes, round trip, prediction span) are kept where
 //! the caller can read them during and after the walk ([`StreamFigures`]).
+//!
+//! A session that breaks (the server restarted, the network dropped) does not stop the
+//! walk: the landmarks are drawn as they stand while the client reconnects and resumes
+//! from the meshes it holds, at once and then every [`RETRY_AFTER`]; the figures count
+//! the frames drawn so and keep the last failure.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
@@ -34,7 +39,16 @@ pub struct StreamFigures {
     pub round_trip: Option<Duration>,
     /// The prediction span f, in frames.
     pub span: usize,
+    /// Times the session was resumed on a new connection.
+    pub reconnects: u64,
+    /// Frames drawn while the session was broken (the landmarks as they stood).
+    pub broken_frames: u64,
+    /// The last failure of the session, in words.
+    pub last_failure: Option<String>,
 }
+
+/// How long a broken session waits before it tries to reconnect again.
+pub const RETRY_AFTER: Duration = Duration::from_secs(1);
 
 /// A predictive stream client as the objects a walk draws from elsewhere.
 pub struct StreamedLandmarks {
@@ -45,6 +59,8 @@ pub struct StreamedLandmarks {
     /// The batches of the last second: when each came and its bytes.
     recent: VecDeque<(Instant, usize)>,
     last: StreamFigures,
+    /// When the session broke and the last reconnection failed; `None` while it runs.
+    broken_since: Option<Instant>,
 }
 
 impl StreamedLandmarks {
@@ -64,8 +80,32 @@ impl StreamedLandmarks {
             figures: figures.clone(),
             recent: VecDeque::new(),
             last: StreamFigures::default(),
+            broken_since: None,
         };
         (landmarks, figures)
+    }
+}
+
+impl StreamedLandmarks {
+    /// The stream client, as the batches so far left it.
+    pub fn client(&self) -> &PredictiveClient {
+        &self.client
+    }
+
+    /// Tries to resume the broken session on a new connection; whether it did.
+    fn resume(&mut self, s: &mut StreamFigures) -> bool {
+        match self.client.reconnect() {
+            Ok(()) => {
+                s.reconnects += 1;
+                self.broken_since = None;
+                true
+            }
+            Err(e) => {
+                s.last_failure = Some(format!("reconnecting: {e}"));
+                self.broken_since = Some(Instant::now());
+                false
+            }
+        }
     }
 }
 
@@ -75,13 +115,29 @@ impl RemoteRefinements for StreamedLandmarks {
     }
 
     fn frame(&mut self, camera: &Camera) -> flaneur::Result<()> {
-        let eye = camera.position;
-        let f = self
-            .client
-            .frame(eye, eye + camera.forward())
-            .map_err(|e| flaneur::Error::Invalid(format!("stream session: {e}")))?;
-        let mut s = self.figures.lock().unwrap_or_else(|p| p.into_inner());
+        let figures = self.figures.clone();
+        let mut s = figures.lock().unwrap_or_else(|p| p.into_inner());
         s.frames += 1;
+        if let Some(since) = self.broken_since {
+            // Drawn as they stand until a reconnection, tried every RETRY_AFTER, works.
+            if since.elapsed() < RETRY_AFTER || !self.resume(&mut s) {
+                s.broken_frames += 1;
+                self.last = s.clone();
+                return Ok(());
+            }
+        }
+        let eye = camera.position;
+        let f = match self.client.frame(eye, eye + camera.forward()) {
+            Ok(f) => f,
+            Err(e) => {
+                s.last_failure = Some(e.to_string());
+                s.broken_frames += 1;
+                self.broken_since = Some(Instant::now());
+                self.resume(&mut s);
+                self.last = s.clone();
+                return Ok(());
+            }
+        };
         s.modified += u64::from(f.modified);
         s.views += f.sent as u64;
         s.bytes += f.bytes as u64;
@@ -105,6 +161,12 @@ impl RemoteRefinements for StreamedLandmarks {
 
     fn status(&self) -> Option<String> {
         let s = &self.last;
+        if self.broken_since.is_some() {
+            return Some(format!(
+                "broken, reconnecting: {}",
+                s.last_failure.as_deref().unwrap_or("?")
+            ));
+        }
         let per_second: usize = self.recent.iter().map(|(_, b)| b).sum();
         Some(format!(
             "round trip {}, span {}, {} batches in the last second, {:.1} KiB/s",

@@ -487,3 +487,100 @@ fn a_stalled_client_holds_back_no_other_and_is_closed() {
     drop(stalled);
     writes.join().unwrap();
 }
+
+/// A relay from a port of its own to a server, whose connections can be cut.
+struct Relay {
+    addr: std::net::SocketAddr,
+    open: Arc<std::sync::Mutex<Vec<TcpStream>>>,
+}
+
+impl Relay {
+    fn to(server: std::net::SocketAddr) -> Relay {
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let open = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let kept = open.clone();
+        std::thread::spawn(move || {
+            for client in listener.incoming().flatten() {
+                let Ok(upstream) = TcpStream::connect(server) else {
+                    return;
+                };
+                let pipe = |mut from: TcpStream, mut to: TcpStream| {
+                    std::thread::spawn(move || {
+                        let _ = std::io::copy(&mut from, &mut to);
+                        let _ = to.shutdown(std::net::Shutdown::Both);
+                    });
+                };
+                let mut open = kept.lock().unwrap();
+                open.extend([client.try_clone().unwrap(), upstream.try_clone().unwrap()]);
+                pipe(client.try_clone().unwrap(), upstream.try_clone().unwrap());
+                pipe(upstream, client);
+            }
+        });
+        Relay { addr, open }
+    }
+
+    /// Cuts every connection it relays, as a network that drops them.
+    fn cut(&self) {
+        for c in self.open.lock().unwrap().drain(..) {
+            let _ = c.shutdown(std::net::Shutdown::Both);
+        }
+    }
+}
+
+/// A walk's stream session whose connection is cut goes on: the landmarks stay drawn
+/// as they stood, the client reconnects and resumes from the meshes it holds, batches
+/// come again, and each mesh is still the one the nodes it holds split make.
+#[test]
+fn a_walks_stream_session_survives_a_cut_connection() {
+    use flaneur::walk::RemoteRefinements;
+    use flaneur_stream::{Predictor, Refinement, StreamedLandmarks};
+    let landmarks = landmarks();
+    let server = serve(&landmarks, ServerConfig::default());
+    let relay = Relay::to(server.addr());
+    let refinement = Refinement {
+        tau: 0.001,
+        n: MAX_N,
+        initial_span: 1,
+        predictor: Predictor::Linear,
+    };
+    let client = flaneur_stream::PredictiveClient::connect(
+        relay.addr,
+        hello(Traversal::Priority),
+        refinement,
+        Duration::from_secs(20),
+    )
+    .unwrap();
+    let (mut walk, figures) = StreamedLandmarks::new(client);
+    let camera = |frame: usize| {
+        // Round the two objects, looking at them.
+        let a = frame as f32 * 0.05;
+        let eye = Vec3::new(1.5 + 4.0 * a.cos(), 0.5, 4.0 * a.sin());
+        let to = Vec3::new(1.5, 0.0, 0.0) - eye;
+        flaneur::geom::Camera::new(eye, to.z.atan2(to.x), (to.y / to.length()).asin()).unwrap()
+    };
+    let mut modified_at_cut = 0;
+    for frame in 0..160 {
+        if frame == 40 {
+            modified_at_cut = figures.lock().unwrap().modified;
+            relay.cut();
+        }
+        walk.frame(&camera(frame)).unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let f = figures.lock().unwrap().clone();
+    assert!(modified_at_cut > 10, "{f:?}");
+    assert!(f.reconnects >= 1, "{f:?}");
+    assert!(f.broken_frames >= 1 && f.last_failure.is_some(), "{f:?}");
+    assert!(
+        f.modified > modified_at_cut + 10,
+        "no batches after the cut: {f:?}"
+    );
+    assert!(walk.status().unwrap().starts_with("round trip"));
+    for (l, o) in landmarks.iter().zip(walk.client().objects()) {
+        let mut r = Refiner::new(&l.pm, &l.dag).unwrap();
+        r.restore(&o.held_nodes()).unwrap();
+        assert_eq!(o.mesh().triangle_count(), r.mesh().triangle_count());
+        assert_eq!(o.mesh().shared_with(r.mesh()), 1.0);
+    }
+}
