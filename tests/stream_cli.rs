@@ -289,3 +289,24 @@ fn view_with_a_stream_says_what_is_wrong_before_opening_a_window() {
         "{err}"
     );
 }
+
+/// `flaneur bench stream-bytes`: for one close view, streaming view-dependently costs
+/// fewer bytes and triangles than view-independently, and under the cap it holds all
+/// the view needs where the view-independent stream holds only part of it.
+#[test]
+fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
+    let dir = bench(&["stream-bytes", "--triangles", "20000"]);
+    let csv = common::Csv::read(&dir.path().join("stream-bytes.csv"));
+    let [dependent, independent] = &csv.rows[..] else {
+        panic!("{:?}", csv.rows)
+    };
+    assert_eq!(csv.get(dependent, "scheme"), "view-dependent");
+    for what in ["bytes", "triangles", "frames"] {
+        assert!(
+            csv.num(dependent, what) < csv.num(independent, what),
+            "{what}: {dependent:?} against {independent:?}"
+        );
+    }
+    assert_eq!(csv.num(dependent, "cap_share"), 1.0);
+    assert!(csv.num(independent, "cap_share") < 0.9, "{independent:?}");
+}

@@ -22,6 +22,7 @@ mod pvs_prefetch;
 mod report;
 mod scene_tree;
 mod stream;
+mod stream_bytes;
 mod stream_crowd;
 mod view_culling;
 mod visual_vs_review;
@@ -121,6 +122,10 @@ enum Experiment {
     /// at 30 Hz: the server's CPU, memory per session, answer time and round trip
     /// (p50, p99), unmodified frames of the worst-served client (ours). No database.
     StreamCrowd(stream_crowd::StreamCrowdArgs),
+    /// One view's stream to convergence, view-dependent against view-independent: bytes,
+    /// frames and triangles, and what a byte cap buys (Kim–Lee–Kobbelt Figs. 8–9). No
+    /// database.
+    StreamBytes(stream_bytes::StreamBytesArgs),
 }
 
 impl BenchArgs {
@@ -149,6 +154,7 @@ impl BenchArgs {
             Experiment::PvsPrefetch(a) => a.run(),
             Experiment::Stream(a) => a.run(),
             Experiment::StreamCrowd(a) => a.run(),
+            Experiment::StreamBytes(a) => a.run(),
         }
     }
 }
