@@ -67,14 +67,22 @@ pub struct StreamBytesReport {
 /// The most frames one stream may take to converge.
 const MAX_FRAMES: u32 = 100_000;
 
-/// Streams the landmark for one view until it converges: the mesh, the frames, the
-/// bytes, and the mesh and bytes at the first batch past `cap`.
+/// One stream to convergence: the mesh then, the frames and bytes it took, and the mesh
+/// and bytes at the first batch past the cap.
+struct Converged {
+    mesh: CompactMesh,
+    frames: u32,
+    bytes: usize,
+    at_cap: Option<(CompactMesh, usize)>,
+}
+
+/// Streams the landmark for one view until it converges.
 fn stream_to_convergence(
     server: std::net::SocketAddr,
     hello: Hello,
     view: ViewPacket,
     cap: usize,
-) -> Result<(CompactMesh, u32, usize, Option<(CompactMesh, usize)>)> {
+) -> Result<Converged> {
     let bad = |e: flaneur_stream::StreamError| Error::Invalid(format!("stream-bytes: {e}"));
     let mut client = StreamClient::connect(server, hello, Duration::from_secs(60)).map_err(bad)?;
     let (mut bytes, mut at_cap) = (0, None);
@@ -90,7 +98,12 @@ fn stream_to_convergence(
         if batch.splits + batch.collapses == 0 {
             let mesh = client.objects()[0].mesh().clone();
             client.bye().map_err(bad)?;
-            return Ok((mesh, frame + 1, bytes, at_cap));
+            return Ok(Converged {
+                mesh,
+                frames: frame + 1,
+                bytes,
+                at_cap,
+            });
         }
     }
     Err(Error::Invalid(format!(
@@ -135,8 +148,12 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
     let mut needed: Option<CompactMesh> = None;
     for (scheme, culling) in [("view-dependent", true), ("view-independent", false)] {
         progress(&format!("streaming {scheme}"));
-        let (mesh, frames, bytes, at_cap) =
-            stream_to_convergence(server.addr(), hello(culling), view, cfg.cap)?;
+        let Converged {
+            mesh,
+            frames,
+            bytes,
+            at_cap,
+        } = stream_to_convergence(server.addr(), hello(culling), view, cfg.cap)?;
         let reference = needed.get_or_insert_with(|| mesh.clone());
         let (cap_mesh, cap_bytes) = at_cap.unwrap_or((mesh.clone(), bytes));
         rows.push(StreamBytesRow {
