@@ -6,11 +6,11 @@
 //! in the window because it is the walk engine's side of the window: which walk runs,
 //! and with what; the window only supplies poses and draws frames.
 
-use super::lod_select::WalkLods;
 use super::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
 use super::review::{self, Preset, ReviewConfig};
 use super::scene_walk::{self, SceneConfig};
 use super::visual::{self, VisualConfig, DEFAULT_ETA};
+use super::walk_lods::WalkLods;
 use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};

@@ -79,6 +79,7 @@ mod sink;
 mod start;
 mod steer;
 pub mod visual;
+mod walk_lods;
 
 pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer, GROUP_ID};
 pub use cells::{contains_ground, disk_cell, scaled_cell};

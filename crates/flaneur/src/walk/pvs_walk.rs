@@ -29,9 +29,9 @@ use serde::Serialize;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::{Lanp, Pbnp, PrefetchArea, Snp};
-use crate::walk::lod_select::WalkLods;
 use crate::walk::path::CameraPath;
 use crate::walk::sink::Played;
+use crate::walk::walk_lods::WalkLods;
 use crate::walk::{FrameSink, NoSink, Viewer};
 
 /// Which neighbours the client prefetches.

@@ -38,9 +38,9 @@
 //! first cell from nothing and is reported apart from the walk's frame times.
 
 use super::frame_times::frame_times;
-use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
+use super::walk_lods::WalkLods;
 use crate::cache::{CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};

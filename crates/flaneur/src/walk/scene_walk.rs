@@ -35,9 +35,9 @@
 use serde::Serialize;
 
 use super::frame_times::frame_times;
-use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
+use super::walk_lods::WalkLods;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::hdov::scene::{SceneTree, Traversal};

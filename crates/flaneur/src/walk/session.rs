@@ -19,9 +19,9 @@
 use std::time::Instant;
 
 use super::buffer::{Loaded, ObjectBuffer};
-use super::lod_select::{LodWanted, WalkLods};
 use super::path::Pose;
 use super::sink::{FrameFigures, Viewer};
+use super::walk_lods::{LodWanted, WalkLods};
 use crate::error::Result;
 use crate::geom::Camera;
 

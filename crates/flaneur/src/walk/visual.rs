@@ -63,9 +63,9 @@
 use serde::Serialize;
 
 use super::frame_times::frame_times;
-use super::lod_select::WalkLods;
 use super::path::CameraPath;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
+use super::walk_lods::WalkLods;
 use crate::cache::CacheStats;
 use crate::database::Database;
 use crate::error::{Error, Result};

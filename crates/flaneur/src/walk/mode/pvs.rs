@@ -15,10 +15,10 @@ use crate::geom::Camera;
 use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsClient, StoredPvs, THESIS_CAPACITY};
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{Loaded, ObjectBuffer};
-use crate::walk::lod_select::WalkLods;
 use crate::walk::pvs_walk::{PvsFrame, PvsWalkConfig};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+use crate::walk::walk_lods::WalkLods;
 
 /// Every object's index entry by id: what a PVS walk reads the meshes of the objects a
 /// row names through.

@@ -18,10 +18,10 @@ use crate::error::Result;
 use crate::geom::Camera;
 use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsSource, StoredPvs};
 use crate::walk::buffer::ObjectBuffer;
-use crate::walk::lod_select::WalkLods;
 use crate::walk::pvs_walk::PvsFrame;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+use crate::walk::walk_lods::WalkLods;
 
 /// A never-wait PVS walk over `source` (`db`'s visibility) with `rule`, the poses
 /// played at `pace` times real time (`None`: back to back).

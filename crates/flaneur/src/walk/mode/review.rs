@@ -32,7 +32,6 @@ use crate::rtree::{History, ObjectEntry};
 use crate::store::{IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
-use crate::walk::lod_select::WalkLods;
 use crate::walk::mode::load_order::take_part;
 use crate::walk::mode::loader::{fetch, Answer, Fetched, Request};
 use crate::walk::mode::oracle::Oracle;
@@ -43,6 +42,7 @@ use crate::walk::review::{
 };
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
+use crate::walk::walk_lods::WalkLods;
 
 /// A loader thread: the prefetch's, or the viewer's own (never-wait walks only).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

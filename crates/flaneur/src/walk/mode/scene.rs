@@ -16,10 +16,10 @@ use crate::hdov::scene::{traverse, SceneTree, Traversal};
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::cells::viewcell_holding;
-use crate::walk::lod_select::WalkLods;
 use crate::walk::scene_walk::{SceneConfig, SceneFrame};
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, Viewer};
+use crate::walk::walk_lods::WalkLods;
 
 /// A walk over `tree` under `cfg` with the poses coming from `viewer`: the walk session
 /// with the scene-tree mode. Every frame's figures.

@@ -20,11 +20,11 @@ use crate::rtree::ObjectEntry;
 use crate::store::{IoStats, PageKind};
 use crate::walk::buffer::{Loaded, ObjectBuffer, GROUP_ID};
 use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
-use crate::walk::lod_select::WalkLods;
 use crate::walk::mode::receive::receive;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 use crate::walk::visual::{VisualConfig, VisualFrame};
+use crate::walk::walk_lods::WalkLods;
 
 /// How long the viewer waits for a prefetch of the cell it enters before it searches
 /// for itself, as REVIEW's does.
