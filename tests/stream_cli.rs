@@ -198,6 +198,10 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
     let (n, evaluated) = (csv.num(row, "n"), csv.num(row, "most_evaluated"));
     assert!(evaluated > 0.0 && evaluated <= 2.0 * n, "{row:?}");
     assert!(csv.num(row, "traversal_p95_ms") > 0.0, "{row:?}");
+    // Each view's operations and each batch's bytes, as El-Sana's Table 1 gives them.
+    assert!(csv.num(row, "operations_per_view") > 0.0, "{row:?}");
+    assert!(csv.num(row, "bytes_per_batch") > 0.0, "{row:?}");
+    assert!(csv.num(row, "triangles_held") > 0.0, "{row:?}");
     assert!(csv.num(row, "round_trip_p50_ms") > 0.0, "{row:?}");
     let md = std::fs::read_to_string(dir.path().join("stream-crowd.md")).unwrap();
     assert!(md.contains("4 predictive clients"), "{md}");

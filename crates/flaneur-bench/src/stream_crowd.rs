@@ -81,6 +81,12 @@ pub struct StreamCrowdReport {
     pub traversal_ms: [f64; 4],
     /// The most front nodes one traversal evaluated for one view, over every session.
     pub most_evaluated: usize,
+    /// Nodes split and collapsed a view, and bytes a batch, over every session (El-Sana
+    /// Table 1's operations and bytes a frame).
+    pub operations_per_view: f64,
+    pub bytes_per_batch: f64,
+    /// Triangles a client's selective mesh held at the end, mean.
+    pub triangles_held: f64,
     /// Every batch's round trip, ms: p50, p95, p99, max over every client.
     pub round_trip_ms: [f64; 4],
     /// Unmodified frames after the warm-up: the fewest, the mean, the most of a client.
@@ -94,6 +100,16 @@ pub struct StreamCrowdReport {
 /// `xs` as "a / b / c / d", each to `digits` decimals.
 fn slashed(xs: &[f64; 4], digits: usize) -> String {
     xs.map(|x| format!("{x:.digits$}")).join(" / ")
+}
+
+/// What one client's walk saw.
+#[derive(Default)]
+struct Walked {
+    trips: Vec<f64>,
+    unmodified: usize,
+    batches: u64,
+    batch_bytes: u64,
+    triangles: usize,
 }
 
 /// p50, p95, p99 and the largest of `xs`.
@@ -157,53 +173,51 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
             std::thread::spawn(move || {
                 let turn =
                     Quat::from_rotation_y(std::f32::consts::TAU * k as f32 / cfg.clients as f32);
-                let walk =
-                    || -> std::result::Result<(PredictiveClient, Vec<f64>, usize), String> {
-                        let hello = Hello {
-                            traversal: cfg.traversal,
-                            fov,
-                            budget: Some(cfg.budget),
-                            out_of_view: true,
-                            back_face: true,
-                        };
-                        let refinement = Refinement {
-                            tau: cfg.tau,
-                            n: cfg.n,
-                            initial_span: 1,
-                            predictor: Predictor::Quadratic,
-                        };
-                        let mut c = PredictiveClient::connect(
-                            addr,
-                            hello,
-                            refinement,
-                            Duration::from_secs(60),
-                        )
-                        .map_err(|e| e.to_string())?;
-                        let period = Duration::from_secs_f64(cfg.frame_ms / 1e3);
-                        let (mut trips, mut unmodified) = (Vec::new(), 0);
-                        let mut next = Instant::now();
-                        for (f, v) in views.iter().enumerate() {
-                            let eye = centre + turn * (v.eye - centre);
-                            let aim = eye + turn * v.look * (centre - v.eye).length().max(1e-3);
-                            let got = c.frame(eye, aim).map_err(|e| e.to_string())?;
-                            if let Some(t) = got.batch_round_trip {
-                                trips.push(t.as_secs_f64() * 1e3);
-                            }
-                            unmodified += usize::from(f >= warm_up && !got.modified);
-                            next += period;
-                            match next.checked_duration_since(Instant::now()) {
-                                Some(wait) => std::thread::sleep(wait),
-                                None => next = Instant::now(),
-                            }
-                        }
-                        Ok((c, trips, unmodified))
+                let walk = || -> std::result::Result<(PredictiveClient, Walked), String> {
+                    let hello = Hello {
+                        traversal: cfg.traversal,
+                        fov,
+                        budget: Some(cfg.budget),
+                        out_of_view: true,
+                        back_face: true,
                     };
+                    let refinement = Refinement {
+                        tau: cfg.tau,
+                        n: cfg.n,
+                        initial_span: 1,
+                        predictor: Predictor::Quadratic,
+                    };
+                    let mut c =
+                        PredictiveClient::connect(addr, hello, refinement, Duration::from_secs(60))
+                            .map_err(|e| e.to_string())?;
+                    let period = Duration::from_secs_f64(cfg.frame_ms / 1e3);
+                    let mut w = Walked::default();
+                    let mut next = Instant::now();
+                    for (f, v) in views.iter().enumerate() {
+                        let eye = centre + turn * (v.eye - centre);
+                        let aim = eye + turn * v.look * (centre - v.eye).length().max(1e-3);
+                        let got = c.frame(eye, aim).map_err(|e| e.to_string())?;
+                        if let Some(t) = got.batch_round_trip {
+                            w.trips.push(t.as_secs_f64() * 1e3);
+                        }
+                        w.unmodified += usize::from(f >= warm_up && !got.modified);
+                        w.batches += u64::from(got.modified);
+                        w.batch_bytes += got.bytes as u64;
+                        next += period;
+                        match next.checked_duration_since(Instant::now()) {
+                            Some(wait) => std::thread::sleep(wait),
+                            None => next = Instant::now(),
+                        }
+                    }
+                    w.triangles = c.objects().iter().map(|o| o.mesh().triangle_count()).sum();
+                    Ok((c, w))
+                };
                 let result = walk();
                 walked.wait();
                 read.wait();
-                result.map(|(c, trips, unmodified)| {
+                result.map(|(c, w)| {
                     let _ = c.bye();
-                    (trips, unmodified)
+                    w
                 })
             })
         })
@@ -214,11 +228,14 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
     read.wait();
     let (mut trips, mut unmodified, mut failed, mut first_error) =
         (Vec::new(), Vec::new(), 0, None);
+    let (mut batches, mut batch_bytes, mut triangles) = (0, 0, Vec::new());
     for h in handles {
         match h.join() {
-            Ok(Ok((t, u))) => {
-                trips.extend(t);
-                unmodified.push(u as f64);
+            Ok(Ok(w)) => {
+                trips.extend(w.trips);
+                unmodified.push(w.unmodified as f64);
+                (batches, batch_bytes) = (batches + w.batches, batch_bytes + w.batch_bytes);
+                triangles.push(w.triangles as f64);
             }
             Ok(Err(e)) => {
                 failed += 1;
@@ -232,6 +249,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
     }
     let mut memories = Vec::new();
     let (mut answers, mut traversals, mut most_evaluated) = (Vec::new(), Vec::new(), 0);
+    let (mut operations, mut views) = (0, 0);
     for _ in 0..cfg.clients - failed {
         let end = server
             .ends()
@@ -241,6 +259,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         answers.extend(end.answer_times.iter().map(|t| t.as_secs_f64() * 1e3));
         traversals.extend(end.traversal_times.iter().map(|t| t.as_secs_f64() * 1e3));
         most_evaluated = most_evaluated.max(end.most_evaluated);
+        (operations, views) = (operations + end.operations, views + end.frames);
     }
     let unmodified_spread = if unmodified.is_empty() {
         [0.0; 3]
@@ -262,6 +281,9 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
         answer_ms: spread(answers),
         traversal_ms: spread(traversals),
         most_evaluated,
+        operations_per_view: operations as f64 / views.max(1) as f64,
+        bytes_per_batch: batch_bytes as f64 / batches.max(1) as f64,
+        triangles_held: triangles.iter().sum::<f64>() / triangles.len().max(1) as f64,
         round_trip_ms: spread(trips),
         unmodified: unmodified_spread,
         warm_up,
@@ -282,9 +304,10 @@ impl Report for StreamCrowdReport {
             "clients,frames,frame_ms,traversal,n,server_cpu_s,wall_s,memory_mean,memory_max,shared_memory,\
              answer_p50_ms,answer_p95_ms,answer_p99_ms,answer_max_ms,\
              traversal_p50_ms,traversal_p95_ms,traversal_p99_ms,traversal_max_ms,most_evaluated,\
+             operations_per_view,bytes_per_batch,triangles_held,\
              round_trip_p50_ms,round_trip_p95_ms,round_trip_p99_ms,round_trip_max_ms,\
              unmodified_min,unmodified_mean,unmodified_max,failed\n\
-             {},{},{:.2},{},{},{:.3},{:.3},{:.0},{},{},{},{},{},{},{},{:.1},{},{}\n",
+             {},{},{:.2},{},{},{:.3},{:.3},{:.0},{},{},{},{},{},{:.1},{:.0},{:.0},{},{},{:.1},{},{}\n",
             c.clients,
             c.frames,
             c.frame_ms,
@@ -298,6 +321,9 @@ impl Report for StreamCrowdReport {
             spread(&self.answer_ms),
             spread(&self.traversal_ms),
             self.most_evaluated,
+            self.operations_per_view,
+            self.bytes_per_batch,
+            self.triangles_held,
             spread(&self.round_trip_ms),
             self.unmodified[0],
             self.unmodified[1],
@@ -321,6 +347,7 @@ impl Report for StreamCrowdReport {
              | time to answer a view, p50 / p95 / p99 / max | {} ms |\n\
              | its traversals, p50 / p95 / p99 / max | {} ms |\n\
              | most front nodes one traversal evaluated for a view (2N = {}) | {} |\n\
+             | a view's operations (nodes split and collapsed), a batch's bytes, triangles held (El-Sana Table 1: 2.6K, 0.68 KB, 91K) | {:.0}, {:.2} KiB, {:.0} |\n\
              | a batch's round trip, p50 / p95 / p99 / max | {} ms |\n\
              | unmodified frames after frame {}, fewest / mean / most of a client | {} / {:.1} / {} |\n\
              | clients failed | {}{} |\n\n\
@@ -345,6 +372,9 @@ impl Report for StreamCrowdReport {
             slashed(&self.traversal_ms, 2),
             2 * c.n,
             self.most_evaluated,
+            self.operations_per_view,
+            self.bytes_per_batch / 1024.0,
+            self.triangles_held,
             slashed(&self.round_trip_ms, 1),
             self.warm_up,
             self.unmodified[0],

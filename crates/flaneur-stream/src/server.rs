@@ -68,6 +68,8 @@ pub struct SessionEnd {
     /// The most front nodes one landmark's traversal evaluated for one view: at most
     /// 2N with the constant-time traversal (Zheng §4.4.3, N per pass).
     pub most_evaluated: usize,
+    /// Nodes split and collapsed over every view and landmark (El-Sana's operations).
+    pub operations: u64,
     /// Why the server closed it; `None` when the client said BYE or closed.
     pub reason: Option<String>,
 }
@@ -256,6 +258,7 @@ struct Session {
     answer_times: Vec<Duration>,
     traversal_times: Vec<Duration>,
     most_evaluated: usize,
+    operations: u64,
 }
 
 /// Runs one TCP client's session to its end.
@@ -292,6 +295,7 @@ fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> Sessio
             answer_times: Vec::new(),
             traversal_times: Vec::new(),
             most_evaluated: 0,
+            operations: 0,
             reason,
         };
     };
@@ -303,6 +307,7 @@ fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> Sessio
         answer_times: s.answer_times,
         traversal_times: s.traversal_times,
         most_evaluated: s.most_evaluated,
+        operations: s.operations,
         reason,
     }
 }
@@ -371,6 +376,7 @@ fn run<R: Read, W: Write>(
         answer_times: Vec::new(),
         traversal_times: Vec::new(),
         most_evaluated: 0,
+        operations: 0,
     });
     // The first message after WELCOME may be a RESUME, the only long one.
     let mut first = true;
@@ -492,6 +498,7 @@ impl Session {
             let stats = refiner.refine(&view, &params)?.stats;
             traversal += stats.traversal;
             self.most_evaluated = self.most_evaluated.max(stats.evaluated());
+            self.operations += stats.updates() as u64;
             let mut updates = ObjectUpdates {
                 index: index as u32,
                 ..Default::default()
