@@ -168,11 +168,14 @@ impl RemoteRefinements for StreamedLandmarks {
             ));
         }
         let per_second: usize = self.recent.iter().map(|(_, b)| b).sum();
+        let last = self.recent.back().map_or(0, |(_, b)| *b);
         Some(format!(
-            "round trip {}, span {}, {} batches in the last second, {:.1} KiB/s",
+            "round trip {}, span {}, last batch {:.1} KiB, {} batches in the last second, \
+             {:.1} KiB/s",
             s.round_trip
                 .map_or("-".into(), |t| format!("{:.1} ms", t.as_secs_f64() * 1e3)),
             s.span,
+            last as f64 / 1024.0,
             self.recent.len(),
             per_second as f64 / 1024.0
         ))
