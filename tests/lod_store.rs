@@ -460,14 +460,7 @@ fn far_above(db: &Database) -> flaneur::geom::Camera {
 fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
     use flaneur::walk::lod_select::{LodSelector, REFINED};
     use flaneur::walk::Loaded;
-    let city = common::city(
-        30,
-        5,
-        &with_lods(LodOptions {
-            pm_threshold: 1_000,
-            ..Default::default()
-        }),
-    );
+    let city = common::city(30, 5, &common::with_landmarks());
     let db = Database::open(&city.db).unwrap();
     let mut buffer = all_loaded(&db);
     let large: Vec<u64> = all_objects(&db)
@@ -594,14 +587,7 @@ fn lod_selection_meets_a_damaged_lod_page() {
 fn adapting_ahead_refines_for_the_predicted_view_off_the_frames_thread() {
     use flaneur::walk::lod_select::{LodSelector, REFINED};
     use flaneur::walk::Loaded;
-    let city = common::city(
-        30,
-        5,
-        &with_lods(LodOptions {
-            pm_threshold: 1_000,
-            ..Default::default()
-        }),
-    );
+    let city = common::city(30, 5, &common::with_landmarks());
     let db = Database::open(&city.db).unwrap();
     let buffer = all_loaded(&db);
     let drawn: Vec<&Loaded> = buffer.iter().collect();

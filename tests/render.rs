@@ -686,15 +686,7 @@ fn large_objects_are_refined_view_by_view() {
     use flaneur::walk::lod_select::REFINED;
     let dir = tempfile::tempdir().unwrap();
     // Every building above 1,000 triangles gets its progressive mesh and DAG.
-    let lod = flaneur::lod::LodOptions {
-        pm_threshold: 1_000,
-        ..Default::default()
-    };
-    let opts = BuildOptions {
-        lod: Some(lod),
-        ..Default::default()
-    };
-    let db = build(dir.path(), &opts);
+    let db = build(dir.path(), &common::with_landmarks());
     let gpu = gpu();
     let cfg = ReviewConfig {
         pace: None,
@@ -839,44 +831,17 @@ fn fidelity_of_the_scene_tree_traversals() {
 #[test]
 fn walk_adapts_ahead_when_drawn() {
     let dir = tempfile::tempdir().unwrap();
-    let lod = flaneur::lod::LodOptions {
-        pm_threshold: 1_000,
-        ..Default::default()
-    };
-    let opts = BuildOptions {
-        lod: Some(lod),
-        ..Default::default()
-    };
-    build(dir.path(), &opts);
-    let (db, frames) = (dir.path().join("c.flaneur"), dir.path().join("frames"));
-    let db = db.to_str().unwrap();
-    let walk = |extra: &[&str]| {
-        let mut args = vec![
-            "walk",
-            db,
-            "--frames",
-            "60",
-            "--quiet",
-            "--lod-tau",
-            "0.001",
-        ];
-        args.extend_from_slice(extra);
-        common::flaneur(&args)
-    };
-    let out = walk(&[
-        "--render",
-        "--adapt-ahead",
-        "--size",
-        "64x64",
-        "--frames-dir",
-        frames.to_str().unwrap(),
-        "--every",
-        "1000",
-    ]);
+    build(dir.path(), &common::with_landmarks());
+    let db = dir.path().join("c.flaneur");
+    let out = common::drawn_walk(
+        &db,
+        &dir.path().join("frames"),
+        &["--frames", "60", "--adapt-ahead"],
+    );
     let text = common::succeeded(&out);
     let refined = common::number_before(&text, " draws refined view by view");
     assert!(refined > 0, "{text}");
-    let out = walk(&["--adapt-ahead"]);
+    let out = common::flaneur(&["walk", db.to_str().unwrap(), "--quiet", "--adapt-ahead"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--adapt-ahead is for a walk drawn"));
 }
@@ -914,17 +879,7 @@ impl flaneur::walk::RemoteRefinements for Recorded {
 fn landmarks_streamed_into_a_walk_reach_the_gpu_as_the_batches_made_them() {
     use flaneur::walk::lod_select::REFINED;
     let dir = tempfile::tempdir().unwrap();
-    let lod = flaneur::lod::LodOptions {
-        pm_threshold: 1_000,
-        ..Default::default()
-    };
-    let db = build(
-        dir.path(),
-        &BuildOptions {
-            lod: Some(lod),
-            ..Default::default()
-        },
-    );
+    let db = build(dir.path(), &common::with_landmarks());
     let landmarks = flaneur_stream::Landmark::all_in(&db, 64).unwrap();
     assert!(!landmarks.is_empty());
     let server = flaneur_stream::StreamServer::bind(

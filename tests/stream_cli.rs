@@ -212,45 +212,13 @@ fn bench_stream_crowd_serves_every_client_and_reports_the_server() {
 /// --render.
 #[test]
 fn walk_draws_its_landmarks_from_a_stream_server() {
-    let opts = BuildOptions {
-        lod: Some(LodOptions {
-            pm_threshold: 1_000,
-            ..Default::default()
-        }),
-        ..Default::default()
-    };
-    let c = common::city(60, 3, &opts);
+    let c = common::city(60, 3, &common::with_landmarks());
     let mut served = serve_stream(&c.db, &[]);
     let (_, addr) = served.first_line();
-    let frames = c.dir.path().join("frames");
-    let walk = |extra: &[&str]| {
-        let mut args = vec![
-            "walk",
-            c.db.to_str().unwrap(),
-            "--config",
-            "box",
-            "--frames",
-            "90",
-            "--seed",
-            "5",
-            "--quiet",
-            "--lod-tau",
-            "0.001",
-            "--stream",
-            &addr,
-        ];
-        args.extend_from_slice(extra);
-        common::flaneur(&args)
-    };
-    let out = walk(&[
-        "--render",
-        "--size",
-        "64x64",
-        "--frames-dir",
-        frames.to_str().unwrap(),
-        "--every",
-        "1000",
-    ]);
+    let fixed = [
+        "--config", "box", "--frames", "90", "--seed", "5", "--stream", &addr,
+    ];
+    let out = common::drawn_walk(&c.db, &c.dir.path().join("frames"), &fixed);
     let text = common::succeeded(&out);
     let number_before = |what: &str| common::number_before(&text, what);
     // Landmarks were drawn from the stream, and batches came for them.
@@ -263,7 +231,8 @@ fn walk_draws_its_landmarks_from_a_stream_server() {
         text.contains(&format!("streamed landmarks from {addr}")),
         "{text}"
     );
-    let out = walk(&[]);
+    let db = c.db.to_str().unwrap();
+    let out = common::flaneur(&[&["walk", db, "--quiet"][..], &fixed].concat());
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--stream is for a walk drawn"));
 }

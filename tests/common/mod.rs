@@ -15,6 +15,32 @@ pub fn flaneur(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// Runs `flaneur walk DB --render` under τ = 0.1 %, its frames drawn at 64 × 64 into
+/// `frames` (one of them written), with `extra` arguments; its whole output.
+pub fn drawn_walk(
+    db: &std::path::Path,
+    frames: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let (db, frames) = (db.to_str().unwrap(), frames.to_str().unwrap());
+    let mut args = vec![
+        "walk",
+        db,
+        "--quiet",
+        "--lod-tau",
+        "0.001",
+        "--render",
+        "--size",
+        "64x64",
+        "--frames-dir",
+        frames,
+        "--every",
+        "1000",
+    ];
+    args.extend_from_slice(extra);
+    flaneur(&args)
+}
+
 /// The standard output of a command that must have succeeded (a test's failure with
 /// its standard error otherwise).
 pub fn succeeded(out: &std::process::Output) -> String {
@@ -34,6 +60,18 @@ pub fn number_before(text: &str, what: &str) -> u64 {
         .and_then(|s| s.rsplit(' ').next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no number before '{what}' in {text}"))
+}
+
+/// A build where every object above 1,000 triangles also stores its progressive mesh
+/// and DAG: a test city's buildings become landmarks refined view by view.
+pub fn with_landmarks() -> BuildOptions {
+    BuildOptions {
+        lod: Some(flaneur::lod::LodOptions {
+            pm_threshold: 1_000,
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
 }
 
 /// A bench's CSV file read back, each field found by its column's name.
