@@ -58,7 +58,6 @@ pub struct StreamedLandmarks {
     figures: Arc<Mutex<StreamFigures>>,
     /// The batches of the last second: when each came and its bytes.
     recent: VecDeque<(Instant, usize)>,
-    last: StreamFigures,
     /// When the session broke and the last reconnection failed; `None` while it runs.
     broken_since: Option<Instant>,
 }
@@ -79,7 +78,6 @@ impl StreamedLandmarks {
             index,
             figures: figures.clone(),
             recent: VecDeque::new(),
-            last: StreamFigures::default(),
             broken_since: None,
         };
         (landmarks, figures)
@@ -122,7 +120,6 @@ impl RemoteRefinements for StreamedLandmarks {
             // Drawn as they stand until a reconnection, tried every RETRY_AFTER, works.
             if since.elapsed() < RETRY_AFTER || !self.resume(&mut s) {
                 s.broken_frames += 1;
-                self.last = s.clone();
                 return Ok(());
             }
         }
@@ -134,7 +131,6 @@ impl RemoteRefinements for StreamedLandmarks {
                 s.broken_frames += 1;
                 self.broken_since = Some(Instant::now());
                 self.resume(&mut s);
-                self.last = s.clone();
                 return Ok(());
             }
         };
@@ -144,7 +140,6 @@ impl RemoteRefinements for StreamedLandmarks {
         s.largest_batch = s.largest_batch.max(f.bytes);
         s.round_trip = f.round_trip;
         s.span = f.span;
-        self.last = s.clone();
         let now = Instant::now();
         if f.modified {
             self.recent.push_back((now, f.bytes));
@@ -160,7 +155,7 @@ impl RemoteRefinements for StreamedLandmarks {
     }
 
     fn status(&self) -> Option<String> {
-        let s = &self.last;
+        let s = self.figures.lock().unwrap_or_else(|p| p.into_inner());
         if self.broken_since.is_some() {
             return Some(format!(
                 "broken, reconnecting: {}",

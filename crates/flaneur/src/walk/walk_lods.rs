@@ -66,10 +66,7 @@ impl<'db> WalkLods<'db> {
     /// The frame is drawn: what adapts ahead starts for the next, if the viewer did
     /// not start it when it uploaded.
     pub(crate) fn frame_drawn(&mut self) -> Result<()> {
-        match &mut self.selector {
-            Some(s) => s.launch_ahead(),
-            None => Ok(()),
-        }
+        self.uploaded()
     }
 
     /// What reading the database over HTTP has cost so far; `None` for a local file.
