@@ -37,20 +37,6 @@ fn city(seed: u64) -> common::City {
     )
 }
 
-/// A walk through the viewcells that then stands still for two seconds at its end, so
-/// that a loader has time to bring all of the last cell's PVS.
-fn walk_then_stand(db: &Database) -> CameraPath {
-    let mut path = cell_walk(db, 90, 1.0, 30.0, 3).unwrap();
-    let last = *path.poses.last().unwrap();
-    for i in 1..=60 {
-        path.poses.push(flaneur::walk::path::Pose {
-            time: last.time + f64::from(i) / 30.0,
-            ..last
-        });
-    }
-    path
-}
-
 fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
     PvsWalkConfig {
         pace: Some(1.0),
@@ -87,7 +73,7 @@ fn check_against_waiting(path: &CameraPath, r: &PvsWalkReport, waits: &PvsWalkRe
 fn a_never_wait_pvs_walk_draws_what_arrives_and_ends_with_its_whole_pvs() {
     let c = city(21);
     let db = Database::open(&c.db).unwrap();
-    let path = walk_then_stand(&db);
+    let path = common::walk_then_stand(&db);
     for prefetch in rules() {
         let waits = walk_pvs(&db, &path, prefetch, |_| {}).unwrap();
         let r = walk_pvs(&db, &path, never_waiting(prefetch), |_| {}).unwrap();
@@ -102,7 +88,7 @@ fn a_never_wait_pvs_walk_over_http_ends_as_the_local_one() {
     let c = city(22);
     let server = Nginx::start(c.dir.path());
     let local = Database::open(&c.db).unwrap();
-    let path = walk_then_stand(&local);
+    let path = common::walk_then_stand(&local);
     for prefetch in rules() {
         let waits = walk_pvs(&local, &path, prefetch, |_| {}).unwrap();
         let db = Database::open_url(&server.url("city.flaneur")).unwrap();
@@ -293,7 +279,7 @@ fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
     let other = city(28);
     let server = Nginx::start(c.dir.path());
     let db = Database::open_url(&server.url("city.flaneur")).unwrap();
-    let path = walk_then_stand(&db);
+    let path = common::walk_then_stand(&db);
     // Replace the served file with another city's, as a deploy would (a rename), newer.
     let staged = c.dir.path().join("staged");
     std::fs::copy(&other.db, &staged).unwrap();

@@ -78,10 +78,11 @@ pub struct WalkArgs {
     /// to back; the prefetch thread then rarely finishes in time).
     #[arg(long, default_value_t = review::DEFAULT_PACE)]
     speed: f32,
-    /// REVIEW, BOX and PVS: the viewer's thread never waits on a read (ours): a search
-    /// the viewer needs (PVS: the client and its rows) is queued on a loader thread of
-    /// its own and the frame draws what is loaded, its misses counted; a load that
-    /// fails on the network is asked for again and the walk goes on.
+    /// REVIEW, BOX, PVS and VISUAL: the viewer's thread never waits on a read (ours): a
+    /// search the viewer needs (PVS: the client and its rows; VISUAL: the HDoV-tree's)
+    /// is queued on a loader thread of its own and the frame draws what is loaded,
+    /// coarse levels first, its misses counted; a load that fails on the network is
+    /// asked for again and the walk goes on.
     #[arg(long)]
     never_wait: bool,
     /// Write one row per frame here.
@@ -200,10 +201,13 @@ impl WalkArgs {
                  it draws landmarks refined view by view"
             );
         }
-        if never_wait && config.is_none() && !matches!(mode.as_str(), "review" | "box" | "pvs") {
+        if never_wait
+            && config.is_none()
+            && !matches!(mode.as_str(), "review" | "box" | "pvs" | "visual")
+        {
             bail!(
-                "--never-wait is for --mode review, box and pvs; the {mode} walk still waits on \
-                 its reads"
+                "--never-wait is for --mode review, box, pvs and visual; the {mode} walk \
+                 still waits on its reads"
             );
         }
         if mode == "pvs" && config.is_none() {
@@ -262,6 +266,7 @@ impl WalkArgs {
                 pace: pace(speed),
                 dov_tau,
                 finer_by_tau,
+                never_wait,
                 ..VisualConfig::default()
             };
             if let Some(s) = scheme {
@@ -622,6 +627,23 @@ pub fn print_visual(r: &VisualReport) {
         s.mean_triangles,
         s.peak_buffer_bytes as f64 / (1 << 20) as f64
     );
+    if c.never_wait {
+        println!(
+            "  never waits on a read (ours): first complete frame {}   visual misses {} ({} after it)   finds drawn coarser than they deserve {} (summed over frames)",
+            s.first_complete_frame
+                .map_or("none".to_string(), |f| f.to_string()),
+            s.visual_misses,
+            s.visual_misses_after_start,
+            s.coarse_draws
+        );
+    }
+    if s.failed_loads > 0 {
+        println!(
+            "  {} reads failed on the network and were asked for again; the last: {}",
+            s.failed_loads,
+            s.last_load_error.as_deref().unwrap_or("")
+        );
+    }
     if let Some(cs) = &s.node_cache {
         println!(
             "  node cache: {} hits, {} misses, hit rate {:.1}%",

@@ -186,3 +186,17 @@ impl City {
         self.boxes.iter().fold(Aabb::EMPTY, |b, (_, o)| b.union(o))
     }
 }
+
+/// A walk through the viewcells that then stands still for two seconds at its end, so
+/// that a loader that never waits has time to bring all it needs there.
+pub fn walk_then_stand(db: &flaneur::Database) -> flaneur::walk::path::CameraPath {
+    let mut path = flaneur::walk::path::cell_walk(db, 90, 1.0, 30.0, 3).unwrap();
+    let last = *path.poses.last().unwrap();
+    for i in 1..=60 {
+        path.poses.push(flaneur::walk::path::Pose {
+            time: last.time + f64::from(i) / 30.0,
+            ..last
+        });
+    }
+    path
+}

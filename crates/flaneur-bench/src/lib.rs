@@ -13,7 +13,7 @@
 //! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
 //! loopback relay with a chosen round trip and bandwidth, which `http_walk` walks a
-//! database over HTTP through (`through_link` opens one by URL through a link of its own), and `pvs_http` the PVS walk's prefetchers; `layout` counts what the file's order costs a reader
+//! database over HTTP through (`through_link` opens one by URL through a link of its own), `pvs_http` the PVS walk's prefetchers, and `visual_http` the VISUAL walk never waiting; `layout` counts what the file's order costs a reader
 //! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
 //! starts; `stream` streams a landmark from `flaneur_stream`'s server through the link,
 //! `stream_crowd` many clients from one server at once, and `stream_bytes` what one view
@@ -54,5 +54,6 @@ pub mod stream_bytes;
 pub mod stream_crowd;
 pub mod through_link;
 pub mod view_culling;
+pub mod visual_http;
 pub mod visual_vs_review;
 pub mod walk_setup;

@@ -16,11 +16,11 @@
 
 use std::net::SocketAddr;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
-use crate::through_link::{check_link, open_through};
+use crate::through_link::{check_link, open_through, timed};
 use crate::walk_setup::WalkSetup;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
@@ -102,7 +102,17 @@ pub enum Source {
 }
 
 impl Source {
-    fn describe(&self) -> String {
+    /// Its kind and round trip, as a CSV's two columns.
+    pub fn columns(&self) -> (&'static str, String) {
+        match self {
+            Source::LocalWaiting => ("local-waiting", String::new()),
+            Source::Local => ("local", String::new()),
+            Source::Http { rtt_ms } => ("http", rtt_ms.to_string()),
+        }
+    }
+
+    /// Where the walk read, in words.
+    pub fn describe(&self) -> String {
         match self {
             Source::LocalWaiting => "local, waits (thesis)".into(),
             Source::Local => "local, never waits".into(),
@@ -172,14 +182,7 @@ pub fn run(
                 walk_cfg.prefetch.name(),
                 source.describe()
             ));
-            let before = db.remote_stats();
-            let t = Instant::now();
-            let r = pvs_walk::walk_pvs(db, &path, walk_cfg, |_| {})?;
-            let took = t.elapsed();
-            let net = db
-                .remote_stats()
-                .zip(before)
-                .map(|(after, before)| after.since(&before));
+            let (r, took, net) = timed(db, || pvs_walk::walk_pvs(db, &path, walk_cfg, |_| {}))?;
             let speed = walk_cfg.pace.map_or(1.0, f64::from);
             let first = |i: usize| (path.poses[i].time - path.poses[0].time) / speed;
             rows.push(row(pattern, source, &r, took, net, first));
@@ -252,11 +255,7 @@ impl Report for PvsHttpReport {
     fn to_csv(&self) -> String {
         let mut s = String::from("pattern,rule,source,rtt_ms,frames,frames_over_50ms,max_frame_ms,visual_misses,visual_misses_after_start,first_complete_s,transactions,swaps,objects_sent,round_trip_frames,requests,bytes,failed_loads,walk_s\n");
         for r in &self.rows {
-            let (kind, rtt) = match r.source {
-                Source::LocalWaiting => ("local-waiting", String::new()),
-                Source::Local => ("local", String::new()),
-                Source::Http { rtt_ms } => ("http", rtt_ms.to_string()),
-            };
+            let (kind, rtt) = r.source.columns();
             s.push_str(&format!(
                 "{},{},{kind},{rtt},{},{},{:.3},{},{},{},{},{},{},{},{},{},{},{:.3}\n",
                 r.pattern.name(),

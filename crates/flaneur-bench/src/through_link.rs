@@ -2,12 +2,12 @@
 //! own, of set round trip and bandwidth, and the checks of their settings.
 
 use std::net::SocketAddr;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::link::{Link, LinkSpec};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::store::HttpOptions;
+use flaneur::store::{HttpOptions, RemoteStats};
 
 /// Opens `name`, served at `origin`, through a new link `rtt_ms` and `mbit` away, with
 /// a client page cache of `cache_bytes`. The link carries the database's requests for
@@ -52,4 +52,21 @@ pub fn check_link(what: &str, mbits: &[f64], cache_bytes: usize) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// Runs `walk` over `db`: its answer, its real time, and what it cost the network
+/// (`None` for a local file).
+pub fn timed<R>(
+    db: &Database,
+    walk: impl FnOnce() -> Result<R>,
+) -> Result<(R, Duration, Option<RemoteStats>)> {
+    let before = db.remote_stats();
+    let t = Instant::now();
+    let r = walk()?;
+    let took = t.elapsed();
+    let net = db
+        .remote_stats()
+        .zip(before)
+        .map(|(after, before)| after.since(&before));
+    Ok((r, took, net))
 }

@@ -154,6 +154,45 @@ pub enum Error {
 }
 
 impl Error {
+    /// A copy of a network failure (the server gone, the file changed under it), for
+    /// the reads of a batch skipped after it: the same server would fail them too, each
+    /// after its retries. `None` for any other error.
+    pub(crate) fn network_copy(&self) -> Option<Error> {
+        match self {
+            Error::Remote { url, what } => Some(Error::Remote {
+                url: url.clone(),
+                what: what.clone(),
+            }),
+            Error::RemoteChanged { url, what } => Some(Error::RemoteChanged {
+                url: url.clone(),
+                what: what.clone(),
+            }),
+            _ => None,
+        }
+    }
+
+    /// Runs `read` on each of `items` in order, each result apart, until one fails on
+    /// the network: the rest are not read, and fail as it did ([`Error::network_copy`]).
+    pub(crate) fn until_offline<T, R>(
+        items: impl IntoIterator<Item = T>,
+        mut read: impl FnMut(T) -> Result<R, Error>,
+    ) -> Vec<Result<R, Error>> {
+        let mut offline: Option<Error> = None;
+        items
+            .into_iter()
+            .map(|item| {
+                if let Some(e) = offline.as_ref().and_then(Error::network_copy) {
+                    return Err(e);
+                }
+                let got = read(item);
+                if let Err(e) = &got {
+                    offline = e.network_copy();
+                }
+                got
+            })
+            .collect()
+    }
+
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
         Error::Io {

@@ -25,6 +25,7 @@ mod stream;
 mod stream_bytes;
 mod stream_crowd;
 mod view_culling;
+mod visual_http;
 mod visual_vs_review;
 mod walk_setup;
 
@@ -85,6 +86,11 @@ enum Experiment {
     /// misses, frames over 50 ms, swaps, objects sent, the measured round trip (ours).
     /// Needs a database built with --visibility.
     PvsHttp(pvs_http::PvsHttpArgs),
+    /// The VISUAL walk over the HDoV-tree never waiting on a read, over HTTP through a
+    /// loopback link of set round trips, beside the local walks waiting and never
+    /// waiting: visual misses, frames over 50 ms, coarse draws (ours). Needs a database
+    /// built with --visibility --hdov.
+    VisualHttp(visual_http::VisualHttpArgs),
     /// The same city in files of different object orders (`build --order`), served over
     /// HTTP and asked the same range queries from cold clients: pages, requests, round
     /// trips and bytes per query for the query, the coarse levels and the full meshes
@@ -145,6 +151,7 @@ impl BenchArgs {
             Experiment::IndexCache(a) => a.run(),
             Experiment::Http(a) => a.run(),
             Experiment::PvsHttp(a) => a.run(),
+            Experiment::VisualHttp(a) => a.run(),
             Experiment::Layout(a) => a.run(),
             Experiment::Crowd(a) => a.run(),
             Experiment::Csearch(a) => a.run(),

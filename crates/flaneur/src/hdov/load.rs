@@ -6,16 +6,23 @@
 //! node's levels once their directory is read, so that the level a later search's find
 //! deserves is known without a read, and only what is not already held at that level is
 //! loaded (the delta search of §5.8.5).
+//!
+//! A loader that reads many finds at once ([`Loader::learn`], [`Loader::meshes`]) asks
+//! for their pages together first, so that a remote store fetches them in a few
+//! parallel runs rather than a round trip each; it reads the same pages as one find at
+//! a time.
 
 use std::collections::HashMap;
 
 use super::search::{level_for_detail, Found};
 use crate::catalog::read_mesh;
-use crate::error::Result;
-use crate::lod::stored::{chain_level, chain_levels, level_mesh, levels, LodEntry, LodTable};
+use crate::error::{Error, Result};
+use crate::lod::stored::{
+    chain_level, chain_levels, chain_levels_at, level_mesh, levels, levels_at, LodEntry, LodTable,
+};
 use crate::lod::LevelInfo;
 use crate::scene::Mesh;
-use crate::store::Store;
+use crate::store::{Extent, Store};
 
 /// A found object's or node's mesh, and the level it is at (0: an object's full mesh;
 /// an internal LOD's levels count from 1, finest first).
@@ -100,6 +107,116 @@ impl<'a> Loader<'a> {
                 Ok(mesh)
             }
         }
+    }
+
+    /// The coarsest level `found` has: an object's coarsest stored level (0 when it has
+    /// none), a node's coarsest internal LOD. Reads its directory the first time only.
+    pub(crate) fn coarsest(&mut self, found: &Found) -> Result<usize> {
+        self.level(found)?;
+        Ok(match found {
+            Found::Object { entry, .. } => match self.object(entry.id)? {
+                Some((e, _)) if !e.chain.is_empty() => e.levels as usize,
+                _ => 0,
+            },
+            Found::Node { node, .. } => self.nodes[node].len(),
+        })
+    }
+
+    /// Makes the levels of `finds` known, asking for what that reads together first (the
+    /// objects' LOD table entries, then their chains' heads; the nodes' chains' first
+    /// pages). The same pages as [`Loader::level`] one find at a time; a find whose data
+    /// cannot be read stays unknown, for its level's read to name the damage.
+    pub(crate) fn learn(&mut self, finds: &[Found]) {
+        let store = self.store;
+        let ids: Vec<u64> = finds
+            .iter()
+            .filter_map(|f| match f {
+                Found::Object { entry, .. } if !self.objects.contains_key(&entry.id) => {
+                    Some(entry.id)
+                }
+                _ => None,
+            })
+            .collect();
+        let entries: Vec<(u64, Option<LodEntry>)> = match self.lods {
+            Some(t) => {
+                let mut pages: Vec<u64> = Error::until_offline(&ids, |&id| t.entry_page(store, id))
+                    .into_iter()
+                    .map_while(Result::ok)
+                    .flatten()
+                    .collect();
+                pages.dedup();
+                store.announce(&pages);
+                Error::until_offline(&ids, |&id| t.find(store, id).map(|e| (id, e)))
+                    .into_iter()
+                    .map_while(Result::ok)
+                    .collect()
+            }
+            None => ids.iter().map(|&id| (id, None)).collect(),
+        };
+        let heads: Vec<_> = entries
+            .iter()
+            .filter_map(|(_, e)| e.filter(|e| e.levels > 0).map(|e| e.chain))
+            .collect();
+        let _ = store.prefetch(&heads);
+        let known = Error::until_offline(entries, |(id, found)| {
+            Ok((
+                id,
+                match found {
+                    Some(e) if e.levels > 0 => Some((e, triangles(&levels(store, &e)?))),
+                    Some(e) => Some((e, vec![e.triangles])),
+                    None => None,
+                },
+            ))
+        });
+        self.objects.extend(known.into_iter().flatten());
+        let nodes: Vec<u64> = finds
+            .iter()
+            .filter_map(|f| match f {
+                Found::Node { node, lods, .. } if !self.nodes.contains_key(node) => {
+                    Some(lods.first_page)
+                }
+                _ => None,
+            })
+            .collect();
+        store.announce(&nodes);
+        let nodes = finds.iter().filter(|f| matches!(f, Found::Node { .. }));
+        let _ = Error::until_offline(nodes, |f| self.level(f));
+    }
+
+    /// The meshes of `wanted`, each find at its level (one [`Loader::level`] or
+    /// [`Loader::coarsest`] gave), in order, their pages asked for together first. Each
+    /// find's result apart: damage costs that find.
+    pub(crate) fn meshes(&mut self, wanted: &[(&Found, usize)]) -> Vec<Result<Mesh>> {
+        let store = self.store;
+        let mut out: Vec<Option<Result<Mesh>>> = (0..wanted.len()).map(|_| None).collect();
+        // Objects with LOD data, read as a batch of levels.
+        let mut chained: Vec<(usize, (LodEntry, usize))> = Vec::new();
+        let mut nodes: Vec<(usize, (Extent, usize, String))> = Vec::new();
+        let mut bare = Vec::new();
+        for (k, (found, level)) in wanted.iter().enumerate() {
+            match found {
+                Found::Object { entry, .. } => match self.object(entry.id) {
+                    Ok(Some((e, _))) => chained.push((k, (*e, *level))),
+                    Ok(None) => bare.push(entry.mesh),
+                    Err(e) => out[k] = Some(Err(e)),
+                },
+                Found::Node { node, lods, .. } => {
+                    nodes.push((k, (*lods, *level, node_chain(*node))));
+                }
+            }
+        }
+        let _ = store.prefetch(&bare);
+        let batch: Vec<(LodEntry, usize)> = chained.iter().map(|(_, w)| *w).collect();
+        for ((k, _), mesh) in chained.iter().zip(levels_at(store, &batch)) {
+            out[*k] = Some(mesh);
+        }
+        let batch: Vec<(Extent, usize, String)> = nodes.iter().map(|(_, w)| w.clone()).collect();
+        for ((k, _), mesh) in nodes.iter().zip(chain_levels_at(store, &batch)) {
+            out[*k] = Some(mesh);
+        }
+        Error::until_offline(wanted.iter().zip(out), |((found, level), got)| {
+            got.unwrap_or_else(|| self.mesh(found, *level))
+        })
     }
 
     /// Object `id`'s LOD data, looked up and its levels read the first time.

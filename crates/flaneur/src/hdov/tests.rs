@@ -317,3 +317,45 @@ fn a_node_cache_serves_the_same_answers_and_saves_node_reads() {
         }
     }
 }
+
+#[test]
+fn a_batch_of_finds_reads_the_same_meshes_and_pages_as_one_at_a_time() {
+    let db = open();
+    let cells = db.hdov().unwrap().unwrap().cells.clone();
+    for &cell in cells.iter().step_by(11) {
+        let found = db.hdov_search(cell, 0.05).unwrap().found;
+        // What the database keeps once read (the LOD table's head) read before either.
+        let mut warm = db.hdov_loader();
+        for f in &found {
+            warm.level(f).unwrap();
+        }
+        // One find at a time, as the waiting walk reads them.
+        db.reset_io();
+        let mut one = db.hdov_loader();
+        let mut alone = Vec::new();
+        for f in &found {
+            let (fine, coarse) = (one.level(f).unwrap(), one.coarsest(f).unwrap());
+            assert!(coarse >= fine, "the coarsest level is the largest number");
+            alone.push((one.mesh(f, fine).unwrap(), one.mesh(f, coarse).unwrap()));
+        }
+        let pages_alone = db.io().page_reads;
+        // As a batch: levels learnt together, then each level's meshes together.
+        db.reset_io();
+        let mut batch = db.hdov_loader();
+        batch.learn(&found);
+        let levels: Vec<(usize, usize)> = found
+            .iter()
+            .map(|f| (batch.level(f).unwrap(), batch.coarsest(f).unwrap()))
+            .collect();
+        let fine: Vec<_> = found.iter().zip(&levels).map(|(f, l)| (f, l.0)).collect();
+        let coarse: Vec<_> = found.iter().zip(&levels).map(|(f, l)| (f, l.1)).collect();
+        let together: Vec<_> = batch
+            .meshes(&fine)
+            .into_iter()
+            .zip(batch.meshes(&coarse))
+            .map(|(a, b)| (a.unwrap(), b.unwrap()))
+            .collect();
+        assert_eq!(together, alone, "cell {cell}");
+        assert_eq!(db.io().page_reads, pages_alone, "cell {cell}");
+    }
+}

@@ -116,6 +116,19 @@ fn review_config(mode: ViewMode, remote: bool) -> ReviewConfig {
     }
 }
 
+/// The VISUAL settings a live walk under `eta` takes: the thesis's, unpaced, and over
+/// HTTP (`remote`) never waiting on a read, the searches and meshes read on a loader
+/// thread, the next viewcell's too.
+fn visual_config(eta: f32, remote: bool) -> VisualConfig {
+    VisualConfig {
+        eta,
+        pace: None,
+        never_wait: remote,
+        prefetch_k: remote.then_some(review::DEFAULT_K),
+        ..VisualConfig::default()
+    }
+}
+
 /// Tells `viewer` `what` and shows it mode `to`, which the session walks from now on.
 fn fall_back<V: LiveViewer>(viewer: &mut V, what: String, to: ViewMode) -> ViewMode {
     viewer.report(what);
@@ -133,7 +146,7 @@ fn shown(mode: ViewMode) -> String {
 /// waiting on a read, [`ReviewConfig::never_wait`]), PVS as
 /// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (over HTTP LANP, never
 /// waiting; REVIEW instead, said so, on a database without visibility), VISUAL as [`visual::walk_live`] does under the
-/// viewer's [η](LiveViewer::eta) (PVS instead, said so, on a database without the
+/// viewer's [η](LiveViewer::eta) (over HTTP never waiting, the next viewcell prefetched; PVS instead, said so, on a database without the
 /// HDoV-tree), VSC, PB and CONV as [`scene_walk::walk_live`] does over the memory scene
 /// tree, loaded when first shown (REVIEW instead, said so, without visibility).
 /// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
@@ -208,11 +221,7 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                 scene_walk::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Visual => {
-                let cfg = VisualConfig {
-                    eta: viewer.eta(),
-                    pace: None,
-                    ..VisualConfig::default()
-                };
+                let cfg = visual_config(viewer.eta(), remote);
                 visual::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Pvs => {
@@ -286,6 +295,11 @@ mod tests {
             assert_eq!(local.index_cache, remote.index_cache);
             assert_eq!(local.prefetch_k, remote.prefetch_k);
         }
+        let (local, remote) = (visual_config(0.01, false), visual_config(0.01, true));
+        assert!(!local.never_wait && remote.never_wait);
+        assert_eq!((local.prefetch_k, local.pace), (None, None));
+        assert!(remote.prefetch_k.is_some() && remote.pace.is_none());
+        assert_eq!((local.eta, remote.eta), (0.01, 0.01));
         let retrieval = |m| review_config(m, false).retrieval;
         assert_eq!(retrieval(ViewMode::Box), review::Retrieval::Box);
         assert_eq!(retrieval(ViewMode::Review), review::Retrieval::CSearch);

@@ -109,6 +109,10 @@ pub struct VisualConfig {
     /// with prefetching ([`ReviewConfig::pace`](super::review::ReviewConfig::pace));
     /// `None`: frames back to back.
     pub pace: Option<f32>,
+    /// The viewer's thread never waits on a read (ours): the searches and the finds'
+    /// meshes are read on a loader thread, coarsest levels first, and each frame draws
+    /// what has arrived, its visual misses counted. Off by default (the thesis's walk).
+    pub never_wait: bool,
 }
 
 impl Default for VisualConfig {
@@ -125,6 +129,7 @@ impl Default for VisualConfig {
             dov_tau: false,
             finer_by_tau: false,
             pace: Some(super::review::DEFAULT_PACE),
+            never_wait: false,
         }
     }
 }
@@ -198,6 +203,11 @@ pub struct VisualFrame {
     pub other_pages: u64,
     /// Bytes the buffer holds at the end of the frame.
     pub buffer_bytes: usize,
+    /// A walk that never waits: the cell's finds the buffer held at no level (all of
+    /// them while its search had not come back); 0 outside every viewcell.
+    pub visual_misses: usize,
+    /// A walk that never waits: the cell's finds held coarser than they deserve.
+    pub coarse: usize,
 }
 
 /// A VISUAL walk in all. Frame 0 loads the first cell cold and is left out of the
@@ -250,6 +260,18 @@ pub struct VisualSummary {
     pub peak_buffer_bytes: usize,
     /// The node cache's figures, when it had one.
     pub node_cache: Option<CacheStats>,
+    /// A walk that never waits: frames' visual misses, summed over the walk.
+    pub visual_misses: usize,
+    /// The first frame in a viewcell that misses nothing (a walk that never waits).
+    pub first_complete_frame: Option<usize>,
+    /// Visual misses from the first complete frame on.
+    pub visual_misses_after_start: usize,
+    /// Finds drawn coarser than they deserve, summed over frames.
+    pub coarse_draws: usize,
+    /// Reads the network failed, each asked for again (a walk that never waits).
+    pub failed_loads: usize,
+    /// The last failed read's words.
+    pub last_load_error: Option<String>,
 }
 
 /// What a VISUAL walk did: its settings, every frame's figures, their summary.
@@ -267,11 +289,11 @@ impl VisualReport {
     /// One row per frame.
     pub fn to_csv(&self) -> String {
         let mut s = String::from(
-            "frame,time,cell,searched,prefetch_used,prefetch_adopted,fallback_query,objects_found,nodes_found,loaded,reused,dropped,left_out,drawn,triangles_drawn,search_ms,load_ms,cull_ms,frame_ms,tree_pages,model_pages,other_pages,buffer_bytes\n",
+            "frame,time,cell,searched,prefetch_used,prefetch_adopted,fallback_query,objects_found,nodes_found,loaded,reused,dropped,left_out,drawn,triangles_drawn,search_ms,load_ms,cull_ms,frame_ms,tree_pages,model_pages,other_pages,buffer_bytes,visual_misses,coarse\n",
         );
         for f in &self.frames {
             s.push_str(&format!(
-                "{},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{}\n",
+                "{},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{}\n",
                 f.frame,
                 f.time,
                 f.cell.map_or(String::new(), |c| c.to_string()),
@@ -294,7 +316,9 @@ impl VisualReport {
                 f.tree_pages,
                 f.model_pages,
                 f.other_pages,
-                f.buffer_bytes
+                f.buffer_bytes,
+                f.visual_misses,
+                f.coarse
             ));
         }
         s
@@ -345,8 +369,11 @@ pub(crate) fn walk_live_with<'db>(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<VisualReport> {
-    let (frames, node_cache) = super::mode::visual::walk_live(db, cfg, lods, progress, viewer)?;
-    let summary = summarize(&frames, node_cache);
+    let (frames, node_cache, run) =
+        super::mode::visual::walk_live(db, cfg, lods, progress, viewer)?;
+    let mut summary = summarize(&frames, node_cache);
+    summary.failed_loads = run.failed_loads;
+    summary.last_load_error = run.last_load_error;
     Ok(VisualReport {
         config: cfg.clone(),
         frames,
@@ -359,6 +386,9 @@ fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSu
     let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
     let searched: Vec<&VisualFrame> = frames.iter().filter(|f| f.searched).collect();
     let all = frames.len().max(1) as f64;
+    let first_complete_frame = frames
+        .iter()
+        .position(|f| f.cell.is_some() && f.visual_misses == 0);
     VisualSummary {
         frames: frames.len(),
         initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
@@ -373,8 +403,11 @@ fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSu
         searches: searched.len(),
         prefetches: frames.iter().filter(|f| f.prefetch_adopted).count(),
         prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
-        mean_search_ms: searched.iter().map(|f| f.search_ms).sum::<f64>()
-            / searched.len().max(1) as f64,
+        mean_search_ms: if searched.is_empty() {
+            0.0
+        } else {
+            searched.iter().map(|f| f.search_ms).sum::<f64>() / searched.len() as f64
+        },
         frames_outside: frames.iter().filter(|f| f.cell.is_none()).count(),
         fallback_queries: frames.iter().filter(|f| f.fallback_query).count(),
         tree_pages: frames.iter().map(|f| f.tree_pages).sum(),
@@ -387,5 +420,12 @@ fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSu
         mean_triangles: frames.iter().map(|f| f.triangles_drawn as f64).sum::<f64>() / all,
         peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
         node_cache,
+        visual_misses: frames.iter().map(|f| f.visual_misses).sum(),
+        first_complete_frame,
+        visual_misses_after_start: first_complete_frame
+            .map_or(0, |k| frames[k..].iter().map(|f| f.visual_misses).sum()),
+        coarse_draws: frames.iter().map(|f| f.coarse).sum(),
+        failed_loads: 0,
+        last_load_error: None,
     }
 }

@@ -7,7 +7,6 @@
 //! codec's complaint about bytes that passed their page checksums is reported against
 //! the extent's first page.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::scene::Mesh;
@@ -190,12 +189,7 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
             .map_err(|err| about(store, &e.mesh, &what, err))?;
         return decode_mesh(&bytes).map_err(|w| about(store, &e.mesh, &what, Error::Invalid(w)));
     }
-    if level > e.levels as usize {
-        return Err(Error::Invalid(format!(
-            "object {} has LOD levels 0..={} (0 is its full mesh), not {level}",
-            e.id, e.levels
-        )));
-    }
+    check_level(e, level)?;
     let head = read_chain_head(store, e)?;
     let what = format!("LOD level {level} of object {}", e.id);
     chain_level_of(store, &ChainPlace::of(e), &head, level, &what)
@@ -207,54 +201,127 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
 /// a few parallel runs. Objects with no coarse level come at full detail (level 0),
 /// their meshes asked for together with the heads.
 pub(crate) fn coarsest_levels(store: &Store, entries: &[LodEntry]) -> Result<Vec<(usize, Mesh)>> {
-    let (chained, whole): (Vec<&LodEntry>, Vec<&LodEntry>) =
-        entries.iter().partition(|e| !e.chain.is_empty());
-    // A chain's head is its directory and its coarsest level, and a batch's heads lie
-    // side by side (`bake`): asked for whole, they come in a few runs, with the meshes
-    // of the objects that have no coarse level. A failed fetch is the read's to report,
-    // naming its page.
-    let heads_and_meshes: Vec<Extent> = chained
+    let wanted: Vec<(LodEntry, usize)> = entries
         .iter()
-        .map(|e| e.chain)
-        .chain(whole.iter().map(|e| e.mesh))
-        .collect();
-    let _ = store.prefetch(&heads_and_meshes);
-    let heads = chained
-        .iter()
-        .map(|e| read_chain_head(store, e))
-        .collect::<Result<Vec<_>>>()?;
-    let payload = store.payload_size();
-    let mut rest = Vec::new();
-    for (e, head) in chained.iter().zip(&heads) {
-        let (offset, length) = head.dir.level_range(e.levels as usize)?;
-        let have = head.prefix.len();
-        if offset + length > have {
-            let first = offset.max(have) / payload;
-            let last = (offset + length - 1) / payload;
-            let place = ChainPlace::of(e);
-            rest.extend((first..=last).map(|p| place.page(p as u64)));
-        }
-    }
-    store.announce(&rest);
-    let mut heads = chained
-        .iter()
-        .map(|e| e.id)
-        .zip(heads)
-        .collect::<HashMap<_, _>>();
-    entries
-        .iter()
-        .map(|e| match heads.remove(&e.id) {
-            Some(head) => {
-                let level = e.levels as usize;
-                let what = format!("LOD level {level} of object {}", e.id);
-                Ok((
-                    level,
-                    chain_level_of(store, &ChainPlace::of(e), &head, level, &what)?,
-                ))
-            }
-            None => Ok((0, level_mesh(store, e, 0)?)),
+        .map(|e| {
+            (
+                *e,
+                if e.chain.is_empty() {
+                    0
+                } else {
+                    e.levels as usize
+                },
+            )
         })
+        .collect();
+    levels_at(store, &wanted)
+        .into_iter()
+        .zip(&wanted)
+        .map(|(mesh, (_, level))| Ok((*level, mesh?)))
         .collect()
+}
+
+/// Level `level` of the object of each `(entry, level)` of `wanted`, in order: the
+/// chains' heads of the coarse levels and the full meshes asked for together, then the
+/// pages each coarse level needs beyond its head, so that a remote store fetches a
+/// batch in a few parallel runs. Each object's result apart: damage costs that object.
+pub(crate) fn levels_at(store: &Store, wanted: &[(LodEntry, usize)]) -> Vec<Result<Mesh>> {
+    let coarse = |e: &LodEntry, level: usize| level > 0 && !e.chain.is_empty();
+    // A chain's head is its directory and its coarsest level, and a batch's heads lie
+    // side by side (`bake`): asked for whole, they come in a few runs, with the full
+    // meshes. A failed fetch is the read's to report, naming its page.
+    let first: Vec<Extent> = wanted
+        .iter()
+        .map(|(e, level)| if coarse(e, *level) { e.chain } else { e.mesh })
+        .collect();
+    let _ = store.prefetch(&first);
+    let heads: Vec<Result<Option<ChainHead>>> = Error::until_offline(wanted, |(e, level)| {
+        coarse(e, *level)
+            .then(|| read_chain_head(store, e))
+            .transpose()
+    });
+    let rest: Vec<u64> = wanted
+        .iter()
+        .zip(&heads)
+        .filter_map(|((e, level), head)| match head {
+            Ok(Some(head)) => pages_beyond_head(store, &ChainPlace::of(e), head, *level).ok(),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    store.announce(&rest);
+    Error::until_offline(wanted.iter().zip(heads), |((e, level), head)| match head? {
+        None => level_mesh(store, e, *level),
+        Some(head) => {
+            check_level(e, *level)?;
+            let what = format!("LOD level {level} of object {}", e.id);
+            chain_level_of(store, &ChainPlace::of(e), &head, *level, &what)
+        }
+    })
+}
+
+/// The pages of the chain at `place` (its head read) that level `level` lies on beyond
+/// the head: none when the head holds it.
+fn pages_beyond_head(
+    store: &Store,
+    place: &ChainPlace,
+    head: &ChainHead,
+    level: usize,
+) -> Result<Vec<u64>> {
+    let payload = store.payload_size();
+    let (offset, length) = head.dir.level_range(level)?;
+    let have = head.prefix.len();
+    if offset + length <= have {
+        return Ok(Vec::new());
+    }
+    let first = offset.max(have) / payload;
+    let last = (offset + length - 1) / payload;
+    Ok((first..=last).map(|p| place.page(p as u64)).collect())
+}
+
+/// Level `level` of each group's chain of `wanted` (an HDoV node's internal LODs,
+/// 1..=n finest first; `what` naming it in errors), in order: the chains' heads read,
+/// then the pages each level needs beyond its head asked for together, so that a remote
+/// store fetches a batch in a few parallel runs. Each chain's result apart.
+pub(crate) fn chain_levels_at(
+    store: &Store,
+    wanted: &[(Extent, usize, String)],
+) -> Vec<Result<Mesh>> {
+    let heads: Vec<Result<ChainHead>> = Error::until_offline(wanted, |(ext, _, what)| {
+        read_chain(store, &ChainPlace::single(ext), what)
+    });
+    let rest: Vec<u64> = wanted
+        .iter()
+        .zip(&heads)
+        .filter_map(|((ext, level, _), head)| {
+            let head = head.as_ref().ok()?;
+            pages_beyond_head(store, &ChainPlace::single(ext), head, *level).ok()
+        })
+        .flatten()
+        .collect();
+    store.announce(&rest);
+    Error::until_offline(wanted.iter().zip(heads), |((ext, level, what), head)| {
+        let head = head?;
+        let stored = head.dir.stored_levels();
+        if *level == 0 || *level > stored {
+            return Err(Error::Invalid(format!(
+                "{what}: no level {level} of {stored}"
+            )));
+        }
+        let what = format!("{what}, level {level}");
+        chain_level_of(store, &ChainPlace::single(ext), &head, *level, &what)
+    })
+}
+
+/// An error unless the object of `e` has a stored level `level`.
+fn check_level(e: &LodEntry, level: usize) -> Result<()> {
+    if level > e.levels as usize {
+        return Err(Error::Invalid(format!(
+            "object {} has LOD levels 0..={} (0 is its full mesh), not {level}",
+            e.id, e.levels
+        )));
+    }
+    Ok(())
 }
 
 /// One level of a group's chain (an HDoV node's internal LODs, numbered 1..=n finest

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 
@@ -11,7 +12,12 @@ use crate::walk::buffer::{Loaded, ObjectBuffer};
 /// ahead of the viewer (within 60° of where it looks) before those behind, nearest
 /// first within each. Smaller loads sooner.
 pub(super) fn load_order(e: &ObjectEntry, eye: Vec3, aim: Vec3) -> f32 {
-    let to = e.bounds.center() - eye;
+    order_of(&e.bounds, eye, aim)
+}
+
+/// [`load_order`] of what lies in `bounds` (an object, or a group of objects).
+pub(super) fn order_of(bounds: &Aabb, eye: Vec3, aim: Vec3) -> f32 {
+    let to = bounds.center() - eye;
     let distance = to.length();
     let ahead = distance < 1e-3 || to.dot(aim) >= 0.5 * distance;
     if ahead {

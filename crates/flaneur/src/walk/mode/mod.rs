@@ -11,6 +11,7 @@
 
 mod load_order;
 mod loader;
+mod mailbox;
 mod mesh_batch;
 mod oracle;
 mod pace;
@@ -22,3 +23,5 @@ mod refining;
 pub(crate) mod review;
 pub(crate) mod scene;
 pub(crate) mod visual;
+mod visual_loader;
+mod visual_never_wait;

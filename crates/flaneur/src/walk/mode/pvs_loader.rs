@@ -15,9 +15,7 @@
 //! dropped by the cache).
 
 use std::collections::{HashSet, VecDeque};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{mpsc, Condvar, Mutex};
-use std::time::Duration;
+use std::sync::{mpsc, Mutex};
 
 use glam::Vec3;
 
@@ -49,52 +47,8 @@ pub(super) struct Stand {
     pub aim: Vec3,
 }
 
-/// The viewer's latest position, for the loader to take when it is free (older ones
-/// are not worth looking from), and the walk's end.
-#[derive(Default)]
-pub(super) struct Mailbox {
-    latest: Mutex<Option<Stand>>,
-    wake: Condvar,
-    /// The viewer's latest frame: the clock the loader's answers are delivered at.
-    now: AtomicU64,
-    ended: AtomicBool,
-}
-
-/// How long an idle loader sleeps between looks at the walk's end.
-const IDLE_WAKE: Duration = Duration::from_millis(50);
-
-impl Mailbox {
-    pub fn post(&self, stand: Stand) {
-        self.now.store(stand.frame, Ordering::Relaxed);
-        if let Ok(mut latest) = self.latest.lock() {
-            *latest = Some(stand);
-        }
-        self.wake.notify_one();
-    }
-
-    pub fn end(&self) {
-        self.ended.store(true, Ordering::Relaxed);
-        self.wake.notify_one();
-    }
-
-    fn ended(&self) -> bool {
-        self.ended.load(Ordering::Relaxed)
-    }
-
-    fn now(&self) -> u64 {
-        self.now.load(Ordering::Relaxed)
-    }
-
-    /// The latest position posted since the last take; with `block`, waits for one
-    /// (or the walk's end).
-    fn take(&self, block: bool) -> Option<Stand> {
-        let mut latest = self.latest.lock().ok()?;
-        while block && latest.is_none() && !self.ended() {
-            latest = self.wake.wait_timeout(latest, IDLE_WAKE).ok()?.0;
-        }
-        latest.take()
-    }
-}
+/// The viewer's latest position, as the loader takes it.
+pub(super) type Mailbox = super::mailbox::Mailbox<Stand>;
 
 /// What the loader tells the viewer, in the order it happened.
 pub(super) enum Update {

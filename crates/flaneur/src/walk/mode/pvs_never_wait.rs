@@ -111,12 +111,15 @@ impl Mode for NeverWait<'_> {
         let here = match self.db.viewcell_at(pose.position)? {
             Some(id) => {
                 let p = Position::new(f64::from(pose.position.x), f64::from(pose.position.z));
-                self.mailbox.post(Stand {
-                    frame: at.index as u64,
-                    at: p,
-                    eye: camera.position,
-                    aim: camera.forward(),
-                });
+                self.mailbox.post(
+                    at.index as u64,
+                    Stand {
+                        frame: at.index as u64,
+                        at: p,
+                        eye: camera.position,
+                        aim: camera.forward(),
+                    },
+                );
                 frame.cell = Some(id);
                 Some(self.source.grid().cell_of(p)?)
             }

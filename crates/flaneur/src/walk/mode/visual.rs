@@ -10,6 +10,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use super::pace::wait_until_due;
+use super::visual_never_wait::NeverWaitRun;
 use crate::cache::{policy_by_name, BufferPool, CacheStats};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -17,6 +18,7 @@ use crate::geom::{Aabb, Camera};
 use crate::hdov::{Found, Loader, Scheme};
 use crate::prefetch::motion::MotionTrack;
 use crate::rtree::ObjectEntry;
+use crate::scene::Mesh;
 use crate::store::{IoStats, PageKind};
 use crate::walk::buffer::{Loaded, ObjectBuffer, GROUP_ID};
 use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
@@ -32,11 +34,11 @@ const MAX_PREFETCH_WAIT: Duration = Duration::from_millis(10);
 
 /// One find of a search (or of the fallback's query), at the level it deserves.
 #[derive(Clone, Debug)]
-struct Piece {
+pub(super) struct Piece {
     /// Its id in the buffer: the object's, or the node's with [`GROUP_ID`].
-    key: u64,
-    level: usize,
-    found: Found,
+    pub key: u64,
+    pub level: usize,
+    pub found: Found,
 }
 
 /// A prefetched cell's finds, and the meshes the thread read for them.
@@ -62,7 +64,7 @@ pub(crate) fn walk_live<'db>(
     lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
-) -> Result<(Vec<VisualFrame>, Option<CacheStats>)> {
+) -> Result<(Vec<VisualFrame>, Option<CacheStats>, NeverWaitRun)> {
     cfg.validate()?;
     let head = db.hdov_head()?;
     let scheme = match cfg.scheme {
@@ -97,6 +99,14 @@ pub(crate) fn walk_live<'db>(
     };
     let search = &search;
     db.reset_io();
+    if cfg.never_wait {
+        let (frames, run) =
+            super::visual_never_wait::walk_live(db, cfg, search, lods, progress, viewer)?;
+        if frames.is_empty() {
+            return Err(Error::Invalid("the walk had no poses".into()));
+        }
+        return Ok((frames, pool.as_ref().map(BufferPool::stats), run));
+    }
     let frames = std::thread::scope(|scope| -> Result<Vec<VisualFrame>> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Prefetched>>();
@@ -141,39 +151,44 @@ pub(crate) fn walk_live<'db>(
         }
         Ok(frames)
     })?;
-    Ok((frames, pool.as_ref().map(BufferPool::stats)))
+    Ok((
+        frames,
+        pool.as_ref().map(BufferPool::stats),
+        NeverWaitRun::default(),
+    ))
 }
 
 /// A cell's finds at their levels, those whose level could not be read (with why),
 /// and the search's time, ms.
-struct Finds {
-    pieces: Vec<Piece>,
-    failed: Vec<(u64, Error)>,
-    ms: f64,
+pub(super) struct Finds {
+    pub pieces: Vec<Piece>,
+    pub failed: Vec<(u64, Error)>,
+    pub ms: f64,
 }
 
 /// What both threads search with.
-struct Searcher<'a> {
-    db: &'a Database,
-    eta: f32,
-    scheme: Scheme,
-    pool: Option<&'a BufferPool<'a>>,
-    tolerant: bool,
+pub(super) struct Searcher<'a> {
+    pub db: &'a Database,
+    pub eta: f32,
+    pub scheme: Scheme,
+    pub pool: Option<&'a BufferPool<'a>>,
+    pub tolerant: bool,
     /// Whether objects carry their DoV to LOD selection.
-    dov_tau: bool,
+    pub dov_tau: bool,
     /// Whether LOD selection may draw objects finer than they were loaded.
-    finer_by_tau: bool,
+    pub finer_by_tau: bool,
 }
 
 impl Searcher<'_> {
     /// The finds of `cell`, each at the level `loader` says it deserves (those whose
     /// level could not be read left apart when tolerant; otherwise the error).
-    fn finds(&self, loader: &mut Loader<'_>, cell: u32) -> Result<Finds> {
+    pub(super) fn finds(&self, loader: &mut Loader<'_>, cell: u32) -> Result<Finds> {
         let t = Instant::now();
         let result = self
             .db
             .hdov_search_cached(cell, self.eta, self.scheme, self.pool)?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
+        loader.learn(&result.found);
         let mut pieces = Vec::with_capacity(result.found.len());
         let mut failed = Vec::new();
         for found in result.found {
@@ -214,7 +229,7 @@ impl Searcher<'_> {
 }
 
 /// The viewcell of the HDoV-tree whose box holds `p` ([`viewcell_holding`]).
-fn cell_at(db: &Database, p: glam::Vec3) -> Result<Option<u32>> {
+pub(super) fn cell_at(db: &Database, p: glam::Vec3) -> Result<Option<u32>> {
     Ok(match viewcell_holding(db, p)? {
         Some(c) if db.hdov_head()?.slot(c).is_some() => Some(c),
         _ => None,
@@ -222,7 +237,7 @@ fn cell_at(db: &Database, p: glam::Vec3) -> Result<Option<u32>> {
 }
 
 /// The id a find has in the buffer.
-fn key_of(found: &Found) -> Result<u64> {
+pub(super) fn key_of(found: &Found) -> Result<u64> {
     match found {
         Found::Object { entry, .. } if entry.id & GROUP_ID != 0 => Err(Error::Invalid(format!(
             "object {} has an id with its top bit set, which VISUAL keeps for HDoV nodes",
@@ -237,6 +252,12 @@ fn key_of(found: &Found) -> Result<u64> {
 /// know of it as `search` says (its DoV, how fine it may be drawn).
 fn read(loader: &mut Loader<'_>, piece: &Piece, search: &Searcher<'_>) -> Result<Loaded> {
     let mesh = loader.mesh(&piece.found, piece.level)?;
+    Ok(loaded(piece, mesh, piece.level, search))
+}
+
+/// `piece` as the buffer holds it with `mesh`, its level `level`, and what LOD
+/// selection is to know of it as `search` says.
+pub(super) fn loaded(piece: &Piece, mesh: Mesh, level: usize, search: &Searcher<'_>) -> Loaded {
     let entry = match &piece.found {
         Found::Object { entry, .. } => *entry,
         Found::Node { mbr, lods, .. } => ObjectEntry {
@@ -247,7 +268,7 @@ fn read(loader: &mut Loader<'_>, piece: &Piece, search: &Searcher<'_>) -> Result
             kind: 0,
         },
     };
-    let mut loaded = Loaded::at_level(entry, mesh, piece.level);
+    let mut loaded = Loaded::at_level(entry, mesh, level);
     if let Found::Object { dov, .. } = &piece.found {
         // The fallback's objects (DoV 0) have no DoV to hand on.
         if search.dov_tau && *dov > 0.0 {
@@ -257,7 +278,34 @@ fn read(loader: &mut Loader<'_>, piece: &Piece, search: &Searcher<'_>) -> Result
             loaded.finest = 0;
         }
     }
-    Ok(loaded)
+    loaded
+}
+
+/// A frame's figures once it is culled, from what its retrieval left `pending`: what
+/// it draws, its time, and the pages read since its retrieval began, on every thread.
+pub(super) fn finish_frame(
+    db: &Database,
+    pending: Option<(VisualFrame, IoStats, Instant)>,
+    culled: &Culled<'_>,
+    buffer: &ObjectBuffer,
+) -> Result<VisualFrame> {
+    let (mut frame, io_before, start) =
+        pending.ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))?;
+    frame.cull_ms = culled.ms;
+    frame.drawn = culled.drawn.len();
+    frame.triangles_drawn = culled
+        .drawn
+        .iter()
+        .map(|o| o.mesh.triangle_count() as u64)
+        .sum();
+    frame.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+    let io = db.io().since(&io_before);
+    let of = |kinds: &[PageKind]| kinds.iter().map(|k| io.reads_of(*k)).sum::<u64>();
+    frame.tree_pages = of(&[PageKind::HdovNode, PageKind::VPage]);
+    frame.model_pages = of(&[PageKind::Mesh, PageKind::Lod]);
+    frame.other_pages = io.page_reads - frame.tree_pages - frame.model_pages;
+    frame.buffer_bytes = buffer.bytes();
+    Ok(frame)
 }
 
 /// The VISUAL mode: the current cell's finds, the fallback's cell, the prefetch.
@@ -343,25 +391,7 @@ impl Mode for Visual<'_> {
     }
 
     fn finish(&mut self, culled: &Culled<'_>, buffer: &ObjectBuffer) -> Result<VisualFrame> {
-        let (mut frame, io_before, start) = self
-            .pending
-            .take()
-            .ok_or_else(|| Error::Invalid("a frame finished before it was retrieved".into()))?;
-        frame.cull_ms = culled.ms;
-        frame.drawn = culled.drawn.len();
-        frame.triangles_drawn = culled
-            .drawn
-            .iter()
-            .map(|o| o.mesh.triangle_count() as u64)
-            .sum();
-        frame.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let io = self.db.io().since(&io_before);
-        let of = |kinds: &[PageKind]| kinds.iter().map(|k| io.reads_of(*k)).sum::<u64>();
-        frame.tree_pages = of(&[PageKind::HdovNode, PageKind::VPage]);
-        frame.model_pages = of(&[PageKind::Mesh, PageKind::Lod]);
-        frame.other_pages = io.page_reads - frame.tree_pages - frame.model_pages;
-        frame.buffer_bytes = buffer.bytes();
-        Ok(frame)
+        finish_frame(self.db, self.pending.take(), culled, buffer)
     }
 
     fn figures(&mut self, f: &VisualFrame, buffer: &ObjectBuffer) -> FrameFigures {
