@@ -37,6 +37,7 @@ mod fixtures;
 mod hausdorff;
 mod pm;
 mod refine;
+mod selective;
 pub(crate) mod stored;
 mod torus;
 
@@ -50,6 +51,7 @@ pub use refine::{
     CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, NodeOperator,
     PassStats, RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
+pub use selective::{CutMesh, Front, HeapIndex, NodeName, VertexHierarchy};
 pub(crate) use stored::LodWriter;
 pub use stored::{
     distance_to, level_for, LevelInfo, LodOptions, LodReport, LodStats, CHAIN_MAGIC,

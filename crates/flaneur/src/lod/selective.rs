@@ -1,0 +1,937 @@
+//! Truly selective refinement (Kim & Lee 2001, as Kim–Lee–Kobbelt 2004 §4 stream it):
+//! a progressive mesh's splits as a **binary vertex hierarchy**, each node named
+//! ⟨tree-id, node-id⟩ with heap indexing, and each split's two **fundamental cut
+//! vertices**, leaves of the hierarchy. Any front of active nodes (a cut through every
+//! tree) is a mesh: each triangle of the fully refined mesh with every corner moved to
+//! its leaf's **active ancestor**, those whose corners meet dropped. A split whose cut
+//! vertices' active ancestors differ may be made at any time, without forcing others:
+//! that is what makes the refinement truly selective, and what lets a client that holds
+//! only part of the hierarchy refine it (ActiveAncestor by right shifts of a node-id).
+//!
+//! Our progressive meshes are built from half-edge collapses (v_c onto v_p), KLK's from
+//! full-edge ones (v_t and v_u onto a new v_s). A split of v_p is read as KLK's split of
+//! the node standing for v_p into two children: the left one stands for v_p from then
+//! on, the right one for v_c. Node-ids grow by one bit a level, and ours are as long as
+//! a node is deep ([`HeapIndex`]).
+//!
+//! ```
+//! use flaneur::lod::{ProgressiveMesh, VertexHierarchy};
+//! let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+//! let h = VertexHierarchy::new(&pm)?;
+//! let mut front = h.roots();
+//! // The roots' front is the base mesh; splitting every node in order gives the original.
+//! assert_eq!(front.triangles(&h).len(), pm.base.triangle_count());
+//! for s in 0..pm.splits.len() {
+//!     front.split(&h, h.split_node(s))?;
+//! }
+//! assert_eq!(front.triangles(&h).len(), flaneur::scene::bunny().triangle_count());
+//! # Ok::<(), flaneur::Error>(())
+//! ```
+
+use super::pm::{ProgressiveMesh, SelectiveMesh, NO_TRIANGLE};
+use crate::error::{Error, Result};
+
+/// A node's name: its tree (the base vertex it descends from) and its place in that
+/// tree by heap indexing (the root 1, the children of n are 2n and 2n + 1), an integer
+/// of as many bits as the node is deep (our hierarchies are not balanced as KLK §6.2's:
+/// a flat region collapses into a deep chain).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeName {
+    /// The base vertex the tree grows from.
+    pub tree: u32,
+    /// The node's heap index in its tree.
+    pub node: HeapIndex,
+}
+
+impl NodeName {
+    /// The name of this node's ancestor `levels` up (itself at 0): a right shift.
+    pub fn up(&self, levels: u32) -> NodeName {
+        NodeName {
+            tree: self.tree,
+            node: self.node.shr(levels),
+        }
+    }
+
+    /// How deep the node lies (a root at 0).
+    pub fn depth(&self) -> u32 {
+        self.node.bits() - 1
+    }
+}
+
+/// A heap index of any size: 64-bit words, least significant first, the top word not
+/// zero.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct HeapIndex(Vec<u64>);
+
+impl HeapIndex {
+    /// A root's index, 1.
+    pub fn root() -> HeapIndex {
+        HeapIndex(vec![1])
+    }
+
+    /// The index of this node's child: 2n for the left, 2n + 1 for the right.
+    pub fn child(&self, right: bool) -> HeapIndex {
+        let mut words = Vec::with_capacity(self.0.len() + 1);
+        let mut carry = right as u64;
+        for &w in &self.0 {
+            words.push((w << 1) | carry);
+            carry = w >> 63;
+        }
+        if carry != 0 {
+            words.push(carry);
+        }
+        HeapIndex(words)
+    }
+
+    /// The index `levels` up: a right shift.
+    pub fn shr(&self, levels: u32) -> HeapIndex {
+        let (words, bits) = ((levels / 64) as usize, levels % 64);
+        let mut out: Vec<u64> = (words..self.0.len())
+            .map(|k| {
+                let low = self.0[k] >> bits;
+                let high = match (bits, self.0.get(k + 1)) {
+                    (0, _) | (_, None) => 0,
+                    (b, Some(&next)) => next << (64 - b),
+                };
+                low | high
+            })
+            .collect();
+        while out.len() > 1 && out.last() == Some(&0) {
+            out.pop();
+        }
+        if out.is_empty() || out == [0] {
+            return HeapIndex(vec![0]);
+        }
+        HeapIndex(out)
+    }
+
+    /// Its bits, the leading 1 included.
+    pub fn bits(&self) -> u32 {
+        let top = *self.0.last().unwrap_or(&0);
+        (self.0.len() as u32 - 1) * 64 + (64 - top.leading_zeros())
+    }
+
+    /// The index as 64-bit words, least significant first.
+    pub fn words(&self) -> &[u64] {
+        &self.0
+    }
+}
+
+/// One node of the hierarchy.
+#[derive(Clone, Debug, PartialEq)]
+struct Node {
+    /// The base vertex its tree grows from.
+    tree: u32,
+    /// Levels below its root.
+    depth: u32,
+    parent: Option<u32>,
+    /// The left child (the split vertex from then on) and the right (the new one).
+    children: Option<[u32; 2]>,
+    /// The progressive mesh's vertex it stands for.
+    vertex: u32,
+}
+
+/// A progressive mesh's splits as a binary vertex hierarchy with fundamental cut
+/// vertices (Kim & Lee 2001).
+#[derive(Clone, Debug)]
+pub struct VertexHierarchy {
+    nodes: Vec<Node>,
+    /// Split `i`'s node.
+    split_nodes: Vec<u32>,
+    /// Split `i`'s fundamental cut vertices, left and right: leaf nodes (`None` where
+    /// the split adds no such triangle).
+    cuts: Vec<[Option<u32>; 2]>,
+    /// The fully refined mesh's triangles as leaf nodes.
+    leaf_triangles: Vec<[u32; 3]>,
+    /// Split `i`'s run: the splits of one collapse of a position on a crease or seam,
+    /// made and undone together (or the surface cracks along the crease).
+    runs: Vec<std::ops::Range<u32>>,
+    roots: usize,
+}
+
+impl VertexHierarchy {
+    /// The hierarchy of `pm`'s splits. An `Err` when a split's vertex is not there when
+    /// it comes (a progressive mesh out of order).
+    pub fn new(pm: &ProgressiveMesh) -> Result<VertexHierarchy> {
+        let base = pm.base.positions.len();
+        let mut nodes: Vec<Node> = (0..base as u32)
+            .map(|v| Node {
+                tree: v,
+                depth: 0,
+                parent: None,
+                children: None,
+                vertex: v,
+            })
+            .collect();
+        // Each vertex's node so far: the deepest that stands for it.
+        let mut current: Vec<u32> = (0..base as u32).collect();
+        current.resize(pm.vertex_count(), u32::MAX);
+        let mut split_nodes = Vec::with_capacity(pm.splits.len());
+        for (i, s) in pm.splits.iter().enumerate() {
+            let v_c = pm.ids(i).v_c;
+            let at = *current
+                .get(s.v_p as usize)
+                .filter(|&&n| n != u32::MAX)
+                .ok_or_else(|| {
+                    Error::Invalid(format!("split {i}: vertex {} is not there yet", s.v_p))
+                })?;
+            let (tree, depth) = (nodes[at as usize].tree, nodes[at as usize].depth + 1);
+            let child = |vertex: u32| Node {
+                tree,
+                depth,
+                parent: Some(at),
+                children: None,
+                vertex,
+            };
+            let (left, right) = (nodes.len() as u32, nodes.len() as u32 + 1);
+            nodes.push(child(s.v_p));
+            nodes.push(child(v_c));
+            nodes[at as usize].children = Some([left, right]);
+            current[s.v_p as usize] = left;
+            current[v_c as usize] = right;
+            split_nodes.push(at);
+        }
+        // The fully refined mesh, slot by slot, its corners as leaves.
+        let mut full = SelectiveMesh::new(&pm.base, pm.splits.len())?;
+        for (i, s) in pm.splits.iter().enumerate() {
+            full.split(i, s)?;
+        }
+        let leaf_triangles: Vec<[u32; 3]> = full
+            .slots()
+            .iter()
+            .filter(|t| **t != NO_TRIANGLE)
+            .map(|t| t.map(|v| current[v as usize]))
+            .collect();
+        let mut runs: Vec<std::ops::Range<u32>> = Vec::with_capacity(pm.splits.len());
+        for (i, s) in pm.splits.iter().enumerate() {
+            let start = match runs.last() {
+                Some(r) if s.joins_previous => r.start,
+                _ => i as u32,
+            };
+            runs.push(start..i as u32 + 1);
+        }
+        // Every split of a run is told the run's end.
+        for i in (0..runs.len()).rev() {
+            if i + 1 < runs.len() && runs[i + 1].start == runs[i].start {
+                runs[i].end = runs[i + 1].end;
+            }
+        }
+        let mut h = VertexHierarchy {
+            nodes,
+            split_nodes,
+            cuts: Vec::with_capacity(pm.splits.len()),
+            leaf_triangles: Vec::new(),
+            runs,
+            roots: base,
+        };
+        // A split's fundamental cut vertex: the corner of its triangle, fully refined,
+        // that does not descend from the node it splits.
+        for (i, _) in pm.splits.iter().enumerate() {
+            let ids = pm.ids(i);
+            let at = h.split_nodes[i];
+            let cut = |slot: u32| {
+                let t = full.slots()[slot as usize];
+                (t != NO_TRIANGLE).then(|| {
+                    t.map(|v| current[v as usize])
+                        .into_iter()
+                        .find(|&leaf| !h.descends(leaf, at))
+                })
+            };
+            let (l, r) = (cut(ids.f_l).flatten(), cut(ids.f_r).flatten());
+            h.cuts.push([l, r]);
+        }
+        h.leaf_triangles = leaf_triangles;
+        Ok(h)
+    }
+
+    /// The number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether it has no nodes (a progressive mesh without vertices).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// The node split `split` splits.
+    pub fn split_node(&self, split: usize) -> u32 {
+        self.split_nodes[split]
+    }
+
+    /// The nodes split together with `node` (itself among them): its split's run, on a
+    /// crease or seam; just itself elsewhere. Empty for a leaf.
+    pub fn run_nodes(&self, node: u32) -> Vec<u32> {
+        match self.split_index(node) {
+            Some(s) => self.runs[s]
+                .clone()
+                .map(|j| self.split_nodes[j as usize])
+                .collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Node `node`'s name: read off the path from its root.
+    pub fn name(&self, node: u32) -> NodeName {
+        let mut path = Vec::new();
+        let mut n = node;
+        while let Some(p) = self.nodes[n as usize].parent {
+            path.push(self.children(p).is_some_and(|[_, r]| r == n));
+            n = p;
+        }
+        let index = path
+            .iter()
+            .rev()
+            .fold(HeapIndex::root(), |index, &right| index.child(right));
+        NodeName {
+            tree: self.nodes[node as usize].tree,
+            node: index,
+        }
+    }
+
+    /// Node `node`'s children, if it splits.
+    pub fn children(&self, node: u32) -> Option<[u32; 2]> {
+        self.nodes[node as usize].children
+    }
+
+    /// Node `node`'s parent (`None` for a root).
+    pub fn parent(&self, node: u32) -> Option<u32> {
+        self.nodes[node as usize].parent
+    }
+
+    /// The progressive mesh's vertex node `node` stands for.
+    pub fn vertex(&self, node: u32) -> u32 {
+        self.nodes[node as usize].vertex
+    }
+
+    /// The fundamental cut vertices (leaves) of the split of node `node`.
+    pub fn cut_vertices(&self, node: u32) -> Option<[Option<u32>; 2]> {
+        let split = self.split_index(node)?;
+        Some(self.cuts[split])
+    }
+
+    /// The deepest node of the hierarchy, levels below its root.
+    pub fn depth(&self) -> u32 {
+        self.nodes.iter().map(|n| n.depth).max().unwrap_or(0)
+    }
+
+    /// The front of the roots: the base mesh.
+    pub fn roots(&self) -> Front {
+        let mut active = vec![false; self.nodes.len()];
+        active[..self.roots].fill(true);
+        Front { active }
+    }
+
+    /// Whether `node` is `ancestor` or lies below it.
+    fn descends(&self, node: u32, ancestor: u32) -> bool {
+        let mut n = Some(node);
+        while let Some(k) = n {
+            if k == ancestor {
+                return true;
+            }
+            n = self.nodes[k as usize].parent;
+        }
+        false
+    }
+
+    /// The split that splits `node`, if any: the nodes' order is the splits'.
+    fn split_index(&self, node: u32) -> Option<usize> {
+        let [left, _] = self.nodes[node as usize].children?;
+        Some((left as usize - self.roots) / 2)
+    }
+}
+
+/// A front of the hierarchy: which nodes are active (a cut through every tree).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Front {
+    active: Vec<bool>,
+}
+
+impl Front {
+    /// Whether `node` is on the front.
+    pub fn is_active(&self, node: u32) -> bool {
+        self.active[node as usize]
+    }
+
+    /// The active node `leaf` descends from.
+    pub fn active_ancestor(&self, h: &VertexHierarchy, leaf: u32) -> u32 {
+        let mut n = leaf;
+        while !self.active[n as usize] {
+            n = h.nodes[n as usize]
+                .parent
+                .expect("a front cuts every tree, so a leaf has an active ancestor");
+        }
+        n
+    }
+
+    /// Whether `node`'s split keeps the mesh a manifold now: its cut vertices' active
+    /// ancestors differ (KLK §5.3's partial order). A node without a split, or off the
+    /// front, cannot split.
+    /// (A split of a crease's run asks this of each of its nodes.)
+    pub fn can_split(&self, h: &VertexHierarchy, node: u32) -> bool {
+        match h.cut_vertices(node) {
+            Some([Some(l), Some(r)]) if self.is_active(node) => {
+                self.active_ancestor(h, l) != self.active_ancestor(h, r)
+            }
+            Some(_) => self.is_active(node),
+            None => false,
+        }
+    }
+
+    /// Splits `node` into its children with the rest of its run, first splitting what
+    /// the partial order asks for (KLK's SelStreamVSplit): the node both cut vertices'
+    /// active ancestor is, until they differ, and the ancestors of a run's nodes that
+    /// are not on the front yet. The nodes split, in order.
+    pub fn split(&mut self, h: &VertexHierarchy, node: u32) -> Result<Vec<u32>> {
+        if h.children(node).is_none() {
+            return Err(Error::Invalid(format!(
+                "node {node} is a leaf: it does not split"
+            )));
+        }
+        if !self.is_active(node) {
+            return Err(Error::Invalid(format!("node {node} is not on the front")));
+        }
+        let mut done = Vec::new();
+        self.split_run(h, node, &mut done)?;
+        Ok(done)
+    }
+
+    /// Splits every node of `node`'s run that is not split yet.
+    fn split_run(&mut self, h: &VertexHierarchy, node: u32, done: &mut Vec<u32>) -> Result<()> {
+        for n in h.run_nodes(node) {
+            self.make_split(h, n, done)?;
+        }
+        Ok(())
+    }
+
+    /// Splits `node`, bringing it to the front first; nothing if it is split already.
+    fn make_split(&mut self, h: &VertexHierarchy, node: u32, done: &mut Vec<u32>) -> Result<()> {
+        loop {
+            if self.is_active(node) {
+                break;
+            }
+            match self.active_above(h, node) {
+                // Above the front: split already.
+                None => return Ok(()),
+                Some(a) => self.split_run(h, a, done)?,
+            }
+        }
+        if let Some([Some(l), Some(r)]) = h.cut_vertices(node) {
+            loop {
+                let a = self.active_ancestor(h, l);
+                if a != self.active_ancestor(h, r) {
+                    break;
+                }
+                if h.children(a).is_none() {
+                    return Err(Error::Invalid(format!(
+                        "node {node}'s cut vertices meet in leaf {a}"
+                    )));
+                }
+                self.split_run(h, a, done)?;
+            }
+        }
+        let [left, right] = h.children(node).expect("a split's node has children");
+        self.active[node as usize] = false;
+        self.active[left as usize] = true;
+        self.active[right as usize] = true;
+        done.push(node);
+        Ok(())
+    }
+
+    /// The active node strictly above `node`, if the front runs below it.
+    fn active_above(&self, h: &VertexHierarchy, node: u32) -> Option<u32> {
+        let mut n = h.parent(node);
+        while let Some(k) = n {
+            if self.is_active(k) {
+                return Some(k);
+            }
+            n = h.parent(k);
+        }
+        None
+    }
+
+    /// Whether the children of `node` may be collapsed back into it with the rest of
+    /// its run: every child of the run active, and no active split whose cut vertices
+    /// would then meet in one node (the mesh stays a manifold).
+    pub fn can_collapse(&self, h: &VertexHierarchy, node: u32) -> bool {
+        let run = h.run_nodes(node);
+        let all_children_active = run.iter().all(|&n| {
+            h.children(n)
+                .is_some_and(|[l, r]| self.is_active(l) && self.is_active(r))
+        });
+        if run.is_empty() || !all_children_active {
+            return false;
+        }
+        let mut after = self.clone();
+        after.collapse_unchecked(h, &run);
+        after.is_manifold(h)
+    }
+
+    /// Collapses the children of `node` (and of its run) back into it. An `Err`, and
+    /// no change, unless [`Front::can_collapse`].
+    pub fn collapse(&mut self, h: &VertexHierarchy, node: u32) -> Result<()> {
+        if !self.can_collapse(h, node) {
+            return Err(Error::Invalid(format!(
+                "node {node}'s children cannot be collapsed here"
+            )));
+        }
+        self.collapse_unchecked(h, &h.run_nodes(node));
+        Ok(())
+    }
+
+    fn collapse_unchecked(&mut self, h: &VertexHierarchy, run: &[u32]) {
+        for &n in run {
+            let [left, right] = h.children(n).expect("a run's node has children");
+            self.active[left as usize] = false;
+            self.active[right as usize] = false;
+            self.active[n as usize] = true;
+        }
+    }
+
+    /// The front's mesh: every fully refined triangle with its corners at their active
+    /// ancestors, those whose corners meet left out, as active nodes, in slot order.
+    pub fn triangles(&self, h: &VertexHierarchy) -> Vec<[u32; 3]> {
+        h.leaf_triangles
+            .iter()
+            .map(|t| t.map(|leaf| self.active_ancestor(h, leaf)))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect()
+    }
+
+    /// Whether the front's mesh is an oriented 2-manifold where the original is: no
+    /// directed edge twice, no triangle twice.
+    pub fn is_manifold(&self, h: &VertexHierarchy) -> bool {
+        let mut edges = std::collections::HashSet::new();
+        self.triangles(h)
+            .iter()
+            .all(|t| (0..3).all(|k| edges.insert((t[k], t[(k + 1) % 3]))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn pm_of(triangles: usize) -> ProgressiveMesh {
+        ProgressiveMesh::build(&crate::lod::bumpy_torus(triangles)).unwrap()
+    }
+
+    /// The prefix mesh of `k` splits, its corners as the progressive mesh's vertices.
+    fn prefix(pm: &ProgressiveMesh, k: usize) -> Vec<[u32; 3]> {
+        let mut m = SelectiveMesh::new(&pm.base, pm.splits.len()).unwrap();
+        for (i, s) in pm.splits.iter().enumerate().take(k) {
+            m.split(i, s).unwrap();
+        }
+        m.slots()
+            .iter()
+            .copied()
+            .filter(|t| *t != NO_TRIANGLE)
+            .collect()
+    }
+
+    #[test]
+    fn splitting_in_order_gives_each_prefix_of_the_progressive_mesh() {
+        let pm = pm_of(2000);
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let mut front = h.roots();
+        for k in 0..=pm.splits.len() {
+            if k % 97 == 0 || k == pm.splits.len() {
+                let mut ours: Vec<[u32; 3]> = front
+                    .triangles(&h)
+                    .iter()
+                    .map(|t| t.map(|n| h.vertex(n)))
+                    .collect();
+                let mut theirs = prefix(&pm, k);
+                ours.sort_unstable();
+                theirs.sort_unstable();
+                assert_eq!(ours, theirs, "after {k} splits");
+            }
+            if k < pm.splits.len() {
+                // In order, each split is legal as it stands.
+                assert!(front.can_split(&h, h.split_node(k)), "split {k}");
+                assert_eq!(front.split(&h, h.split_node(k)).unwrap(), [h.split_node(k)]);
+            }
+        }
+    }
+
+    #[test]
+    fn names_are_heap_indices_and_ancestors_right_shifts() {
+        let pm = pm_of(800);
+        let h = VertexHierarchy::new(&pm).unwrap();
+        for n in 0..h.len() as u32 {
+            if let Some(p) = h.parent(n) {
+                assert_eq!(h.name(n).up(1), h.name(p));
+                assert_eq!(h.name(n).depth(), h.name(p).depth() + 1);
+            } else {
+                assert_eq!(h.name(n).node, HeapIndex::root());
+            }
+        }
+        // Deep chains too: a flat grid collapses into one.
+        let grid = ProgressiveMesh::build(&crate::lod::fixtures::grid(24)).unwrap();
+        let h = VertexHierarchy::new(&grid).unwrap();
+        assert!(h.depth() > 64, "{}", h.depth());
+        let deepest = (0..h.len() as u32)
+            .max_by_key(|&n| h.name(n).depth())
+            .unwrap();
+        let name = h.name(deepest);
+        assert_eq!(name.depth(), h.depth());
+        let mut up = deepest;
+        for levels in 1..=name.depth() {
+            up = h.parent(up).unwrap();
+            assert_eq!(name.up(levels), h.name(up), "{levels} up");
+        }
+    }
+
+    /// Random selective refinement and coarsening: every front's mesh stays an oriented
+    /// manifold, and refining everything gives back the original.
+    #[test]
+    fn any_order_of_legal_splits_and_collapses_keeps_a_manifold() {
+        let pm = pm_of(3000);
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut front = h.roots();
+        for step in 0..4000 {
+            let node = rng.gen_range(0..h.len() as u32);
+            if rng.gen_bool(0.7) {
+                if front.is_active(node) && h.children(node).is_some() {
+                    front.split(&h, node).unwrap();
+                }
+            } else if front.can_collapse(&h, node) {
+                front.collapse(&h, node).unwrap();
+            }
+            if step % 50 == 0 {
+                assert!(front.is_manifold(&h), "step {step}");
+            }
+        }
+        for s in 0..pm.splits.len() {
+            let node = h.split_node(s);
+            if front.is_active(node) {
+                front.split(&h, node).unwrap();
+            }
+        }
+        let mut ours: Vec<[u32; 3]> = front
+            .triangles(&h)
+            .iter()
+            .map(|t| t.map(|n| h.vertex(n)))
+            .collect();
+        let mut theirs = prefix(&pm, pm.splits.len());
+        ours.sort_unstable();
+        theirs.sort_unstable();
+        assert_eq!(ours, theirs);
+    }
+
+    /// Every run is split whole or not at all.
+    fn runs_whole(h: &VertexHierarchy, front: &Front) -> bool {
+        (0..h.len() as u32).all(|n| {
+            let split = |k: u32| !front.is_active(k) && front.active_above(h, k).is_none();
+            let run = h.run_nodes(n);
+            run.iter().all(|&k| split(k)) || run.iter().all(|&k| !split(k))
+        })
+    }
+
+    #[test]
+    fn on_creases_and_seams_a_run_splits_and_collapses_whole() {
+        let building = crate::lod::fixtures::building();
+        let pm = ProgressiveMesh::build(&building).unwrap();
+        assert!(
+            pm.splits.iter().any(|s| s.joins_previous),
+            "a building has runs"
+        );
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut front = h.roots();
+        for step in 0..3000 {
+            let node = rng.gen_range(0..h.len() as u32);
+            if rng.gen_bool(0.7) {
+                if front.is_active(node) && h.children(node).is_some() {
+                    front.split(&h, node).unwrap();
+                }
+            } else if front.can_collapse(&h, node) {
+                front.collapse(&h, node).unwrap();
+            }
+            if step % 25 == 0 {
+                assert!(front.is_manifold(&h), "step {step}");
+                assert!(runs_whole(&h, &front), "step {step}");
+            }
+        }
+    }
+}
+
+/// A selectively refined mesh kept as its triangles over active nodes, split and
+/// collapsed in place as a client does that holds only part of the hierarchy
+/// (Kim–Lee–Kobbelt §5.3): a split of `node` into its children is told the active
+/// ancestors of its cut vertices, which bound the fan of triangles around `node` that
+/// go to the right child; the rest go to the left, and the split's one or two new
+/// triangles join them. It needs neither the fully refined mesh nor the nodes below
+/// the front.
+///
+/// ```
+/// use flaneur::lod::{CutMesh, ProgressiveMesh, VertexHierarchy};
+/// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
+/// let h = VertexHierarchy::new(&pm)?;
+/// let mut front = h.roots();
+/// let mut mesh = CutMesh::new(&front.triangles(&h));
+/// let node = h.split_node(0);
+/// let cuts = h.cut_vertices(node).unwrap().map(|c| c.map(|c| front.active_ancestor(&h, c)));
+/// front.split(&h, node)?;
+/// mesh.split(node, h.children(node).unwrap(), cuts)?;
+/// let (mut ours, mut truth) = (mesh.triangles(), front.triangles(&h));
+/// assert_eq!(ours.len(), truth.len());
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct CutMesh {
+    /// Triangle slots; a freed one is `NO_TRIANGLE`.
+    slots: Vec<[u32; 3]>,
+    free: Vec<u32>,
+    /// The slots each vertex is a corner of.
+    around: std::collections::HashMap<u32, Vec<u32>>,
+}
+
+impl CutMesh {
+    /// The mesh of `triangles` (a front's, the roots' for a client that starts).
+    pub fn new(triangles: &[[u32; 3]]) -> CutMesh {
+        let mut m = CutMesh::default();
+        for t in triangles {
+            m.add(*t);
+        }
+        m
+    }
+
+    /// Its triangles, in no particular order.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        self.slots
+            .iter()
+            .copied()
+            .filter(|t| *t != NO_TRIANGLE)
+            .collect()
+    }
+
+    /// Splits vertex `node` into `[left, right]`, its cut vertices' active ancestors
+    /// being `cuts` (`None` where the split adds no such triangle). An `Err`, and no
+    /// change, when the fan around `node` does not run from one cut to the other.
+    pub fn split(
+        &mut self,
+        node: u32,
+        [left, right]: [u32; 2],
+        cuts: [Option<u32>; 2],
+    ) -> Result<()> {
+        let bad = |what: &str| Error::Invalid(format!("splitting vertex {node}: {what}"));
+        // The fan around `node`: each triangle (node, x, y) links x to y.
+        let fan = self.around.get(&node).cloned().unwrap_or_default();
+        let mut next = std::collections::HashMap::new();
+        let mut prev = std::collections::HashMap::new();
+        for &slot in &fan {
+            let t = self.slots[slot as usize];
+            let k = t
+                .iter()
+                .position(|&v| v == node)
+                .ok_or_else(|| bad("a stale corner"))?;
+            let (x, y) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            if next.insert(x, (y, slot)).is_some() || prev.insert(y, x).is_some() {
+                return Err(bad("its fan is not a manifold's"));
+            }
+        }
+        // The right child takes the triangles from its right cut round to its left one
+        // (f_r = (left, a_r, right) and f_l = (left, right, a_l) close the two fans);
+        // on a boundary or crease, from the fan's open end, or to it.
+        let start = match cuts {
+            [_, Some(r)] => r,
+            [Some(l), None] => {
+                let mut x = l;
+                for _ in 0..=fan.len() {
+                    match prev.get(&x) {
+                        Some(&p) if p != l => x = p,
+                        _ => break,
+                    }
+                }
+                if prev.contains_key(&x) {
+                    return Err(bad("one cut vertex, and its fan is closed"));
+                }
+                x
+            }
+            [None, None] => {
+                return Err(bad(
+                    "its split adds no triangle (a wedge of a crease or seam), so no cut \
+                     vertex places it: KLK's scheme assumes manifold vertex splits",
+                ))
+            }
+        };
+        let mut to_right = Vec::new();
+        let mut x = start;
+        while Some(x) != cuts[0] {
+            let Some(&(y, slot)) = next.get(&x) else {
+                if cuts[0].is_none() {
+                    break;
+                }
+                return Err(bad("its fan does not run from the right cut to the left"));
+            };
+            to_right.push(slot);
+            x = y;
+            if to_right.len() > fan.len() {
+                return Err(bad("its fan runs round without meeting the left cut"));
+            }
+        }
+        for &slot in &fan {
+            let to = if to_right.contains(&slot) {
+                right
+            } else {
+                left
+            };
+            self.recorner(slot, node, to);
+        }
+        self.around.remove(&node);
+        if let Some(l) = cuts[0] {
+            self.add([left, right, l]);
+        }
+        if let Some(r) = cuts[1] {
+            self.add([left, r, right]);
+        }
+        Ok(())
+    }
+
+    /// Collapses `[left, right]` back into `node`: the triangles they share go, the rest
+    /// take `node` for their corner.
+    pub fn collapse(&mut self, node: u32, [left, right]: [u32; 2]) {
+        let mut slots = self.around.remove(&left).unwrap_or_default();
+        slots.extend(self.around.remove(&right).unwrap_or_default());
+        slots.sort_unstable();
+        slots.dedup();
+        for slot in slots {
+            let t =
+                self.slots[slot as usize].map(|v| if v == left || v == right { node } else { v });
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                self.remove(slot);
+            } else {
+                self.slots[slot as usize] = t;
+                self.around.entry(node).or_default().push(slot);
+            }
+        }
+    }
+
+    fn add(&mut self, t: [u32; 3]) {
+        let slot = match self.free.pop() {
+            Some(s) => {
+                self.slots[s as usize] = t;
+                s
+            }
+            None => {
+                self.slots.push(t);
+                self.slots.len() as u32 - 1
+            }
+        };
+        for v in t {
+            self.around.entry(v).or_default().push(slot);
+        }
+    }
+
+    fn remove(&mut self, slot: u32) {
+        for v in self.slots[slot as usize] {
+            if let Some(list) = self.around.get_mut(&v) {
+                list.retain(|&s| s != slot);
+            }
+        }
+        self.slots[slot as usize] = NO_TRIANGLE;
+        self.free.push(slot);
+    }
+
+    fn recorner(&mut self, slot: u32, from: u32, to: u32) {
+        for v in &mut self.slots[slot as usize] {
+            if *v == from {
+                *v = to;
+            }
+        }
+        self.around.entry(to).or_default().push(slot);
+    }
+}
+
+#[cfg(test)]
+mod cut_mesh_tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// `triangles` each turned to start at its smallest corner, sorted: the same mesh
+    /// gives the same list whatever the slots and rotations.
+    fn canonical(mut triangles: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+        for t in &mut triangles {
+            let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+            t.rotate_left(k);
+        }
+        triangles.sort_unstable();
+        triangles
+    }
+
+    /// A client's mesh, split and collapsed in place as the front moves at random,
+    /// equals the front's mesh triangle for triangle after every step.
+    fn mirrors(mesh: &crate::scene::Mesh, seed: u64, steps: usize) {
+        let pm = ProgressiveMesh::build(mesh).unwrap();
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let mut front = h.roots();
+        let mut client = CutMesh::new(&front.triangles(&h));
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        for step in 0..steps {
+            let node = rng.gen_range(0..h.len() as u32);
+            if rng.gen_bool(0.7) {
+                if !(front.is_active(node) && h.children(node).is_some()) {
+                    continue;
+                }
+                // The nodes split in order, each told its cuts as they stand then.
+                let mut probe = front.clone();
+                for n in probe.split(&h, node).unwrap() {
+                    let cuts = h
+                        .cut_vertices(n)
+                        .unwrap()
+                        .map(|c| c.map(|c| front.active_ancestor(&h, c)));
+                    client.split(n, h.children(n).unwrap(), cuts).unwrap();
+                    let [l, r] = h.children(n).unwrap();
+                    front.active[n as usize] = false;
+                    front.active[l as usize] = true;
+                    front.active[r as usize] = true;
+                }
+                assert_eq!(front, probe);
+            } else if front.can_collapse(&h, node) {
+                for n in h.run_nodes(node) {
+                    client.collapse(n, h.children(n).unwrap());
+                }
+                front.collapse(&h, node).unwrap();
+            } else {
+                continue;
+            }
+            assert_eq!(
+                canonical(client.triangles()),
+                canonical(front.triangles(&h)),
+                "step {step}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_client_mesh_equals_the_fronts_triangle_for_triangle() {
+        mirrors(&crate::lod::bumpy_torus(3000), 11, 3000);
+        mirrors(&crate::scene::bunny(), 12, 3000);
+        mirrors(&crate::lod::fixtures::grid(24), 14, 2000);
+    }
+
+    #[test]
+    fn a_wedge_split_that_adds_no_triangle_is_refused_by_name() {
+        // A flat-shaded building: every corner a seam; some of its wedges' splits add no
+        // triangle, which cut vertices cannot place.
+        let pm = ProgressiveMesh::build(&crate::lod::fixtures::building()).unwrap();
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let mut front = h.roots();
+        let mut client = CutMesh::new(&front.triangles(&h));
+        let refused = (0..pm.splits.len()).find_map(|i| {
+            let n = h.split_node(i);
+            let cuts = h
+                .cut_vertices(n)
+                .unwrap()
+                .map(|c| c.map(|c| front.active_ancestor(&h, c)));
+            let got = client.split(n, h.children(n).unwrap(), cuts);
+            front.split(&h, n).unwrap();
+            got.err()
+        });
+        let e = refused.expect("a building has a split that adds no triangle");
+        assert!(e.to_string().contains("adds no triangle"), "{e}");
+    }
+}
