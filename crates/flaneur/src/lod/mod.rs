@@ -20,6 +20,11 @@
 //!   build one in two steps, for the experiments that time them apart.
 //! - [`Refiner`] refines a mesh through its [`Dag`] for a [`View`], frame by frame (Zheng
 //!   ch. 4: the fronts, the three traversals, the compact selective mesh).
+//! - [`VertexHierarchy`] reads the splits as Kim & Lee's binary vertex hierarchy for
+//!   truly selective refinement, named ⟨tree-id, node-id⟩ ([`NodeName`]); a [`Front`]
+//!   of it is a mesh, a [`CutMesh`] the same mesh kept by a client from cut vertices
+//!   alone, and [`SelectiveServer`] and [`SelectiveClient`] stream it view by view
+//!   (Kim–Lee–Kobbelt 2004).
 //! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels (coarsest
 //!   first so a coarse level reads few pages; its bytes open with [`CHAIN_MAGIC`]), and
 //!   for large objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG,
@@ -28,8 +33,8 @@
 //!   back, and [`level_for`] is the criterion that picks a stored level for a view.
 //!
 //! The code is grouped by idea: `pm` (the progressive mesh, its levels and codec), `dag`
-//! (the hierarchy of its splits), `refine` (view-dependent refinement through the DAG)
-//! and `stored` (the LODs a build writes into the database and reads back).
+//! (the hierarchy of its splits), `refine` (view-dependent refinement through the DAG),
+//! `selective` (truly selective refinement and its streaming) and `stored` (the LODs a build writes into the database and reads back).
 
 mod dag;
 #[cfg(test)]
@@ -51,7 +56,10 @@ pub use refine::{
     CompactMesh, Criteria, FrameReport, FrameStats, Fronts, MeshChanges, MeshMemory, NodeOperator,
     PassStats, RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
-pub use selective::{CutMesh, Front, HeapIndex, NodeName, VertexHierarchy};
+pub use selective::{
+    CutMesh, Front, HeapIndex, NodeName, RefineInfo, SelectiveBase, SelectiveClient,
+    SelectiveServer, SelectiveSource, VertexHierarchy, VsplitPacket,
+};
 pub(crate) use stored::LodWriter;
 pub use stored::{
     distance_to, level_for, LevelInfo, LodOptions, LodReport, LodStats, CHAIN_MAGIC,

@@ -13,6 +13,7 @@ mod tests;
 mod traversal;
 
 pub use criteria::{Criteria, View};
+pub(crate) use criteria::{NodeGeometry, ViewTest};
 pub use fronts::Fronts;
 pub use mesh_update::{CompactMesh, MeshChanges, MeshMemory};
 pub use refiner::{

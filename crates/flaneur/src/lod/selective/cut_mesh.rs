@@ -156,6 +156,30 @@ impl CutMesh {
         }
     }
 
+    /// Whether collapsing `[left, right]` into `node` keeps the mesh a manifold: no
+    /// directed edge at `node` twice (the only edges a collapse changes; `node` itself
+    /// is no corner before it).
+    pub fn collapse_keeps_manifold(&self, node: u32, [left, right]: [u32; 2]) -> bool {
+        let mut slots: Vec<u32> = [left, right]
+            .iter()
+            .flat_map(|v| self.around.get(v).into_iter().flatten().copied())
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
+        let mut edges = std::collections::HashSet::new();
+        slots.iter().all(|&slot| {
+            let t =
+                self.slots[slot as usize].map(|v| if v == left || v == right { node } else { v });
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                return true;
+            }
+            (0..3).all(|k| {
+                let e = (t[k], t[(k + 1) % 3]);
+                !(e.0 == node || e.1 == node) || edges.insert(e)
+            })
+        })
+    }
+
     fn add(&mut self, t: [u32; 3]) {
         let slot = match self.free.pop() {
             Some(s) => {

@@ -29,8 +29,12 @@
 //! ```
 
 mod cut_mesh;
+mod stream;
 
 pub use cut_mesh::CutMesh;
+pub use stream::{
+    RefineInfo, SelectiveBase, SelectiveClient, SelectiveServer, SelectiveSource, VsplitPacket,
+};
 
 use super::pm::{ProgressiveMesh, SelectiveMesh, NO_TRIANGLE};
 use crate::error::{Error, Result};
@@ -339,7 +343,7 @@ impl VertexHierarchy {
     }
 
     /// The split that splits `node`, if any: the nodes' order is the splits'.
-    fn split_index(&self, node: u32) -> Option<usize> {
+    pub(crate) fn split_index(&self, node: u32) -> Option<usize> {
         let [left, _] = self.nodes[node as usize].children?;
         Some((left as usize - self.roots) / 2)
     }
