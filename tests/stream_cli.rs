@@ -270,7 +270,7 @@ fn view_with_a_stream_says_what_is_wrong_before_opening_a_window() {
 fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
     let dir = bench(&["stream-bytes", "--triangles", "20000"]);
     let csv = common::Csv::read(&dir.path().join("stream-bytes.csv"));
-    let [dependent, independent] = &csv.rows[..] else {
+    let [dependent, independent, selective, selective_all] = &csv.rows[..] else {
         panic!("{:?}", csv.rows)
     };
     assert_eq!(csv.get(dependent, "scheme"), "view-dependent");
@@ -282,4 +282,16 @@ fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
     }
     assert_eq!(csv.num(dependent, "cap_share"), 1.0);
     assert!(csv.num(independent, "cap_share") < 0.9, "{independent:?}");
+    // The same for Kim–Lee–Kobbelt's truly selective scheme.
+    assert_eq!(
+        csv.get(selective, "scheme"),
+        "truly-selective view-dependent"
+    );
+    for what in ["bytes", "triangles"] {
+        assert!(
+            csv.num(selective, what) < csv.num(selective_all, what),
+            "{what}: {selective:?} against {selective_all:?}"
+        );
+    }
+    assert_eq!(csv.num(selective, "cap_share"), 1.0);
 }

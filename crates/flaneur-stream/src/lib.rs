@@ -40,6 +40,7 @@ mod error;
 mod landmark;
 mod predictive;
 pub mod protocol;
+pub mod selective_wire;
 mod server;
 mod walk_source;
 mod wire;

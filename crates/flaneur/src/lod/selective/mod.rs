@@ -123,6 +123,15 @@ impl HeapIndex {
     pub fn words(&self) -> &[u64] {
         &self.0
     }
+
+    /// The index of `words` (least significant first, as [`HeapIndex::words`] gives
+    /// them); `None` for zero, which names no node.
+    pub fn from_words(mut words: Vec<u64>) -> Option<HeapIndex> {
+        while words.len() > 1 && words.last() == Some(&0) {
+            words.pop();
+        }
+        (words.iter().any(|&w| w != 0)).then_some(HeapIndex(words))
+    }
 }
 
 /// One node of the hierarchy.

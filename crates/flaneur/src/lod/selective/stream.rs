@@ -183,7 +183,7 @@ impl SelectiveSource {
     /// fixed point a client reaches (the module's rule): the reference a client's mesh
     /// is checked against.
     pub fn select(&self, front: &mut Front, view: &View, tau: f32) -> Result<()> {
-        let test = view_test(view, tau)?;
+        let test = view_test(view, tau, Criteria::default())?;
         let h = &self.h;
         let by_name = |mut nodes: Vec<u32>| {
             nodes.sort_by_cached_key(|&n| h.name(n));
@@ -227,14 +227,14 @@ impl SelectiveSource {
     }
 }
 
-fn view_test(view: &View, tau: f32) -> Result<ViewTest> {
+fn view_test(view: &View, tau: f32, criteria: Criteria) -> Result<ViewTest> {
     view.validate()?;
     if !(tau.is_finite() && tau > 0.0) {
         return Err(Error::Invalid(format!(
             "a screen-space error τ of {tau}: give a number above 0"
         )));
     }
-    Ok(ViewTest::new(view, tau, Criteria::default()))
+    Ok(ViewTest::new(view, tau, criteria))
 }
 
 /// A server's session with one client: the front of what it has sent, which only
@@ -242,6 +242,7 @@ fn view_test(view: &View, tau: f32) -> Result<ViewTest> {
 #[derive(Clone, Debug)]
 pub struct SelectiveServer {
     sent: Front,
+    criteria: Criteria,
 }
 
 impl SelectiveServer {
@@ -249,7 +250,14 @@ impl SelectiveServer {
     pub fn new(source: &SelectiveSource) -> SelectiveServer {
         SelectiveServer {
             sent: source.h.roots(),
+            criteria: Criteria::default(),
         }
+    }
+
+    /// The session under `criteria` (both by default; none for a view-independent
+    /// stream, which refines to the screen-space error alone).
+    pub fn with_criteria(self, criteria: Criteria) -> SelectiveServer {
+        SelectiveServer { criteria, ..self }
     }
 
     /// The splits `view` under `tau` asks for that were not sent yet, in the order a
@@ -262,7 +270,7 @@ impl SelectiveServer {
         view: &View,
         tau: f32,
     ) -> Result<Vec<VsplitPacket>> {
-        let test = view_test(view, tau)?;
+        let test = view_test(view, tau, self.criteria)?;
         let mut packets = Vec::new();
         // A node's children come after it, so one sequential pass reaches them.
         for n in 0..source.h.len() as u32 {
@@ -315,6 +323,7 @@ pub struct SelectiveClient {
     by_name: HashMap<NodeName, u32>,
     active: Vec<bool>,
     mesh: CutMesh,
+    criteria: Criteria,
 }
 
 impl SelectiveClient {
@@ -346,7 +355,14 @@ impl SelectiveClient {
             nodes,
             by_name,
             mesh: CutMesh::new(&triangles),
+            criteria: Criteria::default(),
         }
+    }
+
+    /// The client under `criteria`, as its server's session
+    /// ([`SelectiveServer::with_criteria`]).
+    pub fn with_criteria(self, criteria: Criteria) -> SelectiveClient {
+        SelectiveClient { criteria, ..self }
     }
 
     /// Takes the server's packets: each node's children join the partial hierarchy
@@ -396,7 +412,7 @@ impl SelectiveClient {
     /// rule). The names of the nodes it wanted split but was not sent: empty when the
     /// mesh is what the view asks for, else what to ask the server for.
     pub fn select(&mut self, view: &View, tau: f32) -> Result<Vec<NodeName>> {
-        let test = view_test(view, tau)?;
+        let test = view_test(view, tau, self.criteria)?;
         let qrefine = |n: &ClientNode| {
             n.info
                 .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
