@@ -174,4 +174,33 @@ mod tests {
         zero.resize(40, 0);
         assert!(decode_vsplits(&zero).is_err());
     }
+
+    /// Hostile bytes never panic the decoder: random ones, and a real batch with bytes
+    /// flipped, are a batch or an error.
+    #[test]
+    fn random_and_flipped_bytes_are_a_batch_or_an_error() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..5000 {
+            let len = rng.gen_range(0..200);
+            let bytes: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
+            let _ = decode_vsplits(&bytes);
+        }
+        let pm = ProgressiveMesh::build(&flaneur::lod::bumpy_torus(600)).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        let view = View::new(Vec3::new(0.0, 0.0, 2.0), Vec3::NEG_Z, 1.0).unwrap();
+        let packets = SelectiveServer::new(&source)
+            .refine(&source, &view, 0.001)
+            .unwrap();
+        let good = encode_vsplits(&packets);
+        for _ in 0..5000 {
+            let mut bytes = good.clone();
+            for _ in 0..rng.gen_range(1..4) {
+                let k = rng.gen_range(0..bytes.len());
+                bytes[k] = rng.gen();
+            }
+            let _ = decode_vsplits(&bytes);
+        }
+    }
 }
