@@ -270,7 +270,7 @@ fn view_with_a_stream_says_what_is_wrong_before_opening_a_window() {
 fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
     let dir = bench(&["stream-bytes", "--triangles", "20000"]);
     let csv = common::Csv::read(&dir.path().join("stream-bytes.csv"));
-    let [dependent, independent, selective, selective_all] = &csv.rows[..] else {
+    let [dependent, independent, selective, selective_all, cut_only] = &csv.rows[..] else {
         panic!("{:?}", csv.rows)
     };
     assert_eq!(csv.get(dependent, "scheme"), "view-dependent");
@@ -294,4 +294,11 @@ fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
         );
     }
     assert_eq!(csv.num(selective, "cap_share"), 1.0);
+    // KLK §7: without the data for the client's own refinement, the same mesh for fewer
+    // bytes.
+    assert_eq!(
+        csv.num(cut_only, "triangles"),
+        csv.num(selective, "triangles")
+    );
+    assert!(csv.num(cut_only, "bytes") < csv.num(selective, "bytes"));
 }

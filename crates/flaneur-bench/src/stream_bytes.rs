@@ -22,8 +22,8 @@ use flaneur::error::{Error, Result};
 use std::collections::HashSet;
 
 use flaneur::lod::{
-    CompactMesh, Criteria, NodeName, SelectiveClient, SelectiveServer, SelectiveSource, Traversal,
-    View,
+    CompactMesh, Criteria, CutVertexClient, NodeName, SelectiveClient, SelectiveServer,
+    SelectiveSource, Traversal, View,
 };
 use flaneur_stream::protocol::MAX_N;
 use flaneur_stream::selective_wire::encode_vsplits;
@@ -199,10 +199,50 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
             &mut needed,
         )?);
     }
+    progress("streaming truly selective, cut vertices only");
+    rows.push(stream_cut_vertices(&source, &view, cfg, &mut needed)?);
     Ok(StreamBytesReport {
         config: cfg.clone(),
         model_triangles,
         rows,
+    })
+}
+
+/// Streams the landmark for `view` in KLK §7's variant: the server decides every split
+/// and names the cut vertices as they stand, and the client makes them as they come.
+fn stream_cut_vertices(
+    source: &SelectiveSource,
+    view: &View,
+    cfg: &StreamBytesConfig,
+    needed: &mut Option<HashSet<[NodeName; 3]>>,
+) -> Result<StreamBytesRow> {
+    let mut server = SelectiveServer::new(source).cut_vertex_only();
+    let mut client = CutVertexClient::new(source.base());
+    let (mut frames, mut bytes, mut at_cap) = (0, 0, None);
+    loop {
+        let packets = server.refine(source, view, cfg.tau)?;
+        if packets.is_empty() {
+            break;
+        }
+        bytes += encode_vsplits(&packets).len();
+        frames += 1;
+        client.receive(&packets)?;
+        if bytes >= cfg.cap && at_cap.is_none() {
+            at_cap = Some((canonical(client.triangles()), bytes));
+        }
+    }
+    let mesh = canonical(client.triangles());
+    let reference = needed.get_or_insert_with(|| mesh.clone());
+    let (cap_mesh, cap_bytes) = at_cap.unwrap_or((mesh.clone(), bytes));
+    let held = cap_mesh.intersection(reference).count();
+    Ok(StreamBytesRow {
+        scheme: "truly-selective cut-vertex-only",
+        frames,
+        bytes,
+        triangles: mesh.len(),
+        cap_bytes,
+        cap_triangles: cap_mesh.len(),
+        cap_share: held as f64 / reference.len().max(1) as f64,
     })
 }
 

@@ -3,6 +3,8 @@
 //! libFuzzer: `stream_session`'s through a server's `serve` with the output thrown
 //! away, `stream_batch`'s through `receive` in a loop as a client reads a server.
 //!
+//! `selective_batch`'s are decoded and handed to a truly selective client.
+//!
 //! `write_seed_corpus` (ignored) wrote the seeds the corpora grew from: well-formed
 //! sessions and sessions the server refuses, and what the server answered each with.
 
@@ -14,8 +16,10 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal};
+use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal, View};
+use flaneur::lod::{SelectiveClient, SelectiveServer, SelectiveSource};
 use flaneur_stream::protocol::{receive, send, Message, MAX_N, MAX_TO_CLIENT, MAX_TO_SERVER};
+use flaneur_stream::selective_wire::{decode_vsplits, encode_vsplits};
 use flaneur_stream::{HeldNodes, Hello, Landmark, ServerConfig, StreamServer, ViewPacket};
 
 /// The server the `stream_session` target serves each input with: one torus of about
@@ -98,6 +102,58 @@ fn every_server_stream_of_the_corpus_reads_without_a_panic() {
         read > 0,
         "no input of the corpus held a message a client reads"
     );
+}
+
+/// The `selective_batch` target's client: a small torus's truly selective source.
+fn selective_source() -> SelectiveSource {
+    let pm = ProgressiveMesh::build(&bumpy_torus(600)).unwrap();
+    let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+    SelectiveSource::new(&pm, &dag).unwrap()
+}
+
+fn selective_view() -> View {
+    View::new(glam::Vec3::new(0.0, 0.0, 2.0), glam::Vec3::NEG_Z, 1.0).unwrap()
+}
+
+#[test]
+fn every_selective_batch_of_the_corpus_ends_without_a_panic() {
+    let source = selective_source();
+    let (mut decoded, mut refused) = (0, 0);
+    for (name, data) in inputs("selective_batch") {
+        catch_unwind(AssertUnwindSafe(|| match decode_vsplits(&data) {
+            Ok(packets) => {
+                decoded += 1;
+                let mut client = SelectiveClient::new(source.base());
+                if client.receive(&packets).is_ok() {
+                    let _ = client.select(&selective_view(), 0.001);
+                }
+            }
+            Err(_) => refused += 1,
+        }))
+        .unwrap_or_else(|_| panic!("selective_batch input {name} panicked the client"));
+    }
+    assert!(
+        decoded > 0 && refused > 0,
+        "{decoded} decoded, {refused} refused"
+    );
+}
+
+/// Writes the `selective_batch` target's seeds: the batches a server sends a client
+/// for a few views, and a few bad ones.
+#[test]
+#[ignore = "writes the fuzz corpus's seeds; run by hand"]
+fn write_selective_seeds() {
+    let source = selective_source();
+    let dir = corpus("selective_batch");
+    fs::create_dir_all(&dir).unwrap();
+    let mut server = SelectiveServer::new(&source);
+    for (k, z) in [3.0f32, 2.0, 1.2].into_iter().enumerate() {
+        let view = View::new(glam::Vec3::new(0.2, 0.1, z), glam::Vec3::NEG_Z, 1.0).unwrap();
+        let packets = server.refine(&source, &view, 0.002).unwrap();
+        fs::write(dir.join(format!("seed-view-{k}")), encode_vsplits(&packets)).unwrap();
+    }
+    fs::write(dir.join("seed-empty"), encode_vsplits(&[])).unwrap();
+    fs::write(dir.join("seed-count-too-big"), [0xff, 0xff, 0, 0]).unwrap();
 }
 
 fn encode(messages: &[Message]) -> Vec<u8> {

@@ -57,8 +57,8 @@ pub use refine::{
     PassStats, RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
 pub use selective::{
-    CutMesh, Front, HeapIndex, NodeName, RefineInfo, SelectiveBase, SelectiveClient,
-    SelectiveServer, SelectiveSource, VertexHierarchy, VsplitPacket,
+    CutMesh, CutVertexClient, Front, HeapIndex, NodeName, RefineInfo, SelectiveBase,
+    SelectiveClient, SelectiveServer, SelectiveSource, VertexHierarchy, VsplitPacket,
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{

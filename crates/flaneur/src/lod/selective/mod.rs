@@ -33,7 +33,8 @@ mod stream;
 
 pub use cut_mesh::CutMesh;
 pub use stream::{
-    RefineInfo, SelectiveBase, SelectiveClient, SelectiveServer, SelectiveSource, VsplitPacket,
+    CutVertexClient, RefineInfo, SelectiveBase, SelectiveClient, SelectiveServer, SelectiveSource,
+    VsplitPacket,
 };
 
 use super::pm::{ProgressiveMesh, SelectiveMesh, NO_TRIANGLE};

@@ -243,6 +243,7 @@ fn view_test(view: &View, tau: f32, criteria: Criteria) -> Result<ViewTest> {
 pub struct SelectiveServer {
     sent: Front,
     criteria: Criteria,
+    cut_vertex_only: bool,
 }
 
 impl SelectiveServer {
@@ -251,6 +252,18 @@ impl SelectiveServer {
         SelectiveServer {
             sent: source.h.roots(),
             criteria: Criteria::default(),
+            cut_vertex_only: false,
+        }
+    }
+
+    /// The session of KLK §7's variant, for a client that will not refine on its own
+    /// ([`CutVertexClient`]): each packet names the split's cut vertices as they stand
+    /// on the sent front (the client's), not the fundamental ones, and carries nothing
+    /// for `qrefine`.
+    pub fn cut_vertex_only(self) -> SelectiveServer {
+        SelectiveServer {
+            cut_vertex_only: true,
+            ..self
         }
     }
 
@@ -273,11 +286,28 @@ impl SelectiveServer {
         let test = view_test(view, tau, self.criteria)?;
         let mut packets = Vec::new();
         // A node's children come after it, so one sequential pass reaches them.
-        for n in 0..source.h.len() as u32 {
-            if self.sent.is_active(n) && source.qrefine(&test, n) {
-                for split in self.sent.split(&source.h, n)? {
-                    packets.push(source.packet(split));
-                }
+        let h = &source.h;
+        for n in 0..h.len() as u32 {
+            if !(self.sent.is_active(n) && source.qrefine(&test, n)) {
+                continue;
+            }
+            let before = self.cut_vertex_only.then(|| self.sent.clone());
+            let splits = self.sent.split(h, n)?;
+            let Some(mut front) = before else {
+                packets.extend(splits.into_iter().map(|s| source.packet(s)));
+                continue;
+            };
+            // The cut vertices as each split finds them on the front, split by split.
+            for s in splits {
+                let mut p = source.packet(s);
+                let cuts = h.cut_vertices(s).expect("a split node");
+                p.cuts = cuts.map(|c| c.map(|c| h.name(front.active_ancestor(h, c))));
+                p.children = [None, None];
+                let [l, r] = h.children(s).expect("a split node");
+                front.active[s as usize] = false;
+                front.active[l as usize] = true;
+                front.active[r as usize] = true;
+                packets.push(p);
             }
         }
         Ok(packets)
@@ -286,6 +316,16 @@ impl SelectiveServer {
     /// How many nodes the client was sent (the roots included).
     pub fn sent_nodes(&self) -> usize {
         self.sent.active.iter().filter(|a| **a).count()
+    }
+
+    /// The mesh of the front sent so far, its corners as node names: what a
+    /// [`CutVertexClient`] holds.
+    pub fn sent_triangles(&self, source: &SelectiveSource) -> Vec<[NodeName; 3]> {
+        self.sent
+            .triangles(&source.h)
+            .iter()
+            .map(|t| t.map(|n| source.h.name(n)))
+            .collect()
     }
 }
 
@@ -542,6 +582,75 @@ impl SelectiveClient {
     }
 }
 
+/// The client of KLK §7's variant: it makes every split as it comes, at the cut
+/// vertices the server names, and never refines on its own
+/// ([`SelectiveServer::cut_vertex_only`]).
+#[derive(Clone, Debug)]
+pub struct CutVertexClient {
+    names: Vec<NodeName>,
+    by_name: HashMap<NodeName, u32>,
+    mesh: CutMesh,
+}
+
+impl CutVertexClient {
+    /// A client that has the base mesh.
+    pub fn new(base: SelectiveBase) -> CutVertexClient {
+        let names: Vec<NodeName> = (0..base.roots.len() as u32)
+            .map(|tree| NodeName {
+                tree,
+                node: HeapIndex::root(),
+            })
+            .collect();
+        let by_name = names.iter().cloned().zip(0..).collect();
+        CutVertexClient {
+            names,
+            by_name,
+            mesh: CutMesh::new(&base.triangles),
+        }
+    }
+
+    /// Makes the splits of `packets` in order. An `Err` for a split of a node, or at a
+    /// cut vertex, the client does not hold.
+    pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
+        for p in packets {
+            let id = |name: &NodeName| {
+                self.by_name.get(name).copied().ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "a split names node {name:?}, which the client lacks"
+                    ))
+                })
+            };
+            let node = id(&p.node)?;
+            let cuts = [
+                p.cuts[0].as_ref().map(id).transpose()?,
+                p.cuts[1].as_ref().map(id).transpose()?,
+            ];
+            let mut child = |right: bool| {
+                let name = NodeName {
+                    tree: p.node.tree,
+                    node: p.node.node.child(right),
+                };
+                let k = self.names.len() as u32;
+                self.by_name.insert(name.clone(), k);
+                self.names.push(name);
+                k
+            };
+            let children = [child(false), child(true)];
+            self.mesh.split(node, children, cuts)?;
+        }
+        Ok(())
+    }
+
+    /// The mesh's triangles, their corners as node names.
+    pub fn triangles(&self) -> Vec<[NodeName; 3]> {
+        self.mesh
+            .triangles()
+            .iter()
+            .map(|t| t.map(|k| self.names[k as usize].clone()))
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -626,5 +735,39 @@ mod tests {
                 .unwrap_err();
             assert!(e.to_string().contains('τ'), "{e}");
         }
+    }
+
+    #[test]
+    fn a_cut_vertex_only_client_holds_the_sent_front_without_qrefines_data() {
+        let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(1500)).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        let mut server = SelectiveServer::new(&source).cut_vertex_only();
+        let mut full = SelectiveServer::new(&source);
+        let mut client = CutVertexClient::new(source.base());
+        let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+        let mut sent = 0;
+        for step in 0..60 {
+            let eye = Vec3::new(
+                rng.gen_range(-3.0..3.0),
+                rng.gen_range(-3.0..3.0),
+                rng.gen_range(-3.0..3.0),
+            );
+            let view = View::new(eye, -eye, 1.0).unwrap();
+            let packets = server.refine(&source, &view, 0.002).unwrap();
+            let with_info = full.refine(&source, &view, 0.002).unwrap();
+            // The same splits, in the same order; nothing for qrefine.
+            let nodes = |p: &[VsplitPacket]| p.iter().map(|p| p.node.clone()).collect::<Vec<_>>();
+            assert_eq!(nodes(&packets), nodes(&with_info), "step {step}");
+            assert!(packets.iter().all(|p| p.children == [None, None]));
+            sent += packets.len();
+            client.receive(&packets).unwrap();
+            assert_eq!(
+                canonical(client.triangles()),
+                canonical(server.sent_triangles(&source)),
+                "step {step}"
+            );
+        }
+        assert!(sent > 100, "{sent}");
     }
 }
