@@ -15,7 +15,7 @@ use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database, Error};
 use glam::Vec3;
-use servers::{Fault, Misbehaving, Nginx, NginxConfig};
+use servers::{impatient, Fault, Misbehaving, Nginx, NginxConfig};
 
 /// A small city built into its own folder, which nginx serves.
 fn city(objects: u64, seed: u64) -> common::City {
@@ -27,16 +27,6 @@ fn city(objects: u64, seed: u64) -> common::City {
             ..Default::default()
         },
     )
-}
-
-/// Quick to give up: the failure tests need not wait for the default backoff.
-fn impatient() -> HttpOptions {
-    HttpOptions {
-        retries: 2,
-        backoff: Duration::from_millis(10),
-        timeout: Duration::from_secs(5),
-        ..HttpOptions::default()
-    }
 }
 
 fn boxes(db: &Database, n: usize) -> Vec<Aabb> {

@@ -103,13 +103,7 @@ fn a_never_wait_pvs_walk_goes_on_without_its_server_and_says_so() {
     let c = city(23);
     let mut server = Nginx::start(c.dir.path());
     let url = server.url("city.flaneur");
-    let opts = HttpOptions {
-        retries: 2,
-        backoff: Duration::from_millis(10),
-        timeout: Duration::from_secs(5),
-        ..HttpOptions::default()
-    };
-    let db = Database::open_url_with(&url, &opts).unwrap();
+    let db = Database::open_url_with(&url, &servers::impatient()).unwrap();
     // The index and the visibility directory are read while the server is up; then it
     // goes, and no row or mesh can be.
     db.range(&db.bounds()).unwrap();

@@ -7,11 +7,8 @@ mod common;
 #[path = "common/http.rs"]
 mod servers;
 
-use std::time::Duration;
-
 use flaneur::geom::Camera;
 use flaneur::hdov::HdovOptions;
-use flaneur::store::HttpOptions;
 use flaneur::visibility::VisibilityOptions;
 use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
@@ -128,13 +125,7 @@ fn a_never_wait_visual_walk_goes_on_without_its_server_and_says_so() {
     let c = city(33);
     let mut server = Nginx::start(c.dir.path());
     let url = server.url("city.flaneur");
-    let opts = HttpOptions {
-        retries: 2,
-        backoff: Duration::from_millis(10),
-        timeout: Duration::from_secs(5),
-        ..HttpOptions::default()
-    };
-    let db = Database::open_url_with(&url, &opts).unwrap();
+    let db = Database::open_url_with(&url, &servers::impatient()).unwrap();
     // The viewcells and the tree's head are read while the server is up; then it goes,
     // and no search or mesh can be.
     let path = cell_walk(&db, 30, 1.0, 30.0, 3).unwrap();

@@ -12,6 +12,17 @@ use std::sync::Arc;
 use std::thread;
 use std::time::Duration;
 
+/// Client options quick to give up: the failure tests need not wait for the default
+/// backoff.
+pub fn impatient() -> flaneur::store::HttpOptions {
+    flaneur::store::HttpOptions {
+        retries: 2,
+        backoff: Duration::from_millis(10),
+        timeout: Duration::from_secs(5),
+        ..flaneur::store::HttpOptions::default()
+    }
+}
+
 /// nginx serving `root` on 127.0.0.1 (`flaneur_bench::nginx`, which the crowd bench
 /// starts too), a test's failure when it cannot start.
 pub struct Nginx(flaneur_bench::nginx::Nginx);

@@ -232,18 +232,13 @@ fn stream_cut_vertices(
         }
     }
     let mesh = canonical(client.triangles());
-    let reference = needed.get_or_insert_with(|| mesh.clone());
-    let (cap_mesh, cap_bytes) = at_cap.unwrap_or((mesh.clone(), bytes));
-    let held = cap_mesh.intersection(reference).count();
-    Ok(StreamBytesRow {
-        scheme: "truly-selective cut-vertex-only",
-        frames,
-        bytes,
-        triangles: mesh.len(),
-        cap_bytes,
-        cap_triangles: cap_mesh.len(),
-        cap_share: held as f64 / reference.len().max(1) as f64,
-    })
+    Ok(selective_row(
+        "truly-selective cut-vertex-only",
+        (frames, bytes),
+        mesh,
+        at_cap,
+        needed,
+    ))
 }
 
 /// Streams the landmark for `view` by truly selective refinement, in process, until
@@ -277,10 +272,23 @@ fn stream_selective(
         }
     }
     let mesh = canonical(client.triangles());
+    Ok(selective_row(scheme, (frames, bytes), mesh, at_cap, needed))
+}
+
+/// A truly selective stream's row: `frames` and `bytes` to converge on `mesh`, the mesh
+/// and bytes at the first batch past the cap (the converged ones when it never passed
+/// it), and the share of `needed` (set by the first row) held then.
+fn selective_row(
+    scheme: &'static str,
+    (frames, bytes): (usize, usize),
+    mesh: HashSet<[NodeName; 3]>,
+    at_cap: Option<(HashSet<[NodeName; 3]>, usize)>,
+    needed: &mut Option<HashSet<[NodeName; 3]>>,
+) -> StreamBytesRow {
     let reference = needed.get_or_insert_with(|| mesh.clone());
     let (cap_mesh, cap_bytes) = at_cap.unwrap_or((mesh.clone(), bytes));
     let held = cap_mesh.intersection(reference).count();
-    Ok(StreamBytesRow {
+    StreamBytesRow {
         scheme,
         frames,
         bytes,
@@ -288,7 +296,7 @@ fn stream_selective(
         cap_bytes,
         cap_triangles: cap_mesh.len(),
         cap_share: held as f64 / reference.len().max(1) as f64,
-    })
+    }
 }
 
 /// Triangles turned to start at their smallest corner: the same triangle whatever its

@@ -607,21 +607,10 @@ mod tests {
     fn any_order_of_legal_splits_and_collapses_keeps_a_manifold() {
         let pm = pm_of(3000);
         let h = VertexHierarchy::new(&pm).unwrap();
-        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let mut front = h.roots();
-        for step in 0..4000 {
-            let node = rng.gen_range(0..h.len() as u32);
-            if rng.gen_bool(0.7) {
-                if front.is_active(node) && h.children(node).is_some() {
-                    front.split(&h, node).unwrap();
-                }
-            } else if front.can_collapse(&h, node) {
-                front.collapse(&h, node).unwrap();
-            }
-            if step % 50 == 0 {
-                assert!(front.is_manifold(&h), "step {step}");
-            }
-        }
+        wander(&h, &mut front, 7, 4000, 50, |front, step| {
+            assert!(front.is_manifold(&h), "step {step}");
+        });
         for s in 0..pm.splits.len() {
             let node = h.split_node(s);
             if front.is_active(node) {
@@ -637,6 +626,33 @@ mod tests {
         ours.sort_unstable();
         theirs.sort_unstable();
         assert_eq!(ours, theirs);
+    }
+
+    /// Moves `front` at random for `steps` steps (seeded by `seed`): seven in ten try to
+    /// split a node, the rest to collapse one where that is legal; `check` looks at the
+    /// front every `every` steps.
+    fn wander(
+        h: &VertexHierarchy,
+        front: &mut Front,
+        seed: u64,
+        steps: usize,
+        every: usize,
+        mut check: impl FnMut(&Front, usize),
+    ) {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        for step in 0..steps {
+            let node = rng.gen_range(0..h.len() as u32);
+            if rng.gen_bool(0.7) {
+                if front.is_active(node) && h.children(node).is_some() {
+                    front.split(h, node).unwrap();
+                }
+            } else if front.can_collapse(h, node) {
+                front.collapse(h, node).unwrap();
+            }
+            if step % every == 0 {
+                check(front, step);
+            }
+        }
     }
 
     /// Every run is split whole or not at all.
@@ -657,21 +673,10 @@ mod tests {
             "a building has runs"
         );
         let h = VertexHierarchy::new(&pm).unwrap();
-        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
         let mut front = h.roots();
-        for step in 0..3000 {
-            let node = rng.gen_range(0..h.len() as u32);
-            if rng.gen_bool(0.7) {
-                if front.is_active(node) && h.children(node).is_some() {
-                    front.split(&h, node).unwrap();
-                }
-            } else if front.can_collapse(&h, node) {
-                front.collapse(&h, node).unwrap();
-            }
-            if step % 25 == 0 {
-                assert!(front.is_manifold(&h), "step {step}");
-                assert!(runs_whole(&h, &front), "step {step}");
-            }
-        }
+        wander(&h, &mut front, 3, 3000, 25, |front, step| {
+            assert!(front.is_manifold(&h), "step {step}");
+            assert!(runs_whole(&h, front), "step {step}");
+        });
     }
 }

@@ -140,7 +140,6 @@ pub(crate) fn walk_live<'db>(
             res_rx,
             left_out: tolerant.then(LeftOut::default),
             track: MotionTrack::default(),
-            pace: cfg.pace,
             clock: Instant::now(),
             pending: None,
         };
@@ -281,6 +280,35 @@ pub(super) fn loaded(piece: &Piece, mesh: Mesh, level: usize, search: &Searcher<
     loaded
 }
 
+/// A frame's start, in either VISUAL mode: its pose taken into `track`, the path's clock
+/// waited for under the walk's pace, its camera, and its figures begun. Pages are
+/// counted from before the wait: what another thread reads meanwhile is this frame's.
+/// The camera, the figures, the pages read so far and when the frame's own work began.
+pub(super) fn begin_frame(
+    db: &Database,
+    cfg: &VisualConfig,
+    track: &mut MotionTrack,
+    clock: Instant,
+    at: FrameAt<'_>,
+) -> Result<(Camera, VisualFrame, IoStats, Instant)> {
+    let pose = at.pose;
+    track.push(at.index, *pose)?;
+    let io_before = db.io();
+    if let (Some(speed), Some(start)) = (cfg.pace, track.start()) {
+        wait_until_due(pose.time, start, speed, clock);
+    }
+    let camera = Camera {
+        far: cfg.far,
+        ..Camera::new(pose.position, pose.yaw, pose.pitch)?
+    };
+    let frame = VisualFrame {
+        frame: at.index,
+        time: pose.time,
+        ..Default::default()
+    };
+    Ok((camera, frame, io_before, Instant::now()))
+}
+
 /// A frame's figures once it is culled, from what its retrieval left `pending`: what
 /// it draws, its time, and the pages read since its retrieval began, on every thread.
 pub(super) fn finish_frame(
@@ -333,7 +361,6 @@ struct Visual<'a> {
     res_rx: mpsc::Receiver<Result<Prefetched>>,
     left_out: Option<LeftOut>,
     track: MotionTrack,
-    pace: Option<f32>,
     clock: Instant,
     pending: Option<(VisualFrame, IoStats, Instant)>,
 }
@@ -347,24 +374,9 @@ impl Mode for Visual<'_> {
     }
 
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
-        let (i, pose) = (at.index, at.pose);
-        self.track.push(i, *pose)?;
-        // Counted from before the wait for the clock: what the prefetch thread reads
-        // meanwhile is this frame's.
-        let io_before = self.db.io();
-        if let (Some(speed), Some(start)) = (self.pace, self.track.start()) {
-            wait_until_due(pose.time, start, speed, self.clock);
-        }
-        let camera = Camera {
-            far: self.cfg.far,
-            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-        };
-        let start = Instant::now();
-        let mut frame = VisualFrame {
-            frame: i,
-            time: pose.time,
-            ..Default::default()
-        };
+        let pose = at.pose;
+        let (camera, mut frame, io_before, start) =
+            begin_frame(self.db, self.cfg, &mut self.track, self.clock, at)?;
         self.collect_prefetch(None, buffer, &mut frame)?;
         let cell = cell_at(self.db, pose.position)?;
         match cell {

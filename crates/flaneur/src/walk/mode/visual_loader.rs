@@ -197,7 +197,7 @@ impl VisualLoader<'_> {
         }
         let finds = pieces.iter().map(|p| (p.key, p.level)).collect();
         self.finds.insert(place, pieces);
-        self.send(Update::Found { place, finds })?;
+        self.send(Update::Found { place, finds });
         // After the new place's finds, so that the viewer always has a place to draw.
         if place == stand.here {
             self.let_go(stand);
@@ -264,7 +264,7 @@ impl VisualLoader<'_> {
             self.sent.remove(k);
         }
         if !(places.is_empty() && keys.is_empty()) {
-            let _ = self.tx.send(Update::LetGo { places, keys });
+            self.send(Update::LetGo { places, keys });
         }
     }
 
@@ -333,7 +333,7 @@ impl VisualLoader<'_> {
             }
         }
         if !arrived.is_empty() {
-            self.send(Update::Loaded(arrived))?;
+            self.send(Update::Loaded(arrived));
         }
         Ok(true)
     }
@@ -350,7 +350,7 @@ impl VisualLoader<'_> {
     /// The network failed to bring what `key` (or a place's search) needed: told, and
     /// asked for again a pause later.
     fn retry(&mut self, key: Option<u64>, e: Error) -> Result<()> {
-        self.send(Update::Retrying(e.to_string()))?;
+        self.send(Update::Retrying(e.to_string()));
         match key {
             Some(k) => {
                 self.again_at.insert(k, Instant::now() + ASK_AGAIN_AFTER);
@@ -373,10 +373,9 @@ impl VisualLoader<'_> {
         }
     }
 
-    fn send(&self, update: Update) -> Result<()> {
+    fn send(&self, update: Update) {
         // A viewer that no longer listens has ended the walk.
         let _ = self.tx.send(update);
-        Ok(())
     }
 }
 

@@ -16,9 +16,8 @@ use std::sync::{mpsc, Mutex};
 use std::time::Instant;
 
 use super::mailbox::Mailbox;
-use super::pace::wait_until_due;
 use super::receive::receive;
-use super::visual::{cell_at, finish_frame, Searcher};
+use super::visual::{begin_frame, cell_at, finish_frame, Searcher};
 use super::visual_loader::{self, Place, Stand, Update};
 use crate::database::Database;
 use crate::error::Result;
@@ -141,21 +140,8 @@ impl Mode for NeverWait<'_> {
 
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
         let (i, pose) = (at.index, at.pose);
-        self.track.push(i, *pose)?;
-        let io_before = self.db.io();
-        if let (Some(speed), Some(start)) = (self.cfg.pace, self.track.start()) {
-            wait_until_due(pose.time, start, speed, self.clock);
-        }
-        let camera = Camera {
-            far: self.cfg.far,
-            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-        };
-        let started = Instant::now();
-        let mut frame = VisualFrame {
-            frame: i,
-            time: pose.time,
-            ..Default::default()
-        };
+        let (camera, mut frame, io_before, started) =
+            begin_frame(self.db, self.cfg, &mut self.track, self.clock, at)?;
         let cell = cell_at(self.db, pose.position)?;
         let (here, outside) = match cell {
             Some(c) => (Place::Cell(c), None),
