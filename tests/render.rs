@@ -896,6 +896,7 @@ fn landmarks_streamed_into_a_walk_reach_the_gpu_as_the_batches_made_them() {
         budget: Some(flaneur::lod::THESIS_BUDGET as u32),
         out_of_view: true,
         back_face: true,
+        scheme: flaneur_stream::Scheme::Dag,
     };
     let refinement = flaneur_stream::Refinement {
         tau: 0.001,

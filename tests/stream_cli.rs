@@ -90,6 +90,7 @@ fn serve_stream_streams_a_databases_landmarks_to_a_client() {
         budget: None,
         out_of_view: false,
         back_face: false,
+        scheme: flaneur_stream::Scheme::Dag,
     };
     let mut client = StreamClient::connect(&addr, hello, Duration::from_secs(20)).unwrap();
     // The eight largest, by id, each from its base mesh.

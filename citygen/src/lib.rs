@@ -36,7 +36,7 @@ mod sculpture;
 pub use config::{CityConfig, MAX_OBJECTS};
 pub use generate::{generate, write_city, write_city_with_progress};
 pub use obj_export::export_obj;
-pub use recipe::object;
+pub use recipe::{object, sample_building};
 // The scene types are the engine's (`flaneur-scene`); they are named here too so that a
 // generator user has one crate to import.
 pub use flaneur_scene::{

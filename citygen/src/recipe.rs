@@ -13,7 +13,7 @@ use crate::config::CityConfig;
 use crate::layout::Layout;
 use crate::sculpture::sculpture;
 use flaneur_scene::SceneError;
-use flaneur_scene::{ObjectKind, SceneObject};
+use flaneur_scene::{Mesh, ObjectKind, SceneObject};
 
 /// Salts that keep the independent per-id draws apart.
 const STREAM_SALT: u64 = 0x6f62_6a65_6374_0001;
@@ -71,6 +71,26 @@ pub(crate) fn checked_layout(config: &CityConfig) -> Result<Layout, SceneError> 
 /// ```
 pub fn object(config: &CityConfig, id: u64) -> Result<SceneObject, SceneError> {
     Ok(object_on(config, &checked_layout(config)?, id))
+}
+
+/// The first building of at least `triangles` triangles in the default city of 64
+/// ordinary objects: flat-shaded, so that every corner and crease is a seam. The mesh
+/// tests and fuzzers of crease handling share; `None` past what such a city holds.
+///
+/// ```
+/// let b = citygen::sample_building(600).unwrap();
+/// assert!(b.triangle_count() >= 600);
+/// ```
+pub fn sample_building(triangles: usize) -> Option<Mesh> {
+    let config = CityConfig {
+        objects: 64,
+        landmarks: 0.0,
+        ..Default::default()
+    };
+    let layout = checked_layout(&config).ok()?;
+    (0..config.objects)
+        .map(|id| object_on(&config, &layout, id).mesh)
+        .find(|m| m.triangle_count() >= triangles)
 }
 
 /// [`object`] with the layout already built (it is the same for every id).

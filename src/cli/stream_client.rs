@@ -18,6 +18,7 @@ pub fn stream_landmarks(
         budget: Some(flaneur::lod::THESIS_BUDGET as u32),
         out_of_view: true,
         back_face: true,
+        scheme: flaneur_stream::Scheme::Dag,
     };
     let refinement = flaneur_stream::Refinement {
         tau,

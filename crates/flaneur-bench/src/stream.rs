@@ -264,6 +264,7 @@ fn walk(
         budget: Some(cfg.budget),
         out_of_view: true,
         back_face: true,
+        scheme: flaneur_stream::Scheme::Dag,
     };
     let params = RefineParams {
         traversal: hello.traversal,

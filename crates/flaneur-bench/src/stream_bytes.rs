@@ -9,8 +9,8 @@
 //! to converge, the triangles then, and at a byte cap (their Fig. 9's 0.5 MB) the
 //! triangles held and the share of what the view needs (the view-dependent converged
 //! mesh's triangles) that they cover. Then the same for Kim–Lee–Kobbelt's truly
-//! selective scheme (`lod::selective`), streamed in process with each batch counted as
-//! encoded for the wire; its share at the cap is of its own view-dependent mesh.
+//! selective schemes (`lod::selective`) over sessions of their own with the same
+//! server; their share at the cap is of their own view-dependent mesh.
 
 use std::path::Path;
 use std::time::Duration;
@@ -21,13 +21,11 @@ use crate::report::Report;
 use flaneur::error::{Error, Result};
 use std::collections::HashSet;
 
-use flaneur::lod::{
-    CompactMesh, Criteria, CutVertexClient, NodeName, SelectiveClient, SelectiveServer,
-    SelectiveSource, Traversal, View,
-};
+use flaneur::lod::{CompactMesh, NodeName, Traversal};
 use flaneur_stream::protocol::MAX_N;
-use flaneur_stream::selective_wire::encode_vsplits;
-use flaneur_stream::{Hello, ServerConfig, StreamClient, StreamServer, ViewPacket};
+use flaneur_stream::{
+    Hello, Scheme, SelectiveStreamClient, ServerConfig, StreamClient, StreamServer, ViewPacket,
+};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -130,7 +128,6 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
     progress("building the landmark's progressive mesh and DAG");
     let (landmark, centre, radius) = crate::stream::torus_landmark(cfg.triangles)?;
     let model_triangles = landmark.triangles();
-    let (landmark_pm, landmark_dag) = (landmark.pm.clone(), landmark.dag.clone());
     let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
         .and_then(|s| s.spawn())
         .map_err(|e| Error::Invalid(format!("stream-bytes: {e}")))?;
@@ -152,6 +149,7 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
         budget: None,
         out_of_view: culling,
         back_face: culling,
+        scheme: Scheme::Dag,
     };
     let mut rows = Vec::new();
     let mut needed: Option<CompactMesh> = None;
@@ -175,32 +173,26 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
             cap_share: cap_mesh.shared_with(reference),
         });
     }
-    let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
-    let view = View::new(eye, aim - eye, fov)?;
-    let source = SelectiveSource::new(&landmark_pm, &landmark_dag)?;
     let mut needed: Option<HashSet<[NodeName; 3]>> = None;
-    for (scheme, criteria) in [
-        ("truly-selective view-dependent", Criteria::default()),
-        (
-            "truly-selective view-independent",
-            Criteria {
-                out_of_view: false,
-                back_face: false,
-            },
-        ),
+    for (name, scheme, culling) in [
+        ("truly-selective view-dependent", Scheme::Selective, true),
+        ("truly-selective view-independent", Scheme::Selective, false),
+        ("truly-selective cut-vertex-only", Scheme::CutVertex, true),
     ] {
-        progress(&format!("streaming {scheme}"));
-        rows.push(stream_selective(
-            &source,
-            &view,
-            cfg,
-            criteria,
+        progress(&format!("streaming {name}"));
+        let hello = Hello {
             scheme,
+            ..hello(culling)
+        };
+        rows.push(stream_selective(
+            server.addr(),
+            hello,
+            view,
+            cfg,
+            name,
             &mut needed,
         )?);
     }
-    progress("streaming truly selective, cut vertices only");
-    rows.push(stream_cut_vertices(&source, &view, cfg, &mut needed)?);
     Ok(StreamBytesReport {
         config: cfg.clone(),
         model_triangles,
@@ -208,71 +200,58 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
     })
 }
 
-/// Streams the landmark for `view` in KLK §7's variant: the server decides every split
-/// and names the cut vertices as they stand, and the client makes them as they come.
-fn stream_cut_vertices(
-    source: &SelectiveSource,
-    view: &View,
+/// Streams the landmark for `view` over a truly selective session until the client's
+/// mesh is what the view asks for (the selective scheme), or until a VSPLITS brings
+/// nothing (cut-vertex-only, whose client does not refine on its own), each VSPLITS
+/// counted as it came over the wire. `needed` is the first row's converged mesh, that
+/// the share at the cap is of.
+fn stream_selective(
+    server: std::net::SocketAddr,
+    hello: Hello,
+    view: ViewPacket,
     cfg: &StreamBytesConfig,
+    name: &'static str,
     needed: &mut Option<HashSet<[NodeName; 3]>>,
 ) -> Result<StreamBytesRow> {
-    let mut server = SelectiveServer::new(source).cut_vertex_only();
-    let mut client = CutVertexClient::new(source.base());
+    let bad = |e: flaneur_stream::StreamError| Error::Invalid(format!("stream-bytes: {name}: {e}"));
+    let mut client =
+        SelectiveStreamClient::connect(server, hello, Duration::from_secs(60)).map_err(bad)?;
+    let mesh = |client: &SelectiveStreamClient| canonical(client.objects()[0].triangles());
     let (mut frames, mut bytes, mut at_cap) = (0, 0, None);
-    loop {
-        let packets = server.refine(source, view, cfg.tau)?;
-        if packets.is_empty() {
+    let mut v = view;
+    while client.select(&v).map_err(bad)? {
+        if v.frame >= MAX_FRAMES {
+            return Err(Error::Invalid(format!(
+                "stream-bytes: {name} did not converge in {MAX_FRAMES} frames"
+            )));
+        }
+        client.send_view(&v).map_err(bad)?;
+        let got = client.receive_batch().map_err(bad)?;
+        v.frame += 1;
+        frames += 1;
+        bytes += got.bytes;
+        if got.splits == 0 {
+            if hello.scheme == Scheme::Selective {
+                return Err(Error::Invalid(format!(
+                    "stream-bytes: {name}: the server had nothing for what the client lacks"
+                )));
+            }
             break;
         }
-        bytes += encode_vsplits(&packets).len();
-        frames += 1;
-        client.receive(&packets)?;
         if bytes >= cfg.cap && at_cap.is_none() {
-            at_cap = Some((canonical(client.triangles()), bytes));
+            client.select(&v).map_err(bad)?;
+            at_cap = Some((mesh(&client), bytes));
         }
     }
-    let mesh = canonical(client.triangles());
+    let converged = mesh(&client);
+    client.bye().map_err(bad)?;
     Ok(selective_row(
-        "truly-selective cut-vertex-only",
+        name,
         (frames, bytes),
-        mesh,
+        converged,
         at_cap,
         needed,
     ))
-}
-
-/// Streams the landmark for `view` by truly selective refinement, in process, until
-/// the client's mesh is what the view asks for: each request's batch counted as
-/// encoded for the wire. `needed` is the view-dependent stream's converged mesh, set by
-/// the first call, that the share at the cap is of.
-fn stream_selective(
-    source: &SelectiveSource,
-    view: &View,
-    cfg: &StreamBytesConfig,
-    criteria: Criteria,
-    scheme: &'static str,
-    needed: &mut Option<HashSet<[NodeName; 3]>>,
-) -> Result<StreamBytesRow> {
-    let mut server = SelectiveServer::new(source).with_criteria(criteria);
-    let mut client = SelectiveClient::new(source.base()).with_criteria(criteria);
-    let (mut frames, mut bytes, mut at_cap) = (0, 0, None);
-    while !client.select(view, cfg.tau)?.is_empty() {
-        let packets = server.refine(source, view, cfg.tau)?;
-        if packets.is_empty() {
-            return Err(Error::Invalid(format!(
-                "stream-bytes: {scheme}: the server had nothing for what the client lacks"
-            )));
-        }
-        bytes += encode_vsplits(&packets).len();
-        frames += 1;
-        client.receive(&packets)?;
-        if bytes >= cfg.cap && at_cap.is_none() {
-            client.select(view, cfg.tau)?;
-            at_cap = Some((canonical(client.triangles()), bytes));
-        }
-    }
-    let mesh = canonical(client.triangles());
-    Ok(selective_row(scheme, (frames, bytes), mesh, at_cap, needed))
 }
 
 /// A truly selective stream's row: `frames` and `bytes` to converge on `mesh`, the mesh
@@ -354,9 +333,10 @@ impl Report for StreamBytesReport {
                 100.0 * r.cap_share
             );
         }
-        md += "\nThe truly selective rows stream in process (not yet over TCP), each batch \
-               counted as encoded for the wire (`selective_wire`); the DAG rows are a stream \
-               server's batches over loopback. Neither counts the base mesh. Kim–Lee–Kobbelt's \
+        md += "\nEvery row is one session with the same stream server over loopback, its \
+               answers' bytes as they came over the wire (the truly selective client asks only \
+               while its view wants a split it lacks; the cut-vertex-only one until an answer \
+               brings nothing). No row counts the base mesh. Kim–Lee–Kobbelt's \
                Fig. 8: 177,120 bytes and 4,534 faces view-dependent against 827,688 bytes and \
                68,884 faces view-independent (their truly selective scheme).\n";
         md

@@ -180,6 +180,7 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
                         budget: Some(cfg.budget),
                         out_of_view: true,
                         back_face: true,
+                        scheme: flaneur_stream::Scheme::Dag,
                     };
                     let refinement = Refinement {
                         tau: cfg.tau,

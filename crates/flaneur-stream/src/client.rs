@@ -20,9 +20,10 @@ use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::Duration;
 
 use crate::error::StreamError;
+use crate::exchange::Exchange;
 use crate::protocol::{
-    receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
-    MAX_RESUME, MAX_TO_CLIENT,
+    receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, Scheme, ViewPacket,
+    WelcomeObject, MAX_RESUME, MAX_TO_CLIENT,
 };
 use flaneur::lod::{CompactMesh, MeshChanges};
 
@@ -152,21 +153,40 @@ pub(crate) fn resume_session(
     Ok(stream)
 }
 
-/// Opens a session on `stream`: HELLO, then the server's WELCOME.
+/// Opens a session of Zheng's scheme on `stream`: HELLO, then the server's WELCOME.
 fn greet(
-    mut stream: TcpStream,
+    stream: TcpStream,
     hello: Hello,
     timeout: Duration,
 ) -> Result<(TcpStream, Vec<WelcomeObject>), StreamError> {
+    if hello.scheme != Scheme::Dag {
+        return Err(StreamError::Malformed(format!(
+            "a HELLO of the {:?} scheme: this client speaks Zheng's DAG scheme \
+             (SelectiveStreamClient speaks the truly selective ones)",
+            hello.scheme
+        )));
+    }
+    match open(stream, hello, timeout)? {
+        (stream, Message::Welcome(objects)) => Ok((stream, objects)),
+        (_, other) => Err(StreamError::Malformed(format!(
+            "the server answered HELLO with {other:?}"
+        ))),
+    }
+}
+
+/// Sends HELLO on `stream`, `timeout` bounding each wait from then on, and reads the
+/// server's answer (a REFUSED is an `Err` with its reason).
+pub(crate) fn open(
+    mut stream: TcpStream,
+    hello: Hello,
+    timeout: Duration,
+) -> Result<(TcpStream, Message), StreamError> {
     stream.set_read_timeout(Some(timeout))?;
     stream.set_nodelay(true)?;
     send(&mut stream, &Message::Hello(hello))?;
     match receive(&mut stream, MAX_TO_CLIENT)? {
-        Some((Message::Welcome(objects), _)) => Ok((stream, objects)),
         Some((Message::Refused(why), _)) => Err(StreamError::Refused(why)),
-        Some((other, _)) => Err(StreamError::Malformed(format!(
-            "the server answered HELLO with {other:?}"
-        ))),
+        Some((answer, _)) => Ok((stream, answer)),
         None => Err(StreamError::Refused("closed before WELCOME".into())),
     }
 }
@@ -187,12 +207,8 @@ pub struct BatchReport {
 /// A session with a stream server.
 #[derive(Debug)]
 pub struct StreamClient {
-    stream: TcpStream,
+    exchange: Exchange,
     objects: Vec<StreamedObject>,
-    /// The frame of the VIEW sent and not yet answered.
-    pending: Option<u32>,
-    /// The lowest frame the next VIEW may have (one past the last sent).
-    next_frame: u32,
     /// What a reconnection needs: the server, the HELLO, the wait bound.
     server: SocketAddr,
     hello: Hello,
@@ -233,10 +249,8 @@ impl StreamClient {
             })
             .collect::<Result<Vec<_>, StreamError>>()?;
         Ok(StreamClient {
-            stream,
+            exchange: Exchange::new(stream),
             objects,
-            pending: None,
-            next_frame: 0,
             server,
             hello,
             timeout,
@@ -250,8 +264,8 @@ impl StreamClient {
     /// left as it was, when the server cannot be reached or now streams other objects.
     pub fn reconnect(&mut self) -> Result<(), StreamError> {
         let peer = (self.server, self.hello, self.timeout);
-        self.stream = resume_session(peer, &self.objects, self.next_frame)?;
-        self.pending = None;
+        let stream = resume_session(peer, &self.objects, self.exchange.next_frame())?;
+        self.exchange.resume_on(stream);
         Ok(())
     }
 
@@ -263,38 +277,18 @@ impl StreamClient {
     /// Sends `view`; its batch is [`StreamClient::receive_batch`]'s. One view is
     /// pending at a time (Zheng Fig. 5.3b: no request until the last was answered).
     pub fn send_view(&mut self, view: &ViewPacket) -> Result<(), StreamError> {
-        if let Some(frame) = self.pending {
-            return Err(StreamError::Malformed(format!(
-                "frame {frame}'s batch has not come yet"
-            )));
-        }
-        send(&mut self.stream, &Message::View(*view))?;
-        self.pending = Some(view.frame);
-        self.next_frame = self.next_frame.max(view.frame.saturating_add(1));
-        Ok(())
+        self.exchange.send_view(view)
     }
 
     /// Waits for the pending view's batch and applies it.
     pub fn receive_batch(&mut self) -> Result<BatchReport, StreamError> {
-        let asked = self
-            .pending
-            .ok_or_else(|| StreamError::Malformed("no view is waiting for a batch".into()))?;
-        let (frame, objects, bytes) = match receive(&mut self.stream, MAX_TO_CLIENT)? {
-            Some((Message::Batch { frame, objects }, bytes)) => (frame, objects, bytes),
-            Some((Message::Refused(why), _)) => return Err(StreamError::Refused(why)),
-            Some((other, _)) => {
-                return Err(StreamError::Malformed(format!(
-                    "a {other:?} where frame {asked}'s batch was due"
-                )))
-            }
-            None => return Err(StreamError::Refused("closed mid-session".into())),
+        let (m, bytes) = self.exchange.answer(|m: &Message| match m {
+            Message::Batch { frame, .. } => Some(*frame),
+            _ => None,
+        })?;
+        let Message::Batch { frame, objects } = m else {
+            unreachable!("the exchange returns a batch")
         };
-        if frame != asked {
-            return Err(StreamError::Malformed(format!(
-                "the batch of frame {frame} where frame {asked}'s was due"
-            )));
-        }
-        self.pending = None;
         let mut report = BatchReport {
             frame,
             bytes,
@@ -315,12 +309,17 @@ impl StreamClient {
     /// The connection, the objects and where the server is, for a client that takes
     /// the session over.
     pub(crate) fn into_parts(self) -> (TcpStream, Vec<StreamedObject>, SocketAddr, Duration) {
-        (self.stream, self.objects, self.server, self.timeout)
+        (
+            self.exchange.stream,
+            self.objects,
+            self.server,
+            self.timeout,
+        )
     }
 
     /// Ends the session.
     pub fn bye(mut self) -> Result<(), StreamError> {
-        send(&mut self.stream, &Message::Bye)?;
+        send(&mut self.exchange.stream, &Message::Bye)?;
         Ok(())
     }
 }

@@ -5,16 +5,18 @@
 //! batches of edge collapses and vertex splits the server answers its views with.
 //!
 //! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
-//! documentation); `landmark` what a server streams; `server` the sessions; `client` the selective meshes' side, and `predictive` the
-//! client that hides the round trip by prediction (Zheng ch. 5–6); `wire`
-//! the bounded field reader both decode with; `walk_source` a session as the landmarks a
-//! walk draws (`flaneur walk --stream`).
+//! documentation); `landmark` what a server streams; `server` the sessions; `client`
+//! the selective meshes' side of Zheng's scheme, and `predictive` the client that hides
+//! the round trip by prediction (Zheng ch. 5–6); `selective_client` the side of
+//! Kim–Lee–Kobbelt's truly selective schemes, whose packets `selective_wire` encodes;
+//! `wire` the bounded field reader every decoder uses; `walk_source` a session as the
+//! landmarks a walk draws (`flaneur walk --stream`).
 //!
 //! ```
 //! use std::sync::Arc;
 //! use std::time::Duration;
 //! use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, Traversal};
-//! use flaneur_stream::{Hello, Landmark, ServerConfig, StreamClient, StreamServer, ViewPacket};
+//! use flaneur_stream::{Hello, Landmark, Scheme, ServerConfig, StreamClient, StreamServer, ViewPacket};
 //!
 //! let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
 //! let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
@@ -22,7 +24,7 @@
 //! let server = StreamServer::bind("127.0.0.1:0", vec![bunny], ServerConfig::default())?.spawn()?;
 //!
 //! let hello = Hello { traversal: Traversal::Priority, fov: 1.0, budget: Some(60_000),
-//!                     out_of_view: true, back_face: true };
+//!                     out_of_view: true, back_face: true, scheme: Scheme::Dag };
 //! let mut client = StreamClient::connect(server.addr(), hello, Duration::from_secs(5))?;
 //! let base = client.objects()[0].mesh().triangle_count();
 //! let view = ViewPacket { frame: 0, eye: [0.0, 0.1, 0.4], aim: [0.0, 0.1, 0.0], tau: 0.001,
@@ -37,9 +39,11 @@
 
 mod client;
 mod error;
+mod exchange;
 mod landmark;
 mod predictive;
 pub mod protocol;
+mod selective_client;
 pub mod selective_wire;
 mod server;
 mod walk_source;
@@ -51,6 +55,7 @@ pub use landmark::Landmark;
 pub use predictive::{
     PredictiveClient, PredictiveFrame, Predictor, Refinement, ADJUST_EVERY, MAX_SPAN,
 };
-pub use protocol::{HeldNodes, Hello, Message, ViewPacket};
+pub use protocol::{HeldLeaves, HeldNodes, Hello, Message, Scheme, ViewPacket};
+pub use selective_client::{SelectiveLandmark, SelectiveStreamClient, VsplitsReport};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};
 pub use walk_source::{StreamFigures, StreamedLandmarks, RETRY_AFTER};

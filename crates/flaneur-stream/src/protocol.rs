@@ -1,4 +1,4 @@
-//! The stream protocol, version 2: length-prefixed messages over one TCP connection.
+//! The stream protocol, version 3: length-prefixed messages over one TCP connection.
 //!
 //! Every message is a frame: a `u32` length `L` (the bytes after it), then `L` bytes,
 //! the first of them the message's kind. All numbers are little-endian; floats are
@@ -10,7 +10,8 @@
 //!   0x01 HELLO    magic "FLANEURS" (8)  version u16  traversal u8 (0 priority, 1 linear,
 //!                 2 constant-time)  fov f32 (the view cone's full angle, radians)
 //!                 budget u32 (triangles per object in budget mode; 0: none)
-//!                 criteria u8 (bit 0 out-of-view, bit 1 back-face)             20 bytes
+//!                 criteria u8 (bit 0 out-of-view, bit 1 back-face)
+//!                 scheme u8 (0 Zheng's DAG, 1 truly selective, 2 cut-vertex-only)  21 bytes
 //!   0x02 VIEW     frame u32 (strictly increasing)  then Zheng's 33 bytes (§8.2.1):
 //!                 eye 3×f32  aim-at 3×f32  τ f32  mode u8 (0 free, 1 budget)  N u32
 //!                                                                              37 bytes
@@ -18,6 +19,8 @@
 //!   0x04 RESUME   next frame u32 (the lowest frame the next VIEW may have)
 //!                 objects u32, then each: index u32 (in WELCOME's order)
 //!                 nodes u32, then each: node u32 (a DAG node the client holds split)
+//!   0x05 RESUME-LEAVES  next frame u32  objects u32, then each: index u32
+//!                 names u32, then each a NAME (a node held whose split it was not sent)
 //! server → client
 //!   0x81 WELCOME  magic (8)  version u16  objects u32, then each:
 //!                 id u64  splits u32  base vertices u32  positions 3×f32 each
@@ -31,6 +34,27 @@
 //!                   normal 3×f32  v_l u32  v_r u32 (u32::MAX: none)  corners 2×u8
 //!                   adjusted u32, then that many triangle numbers u32
 //!   0x83 REFUSED  reason, UTF-8, to the frame's end; the server closes after it
+//!   0x84 SELECTIVE-WELCOME  magic (8)  version u16  objects u32, then each: id u64
+//!                 roots u32, then each: position 3×f32  normal 3×f32  flag u8 (1: an
+//!                 INFO follows)  base triangles u32, corners 3×u32 each (tree-ids)
+//!                 placement u8 (0 cut vertices; 1 leaf corners: then each base
+//!                 triangle's three corners' leaves, 3 NAMEs, each in its corner's tree)
+//!   0x85 VSPLITS  frame u32 (the VIEW's)  objects u32, then each object with splits:
+//!                 index u32  packets u32 (at least 1), then each:
+//!                   NAME (the node)  flags u8 (bits 0, 1: left, right cut vertex;
+//!                   bits 2, 3: the left, right child's INFO; bit 4: a run; bit 5:
+//!                   leaves)  the cut vertices' NAMEs
+//!                   position 3×f32  normal 3×f32 (the right child's vertex)
+//!                   the children's INFOs
+//!                   if bit 4: NAME (the node of its run's first split)
+//!                   if bit 5: for each cut vertex sent, its triangle's leaves below
+//!                   the left and the right child, 2 SUFFIXes
+//!
+//! NAME    tree u32  bits u16 (1 to 65,536)  the heap index in ⌈bits/8⌉ bytes, least
+//!         significant first
+//! SUFFIX  levels u16  the steps down from the child (1 right), most significant
+//!         first, in ⌈levels/8⌉ bytes
+//! INFO  centre 3×f32  axis 3×f32  radius f32  cone sin f32  error f32   44 bytes
 //! ```
 //!
 //! A session: HELLO, WELCOME, then VIEW and BATCH in turn (the server answers every
@@ -47,18 +71,37 @@
 //! the server cannot follow (a node out of range, or split with a parent that is not)
 //! is refused as any other bad message is.
 //!
-//! Version 2 added RESUME; version 1 peers are refused by version.
+//! **Truly selective sessions** (Kim–Lee–Kobbelt; HELLO's scheme 1 or 2) stream the
+//! landmarks' vertex hierarchies instead: SELECTIVE-WELCOME gives each base mesh over
+//! its roots, and each VIEW is answered with one VSPLITS of the splits the view asks
+//! for that were not sent yet (`lod::selective`), at most N per object (a split begun
+//! is sent whole with what the partial order forces for it, so a part may run a little
+//! past N). A client of scheme 1 refines and coarsens locally and sends a VIEW only
+//! when its view wants a split it lacks; one of scheme 2 (KLK §7) makes every split as
+//! it comes, at the cut vertices the packet names as they stand on its mesh (under leaf
+//! placement, by the leaves), and its packets carry no INFO. An object whose splits
+//! come in crease runs, some adding no triangle, is sent with leaf placement: its
+//! packets name their run and the leaves of the triangles they add (ours;
+//! `lod::selective`). Budget mode is not part of these schemes: a VIEW in it is
+//! refused. A client resumes with RESUME-LEAVES, naming the nodes it holds whose split
+//! it was not sent: the server's front of what it sent.
+//!
+//! Version 3 added the scheme and the truly selective messages, version 2 RESUME;
+//! peers of another version are refused by version.
 
 use crate::error::StreamError;
+use crate::selective_wire::{
+    read_base, read_name, read_vsplits, write_base, write_name, write_vsplits, MIN_NAME,
+};
 use crate::wire::{Reader, Writer};
-use flaneur::lod::{Traversal, VertexSplit};
+use flaneur::lod::{NodeName, SelectiveBase, Traversal, VertexSplit, VsplitPacket};
 use flaneur::scene::Mesh;
 
 /// The first bytes of HELLO and WELCOME.
 pub const MAGIC: [u8; 8] = *b"FLANEURS";
 /// The protocol's version; a peer of another is refused.
-pub const VERSION: u16 = 2;
-/// The longest frame a server reads: a VIEW is 38 bytes, a HELLO 21.
+pub const VERSION: u16 = 3;
+/// The longest frame a server reads: a VIEW is 38 bytes, a HELLO 22.
 pub const MAX_TO_SERVER: usize = 4 << 10;
 /// The longest RESUME a server reads: 4 bytes a node held split, so about four million
 /// nodes over every object.
@@ -76,9 +119,26 @@ const HELLO: u8 = 0x01;
 const VIEW: u8 = 0x02;
 const BYE: u8 = 0x03;
 const RESUME: u8 = 0x04;
+const RESUME_LEAVES: u8 = 0x05;
 const WELCOME: u8 = 0x81;
 const BATCH: u8 = 0x82;
 const REFUSED: u8 = 0x83;
+const SELECTIVE_WELCOME: u8 = 0x84;
+const VSPLITS: u8 = 0x85;
+
+/// How a session streams its landmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Scheme {
+    /// Zheng's: the server runs the DAG traversal and sends collapses and splits.
+    #[default]
+    Dag,
+    /// Kim–Lee–Kobbelt's truly selective refinement: the server sends the vertex
+    /// hierarchy's splits a view asks for, the client refines on its own.
+    Selective,
+    /// KLK §7's variant for clients that do not refine: each split at the cut vertices
+    /// as they stand on the client's mesh.
+    CutVertex,
+}
 
 /// What a client asks for once, at the session's start.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,6 +150,7 @@ pub struct Hello {
     pub budget: Option<u32>,
     pub out_of_view: bool,
     pub back_face: bool,
+    pub scheme: Scheme,
 }
 
 /// One frame's view parameters (Zheng 2007 §8.2.1: E, A, τ, mode, N).
@@ -115,6 +176,32 @@ pub struct HeldNodes {
     pub index: u32,
     /// The DAG nodes split, in any order.
     pub nodes: Vec<u32>,
+}
+
+/// One object's leaves a resuming client of a truly selective session holds
+/// (RESUME-LEAVES).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct HeldLeaves {
+    /// The object's place in SELECTIVE-WELCOME's list.
+    pub index: u32,
+    /// The nodes it holds whose split it was not sent.
+    pub leaves: Vec<NodeName>,
+}
+
+/// An object a truly selective session may stream: its id and the base mesh over its
+/// hierarchy's roots.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelectiveObject {
+    pub id: u64,
+    pub base: SelectiveBase,
+}
+
+/// One object's splits in a VSPLITS.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectVsplits {
+    /// The object's place in SELECTIVE-WELCOME's list.
+    pub index: u32,
+    pub packets: Vec<VsplitPacket>,
 }
 
 /// An object a session may stream: its id and the base mesh its splits refine.
@@ -174,6 +261,24 @@ pub enum Message {
         objects: Vec<ObjectUpdates>,
     },
     Refused(String),
+    /// A client of a truly selective session resuming on a new connection.
+    ResumeLeaves {
+        next_frame: u32,
+        objects: Vec<HeldLeaves>,
+    },
+    SelectiveWelcome(Vec<SelectiveObject>),
+    Vsplits {
+        frame: u32,
+        objects: Vec<ObjectVsplits>,
+    },
+}
+
+fn scheme_code(s: Scheme) -> u8 {
+    match s {
+        Scheme::Dag => 0,
+        Scheme::Selective => 1,
+        Scheme::CutVertex => 2,
+    }
 }
 
 fn traversal_code(t: Traversal) -> u8 {
@@ -198,6 +303,7 @@ impl Message {
                 w.f32(h.fov);
                 w.u32(h.budget.unwrap_or(0));
                 w.u8(u8::from(h.out_of_view) | (u8::from(h.back_face) << 1));
+                w.u8(scheme_code(h.scheme));
             }
             Message::View(v) => {
                 w.u8(VIEW);
@@ -258,6 +364,38 @@ impl Message {
                 w.u8(REFUSED);
                 w.raw(why.as_bytes());
             }
+            Message::ResumeLeaves {
+                next_frame,
+                objects,
+            } => {
+                w.u8(RESUME_LEAVES);
+                w.u32(*next_frame);
+                w.count(objects.len());
+                for o in objects {
+                    w.u32(o.index);
+                    w.count(o.leaves.len());
+                    o.leaves.iter().for_each(|n| write_name(&mut w, n));
+                }
+            }
+            Message::SelectiveWelcome(objects) => {
+                w.u8(SELECTIVE_WELCOME);
+                w.raw(&MAGIC);
+                w.u16(VERSION);
+                w.count(objects.len());
+                for o in objects {
+                    w.u64(o.id);
+                    write_base(&mut w, &o.base);
+                }
+            }
+            Message::Vsplits { frame, objects } => {
+                w.u8(VSPLITS);
+                w.u32(*frame);
+                w.count(objects.len());
+                for o in objects {
+                    w.u32(o.index);
+                    write_vsplits(&mut w, &o.packets);
+                }
+            }
         }
         let len = (w.bytes.len() - 4) as u32;
         w.bytes[..4].copy_from_slice(&len.to_le_bytes());
@@ -285,6 +423,12 @@ impl Message {
                 if criteria > 3 {
                     return Err(r.bad(format!("criteria bits {criteria:#x}")));
                 }
+                let scheme = match r.u8()? {
+                    0 => Scheme::Dag,
+                    1 => Scheme::Selective,
+                    2 => Scheme::CutVertex,
+                    s => return Err(r.bad(format!("scheme {s}, not 0, 1 or 2"))),
+                };
                 r.end()?;
                 Message::Hello(Hello {
                     traversal,
@@ -292,6 +436,7 @@ impl Message {
                     budget: (budget > 0).then_some(budget),
                     out_of_view: criteria & 1 != 0,
                     back_face: criteria & 2 != 0,
+                    scheme,
                 })
             }
             VIEW => {
@@ -324,6 +469,9 @@ impl Message {
             WELCOME => decode_welcome(rest)?,
             BATCH => decode_batch(rest)?,
             REFUSED => Message::Refused(String::from_utf8_lossy(rest).into_owned()),
+            RESUME_LEAVES => decode_resume_leaves(rest)?,
+            SELECTIVE_WELCOME => decode_selective_welcome(rest)?,
+            VSPLITS => decode_vsplits_message(rest)?,
             k => {
                 return Err(StreamError::Malformed(format!(
                     "a message of kind {k:#04x}"
@@ -402,6 +550,57 @@ fn decode_resume(body: &[u8]) -> Result<Message, StreamError> {
         next_frame,
         objects,
     })
+}
+
+fn decode_resume_leaves(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "RESUME-LEAVES");
+    let next_frame = r.u32()?;
+    let n = r.count_at_most(8, MAX_OBJECTS, "objects")?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let index = r.u32()?;
+        let len = r.count(MIN_NAME)?;
+        let leaves = (0..len)
+            .map(|_| read_name(&mut r))
+            .collect::<Result<Vec<_>, _>>()?;
+        objects.push(HeldLeaves { index, leaves });
+    }
+    r.end()?;
+    Ok(Message::ResumeLeaves {
+        next_frame,
+        objects,
+    })
+}
+
+fn decode_selective_welcome(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "SELECTIVE-WELCOME");
+    magic_and_version(&mut r)?;
+    let n = r.count_at_most(8 + 4 + 4, MAX_OBJECTS, "objects")?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let id = r.u64()?;
+        let base = read_base(&mut r)?;
+        objects.push(SelectiveObject { id, base });
+    }
+    r.end()?;
+    Ok(Message::SelectiveWelcome(objects))
+}
+
+fn decode_vsplits_message(body: &[u8]) -> Result<Message, StreamError> {
+    let mut r = Reader::new(body, "VSPLITS");
+    let frame = r.u32()?;
+    let n = r.count_at_most(8, MAX_OBJECTS, "objects")?;
+    let mut objects = Vec::with_capacity(n);
+    for _ in 0..n {
+        let index = r.u32()?;
+        let packets = read_vsplits(&mut r)?;
+        if packets.is_empty() {
+            return Err(r.bad(format!("object {index}'s part has no split")));
+        }
+        objects.push(ObjectVsplits { index, packets });
+    }
+    r.end()?;
+    Ok(Message::Vsplits { frame, objects })
 }
 
 fn decode_welcome(body: &[u8]) -> Result<Message, StreamError> {
@@ -525,6 +724,7 @@ mod tests {
                 budget: Some(60_000),
                 out_of_view: true,
                 back_face: false,
+                scheme: Scheme::Selective,
             }),
             Message::View(ViewPacket {
                 frame: 7,
@@ -570,7 +770,62 @@ mod tests {
                     },
                 ],
             },
+            Message::ResumeLeaves {
+                next_frame: 3,
+                objects: vec![HeldLeaves {
+                    index: 0,
+                    leaves: vec![name(2, &[true, false]), name(0, &[])],
+                }],
+            },
+            Message::SelectiveWelcome(vec![SelectiveObject {
+                id: 4,
+                base: SelectiveBase {
+                    triangles: vec![[0, 1, 2]],
+                    roots: vec![
+                        ([0.0; 3], [0.0, 0.0, 1.0], Some(info())),
+                        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], None),
+                        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], Some(info())),
+                    ],
+                    leaves: Some(vec![[name(0, &[true]), name(1, &[]), name(2, &[false; 9])]]),
+                },
+            }]),
+            Message::Vsplits {
+                frame: 9,
+                objects: vec![ObjectVsplits {
+                    index: 0,
+                    packets: vec![VsplitPacket {
+                        node: name(1, &[false]),
+                        cuts: [Some(name(2, &[true; 70])), None],
+                        position: [1.0, 2.0, 3.0],
+                        normal: [0.0, 1.0, 0.0],
+                        children: [None, Some(info())],
+                        run: Some(name(0, &[true, true])),
+                        leaves: [
+                            Some([name(1, &[false, false, true]), name(1, &[false, true])]),
+                            None,
+                        ],
+                    }],
+                }],
+            },
         ]
+    }
+
+    /// The name of the node down `path` (true: right) from root `tree`.
+    fn name(tree: u32, path: &[bool]) -> NodeName {
+        let node = path
+            .iter()
+            .fold(flaneur::lod::HeapIndex::root(), |n, &right| n.child(right));
+        NodeName { tree, node }
+    }
+
+    fn info() -> flaneur::lod::RefineInfo {
+        flaneur::lod::RefineInfo {
+            centre: [1.0, 2.0, 3.0],
+            axis: [0.0, 1.0, 0.0],
+            radius: 0.5,
+            cone_sin: 0.25,
+            error: 0.01,
+        }
     }
 
     #[test]
@@ -683,6 +938,29 @@ mod tests {
         view[9..13].copy_from_slice(&f32::NAN.to_le_bytes());
         let e = Message::decode(&view[4..]).unwrap_err().to_string();
         assert!(e.contains("not finite"), "{e}");
+        let mut hello = every_kind()[0].encode();
+        *hello.last_mut().unwrap() = 3;
+        let e = Message::decode(&hello[4..]).unwrap_err().to_string();
+        assert!(e.contains("scheme 3"), "{e}");
+        let Message::SelectiveWelcome(mut objects) = every_kind()[8].clone() else {
+            unreachable!()
+        };
+        objects[0].base.leaves = None;
+        let mut welcome = Message::SelectiveWelcome(objects).encode();
+        // The placement byte, then the base triangle's last corner before it.
+        welcome.pop();
+        // The base triangle's last corner: a root the object does not have.
+        let at = welcome.len() - 4;
+        welcome[at..].copy_from_slice(&7u32.to_le_bytes());
+        welcome.push(0);
+        let e = Message::decode(&welcome[4..]).unwrap_err().to_string();
+        assert!(e.contains("corner 7, of 3 roots"), "{e}");
+        let mut welcome = every_kind()[8].encode();
+        // The first leaf's tree (the three leaves take 7, 7 and 8 bytes): not its root.
+        let at = welcome.len() - (7 + 7 + 8);
+        welcome[at..at + 4].copy_from_slice(&2u32.to_le_bytes());
+        let e = Message::decode(&welcome[4..]).unwrap_err().to_string();
+        assert!(e.contains("leaf in tree 2, its corner being root 0"), "{e}");
         let e = Message::decode(&[0x7f]).unwrap_err().to_string();
         assert!(e.contains("kind 0x7f"), "{e}");
         let long = (MAX_TO_SERVER as u32 + 1).to_le_bytes();

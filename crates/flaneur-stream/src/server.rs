@@ -16,11 +16,16 @@
 //! A client that reconnects resumes with RESUME: a fresh session's refiners split the
 //! nodes the client holds ([`Refiner::restore`]), so that the session goes on from the
 //! meshes the client has, whatever batches the lost connection took with it.
+//!
+//! A session of a truly selective scheme (Kim–Lee–Kobbelt) keeps per landmark the front
+//! of what it sent ([`SelectiveServer`]) over a [`SelectiveSource`] every session
+//! shares; the sources are made when the first such session comes, so a server whose
+//! clients all speak Zheng's scheme never holds them. Its resume is RESUME-LEAVES.
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::{mpsc, Arc, OnceLock};
 use std::thread;
 use std::time::Duration;
 
@@ -29,10 +34,11 @@ use glam::Vec3;
 use crate::error::StreamError;
 use crate::landmark::Landmark;
 use crate::protocol::{
-    receive, send, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ViewPacket, WelcomeObject,
-    MAX_N, MAX_OBJECTS, MAX_RESUME, MAX_TO_SERVER,
+    receive, send, HeldLeaves, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ObjectVsplits,
+    Scheme, SelectiveObject, ViewPacket, WelcomeObject, MAX_N, MAX_OBJECTS, MAX_RESUME,
+    MAX_TO_SERVER,
 };
-use flaneur::lod::{Criteria, RefineParams, Refiner, View};
+use flaneur::lod::{Criteria, RefineParams, Refiner, SelectiveServer, SelectiveSource, View};
 
 /// How a server treats its sessions.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,11 +83,61 @@ pub struct SessionEnd {
 /// A server bound to its address, not yet accepting.
 pub struct StreamServer {
     listener: TcpListener,
-    landmarks: Arc<[Landmark]>,
+    shared: Arc<Shared>,
+    config: ServerConfig,
+}
+
+/// What every session reads and none changes.
+struct Shared {
+    landmarks: Vec<Landmark>,
     /// A refiner per landmark at its base mesh, which each session's are made from,
     /// sharing its node records.
-    templates: Arc<[Refiner<'static>]>,
-    config: ServerConfig,
+    templates: Vec<Refiner<'static>>,
+    /// WELCOME, encoded once.
+    welcome: Vec<u8>,
+    /// The landmarks' vertex hierarchies, made for the first truly selective session
+    /// (or why they cannot be).
+    selective: OnceLock<Result<Selective, String>>,
+}
+
+/// The truly selective schemes' shared part: each landmark's source, and
+/// SELECTIVE-WELCOME encoded once.
+struct Selective {
+    sources: Vec<SelectiveSource>,
+    welcome: Vec<u8>,
+}
+
+impl Shared {
+    fn selective(&self) -> Result<&Selective, StreamError> {
+        let made = self.selective.get_or_init(|| {
+            let sources = self
+                .landmarks
+                .iter()
+                .map(|l| {
+                    SelectiveSource::new(&l.pm, &l.dag).map_err(|e| {
+                        format!(
+                            "landmark {} cannot be streamed truly selectively: {e}",
+                            l.id
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?;
+            let welcome = Message::SelectiveWelcome(
+                self.landmarks
+                    .iter()
+                    .zip(&sources)
+                    .map(|(l, s)| SelectiveObject {
+                        id: l.id,
+                        base: s.base(),
+                    })
+                    .collect(),
+            )
+            .encode();
+            Ok(Selective { sources, welcome })
+        });
+        made.as_ref()
+            .map_err(|why| StreamError::Malformed(why.clone()))
+    }
 }
 
 /// A server accepting on a thread of its own; dropped, it stops accepting (sessions
@@ -124,10 +180,15 @@ impl StreamServer {
             .iter()
             .map(|l| Refiner::shared(l.pm.clone(), l.dag.clone()))
             .collect::<Result<Vec<_>, _>>()?;
+        let welcome = welcome(&landmarks).encode();
         Ok(StreamServer {
             listener: TcpListener::bind(addr)?,
-            landmarks: landmarks.into(),
-            templates: templates.into(),
+            shared: Arc::new(Shared {
+                landmarks,
+                templates,
+                welcome,
+                selective: OnceLock::new(),
+            }),
             config,
         })
     }
@@ -140,7 +201,8 @@ impl StreamServer {
     /// Bytes every session shares besides the landmarks' progressive meshes and DAGs:
     /// each DAG node's record, made once per landmark rather than once per session.
     pub fn shared_memory(&self) -> usize {
-        self.templates
+        self.shared
+            .templates
             .iter()
             .map(Refiner::node_records_memory)
             .sum()
@@ -182,29 +244,19 @@ impl StreamServer {
     /// # Ok::<(), flaneur_stream::StreamError>(())
     /// ```
     pub fn serve(&self, input: impl Read, output: impl Write, peer: SocketAddr) -> SessionEnd {
-        let welcome = welcome(&self.landmarks).encode();
-        serve(
-            (input, output),
-            peer,
-            &self.templates,
-            &welcome,
-            self.config,
-        )
+        serve((input, output), peer, &self.shared, self.config)
     }
 
     fn accept_until(&self, stop: &AtomicBool, ends: &mpsc::Sender<SessionEnd>) {
-        let welcome = Arc::new(welcome(&self.landmarks).encode());
         while !stop.load(Ordering::Relaxed) {
             match self.listener.accept() {
                 Ok((stream, peer)) => {
-                    let (templates, welcome) = (self.templates.clone(), welcome.clone());
-                    let (config, ends) = (self.config, ends.clone());
+                    let (shared, config, ends) = (self.shared.clone(), self.config, ends.clone());
                     let _ =
                         thread::Builder::new()
                             .name(format!("stream-{peer}"))
                             .spawn(move || {
-                                let end = session(stream, peer, &templates, &welcome, config);
-                                let _ = ends.send(end);
+                                let _ = ends.send(session(stream, peer, &shared, config));
                             });
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
@@ -248,10 +300,10 @@ fn welcome(landmarks: &[Landmark]) -> Message {
     )
 }
 
-/// A session's state: its HELLO, one refiner per landmark, what it has done.
-struct Session {
+/// A session's state: its HELLO, what it refines with, what it has done.
+struct Session<'a> {
     hello: Hello,
-    refiners: Vec<Refiner<'static>>,
+    streams: Streams<'a>,
     last_frame: Option<u32>,
     frames: u64,
     bytes_out: u64,
@@ -261,12 +313,29 @@ struct Session {
     operations: u64,
 }
 
+/// What a session refines with, by its scheme.
+enum Streams<'a> {
+    /// One refiner per landmark.
+    Dag(Vec<Refiner<'static>>),
+    /// Each landmark's source and the session's front of what it sent.
+    Selective(&'a [SelectiveSource], Vec<SelectiveServer>),
+}
+
+impl Streams<'_> {
+    /// The session's own bytes.
+    fn memory(&self) -> usize {
+        match self {
+            Streams::Dag(refiners) => refiners.iter().map(Refiner::memory).sum(),
+            Streams::Selective(_, servers) => servers.iter().map(SelectiveServer::memory).sum(),
+        }
+    }
+}
+
 /// Runs one TCP client's session to its end.
 fn session(
     stream: TcpStream,
     peer: SocketAddr,
-    templates: &[Refiner<'static>],
-    welcome: &[u8],
+    shared: &Shared,
     config: ServerConfig,
 ) -> SessionEnd {
     let set_up = stream
@@ -275,7 +344,7 @@ fn session(
         .and_then(|()| stream.set_write_timeout(Some(config.idle_timeout)))
         .and_then(|()| stream.set_nodelay(true));
     match set_up {
-        Ok(()) => serve((&stream, &stream), peer, templates, welcome, config),
+        Ok(()) => serve((&stream, &stream), peer, shared, config),
         Err(e) => ended(
             peer,
             None,
@@ -285,7 +354,7 @@ fn session(
 }
 
 /// How a session of `peer` ended, `s` what it did (`None` before WELCOME).
-fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> SessionEnd {
+fn ended(peer: SocketAddr, s: Option<Session<'_>>, reason: Option<String>) -> SessionEnd {
     let Some(s) = s else {
         return SessionEnd {
             peer,
@@ -303,7 +372,7 @@ fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> Sessio
         peer,
         frames: s.frames,
         bytes_out: s.bytes_out,
-        memory: s.refiners.iter().map(Refiner::memory).sum(),
+        memory: s.streams.memory(),
         answer_times: s.answer_times,
         traversal_times: s.traversal_times,
         most_evaluated: s.most_evaluated,
@@ -316,12 +385,11 @@ fn ended(peer: SocketAddr, s: Option<Session>, reason: Option<String>) -> Sessio
 fn serve<R: Read, W: Write>(
     mut stream: (R, W),
     peer: SocketAddr,
-    templates: &[Refiner<'static>],
-    welcome: &[u8],
+    shared: &Shared,
     config: ServerConfig,
 ) -> SessionEnd {
     let mut s = None;
-    let reason = run(&mut stream, templates, welcome, &mut s).err().map(|e| {
+    let reason = run(&mut stream, shared, &mut s).err().map(|e| {
         let why = match &e {
             StreamError::Io(io)
                 if matches!(
@@ -345,11 +413,10 @@ fn serve<R: Read, W: Write>(
 }
 
 /// The session's loop; `Ok` when the client said BYE or closed.
-fn run<R: Read, W: Write>(
+fn run<'a, R: Read, W: Write>(
     (input, output): &mut (R, W),
-    templates: &[Refiner<'static>],
-    welcome: &[u8],
-    state: &mut Option<Session>,
+    shared: &'a Shared,
+    state: &mut Option<Session<'a>>,
 ) -> Result<(), StreamError> {
     let hello = match receive(input, MAX_TO_SERVER)? {
         Some((Message::Hello(h), _)) => h,
@@ -362,14 +429,42 @@ fn run<R: Read, W: Write>(
             hello.fov
         )));
     }
-    let refiners = templates
-        .iter()
-        .map(Refiner::fresh)
-        .collect::<Result<Vec<_>, _>>()?;
+    let (streams, welcome) = match hello.scheme {
+        Scheme::Dag => {
+            let refiners = shared
+                .templates
+                .iter()
+                .map(Refiner::fresh)
+                .collect::<Result<Vec<_>, _>>()?;
+            (Streams::Dag(refiners), &shared.welcome)
+        }
+        Scheme::Selective | Scheme::CutVertex => {
+            let selective = shared.selective()?;
+            let criteria = Criteria {
+                out_of_view: hello.out_of_view,
+                back_face: hello.back_face,
+            };
+            let servers = selective
+                .sources
+                .iter()
+                .map(|source| {
+                    let server = SelectiveServer::new(source).with_criteria(criteria);
+                    match hello.scheme {
+                        Scheme::CutVertex => server.cut_vertex_only(),
+                        _ => server,
+                    }
+                })
+                .collect();
+            (
+                Streams::Selective(&selective.sources, servers),
+                &selective.welcome,
+            )
+        }
+    };
     output.write_all(welcome).map_err(|e| stalled(e.into()))?;
     let s = state.insert(Session {
         hello,
-        refiners,
+        streams,
         last_frame: None,
         frames: 0,
         bytes_out: welcome.len() as u64,
@@ -391,6 +486,15 @@ fn run<R: Read, W: Write>(
                 _,
             )) if first => {
                 s.resume(next_frame, objects)?;
+            }
+            Some((
+                Message::ResumeLeaves {
+                    next_frame,
+                    objects,
+                },
+                _,
+            )) if first => {
+                s.resume_leaves(next_frame, objects)?;
             }
             Some((Message::View(v), _)) => {
                 let started = std::time::Instant::now();
@@ -430,39 +534,81 @@ fn out_of_place(wanted: &str, got: &Message) -> StreamError {
         Message::Welcome(_) => "WELCOME",
         Message::Batch { .. } => "BATCH",
         Message::Refused(_) => "REFUSED",
+        Message::ResumeLeaves { .. } => "RESUME-LEAVES",
+        Message::SelectiveWelcome(_) => "SELECTIVE-WELCOME",
+        Message::Vsplits { .. } => "VSPLITS",
     };
     StreamError::Malformed(format!("{kind} where {wanted} was due"))
 }
 
-impl Session {
+/// Checks that each object of a RESUME (`what`) is in the session's `objects` and
+/// named once, and hands each to `restore` with its place.
+fn each_once<T>(
+    what: &str,
+    objects: usize,
+    held: Vec<(u32, T)>,
+    mut restore: impl FnMut(usize, T) -> Result<(), String>,
+) -> Result<(), StreamError> {
+    let mut seen = vec![false; objects];
+    for (index, o) in held {
+        let Some(seen) = seen.get_mut(index as usize) else {
+            return Err(StreamError::Malformed(format!(
+                "{what}: object {index}, not in WELCOME's {objects}"
+            )));
+        };
+        if std::mem::replace(seen, true) {
+            return Err(StreamError::Malformed(format!(
+                "{what}: object {index} named twice"
+            )));
+        }
+        restore(index as usize, o)
+            .map_err(|e| StreamError::Malformed(format!("{what}: object {index}: {e}")))?;
+    }
+    Ok(())
+}
+
+impl Session<'_> {
     /// The session a resuming client left: each object's refiner with the nodes it
     /// holds split, and the frames it may send from `next_frame` on.
     fn resume(&mut self, next_frame: u32, objects: Vec<HeldNodes>) -> Result<(), StreamError> {
-        let mut seen = vec![false; self.refiners.len()];
-        for o in objects {
-            let refiner = self.refiners.get_mut(o.index as usize).ok_or_else(|| {
-                StreamError::Malformed(format!(
-                    "RESUME: object {}, not in WELCOME's {}",
-                    o.index,
-                    seen.len()
-                ))
-            })?;
-            if std::mem::replace(&mut seen[o.index as usize], true) {
-                return Err(StreamError::Malformed(format!(
-                    "RESUME: object {} named twice",
-                    o.index
-                )));
-            }
-            refiner
-                .restore(&o.nodes)
-                .map_err(|e| StreamError::Malformed(format!("RESUME: object {}: {e}", o.index)))?;
-        }
+        let Streams::Dag(refiners) = &mut self.streams else {
+            return Err(StreamError::Malformed(
+                "RESUME in a truly selective session: it resumes with RESUME-LEAVES".into(),
+            ));
+        };
+        let held = objects.into_iter().map(|o| (o.index, o.nodes)).collect();
+        each_once("RESUME", refiners.len(), held, |k, nodes| {
+            refiners[k].restore(&nodes).map_err(|e| e.to_string())
+        })?;
         self.last_frame = next_frame.checked_sub(1);
         Ok(())
     }
 
-    /// The BATCH for view `v`: each landmark refined for it, its collapses then its
-    /// splits with their vertex splits.
+    /// The truly selective session a resuming client left: each object's front of what
+    /// was sent, from the leaves the client holds.
+    fn resume_leaves(
+        &mut self,
+        next_frame: u32,
+        objects: Vec<HeldLeaves>,
+    ) -> Result<(), StreamError> {
+        let Streams::Selective(sources, servers) = &mut self.streams else {
+            return Err(StreamError::Malformed(
+                "RESUME-LEAVES in a session of Zheng's scheme: it resumes with RESUME".into(),
+            ));
+        };
+        let held = objects.into_iter().map(|o| (o.index, o.leaves)).collect();
+        each_once("RESUME-LEAVES", servers.len(), held, |k, leaves| {
+            servers[k] = servers[k]
+                .resume(&sources[k], &leaves)
+                .map_err(|e| e.to_string())?;
+            Ok(())
+        })?;
+        self.last_frame = next_frame.checked_sub(1);
+        Ok(())
+    }
+
+    /// The answer to view `v`: a BATCH of each landmark's collapses then splits with
+    /// their vertex splits, or in a truly selective session a VSPLITS.
     fn answer(&mut self, v: &ViewPacket) -> Result<Message, StreamError> {
         if let Some(last) = self.last_frame.filter(|&l| v.frame <= l) {
             return Err(StreamError::Malformed(format!(
@@ -478,53 +624,107 @@ impl Session {
         }
         let eye = Vec3::from(v.eye);
         let view = View::new(eye, Vec3::from(v.aim) - eye, self.hello.fov)?;
-        let params = RefineParams {
-            traversal: self.hello.traversal,
-            tau: v.tau,
-            budget: v
-                .budget_mode
-                .then_some(self.hello.budget)
-                .flatten()
-                .map(|b| b as usize),
-            max_work: v.n as usize,
-            criteria: Criteria {
-                out_of_view: self.hello.out_of_view,
-                back_face: self.hello.back_face,
-            },
-        };
-        let mut objects = Vec::new();
-        let mut traversal = Duration::ZERO;
-        for (index, refiner) in self.refiners.iter_mut().enumerate() {
-            let stats = refiner.refine(&view, &params)?.stats;
-            traversal += stats.traversal;
-            self.most_evaluated = self.most_evaluated.max(stats.evaluated());
-            self.operations += stats.updates() as u64;
-            let mut updates = ObjectUpdates {
-                index: index as u32,
-                ..Default::default()
-            };
-            let (pm, dag) = (refiner.progressive_mesh(), refiner.dag());
-            for op in refiner.operators() {
-                if op.split {
-                    let run = dag.splits(op.node);
-                    updates.splits.push(NodeSplit {
-                        node: op.node,
-                        first: run.start as u32,
-                        run: pm.splits[run].to_vec(),
-                    });
-                } else {
-                    updates.collapses.push(op.node);
+        let Session {
+            hello,
+            streams,
+            traversal_times,
+            most_evaluated,
+            operations,
+            ..
+        } = self;
+        let message = match streams {
+            Streams::Dag(refiners) => {
+                let (objects, traversal) =
+                    answer_dag(refiners, hello, &view, v, most_evaluated, operations)?;
+                traversal_times.push(traversal);
+                Message::Batch {
+                    frame: v.frame,
+                    objects,
                 }
             }
-            if !(updates.collapses.is_empty() && updates.splits.is_empty()) {
-                objects.push(updates);
+            Streams::Selective(sources, servers) => {
+                if v.budget_mode {
+                    return Err(StreamError::Malformed(format!(
+                        "VIEW of frame {} in budget mode: the truly selective schemes \
+                         have none",
+                        v.frame
+                    )));
+                }
+                let mut objects = Vec::new();
+                let started = std::time::Instant::now();
+                for (index, (source, server)) in sources.iter().zip(servers).enumerate() {
+                    let packets = server.refine_at_most(source, &view, v.tau, v.n as usize)?;
+                    *operations += packets.len() as u64;
+                    if !packets.is_empty() {
+                        objects.push(ObjectVsplits {
+                            index: index as u32,
+                            packets,
+                        });
+                    }
+                }
+                traversal_times.push(started.elapsed());
+                Message::Vsplits {
+                    frame: v.frame,
+                    objects,
+                }
+            }
+        };
+        self.last_frame = Some(v.frame);
+        Ok(message)
+    }
+}
+
+/// Zheng's scheme's answer to `v` (seen as `view`) under `hello`: each landmark's part,
+/// and the traversals' time; the most nodes evaluated and the operations counted in.
+fn answer_dag(
+    refiners: &mut [Refiner<'static>],
+    hello: &Hello,
+    view: &View,
+    v: &ViewPacket,
+    most_evaluated: &mut usize,
+    operations: &mut u64,
+) -> Result<(Vec<ObjectUpdates>, Duration), StreamError> {
+    let params = RefineParams {
+        traversal: hello.traversal,
+        tau: v.tau,
+        budget: v
+            .budget_mode
+            .then_some(hello.budget)
+            .flatten()
+            .map(|b| b as usize),
+        max_work: v.n as usize,
+        criteria: Criteria {
+            out_of_view: hello.out_of_view,
+            back_face: hello.back_face,
+        },
+    };
+    let mut objects = Vec::new();
+    let mut traversal = Duration::ZERO;
+    for (index, refiner) in refiners.iter_mut().enumerate() {
+        let stats = refiner.refine(view, &params)?.stats;
+        traversal += stats.traversal;
+        *most_evaluated = (*most_evaluated).max(stats.evaluated());
+        *operations += stats.updates() as u64;
+        let mut updates = ObjectUpdates {
+            index: index as u32,
+            ..Default::default()
+        };
+        let (pm, dag) = (refiner.progressive_mesh(), refiner.dag());
+        for op in refiner.operators() {
+            if op.split {
+                let run = dag.splits(op.node);
+                updates.splits.push(NodeSplit {
+                    node: op.node,
+                    first: run.start as u32,
+                    run: pm.splits[run].to_vec(),
+                });
+            } else {
+                updates.collapses.push(op.node);
             }
         }
-        self.last_frame = Some(v.frame);
-        self.traversal_times.push(traversal);
-        Ok(Message::Batch {
-            frame: v.frame,
-            objects,
-        })
+        if !(updates.collapses.is_empty() && updates.splits.is_empty()) {
+            objects.push(updates);
+        }
     }
+    Ok((objects, traversal))
 }

@@ -114,6 +114,18 @@ impl<'a> Reader<'a> {
         Ok(n)
     }
 
+    /// Refuses `n` elements of at least `min_len` bytes each (counted earlier) when the
+    /// bytes left cannot hold them, before anything is reserved for them.
+    pub(crate) fn fits(&self, n: usize, min_len: usize) -> Result<(), StreamError> {
+        let left = self.bytes.len() - self.at;
+        if n.saturating_mul(min_len.max(1)) > left {
+            return Err(self.bad(format!(
+                "{n} elements of at least {min_len} bytes, with {left} bytes left"
+            )));
+        }
+        Ok(())
+    }
+
     /// A count as [`Reader::count`] reads it, refused above `max` (`what` names what
     /// is counted).
     pub(crate) fn count_at_most(

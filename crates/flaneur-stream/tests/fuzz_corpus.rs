@@ -17,10 +17,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal, View};
-use flaneur::lod::{SelectiveClient, SelectiveServer, SelectiveSource};
+use flaneur::lod::{
+    CutVertexClient, HeapIndex, NodeName, SelectiveClient, SelectiveServer, SelectiveSource,
+};
 use flaneur_stream::protocol::{receive, send, Message, MAX_N, MAX_TO_CLIENT, MAX_TO_SERVER};
 use flaneur_stream::selective_wire::{decode_vsplits, encode_vsplits};
-use flaneur_stream::{HeldNodes, Hello, Landmark, ServerConfig, StreamServer, ViewPacket};
+use flaneur_stream::{
+    HeldLeaves, HeldNodes, Hello, Landmark, Scheme, ServerConfig, StreamServer, ViewPacket,
+};
 
 /// The server the `stream_session` target serves each input with: one torus of about
 /// 1,000 triangles.
@@ -104,53 +108,80 @@ fn every_server_stream_of_the_corpus_reads_without_a_panic() {
     );
 }
 
-/// The `selective_batch` target's client: a small torus's truly selective source.
-fn selective_source() -> SelectiveSource {
-    let pm = ProgressiveMesh::build(&bumpy_torus(600)).unwrap();
-    let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-    SelectiveSource::new(&pm, &dag).unwrap()
-}
-
-fn selective_view() -> View {
-    View::new(glam::Vec3::new(0.0, 0.0, 2.0), glam::Vec3::NEG_Z, 1.0).unwrap()
+/// The `selective_batch` target's clients' sources, each with a view: a small torus's
+/// (placed by cut vertices) and a flat-shaded building's (placed by leaves).
+fn selective_sources() -> [(SelectiveSource, View); 2] {
+    let source = |mesh: &flaneur::scene::Mesh| {
+        let pm = ProgressiveMesh::build(mesh).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        SelectiveSource::new(&pm, &dag).unwrap()
+    };
+    let building = citygen::sample_building(600).unwrap();
+    let p = glam::Vec3::from(building.positions[0]);
+    let torus_view = View::new(glam::Vec3::new(0.0, 0.0, 2.0), glam::Vec3::NEG_Z, 1.0);
+    let building_view = View::new(p + glam::Vec3::new(0.0, 5.0, 40.0), glam::Vec3::NEG_Z, 1.0);
+    [
+        (source(&bumpy_torus(600)), torus_view.unwrap()),
+        (source(&building), building_view.unwrap()),
+    ]
 }
 
 #[test]
 fn every_selective_batch_of_the_corpus_ends_without_a_panic() {
-    let source = selective_source();
-    let (mut decoded, mut refused) = (0, 0);
+    let sources = selective_sources();
+    let (mut decoded, mut refused, mut taken) = (0, 0, [0, 0]);
     for (name, data) in inputs("selective_batch") {
         catch_unwind(AssertUnwindSafe(|| match decode_vsplits(&data) {
             Ok(packets) => {
                 decoded += 1;
-                let mut client = SelectiveClient::new(source.base());
-                if client.receive(&packets).is_ok() {
-                    let _ = client.select(&selective_view(), 0.001);
+                for (k, (source, view)) in sources.iter().enumerate() {
+                    let mut client = SelectiveClient::new(source.base());
+                    if client.receive(&packets).is_ok() {
+                        taken[k] += usize::from(!packets.is_empty());
+                        let _ = client.select(view, 0.001);
+                    }
+                    let _ = CutVertexClient::new(source.base()).receive(&packets);
                 }
             }
             Err(_) => refused += 1,
         }))
-        .unwrap_or_else(|_| panic!("selective_batch input {name} panicked the client"));
+        .unwrap_or_else(|_| panic!("selective_batch input {name} panicked a client"));
     }
     assert!(
         decoded > 0 && refused > 0,
         "{decoded} decoded, {refused} refused"
     );
+    // Both placements take some batch whole.
+    assert!(taken[0] > 0 && taken[1] > 0, "batches taken: {taken:?}");
 }
 
-/// Writes the `selective_batch` target's seeds: the batches a server sends a client
+/// Writes the `selective_batch` target's seeds: the batches a server sends each client
 /// for a few views, and a few bad ones.
 #[test]
 #[ignore = "writes the fuzz corpus's seeds; run by hand"]
 fn write_selective_seeds() {
-    let source = selective_source();
     let dir = corpus("selective_batch");
     fs::create_dir_all(&dir).unwrap();
-    let mut server = SelectiveServer::new(&source);
-    for (k, z) in [3.0f32, 2.0, 1.2].into_iter().enumerate() {
-        let view = View::new(glam::Vec3::new(0.2, 0.1, z), glam::Vec3::NEG_Z, 1.0).unwrap();
-        let packets = server.refine(&source, &view, 0.002).unwrap();
-        fs::write(dir.join(format!("seed-view-{k}")), encode_vsplits(&packets)).unwrap();
+    let sources = ["torus", "building"].into_iter().zip(selective_sources());
+    for ((name, (source, view)), distance) in sources.zip([2.0f32, 40.0]) {
+        let mut server = SelectiveServer::new(&source);
+        let mut cut = SelectiveServer::new(&source).cut_vertex_only();
+        for (k, closer) in [0.0f32, 0.3, 0.6].into_iter().enumerate() {
+            let eye = view.eye + view.look * closer * distance;
+            let v = View::new(eye, view.look, 1.0).unwrap();
+            let packets = server.refine(&source, &v, 0.002).unwrap();
+            fs::write(
+                dir.join(format!("seed-{name}-view-{k}")),
+                encode_vsplits(&packets),
+            )
+            .unwrap();
+            let packets = cut.refine(&source, &v, 0.002).unwrap();
+            fs::write(
+                dir.join(format!("seed-{name}-cut-{k}")),
+                encode_vsplits(&packets),
+            )
+            .unwrap();
+        }
     }
     fs::write(dir.join("seed-empty"), encode_vsplits(&[])).unwrap();
     fs::write(dir.join("seed-count-too-big"), [0xff, 0xff, 0, 0]).unwrap();
@@ -171,6 +202,7 @@ fn hello(traversal: Traversal, budget: Option<u32>, criteria: u8) -> Hello {
         budget,
         out_of_view: criteria & 1 != 0,
         back_face: criteria & 2 != 0,
+        scheme: Scheme::Dag,
     }
 }
 
@@ -334,7 +366,98 @@ fn seed_sessions(server: &StreamServer) -> Vec<(String, Vec<u8>)> {
     ));
     let late = views(0..1, 40).chain([resume(6, vec![(0, held)])]);
     seeds.push(("refused-resume-late".into(), session(priority, late)));
+    seeds.extend(selective_seed_sessions(server));
     seeds
+}
+
+/// Seeds of the truly selective schemes: sessions a client may send, a resume from
+/// the leaves a session left, then ones the server refuses.
+fn selective_seed_sessions(server: &StreamServer) -> Vec<(String, Vec<u8>)> {
+    let mut seeds = Vec::new();
+    let selective = |scheme, criteria| Hello {
+        scheme,
+        ..hello(Traversal::Priority, None, criteria)
+    };
+    for (name, scheme) in [
+        ("selective", Scheme::Selective),
+        ("cut-vertex", Scheme::CutVertex),
+    ] {
+        for criteria in 0..4 {
+            let walk = views(0..6, 40).chain([Message::Bye]);
+            seeds.push((
+                format!("{name}-criteria{criteria}"),
+                session(selective(scheme, criteria), walk),
+            ));
+        }
+    }
+    let hello = selective(Scheme::Selective, 3);
+    // A client that held what six views brought resumes on a new connection.
+    let mut answer = Vec::new();
+    let before = session(hello, views(0..6, 40).chain([Message::Bye]));
+    server.serve(&before[..], &mut answer, peer());
+    let leaves = held_leaves(&answer);
+    let resume = |leaves: Vec<NodeName>| Message::ResumeLeaves {
+        next_frame: 6,
+        objects: vec![HeldLeaves { index: 0, leaves }],
+    };
+    let rest = [resume(leaves.clone())].into_iter().chain(views(6..10, 40));
+    seeds.push(("selective-resume".into(), session(hello, rest)));
+    let refused: Vec<(&str, Vec<Message>)> = vec![
+        ("budget", vec![Message::View(view(0, 40, true))]),
+        (
+            "resume-dag",
+            vec![Message::Resume {
+                next_frame: 0,
+                objects: vec![],
+            }],
+        ),
+        ("leaves-missing", vec![resume(leaves[1..].to_vec())]),
+        (
+            "leaves-twice",
+            vec![resume([&leaves[..], &leaves[..1]].concat())],
+        ),
+    ];
+    for (name, rest) in refused {
+        seeds.push((format!("refused-selective-{name}"), session(hello, rest)));
+    }
+    let dag = selective(Scheme::Dag, 3);
+    seeds.push((
+        "refused-dag-resume-leaves".into(),
+        session(dag, [resume(leaves)]),
+    ));
+    seeds
+}
+
+/// The leaves a truly selective client holds after reading `answer`
+/// (SELECTIVE-WELCOME, then VSPLITSes): the roots, each split node giving way to its
+/// children.
+fn held_leaves(mut answer: &[u8]) -> Vec<NodeName> {
+    let mut held = BTreeSet::new();
+    while let Some((m, _)) = receive(&mut answer, MAX_TO_CLIENT).unwrap() {
+        match m {
+            Message::SelectiveWelcome(objects) => {
+                held.extend(
+                    (0..objects[0].base.roots.len() as u32).map(|tree| NodeName {
+                        tree,
+                        node: HeapIndex::root(),
+                    }),
+                );
+            }
+            Message::Vsplits { objects, .. } => {
+                for p in &objects[0].packets {
+                    assert!(held.remove(&p.node));
+                    for right in [false, true] {
+                        held.insert(NodeName {
+                            tree: p.node.tree,
+                            node: p.node.node.child(right),
+                        });
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    held.into_iter().collect()
 }
 
 /// Writes the seeds into the corpora: the sessions for `stream_session`, and for

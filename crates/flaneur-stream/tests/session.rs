@@ -57,6 +57,7 @@ fn hello(traversal: Traversal) -> Hello {
         budget: Some(BUDGET),
         out_of_view: true,
         back_face: true,
+        scheme: flaneur_stream::Scheme::Dag,
     }
 }
 

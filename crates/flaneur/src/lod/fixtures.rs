@@ -4,7 +4,7 @@ use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
 
-use citygen::{CityConfig, Mesh};
+use citygen::Mesh;
 
 use super::pm::Adjacency;
 use super::pm::{ProgressiveMesh, SelectiveMesh};
@@ -12,15 +12,7 @@ use super::pm::{ProgressiveMesh, SelectiveMesh};
 /// The first generated building of at least 600 triangles: flat-shaded, every face with
 /// its own vertices, so every corner and crease is a seam.
 pub(crate) fn building() -> Mesh {
-    let config = CityConfig {
-        objects: 64,
-        landmarks: 0.0,
-        ..Default::default()
-    };
-    (0..config.objects)
-        .map(|id| citygen::object(&config, id).expect("a valid city").mesh)
-        .find(|m| m.triangle_count() >= 600)
-        .expect("a city of 64 has a building of 600 triangles")
+    citygen::sample_building(600).expect("a city of 64 has a building of 600 triangles")
 }
 
 /// A closed cube of side 2 at `centre`, subdivided `levels` times, smooth normals.

@@ -28,13 +28,16 @@
 //! # Ok::<(), flaneur::Error>(())
 //! ```
 
+mod client;
 mod cut_mesh;
+mod leaf_mesh;
 mod stream;
 
+pub use client::{CutVertexClient, SelectiveClient};
 pub use cut_mesh::CutMesh;
+pub use leaf_mesh::LeafMesh;
 pub use stream::{
-    CutVertexClient, RefineInfo, SelectiveBase, SelectiveClient, SelectiveServer, SelectiveSource,
-    VsplitPacket,
+    Placement, RefineInfo, SelectiveBase, SelectiveServer, SelectiveSource, VsplitPacket,
 };
 
 use super::pm::{ProgressiveMesh, SelectiveMesh, NO_TRIANGLE};
@@ -114,6 +117,13 @@ impl HeapIndex {
         HeapIndex(out)
     }
 
+    /// Whether the step from depth `level - 1` to depth `level` on the way down from the
+    /// root goes to a right child (`level` from 1 to the node's depth).
+    pub(crate) fn goes_right(&self, level: u32) -> bool {
+        let k = self.bits() - 1 - level;
+        (self.0[(k / 64) as usize] >> (k % 64)) & 1 == 1
+    }
+
     /// Its bits, the leading 1 included.
     pub fn bits(&self) -> u32 {
         let top = *self.0.last().unwrap_or(&0);
@@ -159,6 +169,9 @@ pub struct VertexHierarchy {
     /// Split `i`'s fundamental cut vertices, left and right: leaf nodes (`None` where
     /// the split adds no such triangle).
     cuts: Vec<[Option<u32>; 2]>,
+    /// The leaves of split `i`'s f_l and f_r, fully refined, below its left and its
+    /// right child (`None` where the split adds no such triangle).
+    child_leaves: Vec<[Option<[u32; 2]>; 2]>,
     /// The fully refined mesh's triangles as leaf nodes.
     leaf_triangles: Vec<[u32; 3]>,
     /// Split `i`'s run: the splits of one collapse of a position on a crease or seam,
@@ -238,6 +251,7 @@ impl VertexHierarchy {
             nodes,
             split_nodes,
             cuts: Vec::with_capacity(pm.splits.len()),
+            child_leaves: Vec::with_capacity(pm.splits.len()),
             leaf_triangles: Vec::new(),
             runs,
             roots: base,
@@ -257,6 +271,16 @@ impl VertexHierarchy {
             };
             let (l, r) = (cut(ids.f_l).flatten(), cut(ids.f_r).flatten());
             h.cuts.push([l, r]);
+            let [left, right] = h.nodes[at as usize].children.expect("a split's node");
+            let below = |slot: u32| {
+                let t = full.slots()[slot as usize];
+                (t != NO_TRIANGLE).then(|| {
+                    let leaves = t.map(|v| current[v as usize]);
+                    let under = |child| leaves.into_iter().find(|&leaf| h.descends(leaf, child));
+                    Some([under(left)?, under(right)?])
+                })?
+            };
+            h.child_leaves.push([below(ids.f_l), below(ids.f_r)]);
         }
         h.leaf_triangles = leaf_triangles;
         Ok(h)
@@ -307,6 +331,47 @@ impl VertexHierarchy {
         }
     }
 
+    /// The node `name` names, if the hierarchy has it: down from its tree's root, a
+    /// child for each bit below the leading one.
+    pub fn find(&self, name: &NodeName) -> Option<u32> {
+        if name.tree as usize >= self.roots {
+            return None;
+        }
+        let mut n = name.tree;
+        for level in 1..=name.depth() {
+            let [left, right] = self.children(n)?;
+            n = if name.node.goes_right(level) {
+                right
+            } else {
+                left
+            };
+        }
+        Some(n)
+    }
+
+    /// The nodes split together with `node` when its split is one of a run of more
+    /// than one: the node of the run's first split. `None` for a split alone, or a
+    /// leaf.
+    pub fn run_leader(&self, node: u32) -> Option<u32> {
+        let run = self.runs[self.split_index(node)?].clone();
+        (run.len() > 1).then(|| self.split_nodes[run.start as usize])
+    }
+
+    /// The leaves of the two triangles `node`'s split adds (f_l, then f_r), fully
+    /// refined, that lie below its left and its right child: with the cut vertex, each
+    /// triangle's corners, in the order (left, right, left cut) for f_l and (left,
+    /// right cut, right) for f_r. `None` for a leaf; `None` for a triangle the split
+    /// does not add.
+    pub fn child_leaves(&self, node: u32) -> Option<[Option<[u32; 2]>; 2]> {
+        Some(self.child_leaves[self.split_index(node)?])
+    }
+
+    /// Whether some split adds no triangle (a wedge of a crease or seam run), so that
+    /// no cut vertex places it and a client must place triangles by their leaves.
+    pub fn has_wedge_splits(&self) -> bool {
+        self.cuts.iter().any(|c| c == &[None, None])
+    }
+
     /// Node `node`'s children, if it splits.
     pub fn children(&self, node: u32) -> Option<[u32; 2]> {
         self.nodes[node as usize].children
@@ -341,7 +406,7 @@ impl VertexHierarchy {
     }
 
     /// Whether `node` is `ancestor` or lies below it.
-    fn descends(&self, node: u32, ancestor: u32) -> bool {
+    pub(crate) fn descends(&self, node: u32, ancestor: u32) -> bool {
         let mut n = Some(node);
         while let Some(k) = n {
             if k == ancestor {
@@ -366,6 +431,42 @@ pub struct Front {
 }
 
 impl Front {
+    /// The front whose active nodes are `nodes`, as a client that resumes names them
+    /// (KLK §5: its leaf ids). An `Err` naming a node unless they cut every tree
+    /// exactly once: a node out of range or named twice, one below another, a leaf of
+    /// the hierarchy with none above it.
+    pub fn from_active(h: &VertexHierarchy, nodes: &[u32]) -> Result<Front> {
+        let mut active = vec![false; h.len()];
+        for &n in nodes {
+            match active.get_mut(n as usize) {
+                None => return Err(Error::Invalid(format!("no node {n} in the hierarchy"))),
+                Some(true) => return Err(Error::Invalid(format!("node {n} named twice"))),
+                Some(a) => *a = true,
+            }
+        }
+        let front = Front { active };
+        if let Some(&below) = nodes.iter().find(|&&n| front.active_above(h, n).is_some()) {
+            return Err(Error::Invalid(format!(
+                "node {:?} lies below another named node",
+                h.name(below)
+            )));
+        }
+        let mut stack: Vec<u32> = (0..h.roots as u32).collect();
+        while let Some(n) = stack.pop() {
+            if front.is_active(n) {
+                continue;
+            }
+            let Some([l, r]) = h.children(n) else {
+                return Err(Error::Invalid(format!(
+                    "leaf {:?} has no named node above it",
+                    h.name(n)
+                )));
+            };
+            stack.extend([l, r]);
+        }
+        Ok(front)
+    }
+
     /// Whether `node` is on the front.
     pub fn is_active(&self, node: u32) -> bool {
         self.active[node as usize]
@@ -662,6 +763,49 @@ mod tests {
             let run = h.run_nodes(n);
             run.iter().all(|&k| split(k)) || run.iter().all(|&k| !split(k))
         })
+    }
+
+    /// The leaf triangles a split adds are (left, right, left cut) and (left, right
+    /// cut, right), turned: what a client that places triangles by their leaves builds
+    /// them from.
+    #[test]
+    fn a_splits_triangles_are_its_child_leaves_and_cut_vertices_in_order() {
+        for mesh in [
+            crate::lod::fixtures::building(),
+            crate::lod::bumpy_torus(800),
+        ] {
+            let pm = ProgressiveMesh::build(&mesh).unwrap();
+            let h = VertexHierarchy::new(&pm).unwrap();
+            let turned = |t: [u32; 3]| {
+                let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+                let mut t = t;
+                t.rotate_left(k);
+                t
+            };
+            let all: std::collections::HashSet<[u32; 3]> =
+                h.leaf_triangles.iter().map(|&t| turned(t)).collect();
+            let mut found = 0;
+            for s in 0..pm.splits.len() {
+                let n = h.split_node(s);
+                let [cl, cr] = h.cut_vertices(n).unwrap();
+                let [ll, lr] = h.child_leaves(n).unwrap();
+                assert_eq!(cl.is_some(), ll.is_some(), "split {s}");
+                assert_eq!(cr.is_some(), lr.is_some(), "split {s}");
+                if let (Some(c), Some([a, b])) = (cl, ll) {
+                    assert!(all.contains(&turned([a, b, c])), "split {s}'s f_l");
+                    found += 1;
+                }
+                if let (Some(c), Some([a, b])) = (cr, lr) {
+                    assert!(all.contains(&turned([a, c, b])), "split {s}'s f_r");
+                    found += 1;
+                }
+            }
+            assert!(
+                found > pm.splits.len() / 2,
+                "{found} of {} splits",
+                pm.splits.len()
+            );
+        }
     }
 
     #[test]

@@ -15,14 +15,16 @@
 //! wants split is collapsed where the mesh stays a manifold, each pass in the order of
 //! the nodes' names.
 //!
-//! Crease and seam runs (splits that must go together) are not streamed: KLK's scheme
-//! is for manifold vertex splits, and a mesh with runs is refused by name.
-
-use std::collections::HashMap;
+//! Crease and seam runs (splits that must go together, some adding no triangle) are
+//! ours: KLK's scheme is for manifold vertex splits, placed by their cut vertices. For
+//! a mesh with such splits ([`Placement::LeafCorners`]) each packet also names its
+//! run's first node and the leaves of its new triangles below its children, and the
+//! client keeps the fully refined triangles it was sent at their leaves' active
+//! ancestors ([`LeafMesh`]), as the hierarchy defines a front's mesh.
 
 use glam::Vec3;
 
-use super::{CutMesh, Front, HeapIndex, NodeName, VertexHierarchy};
+use super::{Front, NodeName, VertexHierarchy};
 use crate::error::{Error, Result};
 use crate::lod::dag::Dag;
 use crate::lod::pm::ProgressiveMesh;
@@ -45,7 +47,7 @@ pub struct RefineInfo {
 }
 
 impl RefineInfo {
-    fn geometry(&self) -> NodeGeometry {
+    pub(super) fn geometry(&self) -> NodeGeometry {
         NodeGeometry {
             centre: Vec3::from(self.centre),
             radius: self.radius,
@@ -71,6 +73,24 @@ pub struct VsplitPacket {
     pub normal: [f32; 3],
     /// What `qrefine` reads of the left and the right child.
     pub children: [Option<RefineInfo>; 2],
+    /// The node of the first split of the run this split belongs to, when the run has
+    /// more than one: the client splits and collapses the run's nodes together.
+    pub run: Option<NodeName>,
+    /// Under [`Placement::LeafCorners`], the leaves of f_l and f_r below the left and
+    /// the right child (`None` where the split adds no such triangle, and always under
+    /// [`Placement::CutVertices`]).
+    pub leaves: [Option<[NodeName; 2]>; 2],
+}
+
+/// How a client places a split's triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// By the cut vertices' active ancestors, which bound the fan that goes to the
+    /// right child (KLK §5.3): for meshes whose every split adds a triangle.
+    CutVertices,
+    /// By each triangle's leaves, sent with it: for meshes with wedge splits that add
+    /// none (ours).
+    LeafCorners,
 }
 
 /// What a client starts from: the base mesh over the roots (numbered by tree-id) and
@@ -81,6 +101,10 @@ pub struct SelectiveBase {
     pub triangles: Vec<[u32; 3]>,
     /// Each root's vertex position and normal, and what `qrefine` reads of it.
     pub roots: Vec<([f32; 3], [f32; 3], Option<RefineInfo>)>,
+    /// Under [`Placement::LeafCorners`], each base triangle's corners' leaves (the
+    /// same triangles, in the same order and turn); `None` under
+    /// [`Placement::CutVertices`].
+    pub leaves: Option<Vec<[NodeName; 3]>>,
 }
 
 /// What a server holds of one mesh: its vertex hierarchy, each node's vertex and what
@@ -92,19 +116,14 @@ pub struct SelectiveSource {
     normals: Vec<[f32; 3]>,
     info: Vec<Option<RefineInfo>>,
     base: Vec<[u32; 3]>,
+    /// The base triangles' leaves, under leaf placement.
+    base_leaves: Option<Vec<[u32; 3]>>,
 }
 
 impl SelectiveSource {
     /// The source of `pm`, `dag` being the DAG built from it (for its attributes). An
-    /// `Err` for a mesh whose splits come in crease or seam runs, or a DAG of another
-    /// mesh.
+    /// `Err` for a DAG of another mesh.
     pub fn new(pm: &ProgressiveMesh, dag: &Dag) -> Result<SelectiveSource> {
-        if let Some(k) = pm.splits.iter().position(|s| s.joins_previous) {
-            return Err(Error::Invalid(format!(
-                "split {k} joins a crease or seam run: truly selective streaming is for \
-                 manifold vertex splits, one at a time"
-            )));
-        }
         if dag.split_count() != pm.splits.len() {
             return Err(Error::Invalid(format!(
                 "a DAG of {} splits with a progressive mesh of {}",
@@ -132,13 +151,36 @@ impl SelectiveSource {
             })
             .collect();
         let base = h.roots().triangles(&h);
+        let leaf_corners = pm.splits.iter().any(|s| s.joins_previous) || h.has_wedge_splits();
+        // The base triangles are the fully refined triangles whose corners lie in three
+        // trees, in the same order.
+        let base_leaves = leaf_corners.then(|| {
+            let roots = h.roots();
+            h.leaf_triangles
+                .iter()
+                .filter(|t| {
+                    let r = t.map(|leaf| roots.active_ancestor(&h, leaf));
+                    r[0] != r[1] && r[1] != r[2] && r[0] != r[2]
+                })
+                .copied()
+                .collect()
+        });
         Ok(SelectiveSource {
             h,
             positions,
             normals,
             info,
             base,
+            base_leaves,
         })
+    }
+
+    /// How a client of this source places a split's triangles.
+    pub fn placement(&self) -> Placement {
+        match self.base_leaves {
+            Some(_) => Placement::LeafCorners,
+            None => Placement::CutVertices,
+        }
     }
 
     /// The vertex hierarchy.
@@ -154,6 +196,12 @@ impl SelectiveSource {
             roots: (0..self.h.roots)
                 .map(|v| (self.positions[v], self.normals[v], self.info[v]))
                 .collect(),
+            leaves: self.base_leaves.as_ref().map(|triangles| {
+                triangles
+                    .iter()
+                    .map(|t| t.map(|leaf| self.h.name(leaf)))
+                    .collect()
+            }),
         }
     }
 
@@ -165,12 +213,22 @@ impl SelectiveSource {
             .expect("a split node")
             .map(|c| c.map(|c| self.h.name(c)));
         let v = self.h.vertex(right) as usize;
+        let leaves = match self.placement() {
+            Placement::CutVertices => [None, None],
+            Placement::LeafCorners => self
+                .h
+                .child_leaves(node)
+                .expect("a split node")
+                .map(|t| t.map(|t| t.map(|leaf| self.h.name(leaf)))),
+        };
         VsplitPacket {
             node: self.h.name(node),
             cuts,
             position: self.positions[v],
             normal: self.normals[v],
             children: [self.info[left as usize], self.info[right as usize]],
+            run: self.h.run_leader(node).map(|n| self.h.name(n)),
+            leaves,
         }
     }
 
@@ -227,7 +285,7 @@ impl SelectiveSource {
     }
 }
 
-fn view_test(view: &View, tau: f32, criteria: Criteria) -> Result<ViewTest> {
+pub(super) fn view_test(view: &View, tau: f32, criteria: Criteria) -> Result<ViewTest> {
     view.validate()?;
     if !(tau.is_finite() && tau > 0.0) {
         return Err(Error::Invalid(format!(
@@ -283,18 +341,45 @@ impl SelectiveServer {
         view: &View,
         tau: f32,
     ) -> Result<Vec<VsplitPacket>> {
+        self.refine_at_most(source, view, tau, usize::MAX)
+    }
+
+    /// [`SelectiveServer::refine`], stopping once `max` packets are due: no split is
+    /// begun after that, but one begun is sent whole with what the partial order forces
+    /// for it, so a batch may run a little past `max`. The rest comes with the next
+    /// view that asks for it.
+    pub fn refine_at_most(
+        &mut self,
+        source: &SelectiveSource,
+        view: &View,
+        tau: f32,
+        max: usize,
+    ) -> Result<Vec<VsplitPacket>> {
         let test = view_test(view, tau, self.criteria)?;
         let mut packets = Vec::new();
         // A node's children come after it, so one sequential pass reaches them.
         let h = &source.h;
         for n in 0..h.len() as u32 {
+            if packets.len() >= max {
+                break;
+            }
             if !(self.sent.is_active(n) && source.qrefine(&test, n)) {
                 continue;
             }
-            let before = self.cut_vertex_only.then(|| self.sent.clone());
+            // Cut vertices as they stand place a split only under cut placement; leaf
+            // placement needs the fundamental ones, the third corners of its triangles.
+            let as_they_stand =
+                self.cut_vertex_only && source.placement() == Placement::CutVertices;
+            let before = as_they_stand.then(|| self.sent.clone());
             let splits = self.sent.split(h, n)?;
             let Some(mut front) = before else {
-                packets.extend(splits.into_iter().map(|s| source.packet(s)));
+                packets.extend(splits.into_iter().map(|s| {
+                    let mut p = source.packet(s);
+                    if self.cut_vertex_only {
+                        p.children = [None, None];
+                    }
+                    p
+                }));
                 continue;
             };
             // The cut vertices as each split finds them on the front, split by split.
@@ -313,6 +398,31 @@ impl SelectiveServer {
         Ok(packets)
     }
 
+    /// The session of a client that resumes on a new connection holding `leaves`: the
+    /// nodes of its partial hierarchy that it was not sent a split of (KLK §5's leaf
+    /// ids), which are the front the old session had sent. An `Err` naming the node
+    /// when they are not a front of this hierarchy.
+    pub fn resume(&self, source: &SelectiveSource, leaves: &[NodeName]) -> Result<SelectiveServer> {
+        let nodes = leaves
+            .iter()
+            .map(|name| {
+                source
+                    .h
+                    .find(name)
+                    .ok_or_else(|| Error::Invalid(format!("node {name:?} is not in the hierarchy")))
+            })
+            .collect::<Result<Vec<u32>>>()?;
+        Ok(SelectiveServer {
+            sent: Front::from_active(&source.h, &nodes)?,
+            ..self.clone()
+        })
+    }
+
+    /// The session's own bytes: its front's tags (the source is shared).
+    pub fn memory(&self) -> usize {
+        self.sent.active.capacity()
+    }
+
     /// How many nodes the client was sent (the roots included).
     pub fn sent_nodes(&self) -> usize {
         self.sent.active.iter().filter(|a| **a).count()
@@ -329,332 +439,11 @@ impl SelectiveServer {
     }
 }
 
-/// One node of a client's partial hierarchy.
-#[derive(Clone, Debug)]
-struct ClientNode {
-    name: NodeName,
-    children: Option<[u32; 2]>,
-    cuts: [Option<NodeName>; 2],
-    position: [f32; 3],
-    normal: [f32; 3],
-    info: Option<RefineInfo>,
-}
-
-/// A client: the part of the hierarchy it was sent, its front and its mesh.
-///
-/// ```
-/// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, View};
-/// use flaneur::lod::{SelectiveClient, SelectiveServer, SelectiveSource};
-/// let pm = ProgressiveMesh::build(&flaneur::lod::bumpy_torus(800))?;
-/// let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
-/// let source = SelectiveSource::new(&pm, &dag)?;
-/// let (mut server, mut client) = (SelectiveServer::new(&source), SelectiveClient::new(source.base()));
-/// let view = View::new(glam::Vec3::new(0.0, 0.0, 2.5), glam::Vec3::NEG_Z, 1.0)?;
-/// // The client asks only when its view wants what it was not sent.
-/// while !client.select(&view, 0.002)?.is_empty() {
-///     client.receive(&server.refine(&source, &view, 0.002)?)?;
-/// }
-/// assert!(client.triangles().len() > pm.base.triangle_count());
-/// # Ok::<(), flaneur::Error>(())
-/// ```
-#[derive(Clone, Debug)]
-pub struct SelectiveClient {
-    nodes: Vec<ClientNode>,
-    by_name: HashMap<NodeName, u32>,
-    active: Vec<bool>,
-    mesh: CutMesh,
-    criteria: Criteria,
-}
-
-impl SelectiveClient {
-    /// A client that has the base mesh and its roots, as [`SelectiveSource::base`] gives
-    /// them.
-    pub fn new(SelectiveBase { triangles, roots }: SelectiveBase) -> SelectiveClient {
-        let nodes: Vec<ClientNode> = roots
-            .into_iter()
-            .enumerate()
-            .map(|(tree, (position, normal, info))| ClientNode {
-                name: NodeName {
-                    tree: tree as u32,
-                    node: HeapIndex::root(),
-                },
-                children: None,
-                cuts: [None, None],
-                position,
-                normal,
-                info,
-            })
-            .collect();
-        let by_name = nodes
-            .iter()
-            .enumerate()
-            .map(|(k, n)| (n.name.clone(), k as u32))
-            .collect();
-        SelectiveClient {
-            active: vec![true; nodes.len()],
-            nodes,
-            by_name,
-            mesh: CutMesh::new(&triangles),
-            criteria: Criteria::default(),
-        }
-    }
-
-    /// The client under `criteria`, as its server's session
-    /// ([`SelectiveServer::with_criteria`]).
-    pub fn with_criteria(self, criteria: Criteria) -> SelectiveClient {
-        SelectiveClient { criteria, ..self }
-    }
-
-    /// Takes the server's packets: each node's children join the partial hierarchy
-    /// (the mesh changes only when [`SelectiveClient::select`] splits them). An `Err`
-    /// for a packet of a node the client does not have, or has split already.
-    pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
-        for p in packets {
-            let &k = self.by_name.get(&p.node).ok_or_else(|| {
-                Error::Invalid(format!(
-                    "a split of node {:?}, which the client was not sent",
-                    p.node
-                ))
-            })?;
-            if self.nodes[k as usize].children.is_some() {
-                return Err(Error::Invalid(format!("node {:?} was sent twice", p.node)));
-            }
-            let parent = &self.nodes[k as usize];
-            let (name, position, normal) = (parent.name.clone(), parent.position, parent.normal);
-            let mut child = |right: bool, position, normal, info| {
-                let id = self.nodes.len() as u32;
-                let name = NodeName {
-                    tree: name.tree,
-                    node: name.node.child(right),
-                };
-                self.by_name.insert(name.clone(), id);
-                self.nodes.push(ClientNode {
-                    name,
-                    children: None,
-                    cuts: [None, None],
-                    position,
-                    normal,
-                    info,
-                });
-                self.active.push(false);
-                id
-            };
-            let left = child(false, position, normal, p.children[0]);
-            let right = child(true, p.position, p.normal, p.children[1]);
-            let node = &mut self.nodes[k as usize];
-            node.children = Some([left, right]);
-            node.cuts = p.cuts.clone();
-        }
-        Ok(())
-    }
-
-    /// Brings the client's mesh to `view` under `tau` with what it holds (the module's
-    /// rule). The names of the nodes it wanted split but was not sent: empty when the
-    /// mesh is what the view asks for, else what to ask the server for.
-    pub fn select(&mut self, view: &View, tau: f32) -> Result<Vec<NodeName>> {
-        let test = view_test(view, tau, self.criteria)?;
-        let qrefine = |n: &ClientNode| {
-            n.info
-                .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
-        };
-        let missing = loop {
-            let mut wanted: Vec<u32> = (0..self.nodes.len() as u32)
-                .filter(|&n| self.active[n as usize] && qrefine(&self.nodes[n as usize]))
-                .collect();
-            wanted.sort_by(|a, b| {
-                self.nodes[*a as usize]
-                    .name
-                    .cmp(&self.nodes[*b as usize].name)
-            });
-            let (have, lack): (Vec<u32>, Vec<u32>) = wanted
-                .into_iter()
-                .partition(|&n| self.nodes[n as usize].children.is_some());
-            if have.is_empty() {
-                break lack
-                    .iter()
-                    .map(|&n| self.nodes[n as usize].name.clone())
-                    .collect::<Vec<_>>();
-            }
-            for n in have {
-                if self.active[n as usize] {
-                    self.split(n)?;
-                }
-            }
-        };
-        if !missing.is_empty() {
-            return Ok(missing);
-        }
-        loop {
-            let mut parents: Vec<u32> = (0..self.nodes.len() as u32)
-                .filter(|&n| {
-                    self.nodes[n as usize]
-                        .children
-                        .is_some_and(|[l, r]| self.active[l as usize] && self.active[r as usize])
-                })
-                .collect();
-            parents.sort_by(|a, b| {
-                self.nodes[*a as usize]
-                    .name
-                    .cmp(&self.nodes[*b as usize].name)
-            });
-            let mut changed = false;
-            for p in parents {
-                let [l, r] = self.nodes[p as usize].children.expect("a parent");
-                if !qrefine(&self.nodes[p as usize]) && self.mesh.collapse_keeps_manifold(p, [l, r])
-                {
-                    self.mesh.collapse(p, [l, r]);
-                    self.active[l as usize] = false;
-                    self.active[r as usize] = false;
-                    self.active[p as usize] = true;
-                    changed = true;
-                }
-            }
-            if !changed {
-                return Ok(Vec::new());
-            }
-        }
-    }
-
-    /// Splits active node `n`, first what the partial order forces: the node both its
-    /// cut vertices' active ancestors are, found by right shifts of their names.
-    fn split(&mut self, n: u32) -> Result<()> {
-        let cuts = self.nodes[n as usize].cuts.clone();
-        if let [Some(l), Some(r)] = &cuts {
-            loop {
-                let (a, b) = (self.active_ancestor(l)?, self.active_ancestor(r)?);
-                if a != b {
-                    break;
-                }
-                if self.nodes[a as usize].children.is_none() {
-                    return Err(Error::Invalid(format!(
-                        "the partial order asks for a split of node {:?}, which was not sent",
-                        self.nodes[a as usize].name
-                    )));
-                }
-                self.split(a)?;
-            }
-        }
-        let children = self.nodes[n as usize].children.expect("a node sent split");
-        let at = [
-            cuts[0]
-                .as_ref()
-                .map(|c| self.active_ancestor(c))
-                .transpose()?,
-            cuts[1]
-                .as_ref()
-                .map(|c| self.active_ancestor(c))
-                .transpose()?,
-        ];
-        self.mesh.split(n, children, at)?;
-        self.active[n as usize] = false;
-        self.active[children[0] as usize] = true;
-        self.active[children[1] as usize] = true;
-        Ok(())
-    }
-
-    /// The active node `name` descends from: `name` shifted right until it names a
-    /// node on the front (KLK §4).
-    fn active_ancestor(&self, name: &NodeName) -> Result<u32> {
-        for up in 0..=name.depth() {
-            if let Some(&k) = self.by_name.get(&name.up(up)) {
-                if self.active[k as usize] {
-                    return Ok(k);
-                }
-            }
-        }
-        Err(Error::Invalid(format!(
-            "no active ancestor of node {name:?}"
-        )))
-    }
-
-    /// The mesh's triangles, their corners as node names.
-    pub fn triangles(&self) -> Vec<[NodeName; 3]> {
-        self.mesh
-            .triangles()
-            .iter()
-            .map(|t| t.map(|k| self.nodes[k as usize].name.clone()))
-            .collect()
-    }
-
-    /// Nodes held (the roots included).
-    pub fn nodes(&self) -> usize {
-        self.nodes.len()
-    }
-}
-
-/// The client of KLK §7's variant: it makes every split as it comes, at the cut
-/// vertices the server names, and never refines on its own
-/// ([`SelectiveServer::cut_vertex_only`]).
-#[derive(Clone, Debug)]
-pub struct CutVertexClient {
-    names: Vec<NodeName>,
-    by_name: HashMap<NodeName, u32>,
-    mesh: CutMesh,
-}
-
-impl CutVertexClient {
-    /// A client that has the base mesh.
-    pub fn new(base: SelectiveBase) -> CutVertexClient {
-        let names: Vec<NodeName> = (0..base.roots.len() as u32)
-            .map(|tree| NodeName {
-                tree,
-                node: HeapIndex::root(),
-            })
-            .collect();
-        let by_name = names.iter().cloned().zip(0..).collect();
-        CutVertexClient {
-            names,
-            by_name,
-            mesh: CutMesh::new(&base.triangles),
-        }
-    }
-
-    /// Makes the splits of `packets` in order. An `Err` for a split of a node, or at a
-    /// cut vertex, the client does not hold.
-    pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
-        for p in packets {
-            let id = |name: &NodeName| {
-                self.by_name.get(name).copied().ok_or_else(|| {
-                    Error::Invalid(format!(
-                        "a split names node {name:?}, which the client lacks"
-                    ))
-                })
-            };
-            let node = id(&p.node)?;
-            let cuts = [
-                p.cuts[0].as_ref().map(id).transpose()?,
-                p.cuts[1].as_ref().map(id).transpose()?,
-            ];
-            let mut child = |right: bool| {
-                let name = NodeName {
-                    tree: p.node.tree,
-                    node: p.node.node.child(right),
-                };
-                let k = self.names.len() as u32;
-                self.by_name.insert(name.clone(), k);
-                self.names.push(name);
-                k
-            };
-            let children = [child(false), child(true)];
-            self.mesh.split(node, children, cuts)?;
-        }
-        Ok(())
-    }
-
-    /// The mesh's triangles, their corners as node names.
-    pub fn triangles(&self) -> Vec<[NodeName; 3]> {
-        self.mesh
-            .triangles()
-            .iter()
-            .map(|t| t.map(|k| self.names[k as usize].clone()))
-            .collect()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::lod::dag::DagConstruction;
+    use crate::lod::selective::{CutVertexClient, SelectiveClient};
     use rand::{Rng, SeedableRng};
 
     /// Triangles turned to start at their smallest corner, sorted.
@@ -667,28 +456,41 @@ mod tests {
         triangles
     }
 
-    #[test]
-    fn a_streamed_mesh_equals_a_local_refiners_triangle_for_triangle() {
-        let mesh = crate::lod::bumpy_torus(1500);
-        let pm = ProgressiveMesh::build(&mesh).unwrap();
+    /// A random view of `mesh` from about one to three of its sizes away, looking near
+    /// its middle.
+    fn random_view(rng: &mut rand::rngs::StdRng, mesh: &crate::scene::Mesh) -> View {
+        let (lo, hi) = mesh.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), &p| (lo.min(Vec3::from(p)), hi.max(Vec3::from(p))),
+        );
+        let (centre, size) = ((lo + hi) / 2.0, (hi - lo).max_element());
+        let mut off = || rng.gen_range(-1.5..1.5) * size;
+        let eye = centre + Vec3::new(off(), off(), off());
+        let aim = centre + Vec3::new(off(), off(), off()) * 0.2;
+        View::new(eye, aim - eye, 1.0).unwrap()
+    }
+
+    /// Over `views` random views, a client streamed from a server holds, after each,
+    /// the mesh a local refiner makes, triangle for triangle; each split is sent once.
+    fn streams_as_a_local_refiner_refines(mesh: &crate::scene::Mesh, seed: u64, views: usize) {
+        let pm = ProgressiveMesh::build(mesh).unwrap();
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
         let source = SelectiveSource::new(&pm, &dag).unwrap();
         let h = source.hierarchy();
         let mut server = SelectiveServer::new(&source);
         let mut client = SelectiveClient::new(source.base());
         let mut local = h.roots();
-        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
-        let (mut asked, mut sent) = (0, 0);
-        for step in 0..150 {
-            let eye = Vec3::new(
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-            );
-            let look = -eye + Vec3::new(rng.gen_range(-0.5..0.5), 0.0, rng.gen_range(-0.5..0.5));
-            let view = View::new(eye, look, 1.0).unwrap();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let (mut asked, mut sent, mut collapsed) = (0, 0, 0);
+        for step in 0..views {
+            let view = random_view(&mut rng, mesh);
             let tau = rng.gen_range(0.0005..0.01);
+            let before = local.clone();
             source.select(&mut local, &view, tau).unwrap();
+            collapsed +=
+                usize::from((0..h.len() as u32).any(|n| {
+                    before.is_active(n) && !local.is_active(n) && h.children(n).is_none()
+                }));
             loop {
                 let missing = client.select(&view, tau).unwrap();
                 if missing.is_empty() {
@@ -712,19 +514,72 @@ mod tests {
                     .collect(),
             );
             assert_eq!(ours, theirs, "step {step}");
+            // What it draws: the same triangles over the nodes' vertices.
+            let drawn = client.mesh();
+            drawn.validate().unwrap();
+            let at = |m: &crate::scene::Mesh, t: &[u32]| {
+                let mut t: Vec<[[u32; 3]; 3]> = t
+                    .chunks(3)
+                    .map(|c| {
+                        let mut p = [0, 1, 2].map(|k| m.positions[c[k] as usize].map(f32::to_bits));
+                        // The same triangle whatever corner it starts at.
+                        let first = (0..3).min_by_key(|&k| p[k]).unwrap();
+                        p.rotate_left(first);
+                        p
+                    })
+                    .collect();
+                t.sort_unstable();
+                t
+            };
+            let reference = crate::scene::Mesh {
+                positions: source.positions.clone(),
+                normals: source.normals.clone(),
+                indices: local
+                    .triangles(h)
+                    .iter()
+                    .flat_map(|t| t.map(|n| h.vertex(n)))
+                    .collect(),
+            };
+            assert_eq!(
+                at(&drawn, &drawn.indices),
+                at(&reference, &reference.indices),
+                "step {step}: what is drawn"
+            );
         }
-        assert!(asked > 10 && sent > 100, "asked {asked}, sent {sent}");
+        assert!(asked > 3 && sent > 100, "asked {asked}, sent {sent}");
+        assert!(
+            collapsed > 0,
+            "no view coarsened what an earlier one refined"
+        );
         // Each split is sent once: never more than the hierarchy has.
         assert_eq!(client.nodes(), h.roots + 2 * sent);
         assert!(client.nodes() <= h.len());
     }
 
     #[test]
-    fn a_mesh_of_crease_runs_and_a_bad_tau_are_refused_by_name() {
-        let pm = ProgressiveMesh::build(&crate::lod::fixtures::building()).unwrap();
+    fn a_streamed_mesh_equals_a_local_refiners_triangle_for_triangle() {
+        let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(1500)).unwrap();
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-        let e = SelectiveSource::new(&pm, &dag).unwrap_err();
-        assert!(e.to_string().contains("crease or seam run"), "{e}");
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        assert_eq!(source.placement(), Placement::CutVertices);
+        streams_as_a_local_refiner_refines(&crate::lod::bumpy_torus(1500), 5, 150);
+    }
+
+    /// A flat-shaded building: every corner and crease a seam, so its splits come in
+    /// runs, some adding no triangle. Its triangles are placed by their leaves.
+    #[test]
+    fn a_mesh_of_crease_runs_streams_by_its_leaves_as_a_local_refiner_refines() {
+        let building = crate::lod::fixtures::building();
+        let pm = ProgressiveMesh::build(&building).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        assert_eq!(source.placement(), Placement::LeafCorners);
+        assert!(pm.splits.iter().any(|s| s.joins_previous));
+        streams_as_a_local_refiner_refines(&building, 7, 150);
+    }
+
+    #[test]
+    fn a_bad_tau_is_refused_by_name() {
         let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(400)).unwrap();
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
         let source = SelectiveSource::new(&pm, &dag).unwrap();
@@ -737,37 +592,41 @@ mod tests {
         }
     }
 
+    /// KLK §7: after each view the client holds exactly the sent front's mesh, under
+    /// both placements.
     #[test]
     fn a_cut_vertex_only_client_holds_the_sent_front_without_qrefines_data() {
-        let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(1500)).unwrap();
-        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-        let source = SelectiveSource::new(&pm, &dag).unwrap();
-        let mut server = SelectiveServer::new(&source).cut_vertex_only();
-        let mut full = SelectiveServer::new(&source);
-        let mut client = CutVertexClient::new(source.base());
-        let mut rng = rand::rngs::StdRng::seed_from_u64(6);
-        let mut sent = 0;
-        for step in 0..60 {
-            let eye = Vec3::new(
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-                rng.gen_range(-3.0..3.0),
-            );
-            let view = View::new(eye, -eye, 1.0).unwrap();
-            let packets = server.refine(&source, &view, 0.002).unwrap();
-            let with_info = full.refine(&source, &view, 0.002).unwrap();
-            // The same splits, in the same order; nothing for qrefine.
-            let nodes = |p: &[VsplitPacket]| p.iter().map(|p| p.node.clone()).collect::<Vec<_>>();
-            assert_eq!(nodes(&packets), nodes(&with_info), "step {step}");
-            assert!(packets.iter().all(|p| p.children == [None, None]));
-            sent += packets.len();
-            client.receive(&packets).unwrap();
-            assert_eq!(
-                canonical(client.triangles()),
-                canonical(server.sent_triangles(&source)),
-                "step {step}"
-            );
+        let meshes = [
+            crate::lod::bumpy_torus(1500),
+            crate::lod::fixtures::building(),
+        ];
+        for (seed, mesh) in meshes.iter().enumerate() {
+            let pm = ProgressiveMesh::build(mesh).unwrap();
+            let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+            let source = SelectiveSource::new(&pm, &dag).unwrap();
+            let mut server = SelectiveServer::new(&source).cut_vertex_only();
+            let mut full = SelectiveServer::new(&source);
+            let mut client = CutVertexClient::new(source.base());
+            let mut rng = rand::rngs::StdRng::seed_from_u64(6 + seed as u64);
+            let mut sent = 0;
+            for step in 0..60 {
+                let view = random_view(&mut rng, mesh);
+                let packets = server.refine(&source, &view, 0.002).unwrap();
+                let with_info = full.refine(&source, &view, 0.002).unwrap();
+                // The same splits, in the same order; nothing for qrefine.
+                let nodes =
+                    |p: &[VsplitPacket]| p.iter().map(|p| p.node.clone()).collect::<Vec<_>>();
+                assert_eq!(nodes(&packets), nodes(&with_info), "step {step}");
+                assert!(packets.iter().all(|p| p.children == [None, None]));
+                sent += packets.len();
+                client.receive(&packets).unwrap();
+                assert_eq!(
+                    canonical(client.triangles()),
+                    canonical(server.sent_triangles(&source)),
+                    "step {step}"
+                );
+            }
+            assert!(sent > 100, "{sent}");
         }
-        assert!(sent > 100, "{sent}");
     }
 }

@@ -1,0 +1,574 @@
+//! The clients of truly selective streaming: the part of the hierarchy they were sent,
+//! named ⟨tree-id, node-id⟩, and their mesh over it. [`SelectiveClient`] refines and
+//! coarsens on its own for each view, as a local refiner's [`Front`](super::Front)
+//! would, splitting a run's nodes together and what the partial order forces first;
+//! [`CutVertexClient`] (KLK §7) makes each split as it comes.
+//!
+//! A packet that does not fit what a client holds is an `Err` naming it; after one, the
+//! client's mesh may no longer be its server's.
+
+use std::collections::HashMap;
+
+use super::stream::{view_test, RefineInfo, SelectiveBase, VsplitPacket};
+use super::{CutMesh, HeapIndex, LeafMesh, NodeName};
+use crate::error::{Error, Result};
+use crate::lod::refine::{Criteria, View};
+use crate::scene::Mesh;
+
+/// One node of a client's partial hierarchy.
+#[derive(Clone, Debug)]
+struct ClientNode {
+    name: NodeName,
+    parent: Option<u32>,
+    children: Option<[u32; 2]>,
+    cuts: [Option<NodeName>; 2],
+    /// The first node of its split's run, if the run has more than one.
+    run: Option<NodeName>,
+    /// Its vertex.
+    position: [f32; 3],
+    normal: [f32; 3],
+    info: Option<RefineInfo>,
+}
+
+/// The part of a hierarchy a client was sent, and which of its nodes are active.
+#[derive(Clone, Debug)]
+struct Partial {
+    nodes: Vec<ClientNode>,
+    by_name: HashMap<NodeName, u32>,
+    active: Vec<bool>,
+    /// The nodes of each run, by the name of its first, in the order they were sent.
+    runs: HashMap<NodeName, Vec<u32>>,
+}
+
+impl Partial {
+    /// The roots, each with its vertex and what `qrefine` reads of it.
+    fn new(roots: Vec<([f32; 3], [f32; 3], Option<RefineInfo>)>) -> Partial {
+        let nodes: Vec<ClientNode> = roots
+            .into_iter()
+            .enumerate()
+            .map(|(tree, (position, normal, info))| ClientNode {
+                name: NodeName {
+                    tree: tree as u32,
+                    node: HeapIndex::root(),
+                },
+                parent: None,
+                children: None,
+                cuts: [None, None],
+                run: None,
+                position,
+                normal,
+                info,
+            })
+            .collect();
+        Partial {
+            by_name: nodes
+                .iter()
+                .enumerate()
+                .map(|(k, n)| (n.name.clone(), k as u32))
+                .collect(),
+            active: vec![true; nodes.len()],
+            nodes,
+            runs: HashMap::new(),
+        }
+    }
+
+    fn id(&self, name: &NodeName) -> Result<u32> {
+        self.by_name.get(name).copied().ok_or_else(|| {
+            Error::Invalid(format!(
+                "a split names node {name:?}, which the client was not sent"
+            ))
+        })
+    }
+
+    /// Takes packet `p`: the node's children join the hierarchy, inactive. The node.
+    fn receive(&mut self, p: &VsplitPacket) -> Result<u32> {
+        let k = self.id(&p.node)?;
+        if self.nodes[k as usize].children.is_some() {
+            return Err(Error::Invalid(format!("node {:?} was sent twice", p.node)));
+        }
+        let parent = &self.nodes[k as usize];
+        let (position, normal) = (parent.position, parent.normal);
+        let mut child = |right: bool, (position, normal), info| {
+            let id = self.nodes.len() as u32;
+            let name = NodeName {
+                tree: p.node.tree,
+                node: p.node.node.child(right),
+            };
+            self.by_name.insert(name.clone(), id);
+            self.nodes.push(ClientNode {
+                name,
+                parent: Some(k),
+                children: None,
+                cuts: [None, None],
+                run: None,
+                position,
+                normal,
+                info,
+            });
+            self.active.push(false);
+            id
+        };
+        // The left child keeps the node's vertex; the right is the new one.
+        let children = [
+            child(false, (position, normal), p.children[0]),
+            child(true, (p.position, p.normal), p.children[1]),
+        ];
+        let node = &mut self.nodes[k as usize];
+        node.children = Some(children);
+        node.cuts = p.cuts.clone();
+        node.run = p.run.clone();
+        if let Some(leader) = &p.run {
+            self.runs.entry(leader.clone()).or_default().push(k);
+        }
+        Ok(k)
+    }
+
+    /// Moves the front from `node` to its `children`.
+    fn split(&mut self, node: u32, children: [u32; 2]) {
+        self.active[node as usize] = false;
+        self.active[children[0] as usize] = true;
+        self.active[children[1] as usize] = true;
+    }
+
+    /// The active node `name` descends from: `name` shifted right until it names a
+    /// node on the front (KLK §4).
+    fn active_ancestor(&self, name: &NodeName) -> Result<u32> {
+        for up in 0..=name.depth() {
+            if let Some(&k) = self.by_name.get(&name.up(up)) {
+                if self.active[k as usize] {
+                    return Ok(k);
+                }
+            }
+        }
+        Err(Error::Invalid(format!(
+            "no active ancestor of node {name:?}"
+        )))
+    }
+
+    /// The active node strictly above `node`, if the front runs below it.
+    fn active_above(&self, node: u32) -> Option<u32> {
+        let mut n = self.nodes[node as usize].parent;
+        while let Some(k) = n {
+            if self.active[k as usize] {
+                return Some(k);
+            }
+            n = self.nodes[k as usize].parent;
+        }
+        None
+    }
+
+    /// The nodes split with `node`: its run's, or itself.
+    fn run_nodes(&self, node: u32) -> Vec<u32> {
+        match &self.nodes[node as usize].run {
+            Some(leader) => self.runs.get(leader).cloned().unwrap_or_default(),
+            None => vec![node],
+        }
+    }
+
+    fn children(&self, node: u32) -> Result<[u32; 2]> {
+        self.nodes[node as usize].children.ok_or_else(|| {
+            Error::Invalid(format!(
+                "the partial order asks for a split of node {:?}, which was not sent",
+                self.nodes[node as usize].name
+            ))
+        })
+    }
+
+    /// The names of the nodes whose split was not sent.
+    fn leaves(&self) -> Vec<NodeName> {
+        self.nodes
+            .iter()
+            .filter(|n| n.children.is_none())
+            .map(|n| n.name.clone())
+            .collect()
+    }
+
+    fn named(&self, triangles: Vec<[u32; 3]>) -> Vec<[NodeName; 3]> {
+        triangles
+            .iter()
+            .map(|t| t.map(|k| self.nodes[k as usize].name.clone()))
+            .collect()
+    }
+
+    /// `triangles` as a mesh to draw: each corner node's vertex, once.
+    fn mesh(&self, triangles: Vec<[u32; 3]>) -> Mesh {
+        let mut index = HashMap::new();
+        let mut mesh = Mesh::default();
+        for t in triangles {
+            for k in t {
+                let v = *index.entry(k).or_insert_with(|| {
+                    let node = &self.nodes[k as usize];
+                    mesh.positions.push(node.position);
+                    mesh.normals.push(node.normal);
+                    mesh.positions.len() as u32 - 1
+                });
+                mesh.indices.push(v);
+            }
+        }
+        mesh
+    }
+}
+
+/// The nodes `find` finds for each cut vertex named.
+fn each(
+    cuts: &[Option<NodeName>; 2],
+    find: impl Fn(&NodeName) -> Result<u32>,
+) -> Result<[Option<u32>; 2]> {
+    Ok([
+        cuts[0].as_ref().map(&find).transpose()?,
+        cuts[1].as_ref().map(&find).transpose()?,
+    ])
+}
+
+/// A client's mesh, by its source's placement.
+#[derive(Clone, Debug)]
+enum ClientMesh {
+    Cut(CutMesh),
+    Leaf(LeafMesh),
+}
+
+impl ClientMesh {
+    /// The mesh of `base`: over its roots, and under leaf placement with its triangles'
+    /// leaves.
+    fn new(base: &SelectiveBase) -> ClientMesh {
+        match &base.leaves {
+            None => ClientMesh::Cut(CutMesh::new(&base.triangles)),
+            Some(leaves) => {
+                let mut mesh = LeafMesh::default();
+                for (t, leaves) in base.triangles.iter().zip(leaves) {
+                    mesh.add(leaves.clone(), *t);
+                }
+                ClientMesh::Leaf(mesh)
+            }
+        }
+    }
+
+    /// Under leaf placement, adds the triangles packet `p` brings, at their corners'
+    /// active ancestors in `tree`.
+    fn add_triangles(&mut self, tree: &Partial, p: &VsplitPacket) -> Result<()> {
+        let ClientMesh::Leaf(mesh) = self else {
+            return Ok(());
+        };
+        for (side, (cut, leaves)) in p.cuts.iter().zip(&p.leaves).enumerate() {
+            let (Some(cut), Some([left, right])) = (cut, leaves) else {
+                if cut.is_some() != leaves.is_some() {
+                    return Err(Error::Invalid(format!(
+                        "node {:?}'s split: a cut vertex without its triangle's leaves, \
+                         or leaves without a cut vertex",
+                        p.node
+                    )));
+                }
+                continue;
+            };
+            // f_l is (left, right, left cut), f_r (left, right cut, right).
+            let leaves = match side {
+                0 => [left.clone(), right.clone(), cut.clone()],
+                _ => [left.clone(), cut.clone(), right.clone()],
+            };
+            let corners = [
+                tree.active_ancestor(&leaves[0])?,
+                tree.active_ancestor(&leaves[1])?,
+                tree.active_ancestor(&leaves[2])?,
+            ];
+            mesh.add(leaves, corners);
+        }
+        Ok(())
+    }
+
+    fn triangles(&self) -> Vec<[u32; 3]> {
+        match self {
+            ClientMesh::Cut(m) => m.triangles(),
+            ClientMesh::Leaf(m) => m.triangles(),
+        }
+    }
+}
+
+/// A client: the part of the hierarchy it was sent, its front and its mesh.
+///
+/// ```
+/// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh, View};
+/// use flaneur::lod::{SelectiveClient, SelectiveServer, SelectiveSource};
+/// let pm = ProgressiveMesh::build(&flaneur::lod::bumpy_torus(800))?;
+/// let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+/// let source = SelectiveSource::new(&pm, &dag)?;
+/// let (mut server, mut client) = (SelectiveServer::new(&source), SelectiveClient::new(source.base()));
+/// let view = View::new(glam::Vec3::new(0.0, 0.0, 2.5), glam::Vec3::NEG_Z, 1.0)?;
+/// // The client asks only when its view wants what it was not sent.
+/// while !client.select(&view, 0.002)?.is_empty() {
+///     client.receive(&server.refine(&source, &view, 0.002)?)?;
+/// }
+/// assert!(client.triangles().len() > pm.base.triangle_count());
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct SelectiveClient {
+    tree: Partial,
+    mesh: ClientMesh,
+    criteria: Criteria,
+}
+
+impl SelectiveClient {
+    /// A client that has the base mesh and its roots, as [`SelectiveSource::base`](super::SelectiveSource::base)
+    /// gives them.
+    pub fn new(base: SelectiveBase) -> SelectiveClient {
+        SelectiveClient {
+            mesh: ClientMesh::new(&base),
+            tree: Partial::new(base.roots),
+            criteria: Criteria::default(),
+        }
+    }
+
+    /// The client under `criteria`, as its server's session
+    /// ([`SelectiveServer::with_criteria`](super::SelectiveServer::with_criteria)).
+    pub fn with_criteria(self, criteria: Criteria) -> SelectiveClient {
+        SelectiveClient { criteria, ..self }
+    }
+
+    /// Takes the server's packets: each node's children join the partial hierarchy
+    /// (the mesh changes only when [`SelectiveClient::select`] splits them). An `Err`
+    /// for a packet of a node the client does not have, or has split already.
+    pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
+        for p in packets {
+            self.tree.receive(p)?;
+            self.mesh.add_triangles(&self.tree, p)?;
+        }
+        Ok(())
+    }
+
+    /// Brings the client's mesh to `view` under `tau` with what it holds (the
+    /// stream module's rule). The names of the nodes it wanted split but was not sent:
+    /// empty when the mesh is what the view asks for, else what to ask the server for.
+    pub fn select(&mut self, view: &View, tau: f32) -> Result<Vec<NodeName>> {
+        let test = view_test(view, tau, self.criteria)?;
+        let qrefine = |n: &ClientNode| {
+            n.info
+                .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
+        };
+        let missing = loop {
+            let mut wanted: Vec<u32> = (0..self.tree.nodes.len() as u32)
+                .filter(|&n| self.tree.active[n as usize] && qrefine(&self.tree.nodes[n as usize]))
+                .collect();
+            self.by_name(&mut wanted);
+            let (have, lack): (Vec<u32>, Vec<u32>) = wanted
+                .into_iter()
+                .partition(|&n| self.tree.nodes[n as usize].children.is_some());
+            if have.is_empty() {
+                break lack
+                    .iter()
+                    .map(|&n| self.tree.nodes[n as usize].name.clone())
+                    .collect::<Vec<_>>();
+            }
+            for n in have {
+                if self.tree.active[n as usize] {
+                    self.split_run(n)?;
+                }
+            }
+        };
+        if !missing.is_empty() {
+            return Ok(missing);
+        }
+        loop {
+            let mut parents: Vec<u32> = (0..self.tree.nodes.len() as u32)
+                .filter(|&n| self.children_active(n))
+                .collect();
+            self.by_name(&mut parents);
+            let mut changed = false;
+            for p in parents {
+                if !qrefine(&self.tree.nodes[p as usize]) && self.can_collapse(p) {
+                    self.collapse(p);
+                    changed = true;
+                }
+            }
+            if !changed {
+                return Ok(Vec::new());
+            }
+        }
+    }
+
+    fn by_name(&self, nodes: &mut [u32]) {
+        nodes.sort_by(|a, b| {
+            self.tree.nodes[*a as usize]
+                .name
+                .cmp(&self.tree.nodes[*b as usize].name)
+        });
+    }
+
+    fn children_active(&self, n: u32) -> bool {
+        self.tree.nodes[n as usize]
+            .children
+            .is_some_and(|[l, r]| self.tree.active[l as usize] && self.tree.active[r as usize])
+    }
+
+    /// `node`'s run, each node with its children, if every one's children are active.
+    fn collapsible_run(&self, node: u32) -> Option<Vec<(u32, [u32; 2])>> {
+        self.tree
+            .run_nodes(node)
+            .into_iter()
+            .map(|n| {
+                self.children_active(n)
+                    .then(|| (n, self.tree.nodes[n as usize].children.expect("a parent")))
+            })
+            .collect()
+    }
+
+    /// Whether `node`'s run may collapse and leave the mesh a manifold (as
+    /// [`Front::can_collapse`](super::Front::can_collapse)).
+    fn can_collapse(&self, node: u32) -> bool {
+        let Some(run) = self.collapsible_run(node) else {
+            return false;
+        };
+        match &self.mesh {
+            ClientMesh::Cut(m) => run.iter().all(|&(n, c)| m.collapse_keeps_manifold(n, c)),
+            ClientMesh::Leaf(m) => m.collapse_keeps_manifold(&run),
+        }
+    }
+
+    fn collapse(&mut self, node: u32) {
+        let run = self.collapsible_run(node).expect("a run that may collapse");
+        match &mut self.mesh {
+            ClientMesh::Cut(m) => run.iter().for_each(|&(n, c)| m.collapse(n, c)),
+            ClientMesh::Leaf(m) => m.collapse(&run),
+        }
+        for (n, [l, r]) in run {
+            self.tree.active[n as usize] = true;
+            self.tree.active[l as usize] = false;
+            self.tree.active[r as usize] = false;
+        }
+    }
+
+    /// Splits every node of `node`'s run that is not split yet.
+    fn split_run(&mut self, node: u32) -> Result<()> {
+        for n in self.tree.run_nodes(node) {
+            self.make_split(n)?;
+        }
+        Ok(())
+    }
+
+    /// Splits `node`, bringing it to the front first, then splitting the node both its
+    /// cut vertices' active ancestors are, found by right shifts of their names, until
+    /// they differ (KLK's partial order); nothing if it is split already.
+    fn make_split(&mut self, node: u32) -> Result<()> {
+        while !self.tree.active[node as usize] {
+            match self.tree.active_above(node) {
+                None => return Ok(()),
+                Some(a) => {
+                    self.tree.children(a)?;
+                    self.split_run(a)?;
+                }
+            }
+        }
+        let cuts = self.tree.nodes[node as usize].cuts.clone();
+        if let [Some(l), Some(r)] = &cuts {
+            loop {
+                let a = self.tree.active_ancestor(l)?;
+                if a != self.tree.active_ancestor(r)? {
+                    break;
+                }
+                self.tree.children(a)?;
+                self.split_run(a)?;
+            }
+        }
+        let children = self.tree.children(node)?;
+        match &mut self.mesh {
+            ClientMesh::Cut(m) => {
+                let at = each(&cuts, |c| self.tree.active_ancestor(c))?;
+                m.split(node, children, at)?;
+            }
+            ClientMesh::Leaf(m) => {
+                m.split(node, self.tree.nodes[node as usize].name.depth(), children)?
+            }
+        }
+        self.tree.split(node, children);
+        Ok(())
+    }
+
+    /// The mesh's triangles, their corners as node names.
+    pub fn triangles(&self) -> Vec<[NodeName; 3]> {
+        self.tree.named(self.mesh.triangles())
+    }
+
+    /// The mesh to draw: its triangles over their corners' vertices.
+    pub fn mesh(&self) -> Mesh {
+        self.tree.mesh(self.mesh.triangles())
+    }
+
+    /// Nodes held (the roots included).
+    pub fn nodes(&self) -> usize {
+        self.tree.nodes.len()
+    }
+
+    /// The names of the nodes held whose split was not sent: what a client resuming
+    /// its session tells the server
+    /// ([`SelectiveServer::resume`](super::SelectiveServer::resume)).
+    pub fn leaves(&self) -> Vec<NodeName> {
+        self.tree.leaves()
+    }
+}
+
+/// The client of KLK §7's variant: it makes every split as it comes and never refines
+/// on its own
+/// ([`SelectiveServer::cut_vertex_only`](super::SelectiveServer::cut_vertex_only)).
+/// Under cut placement it places each split at the cut vertices the server names as
+/// they stand on its mesh; under leaf placement by the triangles' leaves.
+#[derive(Clone, Debug)]
+pub struct CutVertexClient {
+    tree: Partial,
+    mesh: ClientMesh,
+}
+
+impl CutVertexClient {
+    /// A client that has the base mesh.
+    pub fn new(base: SelectiveBase) -> CutVertexClient {
+        CutVertexClient {
+            mesh: ClientMesh::new(&base),
+            tree: Partial::new(base.roots),
+        }
+    }
+
+    /// Makes the splits of `packets` in order. An `Err` for a split of a node the
+    /// client does not hold on its front, or at a cut vertex it does not hold.
+    pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
+        for p in packets {
+            let node = self.tree.id(&p.node)?;
+            if !self.tree.active[node as usize] {
+                return Err(Error::Invalid(format!(
+                    "a split of node {:?}, which is not on the client's front",
+                    p.node
+                )));
+            }
+            self.tree.receive(p)?;
+            let children = self.tree.children(node)?;
+            match &mut self.mesh {
+                ClientMesh::Cut(m) => {
+                    m.split(node, children, each(&p.cuts, |c| self.tree.id(c))?)?;
+                }
+                ClientMesh::Leaf(_) => {
+                    self.mesh.add_triangles(&self.tree, p)?;
+                    let ClientMesh::Leaf(m) = &mut self.mesh else {
+                        unreachable!("matched above")
+                    };
+                    m.split(node, p.node.depth(), children)?;
+                }
+            }
+            self.tree.split(node, children);
+        }
+        Ok(())
+    }
+
+    /// The mesh's triangles, their corners as node names.
+    pub fn triangles(&self) -> Vec<[NodeName; 3]> {
+        self.tree.named(self.mesh.triangles())
+    }
+
+    /// The mesh to draw: its triangles over their corners' vertices.
+    pub fn mesh(&self) -> Mesh {
+        self.tree.mesh(self.mesh.triangles())
+    }
+
+    /// The names of the nodes held that were not split: what a client resuming its
+    /// session tells the server
+    /// ([`SelectiveServer::resume`](super::SelectiveServer::resume)).
+    pub fn leaves(&self) -> Vec<NodeName> {
+        self.tree.leaves()
+    }
+}
