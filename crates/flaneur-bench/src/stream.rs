@@ -151,6 +151,10 @@ pub struct StreamRow {
     pub accuracy: f64,
     pub accuracy_all: f64,
     pub warm_up: usize,
+    /// The mean accuracy from frame `steady` on, the mesh grown and the orbit at its
+    /// steady speed.
+    pub accuracy_steady: f64,
+    pub steady: usize,
     /// The measured round trip of a batch (T_g), ms, at the end.
     pub round_trip_ms: Option<f64>,
     pub bytes: u64,
@@ -170,6 +174,12 @@ pub struct StreamReport {
 /// (the mesh growing from the base, §5.4), in its 180-frame paths.
 fn warm_up(frames: usize) -> usize {
     frames * 50 / 180
+}
+
+/// The frame from which the mesh has grown from its base, whatever the round trip,
+/// and the orbit turns at its steady speed (from frame 75 of 180): frame 100 of 180.
+fn steady(frames: usize) -> usize {
+    frames * 100 / 180
 }
 
 /// The experiments' landmark: a bumpy torus of about `triangles` triangles with its
@@ -307,6 +317,8 @@ fn walk(
         accuracy: 0.0,
         accuracy_all: 0.0,
         warm_up: warm_up(views.len()),
+        accuracy_steady: 0.0,
+        steady: steady(views.len()),
         round_trip_ms: None,
         bytes: 0,
         accuracies: Vec::new(),
@@ -362,13 +374,15 @@ fn walk(
     }
     row.mean_span = span_sum as f64 / views.len() as f64;
     let mean = |a: &[(usize, f64)]| a.iter().map(|x| x.1).sum::<f64>() / a.len().max(1) as f64;
-    let after: Vec<(usize, f64)> = row
-        .accuracies
-        .iter()
-        .copied()
-        .filter(|&(f, _)| f >= row.warm_up)
-        .collect();
-    row.accuracy = mean(&after);
+    let from = |first: usize| -> Vec<(usize, f64)> {
+        row.accuracies
+            .iter()
+            .copied()
+            .filter(|&(f, _)| f >= first)
+            .collect()
+    };
+    row.accuracy = mean(&from(row.warm_up));
+    row.accuracy_steady = mean(&from(row.steady));
     row.accuracy_all = mean(&row.accuracies);
     if let Some(c) = sequential {
         let _ = c.bye();
@@ -388,10 +402,10 @@ impl Report for StreamReport {
     }
 
     fn to_csv(&self) -> String {
-        let mut s = String::from("rtt_ms,client,frames,mean_frame_ms,max_frame_ms,final_span,mean_span,unmodified,accuracy,accuracy_all,round_trip_ms,bytes\n");
+        let mut s = String::from("rtt_ms,client,frames,mean_frame_ms,max_frame_ms,final_span,mean_span,unmodified,accuracy,accuracy_all,accuracy_steady,round_trip_ms,bytes\n");
         for r in &self.rows {
             s.push_str(&format!(
-                "{},{},{},{:.2},{:.2},{},{:.2},{},{:.4},{:.4},{},{}\n",
+                "{},{},{},{:.2},{:.2},{},{:.2},{},{:.4},{:.4},{:.4},{},{}\n",
                 r.rtt_ms,
                 r.mode.name(),
                 r.frames,
@@ -402,6 +416,7 @@ impl Report for StreamReport {
                 r.unmodified,
                 r.accuracy,
                 r.accuracy_all,
+                r.accuracy_steady,
                 r.round_trip_ms.map_or(String::new(), |t| format!("{t:.1}")),
                 r.bytes
             ));
@@ -418,16 +433,18 @@ impl Report for StreamReport {
              traversal, τ = {} % of the viewport, N = {}, a budget of {} triangles. Accuracy: \
              the share of the reference mesh's triangles (the same traversal at the actual \
              view, locally) the streamed mesh holds, every 5 frames, after the first {} frames \
-             (the warm-up) and over all.\n\n\
-             | round trip | client | frame ms, mean (max) | span, end (mean) | thesis span | unmodified frames | accuracy | thesis | over all frames | T_g ms | KiB/s |\n\
-             |---|---|---|---|---|---|---|---|---|---|---|\n",
+             (the warm-up), from frame {} on (the mesh grown, the orbit at its steady speed) \
+             and over all.\n\n\
+             | round trip | client | frame ms, mean (max) | span, end (mean) | thesis span | unmodified frames | accuracy | thesis | steady | over all frames | T_g ms | KiB/s |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|---|\n",
             self.model_triangles,
             c.frames,
             c.frame_ms,
             100.0 * c.tau,
             c.n,
             c.budget,
-            self.rows.first().map_or(0, |r| r.warm_up)
+            self.rows.first().map_or(0, |r| r.warm_up),
+            self.rows.first().map_or(0, |r| r.steady)
         );
         for r in &self.rows {
             let thesis = THESIS_TABLE_6_1.iter().find(|t| t.0 == r.rtt_ms);
@@ -439,7 +456,7 @@ impl Report for StreamReport {
             };
             let secs = r.mean_frame_ms * r.frames as f64 / 1e3;
             md.push_str(&format!(
-                "| {} ms | {} | {:.1} ({:.1}) | {} ({:.1}) | {span} | {} | {:.1} % | {acc} | {:.1} % | {} | {:.0} |\n",
+                "| {} ms | {} | {:.1} ({:.1}) | {} ({:.1}) | {span} | {} | {:.1} % | {acc} | {:.1} % | {:.1} % | {} | {:.0} |\n",
                 r.rtt_ms,
                 r.mode.name(),
                 r.mean_frame_ms,
@@ -448,6 +465,7 @@ impl Report for StreamReport {
                 r.mean_span,
                 r.unmodified,
                 100.0 * r.accuracy,
+                100.0 * r.accuracy_steady,
                 100.0 * r.accuracy_all,
                 r.round_trip_ms.map_or("–".into(), |t| format!("{t:.0}")),
                 r.bytes as f64 / 1024.0 / secs.max(1e-9)
@@ -488,5 +506,55 @@ impl Report for StreamReport {
                 series,
             },
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flaneur_stream::{PredictiveClient, Refinement, ServerConfig, StreamServer};
+
+    /// The greeting is the session's first round trip: over a 100 ms link at 20 ms
+    /// frames, the span is right at the second frame, which sends the extra requests at
+    /// once, where the span measured from batches alone waits for one to come back.
+    #[test]
+    fn the_span_is_set_from_the_greeting_at_the_second_frame() {
+        let (landmark, centre, radius) = torus_landmark(2_000).unwrap();
+        let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
+            .unwrap()
+            .spawn()
+            .unwrap();
+        let spec = LinkSpec {
+            rtt: Duration::from_millis(100),
+            mbit: None,
+        };
+        let link = Link::start(server.addr(), spec).unwrap();
+        let hello = Hello {
+            traversal: Traversal::Priority,
+            fov: 1.0,
+            budget: None,
+            out_of_view: true,
+            back_face: true,
+            scheme: flaneur_stream::Scheme::Dag,
+        };
+        let refinement = Refinement {
+            tau: 0.001,
+            n: 100,
+            initial_span: 1,
+            predictor: Predictor::Quadratic,
+        };
+        let mut client =
+            PredictiveClient::connect(link.addr(), hello, refinement, Duration::from_secs(20))
+                .unwrap();
+        let eye = centre + Vec3::new(0.0, 0.0, 3.0 * radius);
+        let first = client.frame(eye, centre).unwrap();
+        assert_eq!((first.span, first.sent), (1, 1));
+        std::thread::sleep(Duration::from_millis(20));
+        let second = client.frame(eye, centre).unwrap();
+        assert!(!second.modified, "no batch can have come in 20 ms");
+        // 100 ms over 20 ms frames, and the greeting's own time.
+        assert!((5..=8).contains(&second.span), "{second:?}");
+        assert_eq!(second.sent, second.span - 1, "{second:?}");
+        assert_eq!(second.in_flight, second.span);
     }
 }

@@ -213,6 +213,17 @@ pub struct StreamClient {
     server: SocketAddr,
     hello: Hello,
     timeout: Duration,
+    /// The time from HELLO to WELCOME: the session's first round trip.
+    greeting: Duration,
+}
+
+/// A session as a client that takes it over gets it.
+pub(crate) struct Parts {
+    pub(crate) stream: TcpStream,
+    pub(crate) objects: Vec<StreamedObject>,
+    pub(crate) server: SocketAddr,
+    pub(crate) timeout: Duration,
+    pub(crate) greeting: Duration,
 }
 
 impl StreamClient {
@@ -225,7 +236,9 @@ impl StreamClient {
     ) -> Result<StreamClient, StreamError> {
         let stream = TcpStream::connect(addr)?;
         let server = stream.peer_addr()?;
+        let said = std::time::Instant::now();
         let (stream, welcome) = greet(stream, hello, timeout)?;
+        let greeting = said.elapsed();
         let objects = welcome
             .into_iter()
             .map(|o| {
@@ -254,6 +267,7 @@ impl StreamClient {
             server,
             hello,
             timeout,
+            greeting,
         })
     }
 
@@ -308,13 +322,14 @@ impl StreamClient {
 
     /// The connection, the objects and where the server is, for a client that takes
     /// the session over.
-    pub(crate) fn into_parts(self) -> (TcpStream, Vec<StreamedObject>, SocketAddr, Duration) {
-        (
-            self.exchange.stream,
-            self.objects,
-            self.server,
-            self.timeout,
-        )
+    pub(crate) fn into_parts(self) -> Parts {
+        Parts {
+            stream: self.exchange.stream,
+            objects: self.objects,
+            server: self.server,
+            timeout: self.timeout,
+            greeting: self.greeting,
+        }
     }
 
     /// Ends the session.

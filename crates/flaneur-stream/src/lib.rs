@@ -41,6 +41,7 @@ mod client;
 mod error;
 mod exchange;
 mod landmark;
+mod prediction;
 mod predictive;
 pub mod protocol;
 mod selective_client;
@@ -52,9 +53,8 @@ mod wire;
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
 pub use error::StreamError;
 pub use landmark::Landmark;
-pub use predictive::{
-    PredictiveClient, PredictiveFrame, Predictor, Refinement, ADJUST_EVERY, MAX_SPAN,
-};
+pub use prediction::Predictor;
+pub use predictive::{PredictiveClient, PredictiveFrame, Refinement, ADJUST_EVERY, MAX_SPAN};
 pub use protocol::{HeldLeaves, HeldNodes, Hello, Message, Scheme, ViewPacket};
 pub use selective_client::{SelectiveLandmark, SelectiveStreamClient, VsplitsReport};
 pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};

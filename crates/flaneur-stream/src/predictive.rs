@@ -7,7 +7,9 @@
 //! - **The prediction span** f = ⌈T_g / (T_r + T_u)⌉ (eq. 6.3.1): T_g is measured per
 //!   batch from its request to its arrival, T_r + T_u is the caller's frame period (the
 //!   time between two calls of [`PredictiveClient::frame`]); both smoothed, f updated
-//!   every [`ADJUST_EVERY`] frames.
+//!   every [`ADJUST_EVERY`] frames. T_g's first measure is the session's greeting (HELLO
+//!   to WELCOME, a round trip), so f is set at the second frame, once the period is
+//!   known, rather than a round trip and ten frames later (ours).
 //! - **f requests in flight** (Fig. 6.1): at the start the current view goes out f times
 //!   (RENDER-WAN, Fig. 6.2); then a frame that applied a batch sends one request, so a
 //!   late batch makes frames unmodified without adding requests, and its delay is
@@ -35,6 +37,7 @@ use glam::Vec3;
 
 use crate::client::StreamedObject;
 use crate::error::StreamError;
+use crate::prediction::Predictor;
 use crate::protocol::{
     receive, send, Hello, Message, ObjectUpdates, ViewPacket, MAX_N, MAX_TO_CLIENT,
 };
@@ -44,18 +47,6 @@ use crate::StreamClient;
 pub const ADJUST_EVERY: u32 = 10;
 /// The longest prediction span.
 pub const MAX_SPAN: usize = 64;
-
-/// How a view f frames ahead is predicted from the last frames'.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Predictor {
-    /// Zheng's first order (§5.3, §6.2): E' = E_c + f·(E_c − E_p).
-    Linear,
-    /// Ours, second order: E' = E_c + f·v + f²/2·a with v = E_c − E_p and
-    /// a = E_c − 2E_p + E_pp, the same for the aim-at point. A turn is a curve the first
-    /// order leaves by its tangent, f² times the curvature off after f frames; the second
-    /// follows it to f³.
-    Quadratic,
-}
 
 /// What a predictive client asks of each traversal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,6 +149,8 @@ pub struct PredictiveClient {
     before: Option<(Vec3, Vec3)>,
     earlier: Option<(Vec3, Vec3)>,
     round_trip: Option<f64>,
+    /// Whether f was measured once: until then it is measured every frame.
+    span_measured: bool,
     period: Option<f64>,
     last_call: Option<Instant>,
 }
@@ -179,8 +172,9 @@ impl PredictiveClient {
                 refinement.n, refinement.tau
             )));
         }
+        let parts = StreamClient::connect(addr, hello, timeout)?.into_parts();
         let (stream, objects, server, timeout) =
-            StreamClient::connect(addr, hello, timeout)?.into_parts();
+            (parts.stream, parts.objects, parts.server, parts.timeout);
         let batches = get_updates(&stream)?;
         Ok(PredictiveClient {
             writer: stream,
@@ -198,7 +192,10 @@ impl PredictiveClient {
             now: None,
             before: None,
             earlier: None,
-            round_trip: None,
+            // The greeting was a round trip: T_g's first measure, so that f is right as
+            // soon as the frame period is known.
+            round_trip: Some(parts.greeting.as_secs_f64()),
+            span_measured: false,
             period: None,
             last_call: None,
         })
@@ -277,13 +274,16 @@ impl PredictiveClient {
             report.update = t.elapsed();
             report.bytes = batch.bytes;
         }
-        if self.frame.is_multiple_of(ADJUST_EVERY) {
+        let before = self.span;
+        if self.frame.is_multiple_of(ADJUST_EVERY) || !self.span_measured {
             self.adjust_span();
         }
         // The start sends f requests (RENDER-WAN); afterwards an unmodified frame sends
-        // nothing, and a modified one tops the requests in flight up to f.
+        // nothing, a modified one tops the requests in flight up to f, and one that
+        // finds f grown sends the extra at once (Fig. 6.5).
         let start = self.frame == 0;
-        if start || report.modified || std::mem::take(&mut self.resumed) {
+        let grew = self.span > before;
+        if start || grew || report.modified || std::mem::take(&mut self.resumed) {
             report.budget_mode = self.alarm();
             while self.in_flight.len() < self.span {
                 self.request(report.budget_mode, start)?;
@@ -302,6 +302,7 @@ impl PredictiveClient {
         if let (Some(g), Some(p)) = (self.round_trip, self.period) {
             if p > 0.0 {
                 self.span = ((g / p).ceil() as usize).clamp(1, MAX_SPAN);
+                self.span_measured = true;
             }
         }
     }
@@ -326,14 +327,11 @@ impl PredictiveClient {
         // At the start the motion is not known: the current view stands for the first
         // f frames (§6.2).
         let f = (target - self.frame) as f32;
-        let (e, a) = match (self.before, self.earlier, start, self.refinement.predictor) {
-            (_, _, true, _) | (None, _, _, _) => (eye, aim),
-            (Some((ep, ap)), Some((epp, app)), false, Predictor::Quadratic) => {
-                let ahead =
-                    |c: Vec3, p: Vec3, pp: Vec3| c + f * (c - p) + 0.5 * f * f * (c - 2.0 * p + pp);
-                (ahead(eye, ep, epp), ahead(aim, ap, app))
-            }
-            (Some((ep, ap)), _, false, _) => (eye + f * (eye - ep), aim + f * (aim - ap)),
+        let (e, a) = if start {
+            (eye, aim)
+        } else {
+            let p = self.refinement.predictor;
+            p.predict(f, (eye, aim), self.before, self.earlier)
         };
         let view = ViewPacket {
             frame: target,
