@@ -562,7 +562,7 @@ mod tests {
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
         let source = SelectiveSource::new(&pm, &dag).unwrap();
         assert_eq!(source.placement(), Placement::CutVertices);
-        streams_as_a_local_refiner_refines(&crate::lod::bumpy_torus(1500), 5, 150);
+        streams_as_a_local_refiner_refines(&crate::lod::bumpy_torus(1500), 5, 1_000);
     }
 
     /// A flat-shaded building: every corner and crease a seam, so its splits come in
@@ -575,7 +575,7 @@ mod tests {
         let source = SelectiveSource::new(&pm, &dag).unwrap();
         assert_eq!(source.placement(), Placement::LeafCorners);
         assert!(pm.splits.iter().any(|s| s.joins_previous));
-        streams_as_a_local_refiner_refines(&building, 7, 150);
+        streams_as_a_local_refiner_refines(&building, 7, 1_000);
     }
 
     #[test]
