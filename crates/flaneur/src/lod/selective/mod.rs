@@ -598,6 +598,14 @@ impl Front {
         Ok(())
     }
 
+    /// Makes `node` split (its children active in its place) or not, nothing else.
+    pub(crate) fn set_split(&mut self, h: &VertexHierarchy, node: u32, split: bool) {
+        let [left, right] = h.children(node).expect("a split node");
+        self.active[node as usize] = !split;
+        self.active[left as usize] = split;
+        self.active[right as usize] = split;
+    }
+
     fn collapse_unchecked(&mut self, h: &VertexHierarchy, run: &[u32]) {
         for &n in run {
             let [left, right] = h.children(n).expect("a run's node has children");

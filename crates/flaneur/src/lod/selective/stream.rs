@@ -22,6 +22,8 @@
 //! client keeps the fully refined triangles it was sent at their leaves' active
 //! ancestors ([`LeafMesh`]), as the hierarchy defines a front's mesh.
 
+use std::collections::BTreeSet;
+
 use glam::Vec3;
 
 use super::{Front, NodeName, VertexHierarchy};
@@ -300,6 +302,9 @@ pub(super) fn view_test(view: &View, tau: f32, criteria: Criteria) -> Result<Vie
 #[derive(Clone, Debug)]
 pub struct SelectiveServer {
     sent: Front,
+    /// The sent front's nodes, in order: what a view's pass visits (KLK §5: each node
+    /// of the vertex front), rather than every node of the hierarchy.
+    live: BTreeSet<u32>,
     criteria: Criteria,
     cut_vertex_only: bool,
 }
@@ -309,6 +314,7 @@ impl SelectiveServer {
     pub fn new(source: &SelectiveSource) -> SelectiveServer {
         SelectiveServer {
             sent: source.h.roots(),
+            live: (0..source.h.roots as u32).collect(),
             criteria: Criteria::default(),
             cut_vertex_only: false,
         }
@@ -357,41 +363,42 @@ impl SelectiveServer {
     ) -> Result<Vec<VsplitPacket>> {
         let test = view_test(view, tau, self.criteria)?;
         let mut packets = Vec::new();
-        // A node's children come after it, so one sequential pass reaches them.
         let h = &source.h;
-        for n in 0..h.len() as u32 {
+        // Cut vertices as they stand place a split only under cut placement; leaf
+        // placement needs the fundamental ones, the third corners of its triangles.
+        let as_they_stand = self.cut_vertex_only && source.placement() == Placement::CutVertices;
+        // The front's nodes in the order of their numbers, as one pass over every node
+        // would meet them: a node's children come after it, so the pass reaches them.
+        let mut next = 0;
+        while let Some(&n) = self.live.range(next..).next() {
+            next = n + 1;
             if packets.len() >= max {
                 break;
             }
-            if !(self.sent.is_active(n) && source.qrefine(&test, n)) {
+            if !source.qrefine(&test, n) {
                 continue;
             }
-            // Cut vertices as they stand place a split only under cut placement; leaf
-            // placement needs the fundamental ones, the third corners of its triangles.
-            let as_they_stand =
-                self.cut_vertex_only && source.placement() == Placement::CutVertices;
-            let before = as_they_stand.then(|| self.sent.clone());
             let splits = self.sent.split(h, n)?;
-            let Some(mut front) = before else {
-                packets.extend(splits.into_iter().map(|s| {
-                    let mut p = source.packet(s);
-                    if self.cut_vertex_only {
-                        p.children = [None, None];
-                    }
-                    p
-                }));
-                continue;
-            };
-            // The cut vertices as each split finds them on the front, split by split.
+            if as_they_stand {
+                // Back to the front before them, then each split's cut vertices as it
+                // finds them, split by split.
+                for &s in splits.iter().rev() {
+                    self.sent.set_split(h, s, false);
+                }
+            }
             for s in splits {
                 let mut p = source.packet(s);
-                let cuts = h.cut_vertices(s).expect("a split node");
-                p.cuts = cuts.map(|c| c.map(|c| h.name(front.active_ancestor(h, c))));
-                p.children = [None, None];
+                if as_they_stand {
+                    let cuts = h.cut_vertices(s).expect("a split node");
+                    p.cuts = cuts.map(|c| c.map(|c| h.name(self.sent.active_ancestor(h, c))));
+                    self.sent.set_split(h, s, true);
+                }
+                if self.cut_vertex_only {
+                    p.children = [None, None];
+                }
                 let [l, r] = h.children(s).expect("a split node");
-                front.active[s as usize] = false;
-                front.active[l as usize] = true;
-                front.active[r as usize] = true;
+                self.live.remove(&s);
+                self.live.extend([l, r]);
                 packets.push(p);
             }
         }
@@ -414,18 +421,19 @@ impl SelectiveServer {
             .collect::<Result<Vec<u32>>>()?;
         Ok(SelectiveServer {
             sent: Front::from_active(&source.h, &nodes)?,
+            live: nodes.into_iter().collect(),
             ..self.clone()
         })
     }
 
-    /// The session's own bytes: its front's tags (the source is shared).
+    /// The session's own bytes: its front's tags and nodes (the source is shared).
     pub fn memory(&self) -> usize {
-        self.sent.active.capacity()
+        self.sent.active.capacity() + 40 * self.live.len()
     }
 
-    /// How many nodes the client was sent (the roots included).
+    /// How many nodes the sent front has.
     pub fn sent_nodes(&self) -> usize {
-        self.sent.active.iter().filter(|a| **a).count()
+        self.live.len()
     }
 
     /// The mesh of the front sent so far, its corners as node names: what a
