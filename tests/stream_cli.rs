@@ -266,12 +266,13 @@ fn view_with_a_stream_says_what_is_wrong_before_opening_a_window() {
 
 /// `flaneur bench stream-bytes`: for one close view, streaming view-dependently costs
 /// fewer bytes and triangles than view-independently, and under the cap it holds all
-/// the view needs where the view-independent stream holds only part of it.
+/// the view needs where the view-independent stream holds only part of it; likewise by
+/// Kim–Lee–Kobbelt's scheme, and by El-Sana's blocks for more bytes.
 #[test]
 fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
     let dir = bench(&["stream-bytes", "--triangles", "20000"]);
     let csv = common::Csv::read(&dir.path().join("stream-bytes.csv"));
-    let [dependent, independent, selective, selective_all, cut_only] = &csv.rows[..] else {
+    let [dependent, independent, selective, selective_all, cut_only, blocks] = &csv.rows[..] else {
         panic!("{:?}", csv.rows)
     };
     assert_eq!(csv.get(dependent, "scheme"), "view-dependent");
@@ -302,4 +303,15 @@ fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
         csv.num(selective, "triangles")
     );
     assert!(csv.num(cut_only, "bytes") < csv.num(selective, "bytes"));
+    // El-Sana's blocks: the same mesh, for more bytes (a block brings the splits beside
+    // the ones the view wants).
+    assert_eq!(
+        csv.get(blocks, "scheme"),
+        "El-Sana blocks (2 levels) in process"
+    );
+    assert_eq!(
+        csv.num(blocks, "triangles"),
+        csv.num(selective, "triangles")
+    );
+    assert!(csv.num(blocks, "bytes") > csv.num(selective, "bytes"));
 }

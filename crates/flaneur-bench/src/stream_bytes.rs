@@ -10,7 +10,8 @@
 //! triangles held and the share of what the view needs (the view-dependent converged
 //! mesh's triangles) that they cover. Then the same for Kim–Lee–Kobbelt's truly
 //! selective schemes (`lod::selective`) over sessions of their own with the same
-//! server; their share at the cap is of their own view-dependent mesh.
+//! server, and El-Sana's blocks over the same hierarchy in process; their share at the
+//! cap is of the truly selective view-dependent mesh.
 
 use std::path::Path;
 use std::time::Duration;
@@ -21,8 +22,11 @@ use crate::report::Report;
 use flaneur::error::{Error, Result};
 use std::collections::HashSet;
 
-use flaneur::lod::{CompactMesh, NodeName, Traversal};
+use flaneur::lod::{
+    BlockClient, BlockServer, CompactMesh, NodeName, SelectiveSource, Traversal, View,
+};
 use flaneur_stream::protocol::MAX_N;
+use flaneur_stream::selective_wire::encode_vsplits;
 use flaneur_stream::{
     Hello, Scheme, SelectiveStreamClient, ServerConfig, StreamClient, StreamServer, ViewPacket,
 };
@@ -128,6 +132,7 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
     progress("building the landmark's progressive mesh and DAG");
     let (landmark, centre, radius) = crate::stream::torus_landmark(cfg.triangles)?;
     let model_triangles = landmark.triangles();
+    let (pm, dag) = (landmark.pm.clone(), landmark.dag.clone());
     let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
         .and_then(|s| s.spawn())
         .map_err(|e| Error::Invalid(format!("stream-bytes: {e}")))?;
@@ -193,6 +198,12 @@ pub fn run(cfg: &StreamBytesConfig, mut progress: impl FnMut(&str)) -> Result<St
             &mut needed,
         )?);
     }
+    progress("streaming El-Sana's blocks, in process");
+    let source = SelectiveSource::new(&pm, &dag)?;
+    let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
+    let eye = glam::Vec3::from(view.eye);
+    let local = View::new(eye, glam::Vec3::from(view.aim) - eye, fov)?;
+    rows.push(stream_blocks(&source, &local, cfg, &mut needed)?);
     Ok(StreamBytesReport {
         config: cfg.clone(),
         model_triangles,
@@ -249,6 +260,52 @@ fn stream_selective(
         name,
         (frames, bytes),
         converged,
+        at_cap,
+        needed,
+    ))
+}
+
+/// The levels of the blocks the El-Sana row streams.
+pub const BLOCK_LEVELS: u32 = 2;
+
+/// Streams the landmark for `view` by El-Sana's blocks over the vertex hierarchy, in
+/// process: the client asks for the blocks its view wants a split from and those below
+/// splits that reached a block's last level, until it asks for none; each answer
+/// counted as its blocks would go on the wire (a name and a vsplit batch each).
+fn stream_blocks(
+    source: &SelectiveSource,
+    view: &View,
+    cfg: &StreamBytesConfig,
+    needed: &mut Option<HashSet<[NodeName; 3]>>,
+) -> Result<StreamBytesRow> {
+    let mut server = BlockServer::new(source, BLOCK_LEVELS)?;
+    let mut client = BlockClient::new(source.base(), BLOCK_LEVELS);
+    let (mut frames, mut bytes, mut at_cap) = (0, 0, None);
+    loop {
+        let down = client.select(view, cfg.tau)?;
+        if down.needed.is_empty() && down.ahead.is_empty() {
+            break;
+        }
+        let tops: Vec<NodeName> = down.needed.into_iter().chain(down.ahead).collect();
+        let blocks = server.send(source, &tops)?;
+        frames += 1;
+        bytes += blocks
+            .iter()
+            .map(|b| {
+                6 + (b.top.node.bits() as usize).div_ceil(8) + encode_vsplits(&b.packets).len()
+            })
+            .sum::<usize>();
+        client.receive(&blocks)?;
+        if bytes >= cfg.cap && at_cap.is_none() {
+            client.select(view, cfg.tau)?;
+            at_cap = Some((canonical(client.client().triangles()), bytes));
+        }
+    }
+    let mesh = canonical(client.client().triangles());
+    Ok(selective_row(
+        "El-Sana blocks (2 levels) in process",
+        (frames, bytes),
+        mesh,
         at_cap,
         needed,
     ))
@@ -333,10 +390,11 @@ impl Report for StreamBytesReport {
                 100.0 * r.cap_share
             );
         }
-        md += "\nEvery row is one session with the same stream server over loopback, its \
-               answers' bytes as they came over the wire (the truly selective client asks only \
-               while its view wants a split it lacks; the cut-vertex-only one until an answer \
-               brings nothing). No row counts the base mesh. Kim–Lee–Kobbelt's \
+        md += "\nEvery row but the last is one session with the same stream server over \
+               loopback, its answers' bytes as they came over the wire (the truly selective \
+               client asks only while its view wants a split it lacks; the cut-vertex-only one \
+               until an answer brings nothing); the last streams El-Sana's blocks in process, \
+               each answer counted as its blocks would be encoded. No row counts the base mesh. Kim–Lee–Kobbelt's \
                Fig. 8: 177,120 bytes and 4,534 faces view-dependent against 827,688 bytes and \
                68,884 faces view-independent (their truly selective scheme).\n";
         md

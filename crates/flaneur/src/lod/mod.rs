@@ -57,9 +57,9 @@ pub use refine::{
     PassStats, RefineParams, Refiner, Traversal, View, THESIS_BUDGET, THESIS_MAX_WORK, THESIS_TAU,
 };
 pub use selective::{
-    CutMesh, CutVertexClient, Front, HeapIndex, LeafMesh, NodeName, Placement, RefineInfo,
-    SelectiveBase, SelectiveClient, SelectiveServer, SelectiveSource, VertexHierarchy,
-    VsplitPacket,
+    block_of, Block, BlockClient, BlockServer, CutMesh, CutVertexClient, Front, HeapIndex,
+    LeafMesh, NodeName, Placement, RefineInfo, SelectiveBase, SelectiveClient, SelectiveServer,
+    SelectiveSource, SwitchDown, VertexHierarchy, VsplitPacket,
 };
 pub(crate) use stored::LodWriter;
 pub use stored::{

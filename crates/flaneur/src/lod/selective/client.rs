@@ -305,6 +305,8 @@ pub struct SelectiveClient {
     tree: Partial,
     mesh: ClientMesh,
     criteria: Criteria,
+    /// The nodes the last select split, in order.
+    made: Vec<u32>,
 }
 
 impl SelectiveClient {
@@ -315,6 +317,7 @@ impl SelectiveClient {
             mesh: ClientMesh::new(&base),
             tree: Partial::new(base.roots),
             criteria: Criteria::default(),
+            made: Vec::new(),
         }
     }
 
@@ -340,6 +343,7 @@ impl SelectiveClient {
     /// empty when the mesh is what the view asks for, else what to ask the server for.
     pub fn select(&mut self, view: &View, tau: f32) -> Result<Vec<NodeName>> {
         let test = view_test(view, tau, self.criteria)?;
+        self.made.clear();
         let qrefine = |n: &ClientNode| {
             n.info
                 .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
@@ -479,7 +483,32 @@ impl SelectiveClient {
             }
         }
         self.tree.split(node, children);
+        self.made.push(node);
         Ok(())
+    }
+
+    /// The nodes the last [`SelectiveClient::select`] split, in order, with whether
+    /// each has a split of its own to come (what `qrefine` reads of it was sent).
+    pub fn last_splits(&self) -> Vec<(NodeName, [bool; 2])> {
+        self.made
+            .iter()
+            .map(|&n| {
+                let node = &self.tree.nodes[n as usize];
+                let splits = node
+                    .children
+                    .expect("a node split")
+                    .map(|c| self.tree.nodes[c as usize].info.is_some());
+                (node.name.clone(), splits)
+            })
+            .collect()
+    }
+
+    /// Whether the client holds node `name`'s split.
+    pub fn holds_split(&self, name: &NodeName) -> bool {
+        self.tree
+            .by_name
+            .get(name)
+            .is_some_and(|&k| self.tree.nodes[k as usize].children.is_some())
     }
 
     /// The mesh's triangles, their corners as node names.

@@ -28,11 +28,15 @@
 //! # Ok::<(), flaneur::Error>(())
 //! ```
 
+mod blocks;
 mod client;
 mod cut_mesh;
 mod leaf_mesh;
 mod stream;
+#[cfg(test)]
+mod testing;
 
+pub use blocks::{block_of, Block, BlockClient, BlockServer, SwitchDown};
 pub use client::{CutVertexClient, SelectiveClient};
 pub use cut_mesh::CutMesh;
 pub use leaf_mesh::LeafMesh;

@@ -207,7 +207,7 @@ impl SelectiveSource {
         }
     }
 
-    fn packet(&self, node: u32) -> VsplitPacket {
+    pub(super) fn packet(&self, node: u32) -> VsplitPacket {
         let [left, right] = self.h.children(node).expect("a split node");
         let cuts = self
             .h
@@ -235,7 +235,7 @@ impl SelectiveSource {
     }
 
     /// Whether `node` should split for `test` (a leaf of the whole hierarchy never).
-    fn qrefine(&self, test: &ViewTest, node: u32) -> bool {
+    pub(super) fn qrefine(&self, test: &ViewTest, node: u32) -> bool {
         self.info[node as usize].is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
     }
 
@@ -451,32 +451,9 @@ impl SelectiveServer {
 mod tests {
     use super::*;
     use crate::lod::dag::DagConstruction;
+    use crate::lod::selective::testing::{canonical, random_view};
     use crate::lod::selective::{CutVertexClient, SelectiveClient};
     use rand::{Rng, SeedableRng};
-
-    /// Triangles turned to start at their smallest corner, sorted.
-    fn canonical(mut triangles: Vec<[NodeName; 3]>) -> Vec<[NodeName; 3]> {
-        for t in &mut triangles {
-            let k = (0..3).min_by_key(|&k| t[k].clone()).unwrap();
-            t.rotate_left(k);
-        }
-        triangles.sort_unstable();
-        triangles
-    }
-
-    /// A random view of `mesh` from about one to three of its sizes away, looking near
-    /// its middle.
-    fn random_view(rng: &mut rand::rngs::StdRng, mesh: &crate::scene::Mesh) -> View {
-        let (lo, hi) = mesh.positions.iter().fold(
-            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-            |(lo, hi), &p| (lo.min(Vec3::from(p)), hi.max(Vec3::from(p))),
-        );
-        let (centre, size) = ((lo + hi) / 2.0, (hi - lo).max_element());
-        let mut off = || rng.gen_range(-1.5..1.5) * size;
-        let eye = centre + Vec3::new(off(), off(), off());
-        let aim = centre + Vec3::new(off(), off(), off()) * 0.2;
-        View::new(eye, aim - eye, 1.0).unwrap()
-    }
 
     /// Over `views` random views, a client streamed from a server holds, after each,
     /// the mesh a local refiner makes, triangle for triangle; each split is sent once.

@@ -1,0 +1,352 @@
+//! El-Sana's view-dependence blocks (El-Sana's client-server paper, §4–6) over the
+//! vertex hierarchy: the hierarchy cut into blocks of a few levels by parenthood and
+//! siblings, each block the splits of a node and its descendants down to the next
+//! block level, named by its top node. A client refines on its own from the blocks it
+//! holds ([`SelectiveClient`]), and asks for blocks by name with switch-down messages:
+//! the blocks its view wants a split from, and ahead of need the blocks below a split
+//! that reached its block's last level (his "lower quarter"). The server sends each
+//! block whole, with the blocks above it and those the partial order forces, so the
+//! client never lacks a forced split; when idle it predicts which blocks the client's
+//! next view will want and sends them unasked, and the client keeps or discards each by
+//! its name.
+
+use std::collections::{HashSet, VecDeque};
+
+use super::{stream::view_test, VsplitPacket};
+use super::{Front, NodeName, SelectiveBase, SelectiveClient, SelectiveSource, VertexHierarchy};
+use crate::error::{Error, Result};
+use crate::lod::refine::{Criteria, View};
+
+/// One block: its top node's name and the packets of every split in it, top-down.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// The block's name: its top node's.
+    pub top: NodeName,
+    /// The packets of its splits, parents before children.
+    pub packets: Vec<VsplitPacket>,
+}
+
+impl VertexHierarchy {
+    /// The top of the block of `levels` levels that holds `node`'s split: its ancestor
+    /// (or itself) at the nearest block level above.
+    pub fn block_top(&self, node: u32, levels: u32) -> u32 {
+        let mut n = node;
+        while !self.nodes[n as usize].depth.is_multiple_of(levels) {
+            n = self.nodes[n as usize].parent.expect("a node below a root");
+        }
+        n
+    }
+
+    /// The nodes whose splits the block topped by `top` holds, top-down: those below
+    /// it, itself included, above the next block level.
+    pub fn block_nodes(&self, top: u32, levels: u32) -> Vec<u32> {
+        let bottom = self.nodes[top as usize].depth + levels;
+        let mut nodes = Vec::new();
+        let mut queue = VecDeque::from([top]);
+        while let Some(n) = queue.pop_front() {
+            if let Some([l, r]) = self.children(n) {
+                nodes.push(n);
+                if self.nodes[n as usize].depth + 1 < bottom {
+                    queue.extend([l, r]);
+                }
+            }
+        }
+        nodes
+    }
+}
+
+/// The top of the block of `levels` levels that holds the split of the node `name`
+/// names: a right shift to the block level.
+pub fn block_of(name: &NodeName, levels: u32) -> NodeName {
+    name.up(name.depth() % levels)
+}
+
+/// A server's session of blocks: the blocks it sent, and the front they make.
+#[derive(Clone, Debug)]
+pub struct BlockServer {
+    sent: Front,
+    blocks: HashSet<u32>,
+    levels: u32,
+    criteria: Criteria,
+}
+
+impl BlockServer {
+    /// A session of blocks of `levels` levels (at least 1) that has sent the base mesh.
+    pub fn new(source: &SelectiveSource, levels: u32) -> Result<BlockServer> {
+        if levels == 0 {
+            return Err(Error::Invalid("blocks of 0 levels: give at least 1".into()));
+        }
+        Ok(BlockServer {
+            sent: source.hierarchy().roots(),
+            blocks: HashSet::new(),
+            levels,
+            criteria: Criteria::default(),
+        })
+    }
+
+    /// The blocks sent so far.
+    pub fn sent_blocks(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// The blocks `tops` name that were not sent (a switch-down), each after the
+    /// blocks above it that were not, and with the blocks the partial order forces a
+    /// split from, in the order a client installs them. An `Err` naming a top the
+    /// hierarchy has not, or that is no block's top.
+    pub fn send(&mut self, source: &SelectiveSource, tops: &[NodeName]) -> Result<Vec<Block>> {
+        let h = source.hierarchy();
+        let mut queue = VecDeque::new();
+        for name in tops {
+            let n = h
+                .find(name)
+                .ok_or_else(|| Error::Invalid(format!("no node {name:?} in the hierarchy")))?;
+            if !h.nodes[n as usize].depth.is_multiple_of(self.levels) {
+                return Err(Error::Invalid(format!(
+                    "node {name:?} is no block's top: blocks are {} levels",
+                    self.levels
+                )));
+            }
+            queue.push_back(n);
+        }
+        let mut out = Vec::new();
+        while let Some(top) = queue.pop_front() {
+            self.send_one(h, source, top, &mut queue, &mut out)?;
+        }
+        Ok(out)
+    }
+
+    /// Sends block `top` if it was not, its parent block first; the blocks its splits
+    /// force go on `queue`.
+    fn send_one(
+        &mut self,
+        h: &VertexHierarchy,
+        source: &SelectiveSource,
+        top: u32,
+        queue: &mut VecDeque<u32>,
+        out: &mut Vec<Block>,
+    ) -> Result<()> {
+        if self.blocks.contains(&top) || h.children(top).is_none() {
+            return Ok(());
+        }
+        if let Some(p) = h.parent(top) {
+            self.send_one(h, source, h.block_top(p, self.levels), queue, out)?;
+        }
+        self.blocks.insert(top);
+        let nodes = h.block_nodes(top, self.levels);
+        for &n in &nodes {
+            if !self.sent.is_active(n) {
+                continue;
+            }
+            for d in self.sent.split(h, n)? {
+                let b = h.block_top(d, self.levels);
+                if !self.blocks.contains(&b) {
+                    queue.push_back(b);
+                }
+            }
+        }
+        out.push(Block {
+            top: h.name(top),
+            packets: nodes.into_iter().map(|n| source.packet(n)).collect(),
+        });
+        Ok(())
+    }
+
+    /// Idle-time prediction: the blocks that `view` under `tau` will want a split from
+    /// that were not sent, at most `max` of them asked for (with what they bring).
+    pub fn predict(
+        &mut self,
+        source: &SelectiveSource,
+        view: &View,
+        tau: f32,
+        max: usize,
+    ) -> Result<Vec<Block>> {
+        let test = view_test(view, tau, self.criteria)?;
+        let h = source.hierarchy();
+        let mut wanted = Vec::new();
+        for n in 0..h.len() as u32 {
+            if wanted.len() >= max {
+                break;
+            }
+            if self.sent.is_active(n) && source.qrefine(&test, n) {
+                let b = h.block_top(n, self.levels);
+                if !self.blocks.contains(&b) && !wanted.contains(&b) {
+                    wanted.push(b);
+                }
+            }
+        }
+        let names: Vec<NodeName> = wanted.into_iter().map(|b| h.name(b)).collect();
+        self.send(source, &names)
+    }
+}
+
+/// What a client asks for after a view (El-Sana's switch-down): the blocks its view
+/// wants a split from now, and those below a split that reached its block's last level.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SwitchDown {
+    /// Blocks the view wants a split from that the client lacks.
+    pub needed: Vec<NodeName>,
+    /// Blocks below splits that reached their block's last level, asked ahead.
+    pub ahead: Vec<NodeName>,
+}
+
+/// A client of blocks: a [`SelectiveClient`] fed by whole blocks, and their names.
+#[derive(Clone, Debug)]
+pub struct BlockClient {
+    client: SelectiveClient,
+    held: HashSet<NodeName>,
+    levels: u32,
+    /// Blocks that came and were held already (a server's prediction, or twice).
+    pub discarded: usize,
+}
+
+impl BlockClient {
+    /// A client of blocks of `levels` levels that has the base mesh.
+    pub fn new(base: SelectiveBase, levels: u32) -> BlockClient {
+        BlockClient {
+            client: SelectiveClient::new(base),
+            held: HashSet::new(),
+            levels: levels.max(1),
+            discarded: 0,
+        }
+    }
+
+    /// Takes `blocks`, keeping each it does not hold and discarding the rest by name.
+    pub fn receive(&mut self, blocks: &[Block]) -> Result<()> {
+        for b in blocks {
+            if self.held.contains(&b.top) {
+                self.discarded += 1;
+                continue;
+            }
+            self.client.receive(&b.packets)?;
+            self.held.insert(b.top.clone());
+        }
+        Ok(())
+    }
+
+    /// Brings the mesh to `view` under `tau` with the blocks held, and says which to
+    /// ask for.
+    pub fn select(&mut self, view: &View, tau: f32) -> Result<SwitchDown> {
+        let missing = self.client.select(view, tau)?;
+        let mut down = SwitchDown::default();
+        for n in &missing {
+            let b = block_of(n, self.levels);
+            if !down.needed.contains(&b) {
+                down.needed.push(b);
+            }
+        }
+        for (n, splits) in self.client.last_splits() {
+            if (n.depth() + 1) % self.levels != 0 {
+                continue;
+            }
+            for (right, more) in [(false, splits[0]), (true, splits[1])] {
+                let child = NodeName {
+                    tree: n.tree,
+                    node: n.node.child(right),
+                };
+                if more && !self.client.holds_split(&child) && !down.ahead.contains(&child) {
+                    down.ahead.push(child);
+                }
+            }
+        }
+        Ok(down)
+    }
+
+    /// The selective client the blocks feed.
+    pub fn client(&self) -> &SelectiveClient {
+        &self.client
+    }
+
+    /// Blocks held.
+    pub fn blocks(&self) -> usize {
+        self.held.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lod::dag::{Dag, DagConstruction};
+    use crate::lod::pm::ProgressiveMesh;
+    use crate::lod::selective::testing::{canonical, random_view};
+    use rand::{Rng, SeedableRng};
+
+    /// Random views of `mesh`, each asked for block by block until the client lacks
+    /// nothing: its mesh is a local refiner's after each, no forced split is ever
+    /// missing, and the blocks a prediction sent are discarded when they come again.
+    fn blocks_refine_as_a_local_refiner(mesh: &crate::scene::Mesh, seed: u64) {
+        let pm = ProgressiveMesh::build(mesh).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        let h = source.hierarchy();
+        let mut server = BlockServer::new(&source, 4).unwrap();
+        let mut client = BlockClient::new(source.base(), 4);
+        let mut local = h.roots();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let (mut asked, mut ahead) = (0, 0);
+        for step in 0..200 {
+            let view = random_view(&mut rng, mesh);
+            let tau = rng.gen_range(0.0005..0.01);
+            if step % 10 == 5 {
+                // Idle time: the server sends what it predicts this view wants.
+                let predicted = server.predict(&source, &view, tau, 8).unwrap();
+                client.receive(&predicted).unwrap();
+            }
+            source.select(&mut local, &view, tau).unwrap();
+            loop {
+                let down = client.select(&view, tau).unwrap();
+                ahead += down.ahead.len();
+                if down.needed.is_empty() {
+                    let blocks = server.send(&source, &down.ahead).unwrap();
+                    client.receive(&blocks).unwrap();
+                    break;
+                }
+                asked += 1;
+                let mut tops = down.needed;
+                tops.extend(down.ahead);
+                let blocks = server.send(&source, &tops).unwrap();
+                assert!(!blocks.is_empty(), "step {step}: nothing for {tops:?}");
+                client.receive(&blocks).unwrap();
+            }
+            let theirs = local
+                .triangles(h)
+                .iter()
+                .map(|t| t.map(|n| h.name(n)))
+                .collect();
+            assert_eq!(
+                canonical(client.client().triangles()),
+                canonical(theirs),
+                "step {step}"
+            );
+        }
+        // Most blocks come ahead of need.
+        assert!(
+            asked > 2 && ahead > 2 * asked,
+            "asked {asked}, ahead {ahead}"
+        );
+        assert_eq!(client.blocks(), server.sent_blocks());
+    }
+
+    #[test]
+    fn a_client_of_blocks_refines_as_a_local_refiner() {
+        blocks_refine_as_a_local_refiner(&crate::lod::bumpy_torus(1500), 3);
+        blocks_refine_as_a_local_refiner(&crate::lod::fixtures::building(), 4);
+    }
+
+    #[test]
+    fn blocks_are_named_by_their_tops_and_hold_their_levels() {
+        let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(800)).unwrap();
+        let h = VertexHierarchy::new(&pm).unwrap();
+        let levels = 3;
+        let mut covered = 0;
+        for top in (0..h.len() as u32).filter(|&n| h.block_top(n, levels) == n) {
+            let nodes = h.block_nodes(top, levels);
+            for &n in &nodes {
+                assert_eq!(h.block_top(n, levels), top);
+                assert_eq!(block_of(&h.name(n), levels), h.name(top));
+            }
+            covered += nodes.len();
+        }
+        // Every split is in exactly one block.
+        assert_eq!(covered, pm.splits.len());
+    }
+}
