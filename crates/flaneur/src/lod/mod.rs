@@ -23,8 +23,10 @@
 //! - [`VertexHierarchy`] reads the splits as Kim & Lee's binary vertex hierarchy for
 //!   truly selective refinement, named ⟨tree-id, node-id⟩ ([`NodeName`]); a [`Front`]
 //!   of it is a mesh, a [`CutMesh`] the same mesh kept by a client from cut vertices
-//!   alone, and [`SelectiveServer`] and [`SelectiveClient`] stream it view by view
-//!   (Kim–Lee–Kobbelt 2004).
+//!   alone (a [`LeafMesh`] from its triangles' leaves, where crease runs leave no cut
+//!   vertex), and [`SelectiveServer`] and [`SelectiveClient`] stream it view by view
+//!   (Kim–Lee–Kobbelt 2004); [`BlockServer`] and [`BlockClient`] stream it in El-Sana's
+//!   view-dependence blocks.
 //! - Stored LODs: `flaneur build` keeps each object's chain of coarse levels (coarsest
 //!   first so a coarse level reads few pages; its bytes open with [`CHAIN_MAGIC`]), and
 //!   for large objects its progressive mesh ([`ProgressiveMesh::to_bytes`]) and DAG,

@@ -132,7 +132,7 @@ pub struct LodCounts {
     /// being decoded.
     pub drawn_while_decoding: u64,
     /// Objects drawn as refined elsewhere (a stream server's landmarks,
-    /// [`RemoteRefinements`]), summed over frames.
+    /// [`RemoteRefinements`](crate::walk::RemoteRefinements)), summed over frames.
     pub streamed_draws: u64,
 }
 

@@ -321,9 +321,9 @@ impl SelectiveServer {
     }
 
     /// The session of KLK §7's variant, for a client that will not refine on its own
-    /// ([`CutVertexClient`]): each packet names the split's cut vertices as they stand
-    /// on the sent front (the client's), not the fundamental ones, and carries nothing
-    /// for `qrefine`.
+    /// ([`CutVertexClient`](super::CutVertexClient)): each packet names the split's cut
+    /// vertices as they stand on the sent front (the client's), not the fundamental
+    /// ones (under cut placement), and carries nothing for `qrefine`.
     pub fn cut_vertex_only(self) -> SelectiveServer {
         SelectiveServer {
             cut_vertex_only: true,
@@ -437,7 +437,7 @@ impl SelectiveServer {
     }
 
     /// The mesh of the front sent so far, its corners as node names: what a
-    /// [`CutVertexClient`] holds.
+    /// [`CutVertexClient`](super::CutVertexClient) holds.
     pub fn sent_triangles(&self, source: &SelectiveSource) -> Vec<[NodeName; 3]> {
         self.sent
             .triangles(&source.h)
