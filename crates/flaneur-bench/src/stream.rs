@@ -554,7 +554,10 @@ mod tests {
         assert!(!second.modified, "no batch can have come in 20 ms");
         // The greeting took the link's round trip; the span is that over the period
         // (100 ms over 20 ms frames here, fewer frames if the machine is slow to wake).
-        assert!(second.round_trip >= Some(Duration::from_millis(100)), "{second:?}");
+        assert!(
+            second.round_trip >= Some(Duration::from_millis(100)),
+            "{second:?}"
+        );
         assert!(second.span >= 2, "{second:?}");
         assert_eq!(second.sent, second.span - 1, "{second:?}");
         assert_eq!(second.in_flight, second.span);

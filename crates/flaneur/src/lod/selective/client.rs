@@ -30,6 +30,27 @@ struct ClientNode {
     info: Option<RefineInfo>,
 }
 
+impl ClientNode {
+    /// A node as it first comes: not split yet.
+    fn unsplit(
+        name: NodeName,
+        parent: Option<u32>,
+        (position, normal): ([f32; 3], [f32; 3]),
+        info: Option<RefineInfo>,
+    ) -> ClientNode {
+        ClientNode {
+            name,
+            parent,
+            children: None,
+            cuts: [None, None],
+            run: None,
+            position,
+            normal,
+            info,
+        }
+    }
+}
+
 /// The part of a hierarchy a client was sent, and which of its nodes are active.
 #[derive(Clone, Debug)]
 struct Partial {
@@ -46,18 +67,12 @@ impl Partial {
         let nodes: Vec<ClientNode> = roots
             .into_iter()
             .enumerate()
-            .map(|(tree, (position, normal, info))| ClientNode {
-                name: NodeName {
+            .map(|(tree, (position, normal, info))| {
+                let name = NodeName {
                     tree: tree as u32,
                     node: HeapIndex::root(),
-                },
-                parent: None,
-                children: None,
-                cuts: [None, None],
-                run: None,
-                position,
-                normal,
-                info,
+                };
+                ClientNode::unsplit(name, None, (position, normal), info)
             })
             .collect();
         Partial {
@@ -88,23 +103,15 @@ impl Partial {
         }
         let parent = &self.nodes[k as usize];
         let (position, normal) = (parent.position, parent.normal);
-        let mut child = |right: bool, (position, normal), info| {
+        let mut child = |right: bool, vertex, info| {
             let id = self.nodes.len() as u32;
             let name = NodeName {
                 tree: p.node.tree,
                 node: p.node.node.child(right),
             };
             self.by_name.insert(name.clone(), id);
-            self.nodes.push(ClientNode {
-                name,
-                parent: Some(k),
-                children: None,
-                cuts: [None, None],
-                run: None,
-                position,
-                normal,
-                info,
-            });
+            self.nodes
+                .push(ClientNode::unsplit(name, Some(k), vertex, info));
             self.active.push(false);
             id
         };
@@ -567,17 +574,13 @@ impl CutVertexClient {
             }
             self.tree.receive(p)?;
             let children = self.tree.children(node)?;
+            // Under leaf placement the split's triangles join first, at the node.
+            self.mesh.add_triangles(&self.tree, p)?;
             match &mut self.mesh {
                 ClientMesh::Cut(m) => {
                     m.split(node, children, each(&p.cuts, |c| self.tree.id(c))?)?;
                 }
-                ClientMesh::Leaf(_) => {
-                    self.mesh.add_triangles(&self.tree, p)?;
-                    let ClientMesh::Leaf(m) = &mut self.mesh else {
-                        unreachable!("matched above")
-                    };
-                    m.split(node, p.node.depth(), children)?;
-                }
+                ClientMesh::Leaf(m) => m.split(node, p.node.depth(), children)?,
             }
             self.tree.split(node, children);
         }
