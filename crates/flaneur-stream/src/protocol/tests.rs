@@ -1,0 +1,271 @@
+//! The protocol's messages read back as written, and what a decoder refuses.
+
+use super::*;
+
+fn split(adjusted: Vec<u32>) -> VertexSplit {
+    VertexSplit {
+        v_p: 3,
+        position: [1.0, 2.0, 3.0],
+        normal: [0.0, 1.0, 0.0],
+        v_l: Some(4),
+        v_r: None,
+        adjusted,
+        corners: [0, 2],
+        error: 0.0,
+        joins_previous: false,
+    }
+}
+
+fn every_kind() -> Vec<Message> {
+    vec![
+        Message::Hello(Hello {
+            traversal: Traversal::Linear,
+            fov: 1.0,
+            budget: Some(60_000),
+            out_of_view: true,
+            back_face: false,
+            scheme: Scheme::Selective,
+        }),
+        Message::View(ViewPacket {
+            frame: 7,
+            eye: [1.0, 2.0, 3.0],
+            aim: [0.0, 0.0, 0.0],
+            tau: 0.001,
+            budget_mode: true,
+            n: 500,
+        }),
+        Message::Bye,
+        Message::Welcome(vec![WelcomeObject {
+            id: 9,
+            splits: 10,
+            base: Mesh {
+                positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                normals: vec![[0.0, 0.0, 1.0]; 3],
+                indices: vec![0, 1, 2],
+            },
+        }]),
+        Message::Batch {
+            frame: 7,
+            objects: vec![ObjectUpdates {
+                index: 0,
+                collapses: vec![5, 6],
+                splits: vec![NodeSplit {
+                    node: 2,
+                    first: 4,
+                    run: vec![split(vec![1, 2]), split(vec![])],
+                }],
+            }],
+        },
+        Message::Refused("no".into()),
+        Message::Resume {
+            next_frame: 8,
+            objects: vec![
+                HeldNodes {
+                    index: 0,
+                    nodes: vec![3, 1, 4],
+                },
+                HeldNodes {
+                    index: 1,
+                    nodes: vec![],
+                },
+            ],
+        },
+        Message::ResumeLeaves {
+            next_frame: 3,
+            objects: vec![HeldLeaves {
+                index: 0,
+                leaves: vec![name(2, &[true, false]), name(0, &[])],
+            }],
+        },
+        Message::SelectiveWelcome(vec![SelectiveObject {
+            id: 4,
+            base: SelectiveBase {
+                triangles: vec![[0, 1, 2]],
+                roots: vec![
+                    ([0.0; 3], [0.0, 0.0, 1.0], Some(info())),
+                    ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], None),
+                    ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], Some(info())),
+                ],
+                leaves: Some(vec![[name(0, &[true]), name(1, &[]), name(2, &[false; 9])]]),
+            },
+        }]),
+        Message::Vsplits {
+            frame: 9,
+            objects: vec![ObjectVsplits {
+                index: 0,
+                packets: vec![VsplitPacket {
+                    node: name(1, &[false]),
+                    cuts: [Some(name(2, &[true; 70])), None],
+                    position: [1.0, 2.0, 3.0],
+                    normal: [0.0, 1.0, 0.0],
+                    children: [None, Some(info())],
+                    run: Some(name(0, &[true, true])),
+                    leaves: [
+                        Some([name(1, &[false, false, true]), name(1, &[false, true])]),
+                        None,
+                    ],
+                }],
+            }],
+        },
+    ]
+}
+
+/// The name of the node down `path` (true: right) from root `tree`.
+fn name(tree: u32, path: &[bool]) -> NodeName {
+    let node = path
+        .iter()
+        .fold(flaneur::lod::HeapIndex::root(), |n, &right| n.child(right));
+    NodeName { tree, node }
+}
+
+fn info() -> flaneur::lod::RefineInfo {
+    flaneur::lod::RefineInfo {
+        centre: [1.0, 2.0, 3.0],
+        axis: [0.0, 1.0, 0.0],
+        radius: 0.5,
+        cone_sin: 0.25,
+        error: 0.01,
+    }
+}
+
+#[test]
+fn every_message_reads_back_as_written() {
+    for m in every_kind() {
+        let bytes = m.encode();
+        let mut input = &bytes[..];
+        let (back, len) = receive(&mut input, MAX_TO_CLIENT).unwrap().unwrap();
+        assert_eq!(back, m);
+        assert_eq!(len, bytes.len());
+    }
+}
+
+#[test]
+fn an_objects_wire_length_is_what_it_takes_in_a_batch() {
+    let Message::Batch { objects, .. } = &every_kind()[4] else {
+        unreachable!()
+    };
+    let whole = every_kind()[4].encode().len();
+    // Length, kind, frame and the object count, then the one object.
+    assert_eq!(whole, 4 + 1 + 4 + 4 + objects[0].wire_len());
+}
+
+#[test]
+fn a_view_is_zhengs_33_bytes_after_its_frame_number() {
+    let view = &every_kind()[1];
+    assert_eq!(view.encode().len(), 4 + 1 + 4 + 33);
+}
+
+#[test]
+fn every_cut_of_every_message_is_an_error_not_a_panic() {
+    for m in every_kind() {
+        let bytes = m.encode();
+        for cut in 4..bytes.len() {
+            let body = &bytes[4..cut];
+            if let Ok(back) = Message::decode(body) {
+                // Only REFUSED reads any prefix (its reason runs to the end).
+                assert!(matches!(back, Message::Refused(_)), "{back:?} from {cut}");
+            }
+        }
+    }
+}
+
+#[test]
+fn counts_beyond_the_bytes_are_refused_before_anything_is_reserved() {
+    let mut bytes = every_kind()[4].encode();
+    // The object count, just after the kind and the frame number.
+    bytes[9..13].copy_from_slice(&u32::MAX.to_le_bytes());
+    let e = Message::decode(&bytes[4..]).unwrap_err();
+    assert!(e.to_string().contains("a count of 4294967295"), "{e}");
+}
+
+/// A frame of many empty entries would decode to several times its bytes: the
+/// counts that allow it are refused.
+#[test]
+fn what_a_frame_decodes_to_stays_near_its_bytes() {
+    let batch = |objects: Vec<ObjectUpdates>| Message::Batch { frame: 1, objects }.encode();
+    let empty = |index| ObjectUpdates {
+        index,
+        ..Default::default()
+    };
+    let refused = |bytes: Vec<u8>| Message::decode(&bytes[4..]).unwrap_err().to_string();
+    let e = refused(batch(vec![empty(0)]));
+    assert!(e.contains("object 0's part has no update"), "{e}");
+    let many = (0..=MAX_OBJECTS as u32)
+        .map(|index| ObjectUpdates {
+            index,
+            collapses: vec![1],
+            splits: vec![],
+        })
+        .collect();
+    let e = refused(batch(many));
+    assert!(e.contains("65537 objects, above the 65536"), "{e}");
+    let e = refused(batch(vec![ObjectUpdates {
+        index: 0,
+        collapses: vec![1; MAX_N as usize + 1],
+        splits: vec![],
+    }]));
+    assert!(e.contains("501 collapses"), "{e}");
+    let e = refused(batch(vec![ObjectUpdates {
+        index: 0,
+        collapses: vec![],
+        splits: vec![NodeSplit {
+            node: 4,
+            first: 0,
+            run: vec![],
+        }],
+    }]));
+    assert!(e.contains("node 4's split has no vertex split"), "{e}");
+    let resume = Message::Resume {
+        next_frame: 0,
+        objects: (0..=MAX_OBJECTS as u32)
+            .map(|index| HeldNodes {
+                index,
+                nodes: vec![],
+            })
+            .collect(),
+    };
+    let e = refused(resume.encode());
+    assert!(e.contains("above the 65536"), "{e}");
+}
+
+#[test]
+fn bad_fields_are_named() {
+    let mut hello = every_kind()[0].encode();
+    hello[5] = b'X';
+    let e = Message::decode(&hello[4..]).unwrap_err().to_string();
+    assert!(e.contains("bad magic"), "{e}");
+    let mut view = every_kind()[1].encode();
+    view[9..13].copy_from_slice(&f32::NAN.to_le_bytes());
+    let e = Message::decode(&view[4..]).unwrap_err().to_string();
+    assert!(e.contains("not finite"), "{e}");
+    let mut hello = every_kind()[0].encode();
+    *hello.last_mut().unwrap() = 3;
+    let e = Message::decode(&hello[4..]).unwrap_err().to_string();
+    assert!(e.contains("scheme 3"), "{e}");
+    let Message::SelectiveWelcome(mut objects) = every_kind()[8].clone() else {
+        unreachable!()
+    };
+    objects[0].base.leaves = None;
+    let mut welcome = Message::SelectiveWelcome(objects).encode();
+    // The placement byte, then the base triangle's last corner before it.
+    welcome.pop();
+    // The base triangle's last corner: a root the object does not have.
+    let at = welcome.len() - 4;
+    welcome[at..].copy_from_slice(&7u32.to_le_bytes());
+    welcome.push(0);
+    let e = Message::decode(&welcome[4..]).unwrap_err().to_string();
+    assert!(e.contains("corner 7, of 3 roots"), "{e}");
+    let mut welcome = every_kind()[8].encode();
+    // The first leaf's tree (the three leaves take 7, 7 and 8 bytes): not its root.
+    let at = welcome.len() - (7 + 7 + 8);
+    welcome[at..at + 4].copy_from_slice(&2u32.to_le_bytes());
+    let e = Message::decode(&welcome[4..]).unwrap_err().to_string();
+    assert!(e.contains("leaf in tree 2, its corner being root 0"), "{e}");
+    let e = Message::decode(&[0x7f]).unwrap_err().to_string();
+    assert!(e.contains("kind 0x7f"), "{e}");
+    let long = (MAX_TO_SERVER as u32 + 1).to_le_bytes();
+    let e = receive(&mut &long[..], MAX_TO_SERVER)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("above the 4096"), "{e}");
+}
