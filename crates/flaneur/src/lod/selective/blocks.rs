@@ -151,6 +151,30 @@ impl BlockServer {
         Ok(())
     }
 
+    /// Forgets that the blocks `tops` name were sent: the client dropped them from its
+    /// cache (El-Sana §6.1), and will ask again for what it needs of them. An `Err`
+    /// naming a block that was not sent, or one below which a block is still held.
+    pub fn release(&mut self, source: &SelectiveSource, tops: &[NodeName]) -> Result<()> {
+        let h = source.hierarchy();
+        for name in tops {
+            let top = h
+                .find(name)
+                .filter(|t| self.blocks.contains(t))
+                .ok_or_else(|| Error::Invalid(format!("block {name:?} was not sent")))?;
+            for n in h.block_nodes(top, self.levels) {
+                let below = h.children(n).expect("a block's node splits");
+                if let Some(&b) = below.iter().find(|&b| self.blocks.contains(b)) {
+                    return Err(Error::Invalid(format!(
+                        "block {name:?} released while block {:?} below it is held",
+                        h.name(b)
+                    )));
+                }
+            }
+            self.blocks.remove(&top);
+        }
+        Ok(())
+    }
+
     /// Idle-time prediction: the blocks that `view` under `tau` will want a split from
     /// that were not sent, at most `max` of them asked for (with what they bring).
     pub fn predict(
@@ -187,6 +211,9 @@ pub struct SwitchDown {
     pub needed: Vec<NodeName>,
     /// Blocks below splits that reached their block's last level, asked ahead.
     pub ahead: Vec<NodeName>,
+    /// Blocks the client dropped from its cache (a switch-up): the server forgets it
+    /// sent them ([`BlockServer::release`]).
+    pub released: Vec<NodeName>,
 }
 
 /// A client of blocks: a [`SelectiveClient`] fed by whole blocks, and their names.
@@ -330,6 +357,31 @@ mod tests {
     fn a_client_of_blocks_refines_as_a_local_refiner() {
         blocks_refine_as_a_local_refiner(&crate::lod::bumpy_torus(1500), 3);
         blocks_refine_as_a_local_refiner(&crate::lod::fixtures::building(), 4);
+    }
+
+    #[test]
+    fn a_released_block_is_sent_again_and_only_a_lowest_one_may_be_released() {
+        let pm = ProgressiveMesh::build(&crate::lod::bumpy_torus(800)).unwrap();
+        let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
+        let source = SelectiveSource::new(&pm, &dag).unwrap();
+        let h = source.hierarchy();
+        let mut server = BlockServer::new(&source, 2).unwrap();
+        // A block two levels down: its parent block comes first.
+        let deep = (0..h.len() as u32)
+            .find(|&n| h.nodes[n as usize].depth == 2 && h.children(n).is_some())
+            .unwrap();
+        let sent = server.send(&source, &[h.name(deep)]).unwrap();
+        let tops: Vec<NodeName> = sent.iter().map(|b| b.top.clone()).collect();
+        assert!(tops.contains(&h.name(deep)) && tops.len() >= 2, "{tops:?}");
+        let parent = h.name(h.block_top(h.parent(deep).unwrap(), 2));
+        let err = server.release(&source, &[parent]).unwrap_err().to_string();
+        assert!(err.contains("below it is held"), "{err}");
+        server.release(&source, &[h.name(deep)]).unwrap();
+        let err = server.release(&source, &[h.name(deep)]).unwrap_err().to_string();
+        assert!(err.contains("was not sent"), "{err}");
+        let again = server.send(&source, &[h.name(deep)]).unwrap();
+        assert_eq!(again.len(), 1);
+        assert_eq!(again[0], sent[tops.iter().position(|t| *t == h.name(deep)).unwrap()]);
     }
 
     #[test]
