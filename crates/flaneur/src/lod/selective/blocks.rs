@@ -10,7 +10,7 @@
 //! next view will want and sends them unasked, and the client keeps or discards each by
 //! its name.
 
-use std::collections::{HashSet, VecDeque};
+use std::collections::{HashMap, HashSet, VecDeque};
 
 use super::{stream::view_test, VsplitPacket};
 use super::{Front, NodeName, SelectiveBase, SelectiveClient, SelectiveSource, VertexHierarchy};
@@ -156,22 +156,30 @@ impl BlockServer {
     /// naming a block that was not sent, or one below which a block is still held.
     pub fn release(&mut self, source: &SelectiveSource, tops: &[NodeName]) -> Result<()> {
         let h = source.hierarchy();
+        let mut released = HashSet::new();
         for name in tops {
             let top = h
                 .find(name)
                 .filter(|t| self.blocks.contains(t))
                 .ok_or_else(|| Error::Invalid(format!("block {name:?} was not sent")))?;
+            released.insert(top);
+        }
+        for &top in &released {
             for n in h.block_nodes(top, self.levels) {
                 let below = h.children(n).expect("a block's node splits");
-                if let Some(&b) = below.iter().find(|&b| self.blocks.contains(b)) {
+                if let Some(&b) = below
+                    .iter()
+                    .find(|&b| self.blocks.contains(b) && !released.contains(b))
+                {
                     return Err(Error::Invalid(format!(
-                        "block {name:?} released while block {:?} below it is held",
+                        "block {:?} released while block {:?} below it is held",
+                        h.name(top),
                         h.name(b)
                     )));
                 }
             }
-            self.blocks.remove(&top);
         }
+        self.blocks.retain(|b| !released.contains(b));
         Ok(())
     }
 
@@ -216,43 +224,83 @@ pub struct SwitchDown {
     pub released: Vec<NodeName>,
 }
 
+/// A block a client holds: the nodes whose splits it brought, top-down, and the last
+/// view its mesh used it in.
+#[derive(Clone, Debug)]
+struct Held {
+    nodes: Vec<NodeName>,
+    used: u64,
+}
+
 /// A client of blocks: a [`SelectiveClient`] fed by whole blocks, and their names.
+///
+/// Its cache (El-Sana §6.1) keeps every block it is sent up to a capacity; past it, it
+/// drops the blocks its mesh does not use, those furthest below the blocks in use
+/// first (so the level just below them stays, and the levels above are in use), then
+/// the least recently used. A block is dropped only from the bottom of what it holds,
+/// and never when a split run goes on into another block. The blocks dropped are named
+/// to the server with the next switch message, and asked for again if a view wants
+/// them.
 #[derive(Clone, Debug)]
 pub struct BlockClient {
     client: SelectiveClient,
-    held: HashSet<NodeName>,
+    held: HashMap<NodeName, Held>,
     levels: u32,
+    capacity: usize,
+    views: u64,
     /// Blocks that came and were held already (a server's prediction, or twice).
     pub discarded: usize,
+    /// Blocks dropped from the cache.
+    pub dropped: usize,
 }
 
 impl BlockClient {
-    /// A client of blocks of `levels` levels that has the base mesh.
+    /// A client of blocks of `levels` levels that has the base mesh, and keeps every
+    /// block it is sent.
     pub fn new(base: SelectiveBase, levels: u32) -> BlockClient {
         BlockClient {
-            client: SelectiveClient::new(base),
-            held: HashSet::new(),
+            client: SelectiveClient::new(base).dropping(),
+            held: HashMap::new(),
             levels: levels.max(1),
+            capacity: usize::MAX,
+            views: 0,
             discarded: 0,
+            dropped: 0,
+        }
+    }
+
+    /// The client with a cache of at most `blocks` blocks beyond those its mesh uses.
+    pub fn with_capacity(self, blocks: usize) -> BlockClient {
+        BlockClient {
+            capacity: blocks,
+            ..self
         }
     }
 
     /// Takes `blocks`, keeping each it does not hold and discarding the rest by name.
     pub fn receive(&mut self, blocks: &[Block]) -> Result<()> {
         for b in blocks {
-            if self.held.contains(&b.top) {
+            if self.held.contains_key(&b.top) {
                 self.discarded += 1;
                 continue;
             }
             self.client.receive(&b.packets)?;
-            self.held.insert(b.top.clone());
+            let nodes = b.packets.iter().map(|p| p.node.clone()).collect();
+            self.held.insert(
+                b.top.clone(),
+                Held {
+                    nodes,
+                    used: self.views,
+                },
+            );
         }
         Ok(())
     }
 
     /// Brings the mesh to `view` under `tau` with the blocks held, and says which to
-    /// ask for.
+    /// ask for and which it dropped from its cache.
     pub fn select(&mut self, view: &View, tau: f32) -> Result<SwitchDown> {
+        self.views += 1;
         let missing = self.client.select(view, tau)?;
         let mut down = SwitchDown::default();
         for n in &missing {
@@ -275,7 +323,114 @@ impl BlockClient {
                 }
             }
         }
+        down.released = self.evict()?;
         Ok(down)
+    }
+
+    /// Drops blocks the mesh does not use while more than the capacity are held
+    /// beyond those it does. The blocks dropped.
+    fn evict(&mut self) -> Result<Vec<NodeName>> {
+        let in_use: HashSet<NodeName> = self
+            .held
+            .keys()
+            .filter(|top| self.client.is_split(top))
+            .cloned()
+            .collect();
+        for top in &in_use {
+            self.held.get_mut(top).expect("held").used = self.views;
+        }
+        let mut released = Vec::new();
+        while self.held.len() - in_use.len() > self.capacity {
+            let mut candidates = self.droppable_groups(&in_use);
+            if candidates.is_empty() {
+                break;
+            }
+            // Furthest below the blocks in use first, then least recently used.
+            candidates.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+            for (_, _, group, nodes) in candidates {
+                if self.held.len() - in_use.len() <= self.capacity {
+                    break;
+                }
+                self.client.drop_splits(&nodes)?;
+                for top in group {
+                    self.held.remove(&top);
+                    self.dropped += 1;
+                    released.push(top);
+                }
+            }
+        }
+        Ok(released)
+    }
+
+    /// The groups of blocks not in use that may be dropped now, each with how far
+    /// below the blocks in use it lies and when it was last used, its tops, and its
+    /// nodes parents first. A group is the blocks that split runs tie together
+    /// (a crease run may reach into other trees), dropped together or not at all.
+    #[allow(clippy::type_complexity)]
+    fn droppable_groups(
+        &self,
+        in_use: &HashSet<NodeName>,
+    ) -> Vec<(u32, u64, Vec<NodeName>, Vec<NodeName>)> {
+        let mut tops: Vec<&NodeName> = self.held.keys().filter(|t| !in_use.contains(*t)).collect();
+        tops.sort();
+        let mut seen = HashSet::new();
+        let mut groups = Vec::new();
+        for top in tops {
+            if seen.contains(top) {
+                continue;
+            }
+            let group = self.tied(top);
+            seen.extend(group.iter().cloned());
+            if group.iter().any(|t| in_use.contains(t)) {
+                continue;
+            }
+            let mut nodes: Vec<NodeName> = group
+                .iter()
+                .flat_map(|t| self.held[t].nodes.iter().cloned())
+                .collect();
+            nodes.sort_by_key(|n| n.depth());
+            if !self.client.can_drop(&nodes) {
+                continue;
+            }
+            let below = group.iter().map(|t| self.below_use(t, in_use)).max();
+            let used = group.iter().map(|t| self.held[t].used).max();
+            groups.push((below.unwrap_or(0), used.unwrap_or(0), group, nodes));
+        }
+        groups
+    }
+
+    /// The held blocks that split runs tie to block `top`, itself first.
+    fn tied(&self, top: &NodeName) -> Vec<NodeName> {
+        let mut group = vec![top.clone()];
+        let mut next = 0;
+        while next < group.len() {
+            let nodes = &self.held[&group[next]].nodes;
+            next += 1;
+            for n in nodes {
+                for m in self.client.run_of(n) {
+                    let b = block_of(&m, self.levels);
+                    if self.held.contains_key(&b) && !group.contains(&b) {
+                        group.push(b);
+                    }
+                }
+            }
+        }
+        group
+    }
+
+    /// How many block levels `top` lies below the nearest block in use above it (the
+    /// roots' level counting as in use).
+    fn below_use(&self, top: &NodeName, in_use: &HashSet<NodeName>) -> u32 {
+        let mut levels = 0;
+        let mut at = top.clone();
+        while at.depth() > 0 {
+            at = block_of(&at.up(1), self.levels);
+            levels += 1;
+            if in_use.contains(&at) {
+                break;
+            }
+        }
+        levels
     }
 
     /// The selective client the blocks feed.
@@ -300,13 +455,20 @@ mod tests {
     /// Random views of `mesh`, each asked for block by block until the client lacks
     /// nothing: its mesh is a local refiner's after each, no forced split is ever
     /// missing, and the blocks a prediction sent are discarded when they come again.
-    fn blocks_refine_as_a_local_refiner(mesh: &crate::scene::Mesh, seed: u64) {
+    fn blocks_refine_as_a_local_refiner(
+        mesh: &crate::scene::Mesh,
+        seed: u64,
+        capacity: Option<usize>,
+    ) -> BlockClient {
         let pm = ProgressiveMesh::build(mesh).unwrap();
         let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
         let source = SelectiveSource::new(&pm, &dag).unwrap();
         let h = source.hierarchy();
         let mut server = BlockServer::new(&source, 4).unwrap();
         let mut client = BlockClient::new(source.base(), 4);
+        if let Some(blocks) = capacity {
+            client = client.with_capacity(blocks);
+        }
         let mut local = h.roots();
         let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
         let (mut asked, mut ahead) = (0, 0);
@@ -321,6 +483,7 @@ mod tests {
             source.select(&mut local, &view, tau).unwrap();
             loop {
                 let down = client.select(&view, tau).unwrap();
+                server.release(&source, &down.released).unwrap();
                 ahead += down.ahead.len();
                 if down.needed.is_empty() {
                     let blocks = server.send(&source, &down.ahead).unwrap();
@@ -351,12 +514,27 @@ mod tests {
             "asked {asked}, ahead {ahead}"
         );
         assert_eq!(client.blocks(), server.sent_blocks());
+        client
     }
 
     #[test]
     fn a_client_of_blocks_refines_as_a_local_refiner() {
-        blocks_refine_as_a_local_refiner(&crate::lod::bumpy_torus(1500), 3);
-        blocks_refine_as_a_local_refiner(&crate::lod::fixtures::building(), 4);
+        let torus = blocks_refine_as_a_local_refiner(&crate::lod::bumpy_torus(1500), 3, None);
+        let building = blocks_refine_as_a_local_refiner(&crate::lod::fixtures::building(), 4, None);
+        assert_eq!(torus.dropped + building.dropped, 0);
+    }
+
+    #[test]
+    fn a_client_whose_cache_drops_blocks_refines_as_a_local_refiner() {
+        // Few blocks kept beyond those in use: most views drop some, and ask for some
+        // of them again.
+        for (mesh, seed) in [
+            (crate::lod::bumpy_torus(1500), 5),
+            (crate::lod::fixtures::building(), 6),
+        ] {
+            let client = blocks_refine_as_a_local_refiner(&mesh, seed, Some(4));
+            assert!(client.dropped > 20, "dropped {}", client.dropped);
+        }
     }
 
     #[test]

@@ -59,6 +59,8 @@ struct Partial {
     active: Vec<bool>,
     /// The nodes of each run, by the name of its first, in the order they were sent.
     runs: HashMap<NodeName, Vec<u32>>,
+    /// Slots of nodes dropped with their split, for the next to come.
+    free: Vec<u32>,
 }
 
 impl Partial {
@@ -84,6 +86,7 @@ impl Partial {
             active: vec![true; nodes.len()],
             nodes,
             runs: HashMap::new(),
+            free: Vec::new(),
         }
     }
 
@@ -104,15 +107,23 @@ impl Partial {
         let parent = &self.nodes[k as usize];
         let (position, normal) = (parent.position, parent.normal);
         let mut child = |right: bool, vertex, info| {
-            let id = self.nodes.len() as u32;
             let name = NodeName {
                 tree: p.node.tree,
                 node: p.node.node.child(right),
             };
-            self.by_name.insert(name.clone(), id);
-            self.nodes
-                .push(ClientNode::unsplit(name, Some(k), vertex, info));
-            self.active.push(false);
+            let node = ClientNode::unsplit(name.clone(), Some(k), vertex, info);
+            let id = match self.free.pop() {
+                Some(id) => {
+                    self.nodes[id as usize] = node;
+                    id
+                }
+                None => {
+                    self.nodes.push(node);
+                    self.active.push(false);
+                    self.nodes.len() as u32 - 1
+                }
+            };
+            self.by_name.insert(name, id);
             id
         };
         // The left child keeps the node's vertex; the right is the new one.
@@ -185,9 +196,63 @@ impl Partial {
     fn leaves(&self) -> Vec<NodeName> {
         self.nodes
             .iter()
-            .filter(|n| n.children.is_none())
-            .map(|n| n.name.clone())
+            .enumerate()
+            .filter(|&(k, n)| n.children.is_none() && self.holds(k as u32))
+            .map(|(_, n)| n.name.clone())
             .collect()
+    }
+
+    /// Whether slot `k` holds a node (it was not dropped).
+    fn holds(&self, k: u32) -> bool {
+        self.by_name.get(&self.nodes[k as usize].name) == Some(&k)
+    }
+
+    /// Drops the splits of `nodes` (a block's, parents before children): their
+    /// children leave the hierarchy. Each must be held split, its children inactive and
+    /// not split, but by a node of `nodes`, and its run within `nodes`; else an `Err`
+    /// and nothing dropped.
+    fn drop_splits(&mut self, nodes: &[NodeName]) -> Result<Vec<u32>> {
+        let ids = self.droppable(nodes)?;
+        for &k in ids.iter().rev() {
+            let node = &mut self.nodes[k as usize];
+            let children = node.children.take().expect("checked droppable");
+            node.cuts = [None, None];
+            if let Some(leader) = node.run.take() {
+                self.runs.remove(&leader);
+            }
+            for c in children {
+                self.by_name.remove(&self.nodes[c as usize].name);
+                self.free.push(c);
+            }
+        }
+        Ok(ids)
+    }
+
+    /// The slots of `nodes` if their splits may be dropped ([`Partial::drop_splits`]).
+    fn droppable(&self, nodes: &[NodeName]) -> Result<Vec<u32>> {
+        let ids = nodes
+            .iter()
+            .map(|n| self.id(n))
+            .collect::<Result<Vec<u32>>>()?;
+        let within: std::collections::HashSet<u32> = ids.iter().copied().collect();
+        for &k in &ids {
+            let node = &self.nodes[k as usize];
+            let children = node.children.ok_or_else(|| {
+                Error::Invalid(format!("dropping node {:?}'s split, not held", node.name))
+            })?;
+            let run_out = self.run_nodes(k).iter().any(|r| !within.contains(r));
+            let busy = children.iter().any(|&c| {
+                self.active[c as usize]
+                    || (self.nodes[c as usize].children.is_some() && !within.contains(&c))
+            });
+            if run_out || busy {
+                return Err(Error::Invalid(format!(
+                    "dropping node {:?}'s split, which its mesh or another split uses",
+                    node.name
+                )));
+            }
+        }
+        Ok(ids)
     }
 
     fn named(&self, triangles: Vec<[u32; 3]>) -> Vec<[NodeName; 3]> {
@@ -251,11 +316,12 @@ impl ClientMesh {
     }
 
     /// Under leaf placement, adds the triangles packet `p` brings, at their corners'
-    /// active ancestors in `tree`.
-    fn add_triangles(&mut self, tree: &Partial, p: &VsplitPacket) -> Result<()> {
+    /// active ancestors in `tree`. Their numbers.
+    fn add_triangles(&mut self, tree: &Partial, p: &VsplitPacket) -> Result<Vec<u32>> {
         let ClientMesh::Leaf(mesh) = self else {
-            return Ok(());
+            return Ok(Vec::new());
         };
+        let mut added = Vec::new();
         for (side, (cut, leaves)) in p.cuts.iter().zip(&p.leaves).enumerate() {
             let (Some(cut), Some([left, right])) = (cut, leaves) else {
                 if cut.is_some() != leaves.is_some() {
@@ -277,9 +343,9 @@ impl ClientMesh {
                 tree.active_ancestor(&leaves[1])?,
                 tree.active_ancestor(&leaves[2])?,
             ];
-            mesh.add(leaves, corners);
+            added.push(mesh.add(leaves, corners));
         }
-        Ok(())
+        Ok(added)
     }
 
     fn triangles(&self) -> Vec<[u32; 3]> {
@@ -314,6 +380,11 @@ pub struct SelectiveClient {
     criteria: Criteria,
     /// The nodes the last select split, in order.
     made: Vec<u32>,
+    /// Under leaf placement, the triangles each node's packet brought.
+    brought: HashMap<u32, Vec<u32>>,
+    /// Whether it drops splits from its cache, so that a split the partial order
+    /// forces may be missing: asked for, where it would be a server's fault.
+    drops: bool,
 }
 
 impl SelectiveClient {
@@ -325,6 +396,17 @@ impl SelectiveClient {
             tree: Partial::new(base.roots),
             criteria: Criteria::default(),
             made: Vec::new(),
+            brought: HashMap::new(),
+            drops: false,
+        }
+    }
+
+    /// The client of a cache that drops splits ([`SelectiveClient::drop_splits`]): a
+    /// split the partial order forces that it lacks is named among those to ask for.
+    pub fn dropping(self) -> SelectiveClient {
+        SelectiveClient {
+            drops: true,
+            ..self
         }
     }
 
@@ -339,10 +421,58 @@ impl SelectiveClient {
     /// for a packet of a node the client does not have, or has split already.
     pub fn receive(&mut self, packets: &[VsplitPacket]) -> Result<()> {
         for p in packets {
-            self.tree.receive(p)?;
-            self.mesh.add_triangles(&self.tree, p)?;
+            let k = self.tree.receive(p)?;
+            let added = self.mesh.add_triangles(&self.tree, p)?;
+            if !added.is_empty() {
+                self.brought.insert(k, added);
+            }
         }
         Ok(())
+    }
+
+    /// Drops the splits of `nodes` (parents before children), which its mesh does not
+    /// use: their children leave the hierarchy, and the triangles their packets
+    /// brought leave the mesh. An `Err`, and nothing dropped, for a node whose split is
+    /// not held, is used by the mesh or by a split below not dropped, or whose run goes
+    /// on outside `nodes`.
+    pub fn drop_splits(&mut self, nodes: &[NodeName]) -> Result<()> {
+        for k in self.tree.drop_splits(nodes)? {
+            if let (ClientMesh::Leaf(mesh), Some(triangles)) =
+                (&mut self.mesh, self.brought.remove(&k))
+            {
+                for t in triangles {
+                    mesh.remove(t)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The nodes split with node `name`, itself included: its run's, as held.
+    pub fn run_of(&self, name: &NodeName) -> Vec<NodeName> {
+        match self.tree.by_name.get(name) {
+            Some(&k) => self
+                .tree
+                .run_nodes(k)
+                .into_iter()
+                .map(|n| self.tree.nodes[n as usize].name.clone())
+                .collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Whether [`SelectiveClient::drop_splits`] would drop `nodes`.
+    pub fn can_drop(&self, nodes: &[NodeName]) -> bool {
+        self.tree.droppable(nodes).is_ok()
+    }
+
+    /// Whether the mesh uses node `name`'s split: the front runs below it.
+    pub fn is_split(&self, name: &NodeName) -> bool {
+        self.tree.by_name.get(name).is_some_and(|&k| {
+            self.tree.nodes[k as usize].children.is_some()
+                && !self.tree.active[k as usize]
+                && self.tree.active_above(k).is_none()
+        })
     }
 
     /// Brings the client's mesh to `view` under `tau` with what it holds (the
@@ -371,7 +501,9 @@ impl SelectiveClient {
             }
             for n in have {
                 if self.tree.active[n as usize] {
-                    self.split_run(n)?;
+                    if let Some(k) = self.split_run(n)? {
+                        return Ok(vec![self.tree.nodes[k as usize].name.clone()]);
+                    }
                 }
             }
         };
@@ -447,24 +579,37 @@ impl SelectiveClient {
         }
     }
 
-    /// Splits every node of `node`'s run that is not split yet.
-    fn split_run(&mut self, node: u32) -> Result<()> {
+    /// Splits every node of `node`'s run that is not split yet. A forced split it
+    /// lacks, if it drops splits: the node.
+    fn split_run(&mut self, node: u32) -> Result<Option<u32>> {
         for n in self.tree.run_nodes(node) {
-            self.make_split(n)?;
+            if let Some(k) = self.make_split(n)? {
+                return Ok(Some(k));
+            }
         }
-        Ok(())
+        Ok(None)
+    }
+
+    /// Splits forced node `a` and its run; a split it lacks as [`split_run`](Self::split_run).
+    fn force(&mut self, a: u32) -> Result<Option<u32>> {
+        match self.tree.children(a) {
+            Err(_) if self.drops => Ok(Some(a)),
+            Err(e) => Err(e),
+            Ok(_) => self.split_run(a),
+        }
     }
 
     /// Splits `node`, bringing it to the front first, then splitting the node both its
     /// cut vertices' active ancestors are, found by right shifts of their names, until
     /// they differ (KLK's partial order); nothing if it is split already.
-    fn make_split(&mut self, node: u32) -> Result<()> {
+    fn make_split(&mut self, node: u32) -> Result<Option<u32>> {
         while !self.tree.active[node as usize] {
             match self.tree.active_above(node) {
-                None => return Ok(()),
+                None => return Ok(None),
                 Some(a) => {
-                    self.tree.children(a)?;
-                    self.split_run(a)?;
+                    if let Some(k) = self.force(a)? {
+                        return Ok(Some(k));
+                    }
                 }
             }
         }
@@ -475,8 +620,9 @@ impl SelectiveClient {
                 if a != self.tree.active_ancestor(r)? {
                     break;
                 }
-                self.tree.children(a)?;
-                self.split_run(a)?;
+                if let Some(k) = self.force(a)? {
+                    return Ok(Some(k));
+                }
             }
         }
         let children = self.tree.children(node)?;
@@ -491,7 +637,7 @@ impl SelectiveClient {
         }
         self.tree.split(node, children);
         self.made.push(node);
-        Ok(())
+        Ok(None)
     }
 
     /// The nodes the last [`SelectiveClient::select`] split, in order, with whether
@@ -530,7 +676,7 @@ impl SelectiveClient {
 
     /// Nodes held (the roots included).
     pub fn nodes(&self) -> usize {
-        self.tree.nodes.len()
+        self.tree.nodes.len() - self.tree.free.len()
     }
 
     /// The names of the nodes held whose split was not sent: what a client resuming

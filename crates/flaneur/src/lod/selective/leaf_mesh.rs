@@ -44,7 +44,12 @@ pub struct LeafMesh {
     edges: HashMap<(u32, u32), u32>,
     /// How many directed edges are there more than once, over the first.
     repeated: usize,
+    /// Slots of removed triangles, for the next added.
+    free: Vec<u32>,
 }
+
+/// A removed triangle's corners: they meet, so it is neither drawn nor counted.
+const REMOVED: [u32; 3] = [u32::MAX; 3];
 
 fn meets(t: &[u32; 3]) -> bool {
     t[0] == t[1] || t[1] == t[2] || t[0] == t[2]
@@ -55,15 +60,50 @@ fn directed(t: &[u32; 3]) -> [(u32, u32); 3] {
 }
 
 impl LeafMesh {
-    /// Adds a triangle of `leaves`, each held at the active node in `corners`.
-    pub fn add(&mut self, leaves: [NodeName; 3], corners: [u32; 3]) {
-        let t = self.corners.len() as u32;
+    /// Adds a triangle of `leaves`, each held at the active node in `corners`. Its
+    /// number, until it is removed.
+    pub fn add(&mut self, leaves: [NodeName; 3], corners: [u32; 3]) -> u32 {
+        let t = match self.free.pop() {
+            Some(t) => {
+                self.leaves[t as usize] = leaves;
+                self.corners[t as usize] = corners;
+                t
+            }
+            None => {
+                self.leaves.push(leaves);
+                self.corners.push(corners);
+                self.corners.len() as u32 - 1
+            }
+        };
         for (k, &c) in corners.iter().enumerate() {
             self.at.entry(c).or_default().push((t, k as u8));
         }
-        self.leaves.push(leaves);
-        self.corners.push(corners);
         self.count(&corners, true);
+        t
+    }
+
+    /// Removes triangle `t`, which must not be drawn: its corners meet (a client drops
+    /// a split its mesh does not use, and with it the triangles the split's packet
+    /// brought). An `Err`, and no change, when it is drawn or was removed.
+    pub fn remove(&mut self, t: u32) -> Result<()> {
+        let corners = *self
+            .corners
+            .get(t as usize)
+            .filter(|c| **c != REMOVED && meets(c))
+            .ok_or_else(|| {
+                Error::Invalid(format!("triangle {t} is drawn or gone: it cannot be removed"))
+            })?;
+        for c in corners {
+            if let Some(held) = self.at.get_mut(&c) {
+                held.retain(|&(u, _)| u != t);
+                if held.is_empty() {
+                    self.at.remove(&c);
+                }
+            }
+        }
+        self.corners[t as usize] = REMOVED;
+        self.free.push(t);
+        Ok(())
     }
 
     /// Counts `t`'s directed edges in or out, if its corners do not meet.
