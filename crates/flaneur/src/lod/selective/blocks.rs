@@ -10,7 +10,7 @@
 //! next view will want and sends them unasked, and the client keeps or discards each by
 //! its name.
 
-use std::collections::{HashMap, HashSet, VecDeque};
+use std::collections::{BTreeSet, HashMap, HashSet, VecDeque};
 
 use super::{stream::view_test, VsplitPacket};
 use super::{Front, NodeName, SelectiveBase, SelectiveClient, SelectiveSource, VertexHierarchy};
@@ -65,6 +65,8 @@ pub fn block_of(name: &NodeName, levels: u32) -> NodeName {
 #[derive(Clone, Debug)]
 pub struct BlockServer {
     sent: Front,
+    /// The sent front's nodes: what a prediction's pass visits.
+    live: BTreeSet<u32>,
     blocks: HashSet<u32>,
     levels: u32,
     criteria: Criteria,
@@ -78,6 +80,7 @@ impl BlockServer {
         }
         Ok(BlockServer {
             sent: source.hierarchy().roots(),
+            live: (0..source.hierarchy().roots as u32).collect(),
             blocks: HashSet::new(),
             levels,
             criteria: Criteria::default(),
@@ -87,6 +90,12 @@ impl BlockServer {
     /// The blocks sent so far.
     pub fn sent_blocks(&self) -> usize {
         self.blocks.len()
+    }
+
+    /// The session's own bytes: its front's tags and nodes, and the blocks' names
+    /// (the source is shared).
+    pub fn memory(&self) -> usize {
+        self.sent.active.capacity() + 40 * self.live.len() + 16 * self.blocks.capacity()
     }
 
     /// The blocks `tops` name that were not sent (a switch-down), each after the
@@ -138,6 +147,9 @@ impl BlockServer {
                 continue;
             }
             for d in self.sent.split(h, n)? {
+                let [l, r] = h.children(d).expect("a split node");
+                self.live.remove(&d);
+                self.live.extend([l, r]);
                 let b = h.block_top(d, self.levels);
                 if !self.blocks.contains(&b) {
                     queue.push_back(b);
@@ -195,11 +207,11 @@ impl BlockServer {
         let test = view_test(view, tau, self.criteria)?;
         let h = source.hierarchy();
         let mut wanted = Vec::new();
-        for n in 0..h.len() as u32 {
+        for &n in &self.live {
             if wanted.len() >= max {
                 break;
             }
-            if self.sent.is_active(n) && source.qrefine(&test, n) {
+            if source.qrefine(&test, n) {
                 let b = h.block_top(n, self.levels);
                 if !self.blocks.contains(&b) && !wanted.contains(&b) {
                     wanted.push(b);
