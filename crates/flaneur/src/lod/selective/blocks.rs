@@ -534,6 +534,9 @@ mod tests {
         let torus = blocks_refine_as_a_local_refiner(&crate::lod::bumpy_torus(1500), 3, None);
         let building = blocks_refine_as_a_local_refiner(&crate::lod::fixtures::building(), 4, None);
         assert_eq!(torus.dropped + building.dropped, 0);
+        // Random views split and collapse.
+        let (splits, collapses) = torus.client().operations();
+        assert!(splits > 1000 && collapses > 1000, "{splits} splits, {collapses} collapses");
     }
 
     #[test]

@@ -385,6 +385,9 @@ pub struct SelectiveClient {
     /// Whether it drops splits from its cache, so that a split the partial order
     /// forces may be missing: asked for, where it would be a server's fault.
     drops: bool,
+    /// Vertex splits and collapses made so far.
+    splits: u64,
+    collapses: u64,
 }
 
 impl SelectiveClient {
@@ -398,6 +401,8 @@ impl SelectiveClient {
             made: Vec::new(),
             brought: HashMap::new(),
             drops: false,
+            splits: 0,
+            collapses: 0,
         }
     }
 
@@ -572,6 +577,7 @@ impl SelectiveClient {
             ClientMesh::Cut(m) => run.iter().for_each(|&(n, c)| m.collapse(n, c)),
             ClientMesh::Leaf(m) => m.collapse(&run),
         }
+        self.collapses += run.len() as u64;
         for (n, [l, r]) in run {
             self.tree.active[n as usize] = true;
             self.tree.active[l as usize] = false;
@@ -637,6 +643,7 @@ impl SelectiveClient {
         }
         self.tree.split(node, children);
         self.made.push(node);
+        self.splits += 1;
         Ok(None)
     }
 
@@ -672,6 +679,12 @@ impl SelectiveClient {
     /// The mesh to draw: its triangles over their corners' vertices.
     pub fn mesh(&self) -> Mesh {
         self.tree.mesh(self.mesh.triangles())
+    }
+
+    /// The vertex splits and collapses its selects made so far (El-Sana's split/merge
+    /// operations).
+    pub fn operations(&self) -> (u64, u64) {
+        (self.splits, self.collapses)
     }
 
     /// Nodes held (the roots included).
