@@ -315,3 +315,49 @@ fn bench_stream_bytes_finds_the_view_dependent_stream_cheaper() {
     );
     assert!(csv.num(blocks, "bytes") > csv.num(selective, "bytes"));
 }
+
+/// `flaneur bench stream-blocks` (El-Sana Table 1): over one walk, the truly selective
+/// client and the clients of blocks draw the same meshes frame by frame (each is a
+/// local refiner's), the predicting server's sessions take predicted blocks while the
+/// quiet one's take none, and the bounded cache drops blocks.
+#[test]
+fn bench_stream_blocks_walks_every_scheme_to_the_same_meshes() {
+    let dir = bench(&[
+        "stream-blocks",
+        "--triangles",
+        "20000",
+        "--frames",
+        "40",
+        "--rtt",
+        "0",
+        "--frame-ms",
+        "20",
+        "--idle-ms",
+        "2",
+        "--cache",
+        "4",
+    ]);
+    let csv = common::Csv::read(&dir.path().join("stream-blocks.csv"));
+    let [dag, selective, blocks, predicted, bounded] = &csv.rows[..] else {
+        panic!("{:?}", csv.rows)
+    };
+    assert_eq!(csv.get(dag, "scheme"), "Zheng DAG (sequential)");
+    for row in [blocks, predicted, bounded] {
+        assert_eq!(
+            csv.num(row, "triangles"),
+            csv.num(selective, "triangles"),
+            "{row:?}"
+        );
+        assert!(csv.num(row, "blocks") > 0.0, "{row:?}");
+    }
+    for row in [dag, selective, blocks, predicted, bounded] {
+        assert!(
+            csv.num(row, "operations") > 0.0 && csv.num(row, "bytes") > 0.0,
+            "{row:?}"
+        );
+    }
+    assert_eq!(csv.num(blocks, "predicted_kept"), 0.0);
+    assert!(csv.num(predicted, "predicted_kept") > 0.0, "{predicted:?}");
+    assert!(csv.num(bounded, "dropped") > 0.0, "{bounded:?}");
+    assert_eq!(csv.num(predicted, "dropped"), 0.0);
+}

@@ -54,6 +54,7 @@ impl ServeStreamArgs {
         let count = landmarks.len();
         let config = ServerConfig {
             idle_timeout: Duration::from_secs_f64(self.idle_s),
+            ..ServerConfig::default()
         };
         let server = StreamServer::bind(SocketAddr::new(self.bind, self.port), landmarks, config)
             .with_context(|| format!("listening on {}:{}", self.bind, self.port))?

@@ -16,8 +16,9 @@
 //! database over HTTP through (`through_link` opens one by URL through a link of its own), `pvs_http` the PVS walk's prefetchers, and `visual_http` the VISUAL walk never waiting; `layout` counts what the file's order costs a reader
 //! over HTTP; `crowd` runs many walkers at once against one server, which `nginx`
 //! starts; `stream` streams a landmark from `flaneur_stream`'s server through the link,
-//! `stream_crowd` many clients from one server at once, and `stream_bytes` what one view
-//! costs view-dependent against view-independent (Kim–Lee–Kobbelt Figs. 8–9).
+//! `stream_crowd` many clients from one server at once, `stream_bytes` what one view
+//! costs view-dependent against view-independent (Kim–Lee–Kobbelt Figs. 8–9), and
+//! `stream_blocks` what a walk's frame costs by each scheme (El-Sana's Table 1).
 
 pub mod cell_size;
 pub mod city_series;
@@ -50,6 +51,7 @@ pub mod pvs_stats;
 pub mod report;
 pub mod scene_tree;
 pub mod stream;
+pub mod stream_blocks;
 pub mod stream_bytes;
 pub mod stream_crowd;
 pub mod through_link;

@@ -1,14 +1,19 @@
 //! The papers' client-server view-dependent rendering (Zheng 2007 ch. 5–6 and §8.2;
-//! El-Sana's server of one thread per client): a server that holds each landmark's
+//! Kim–Lee–Kobbelt's truly selective streaming; El-Sana's server of one thread per
+//! client and his view-dependence blocks): a server that holds each landmark's
 //! progressive mesh and DAG once, read-only, and per client the fronts and counters of
 //! its traversal; a client that holds only its selective meshes and applies the
-//! batches of edge collapses and vertex splits the server answers its views with.
+//! batches of edge collapses and vertex splits the server answers its views with, or
+//! (the truly selective schemes and the blocks) refines on its own from the part of the
+//! vertex hierarchy it was sent.
 //!
 //! `protocol` is the wire format (versioned, length-prefixed, its byte layout in its
 //! documentation); `landmark` what a server streams; `server` the sessions; `client`
 //! the selective meshes' side of Zheng's scheme, and `predictive` the client that hides
 //! the round trip by prediction (Zheng ch. 5–6); `selective_client` the side of
 //! Kim–Lee–Kobbelt's truly selective schemes, whose packets `selective_wire` encodes;
+//! `block_client` the side of El-Sana's view-dependence blocks (the client asks for
+//! whole blocks by name, the server predicts on idle time);
 //! `wire` the bounded field reader every decoder uses; `walk_source` a session as the
 //! landmarks a walk draws (`flaneur walk --stream`).
 //!
@@ -37,6 +42,7 @@
 //! # Ok::<(), flaneur_stream::StreamError>(())
 //! ```
 
+mod block_client;
 mod client;
 mod error;
 mod exchange;
@@ -50,6 +56,7 @@ mod server;
 mod walk_source;
 mod wire;
 
+pub use block_client::{BlockLandmark, BlockStreamClient, SwitchReport};
 pub use client::{BatchReport, StreamClient, StreamedObject, MAX_SPLITS};
 pub use error::StreamError;
 pub use landmark::Landmark;

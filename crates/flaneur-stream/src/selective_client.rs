@@ -29,6 +29,8 @@ use flaneur::lod::{CutVertexClient, NodeName, SelectiveClient, View};
 pub struct SelectiveLandmark {
     pub id: u64,
     held: Held,
+    /// Splits a cut-vertex-only client made (each as it came).
+    made: u64,
 }
 
 #[derive(Clone, Debug)]
@@ -54,10 +56,23 @@ impl SelectiveLandmark {
         }
     }
 
+    /// The vertex splits and collapses the client made so far (El-Sana's split and
+    /// merge operations); a cut-vertex-only client makes each split as it comes, and
+    /// never collapses.
+    pub fn operations(&self) -> (u64, u64) {
+        match &self.held {
+            Held::Selective(c) => c.operations(),
+            Held::CutVertex(_) => (self.made, 0),
+        }
+    }
+
     fn receive(&mut self, o: &ObjectVsplits) -> Result<(), StreamError> {
         match &mut self.held {
             Held::Selective(c) => c.receive(&o.packets)?,
-            Held::CutVertex(c) => c.receive(&o.packets)?,
+            Held::CutVertex(c) => {
+                c.receive(&o.packets)?;
+                self.made += o.packets.len() as u64;
+            }
         }
         Ok(())
     }
@@ -123,6 +138,7 @@ impl SelectiveStreamClient {
             .into_iter()
             .map(|o| SelectiveLandmark {
                 id: o.id,
+                made: 0,
                 held: match hello.scheme {
                     Scheme::CutVertex => Held::CutVertex(CutVertexClient::new(o.base)),
                     _ => Held::Selective(SelectiveClient::new(o.base).with_criteria(

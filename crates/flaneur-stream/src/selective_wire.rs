@@ -283,6 +283,11 @@ pub(crate) fn write_name(w: &mut Writer, n: &NodeName) {
     w.raw(&bytes[..bits.div_ceil(8)]);
 }
 
+/// The bytes [`write_name`] writes for `n`.
+pub(crate) fn name_len(n: &NodeName) -> usize {
+    4 + 2 + (n.node.bits() as usize).div_ceil(8)
+}
+
 pub(crate) fn read_name(r: &mut Reader<'_>) -> Result<NodeName, StreamError> {
     let tree = r.u32()?;
     let bits = r.u16()? as usize;

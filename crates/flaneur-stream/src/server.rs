@@ -21,9 +21,16 @@
 //! of what it sent ([`SelectiveServer`]) over a [`SelectiveSource`] every session
 //! shares; the sources are made when the first such session comes, so a server whose
 //! clients all speak Zheng's scheme never holds them. Its resume is RESUME-LEAVES.
+//!
+//! A session of El-Sana's blocks runs in [`block_session`]: over the same sources, a
+//! [`BlockServer`](flaneur::lod::BlockServer) per landmark, its messages read on a
+//! thread of their own so that the session can tell the client's silence and predict
+//! (El-Sana §6.2).
+
+mod block_session;
 
 use std::io::{self, Read, Write};
-use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, OnceLock};
 use std::thread;
@@ -38,6 +45,7 @@ use crate::protocol::{
     Scheme, SelectiveObject, ViewPacket, WelcomeObject, MAX_N, MAX_OBJECTS, MAX_RESUME,
     MAX_TO_SERVER,
 };
+use block_session::BlockStreams;
 use flaneur::lod::{Criteria, RefineParams, Refiner, SelectiveServer, SelectiveSource, View};
 
 /// How a server treats its sessions.
@@ -46,12 +54,25 @@ pub struct ServerConfig {
     /// A session that sends nothing for this long, or does not read what it is sent
     /// for this long (a stalled client, whose batches fill the connection), is closed.
     pub idle_timeout: Duration,
+    /// The levels of a block in sessions of blocks (at least 1), which BLOCKS-WELCOME
+    /// tells their clients.
+    pub block_levels: u8,
+    /// How long a session of blocks waits for the client's next message after an
+    /// answer before it predicts the client's next view and sends the blocks it will
+    /// want (El-Sana §6.2); zero: it never predicts.
+    pub idle: Duration,
+    /// The most blocks a prediction asks for per landmark (each with the blocks above
+    /// it and those its splits force, which come with it); zero: no prediction.
+    pub predict_blocks: usize,
 }
 
 impl Default for ServerConfig {
     fn default() -> ServerConfig {
         ServerConfig {
             idle_timeout: Duration::from_secs(60),
+            block_levels: 2,
+            idle: Duration::from_millis(10),
+            predict_blocks: 8,
         }
     }
 }
@@ -74,8 +95,11 @@ pub struct SessionEnd {
     /// The most front nodes one landmark's traversal evaluated for one view: at most
     /// 2N with the constant-time traversal (Zheng §4.4.3, N per pass).
     pub most_evaluated: usize,
-    /// Nodes split and collapsed over every view and landmark (El-Sana's operations).
+    /// Nodes split and collapsed over every view and landmark (El-Sana's operations);
+    /// in a truly selective session or one of blocks, the splits sent.
     pub operations: u64,
+    /// Blocks sent unasked, on idle time (a session of blocks; 0 in others).
+    pub predicted_blocks: u64,
     /// Why the server closed it; `None` when the client said BYE or closed.
     pub reason: Option<String>,
 }
@@ -98,13 +122,17 @@ struct Shared {
     /// The landmarks' vertex hierarchies, made for the first truly selective session
     /// (or why they cannot be).
     selective: OnceLock<Result<Selective, String>>,
+    /// The levels of a block, as the server's configuration gives them.
+    block_levels: u8,
 }
 
 /// The truly selective schemes' shared part: each landmark's source, and
-/// SELECTIVE-WELCOME encoded once.
+/// SELECTIVE-WELCOME encoded once; BLOCKS-WELCOME once the first session of blocks
+/// comes.
 struct Selective {
     sources: Vec<SelectiveSource>,
     welcome: Vec<u8>,
+    blocks_welcome: OnceLock<Vec<u8>>,
 }
 
 impl Shared {
@@ -122,21 +150,27 @@ impl Shared {
                     })
                 })
                 .collect::<Result<Vec<_>, String>>()?;
-            let welcome = Message::SelectiveWelcome(
-                self.landmarks
-                    .iter()
-                    .zip(&sources)
-                    .map(|(l, s)| SelectiveObject {
-                        id: l.id,
-                        base: s.base(),
-                    })
-                    .collect(),
-            )
-            .encode();
-            Ok(Selective { sources, welcome })
+            let welcome = Message::SelectiveWelcome(self.selective_objects(&sources)).encode();
+            Ok(Selective {
+                sources,
+                welcome,
+                blocks_welcome: OnceLock::new(),
+            })
         });
         made.as_ref()
             .map_err(|why| StreamError::Malformed(why.clone()))
+    }
+
+    /// Each landmark's id and its base mesh over `sources`' roots.
+    fn selective_objects(&self, sources: &[SelectiveSource]) -> Vec<SelectiveObject> {
+        self.landmarks
+            .iter()
+            .zip(sources)
+            .map(|(l, s)| SelectiveObject {
+                id: l.id,
+                base: s.base(),
+            })
+            .collect()
     }
 }
 
@@ -158,6 +192,11 @@ impl StreamServer {
         if landmarks.is_empty() {
             return Err(StreamError::Malformed(
                 "a stream server needs at least one landmark to stream".into(),
+            ));
+        }
+        if config.block_levels == 0 {
+            return Err(StreamError::Malformed(
+                "blocks of 0 levels: give at least 1".into(),
             ));
         }
         if landmarks.len() > MAX_OBJECTS {
@@ -188,6 +227,7 @@ impl StreamServer {
                 templates,
                 welcome,
                 selective: OnceLock::new(),
+                block_levels: config.block_levels,
             }),
             config,
         })
@@ -227,6 +267,10 @@ impl StreamServer {
     /// thread runs over its connection once its idle timeout is set, open to any byte
     /// stream (a test's or a fuzzer's bytes). `peer` names the client in its end.
     ///
+    /// A session of blocks reads `input` on a thread of its own (so that it can tell
+    /// the client's silence), and returns once that thread is done: when `input` ends
+    /// or fails after the session's end.
+    ///
     /// ```
     /// use std::sync::Arc;
     /// use flaneur::lod::{Dag, DagConstruction, ProgressiveMesh};
@@ -243,8 +287,13 @@ impl StreamServer {
     /// assert!(!output.is_empty(), "REFUSED, with the reason");
     /// # Ok::<(), flaneur_stream::StreamError>(())
     /// ```
-    pub fn serve(&self, input: impl Read, output: impl Write, peer: SocketAddr) -> SessionEnd {
-        serve((input, output), peer, &self.shared, self.config)
+    pub fn serve(
+        &self,
+        input: impl Read + Send,
+        output: impl Write,
+        peer: SocketAddr,
+    ) -> SessionEnd {
+        serve((input, output), peer, &self.shared, self.config, &|| {})
     }
 
     fn accept_until(&self, stop: &AtomicBool, ends: &mpsc::Sender<SessionEnd>) {
@@ -311,6 +360,7 @@ struct Session<'a> {
     traversal_times: Vec<Duration>,
     most_evaluated: usize,
     operations: u64,
+    predicted_blocks: u64,
 }
 
 /// What a session refines with, by its scheme.
@@ -319,6 +369,8 @@ enum Streams<'a> {
     Dag(Vec<Refiner<'static>>),
     /// Each landmark's source and the session's front of what it sent.
     Selective(&'a [SelectiveSource], Vec<SelectiveServer>),
+    /// Each landmark's source and the session's blocks sent.
+    Blocks(BlockStreams<'a>),
 }
 
 impl Streams<'_> {
@@ -327,6 +379,7 @@ impl Streams<'_> {
         match self {
             Streams::Dag(refiners) => refiners.iter().map(Refiner::memory).sum(),
             Streams::Selective(_, servers) => servers.iter().map(SelectiveServer::memory).sum(),
+            Streams::Blocks(blocks) => blocks.memory(),
         }
     }
 }
@@ -344,7 +397,10 @@ fn session(
         .and_then(|()| stream.set_write_timeout(Some(config.idle_timeout)))
         .and_then(|()| stream.set_nodelay(true));
     match set_up {
-        Ok(()) => serve((&stream, &stream), peer, shared, config),
+        // A session of blocks reads on a thread of its own: a shut read side ends it.
+        Ok(()) => serve((&stream, &stream), peer, shared, config, &|| {
+            let _ = stream.shutdown(Shutdown::Read);
+        }),
         Err(e) => ended(
             peer,
             None,
@@ -365,6 +421,7 @@ fn ended(peer: SocketAddr, s: Option<Session<'_>>, reason: Option<String>) -> Se
             traversal_times: Vec::new(),
             most_evaluated: 0,
             operations: 0,
+            predicted_blocks: 0,
             reason,
         };
     };
@@ -377,19 +434,23 @@ fn ended(peer: SocketAddr, s: Option<Session<'_>>, reason: Option<String>) -> Se
         traversal_times: s.traversal_times,
         most_evaluated: s.most_evaluated,
         operations: s.operations,
+        predicted_blocks: s.predicted_blocks,
         reason,
     }
 }
 
-/// Runs one session over `stream` (its input, its output) to its end.
-fn serve<R: Read, W: Write>(
+/// Runs one session over `stream` (its input, its output) to its end; `unblock` ends
+/// a read of the input under way (a session of blocks calls it at its end).
+fn serve<R: Read + Send, W: Write>(
     mut stream: (R, W),
     peer: SocketAddr,
     shared: &Shared,
     config: ServerConfig,
+    unblock: &dyn Fn(),
 ) -> SessionEnd {
     let mut s = None;
-    let reason = run(&mut stream, shared, &mut s).err().map(|e| {
+    let end = run(&mut stream, shared, config, &mut s, unblock);
+    let reason = end.err().map(|e| {
         let why = match &e {
             StreamError::Io(io)
                 if matches!(
@@ -413,10 +474,12 @@ fn serve<R: Read, W: Write>(
 }
 
 /// The session's loop; `Ok` when the client said BYE or closed.
-fn run<'a, R: Read, W: Write>(
+fn run<'a, R: Read + Send, W: Write>(
     (input, output): &mut (R, W),
     shared: &'a Shared,
+    config: ServerConfig,
     state: &mut Option<Session<'a>>,
+    unblock: &dyn Fn(),
 ) -> Result<(), StreamError> {
     let hello = match receive(input, MAX_TO_SERVER)? {
         Some((Message::Hello(h), _)) => h,
@@ -436,7 +499,7 @@ fn run<'a, R: Read, W: Write>(
                 .iter()
                 .map(Refiner::fresh)
                 .collect::<Result<Vec<_>, _>>()?;
-            (Streams::Dag(refiners), &shared.welcome)
+            (Streams::Dag(refiners), &shared.welcome[..])
         }
         Scheme::Selective | Scheme::CutVertex => {
             let selective = shared.selective()?;
@@ -457,8 +520,13 @@ fn run<'a, R: Read, W: Write>(
                 .collect();
             (
                 Streams::Selective(&selective.sources, servers),
-                &selective.welcome,
+                &selective.welcome[..],
             )
+        }
+        Scheme::Blocks => {
+            let selective = shared.selective()?;
+            let streams = BlockStreams::new(&selective.sources, &hello, config.block_levels)?;
+            (Streams::Blocks(streams), shared.blocks_welcome(selective))
         }
     };
     output.write_all(welcome).map_err(|e| stalled(e.into()))?;
@@ -472,7 +540,11 @@ fn run<'a, R: Read, W: Write>(
         traversal_times: Vec::new(),
         most_evaluated: 0,
         operations: 0,
+        predicted_blocks: 0,
     });
+    if let Streams::Blocks(_) = s.streams {
+        return block_session::dialogue(input, output, s, config, unblock);
+    }
     // The first message after WELCOME may be a RESUME, the only long one.
     let mut first = true;
     loop {
@@ -504,6 +576,7 @@ fn run<'a, R: Read, W: Write>(
                 s.frames += 1;
             }
             Some((Message::Bye, _)) | None => return Ok(()),
+            Some((Message::Switch(_), _)) => return Err(block_session::switch_refused()),
             Some((m, _)) => return Err(out_of_place("VIEW or BYE", &m)),
         }
         first = false;
@@ -526,19 +599,7 @@ fn stalled(e: StreamError) -> StreamError {
 }
 
 fn out_of_place(wanted: &str, got: &Message) -> StreamError {
-    let kind = match got {
-        Message::Hello(_) => "HELLO",
-        Message::View(_) => "VIEW",
-        Message::Bye => "BYE",
-        Message::Resume { .. } => "RESUME",
-        Message::Welcome(_) => "WELCOME",
-        Message::Batch { .. } => "BATCH",
-        Message::Refused(_) => "REFUSED",
-        Message::ResumeLeaves { .. } => "RESUME-LEAVES",
-        Message::SelectiveWelcome(_) => "SELECTIVE-WELCOME",
-        Message::Vsplits { .. } => "VSPLITS",
-    };
-    StreamError::Malformed(format!("{kind} where {wanted} was due"))
+    StreamError::Malformed(format!("{} where {wanted} was due", got.kind()))
 }
 
 /// Checks that each object of a RESUME (`what`) is in the session's `objects` and
@@ -607,23 +668,33 @@ impl Session<'_> {
         Ok(())
     }
 
+    /// Refuses a message `kind` of `frame` that does not follow the last one's.
+    fn follows(&self, kind: &str, frame: u32) -> Result<(), StreamError> {
+        match self.last_frame.filter(|&l| frame <= l) {
+            Some(last) => Err(StreamError::Malformed(format!(
+                "{kind} of frame {frame} after frame {last}: frames must increase"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// The view a message of the session's gives: eye, aim-at point, its HELLO's cone.
+    fn view(&self, eye: [f32; 3], aim: [f32; 3]) -> Result<View, StreamError> {
+        let eye = Vec3::from(eye);
+        Ok(View::new(eye, Vec3::from(aim) - eye, self.hello.fov)?)
+    }
+
     /// The answer to view `v`: a BATCH of each landmark's collapses then splits with
     /// their vertex splits, or in a truly selective session a VSPLITS.
     fn answer(&mut self, v: &ViewPacket) -> Result<Message, StreamError> {
-        if let Some(last) = self.last_frame.filter(|&l| v.frame <= l) {
-            return Err(StreamError::Malformed(format!(
-                "VIEW of frame {} after frame {last}: frames must increase",
-                v.frame
-            )));
-        }
+        self.follows("VIEW", v.frame)?;
         if !(1..=MAX_N).contains(&v.n) {
             return Err(StreamError::Malformed(format!(
                 "VIEW of frame {}: N = {}, not within 1 to {MAX_N}",
                 v.frame, v.n
             )));
         }
-        let eye = Vec3::from(v.eye);
-        let view = View::new(eye, Vec3::from(v.aim) - eye, self.hello.fov)?;
+        let view = self.view(v.eye, v.aim)?;
         let Session {
             hello,
             streams,
@@ -668,6 +739,7 @@ impl Session<'_> {
                     objects,
                 }
             }
+            Streams::Blocks(_) => return Err(block_session::view_refused()),
         };
         self.last_frame = Some(v.frame);
         Ok(message)

@@ -3,26 +3,21 @@
 //! crease runs, a resume on a new connection, and what a session that breaks the
 //! protocol gets.
 
+mod common;
+
 use std::io::Write;
 use std::net::TcpStream;
-use std::sync::Arc;
-use std::time::Duration;
 
-use flaneur::lod::{
-    bumpy_torus, Dag, DagConstruction, Front, NodeName, ProgressiveMesh, SelectiveServer,
-    SelectiveSource, Traversal, View,
-};
+use flaneur::lod::{bumpy_torus, NodeName, SelectiveServer, SelectiveSource};
 use flaneur_stream::protocol::{receive, Message, MAX_TO_CLIENT};
 use flaneur_stream::{
-    HeldLeaves, Hello, Landmark, RunningServer, Scheme, SelectiveStreamClient, ServerConfig,
-    StreamServer, ViewPacket,
+    HeldLeaves, Landmark, RunningServer, Scheme, SelectiveStreamClient, ServerConfig, StreamServer,
+    ViewPacket,
 };
-use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-const FOV: f32 = 1.0;
-const WAIT: Duration = Duration::from_secs(20);
+use common::{canonical, hello, landmark, local_view, view_of, Local, WAIT};
 
 /// Two landmarks without crease runs: bumpy tori of 2,000 and 3,000 triangles, side
 /// by side (a local refiner's reference fronts cost the square of a mesh's size).
@@ -40,32 +35,11 @@ fn landmarks() -> Vec<Landmark> {
         .collect()
 }
 
-fn landmark(id: u64, mesh: &flaneur::scene::Mesh) -> Landmark {
-    let pm = ProgressiveMesh::build(mesh).unwrap();
-    let dag = Dag::build(&pm, DagConstruction::MiniRedundant).unwrap();
-    Landmark {
-        id,
-        pm: Arc::new(pm),
-        dag: Arc::new(dag),
-    }
-}
-
 fn serve(landmarks: &[Landmark]) -> RunningServer {
     StreamServer::bind("127.0.0.1:0", landmarks.to_vec(), ServerConfig::default())
         .unwrap()
         .spawn()
         .unwrap()
-}
-
-fn hello(scheme: Scheme) -> Hello {
-    Hello {
-        traversal: Traversal::Priority,
-        fov: FOV,
-        budget: None,
-        out_of_view: true,
-        back_face: true,
-        scheme,
-    }
 }
 
 /// A random view of the two landmarks, looking near the middle of one.
@@ -87,56 +61,6 @@ fn random_view(rng: &mut ChaCha8Rng, frame: u32, n: u32) -> ViewPacket {
         tau: rng.gen_range(0.0005..0.005),
         budget_mode: false,
         n,
-    }
-}
-
-fn local_view(v: &ViewPacket) -> View {
-    let eye = Vec3::from(v.eye);
-    View::new(eye, Vec3::from(v.aim) - eye, FOV).unwrap()
-}
-
-/// Triangles turned to start at their smallest corner, sorted.
-fn canonical(mut triangles: Vec<[NodeName; 3]>) -> Vec<[NodeName; 3]> {
-    for t in &mut triangles {
-        let k = (0..3).min_by_key(|&k| t[k].clone()).unwrap();
-        t.rotate_left(k);
-    }
-    triangles.sort_unstable();
-    triangles
-}
-
-/// A local refiner of every landmark: its source and its front.
-struct Local(Vec<(SelectiveSource, Front)>);
-
-impl Local {
-    fn new(landmarks: &[Landmark]) -> Local {
-        Local(
-            landmarks
-                .iter()
-                .map(|l| {
-                    let source = SelectiveSource::new(&l.pm, &l.dag).unwrap();
-                    let front = source.hierarchy().roots();
-                    (source, front)
-                })
-                .collect(),
-        )
-    }
-
-    /// Each landmark's mesh for `v`.
-    fn select(&mut self, v: &ViewPacket) -> Vec<Vec<[NodeName; 3]>> {
-        self.0
-            .iter_mut()
-            .map(|(source, front)| {
-                source.select(front, &local_view(v), v.tau).unwrap();
-                let h = source.hierarchy();
-                let named = front
-                    .triangles(h)
-                    .iter()
-                    .map(|t| t.map(|n| h.name(n)))
-                    .collect();
-                canonical(named)
-            })
-            .collect()
     }
 }
 
@@ -328,33 +252,6 @@ fn building() -> flaneur::scene::Mesh {
     citygen::sample_building(600).unwrap()
 }
 
-/// A random view of `mesh` from one to three of its sizes away, looking near its
-/// middle.
-fn view_of(rng: &mut ChaCha8Rng, mesh: &flaneur::scene::Mesh, frame: u32) -> ViewPacket {
-    let (lo, hi) = mesh.positions.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), &p| (lo.min(Vec3::from(p)), hi.max(Vec3::from(p))),
-    );
-    let (centre, size) = ((lo + hi) / 2.0, (hi - lo).max_element());
-    let mut off = |scale: f32| {
-        Vec3::new(
-            rng.gen_range(-1.5..1.5),
-            rng.gen_range(-1.5..1.5),
-            rng.gen_range(-1.5..1.5),
-        ) * size
-            * scale
-    };
-    let (eye, aim) = (centre + off(1.0), centre + off(0.2));
-    ViewPacket {
-        frame,
-        eye: eye.to_array(),
-        aim: aim.to_array(),
-        tau: rng.gen_range(0.0005..0.005),
-        budget_mode: false,
-        n: 20,
-    }
-}
-
 /// A landmark of crease runs streams truly selectively over TCP: after each random
 /// view, and across a reconnect, the client's mesh is a local refiner's, triangle for
 /// triangle; a cut-vertex-only client's is the front a local server sent.
@@ -374,7 +271,7 @@ fn a_landmark_of_crease_runs_streams_by_its_leaves_over_tcp() {
         if step == 50 {
             client.reconnect().unwrap();
         }
-        let v = view_of(&mut rng, &mesh, 100 * step);
+        let v = view_of(&mut rng, &mesh, 100 * step, 20);
         rounds += client.refine(&v).unwrap();
         assert_eq!(meshes(&client), local.select(&v), "step {step}");
     }
@@ -386,7 +283,7 @@ fn a_landmark_of_crease_runs_streams_by_its_leaves_over_tcp() {
         if step == 20 {
             cut.reconnect().unwrap();
         }
-        let v = view_of(&mut rng, &mesh, step);
+        let v = view_of(&mut rng, &mesh, step, 20);
         cut.send_view(&v).unwrap();
         cut.receive_batch().unwrap();
         sent.refine_at_most(&source, &local_view(&v), v.tau, v.n as usize)

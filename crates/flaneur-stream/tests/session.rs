@@ -377,6 +377,7 @@ fn a_session_that_says_nothing_is_closed_when_idle() {
         &landmarks()[..1],
         ServerConfig {
             idle_timeout: Duration::from_millis(300),
+            ..ServerConfig::default()
         },
     );
     let said = refusal_of(&server, &Message::Hello(hello(Traversal::Linear)).encode());
@@ -437,6 +438,7 @@ fn a_stalled_client_holds_back_no_other_and_is_closed() {
         &landmarks,
         ServerConfig {
             idle_timeout: Duration::from_millis(500),
+            ..ServerConfig::default()
         },
     );
     let h = hello(Traversal::Priority);

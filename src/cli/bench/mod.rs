@@ -22,6 +22,7 @@ mod pvs_prefetch;
 mod report;
 mod scene_tree;
 mod stream;
+mod stream_blocks;
 mod stream_bytes;
 mod stream_crowd;
 mod view_culling;
@@ -132,6 +133,11 @@ enum Experiment {
     /// frames and triangles, and what a byte cap buys (Kim–Lee–Kobbelt Figs. 8–9). No
     /// database.
     StreamBytes(stream_bytes::StreamBytesArgs),
+    /// A walk past a landmark by each stream scheme (Zheng's DAG, Kim–Lee–Kobbelt's
+    /// truly selective, El-Sana's blocks with and without prediction and a bounded
+    /// cache): triangles, split/merge operations, bytes and time per frame (El-Sana
+    /// Table 1). No database.
+    StreamBlocks(stream_blocks::StreamBlocksArgs),
 }
 
 impl BenchArgs {
@@ -162,6 +168,7 @@ impl BenchArgs {
             Experiment::Stream(a) => a.run(),
             Experiment::StreamCrowd(a) => a.run(),
             Experiment::StreamBytes(a) => a.run(),
+            Experiment::StreamBlocks(a) => a.run(),
         }
     }
 }

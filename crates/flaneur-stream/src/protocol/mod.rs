@@ -11,7 +11,8 @@
 //!                 2 constant-time)  fov f32 (the view cone's full angle, radians)
 //!                 budget u32 (triangles per object in budget mode; 0: none)
 //!                 criteria u8 (bit 0 out-of-view, bit 1 back-face)
-//!                 scheme u8 (0 Zheng's DAG, 1 truly selective, 2 cut-vertex-only)  21 bytes
+//!                 scheme u8 (0 Zheng's DAG, 1 truly selective, 2 cut-vertex-only,
+//!                 3 El-Sana's blocks)                                          21 bytes
 //!   0x02 VIEW     frame u32 (strictly increasing)  then Zheng's 33 bytes (§8.2.1):
 //!                 eye 3×f32  aim-at 3×f32  τ f32  mode u8 (0 free, 1 budget)  N u32
 //!                                                                              37 bytes
@@ -21,6 +22,12 @@
 //!                 nodes u32, then each: node u32 (a DAG node the client holds split)
 //!   0x05 RESUME-LEAVES  next frame u32  objects u32, then each: index u32
 //!                 names u32, then each a NAME (a node held whose split it was not sent)
+//!   0x06 SWITCH   frame u32 (strictly increasing, as VIEW's)  eye 3×f32  aim-at 3×f32
+//!                 τ f32  objects u32, then each object with tops: index u32
+//!                 down u32, then each a NAME (a block's top: the view wants its splits)
+//!                 ahead u32, then each a NAME (a block's top, asked ahead of need)
+//!                 released u32, then each a NAME (a block's top, dropped from the
+//!                 client's cache: a switch-up)
 //! server → client
 //!   0x81 WELCOME  magic (8)  version u16  objects u32, then each:
 //!                 id u64  splits u32  base vertices u32  positions 3×f32 each
@@ -49,6 +56,13 @@
 //!                   if bit 4: NAME (the node of its run's first split)
 //!                   if bit 5: for each cut vertex sent, its triangle's leaves below
 //!                   the left and the right child, 2 SUFFIXes
+//!   0x86 BLOCKS-WELCOME  magic (8)  version u16  levels u8 (a block's, at least 1)
+//!                 objects u32, then each as in SELECTIVE-WELCOME
+//!   0x87 BLOCKS   frame u32 (the SWITCH's; a predicted one's, the last SWITCH's)
+//!                 flags u8 (bit 0: predicted, sent unasked on idle time)
+//!                 objects u32, then each object with blocks: index u32
+//!                 blocks u32 (at least 1), then each: NAME (its top)
+//!                   packets u32 (at least 1), then each packet as in VSPLITS
 //!
 //! NAME    tree u32  bits u16 (1 to 65,536)  the heap index in ⌈bits/8⌉ bytes, least
 //!         significant first
@@ -86,13 +100,36 @@
 //! refused. A client resumes with RESUME-LEAVES, naming the nodes it holds whose split
 //! it was not sent: the server's front of what it sent.
 //!
-//! Version 3 added the scheme and the truly selective messages, version 2 RESUME;
-//! peers of another version are refused by version.
+//! **Sessions of blocks** (El-Sana's view-dependence blocks; HELLO's scheme 3) stream
+//! the same hierarchies cut into blocks of a few levels, each named by its top node
+//! (`lod::selective`'s blocks): BLOCKS-WELCOME gives each base mesh and the blocks'
+//! levels; the client refines on its own from the blocks it holds and, when its view
+//! wants a block it lacks, asks ahead of need, or dropped blocks from its cache, sends
+//! one SWITCH (El-Sana's switch-down and switch-up messages), which the server answers
+//! with one BLOCKS (perhaps empty) of the blocks named that it had not sent, each after
+//! the blocks above it, with those the partial order forces. The server releases before
+//! it sends. When no message comes for a while after an answer, the server sends one
+//! BLOCKS of its own, flagged predicted, for the view it extrapolates from the last
+//! two SWITCHes (§6.2); a client takes each block it does not hold and discards the
+//! rest by name (§6.3), and discards a predicted block under a block it released
+//! before the prediction came, which the server forgets with that release (the blocks
+//! of the last prediction below a released block are forgotten with it). A SWITCH may
+//! be longer than [`MAX_TO_SERVER`], up to [`MAX_SWITCH`]. A session of blocks does not
+//! resume: a client connects afresh.
+//!
+//! The codec is this module's; the truly selective messages' longer decoders are in
+//! `protocol/selective.rs`, the blocks' messages in `protocol/blocks.rs`.
+//!
+//! Version 3 added the scheme, the truly selective messages and the blocks' messages,
+//! version 2 RESUME; peers of another version are refused by version.
+
+mod blocks;
+mod selective;
+
+pub use blocks::{ObjectBlocks, ObjectSwitch, Switch};
 
 use crate::error::StreamError;
-use crate::selective_wire::{
-    read_base, read_name, read_vsplits, write_base, write_name, write_vsplits, MIN_NAME,
-};
+use crate::selective_wire::{write_name, write_vsplits};
 use crate::wire::{Reader, Writer};
 use flaneur::lod::{NodeName, SelectiveBase, Traversal, VertexSplit, VsplitPacket};
 use flaneur::scene::Mesh;
@@ -103,6 +140,11 @@ pub const MAGIC: [u8; 8] = *b"FLANEURS";
 pub const VERSION: u16 = 3;
 /// The longest frame a server reads: a VIEW is 38 bytes, a HELLO 22.
 pub const MAX_TO_SERVER: usize = 4 << 10;
+/// The longest SWITCH a server reads. A view's switch-down names every block it wants a
+/// split from and every block it asks ahead, about 10 bytes a name: on a first view of
+/// a large landmark that is thousands of names, past [`MAX_TO_SERVER`]. 1 MiB holds
+/// about a hundred thousand; a client asks for what does not fit at its next round.
+pub const MAX_SWITCH: usize = 1 << 20;
 /// The longest RESUME a server reads: 4 bytes a node held split, so about four million
 /// nodes over every object.
 pub const MAX_RESUME: usize = 16 << 20;
@@ -125,6 +167,9 @@ const BATCH: u8 = 0x82;
 const REFUSED: u8 = 0x83;
 const SELECTIVE_WELCOME: u8 = 0x84;
 const VSPLITS: u8 = 0x85;
+const SWITCH: u8 = 0x06;
+const BLOCKS_WELCOME: u8 = 0x86;
+const BLOCKS: u8 = 0x87;
 
 /// How a session streams its landmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -138,6 +183,9 @@ pub enum Scheme {
     /// KLK §7's variant for clients that do not refine: each split at the cut vertices
     /// as they stand on the client's mesh.
     CutVertex,
+    /// El-Sana's view-dependence blocks: the client refines on its own and asks for
+    /// whole blocks of the hierarchy by name; the server predicts on idle time.
+    Blocks,
 }
 
 /// What a client asks for once, at the session's start.
@@ -271,6 +319,23 @@ pub enum Message {
         frame: u32,
         objects: Vec<ObjectVsplits>,
     },
+    /// A session of blocks' greeting: each object's base mesh, and a block's levels.
+    BlocksWelcome {
+        /// The levels of the hierarchy a block spans (at least 1).
+        levels: u8,
+        objects: Vec<SelectiveObject>,
+    },
+    /// A client of blocks' switch-down and switch-up messages for one view.
+    Switch(Switch),
+    /// Blocks for a SWITCH's frame, or predicted (sent unasked) after it.
+    Blocks {
+        /// The SWITCH's frame; a predicted one's, the last SWITCH's.
+        frame: u32,
+        /// Sent unasked, on idle time.
+        predicted: bool,
+        /// The objects with blocks, each once.
+        objects: Vec<ObjectBlocks>,
+    },
 }
 
 fn scheme_code(s: Scheme) -> u8 {
@@ -278,6 +343,7 @@ fn scheme_code(s: Scheme) -> u8 {
         Scheme::Dag => 0,
         Scheme::Selective => 1,
         Scheme::CutVertex => 2,
+        Scheme::Blocks => 3,
     }
 }
 
@@ -290,6 +356,25 @@ fn traversal_code(t: Traversal) -> u8 {
 }
 
 impl Message {
+    /// The message's name, as the byte layout above spells it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Message::Hello(_) => "HELLO",
+            Message::View(_) => "VIEW",
+            Message::Bye => "BYE",
+            Message::Resume { .. } => "RESUME",
+            Message::Welcome(_) => "WELCOME",
+            Message::Batch { .. } => "BATCH",
+            Message::Refused(_) => "REFUSED",
+            Message::ResumeLeaves { .. } => "RESUME-LEAVES",
+            Message::SelectiveWelcome(_) => "SELECTIVE-WELCOME",
+            Message::Vsplits { .. } => "VSPLITS",
+            Message::BlocksWelcome { .. } => "BLOCKS-WELCOME",
+            Message::Switch(_) => "SWITCH",
+            Message::Blocks { .. } => "BLOCKS",
+        }
+    }
+
     /// The frame: length, kind, body.
     pub fn encode(&self) -> Vec<u8> {
         let mut w = Writer::default();
@@ -381,11 +466,7 @@ impl Message {
                 w.u8(SELECTIVE_WELCOME);
                 w.raw(&MAGIC);
                 w.u16(VERSION);
-                w.count(objects.len());
-                for o in objects {
-                    w.u64(o.id);
-                    write_base(&mut w, &o.base);
-                }
+                selective::write_objects(&mut w, objects);
             }
             Message::Vsplits { frame, objects } => {
                 w.u8(VSPLITS);
@@ -395,6 +476,25 @@ impl Message {
                     w.u32(o.index);
                     write_vsplits(&mut w, &o.packets);
                 }
+            }
+            Message::BlocksWelcome { levels, objects } => {
+                w.u8(BLOCKS_WELCOME);
+                w.raw(&MAGIC);
+                w.u16(VERSION);
+                w.u8(*levels);
+                selective::write_objects(&mut w, objects);
+            }
+            Message::Switch(s) => {
+                w.u8(SWITCH);
+                blocks::write_switch(&mut w, s);
+            }
+            Message::Blocks {
+                frame,
+                predicted,
+                objects,
+            } => {
+                w.u8(BLOCKS);
+                blocks::write_blocks(&mut w, *frame, *predicted, objects);
             }
         }
         let len = (w.bytes.len() - 4) as u32;
@@ -427,7 +527,8 @@ impl Message {
                     0 => Scheme::Dag,
                     1 => Scheme::Selective,
                     2 => Scheme::CutVertex,
-                    s => return Err(r.bad(format!("scheme {s}, not 0, 1 or 2"))),
+                    3 => Scheme::Blocks,
+                    s => return Err(r.bad(format!("scheme {s}, not 0 to 3"))),
                 };
                 r.end()?;
                 Message::Hello(Hello {
@@ -469,9 +570,12 @@ impl Message {
             WELCOME => decode_welcome(rest)?,
             BATCH => decode_batch(rest)?,
             REFUSED => Message::Refused(String::from_utf8_lossy(rest).into_owned()),
-            RESUME_LEAVES => decode_resume_leaves(rest)?,
-            SELECTIVE_WELCOME => decode_selective_welcome(rest)?,
-            VSPLITS => decode_vsplits_message(rest)?,
+            RESUME_LEAVES => selective::decode_resume_leaves(rest)?,
+            SELECTIVE_WELCOME => selective::decode_selective_welcome(rest)?,
+            VSPLITS => selective::decode_vsplits(rest)?,
+            BLOCKS_WELCOME => blocks::decode_blocks_welcome(rest)?,
+            SWITCH => blocks::decode_switch(rest)?,
+            BLOCKS => blocks::decode_blocks(rest)?,
             k => {
                 return Err(StreamError::Malformed(format!(
                     "a message of kind {k:#04x}"
@@ -550,57 +654,6 @@ fn decode_resume(body: &[u8]) -> Result<Message, StreamError> {
         next_frame,
         objects,
     })
-}
-
-fn decode_resume_leaves(body: &[u8]) -> Result<Message, StreamError> {
-    let mut r = Reader::new(body, "RESUME-LEAVES");
-    let next_frame = r.u32()?;
-    let n = r.count_at_most(8, MAX_OBJECTS, "objects")?;
-    let mut objects = Vec::with_capacity(n);
-    for _ in 0..n {
-        let index = r.u32()?;
-        let len = r.count(MIN_NAME)?;
-        let leaves = (0..len)
-            .map(|_| read_name(&mut r))
-            .collect::<Result<Vec<_>, _>>()?;
-        objects.push(HeldLeaves { index, leaves });
-    }
-    r.end()?;
-    Ok(Message::ResumeLeaves {
-        next_frame,
-        objects,
-    })
-}
-
-fn decode_selective_welcome(body: &[u8]) -> Result<Message, StreamError> {
-    let mut r = Reader::new(body, "SELECTIVE-WELCOME");
-    magic_and_version(&mut r)?;
-    let n = r.count_at_most(8 + 4 + 4, MAX_OBJECTS, "objects")?;
-    let mut objects = Vec::with_capacity(n);
-    for _ in 0..n {
-        let id = r.u64()?;
-        let base = read_base(&mut r)?;
-        objects.push(SelectiveObject { id, base });
-    }
-    r.end()?;
-    Ok(Message::SelectiveWelcome(objects))
-}
-
-fn decode_vsplits_message(body: &[u8]) -> Result<Message, StreamError> {
-    let mut r = Reader::new(body, "VSPLITS");
-    let frame = r.u32()?;
-    let n = r.count_at_most(8, MAX_OBJECTS, "objects")?;
-    let mut objects = Vec::with_capacity(n);
-    for _ in 0..n {
-        let index = r.u32()?;
-        let packets = read_vsplits(&mut r)?;
-        if packets.is_empty() {
-            return Err(r.bad(format!("object {index}'s part has no split")));
-        }
-        objects.push(ObjectVsplits { index, packets });
-    }
-    r.end()?;
-    Ok(Message::Vsplits { frame, objects })
 }
 
 fn decode_welcome(body: &[u8]) -> Result<Message, StreamError> {

@@ -107,7 +107,80 @@ fn every_kind() -> Vec<Message> {
                 }],
             }],
         },
+        Message::BlocksWelcome {
+            levels: 2,
+            objects: vec![SelectiveObject {
+                id: 5,
+                base: SelectiveBase {
+                    triangles: vec![[0, 1, 2]],
+                    roots: vec![
+                        ([0.0; 3], [0.0, 0.0, 1.0], Some(info())),
+                        ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], None),
+                        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], Some(info())),
+                    ],
+                    leaves: None,
+                },
+            }],
+        },
+        Message::Switch(Switch {
+            frame: 11,
+            eye: [1.0, 2.0, 3.0],
+            aim: [0.0, 0.5, 0.0],
+            tau: 0.002,
+            objects: vec![
+                ObjectSwitch {
+                    index: 0,
+                    down: vec![name(0, &[]), name(2, &[true, false])],
+                    ahead: vec![name(1, &[false; 12])],
+                    released: vec![],
+                },
+                ObjectSwitch {
+                    index: 3,
+                    down: vec![],
+                    ahead: vec![],
+                    released: vec![name(4, &[true; 2])],
+                },
+            ],
+        }),
+        Message::Blocks {
+            frame: 11,
+            predicted: true,
+            objects: vec![ObjectBlocks {
+                index: 0,
+                blocks: vec![
+                    flaneur::lod::Block {
+                        top: name(0, &[]),
+                        packets: vec![packet(name(0, &[])), packet(name(0, &[true]))],
+                    },
+                    flaneur::lod::Block {
+                        top: name(2, &[true, false]),
+                        packets: vec![packet(name(2, &[true, false]))],
+                    },
+                ],
+            }],
+        },
+        Message::Blocks {
+            frame: 12,
+            predicted: false,
+            objects: vec![],
+        },
     ]
+}
+
+/// The first kind of the blocks scheme's messages in [`every_kind`].
+const BLOCKS_KINDS: usize = 10;
+
+/// A vsplit packet of `node` with both children's INFO.
+fn packet(node: NodeName) -> VsplitPacket {
+    VsplitPacket {
+        node,
+        cuts: [Some(name(1, &[])), Some(name(2, &[false]))],
+        position: [1.0, 2.0, 3.0],
+        normal: [0.0, 1.0, 0.0],
+        children: [Some(info()), Some(info())],
+        run: None,
+        leaves: [None, None],
+    }
 }
 
 /// The name of the node down `path` (true: right) from root `tree`.
@@ -239,9 +312,9 @@ fn bad_fields_are_named() {
     let e = Message::decode(&view[4..]).unwrap_err().to_string();
     assert!(e.contains("not finite"), "{e}");
     let mut hello = every_kind()[0].encode();
-    *hello.last_mut().unwrap() = 3;
+    *hello.last_mut().unwrap() = 4;
     let e = Message::decode(&hello[4..]).unwrap_err().to_string();
-    assert!(e.contains("scheme 3"), "{e}");
+    assert!(e.contains("scheme 4, not 0 to 3"), "{e}");
     let Message::SelectiveWelcome(mut objects) = every_kind()[8].clone() else {
         unreachable!()
     };
@@ -268,4 +341,114 @@ fn bad_fields_are_named() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("above the 4096"), "{e}");
+}
+
+#[test]
+fn a_switchs_frame_length_is_what_it_takes_and_is_bounded_on_its_own() {
+    let Message::Switch(switch) = &every_kind()[BLOCKS_KINDS + 1] else {
+        unreachable!()
+    };
+    assert_eq!(
+        switch.frame_len() + 4,
+        every_kind()[BLOCKS_KINDS + 1].encode().len()
+    );
+    // A SWITCH of ten thousand names: past what a server reads of other messages,
+    // within its own bound.
+    let long = Message::Switch(Switch {
+        objects: vec![ObjectSwitch {
+            index: 0,
+            down: (0..10_000).map(|t| name(t, &[true; 20])).collect(),
+            ..Default::default()
+        }],
+        ..switch.clone()
+    })
+    .encode();
+    let e = receive(&mut &long[..], MAX_TO_SERVER)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("above the 4096"), "{e}");
+    assert!(receive(&mut &long[..], MAX_SWITCH).unwrap().is_some());
+}
+
+/// The blocks' messages: what their decoders refuse, by name.
+#[test]
+fn bad_blocks_messages_are_named() {
+    let refused = |bytes: Vec<u8>| Message::decode(&bytes[4..]).unwrap_err().to_string();
+    let kinds = every_kind();
+    // BLOCKS-WELCOME's levels: after the kind, the magic and the version.
+    let mut welcome = kinds[BLOCKS_KINDS].encode();
+    welcome[4 + 1 + 8 + 2] = 0;
+    let e = refused(welcome);
+    assert!(e.contains("blocks of 0 levels"), "{e}");
+    let Message::Switch(switch) = kinds[BLOCKS_KINDS + 1].clone() else {
+        unreachable!()
+    };
+    let e = refused(
+        Message::Switch(Switch {
+            objects: vec![ObjectSwitch {
+                index: 2,
+                ..Default::default()
+            }],
+            ..switch.clone()
+        })
+        .encode(),
+    );
+    assert!(e.contains("object 2's part names no block"), "{e}");
+    // The view's eye: after the kind and the frame.
+    let mut bad_eye = Message::Switch(switch.clone()).encode();
+    bad_eye[9..13].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    let e = refused(bad_eye);
+    assert!(e.contains("SWITCH") && e.contains("not finite"), "{e}");
+    // A count of names past the bytes left.
+    let mut many = Message::Switch(switch).encode();
+    // The first object's down count: after the head and its index.
+    let at = 4 + 1 + 4 + 12 + 12 + 4 + 4 + 4;
+    many[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    let e = refused(many);
+    assert!(e.contains("a count of 4294967295"), "{e}");
+    // BLOCKS' flags: after the kind and the frame.
+    let mut flags = kinds[BLOCKS_KINDS + 2].encode();
+    flags[9] = 0x03;
+    let e = refused(flags);
+    assert!(e.contains("unknown flags 0x03"), "{e}");
+    let blocks = |blocks: Vec<flaneur::lod::Block>| {
+        Message::Blocks {
+            frame: 1,
+            predicted: false,
+            objects: vec![ObjectBlocks { index: 4, blocks }],
+        }
+        .encode()
+    };
+    let e = refused(blocks(vec![]));
+    assert!(e.contains("object 4's part has no block"), "{e}");
+    let e = refused(blocks(vec![flaneur::lod::Block {
+        top: name(3, &[false]),
+        packets: vec![],
+    }]));
+    assert!(e.contains("has no split"), "{e}");
+}
+
+/// A SWITCH past its bound keeps its releases and drops the tops asked ahead, from the
+/// last, before those down.
+#[test]
+fn a_switch_is_cut_to_its_bound_by_the_tops_it_can_ask_again() {
+    let Message::Switch(switch) = every_kind()[BLOCKS_KINDS + 1].clone() else {
+        unreachable!()
+    };
+    let len = switch.frame_len();
+    assert_eq!(switch.clone().within(len).unwrap(), switch);
+    // The name asked ahead is 13 bits (8 bytes), the others at most 8 bits (7 bytes).
+    let (ahead, name) = (8, 7);
+    let cut = switch.clone().within(len - 1).unwrap();
+    assert!(cut.objects[0].ahead.is_empty() && cut.objects[0].down.len() == 2);
+    assert_eq!(cut.frame_len(), len - ahead);
+    // Then the down tops, from the last; the releases stay.
+    let cut = switch.clone().within(len - ahead - 1).unwrap();
+    assert_eq!(cut.objects[0].down, switch.objects[0].down[..1]);
+    assert_eq!(cut.objects[1], switch.objects[1]);
+    // A part left with nothing is not sent.
+    let cut = switch.clone().within(len - ahead - 2 * name).unwrap();
+    assert_eq!(cut.objects, switch.objects[1..]);
+    let e = switch.within(40).unwrap_err().to_string();
+    assert!(e.contains("releases alone take"), "{e}");
 }

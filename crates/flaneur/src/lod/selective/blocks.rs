@@ -68,6 +68,9 @@ pub struct BlockServer {
     /// The sent front's nodes: what a prediction's pass visits.
     live: BTreeSet<u32>,
     blocks: HashSet<u32>,
+    /// Blocks the client released and was not sent again: above the sent front, so a
+    /// prediction looks at them apart.
+    released: BTreeSet<u32>,
     levels: u32,
     criteria: Criteria,
 }
@@ -82,6 +85,7 @@ impl BlockServer {
             sent: source.hierarchy().roots(),
             live: (0..source.hierarchy().roots as u32).collect(),
             blocks: HashSet::new(),
+            released: BTreeSet::new(),
             levels,
             criteria: Criteria::default(),
         })
@@ -95,7 +99,9 @@ impl BlockServer {
     /// The session's own bytes: its front's tags and nodes, and the blocks' names
     /// (the source is shared).
     pub fn memory(&self) -> usize {
-        self.sent.active.capacity() + 40 * self.live.len() + 16 * self.blocks.capacity()
+        self.sent.active.capacity()
+            + 40 * (self.live.len() + self.released.len())
+            + 16 * self.blocks.capacity()
     }
 
     /// The blocks `tops` name that were not sent (a switch-down), each after the
@@ -141,6 +147,7 @@ impl BlockServer {
             self.send_one(h, source, h.block_top(p, self.levels), queue, out)?;
         }
         self.blocks.insert(top);
+        self.released.remove(&top);
         let nodes = h.block_nodes(top, self.levels);
         for &n in &nodes {
             if !self.sent.is_active(n) {
@@ -192,11 +199,13 @@ impl BlockServer {
             }
         }
         self.blocks.retain(|b| !released.contains(b));
+        self.released.extend(released);
         Ok(())
     }
 
     /// Idle-time prediction: the blocks that `view` under `tau` will want a split from
-    /// that were not sent, at most `max` of them asked for (with what they bring).
+    /// that were not sent, or were released since, at most `max` of them asked for
+    /// (with what they bring).
     pub fn predict(
         &mut self,
         source: &SelectiveSource,
@@ -216,6 +225,15 @@ impl BlockServer {
                 if !self.blocks.contains(&b) && !wanted.contains(&b) {
                     wanted.push(b);
                 }
+            }
+        }
+        // A released block's top is split on the sent front: the view may want it again.
+        for &b in &self.released {
+            if wanted.len() >= max {
+                break;
+            }
+            if source.qrefine(&test, b) && !wanted.contains(&b) {
+                wanted.push(b);
             }
         }
         let names: Vec<NodeName> = wanted.into_iter().map(|b| h.name(b)).collect();
@@ -536,7 +554,10 @@ mod tests {
         assert_eq!(torus.dropped + building.dropped, 0);
         // Random views split and collapse.
         let (splits, collapses) = torus.client().operations();
-        assert!(splits > 1000 && collapses > 1000, "{splits} splits, {collapses} collapses");
+        assert!(
+            splits > 1000 && collapses > 1000,
+            "{splits} splits, {collapses} collapses"
+        );
     }
 
     #[test]
@@ -570,11 +591,28 @@ mod tests {
         let err = server.release(&source, &[parent]).unwrap_err().to_string();
         assert!(err.contains("below it is held"), "{err}");
         server.release(&source, &[h.name(deep)]).unwrap();
-        let err = server.release(&source, &[h.name(deep)]).unwrap_err().to_string();
+        let err = server
+            .release(&source, &[h.name(deep)])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("was not sent"), "{err}");
+        // A view that wants the released block's top split has it predicted again.
+        let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+        let mesh = crate::lod::bumpy_torus(800);
+        let view = (0..1000)
+            .map(|_| random_view(&mut rng, &mesh))
+            .find(|v| source.qrefine(&view_test(v, 1e-5, Criteria::default()).unwrap(), deep))
+            .expect("a view that wants the node split");
+        let predicted = server.predict(&source, &view, 1e-5, usize::MAX).unwrap();
+        assert!(predicted.iter().any(|b| b.top == h.name(deep)));
+        let again: Vec<NodeName> = predicted.iter().map(|b| b.top.clone()).collect();
+        server.release(&source, &again).unwrap();
         let again = server.send(&source, &[h.name(deep)]).unwrap();
         assert_eq!(again.len(), 1);
-        assert_eq!(again[0], sent[tops.iter().position(|t| *t == h.name(deep)).unwrap()]);
+        assert_eq!(
+            again[0],
+            sent[tops.iter().position(|t| *t == h.name(deep)).unwrap()]
+        );
     }
 
     #[test]

@@ -91,7 +91,9 @@ impl LeafMesh {
             .get(t as usize)
             .filter(|c| **c != REMOVED && meets(c))
             .ok_or_else(|| {
-                Error::Invalid(format!("triangle {t} is drawn or gone: it cannot be removed"))
+                Error::Invalid(format!(
+                    "triangle {t} is drawn or gone: it cannot be removed"
+                ))
             })?;
         for c in corners {
             if let Some(held) = self.at.get_mut(&c) {
