@@ -308,11 +308,23 @@ impl BlockClient {
     }
 
     /// Takes `blocks`, keeping each it does not hold and discarding the rest by name.
+    /// An `Err` for a block that holds a split outside it, or one its hierarchy does
+    /// not take (as [`SelectiveClient::receive`]).
     pub fn receive(&mut self, blocks: &[Block]) -> Result<()> {
         for b in blocks {
             if self.held.contains_key(&b.top) {
                 self.discarded += 1;
                 continue;
+            }
+            if let Some(p) = b
+                .packets
+                .iter()
+                .find(|p| block_of(&p.node, self.levels) != b.top)
+            {
+                return Err(Error::Invalid(format!(
+                    "block {:?} holds the split of node {:?}, which is not in it",
+                    b.top, p.node
+                )));
             }
             self.client.receive(&b.packets)?;
             let nodes = b.packets.iter().map(|p| p.node.clone()).collect();
