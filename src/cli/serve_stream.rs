@@ -29,6 +29,16 @@ pub struct ServeStreamArgs {
     /// Close a session that sends nothing for this many seconds.
     #[arg(long, default_value_t = 60.0)]
     idle_s: f64,
+    /// Levels of a block in sessions of El-Sana's blocks.
+    #[arg(long, default_value_t = ServerConfig::default().block_levels)]
+    block_levels: u8,
+    /// In sessions of blocks, predict the client's next view and send the blocks it
+    /// will want after this many milliseconds without a message (0: never).
+    #[arg(long, default_value_t = ServerConfig::default().idle.as_millis() as u64)]
+    predict_after_ms: u64,
+    /// The most blocks a prediction asks for per landmark.
+    #[arg(long, default_value_t = ServerConfig::default().predict_blocks)]
+    predict_blocks: usize,
 }
 
 impl ServeStreamArgs {
@@ -39,6 +49,9 @@ impl ServeStreamArgs {
                 "--idle-s must be a positive number of seconds, not {}",
                 self.idle_s
             );
+        }
+        if self.block_levels == 0 {
+            bail!("--block-levels must be at least 1");
         }
         let db = Database::open(&self.db)?;
         let landmarks = Landmark::all_in(&db, self.landmarks)
@@ -54,7 +67,9 @@ impl ServeStreamArgs {
         let count = landmarks.len();
         let config = ServerConfig {
             idle_timeout: Duration::from_secs_f64(self.idle_s),
-            ..ServerConfig::default()
+            block_levels: self.block_levels,
+            idle: Duration::from_millis(self.predict_after_ms),
+            predict_blocks: self.predict_blocks,
         };
         let server = StreamServer::bind(SocketAddr::new(self.bind, self.port), landmarks, config)
             .with_context(|| format!("listening on {}:{}", self.bind, self.port))?

@@ -486,15 +486,28 @@ impl SelectiveClient {
     pub fn select(&mut self, view: &View, tau: f32) -> Result<Vec<NodeName>> {
         let test = view_test(view, tau, self.criteria)?;
         self.made.clear();
-        let qrefine = |n: &ClientNode| {
-            n.info
-                .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
+        // What `qrefine` says of each node, asked once a select: the view is fixed.
+        let mut memo: HashMap<u32, bool> = HashMap::new();
+        let mut wants = |nodes: &[ClientNode], n: u32| {
+            *memo.entry(n).or_insert_with(|| {
+                nodes[n as usize]
+                    .info
+                    .is_some_and(|i| test.evaluate(&i.geometry()).needs_split)
+            })
         };
+        // Each pass splits every active node the view wants, in the order of their
+        // names; a node not wanted stays so, so a pass looks only at the nodes the last
+        // one made active and at those wanted but not sent.
+        let mut candidates: Vec<u32> = (0..self.tree.nodes.len() as u32)
+            .filter(|&n| self.tree.active[n as usize])
+            .collect();
         let missing = loop {
-            let mut wanted: Vec<u32> = (0..self.tree.nodes.len() as u32)
-                .filter(|&n| self.tree.active[n as usize] && qrefine(&self.tree.nodes[n as usize]))
+            let mut wanted: Vec<u32> = candidates
+                .into_iter()
+                .filter(|&n| self.tree.active[n as usize] && wants(&self.tree.nodes, n))
                 .collect();
             self.by_name(&mut wanted);
+            wanted.dedup();
             let (have, lack): (Vec<u32>, Vec<u32>) = wanted
                 .into_iter()
                 .partition(|&n| self.tree.nodes[n as usize].children.is_some());
@@ -504,6 +517,7 @@ impl SelectiveClient {
                     .map(|&n| self.tree.nodes[n as usize].name.clone())
                     .collect::<Vec<_>>();
             }
+            let start = self.made.len();
             for n in have {
                 if self.tree.active[n as usize] {
                     if let Some(k) = self.split_run(n)? {
@@ -511,25 +525,46 @@ impl SelectiveClient {
                     }
                 }
             }
+            candidates = lack;
+            for &m in &self.made[start..] {
+                let children = self.tree.nodes[m as usize].children.expect("a node split");
+                candidates.extend(
+                    children
+                        .into_iter()
+                        .filter(|&c| self.tree.active[c as usize]),
+                );
+            }
         };
         if !missing.is_empty() {
             return Ok(missing);
         }
+        // Each pass collapses every node the view does not want whose children are
+        // active, in the order of their names, if the mesh stays a manifold; the next
+        // looks at those it could not collapse and at the parents of those it did.
+        let mut parents: Vec<u32> = (0..self.tree.nodes.len() as u32)
+            .filter(|&n| self.children_active(n))
+            .collect();
         loop {
-            let mut parents: Vec<u32> = (0..self.tree.nodes.len() as u32)
-                .filter(|&n| self.children_active(n))
-                .collect();
             self.by_name(&mut parents);
-            let mut changed = false;
+            parents.dedup();
+            let (mut next, mut changed) = (Vec::new(), false);
             for p in parents {
-                if !qrefine(&self.tree.nodes[p as usize]) && self.can_collapse(p) {
-                    self.collapse(p);
-                    changed = true;
+                if !self.children_active(p) || wants(&self.tree.nodes, p) {
+                    continue;
                 }
+                if !self.can_collapse(p) {
+                    next.push(p);
+                    continue;
+                }
+                for n in self.collapse(p) {
+                    next.extend(self.tree.nodes[n as usize].parent);
+                }
+                changed = true;
             }
             if !changed {
                 return Ok(Vec::new());
             }
+            parents = next;
         }
     }
 
@@ -571,18 +606,20 @@ impl SelectiveClient {
         }
     }
 
-    fn collapse(&mut self, node: u32) {
+    /// Collapses `node`'s run: the nodes collapsed.
+    fn collapse(&mut self, node: u32) -> Vec<u32> {
         let run = self.collapsible_run(node).expect("a run that may collapse");
         match &mut self.mesh {
             ClientMesh::Cut(m) => run.iter().for_each(|&(n, c)| m.collapse(n, c)),
             ClientMesh::Leaf(m) => m.collapse(&run),
         }
         self.collapses += run.len() as u64;
-        for (n, [l, r]) in run {
+        for &(n, [l, r]) in &run {
             self.tree.active[n as usize] = true;
             self.tree.active[l as usize] = false;
             self.tree.active[r as usize] = false;
         }
+        run.into_iter().map(|(n, _)| n).collect()
     }
 
     /// Splits every node of `node`'s run that is not split yet. A forced split it
