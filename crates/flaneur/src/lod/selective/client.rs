@@ -61,6 +61,8 @@ struct Partial {
     runs: HashMap<NodeName, Vec<u32>>,
     /// Slots of nodes dropped with their split, for the next to come.
     free: Vec<u32>,
+    /// Whether the front runs below each node: its split is made and not undone.
+    made: Vec<bool>,
 }
 
 impl Partial {
@@ -84,6 +86,7 @@ impl Partial {
                 .map(|(k, n)| (n.name.clone(), k as u32))
                 .collect(),
             active: vec![true; nodes.len()],
+            made: vec![false; nodes.len()],
             nodes,
             runs: HashMap::new(),
             free: Vec::new(),
@@ -115,11 +118,13 @@ impl Partial {
             let id = match self.free.pop() {
                 Some(id) => {
                     self.nodes[id as usize] = node;
+                    self.made[id as usize] = false;
                     id
                 }
                 None => {
                     self.nodes.push(node);
                     self.active.push(false);
+                    self.made.push(false);
                     self.nodes.len() as u32 - 1
                 }
             };
@@ -144,8 +149,17 @@ impl Partial {
     /// Moves the front from `node` to its `children`.
     fn split(&mut self, node: u32, children: [u32; 2]) {
         self.active[node as usize] = false;
+        self.made[node as usize] = true;
         self.active[children[0] as usize] = true;
         self.active[children[1] as usize] = true;
+    }
+
+    /// Moves the front from `children` back to `node`.
+    fn unsplit(&mut self, node: u32, children: [u32; 2]) {
+        self.active[node as usize] = true;
+        self.made[node as usize] = false;
+        self.active[children[0] as usize] = false;
+        self.active[children[1] as usize] = false;
     }
 
     /// The active node `name` descends from: `name` shifted right until it names a
@@ -240,7 +254,8 @@ impl Partial {
             let children = node.children.ok_or_else(|| {
                 Error::Invalid(format!("dropping node {:?}'s split, not held", node.name))
             })?;
-            let run_out = self.run_nodes(k).iter().any(|r| !within.contains(r));
+            let run_out = self.made[k as usize]
+                || self.run_nodes(k).iter().any(|r| !within.contains(r));
             let busy = children.iter().any(|&c| {
                 self.active[c as usize]
                     || (self.nodes[c as usize].children.is_some() && !within.contains(&c))
@@ -473,11 +488,10 @@ impl SelectiveClient {
 
     /// Whether the mesh uses node `name`'s split: the front runs below it.
     pub fn is_split(&self, name: &NodeName) -> bool {
-        self.tree.by_name.get(name).is_some_and(|&k| {
-            self.tree.nodes[k as usize].children.is_some()
-                && !self.tree.active[k as usize]
-                && self.tree.active_above(k).is_none()
-        })
+        self.tree
+            .by_name
+            .get(name)
+            .is_some_and(|&k| self.tree.made[k as usize])
     }
 
     /// Brings the client's mesh to `view` under `tau` with what it holds (the
@@ -614,10 +628,8 @@ impl SelectiveClient {
             ClientMesh::Leaf(m) => m.collapse(&run),
         }
         self.collapses += run.len() as u64;
-        for &(n, [l, r]) in &run {
-            self.tree.active[n as usize] = true;
-            self.tree.active[l as usize] = false;
-            self.tree.active[r as usize] = false;
+        for &(n, children) in &run {
+            self.tree.unsplit(n, children);
         }
         run.into_iter().map(|(n, _)| n).collect()
     }

@@ -47,6 +47,8 @@ pub use stream::{
 };
 
 use super::pm::{ProgressiveMesh, SelectiveMesh, NO_TRIANGLE};
+use smallvec::{smallvec, SmallVec};
+
 use crate::error::{Error, Result};
 
 /// A node's name: its tree (the base vertex it descends from) and its place in that
@@ -77,19 +79,19 @@ impl NodeName {
 }
 
 /// A heap index of any size: 64-bit words, least significant first, the top word not
-/// zero.
+/// zero. Up to two words are held inline.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct HeapIndex(Vec<u64>);
+pub struct HeapIndex(SmallVec<[u64; 2]>);
 
 impl HeapIndex {
     /// A root's index, 1.
     pub fn root() -> HeapIndex {
-        HeapIndex(vec![1])
+        HeapIndex(smallvec![1])
     }
 
     /// The index of this node's child: 2n for the left, 2n + 1 for the right.
     pub fn child(&self, right: bool) -> HeapIndex {
-        let mut words = Vec::with_capacity(self.0.len() + 1);
+        let mut words = SmallVec::with_capacity(self.0.len() + 1);
         let mut carry = right as u64;
         for &w in &self.0 {
             words.push((w << 1) | carry);
@@ -104,7 +106,7 @@ impl HeapIndex {
     /// The index `levels` up: a right shift.
     pub fn shr(&self, levels: u32) -> HeapIndex {
         let (words, bits) = ((levels / 64) as usize, levels % 64);
-        let mut out: Vec<u64> = (words..self.0.len())
+        let mut out: SmallVec<[u64; 2]> = (words..self.0.len())
             .map(|k| {
                 let low = self.0[k] >> bits;
                 let high = match (bits, self.0.get(k + 1)) {
@@ -117,8 +119,8 @@ impl HeapIndex {
         while out.len() > 1 && out.last() == Some(&0) {
             out.pop();
         }
-        if out.is_empty() || out == [0] {
-            return HeapIndex(vec![0]);
+        if out.is_empty() || out[..] == [0] {
+            return HeapIndex(smallvec![0]);
         }
         HeapIndex(out)
     }
@@ -147,7 +149,7 @@ impl HeapIndex {
         while words.len() > 1 && words.last() == Some(&0) {
             words.pop();
         }
-        (words.iter().any(|&w| w != 0)).then_some(HeapIndex(words))
+        (words.iter().any(|&w| w != 0)).then(|| HeapIndex(SmallVec::from_vec(words)))
     }
 }
 
