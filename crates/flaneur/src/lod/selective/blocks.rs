@@ -198,7 +198,9 @@ impl BlockServer {
                 }
             }
         }
-        self.blocks.retain(|b| !released.contains(b));
+        for b in &released {
+            self.blocks.remove(b);
+        }
         self.released.extend(released);
         Ok(())
     }
@@ -267,7 +269,9 @@ struct Held {
 /// Its cache (El-Sana §6.1) keeps every block it is sent up to a capacity; past it, it
 /// drops the blocks its mesh does not use, those furthest below the blocks in use
 /// first (so the level just below them stays, and the levels above are in use), then
-/// the least recently used. A block is dropped only from the bottom of what it holds,
+/// the least recently used (a block's use is counted at the views that find the cache
+/// holding more than the capacity; below it there is nothing to drop, and no view pays
+/// for a look at every block). A block is dropped only from the bottom of what it holds,
 /// and never when a split run goes on into another block. The blocks dropped are named
 /// to the server with the next switch message, and asked for again if a view wants
 /// them.
@@ -372,6 +376,10 @@ impl BlockClient {
     /// Drops blocks the mesh does not use while more than the capacity are held
     /// beyond those it does. The blocks dropped.
     fn evict(&mut self) -> Result<Vec<NodeName>> {
+        if self.held.len() <= self.capacity {
+            // Not full: nothing to drop, and recency is counted from when it is.
+            return Ok(Vec::new());
+        }
         let in_use: HashSet<NodeName> = self
             .held
             .keys()
