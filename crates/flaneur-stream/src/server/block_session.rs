@@ -160,13 +160,16 @@ pub(super) fn dialogue<R: Read + Send, W: Write>(
 ) -> Result<(), StreamError> {
     thread::scope(|scope| {
         let (tx, rx) = mpsc::sync_channel(1);
-        thread::Builder::new()
+        let reader = thread::Builder::new()
             .name("stream-blocks-reader".into())
             .spawn_scoped(scope, move || read_messages(input, &tx))?;
         let end = answer_until_bye(&rx, output, s, config);
         // The reader's next hand-over fails; a read under way ends.
         drop(rx);
         unblock();
+        // Joined by hand: the scope's end waits for the reader's work, not for its
+        // thread to be gone, whose thread-locals would outlive the session.
+        let _ = reader.join();
         end
     })
 }
