@@ -53,7 +53,19 @@ enum Command {
 }
 
 fn main() {
-    if let Err(e) = run(Cli::parse()) {
+    let cli = Cli::parse();
+    // A closed pipe (`flaneur query … | head -1`) ends the program quietly, as it ends
+    // coreutils: Rust's runtime ignores SIGPIPE, which turns the next write into a
+    // panic; its default action is to end the process. The servers keep it ignored: a
+    // client that goes away must not end them.
+    #[cfg(unix)]
+    if !matches!(cli.command, Command::Serve(_) | Command::ServeStream(_)) {
+        // SAFETY: restoring a signal's default action, before any thread starts.
+        unsafe {
+            libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        }
+    }
+    if let Err(e) = run(cli) {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

@@ -320,3 +320,80 @@ fn lod_writes_levels_and_measures_a_view() {
         assert!(!o.stderr.is_empty(), "{bad:?}: no error message");
     }
 }
+
+/// A vector option takes a value that starts with a minus (a city left of the origin),
+/// as it takes `--box=…`.
+#[test]
+fn vector_options_take_a_leading_minus() {
+    let c = common::city(100, 2, &BuildOptions::default());
+    let db = c.db.to_str().unwrap();
+    let b = c.bounds();
+    let q = format!("-1000,-10,-1000,{},{},{}", b.max.x, b.max.y, b.max.z);
+    let h = format!("-1000,-10,-1000,{},{},{}", b.center().x, b.max.y, b.max.z);
+    let split = flaneur(&["query", db, "--box", &q, "--history", &h, "--json"]);
+    let joined = flaneur(&[
+        "query",
+        db,
+        &format!("--box={q}"),
+        &format!("--history={h}"),
+        "--json",
+    ]);
+    let err = String::from_utf8_lossy(&split.stderr);
+    assert!(split.status.success() && joined.status.success(), "{err}");
+    let ids = |out: &std::process::Output| {
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["ids"].clone()
+    };
+    assert_eq!(ids(&split), ids(&joined));
+    assert!(!ids(&split).as_array().unwrap().is_empty());
+    // An eye and a look left of the origin and downwards parse too: the missing
+    // database is what is refused.
+    let out = flaneur(&[
+        "shot",
+        "no-such.flaneur",
+        "--at",
+        "-5,-1,-5",
+        "--look",
+        "-30,-10",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("no-such.flaneur") && !err.contains("panicked"),
+        "{err}"
+    );
+}
+
+/// A closed pipe ends the program quietly, as coreutils do (`flaneur query … | head`):
+/// no panic about a broken pipe, no message.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_program_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let c = common::city(300, 2, &BuildOptions::default());
+    let b = c.bounds();
+    let q = format!(
+        "{},{},{},{},{},{}",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+    );
+    for args in [
+        vec!["query", c.db.to_str().unwrap(), "--box", &q],
+        vec!["info", c.db.to_str().unwrap()],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_flaneur"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The reader goes away before the first line is written.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.is_empty(), "{args:?}: {err}");
+        assert!(
+            out.status.success() || out.status.signal() == Some(13),
+            "{args:?}: {:?}",
+            out.status
+        );
+    }
+}

@@ -26,10 +26,10 @@ pub struct LodArgs {
     #[arg(long)]
     refine: bool,
     /// The eye, x,y,z.
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<glam::Vec3>,
     /// The point looked at, x,y,z.
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     look: Option<glam::Vec3>,
     /// Screen-space error, a fraction of the viewport (the thesis: 0.001).
     #[arg(long, default_value_t = 0.001)]

@@ -14,10 +14,10 @@ use flaneur::geom::Aabb;
 pub struct QueryArgs {
     db: PathBuf,
     /// The query box: x0,y0,z0,x1,y1,z1.
-    #[arg(long = "box", value_name = "BOX")]
+    #[arg(long = "box", value_name = "BOX", allow_hyphen_values = true)]
     query: Aabb,
     /// History cells for CSearch (repeatable).
-    #[arg(long, value_name = "BOX")]
+    #[arg(long, value_name = "BOX", allow_hyphen_values = true)]
     history: Vec<Aabb>,
     #[command(flatten)]
     source: SourceArgs,

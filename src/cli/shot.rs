@@ -13,11 +13,11 @@ use super::source::SourceArgs;
 pub struct ShotArgs {
     db: PathBuf,
     /// The eye: x,y,z in metres.
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     at: glam::Vec3,
     /// Heading and elevation in degrees: yaw,pitch (yaw 0 looks along +x, 90 along
     /// +z; pitch positive looks up).
-    #[arg(long, value_parser = parse_look, default_value = "0,0")]
+    #[arg(long, value_parser = parse_look, default_value = "0,0", allow_hyphen_values = true)]
     look: (f32, f32),
     /// Image size, WIDTHxHEIGHT pixels.
     #[arg(long, value_parser = parse_size, default_value = "960x540")]

@@ -30,10 +30,10 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
     lod_tau: f32,
     /// Start here (x,y,z metres) instead of the busiest street.
-    #[arg(long, value_parser = parse_vec3)]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     at: Option<glam::Vec3>,
     /// Heading and elevation at the start, degrees (with --at).
-    #[arg(long, value_parser = parse_look, default_value = "0,0")]
+    #[arg(long, value_parser = parse_look, default_value = "0,0", allow_hyphen_values = true)]
     look: (f32, f32),
     /// Save the poses walked as a path CSV when the window closes.
     #[arg(long)]

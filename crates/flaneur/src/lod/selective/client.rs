@@ -254,8 +254,8 @@ impl Partial {
             let children = node.children.ok_or_else(|| {
                 Error::Invalid(format!("dropping node {:?}'s split, not held", node.name))
             })?;
-            let run_out = self.made[k as usize]
-                || self.run_nodes(k).iter().any(|r| !within.contains(r));
+            let run_out =
+                self.made[k as usize] || self.run_nodes(k).iter().any(|r| !within.contains(r));
             let busy = children.iter().any(|&c| {
                 self.active[c as usize]
                     || (self.nodes[c as usize].children.is_some() && !within.contains(&c))
