@@ -107,6 +107,9 @@ fn errors_are_messages_not_panics() {
         vec!["query", "no-such.flaneur", "--box", "0,0,0,1,1,1"],
         vec!["info", c.scene.to_str().unwrap()],
         vec!["build", "no-such.scene", "--out", "x.flaneur"],
+        // A field of view given in degrees is refused in degrees.
+        vec!["shot", db, "--at", "0,2,0", "--fov", "180"],
+        vec!["lod", c.scene.to_str().unwrap(), "--fov", "nan"],
         // A walk that cannot keep the promise is refused, not walked waiting.
         vec!["walk", db, "--mode", "vsc", "--never-wait"],
     ] {
@@ -115,6 +118,13 @@ fn errors_are_messages_not_panics() {
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains("error"), "{args:?}: {err}");
+        if args.contains(&"--fov") {
+            assert!(
+                err.contains("within (0°, 180°)") || err.contains("degrees"),
+                "{err}"
+            );
+            assert!(!err.contains("radian") && !err.contains("3.14"), "{err}");
+        }
         if args.contains(&"--never-wait") {
             assert!(
                 err.contains("--never-wait is for --mode review, box, pvs and visual"),

@@ -43,6 +43,17 @@ pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     }
 }
 
+/// A field of view in degrees, within (0°, 180°); refused in degrees, as it is given.
+pub fn parse_fov_degrees(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d > 0.0 && d < 180.0 => Ok(d),
+        Ok(d) => Err(format!(
+            "a field of view of {d}°: give one within (0°, 180°)"
+        )),
+        Err(e) => Err(format!("{s:?} is not a number of degrees: {e}")),
+    }
+}
+
 /// A point or a direction, `x,y,z`.
 pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
     let v: Vec<f32> = s

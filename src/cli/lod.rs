@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 
-use super::args::parse_vec3;
+use super::args::{parse_fov_degrees, parse_vec3};
 
 /// `flaneur lod`'s arguments.
 #[derive(clap::Args)]
@@ -35,7 +35,7 @@ pub struct LodArgs {
     #[arg(long, default_value_t = 0.001)]
     tau: f32,
     /// Full apex angle of the view cone, degrees.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = parse_fov_degrees)]
     fov: f32,
 }
 

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 
-use super::args::{parse_look, parse_size, parse_vec3};
+use super::args::{parse_fov_degrees, parse_look, parse_size, parse_vec3};
 use super::source::SourceArgs;
 
 /// `flaneur shot`'s arguments.
@@ -23,7 +23,7 @@ pub struct ShotArgs {
     #[arg(long, value_parser = parse_size, default_value = "960x540")]
     size: (u32, u32),
     /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = parse_fov_degrees)]
     fov: f32,
     #[arg(short, long, default_value = "shot.png")]
     out: PathBuf,
