@@ -407,3 +407,24 @@ fn a_closed_pipe_ends_the_program_quietly() {
         );
     }
 }
+
+/// Every number an option takes is finite (NaN meant "no prefetching" to `--k`, which
+/// takes a negative number for that), and a negative one is read as a number.
+#[test]
+fn numbers_are_finite_and_may_be_negative() {
+    let c = common::city(100, 2, &BuildOptions::default());
+    let db = c.db.to_str().unwrap();
+    for (option, value) in [("--k", "nan"), ("--sf", "inf"), ("--speed", "-inf")] {
+        let out = flaneur(&["walk", db, &format!("{option}={value}"), "--frames", "3"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{option} {value} walked");
+        assert!(
+            err.contains("is not a finite number"),
+            "{option} {value}: {err}"
+        );
+    }
+    let out = flaneur(&["walk", db, "--k", "-1", "--frames", "3"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("prefetch off"));
+}

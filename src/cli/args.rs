@@ -43,6 +43,25 @@ pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     }
 }
 
+/// A number that is finite: NaN and the infinities are refused where any number is
+/// taken, so that none slips through a comparison meant to bound it.
+pub fn finite_f32(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) => Err(format!("{x} is not a finite number")),
+        Err(e) => Err(format!("{s:?} is not a number: {e}")),
+    }
+}
+
+/// [`finite_f32`] for options kept in 64 bits.
+pub fn finite_f64(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) => Err(format!("{x} is not a finite number")),
+        Err(e) => Err(format!("{s:?} is not a number: {e}")),
+    }
+}
+
 /// A field of view in degrees, within (0°, 180°); refused in degrees, as it is given.
 pub fn parse_fov_degrees(s: &str) -> std::result::Result<f32, String> {
     match s.trim().parse::<f32>() {

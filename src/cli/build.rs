@@ -1,6 +1,7 @@
 //! `flaneur build`: a database from a citygen scene file or OBJ files, and what went
 //! into it.
 
+use crate::cli::args::finite_f32;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
@@ -23,7 +24,7 @@ pub struct BuildArgs {
     #[arg(long, default_value_t = 4096)]
     page_size: usize,
     /// Share of each R-tree node that bulk loading fills.
-    #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL)]
+    #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL, value_parser = finite_f32, allow_negative_numbers = true)]
     fill: f32,
     /// Build the index by one-by-one insertion (linear split), as the thesis did.
     #[arg(long)]
@@ -40,18 +41,18 @@ pub struct BuildArgs {
     #[arg(long)]
     visibility: bool,
     /// Side of a viewcell in metres (with --visibility).
-    #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size)]
+    #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size, value_parser = finite_f32, allow_negative_numbers = true)]
     cell_size: f32,
     /// Pixels per side of each cube face the DoV is measured on (with --visibility).
     #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
     dov_resolution: u32,
     /// Widest patch of a viewcell the conservative test samples, in metres (with
     /// --visibility): smaller is a tighter PVS and a slower build.
-    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing)]
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing, value_parser = finite_f32, allow_negative_numbers = true)]
     sample_spacing: f32,
     /// Occluders further than this from a sample point are not used, in metres
     /// (with --visibility).
-    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius)]
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius, value_parser = finite_f32, allow_negative_numbers = true)]
     occluder_radius: f32,
     /// Build the HDoV-tree over the objects, their LODs and the visibility (needs
     /// --visibility), storing its V-pages under these schemes: any of horizontal,

@@ -1,6 +1,7 @@
 //! `flaneur lod`: the LOD core on one mesh file, its levels written or one view's
 //! selective mesh measured.
 
+use crate::cli::args::finite_f32;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -17,7 +18,7 @@ pub struct LodArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Triangles of each level over the one before (as `build` stores them).
-    #[arg(long, default_value_t = flaneur::lod::LodOptions::default().ratio)]
+    #[arg(long, default_value_t = flaneur::lod::LodOptions::default().ratio, value_parser = finite_f32, allow_negative_numbers = true)]
     ratio: f32,
     /// Stop the chain of levels at this many triangles.
     #[arg(long, default_value_t = flaneur::lod::LodOptions::default().min_triangles)]
@@ -32,7 +33,7 @@ pub struct LodArgs {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     look: Option<glam::Vec3>,
     /// Screen-space error, a fraction of the viewport (the thesis: 0.001).
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = 0.001, value_parser = finite_f32, allow_negative_numbers = true)]
     tau: f32,
     /// Full apex angle of the view cone, degrees.
     #[arg(long, default_value_t = 60.0, value_parser = parse_fov_degrees)]

@@ -2,6 +2,7 @@
 //! objects its build stored a progressive mesh and DAG for), one thread per client. It
 //! prints each session's end, with the reason when the server closed it.
 
+use crate::cli::args::finite_f64;
 use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -27,7 +28,7 @@ pub struct ServeStreamArgs {
     #[arg(long, default_value_t = 64)]
     landmarks: usize,
     /// Close a session that sends nothing for this many seconds.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = finite_f64, allow_negative_numbers = true)]
     idle_s: f64,
     /// Levels of a block in sessions of El-Sana's blocks.
     #[arg(long, default_value_t = ServerConfig::default().block_levels)]

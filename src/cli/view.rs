@@ -1,6 +1,7 @@
 //! `flaneur view`: a walk through the city in a window, restarted from where the viewer
 //! stands whenever a key changes its mode or budget.
 
+use crate::cli::args::{finite_f32, finite_f64};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -27,7 +28,7 @@ pub struct ViewArgs {
     size: (u32, u32),
     /// LOD selection's screen-space error, a fraction of the viewport (0: full
     /// detail); [ and ] halve and double it while walking.
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
     lod_tau: f32,
     /// Start here (x,y,z metres) instead of the busiest street.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -43,10 +44,10 @@ pub struct ViewArgs {
     play: Option<PathBuf>,
     /// GPU memory the meshes may take, MiB (0: as much as the walk's buffer holds);
     /// meshes not drawn are freed to make room, largest first.
-    #[arg(long, default_value_t = 256.0)]
+    #[arg(long, default_value_t = 256.0, value_parser = finite_f64, allow_negative_numbers = true)]
     gpu_budget_mb: f64,
     /// Walking speed, m/s (Shift runs at four times it).
-    #[arg(long, default_value_t = flaneur::walk::WALK_SPEED)]
+    #[arg(long, default_value_t = flaneur::walk::WALK_SPEED, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// Start with the bounding boxes on (B), and seen from above (T).
     #[arg(long)]
@@ -54,7 +55,7 @@ pub struct ViewArgs {
     #[arg(long)]
     top_view: bool,
     /// The VISUAL and VSC modes' DoV threshold η.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
     eta: f32,
     /// The PB mode's polygon budget, triangles a frame.
     #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]

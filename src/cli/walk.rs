@@ -1,6 +1,7 @@
 //! `flaneur walk`: a headless walk along a camera path (REVIEW, Shou 2002 ch. 4, or
 //! the viewcells' PVS), its per-frame figures, and its frames drawn when asked.
 
+use crate::cli::args::{finite_f32, finite_f64};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -47,11 +48,11 @@ pub struct WalkArgs {
     prefetch: String,
     /// With --mode pvs and pbnp or lanp: the border regions' width, a share of the
     /// cell's side.
-    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER)]
+    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = finite_f64, allow_negative_numbers = true)]
     border: f64,
     #[arg(long, default_value_t = 600)]
     frames: usize,
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = finite_f32, allow_negative_numbers = true)]
     fps: f32,
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -63,20 +64,20 @@ pub struct WalkArgs {
     cache_bytes: Option<usize>,
     /// Prefetch factor k in seconds: prefetch the cell of the frustum k seconds of
     /// motion ahead (negative: no prefetching).
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
     k: Option<f32>,
     /// Scale factor SF of the disk cell over the frustum cell.
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
     sf: Option<f32>,
     /// Frustum depth, metres.
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
     far: Option<f32>,
     /// Object buffer budget, MiB.
     #[arg(long)]
     budget_mb: Option<usize>,
     /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
     /// to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE)]
+    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// REVIEW, BOX, PVS and VISUAL: the viewer's thread never waits on a read (ours): a
     /// search the viewer needs (PVS: the client and its rows; VISUAL: the HDoV-tree's)
@@ -111,7 +112,7 @@ pub struct WalkArgs {
     #[arg(long, default_value_t = 20_000)]
     budget: u64,
     /// With --mode visual or vsc: the DoV threshold η of the search.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
     eta: f32,
     /// With --mode visual: the storage scheme searched (horizontal, vertical, indexed;
     /// default the smallest built).
@@ -127,11 +128,11 @@ pub struct WalkArgs {
     finer_by_tau: bool,
     /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
     /// many seconds on (ours, not the thesis's; default off).
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
     next_cell_prefetch: Option<f32>,
     /// LOD selection's screen-space error, a fraction of the viewport: each object
     /// drawn at the coarsest stored level under it (0: full detail).
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
     lod_tau: f32,
     /// With --render: objects refined view by view are refined on the thread pool once
     /// a frame is drawn, for the view predicted for the next (El-Sana–Varshney's Adapt

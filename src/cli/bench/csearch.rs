@@ -1,6 +1,7 @@
 //! `flaneur bench csearch` (Shou 2002 §4.4): BOX against CSearch query by query, then
 //! the REVIEW walks of Figs. 4.19–4.22, all into one summary.
 
+use crate::cli::args::finite_f32;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -21,9 +22,9 @@ use flaneur_bench::walk_setup::WalkSetup;
 #[derive(clap::Args)]
 pub struct CsearchArgs {
     db: PathBuf,
-    #[arg(long, default_value_t = CsearchConfig::default().cell)]
+    #[arg(long, default_value_t = CsearchConfig::default().cell, value_parser = finite_f32, allow_negative_numbers = true)]
     cell: f32,
-    #[arg(long, default_value_t = CsearchConfig::default().step)]
+    #[arg(long, default_value_t = CsearchConfig::default().step, value_parser = finite_f32, allow_negative_numbers = true)]
     step: f32,
     #[arg(long, default_value_t = CsearchConfig::default().steps)]
     steps: usize,

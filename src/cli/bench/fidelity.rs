@@ -1,6 +1,7 @@
 //! `flaneur bench fidelity`: each frame of a walk drawn with the mode's selection and
 //! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers).
 
+use crate::cli::args::finite_f32;
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -40,10 +41,10 @@ pub struct FidelityArgs {
     size: (u32, u32),
     /// LOD selection's screen-space error for the mode's pictures, a fraction of the
     /// viewport (0: the mode's objects at full detail).
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU)]
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
     lod_tau: f32,
     /// With --mode visual: the DoV threshold η.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
     eta: f32,
     /// With --mode pb: the polygon budget, triangles a frame.
     #[arg(long, default_value_t = 20_000)]

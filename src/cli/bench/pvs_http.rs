@@ -1,6 +1,7 @@
 //! `flaneur bench pvs-http` (ours): the PVS walk's prefetchers over HTTP at set round
 //! trips.
 
+use crate::cli::args::finite_f64;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
@@ -25,13 +26,13 @@ pub struct PvsHttpArgs {
     #[arg(long, value_delimiter = ',')]
     rules: Vec<String>,
     /// PBNP's and LANP's border regions, a share of the cell's side.
-    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER)]
+    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = finite_f64, allow_negative_numbers = true)]
     border: f64,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
     #[arg(long, value_delimiter = ',')]
     rtts: Vec<u32>,
     /// The link's bandwidth, Mbit/s.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = finite_f64, allow_negative_numbers = true)]
     mbit: f64,
     /// The client page cache, MiB.
     #[arg(long)]

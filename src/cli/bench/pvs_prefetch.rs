@@ -1,5 +1,6 @@
 //! `flaneur bench pvs-prefetch` (Zheng 2007, Table 7.2, Figs. 7.6–7.8).
 
+use crate::cli::args::finite_f64;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -16,19 +17,19 @@ pub struct PvsPrefetchArgs {
     #[arg(long, default_value_t = SyntheticConfig::default().blocks)]
     blocks: u32,
     /// Mean PVS size, a share of the buildings.
-    #[arg(long, default_value_t = SyntheticConfig::default().pvs_share)]
+    #[arg(long, default_value_t = SyntheticConfig::default().pvs_share, value_parser = finite_f64, allow_negative_numbers = true)]
     share: f64,
     /// Share of a viewcell's PVS that a side neighbour also sees.
-    #[arg(long, default_value_t = SyntheticConfig::default().overlap)]
+    #[arg(long, default_value_t = SyntheticConfig::default().overlap, value_parser = finite_f64, allow_negative_numbers = true)]
     overlap: f64,
     /// Steps of each route.
     #[arg(long, default_value_t = RouteConfig::default().steps)]
     steps: usize,
     /// Metres per step (LANP takes the viewer to set off at one step a step).
-    #[arg(long, default_value_t = RouteConfig::default().step)]
+    #[arg(long, default_value_t = RouteConfig::default().step, value_parser = finite_f64, allow_negative_numbers = true)]
     step: f64,
     /// PBNP's side and corner regions, a fraction of a cell's side, in (0, 0.5].
-    #[arg(long, default_value_t = PvsPrefetchConfig::default().border)]
+    #[arg(long, default_value_t = PvsPrefetchConfig::default().border, value_parser = finite_f64, allow_negative_numbers = true)]
     border: f64,
     /// Region sizes of PBNP's sweep, comma-separated [default: 0.1, 0.15, … 0.5].
     #[arg(long, value_delimiter = ',')]

@@ -1,5 +1,6 @@
 //! `flaneur bench scene-tree` (Shou 2002, Table 6.1, Fig. 6.7).
 
+use crate::cli::args::finite_f32;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -15,10 +16,10 @@ pub struct SceneTreeArgs {
     db: PathBuf,
     #[arg(long, default_value_t = SceneTreeConfig::default().frames)]
     frames: usize,
-    #[arg(long, default_value_t = SceneTreeConfig::default().fps)]
+    #[arg(long, default_value_t = SceneTreeConfig::default().fps, value_parser = finite_f32, allow_negative_numbers = true)]
     fps: f32,
     /// The walker's speed, m/s.
-    #[arg(long, default_value_t = SceneTreeConfig::default().speed)]
+    #[arg(long, default_value_t = SceneTreeConfig::default().speed, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// VSC's DoV thresholds η, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = SceneTreeConfig::default().etas)]

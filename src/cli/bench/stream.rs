@@ -1,6 +1,7 @@
 //! `flaneur bench stream` (Zheng 2007 Tables 5.1, 6.1, Fig. 6.6): a landmark streamed at
 //! set round trips, sequential against predictive.
 
+use crate::cli::args::{finite_f32, finite_f64};
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -19,13 +20,13 @@ pub struct StreamArgs {
     #[arg(long, default_value_t = StreamBenchConfig::default().frames)]
     frames: usize,
     /// The client's frame period, ms.
-    #[arg(long, default_value_t = StreamBenchConfig::default().frame_ms)]
+    #[arg(long, default_value_t = StreamBenchConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
     frame_ms: f64,
     /// Round trips of the link, ms, comma-separated [default: 80, 170, 260, 350 (Table 6.1)].
     #[arg(long, value_delimiter = ',')]
     rtts: Vec<u32>,
     /// τ, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBenchConfig::default().tau)]
+    #[arg(long, default_value_t = StreamBenchConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
     tau: f32,
     /// The predictive clients, comma-separated: linear (Zheng's first order), quadratic
     /// (ours) [default: both].

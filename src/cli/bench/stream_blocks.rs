@@ -1,6 +1,7 @@
 //! `flaneur bench stream-blocks`: a walk's cost per frame by each stream scheme
 //! (El-Sana's Table 1).
 
+use crate::cli::args::{finite_f32, finite_f64};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -18,13 +19,13 @@ pub struct StreamBlocksArgs {
     #[arg(long, default_value_t = StreamBlocksConfig::default().frames)]
     frames: usize,
     /// The frame period, ms (what a frame's refinement leaves of it is idle time).
-    #[arg(long, default_value_t = StreamBlocksConfig::default().frame_ms)]
+    #[arg(long, default_value_t = StreamBlocksConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
     frame_ms: f64,
     /// The link's round trip, ms (0: straight to the server).
     #[arg(long, default_value_t = StreamBlocksConfig::default().rtt_ms)]
     rtt: u32,
     /// The screen-space error streamed to, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBlocksConfig::default().tau)]
+    #[arg(long, default_value_t = StreamBlocksConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
     tau: f32,
     /// Levels of a block.
     #[arg(long, default_value_t = StreamBlocksConfig::default().levels)]

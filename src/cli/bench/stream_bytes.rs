@@ -1,6 +1,7 @@
 //! `flaneur bench stream-bytes`: one view's stream, view-dependent against
 //! view-independent (Kim–Lee–Kobbelt Figs. 8–9).
 
+use crate::cli::args::finite_f32;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -15,7 +16,7 @@ pub struct StreamBytesArgs {
     #[arg(long, default_value_t = StreamBytesConfig::default().triangles)]
     triangles: usize,
     /// The screen-space error streamed to, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBytesConfig::default().tau)]
+    #[arg(long, default_value_t = StreamBytesConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
     tau: f32,
     /// The byte cap the two are compared at.
     #[arg(long, default_value_t = StreamBytesConfig::default().cap)]

@@ -1,5 +1,6 @@
 //! `flaneur bench stream-crowd` (ours): many clients on one stream server.
 
+use crate::cli::args::finite_f64;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -28,7 +29,7 @@ pub struct StreamCrowdArgs {
     #[arg(long, default_value_t = StreamCrowdConfig::default().frames)]
     frames: usize,
     /// Each client's frame period, ms.
-    #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms)]
+    #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
     frame_ms: f64,
     /// The sessions' traversal: priority, linear or constant (constant-time, whose
     /// evaluations N bounds).

@@ -1,6 +1,7 @@
 //! `flaneur bench visual-http` (ours): the VISUAL walk never waiting on a read, over
 //! HTTP at set round trips.
 
+use crate::cli::args::{finite_f32, finite_f64};
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -21,16 +22,16 @@ pub struct VisualHttpArgs {
     #[command(flatten)]
     walk: WalkSetupArgs,
     /// The DoV threshold η of the searches.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA)]
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
     eta: f32,
     /// The next-cell prefetch, seconds ahead (ours; negative: off).
-    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_K)]
+    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_K, value_parser = finite_f32, allow_negative_numbers = true)]
     k: f32,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
     #[arg(long, value_delimiter = ',')]
     rtts: Vec<u32>,
     /// The link's bandwidth, Mbit/s.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = finite_f64, allow_negative_numbers = true)]
     mbit: f64,
     /// The client page cache, MiB.
     #[arg(long)]

@@ -1,5 +1,6 @@
 //! `flaneur bench visual-vs-review` (Shou 2002, Table 5.3, Figs. 5.24–5.27).
 
+use crate::cli::args::finite_f32;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -16,10 +17,10 @@ pub struct VisualVsReviewArgs {
     /// Frames per session.
     #[arg(long, default_value_t = VisualVsReviewConfig::default().frames)]
     frames: usize,
-    #[arg(long, default_value_t = VisualVsReviewConfig::default().fps)]
+    #[arg(long, default_value_t = VisualVsReviewConfig::default().fps, value_parser = finite_f32, allow_negative_numbers = true)]
     fps: f32,
     /// The walker's speed, m/s.
-    #[arg(long, default_value_t = VisualVsReviewConfig::default().speed)]
+    #[arg(long, default_value_t = VisualVsReviewConfig::default().speed, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// VISUAL's DoV thresholds η, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().etas)]
@@ -31,7 +32,7 @@ pub struct VisualVsReviewArgs {
     #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().sessions)]
     sessions: Vec<String>,
     /// Playback speed, times real time.
-    #[arg(long, default_value_t = VisualVsReviewConfig::default().pace)]
+    #[arg(long, default_value_t = VisualVsReviewConfig::default().pace, value_parser = finite_f32, allow_negative_numbers = true)]
     pace: f32,
     #[arg(long, default_value_t = VisualVsReviewConfig::default().seed)]
     seed: u64,

@@ -1,5 +1,6 @@
 //! The walk settings every walking experiment takes, as arguments.
 
+use crate::cli::args::finite_f32;
 use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review;
 use flaneur_bench::walk_setup::{self, WalkSetup};
@@ -11,16 +12,16 @@ use crate::cli::args::{or_default, pace};
 pub struct WalkSetupArgs {
     #[arg(long, help = frames_help())]
     frames: Option<usize>,
-    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS)]
+    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS, value_parser = finite_f32, allow_negative_numbers = true)]
     fps: f32,
     // Also seeds bench csearch's street walk.
     #[arg(long, default_value_t = walk_setup::DEFAULT_SEED)]
     pub(super) seed: u64,
     /// Frustum depth, metres.
-    #[arg(long, default_value_t = review::DEFAULT_FAR)]
+    #[arg(long, default_value_t = review::DEFAULT_FAR, value_parser = finite_f32, allow_negative_numbers = true)]
     far: f32,
     /// Scale factor SF of the disk cell (not used where SF is swept).
-    #[arg(long, default_value_t = review::DEFAULT_SF)]
+    #[arg(long, default_value_t = review::DEFAULT_SF, value_parser = finite_f32, allow_negative_numbers = true)]
     sf: f32,
     /// Object buffer budget, MiB.
     #[arg(long, default_value_t = review::DEFAULT_MEMORY_BUDGET >> 20)]
@@ -31,7 +32,7 @@ pub struct WalkSetupArgs {
     patterns: Vec<Motion>,
     /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
     /// to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE)]
+    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
 }
 
