@@ -107,6 +107,13 @@ fn errors_are_messages_not_panics() {
         vec!["query", "no-such.flaneur", "--box", "0,0,0,1,1,1"],
         vec!["info", c.scene.to_str().unwrap()],
         vec!["build", "no-such.scene", "--out", "x.flaneur"],
+        // A build never writes over its own input.
+        vec![
+            "build",
+            c.scene.to_str().unwrap(),
+            "--out",
+            c.scene.to_str().unwrap(),
+        ],
         // A field of view given in degrees is refused in degrees.
         vec!["shot", db, "--at", "0,2,0", "--fov", "180"],
         vec!["lod", c.scene.to_str().unwrap(), "--fov", "nan"],
@@ -118,6 +125,13 @@ fn errors_are_messages_not_panics() {
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains("error"), "{args:?}: {err}");
+        if args[0] == "build" && args[1] == args[3] {
+            assert!(err.contains("is an input of the build"), "{err}");
+            assert!(
+                c.scene.metadata().unwrap().len() > 0,
+                "the input was overwritten"
+            );
+        }
         if args.contains(&"--fov") {
             assert!(
                 err.contains("within (0°, 180°)") || err.contains("degrees"),

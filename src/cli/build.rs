@@ -88,6 +88,16 @@ impl BuildArgs {
             order,
             quiet,
         } = self;
+        if let Ok(target) = std::fs::canonicalize(&out) {
+            for input in &inputs {
+                if std::fs::canonicalize(input).is_ok_and(|i| i == target) {
+                    bail!(
+                        "--out {} is an input of the build: give the database another path",
+                        out.display()
+                    );
+                }
+            }
+        }
         if hdov.is_some() && !visibility {
             bail!("--hdov needs --visibility: the HDoV-tree is built from the viewcells' DoVs");
         }
