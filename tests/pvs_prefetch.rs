@@ -110,7 +110,7 @@ fn pvs_prefetch_refuses_bad_settings() {
     let dir = tempfile::tempdir().unwrap();
     for (bad, says) in [
         (["--border", "0.7"], "region border"),
-        (["--border", "NaN"], "region border"),
+        (["--border", "NaN"], "--border"),
         (["--borders", "0"], "region border"),
         (["--cache", "8"], "too small"),
         (["--steps", "0"], "steps"),
