@@ -212,5 +212,8 @@ fn the_cli_walks_visual_never_waiting_and_benches_it_over_http() {
     }
     let out = common::flaneur(&["bench", "visual-http", db, "--eta", "nan", "--out", "x"]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--eta") && err.contains("not a finite number"), "{err}");
+    assert!(
+        err.contains("--eta") && err.contains("not a finite number"),
+        "{err}"
+    );
 }

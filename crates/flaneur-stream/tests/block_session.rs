@@ -18,7 +18,7 @@ use flaneur_stream::{
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{canonical, hello, landmark, view_of, Local, WAIT};
+use common::{canonical, hello, landmark, raw_session, refusal, view_of, Local, WAIT};
 
 fn serve(landmarks: &[Landmark], config: ServerConfig) -> RunningServer {
     StreamServer::bind("127.0.0.1:0", landmarks.to_vec(), config)
@@ -339,24 +339,6 @@ fn a_slow_walk_is_sent_predicted_blocks_which_the_client_takes_by_name() {
     }
     client.bye().unwrap();
     assert_eq!(quiet.ends().recv_timeout(WAIT).unwrap().predicted_blocks, 0);
-}
-
-/// Reads the server's answer to what was sent on `stream`: its REFUSED reason.
-fn refusal(stream: &mut TcpStream) -> String {
-    loop {
-        match receive(stream, MAX_TO_CLIENT).unwrap() {
-            Some((Message::Refused(why), _)) => return why,
-            Some(_) => continue,
-            None => panic!("closed without a reason"),
-        }
-    }
-}
-
-fn raw_session(server: &RunningServer, hello: Hello) -> TcpStream {
-    let mut s = TcpStream::connect(server.addr()).unwrap();
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    s.write_all(&Message::Hello(hello).encode()).unwrap();
-    s
 }
 
 /// A SWITCH of frame `frame` naming, for object `index`, `down` and `released`.

@@ -6,10 +6,9 @@
 mod common;
 
 use std::io::Write;
-use std::net::TcpStream;
 
 use flaneur::lod::{bumpy_torus, NodeName, SelectiveServer, SelectiveSource};
-use flaneur_stream::protocol::{receive, Message, MAX_TO_CLIENT};
+use flaneur_stream::protocol::Message;
 use flaneur_stream::{
     HeldLeaves, Landmark, RunningServer, Scheme, SelectiveStreamClient, ServerConfig, StreamServer,
     ViewPacket,
@@ -17,7 +16,7 @@ use flaneur_stream::{
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{canonical, hello, landmark, local_view, view_of, Local, WAIT};
+use common::{canonical, hello, landmark, local_view, raw_session, refusal, view_of, Local, WAIT};
 
 /// Two landmarks without crease runs: bumpy tori of 2,000 and 3,000 triangles, side
 /// by side (a local refiner's reference fronts cost the square of a mesh's size).
@@ -149,25 +148,6 @@ fn a_cut_vertex_client_over_tcp_holds_the_sent_front_and_resumes_to_it() {
     assert!(splits > 200, "{splits}");
 }
 
-/// Reads the server's answer to what was sent on `stream`: its REFUSED reason.
-fn refusal(stream: &mut TcpStream) -> String {
-    loop {
-        match receive(stream, MAX_TO_CLIENT).unwrap() {
-            Some((Message::Refused(why), _)) => return why,
-            Some(_) => continue,
-            None => panic!("closed without a reason"),
-        }
-    }
-}
-
-fn raw_session(server: &RunningServer, scheme: Scheme) -> TcpStream {
-    let mut s = TcpStream::connect(server.addr()).unwrap();
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    s.write_all(&Message::Hello(hello(scheme)).encode())
-        .unwrap();
-    s
-}
-
 /// Each bad message closes its own session with the reason, logged, and a session
 /// beside it goes on.
 #[test]
@@ -230,7 +210,7 @@ fn bad_selective_sessions_are_refused_by_name_and_others_go_on() {
         ),
     ];
     for (m, why) in cases {
-        let mut s = raw_session(&server, Scheme::Selective);
+        let mut s = raw_session(&server, hello(Scheme::Selective));
         s.write_all(&m.encode()).unwrap();
         let said = refusal(&mut s);
         assert!(said.contains(why), "{said}");

@@ -1,13 +1,16 @@
 //! What the truly selective and the blocks sessions' tests share: the landmarks'
 //! making, the HELLO, and a local refiner whose meshes the clients' must equal.
 
+use std::io::Write;
+use std::net::TcpStream;
 use std::sync::Arc;
 use std::time::Duration;
 
 use flaneur::lod::{
     Dag, DagConstruction, Front, NodeName, ProgressiveMesh, SelectiveSource, Traversal, View,
 };
-use flaneur_stream::{Hello, Landmark, Scheme, ViewPacket};
+use flaneur_stream::protocol::{receive, Message, MAX_TO_CLIENT};
+use flaneur_stream::{Hello, Landmark, RunningServer, Scheme, ViewPacket};
 use glam::Vec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -116,4 +119,23 @@ impl Local {
             })
             .collect()
     }
+}
+
+/// Reads the server's answer to what was sent on `stream`: its REFUSED reason.
+pub fn refusal(stream: &mut TcpStream) -> String {
+    loop {
+        match receive(stream, MAX_TO_CLIENT).unwrap() {
+            Some((Message::Refused(why), _)) => return why,
+            Some(_) => continue,
+            None => panic!("closed without a reason"),
+        }
+    }
+}
+
+/// A session opened by hand: HELLO sent, what follows up to the test.
+pub fn raw_session(server: &RunningServer, hello: Hello) -> TcpStream {
+    let mut s = TcpStream::connect(server.addr()).unwrap();
+    s.set_read_timeout(Some(WAIT)).unwrap();
+    s.write_all(&Message::Hello(hello).encode()).unwrap();
+    s
 }
