@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 
 mod cli;
-use cli::{bench, build, demo, info, lod, query, serve, serve_stream, shot, view, walk};
+use cli::{bench, build, demo, info, insert, lod, query, serve, serve_stream, shot, view, walk};
 
 #[derive(Parser)]
 #[command(
@@ -36,6 +36,8 @@ enum Command {
     View(view::ViewArgs),
     /// Objects, triangles, pages by kind, tree height and fill.
     Info(info::InfoArgs),
+    /// Add the objects of OBJ files to a built database, each insert crash-atomic.
+    Insert(insert::InsertArgs),
     /// Range query (BOX), or CSearch when history cells are given.
     Query(query::QueryArgs),
     /// Walk a database headless along a camera path (REVIEW, Shou 2002 ch. 4) and
@@ -79,6 +81,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Shot(a) => a.run(),
         Command::View(a) => a.run(),
         Command::Info(a) => a.run(),
+        Command::Insert(a) => a.run(),
         Command::Query(a) => a.run(),
         Command::Walk(a) => a.run(),
         Command::Bench(a) => a.run(),

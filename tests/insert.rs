@@ -8,23 +8,7 @@ use flaneur::scene::Mesh;
 use flaneur::{Backend, BuildOptions, Database};
 
 fn cube(x: f32, z: f32, size: f32) -> Mesh {
-    let mut positions = Vec::new();
-    for i in 0..8 {
-        positions.push([
-            x + size * (i & 1) as f32,
-            size * ((i >> 1) & 1) as f32,
-            z + size * ((i >> 2) & 1) as f32,
-        ]);
-    }
-    let indices = vec![
-        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
-        1, 3, 5, 3, 7, 5,
-    ];
-    Mesh {
-        normals: vec![[0.0, 1.0, 0.0]; 8],
-        positions,
-        indices,
-    }
+    common::box_mesh([x, 0.0, z], [x + size, size, z + size])
 }
 
 #[test]

@@ -40,6 +40,14 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
         info.page_size,
         info.file_bytes as f64 / (1 << 20) as f64
     );
+    if info.uncommitted_bytes > 0 {
+        eprintln!(
+            "warning: {} bytes past the database's last page are not part of it: what a \
+             write interrupted before its commit leaves, or bytes appended by something \
+             else (never read; the next writer cuts them off)",
+            info.uncommitted_bytes
+        );
+    }
     println!(
         "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}, visibility {}",
         k.rtree, k.mesh, k.meta, k.lod, k.visibility

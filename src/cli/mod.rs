@@ -6,6 +6,7 @@ pub mod bench;
 pub mod build;
 pub mod demo;
 pub mod info;
+pub mod insert;
 pub mod lod;
 pub mod query;
 pub mod serve;

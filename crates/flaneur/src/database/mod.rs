@@ -43,8 +43,12 @@ pub struct DatabaseInfo {
     pub page_size: usize,
     /// Pages of the file, the header included.
     pub pages: u64,
-    /// The file's length: pages × page size.
+    /// The database's length: pages × page size.
     pub file_bytes: u64,
+    /// Bytes in the file past the database's pages (see
+    /// [`Store::uncommitted_bytes`](crate::store::Store::uncommitted_bytes)): what an
+    /// interrupted writer left, or bytes appended by something else; never read.
+    pub uncommitted_bytes: u64,
     /// Pages written per kind.
     pub pages_by_kind: KindCounts,
     /// The box around every object: its min x, y, z, then its max x, y, z.
@@ -221,7 +225,8 @@ impl Database {
         self.store.remote_request_times()
     }
 
-    /// Opens for [`Database::insert`].
+    /// Opens for [`Database::insert`], holding the database's write lock until dropped:
+    /// one writer at a time, while readers go on (see [`Store::open_writable`]).
     pub fn open_writable(path: &Path, backend: Backend) -> Result<Database> {
         Database::from_store(Store::open_writable(path, backend)?)
     }
@@ -520,10 +525,14 @@ impl Database {
     }
 
     /// Adds an object to an open database (opened with [`Database::open_writable`]):
-    /// its mesh is appended and the R-tree grows by insertion. Durable when this
-    /// returns. The object gets no LOD data (the LOD table is written once, at build). Not crash-atomic: changed nodes are rewritten in place, so a crash in
-    /// the middle of an insert can leave the index inconsistent — every read checks
-    /// its page, so that shows as an error naming the page, never as a wrong answer.
+    /// its mesh is appended and the R-tree grows by insertion. The object gets no LOD
+    /// data (the LOD table is written once, at build).
+    ///
+    /// Durable and crash-atomic: the mesh and copies of the changed nodes are appended
+    /// and synced, then one header write names the new root and counts, so a crash at
+    /// any point leaves the database holding either the objects it had or those and
+    /// this one. Each insert appends the tree's height in node pages; the pages it
+    /// replaced stay in the file, unused.
     pub fn insert(&mut self, id: u64, mesh: &Mesh) -> Result<ObjectEntry> {
         let entry = write_object(&mut self.store, id, crate::scene::KIND_IMPORTED, mesh)?;
         let before = self.store.page_count();
@@ -604,6 +613,7 @@ impl Database {
             page_size,
             pages: self.store.page_count(),
             file_bytes: self.store.page_count() * page_size as u64,
+            uncommitted_bytes: self.store.uncommitted_bytes(),
             pages_by_kind: self.kinds,
             bounds: [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
             tree,

@@ -1,6 +1,9 @@
 //! One-by-one insertion (Guttman 1984) with the Ang–Tan linear split, so a library
-//! user can add objects to an open database's index. Changed nodes are rewritten in
-//! place and new nodes appended, all through the store.
+//! user can add objects to an open database's index. Nothing is rewritten in place:
+//! every node on the path from the changed leaf to the root is appended anew (a
+//! copy-on-write path copy, height pages an insert), and only the header, written last,
+//! names the new root. An insert cut short anywhere leaves the old tree whole, and
+//! readers of the old root are never disturbed.
 //!
 //! ChooseLeaf takes the child whose MBR grows least in volume, ties to the least
 //! growth in margin (city boxes can be flat), then to the smaller child.
@@ -55,50 +58,59 @@ pub(crate) fn insert(tree: &mut RTree, store: &mut Store, entry: ObjectEntry) ->
         }
     }
 
-    let (mut page, mut node, _) = path.pop().expect("the path holds the leaf");
+    let (_, mut node, _) = path.pop().expect("the path holds the leaf");
     if let Node::Leaf(objects) = &mut node {
         objects.push(entry);
     }
+    // Copy-on-write: each node on the path is appended anew, never rewritten, so the
+    // old tree stays whole until the header names the new root.
     loop {
         let max = tree.fanout.max(node.level());
-        let (mbr, sibling) = if node.len() > max {
+        let (copy, sibling) = if node.len() > max {
             let (keep, moved) = split(node, ((max as f32 * MIN_FILL) as usize).max(1));
-            store.write_page(page, PageKind::RtreeNode, &keep.encode())?;
+            let keep_page = store.append_page(PageKind::RtreeNode, &keep.encode())?;
             let moved_page = store.append_page(PageKind::RtreeNode, &moved.encode())?;
             (
-                keep.mbr(),
+                ChildEntry {
+                    mbr: keep.mbr(),
+                    page: keep_page,
+                },
                 Some(ChildEntry {
                     mbr: moved.mbr(),
                     page: moved_page,
                 }),
             )
         } else {
-            store.write_page(page, PageKind::RtreeNode, &node.encode())?;
-            (node.mbr(), None)
+            let page = store.append_page(PageKind::RtreeNode, &node.encode())?;
+            (
+                ChildEntry {
+                    mbr: node.mbr(),
+                    page,
+                },
+                None,
+            )
         };
         match path.pop() {
-            Some((parent_page, mut parent, idx)) => {
+            Some((_, mut parent, idx)) => {
                 let Node::Internal { children, .. } = &mut parent else {
                     unreachable!("parents are internal")
                 };
-                let unchanged = children[idx].mbr == mbr && sibling.is_none();
-                if unchanged {
-                    break;
-                }
-                children[idx].mbr = mbr;
+                children[idx] = copy;
                 children.extend(sibling);
-                page = parent_page;
                 node = parent;
             }
             None => {
-                if let Some(sibling) = sibling {
-                    let root = Node::Internal {
-                        level: tree.height as u16,
-                        children: vec![ChildEntry { mbr, page }, sibling],
-                    };
-                    tree.root = store.append_page(PageKind::RtreeNode, &root.encode())?;
-                    tree.height += 1;
-                }
+                tree.root = match sibling {
+                    Some(sibling) => {
+                        let root = Node::Internal {
+                            level: tree.height as u16,
+                            children: vec![copy, sibling],
+                        };
+                        tree.height += 1;
+                        store.append_page(PageKind::RtreeNode, &root.encode())?
+                    }
+                    None => copy.page,
+                };
                 break;
             }
         }

@@ -32,7 +32,7 @@ impl Store {
         let file = self
             .writer
             .as_ref()
-            .and_then(|w| w.temp())
+            .and_then(|w| w.file_path())
             .unwrap_or(&self.path);
         Error::io(file, e)
     }

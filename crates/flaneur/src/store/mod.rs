@@ -19,9 +19,14 @@
 //! checksum), counts it, and names the page in any error. Nothing in a file can make
 //! the store panic.
 //!
-//! Write model: a new database is written to `<path>.tmp` and renamed into place by
-//! [`Store::finish`]; the header (page 0) is the commit point, written last and
-//! fsynced. Pages past the header's page count are not part of the database.
+//! Write model: a new database is written to a temporary file of its own in the target's
+//! folder (`.<name>.<random>.tmp`, so two builds to one path never share one) and
+//! renamed into place by [`Store::finish`]: the last rename wins, with a complete file.
+//! A temporary a killed build left behind is never reused. In an open database the
+//! header (page 0) is the commit point, written last, after the pages it names are on
+//! disk. Pages past the header's page count are not part of the database. The store
+//! never shrinks a file: a new database replaces the old by rename (readers keep the
+//! file they opened) and writes to an open one append or rewrite pages in place.
 
 mod append;
 mod backend;
@@ -37,6 +42,8 @@ mod writer;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod write_safety_tests;
 
 use std::fmt;
 use std::fs::{File, OpenOptions};
@@ -99,6 +106,9 @@ pub struct Store {
     /// Present for created and writable stores.
     writer: Option<Writer>,
     counters: Counters,
+    /// Bytes past the committed pages when opened read-only: what an interrupted
+    /// writer left (or something appended); never read.
+    uncommitted: u64,
 }
 
 const _: fn() = || {
@@ -118,11 +128,35 @@ impl fmt::Debug for Store {
     }
 }
 
-/// `<path>.tmp`, where a new database is built.
-fn temp_path(path: &Path) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(".tmp");
-    PathBuf::from(s)
+/// A new, uniquely named temporary file in `path`'s folder, where the database that
+/// will be `path` is built: `.<name>.<random>.tmp`, created with mode 0666 less the
+/// umask, as `File::create` would, whatever a stale temporary's mode.
+fn temp_file(path: &Path) -> io::Result<tempfile::NamedTempFile> {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .permissions(std::fs::Permissions::from_mode(0o666))
+        .tempfile_in(dir)
+}
+
+/// Takes the advisory lock that keeps a database to one writer at a time (`flock`,
+/// exclusive, not waiting). Readers take none: a writer only appends and commits by
+/// the header, so they never need to wait.
+fn lock_for_writing(path: &Path, file: &File) -> Result<()> {
+    match file.try_lock() {
+        Ok(()) => Ok(()),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::Invalid(format!(
+            "{}: another writer has the database open (it holds the write lock)",
+            path.display()
+        ))),
+        Err(std::fs::TryLockError::Error(e)) => Err(Error::io(path, e)),
+    }
 }
 
 /// Reads and verifies page 0 of a file `len` bytes long, through `read_at` (bytes at an
@@ -214,6 +248,10 @@ impl Store {
     /// [`Store::finish`]; pages appended after the last commit are discarded when the
     /// store is dropped or the file is reopened. Overwrites of committed pages are
     /// written in place and are not rolled back.
+    ///
+    /// Takes an exclusive advisory lock on the file until the store is dropped: a
+    /// second writer, in this process or another, is refused (`Invalid`, "another writer
+    /// has the database open"). Readers take no lock.
     pub fn open_writable(path: &Path, backend: Backend) -> Result<Store> {
         Store::open_existing(path, backend, true)
     }
@@ -260,6 +298,7 @@ impl Store {
             backend: Backend::Http,
             writer: None,
             counters: Counters::default(),
+            uncommitted: 0,
         })
     }
 
@@ -270,14 +309,20 @@ impl Store {
             .write(writable)
             .open(path)
             .map_err(io_err)?;
+        if writable {
+            lock_for_writing(path, &file)?;
+        }
         let len = file.metadata().map_err(io_err)?.len();
         let header = read_header(path, len, |buf, at| file.read_exact_at(buf, at))?;
         let page_size = header.page_size();
         check_length(path, &header, len, writable)?;
         let needed = header.page_count() * page_size as u64;
-        if writable && len > needed {
-            // Pages appended after the last commit: not part of the database.
+        let mut uncommitted = len - needed;
+        if writable && uncommitted > 0 {
+            // Pages appended after the last commit: not part of the database. No reader
+            // reads past the page count of a committed header, so none is cut short.
             file.set_len(needed).map_err(io_err)?;
+            uncommitted = 0;
         }
         let source: Box<dyn RawPageSource> = match backend {
             Backend::Mmap => Box::new(
@@ -306,13 +351,14 @@ impl Store {
             source,
             writer,
             counters: Counters::default(),
+            uncommitted,
         })
     }
 
     /// Starts a new database with `page_size`-byte pages (a power of two in
-    /// 1 KiB..=64 KiB; [`DEFAULT_PAGE_SIZE`] is 4096). It is written to `<path>.tmp`;
-    /// nothing appears at `path` until [`Store::finish`], and dropping the store
-    /// unfinished removes the temporary file. The new store reads its own pages
+    /// 1 KiB..=64 KiB; [`DEFAULT_PAGE_SIZE`] is 4096). It is written to a temporary
+    /// file of its own beside `path`; nothing appears at `path` until
+    /// [`Store::finish`], and dropping the store unfinished removes the temporary file. The new store reads its own pages
     /// (through `pread`).
     pub fn create(path: &Path, page_size: usize) -> Result<Store> {
         if !valid_page_size(page_size) {
@@ -320,17 +366,11 @@ impl Store {
                 "page size {page_size} is not a power of two in {MIN_PAGE_SIZE}..={MAX_PAGE_SIZE}"
             )));
         }
-        let temp = temp_path(path);
-        let io_err = |e| Error::io(&temp, e);
-        let file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&temp)
-            .map_err(io_err)?;
-        let reader = file.try_clone().map_err(io_err)?;
-        let writer = Writer::new(file, page_size, 0, Some(temp.clone()));
+        let (file, temp) = temp_file(path)
+            .map_err(|e| Error::io(path, e))?
+            .into_parts();
+        let reader = file.try_clone().map_err(|e| Error::io(&temp, e))?;
+        let writer = Writer::new(file, page_size, 0, Some(temp));
         Ok(Store {
             path: path.to_path_buf(),
             header: Header::new(page_size),
@@ -339,6 +379,7 @@ impl Store {
             source: Box::new(PreadSource::buffered(reader, page_size)),
             writer: Some(writer),
             counters: Counters::default(),
+            uncommitted: 0,
         })
     }
 
@@ -349,14 +390,13 @@ impl Store {
         let Some(mut w) = self.writer.take() else {
             return Ok(());
         };
-        let file_path = w.temp().cloned().unwrap_or_else(|| self.path.clone());
+        let file_path = w.file_path().unwrap_or(&self.path).to_path_buf();
         w.commit(&self.header)
             .map_err(|e| Error::io(&file_path, e))?;
         if let Some(temp) = w.take_temp() {
-            if let Err(e) = std::fs::rename(&temp, &self.path) {
-                let _ = std::fs::remove_file(&temp);
-                return Err(Error::io(&self.path, e));
-            }
+            // On failure the temporary is dropped, which removes it.
+            temp.persist(&self.path)
+                .map_err(|e| Error::io(&self.path, e.error))?;
             // Make the rename durable; best effort (not every platform can fsync a dir).
             let dir = match self.path.parent() {
                 Some(d) if !d.as_os_str().is_empty() => d,
@@ -375,7 +415,7 @@ impl Store {
         let Some(w) = self.writer.as_mut() else {
             return Ok(());
         };
-        let file_path = w.temp().cloned().unwrap_or_else(|| self.path.clone());
+        let file_path = w.file_path().unwrap_or(&self.path).to_path_buf();
         w.commit(&self.header)
             .map_err(|e| Error::io(&file_path, e))?;
         self.source.refresh().map_err(|e| Error::io(&file_path, e))
@@ -445,6 +485,13 @@ impl Store {
     /// How this store reads pages (a created store reads with `pread`).
     pub fn backend(&self) -> Backend {
         self.backend
+    }
+
+    /// Bytes in the file past its committed pages, for a store opened read-only: what
+    /// a writer interrupted before its commit leaves, or bytes appended by something
+    /// else. They are never read; the next writer to open the file cuts them off.
+    pub fn uncommitted_bytes(&self) -> u64 {
+        self.uncommitted
     }
 
     /// Whether this store accepts writes.

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use super::header::{max_segments, MAGIC};
 use super::*;
 
-const PS: usize = 1024;
+pub(super) const PS: usize = 1024;
 
 fn blob(len: usize, seed: u8) -> Vec<u8> {
     (0..len)
@@ -22,14 +22,14 @@ fn extent_sizes(p: usize) -> Vec<usize> {
 
 /// A database with one page of each data kind and extents of every edge size;
 /// returns the path, the single pages and the extents with their contents.
-struct Fixture {
+pub(super) struct Fixture {
     _dir: tempfile::TempDir,
-    path: PathBuf,
+    pub(super) path: PathBuf,
     pages: Vec<(u64, PageKind, Vec<u8>)>,
-    extents: Vec<(Extent, Vec<u8>)>,
+    pub(super) extents: Vec<(Extent, Vec<u8>)>,
 }
 
-fn build(page_size: usize) -> Fixture {
+pub(super) fn build(page_size: usize) -> Fixture {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("t.db");
     let mut s = Store::create(&path, page_size).unwrap();
@@ -63,7 +63,7 @@ fn build(page_size: usize) -> Fixture {
     }
 }
 
-fn check_all(f: &Fixture, s: &Store) {
+pub(super) fn check_all(f: &Fixture, s: &Store) {
     for (id, kind, b) in &f.pages {
         assert_eq!(&s.read_page(*id, *kind).unwrap(), b, "page {id}");
         let mut buf = vec![1, 2, 3];
@@ -221,7 +221,7 @@ fn corrupt_byte(path: &Path, offset: u64) {
     f.write_all_at(&b, offset).unwrap();
 }
 
-fn set_len(path: &Path, len: u64) {
+pub(super) fn set_len(path: &Path, len: u64) {
     OpenOptions::new()
         .write(true)
         .open(path)
@@ -230,7 +230,7 @@ fn set_len(path: &Path, len: u64) {
         .unwrap();
 }
 
-fn file_len(path: &Path) -> u64 {
+pub(super) fn file_len(path: &Path) -> u64 {
     std::fs::metadata(path).unwrap().len()
 }
 

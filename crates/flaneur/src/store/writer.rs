@@ -10,7 +10,9 @@
 use std::fs::File;
 use std::io;
 use std::os::unix::fs::FileExt;
-use std::path::PathBuf;
+use std::path::Path;
+
+use tempfile::TempPath;
 
 use super::header::Header;
 use super::page::{self, PageKind};
@@ -24,8 +26,11 @@ pub(crate) struct Writer {
     /// Encoded pages not yet written, the first of them page `pending_first`.
     pending: Vec<u8>,
     pending_first: u64,
+    /// The file's length: grown whole pages at a time (`set_len`) before pages are
+    /// written past it, so that a writer killed mid-write leaves whole pages.
+    file_len: u64,
     /// A created store's temporary file, removed on drop unless taken by `finish`.
-    temp: Option<PathBuf>,
+    temp: Option<TempPath>,
 }
 
 impl Writer {
@@ -35,7 +40,7 @@ impl Writer {
         file: File,
         page_size: usize,
         next_page: u64,
-        temp: Option<PathBuf>,
+        temp: Option<TempPath>,
     ) -> Writer {
         let mut pending = Vec::with_capacity(WRITE_BUFFER_BYTES.max(page_size));
         if next_page == 0 {
@@ -46,6 +51,7 @@ impl Writer {
             page_size,
             pending,
             pending_first: next_page,
+            file_len: next_page * page_size as u64,
             temp,
         }
     }
@@ -93,38 +99,37 @@ impl Writer {
         if self.pending.is_empty() {
             return Ok(());
         }
-        self.file
-            .write_all_at(&self.pending, self.pending_first * self.page_size as u64)?;
+        let start = self.pending_first * self.page_size as u64;
+        let end = start + self.pending.len() as u64;
+        if end > self.file_len {
+            self.file.set_len(end)?;
+            self.file_len = end;
+        }
+        self.file.write_all_at(&self.pending, start)?;
         self.pending_first += (self.pending.len() / self.page_size) as u64;
         self.pending.clear();
         Ok(())
     }
 
-    /// Writes every pending page and the header, then fsyncs: after this the file on
-    /// disk is the database `header` describes.
+    /// Writes every pending page, fsyncs, then writes the header and fsyncs: after
+    /// this the file on disk is the database `header` describes, and at no moment
+    /// before did the header on disk name a page not yet written.
     pub(crate) fn commit(&mut self, header: &Header) -> io::Result<()> {
         self.flush_pending()?;
+        self.file.sync_data()?;
         let mut page0 = vec![0u8; self.page_size];
         header.encode(&mut page0);
         self.file.write_all_at(&page0, 0)?;
         self.file.sync_all()
     }
 
-    /// The temporary file, now the caller's to rename (it is no longer removed on drop).
-    pub(crate) fn take_temp(&mut self) -> Option<PathBuf> {
+    /// The temporary file, now the caller's to persist (dropping it removes it).
+    pub(crate) fn take_temp(&mut self) -> Option<TempPath> {
         self.temp.take()
     }
 
     /// The temporary file being written, if this is a created store.
-    pub(crate) fn temp(&self) -> Option<&PathBuf> {
-        self.temp.as_ref()
-    }
-}
-
-impl Drop for Writer {
-    fn drop(&mut self) {
-        if let Some(t) = self.temp.take() {
-            let _ = std::fs::remove_file(t);
-        }
+    pub(crate) fn file_path(&self) -> Option<&Path> {
+        self.temp.as_deref()
     }
 }
