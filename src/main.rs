@@ -4,7 +4,9 @@
 use clap::{Parser, Subcommand};
 
 mod cli;
-use cli::{bench, build, demo, info, insert, lod, query, serve, serve_stream, shot, view, walk};
+use cli::{
+    bench, build, check, demo, info, insert, lod, query, serve, serve_stream, shot, view, walk,
+};
 
 #[derive(Parser)]
 #[command(
@@ -34,6 +36,10 @@ enum Command {
     /// run, F to fly; the walk engine selects, the window draws its selection at the
     /// chosen LODs, with a heads-up display. Opens on the city's busiest street.
     View(view::ViewArgs),
+    /// Verify every page's checksum and every structure of a database (the R-tree, the
+    /// meshes, the LODs, the visibility, the HDoV-tree); each problem named with its
+    /// page. Exit status 1 when one is found.
+    Check(check::CheckArgs),
     /// Objects, triangles, pages by kind, tree height and fill.
     Info(info::InfoArgs),
     /// Add the objects of OBJ files to a built database, each insert crash-atomic.
@@ -80,6 +86,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Lod(a) => a.run(),
         Command::Shot(a) => a.run(),
         Command::View(a) => a.run(),
+        Command::Check(a) => a.run(),
         Command::Info(a) => a.run(),
         Command::Insert(a) => a.run(),
         Command::Query(a) => a.run(),

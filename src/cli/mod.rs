@@ -4,6 +4,7 @@ pub mod args;
 pub mod bars;
 pub mod bench;
 pub mod build;
+pub mod check;
 pub mod demo;
 pub mod info;
 pub mod insert;

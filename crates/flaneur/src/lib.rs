@@ -34,6 +34,7 @@
 pub mod build;
 pub mod cache;
 mod catalog;
+pub mod check;
 pub mod database;
 pub mod error;
 pub mod geom;

@@ -37,6 +37,7 @@ pub use build::{HdovOptions, HdovReport, SchemeReport};
 pub use load::Representation;
 pub(crate) use load::{load, Loader};
 pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
+pub(crate) use node::HNodeKind;
 pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;
 pub use search::{level_for_detail, stops, Found, SearchResult, MAXDOV};

@@ -227,6 +227,11 @@ impl HdovTree {
         }
     }
 
+    /// Where the head lies.
+    pub(crate) fn extent(&self) -> Extent {
+        self.extent
+    }
+
     /// The head, read (and counted) the first time.
     pub fn head(&self, store: &Store) -> Result<&TreeHead> {
         if let Some(h) = self.head.get() {

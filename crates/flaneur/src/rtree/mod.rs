@@ -21,6 +21,7 @@ pub(crate) use complement::covered;
 use complement::Complement;
 pub use complement::Coverlap;
 pub use history::{History, DEFAULT_HISTORY_LEN};
+pub(crate) use node::Node;
 pub use node::{Fanout, ObjectEntry};
 use range::Range;
 pub use search::QueryResult;

@@ -9,6 +9,7 @@
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
 //! - `remote/`: a database on any HTTP server, read by byte ranges through a client
 //!   page cache;
+//! - `scan.rs`: a page read whatever its kind, for an integrity check;
 //! - `source.rs`: [`PageSource`], how a traversal reads node pages (from the store or
 //!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
 //! - `append.rs`: the store's writes as a build makes them (pages, extents, overwrites),
@@ -37,6 +38,7 @@ pub(crate) mod framing;
 mod header;
 mod page;
 mod remote;
+mod scan;
 mod source;
 mod writer;
 

@@ -56,6 +56,11 @@ impl VisibilityTable {
         }))
     }
 
+    /// Where the table lies.
+    pub(crate) fn extent(&self) -> Extent {
+        self.extent
+    }
+
     /// Pages the table takes.
     pub fn pages(&self) -> u64 {
         self.extent.page_count as u64

@@ -348,6 +348,16 @@ impl LodTable {
         self.pages
     }
 
+    /// Where the table lies.
+    pub(crate) fn extent(&self) -> Extent {
+        self.extent
+    }
+
+    /// Entries in the table: objects with LOD data (reads the head the first time).
+    pub(crate) fn entry_count(&self, store: &Store) -> Result<u64> {
+        Ok(self.head(store)?.entries)
+    }
+
     /// The first page of the table, where its head starts.
     pub(crate) fn first_page(&self) -> u64 {
         self.extent.first_page

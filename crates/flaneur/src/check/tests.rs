@@ -1,0 +1,228 @@
+//! A healthy city passes; each kind of page damaged, and each structural lie told with
+//! valid checksums, is found and named.
+
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+use super::*;
+use crate::hdov::{HdovOptions, Scheme};
+use crate::lod::LodOptions;
+use crate::rtree::Node;
+use crate::store::Segment;
+use crate::visibility::VisibilityOptions;
+use crate::BuildOptions;
+
+/// A small city with every structure: LODs with progressive meshes, visibility, and an
+/// HDoV-tree under all three schemes.
+fn city(dir: &Path) -> PathBuf {
+    let scene = dir.join("c.scene");
+    let path = dir.join("c.flaneur");
+    let config = citygen::CityConfig {
+        objects: 40,
+        seed: 4,
+        ..Default::default()
+    };
+    citygen::write_city(&config, &scene).unwrap();
+    let opts = BuildOptions {
+        page_size: 1024,
+        lod: Some(LodOptions {
+            pm_threshold: 50,
+            ..Default::default()
+        }),
+        visibility: Some(VisibilityOptions {
+            cell_size: 12.0,
+            resolution: 16,
+            ..Default::default()
+        }),
+        hdov: Some(HdovOptions {
+            schemes: vec![Scheme::Horizontal, Scheme::Vertical, Scheme::Indexed],
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    crate::build_from_scene(&scene, &path, &opts).unwrap();
+    path
+}
+
+fn kinds(path: &Path) -> Vec<(u64, PageKind)> {
+    let s = Store::open(path, Backend::Mmap).unwrap();
+    (1..s.page_count())
+        .map(|p| (p, s.read_any_page(p).unwrap().0))
+        .collect()
+}
+
+/// Flips one byte of `page`'s payload.
+fn flip(path: &Path, page: u64, page_size: u64) {
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .read(true)
+        .open(path)
+        .unwrap();
+    let at = page * page_size + crate::store::PAGE_HEADER_LEN as u64 + 1;
+    let mut b = [0u8];
+    f.read_exact_at(&mut b, at).unwrap();
+    f.write_all_at(&[b[0] ^ 0x10], at).unwrap();
+}
+
+#[test]
+fn a_healthy_city_passes_and_every_page_is_claimed() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = city(dir.path());
+    let r = check(&path).unwrap();
+    assert!(r.ok(), "{:#?}", r.problems);
+    assert_eq!(r.objects, 40);
+    assert!(r.unclaimed.is_empty(), "{:?}", r.unclaimed);
+    assert!(r.page_reads >= r.pages - 1);
+}
+
+#[test]
+fn each_kind_of_page_damaged_is_named_with_what_it_belongs_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let healthy = city(dir.path());
+    let all = kinds(&healthy);
+    let expect: [(PageKind, &[&str]); 6] = [
+        (PageKind::RtreeNode, &["r-tree node"]),
+        (PageKind::Mesh, &["mesh of object"]),
+        (PageKind::Lod, &["LOD", "progressive mesh", "DAG"]),
+        (PageKind::Visibility, &["visibility table"]),
+        (PageKind::HdovNode, &["HDoV"]),
+        (PageKind::VPage, &["V-pages"]),
+    ];
+    for (kind, parts) in expect {
+        // The first and the last page of the kind.
+        let of_kind: Vec<u64> = all
+            .iter()
+            .filter(|(_, k)| *k == kind)
+            .map(|p| p.0)
+            .collect();
+        assert!(!of_kind.is_empty(), "the city has {} pages", kind.name());
+        for page in [of_kind[0], *of_kind.last().unwrap()] {
+            let damaged = dir.path().join("damaged.flaneur");
+            std::fs::copy(&healthy, &damaged).unwrap();
+            flip(&damaged, page, 1024);
+            let r = check(&damaged).unwrap();
+            assert!(!r.ok(), "{} page {page}", kind.name());
+            let p = &r.problems[0];
+            assert_eq!(p.page, Some(page), "{:#?}", r.problems);
+            assert!(p.what.contains("checksum"), "{p:?}");
+            assert!(
+                parts.iter().any(|w| p.part.contains(w)),
+                "{} page {page} named as {:?}",
+                kind.name(),
+                p.part
+            );
+        }
+    }
+    // The header.
+    let damaged = dir.path().join("damaged.flaneur");
+    std::fs::copy(&healthy, &damaged).unwrap();
+    flip(&damaged, 0, 1024);
+    let r = check(&damaged).unwrap();
+    assert_eq!(r.problems.len(), 1, "{:#?}", r.problems);
+    assert_eq!(r.problems[0].page, Some(0));
+    assert_eq!(r.problems[0].part, "the file header");
+}
+
+/// Rewrites the first leaf of the R-tree with `edit` applied to its entries, checksums
+/// valid: lies only the structure can show.
+fn edit_first_leaf(path: &Path, edit: impl FnOnce(&mut Vec<crate::ObjectEntry>)) -> u64 {
+    let mut s = Store::open_writable(path, Backend::Pread { direct: false }).unwrap();
+    let leaf = kinds(path)
+        .into_iter()
+        .filter(|(_, k)| *k == PageKind::RtreeNode)
+        .find_map(|(p, _)| {
+            match Node::decode(&s.read_page(p, PageKind::RtreeNode).unwrap()).unwrap() {
+                Node::Leaf(e) if e.len() >= 2 => Some((p, e)),
+                _ => None,
+            }
+        })
+        .unwrap();
+    let (page, mut entries) = leaf;
+    edit(&mut entries);
+    s.write_page(page, PageKind::RtreeNode, &Node::Leaf(entries).encode())
+        .unwrap();
+    s.finish().unwrap();
+    page
+}
+
+#[test]
+fn structural_lies_with_valid_checksums_are_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let healthy = city(dir.path());
+    let copy = |name: &str| {
+        let p = dir.path().join(name);
+        std::fs::copy(&healthy, &p).unwrap();
+        p
+    };
+    let find = |r: &CheckReport, what: &str| {
+        assert!(
+            r.problems.iter().any(|p| p.what.contains(what)),
+            "no problem says {what:?}: {:#?}",
+            r.problems
+        );
+    };
+
+    // A mesh extent past the end of the file.
+    let p = copy("beyond.flaneur");
+    let pages = Store::open(&p, Backend::Mmap).unwrap().page_count();
+    edit_first_leaf(&p, |e| e[0].mesh.first_page = pages + 5);
+    let r = check(&p).unwrap();
+    find(&r, "do not lie among the file's data pages");
+    assert!(r
+        .problems
+        .iter()
+        .any(|q| q.part.starts_with("mesh of object")));
+
+    // Two objects on one mesh.
+    let p = copy("shared.flaneur");
+    edit_first_leaf(&p, |e| {
+        e[1].mesh = e[0].mesh;
+        e[1].triangles = e[0].triangles;
+    });
+    find(
+        &check(&p).unwrap(),
+        "the page also belongs to mesh of object",
+    );
+
+    // A triangle count the mesh does not have.
+    let p = copy("triangles.flaneur");
+    edit_first_leaf(&p, |e| e[0].triangles += 1);
+    find(&check(&p).unwrap(), "its leaf entry (page");
+
+    // A leaf entry's box that does not hold its mesh.
+    let p = copy("box.flaneur");
+    edit_first_leaf(&p, |e| {
+        e[0].bounds = crate::geom::Aabb::new([0.0; 3], [0.001; 3]).unwrap();
+    });
+    find(&check(&p).unwrap(), "outside the box");
+
+    // An object count the tree does not hold.
+    let p = copy("count.flaneur");
+    let mut s = Store::open_writable(&p, Backend::Mmap).unwrap();
+    let seg = s.header().segment("objects").unwrap().clone();
+    s.set_segment(Segment {
+        a: seg.a + 1,
+        ..seg
+    })
+    .unwrap();
+    s.finish().unwrap();
+    find(&check(&p).unwrap(), "it counts 41 objects");
+}
+
+#[test]
+fn what_is_not_a_database_is_a_report_and_a_missing_file_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("x");
+    std::fs::write(&p, vec![7u8; 5000]).unwrap();
+    let r = check(&p).unwrap();
+    assert_eq!(r.problems.len(), 1);
+    assert!(
+        r.problems[0].what.contains("not a flaneur database"),
+        "{:?}",
+        r.problems
+    );
+    assert!(matches!(
+        check(&dir.path().join("missing")),
+        Err(Error::Io { .. })
+    ));
+}
