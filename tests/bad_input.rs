@@ -270,3 +270,99 @@ fn a_pvs_walk_meets_a_damaged_mesh() {
         (r, w)
     });
 }
+
+/// Counts the progress a build reports.
+#[derive(Default)]
+struct Steps(std::sync::atomic::AtomicU64);
+
+impl flaneur::progress::Progress for Steps {
+    fn update(&self, _: flaneur::progress::Step, _: u64, _: Option<u64>) {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+#[test]
+fn build_options_are_refused_before_any_work() {
+    let c = city();
+    let out = c.dir.path().join("refused.flaneur");
+    let bad = [
+        (
+            BuildOptions {
+                visibility: Some(flaneur::visibility::VisibilityOptions {
+                    cell_size: 0.0,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            },
+            "viewcell size 0",
+        ),
+        (
+            BuildOptions {
+                visibility: Some(flaneur::visibility::VisibilityOptions {
+                    resolution: 0,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            },
+            "resolution",
+        ),
+        (
+            BuildOptions {
+                visibility: Some(Default::default()),
+                hdov: Some(flaneur::hdov::HdovOptions {
+                    schemes: vec![],
+                    ..Default::default()
+                }),
+                ..Default::default()
+            },
+            "at least one storage scheme",
+        ),
+        (
+            BuildOptions {
+                fill: 2.0,
+                ..Default::default()
+            },
+            "fill factor 2",
+        ),
+    ];
+    for (opts, says) in bad {
+        let steps = Steps::default();
+        let e = flaneur::build::build_from_scene_with_progress(&c.scene, &out, &opts, &steps)
+            .unwrap_err();
+        assert!(e.to_string().contains(says), "{e}");
+        assert_eq!(
+            steps.0.load(std::sync::atomic::Ordering::Relaxed),
+            0,
+            "{says}: refused after work began"
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn obj_faces_of_under_three_vertices_and_text_not_utf8_are_errors_naming_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[u8], &str); 3] = [
+        (
+            "line_face.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n",
+            "line 5: a face of 2 vertices",
+        ),
+        (
+            "point_face.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 3\nf 1 2 3\n",
+            "line 4: a face of 1 vertex:",
+        ),
+        (
+            "latin1.obj",
+            b"v 0 0 0\nv 1 0 0\n# caf\xe9\nv 0 1 0\nf 1 2 3\n",
+            "line 3: not UTF-8 text (byte 0xe9 at column 6)",
+        ),
+    ];
+    for (name, bytes, says) in cases {
+        let obj = dir.path().join(name);
+        fs::write(&obj, bytes).unwrap();
+        let err = flaneur::scene::load_obj(&obj).unwrap_err().to_string();
+        assert!(err.contains(name) && err.contains(says), "{name}: {err}");
+    }
+}

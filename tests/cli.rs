@@ -125,6 +125,13 @@ fn errors_are_messages_not_panics() {
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains("error"), "{args:?}: {err}");
+        if args.iter().any(|a| a.starts_with("no-such")) {
+            assert_eq!(
+                err.matches("No such file or directory").count(),
+                1,
+                "the system's words once: {err}"
+            );
+        }
         if args[0] == "build" && args[1] == args[3] {
             assert!(err.contains("is an input of the build"), "{err}");
             assert!(
@@ -203,6 +210,40 @@ fn walk_and_index_cache_bench() {
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+    // A path file walks its first --frames poses, and is never silently cut short.
+    let part = c.dir.path().join("part.csv");
+    let out = flaneur(&[
+        "walk",
+        db,
+        "--path",
+        saved.to_str().unwrap(),
+        "--frames",
+        "30",
+        "--far",
+        "150",
+        "--quiet",
+        "--csv",
+        part.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&part).unwrap().lines().count(), 31);
+    let out = flaneur(&[
+        "walk",
+        db,
+        "--path",
+        saved.to_str().unwrap(),
+        "--frames",
+        "200",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--frames 200") && err.contains("holds 90 poses"),
+        "{err}"
     );
     let out = flaneur(&["walk", db, "--path", "nowhere.csv", "--quiet"]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("nowhere.csv"));
@@ -323,6 +364,19 @@ fn lod_writes_levels_and_measures_a_view() {
         "{}",
         second.triangle_count()
     );
+
+    // A ratio the simplifier refuses leaves no folder behind.
+    let refused = dir.path().join("refused");
+    let o = flaneur(&[
+        "lod",
+        bunny,
+        "--out",
+        refused.to_str().unwrap(),
+        "--ratio",
+        "0",
+    ]);
+    assert!(!o.status.success());
+    assert!(!refused.exists(), "an empty folder was left");
 
     let o = flaneur(&[
         "lod", bunny, "--refine", "--eye", "0,5,20", "--look", "0,5,0", "--tau", "0.001",

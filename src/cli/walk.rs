@@ -50,8 +50,11 @@ pub struct WalkArgs {
     /// cell's side.
     #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = finite_f64, allow_negative_numbers = true)]
     border: f64,
-    #[arg(long, default_value_t = 600)]
-    frames: usize,
+    /// Frames to walk: of a motion pattern or `cells`, how many to make (default 600);
+    /// of a path file, its first N poses (default: all of them; more than it holds is an
+    /// error).
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
     #[arg(long, default_value_t = 30.0, value_parser = finite_f32, allow_negative_numbers = true)]
     fps: f32,
     #[arg(long, default_value_t = 1)]
@@ -337,7 +340,7 @@ fn walk_cmd(
     path: &Path,
     cfg: &ReviewConfig,
     camera: &str,
-    frames: usize,
+    frames: Option<usize>,
     fps: f32,
     seed: u64,
     csv: Option<&Path>,
@@ -347,7 +350,7 @@ fn walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
-    let poses = camera_path(&db, camera, frames, fps, seed)?;
+    let poses = camera_path(&db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
     if let Some(p) = save_path {
         poses.save_csv(p)?;
     }
@@ -367,37 +370,60 @@ fn walk_cmd(
 fn viewcell_path(
     db: &Database,
     camera: &str,
-    frames: usize,
+    frames: Option<usize>,
     fps: f32,
     seed: u64,
 ) -> Result<CameraPath> {
     match camera {
-        "cells" => Ok(cell_walk(db, frames, 1.4 / fps, fps, seed)?),
-        other => camera_path(db, other, frames, fps, seed),
+        "cells" => Ok(cell_walk(
+            db,
+            frames.unwrap_or(DEFAULT_FRAMES),
+            1.4 / fps,
+            fps,
+            seed,
+        )?),
+        other => camera_path(db, other, (frames, DEFAULT_FRAMES), fps, seed),
     }
 }
 
-/// The poses of `camera`: a motion pattern over `db`'s bounds, or a path CSV file.
+/// Frames a walk makes of a motion pattern when `--frames` is not given.
+pub const DEFAULT_FRAMES: usize = 600;
+
+/// The poses of `camera`: `frames` of a motion pattern over `db`'s bounds (`default`
+/// when not given), or a path CSV file, all of it or its first `frames` poses (a file
+/// shorter than that is an error, not a shorter walk).
 pub fn camera_path(
     db: &Database,
     camera: &str,
-    frames: usize,
+    (frames, default): (Option<usize>, usize),
     fps: f32,
     seed: u64,
 ) -> Result<CameraPath> {
-    Ok(match camera.parse::<Motion>() {
-        Ok(m) => motion::generate(&db.bounds(), m, frames, fps, seed)?,
-        Err(_) => CameraPath::load_csv(Path::new(camera)).with_context(|| {
-            format!("'{camera}' is neither a motion pattern nor a readable path file")
-        })?,
-    })
+    if let Ok(m) = camera.parse::<Motion>() {
+        let n = frames.unwrap_or(default);
+        return Ok(motion::generate(&db.bounds(), m, n, fps, seed)?);
+    }
+    let mut path = CameraPath::load_csv(Path::new(camera)).with_context(|| {
+        format!("'{camera}' is neither a motion pattern nor a readable path file")
+    })?;
+    if let Some(n) = frames {
+        if n > path.len() {
+            bail!(
+                "--frames {n}: the path file {camera} holds {} poses",
+                path.len()
+            );
+        }
+        path.poses.truncate(n);
+        path.validate()?;
+    }
+    Ok(path)
 }
 
 #[allow(clippy::too_many_arguments)]
 fn pvs_walk_cmd(
     path: &Path,
     camera: &str,
-    frames: usize,
+    frames: Option<usize>,
     fps: f32,
     seed: u64,
     rule: PvsWalkConfig,
@@ -479,7 +505,7 @@ fn visual_walk_cmd(
     path: &Path,
     cfg: &VisualConfig,
     camera: &str,
-    (frames, fps, seed): (usize, f32, u64),
+    (frames, fps, seed): (Option<usize>, f32, u64),
     csv: Option<&Path>,
     source: &SourceArgs,
     quiet: bool,
@@ -503,7 +529,7 @@ fn scene_walk_cmd(
     path: &Path,
     cfg: &SceneConfig,
     camera: &str,
-    (frames, fps, seed): (usize, f32, u64),
+    (frames, fps, seed): (Option<usize>, f32, u64),
     csv: Option<&Path>,
     source: &SourceArgs,
     quiet: bool,

@@ -52,9 +52,11 @@ pub fn write_levels(
     min_triangles: usize,
 ) -> Result<Vec<LevelFile>> {
     let pm = ProgressiveMesh::build(mesh)?;
+    // The levels first: options they refuse leave no folder behind.
+    let levels = pm.levels(ratio, min_triangles)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let mut files = Vec::new();
-    for (i, level) in pm.levels(ratio, min_triangles)?.into_iter().enumerate() {
+    for (i, level) in levels.into_iter().enumerate() {
         let path = out.join(format!("level-{i}.obj"));
         write_obj(
             &path,

@@ -57,6 +57,45 @@ pub struct BuildOptions {
     pub order: WriteOrder,
 }
 
+impl BuildOptions {
+    /// Checks every option before any work, so that a bad one fails in a moment, not
+    /// after the long steps before the one that takes it: the page size, the fill
+    /// factor, the LOD, visibility and HDoV-tree settings, and that an HDoV-tree comes
+    /// with visibility. The error names the bad one.
+    pub fn validate(&self) -> Result<()> {
+        if !crate::store::valid_page_size(self.page_size) {
+            return Err(Error::Invalid(format!(
+                "page size {} is not a power of two in {}..={}",
+                self.page_size,
+                crate::store::MIN_PAGE_SIZE,
+                crate::store::MAX_PAGE_SIZE
+            )));
+        }
+        if !(0.1..=1.0).contains(&self.fill) {
+            return Err(Error::Invalid(format!(
+                "fill factor {} is outside 0.1..=1",
+                self.fill
+            )));
+        }
+        if let Some(lod) = &self.lod {
+            lod.validate()?;
+        }
+        if let Some(v) = &self.visibility {
+            v.validate()?;
+        }
+        if let Some(h) = &self.hdov {
+            h.validate()?;
+            if self.visibility.is_none() {
+                return Err(Error::Invalid(
+                    "the HDoV-tree needs the viewcells' visibility: build with --visibility too"
+                        .into(),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for BuildOptions {
     fn default() -> BuildOptions {
         BuildOptions {
@@ -174,6 +213,7 @@ pub fn build_from_scene_with_progress(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
+    opts.validate()?;
     let mut reader = SceneReader::open(scene)?;
     let total = reader.object_count();
     let unpack = |o: SceneObject| (o.id, o.kind.as_u8(), o.mesh);
@@ -253,6 +293,7 @@ pub fn build_from_obj_with_progress(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
+    opts.validate()?;
     if files.is_empty() {
         return Err(Error::Invalid("no OBJ file to build from".into()));
     }
@@ -281,11 +322,7 @@ fn build(
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
     let start = Instant::now();
-    if opts.hdov.is_some() && opts.visibility.is_none() {
-        return Err(Error::Invalid(
-            "the HDoV-tree needs the viewcells' visibility: build with --visibility too".into(),
-        ));
-    }
+    opts.validate()?;
     let mut lods = opts.lod.as_ref().map(LodWriter::new).transpose()?;
     let mut store = Store::create(db, opts.page_size)?;
     // Objects count as built once their LODs are stored too, which may be a batch later.

@@ -32,8 +32,10 @@ pub struct FidelityArgs {
     /// pb (under --budget) or conv.
     #[arg(long, default_value = "review")]
     mode: String,
-    #[arg(long, default_value_t = 300)]
-    frames: usize,
+    /// Frames to draw: of a motion pattern or `cells`, how many to make (default 300);
+    /// of a path file, its first N poses (default: all of them).
+    #[arg(long, value_name = "N")]
+    frames: Option<usize>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Image size, WIDTHxHEIGHT.
@@ -97,8 +99,10 @@ impl FidelityArgs {
         let path =
             path.unwrap_or_else(|| if preset.is_some() { "normal" } else { "cells" }.to_string());
         let poses = match path.as_str() {
-            "cells" if preset.is_none() => cell_walk(&db, frames, 1.4 / fps, fps, seed)?,
-            other => camera_path(&db, other, frames, fps, seed)?,
+            "cells" if preset.is_none() => {
+                cell_walk(&db, frames.unwrap_or(300), 1.4 / fps, fps, seed)?
+            }
+            other => camera_path(&db, other, (frames, 300), fps, seed)?,
         };
         let cfg = ReviewConfig {
             pace: None,

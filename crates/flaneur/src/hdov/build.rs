@@ -50,6 +50,24 @@ impl Default for HdovOptions {
     }
 }
 
+impl HdovOptions {
+    /// Checks the settings: at least one scheme, a fill factor in 0.1..=1.
+    pub fn validate(&self) -> Result<()> {
+        if self.schemes.is_empty() {
+            return Err(Error::Invalid(
+                "an HDoV-tree needs at least one storage scheme".into(),
+            ));
+        }
+        if !(0.1..=1.0).contains(&self.fill) {
+            return Err(Error::Invalid(format!(
+                "HDoV fill factor {} is outside 0.1..=1",
+                self.fill
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// One scheme as stored, against its estimate (eqs. 5.7–5.9).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SchemeReport {
@@ -203,17 +221,7 @@ pub(crate) fn build_hdov(
     progress: &dyn Progress,
 ) -> Result<HdovReport> {
     let start = Instant::now();
-    if opts.schemes.is_empty() {
-        return Err(Error::Invalid(
-            "an HDoV-tree needs at least one storage scheme".into(),
-        ));
-    }
-    if !(0.1..=1.0).contains(&opts.fill) {
-        return Err(Error::Invalid(format!(
-            "HDoV fill factor {} is outside 0.1..=1",
-            opts.fill
-        )));
-    }
+    opts.validate()?;
     let visibility = VisibilityTable::open(store)?.ok_or_else(|| {
         Error::Invalid(
             "the HDoV-tree needs the viewcells' visibility: build with --visibility".into(),

@@ -1,6 +1,10 @@
 //! OBJ import (tobj): every object or group of a file becomes one object of the
 //! database. Faces are triangulated; missing normals are computed per vertex from
 //! the area-weighted normals of the faces around it.
+//!
+//! Before tobj parses it, the file is read once to name the line of what tobj would
+//! report without one (text that is not UTF-8) or pass over in silence (a face of
+//! fewer than three vertices, which tobj takes for a point or a line and drops).
 
 use std::path::Path;
 
@@ -16,6 +20,8 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
         path: path.to_path_buf(),
         what,
     };
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    check_lines(&bytes).map_err(&bad)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -61,6 +67,40 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
         return Err(bad("no faces: the file holds no object to import".into()));
     }
     Ok(out)
+}
+
+/// What tobj would report without a line, or drop without a word: the first line that
+/// is not UTF-8 text, or holds a face of fewer than three vertices.
+fn check_lines(bytes: &[u8]) -> std::result::Result<(), String> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let before = &bytes[..e.valid_up_to()];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = before.len()
+            - before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |i| i + 1)
+            + 1;
+        format!(
+            "line {line}: not UTF-8 text (byte {:#04x} at column {column})",
+            bytes[e.valid_up_to()]
+        )
+    })?;
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("f") {
+            continue;
+        }
+        let n = words.count();
+        if n < 3 {
+            return Err(format!(
+                "line {}: a face of {n} {}: a face needs three or more",
+                i + 1,
+                if n == 1 { "vertex" } else { "vertices" }
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {

@@ -62,10 +62,9 @@ pub struct Viewcell {
 }
 
 impl ViewcellGrid {
-    /// The grid of `size`-metre cells over `city`'s bounds, for eyes between `eye[0]`
-    /// and `eye[1]` metres above its ground.
-    pub fn new(city: &Aabb, size: f32, eye: [f32; 2]) -> Result<ViewcellGrid> {
-        city.validate()?;
+    /// Checks a cell size and an eye range as [`ViewcellGrid::new`] takes them, before
+    /// any city is at hand.
+    pub fn check(size: f32, eye: [f32; 2]) -> Result<()> {
         if !(size.is_finite() && size > 0.0) {
             return Err(Error::Invalid(format!(
                 "viewcell size {size} m: it must be a positive number of metres"
@@ -77,6 +76,14 @@ impl ViewcellGrid {
                 eye[0], eye[1]
             )));
         }
+        Ok(())
+    }
+
+    /// The grid of `size`-metre cells over `city`'s bounds, for eyes between `eye[0]`
+    /// and `eye[1]` metres above its ground.
+    pub fn new(city: &Aabb, size: f32, eye: [f32; 2]) -> Result<ViewcellGrid> {
+        city.validate()?;
+        ViewcellGrid::check(size, eye)?;
         let extent = city.extent();
         let count = |len: f32| (len / size).ceil().max(1.0);
         let (columns, rows) = (count(extent.x), count(extent.z));

@@ -66,14 +66,20 @@ impl CubicProjection {
     /// its identity buffer 384 MiB: beyond it, a resolution is a mistake.
     pub const MAX_RESOLUTION: u32 = 4096;
 
-    /// A projection of `resolution`×`resolution` pixels per face, `1..=MAX_RESOLUTION`.
-    pub fn new(resolution: u32) -> Result<CubicProjection> {
+    /// Checks a resolution as [`CubicProjection::new`] takes it: `1..=MAX_RESOLUTION`.
+    pub fn check(resolution: u32) -> Result<()> {
         if !(1..=Self::MAX_RESOLUTION).contains(&resolution) {
             return Err(Error::BadResolution {
                 n: resolution,
                 max: Self::MAX_RESOLUTION,
             });
         }
+        Ok(())
+    }
+
+    /// A projection of `resolution`×`resolution` pixels per face, `1..=MAX_RESOLUTION`.
+    pub fn new(resolution: u32) -> Result<CubicProjection> {
+        CubicProjection::check(resolution)?;
         let n = resolution as usize;
         let edge = |k: usize| -1.0 + 2.0 * k as f64 / n as f64;
         // The solid angle of the face rectangle [0, x] × [0, y] at distance 1 is

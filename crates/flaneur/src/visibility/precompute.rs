@@ -51,6 +51,16 @@ impl Default for VisibilityOptions {
     }
 }
 
+impl VisibilityOptions {
+    /// Checks every setting, before any work: the cell size and eye range, the cube
+    /// faces' resolution, the sampling. The error names the bad one.
+    pub fn validate(&self) -> Result<()> {
+        ViewcellGrid::check(self.cell_size, self.eye)?;
+        CubicProjection::check(self.resolution)?;
+        self.samples.validate()
+    }
+}
+
 /// What the precomputation made: the grid, and each walkable cell's PVS by id.
 #[derive(Clone, Debug)]
 pub struct Precomputed {
@@ -75,7 +85,7 @@ pub fn precompute(
             "visibility of a city with no objects".into(),
         ));
     }
-    opts.samples.validate()?;
+    opts.validate()?;
     let boxes: Vec<Aabb> = objects
         .iter()
         .map(|(id, m)| {
