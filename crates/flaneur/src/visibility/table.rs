@@ -209,13 +209,15 @@ pub fn decode_record(b: &[u8], count: u32) -> Result<CellPvs> {
     bytes::checksum(b, b.len() - CRC_LEN).map_err(|w| corrupt(format!("record {w}")))?;
     let body = &b[..b.len() - CRC_LEN];
     let mut at = 0;
-    let mut ids = Vec::with_capacity(count);
+    let mut ids: Vec<u64> = Vec::with_capacity(count);
     for k in 0..count {
         let d = read_varint(body, &mut at)
             .ok_or_else(|| corrupt(format!("object {k} of {count}: bad id")))?;
         let id = match ids.last() {
             None => d,
-            Some(&l) if d > 0 => l + d,
+            Some(&l) if d > 0 => l.checked_add(d).ok_or_else(|| {
+                corrupt(format!("object {k}: id {l} + {d} is past the largest id"))
+            })?,
             Some(_) => return Err(corrupt(format!("object {k}: ids do not ascend"))),
         };
         ids.push(id);
@@ -477,6 +479,19 @@ mod tests {
         let (grid, settings, stats, mut cells) = sample();
         cells.swap(0, 1);
         assert!(encode_table(&grid, &settings, &stats, &cells).is_err());
+    }
+
+    /// An id's difference that carries it past u64::MAX is refused by name (it was an
+    /// overflow panic; the fuzz target `visibility_table` found it).
+    #[test]
+    fn an_id_past_the_largest_is_refused() {
+        let mut b = Vec::new();
+        push_varint(&mut b, u64::MAX);
+        push_varint(&mut b, 1);
+        b.extend_from_slice(&[1, 0, 1, 0]);
+        push_crc(&mut b);
+        let e = decode_record(&b, 2).unwrap_err().to_string();
+        assert!(e.contains("past the largest id"), "{e}");
     }
 
     #[test]
