@@ -61,6 +61,7 @@ enum Command {
 }
 
 fn main() {
+    quiet_wayland_probe();
     let cli = Cli::parse();
     // A closed pipe (`flaneur query … | head -1`) ends the program quietly, as it ends
     // coreutils: Rust's runtime ignores SIGPIPE, which turns the next write into a
@@ -76,6 +77,22 @@ fn main() {
     if let Err(e) = run(cli) {
         eprintln!("error: {}", message(&e));
         std::process::exit(1);
+    }
+}
+
+/// Mesa's device-select Vulkan layer asks Wayland for the default GPU whenever the
+/// Vulkan instance offers Wayland surfaces, and libwayland prints "error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment" when there is no session
+/// to ask: on every plain X display and headless machine, where it reads as our
+/// failure. Where no Wayland session can exist the layer is turned off
+/// (`NODEVICE_SELECT`); wgpu chooses the adapter by its power preference either way.
+fn quiet_wayland_probe() {
+    let runtime_dir =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    let wayland = std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if !runtime_dir && !wayland && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // Before any thread starts.
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }
 

@@ -953,3 +953,35 @@ fn landmarks_streamed_into_a_walk_reach_the_gpu_as_the_batches_made_them() {
         }
     }
 }
+
+/// A headless shot where no Wayland session exists (no `XDG_RUNTIME_DIR`, no
+/// `WAYLAND_DISPLAY`) prints nothing on stderr: Mesa's device-select layer would ask
+/// Wayland for the default GPU and libwayland print "error: XDG_RUNTIME_DIR is invalid",
+/// which reads as our failure.
+#[test]
+fn a_headless_shot_prints_no_windowing_noise() {
+    let c = common::city(40, 3, &BuildOptions::default());
+    let b = c.bounds();
+    let at = format!("{},2,{}", b.center().x, b.center().z);
+    let png = c.dir.path().join("shot.png");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .args([
+            "shot",
+            c.db.to_str().unwrap(),
+            "--at",
+            &at,
+            "--size",
+            "64x48",
+        ])
+        .arg("-o")
+        .arg(&png)
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.is_empty(), "stderr: {err}");
+    assert!(png.exists());
+}

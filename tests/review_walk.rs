@@ -330,3 +330,57 @@ fn a_never_wait_walk_never_searches_on_the_viewers_thread() {
         assert!(db.has_lods() && s.lod_pages > 0, "{preset:?}");
     }
 }
+
+/// Records each frame's camera and how many objects it culled in; its picture's shape
+/// when it has one.
+struct Shaped {
+    aspect: Option<f32>,
+    fov_x: Vec<f32>,
+    culled: usize,
+}
+
+impl flaneur::walk::FrameSink for Shaped {
+    fn frame(
+        &mut self,
+        _: usize,
+        camera: &flaneur::geom::Camera,
+        _: &flaneur::walk::ObjectBuffer,
+        selection: &mut flaneur::walk::Selection<'_>,
+    ) -> flaneur::Result<()> {
+        self.fov_x.push(camera.fov_x);
+        self.culled += selection.culled.len();
+        Ok(())
+    }
+
+    fn aspect(&self) -> Option<f32> {
+        self.aspect
+    }
+}
+
+#[test]
+fn a_wide_viewer_gets_a_wide_view_and_a_headless_walk_the_thesis_view() {
+    let c = city();
+    let db = Database::open(&c.db).unwrap();
+    let path = motion::generate(&db.bounds(), Motion::Turning, 120, 30.0, 4).unwrap();
+    let walk = |aspect| {
+        let mut sink = Shaped {
+            aspect,
+            fov_x: Vec::new(),
+            culled: 0,
+        };
+        review::walk_into(&db, &path, &cfg(Preset::Box), |_| {}, &mut sink).unwrap();
+        sink
+    };
+    let square = walk(None);
+    let wide = walk(Some(2.0));
+    let thesis = flaneur::geom::DEFAULT_FOV;
+    assert!(square.fov_x.iter().all(|&f| f == thesis));
+    let fitted = flaneur::geom::fov_x_for(thesis, 2.0);
+    assert!(wide.fov_x.iter().all(|&f| (f - fitted).abs() < 1e-6));
+    assert!(
+        wide.culled > square.culled,
+        "a wider view culls in more: {} against {}",
+        wide.culled,
+        square.culled
+    );
+}

@@ -11,7 +11,7 @@ use super::source::SourceArgs;
 use super::write_file;
 use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::{cell_walk, CameraPath};
+use flaneur::walk::path::{cell_walk, CameraPath, Pose};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
@@ -350,19 +350,75 @@ fn walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
-    let poses = camera_path(&db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
-    if let Some(p) = save_path {
-        poses.save_csv(p)?;
-    }
-    let (report, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
-        review::walk_into(&db, &poses, cfg, tick, sink)
+    // A motion pattern's poses are made as the walk asks for them, and each frame's
+    // figures go to the CSV as the frame ends: a walk of any length in constant memory.
+    let (poses, count): (Box<dyn Iterator<Item = Pose>>, usize) = match camera.parse::<Motion>() {
+        Ok(m) if save_path.is_none() => {
+            let poses =
+                motion::poses(&db.bounds(), m, frames.unwrap_or(DEFAULT_FRAMES), fps, seed)?;
+            let count = poses.len();
+            (Box::new(poses), count)
+        }
+        _ => {
+            let path = camera_path(&db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
+            if let Some(p) = save_path {
+                path.save_csv(p)?;
+            }
+            let count = path.len();
+            (Box::new(path.poses.into_iter()), count)
+        }
+    };
+    let mut rows = csv.map(CsvRows::create).transpose()?;
+    let (report, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
+        review::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| match rows.as_mut() {
+            Some(rows) => rows.write(f),
+            None => Ok(()),
+        })
     })?;
-    if let Some(p) = csv {
-        write_file(p, &report.to_csv())?;
+    if let Some(rows) = rows {
+        rows.finish()?;
     }
     print_walk(&report);
     print_remote(&db);
     print_render(drawn, render)
+}
+
+/// A walk's CSV, a row written as each frame ends.
+struct CsvRows {
+    path: PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl CsvRows {
+    /// Creates `path` and writes the header.
+    fn create(path: &Path) -> Result<CsvRows> {
+        let file =
+            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let mut rows = CsvRows {
+            path: path.to_path_buf(),
+            out: std::io::BufWriter::new(file),
+        };
+        rows.line(review::FrameStats::CSV_HEADER)?;
+        Ok(rows)
+    }
+
+    fn line(&mut self, text: &str) -> flaneur::Result<()> {
+        use std::io::Write;
+        writeln!(self.out, "{text}").map_err(|e| flaneur::Error::io(&self.path, e))
+    }
+
+    /// One frame's row.
+    fn write(&mut self, f: &review::FrameStats) -> flaneur::Result<()> {
+        self.line(&f.csv_row())
+    }
+
+    /// Writes what is buffered.
+    fn finish(mut self) -> Result<()> {
+        use std::io::Write;
+        self.out
+            .flush()
+            .with_context(|| format!("writing {}", self.path.display()))
+    }
 }
 
 /// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable
@@ -437,7 +493,7 @@ fn pvs_walk_cmd(
     // The PVS walk's cameras have the default frustum (`Pose::camera`).
     let (r, drawn) = rendered(
         &db,
-        (&poses, quiet),
+        (poses.len(), quiet),
         render,
         flaneur::geom::DEFAULT_FAR,
         |sink, tick| pvs_walk::walk_pvs_into(&db, &poses, rule, tick, sink),
@@ -513,7 +569,7 @@ fn visual_walk_cmd(
 ) -> Result<()> {
     let db = source.open(path)?;
     let poses = viewcell_path(&db, camera, frames, fps, seed)?;
-    let (r, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
+    let (r, drawn) = rendered(&db, (poses.len(), quiet), render, cfg.far, |sink, tick| {
         visual::walk_into(&db, &poses, cfg, tick, sink)
     })?;
     if let Some(p) = csv {
@@ -554,7 +610,7 @@ fn scene_walk_cmd(
             started.elapsed().as_secs_f64()
         );
     }
-    let (r, drawn) = rendered(&db, (&poses, quiet), render, cfg.far, |sink, tick| {
+    let (r, drawn) = rendered(&db, (poses.len(), quiet), render, cfg.far, |sink, tick| {
         scene_walk::walk_into(&db, &mut tree, &poses, cfg, tick, sink)
     })?;
     if let Some(p) = csv {

@@ -50,6 +50,7 @@ pub mod pvs_prefetch;
 pub mod pvs_stats;
 pub mod report;
 pub mod scene_tree;
+pub mod soak;
 pub mod stream;
 pub mod stream_blocks;
 pub mod stream_bytes;

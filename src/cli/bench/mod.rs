@@ -21,6 +21,7 @@ mod pvs_http;
 mod pvs_prefetch;
 mod report;
 mod scene_tree;
+mod soak;
 mod stream;
 mod stream_blocks;
 mod stream_bytes;
@@ -69,6 +70,9 @@ enum Experiment {
     /// triangles, nodes visited, frames within budget (Table 6.1, Figs. 6.4–6.7). Needs
     /// a database built with --visibility.
     SceneTree(scene_tree::SceneTreeArgs),
+    /// Ours: an hour of walking (108,000 frames, unpaced) with the resident set sampled:
+    /// flat after the warm-up, within the buffer's budget and a fixed overhead.
+    Soak(soak::SoakArgs),
     /// Frame and query time against the prefetch factor k, per motion pattern (Fig. 4.17).
     PrefetchK(prefetch_k::PrefetchKArgs),
     /// Objects and time removed by frustum culling against the disk cell's scale factor (Table 4.2).
@@ -150,6 +154,7 @@ impl BenchArgs {
             Experiment::HdovScaling(a) => a.run(),
             Experiment::VisualVsReview(a) => a.run(),
             Experiment::SceneTree(a) => a.run(),
+            Experiment::Soak(a) => a.run(),
             Experiment::HdovStorage(a) => a.run(),
             Experiment::PrefetchK(a) => a.run(),
             Experiment::ViewCulling(a) => a.run(),

@@ -6,30 +6,29 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use super::super::write_file;
-use flaneur::walk::path::CameraPath;
 use flaneur::Database;
 
-/// A bar counting the walk's frames, hidden when quiet.
-fn frame_bar(poses: &CameraPath, quiet: bool) -> indicatif::ProgressBar {
+/// A bar counting the walk's `frames`, hidden when quiet.
+fn frame_bar(frames: usize, quiet: bool) -> indicatif::ProgressBar {
     if quiet {
         indicatif::ProgressBar::hidden()
     } else {
-        indicatif::ProgressBar::new(poses.poses.len() as u64)
+        indicatif::ProgressBar::new(frames as u64)
     }
 }
 
-/// Runs `walk` over `poses` under a bar of its frames (hidden when `quiet`), with a frame
+/// Runs `walk` over `frames` poses under a bar of its frames (hidden when `quiet`), with a frame
 /// writer when `render` asks for one (frames drawn with a ground reaching `far` past the
 /// city), else with no sink; and what drawing cost. `walk` is handed the sink and what
 /// to tell of each frame.
 pub(super) fn rendered<R>(
     db: &Database,
-    (poses, quiet): (&CameraPath, bool),
+    (frames, quiet): (usize, bool),
     render: Option<&RenderOpts>,
     far: f32,
     walk: impl FnOnce(&mut dyn flaneur::walk::FrameSink, &mut dyn FnMut(usize)) -> flaneur::Result<R>,
 ) -> Result<(R, Option<Drawn>)> {
-    let bar = frame_bar(poses, quiet);
+    let bar = frame_bar(frames, quiet);
     let mut tick = |_: usize| bar.inc(1);
     let Some(r) = render else {
         let result = walk(&mut flaneur::walk::NoSink, &mut tick)?;

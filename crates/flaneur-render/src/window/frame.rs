@@ -71,13 +71,16 @@ impl WalkWindow {
         };
         let started = Instant::now();
         let view = texture.texture.create_view(&Default::default());
-        // The walk's square view, centred.
-        let side = w.min(h) as f32;
-        let viewport = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
-        let view_proj = if self.top_view {
-            top_view(camera)
+        // The walk's view fills the window: the walk fitted its camera's horizontal
+        // field of view to the window's shape (`FrameSink::aspect`). The view from
+        // above stays square, centred.
+        let (viewport, view_proj) = if self.top_view {
+            let side = w.min(h) as f32;
+            let square = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
+            (square, top_view(camera))
         } else {
-            camera.view_proj(1.0)?
+            let aspect = w as f32 / h.max(1) as f32;
+            ([0.0, 0.0, w as f32, h as f32], camera.view_proj(aspect)?)
         };
         let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
         s.scene.encode(
@@ -181,6 +184,14 @@ impl FrameSink for WalkWindow {
 
     fn lod_tau(&self) -> Option<f32> {
         self.lod_tau
+    }
+
+    fn aspect(&self) -> Option<f32> {
+        let (w, h) = match &self.surfaced {
+            Some(s) => (s.config.width, s.config.height),
+            None => self.opts.size,
+        };
+        (w > 0 && h > 0).then(|| w as f32 / h as f32)
     }
 
     fn lod_restart(&mut self) -> bool {

@@ -73,6 +73,7 @@ pub mod path;
 pub mod pvs_walk;
 mod remote;
 pub mod review;
+mod review_tally;
 pub mod scene_walk;
 mod session;
 mod sink;

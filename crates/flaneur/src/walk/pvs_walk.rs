@@ -226,7 +226,7 @@ pub fn walk_pvs_into(
     tick: impl FnMut(usize),
     sink: &mut dyn FrameSink,
 ) -> Result<PvsWalkReport> {
-    walk_pvs_live(db, cfg, tick, &mut Played { path, sink })
+    walk_pvs_live(db, cfg, tick, &mut Played::path(path, sink))
 }
 
 /// [`walk_pvs_into`] with the poses coming from `viewer` frame by frame (a person at a

@@ -37,8 +37,7 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
-use super::frame_times::frame_times;
-use super::path::CameraPath;
+use super::path::{CameraPath, Pose};
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::walk_lods::WalkLods;
 use crate::cache::{CacheStats, Trace};
@@ -315,6 +314,44 @@ pub struct FrameStats {
     pub outran: bool,
 }
 
+impl FrameStats {
+    /// The columns of [`FrameStats::csv_row`].
+    pub const CSV_HEADER: &'static str = "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow,outran,coarse_drawn,refined";
+
+    /// The frame as one CSV row (no line end), its columns [`FrameStats::CSV_HEADER`]:
+    /// what a walk writes as each frame ends.
+    pub fn csv_row(&self) -> String {
+        let f = self;
+        format!(
+                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                f.frame,
+                f.time,
+                f.frame_ms,
+                f.query_ms,
+                f.load_ms,
+                f.cull_ms,
+                f.prep_ms,
+                f.queried as u8,
+                f.sync_query as u8,
+                f.prefetch_used as u8,
+                f.prefetch_adopted as u8,
+                f.objects_loaded,
+                f.objects_buffered,
+                f.objects_drawn,
+                f.triangles_drawn,
+                f.visual_misses,
+                f.index_pages,
+                f.mesh_pages,
+                f.buffer_bytes,
+                f.evicted,
+                f.overflow as u8,
+                f.outran as u8,
+                f.coarse_drawn,
+                f.refined
+            )
+    }
+}
+
 /// A whole walk. Frame 0 loads the first disk cell from nothing (the thesis's session
 /// start); its time is reported as `initial_load_ms` and left out of the frame-time
 /// figures, which describe the walk itself.
@@ -400,39 +437,12 @@ pub struct WalkReport {
 }
 
 impl WalkReport {
-    /// One row per frame.
+    /// One row per frame, under [`FrameStats::CSV_HEADER`].
     pub fn to_csv(&self) -> String {
-        let mut s = String::from(
-            "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow,outran,coarse_drawn,refined\n",
-        );
+        let mut s = format!("{}\n", FrameStats::CSV_HEADER);
         for f in &self.frames {
-            s.push_str(&format!(
-                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                f.frame,
-                f.time,
-                f.frame_ms,
-                f.query_ms,
-                f.load_ms,
-                f.cull_ms,
-                f.prep_ms,
-                f.queried as u8,
-                f.sync_query as u8,
-                f.prefetch_used as u8,
-                f.prefetch_adopted as u8,
-                f.objects_loaded,
-                f.objects_buffered,
-                f.objects_drawn,
-                f.triangles_drawn,
-                f.visual_misses,
-                f.index_pages,
-                f.mesh_pages,
-                f.buffer_bytes,
-                f.evicted,
-                f.overflow as u8,
-                f.outran as u8,
-                f.coarse_drawn,
-                f.refined
-            ));
+            s.push_str(&f.csv_row());
+            s.push('\n');
         }
         s
     }
@@ -460,7 +470,49 @@ pub fn walk_into(
     if path.poses.is_empty() {
         return Err(Error::Invalid("the camera path has no poses".into()));
     }
-    walk_live(db, cfg, progress, &mut Played { path, sink })
+    walk_live(db, cfg, progress, &mut Played::path(path, sink))
+}
+
+/// [`walk_into`] in constant memory, for a walk of any length: the poses come from
+/// `poses` as the walk needs them (each checked as a [`CameraPath`]'s are), and each
+/// frame's figures go to `each` as the frame ends, and are not kept. The report's
+/// `frames` is empty; its summary is whole, and the same as [`walk_into`]'s.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 60, ..Default::default() }, &scene)?;
+/// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+/// use flaneur::walk::{path::motion, review, NoSink};
+/// let db = flaneur::Database::open(&path)?;
+/// let poses = motion::poses(&db.bounds(), motion::Motion::Normal, 300, 30.0, 1)?;
+/// let mut rows = 0;
+/// let cfg = review::ReviewConfig::preset(review::Preset::Box);
+/// let report = review::walk_streamed(&db, poses, &cfg, |_| {}, &mut NoSink, &mut |_| {
+///     rows += 1;
+///     Ok(())
+/// })?;
+/// assert!(report.frames.is_empty());
+/// assert_eq!((report.summary.frames, rows), (300, 300));
+/// # Ok(()) }
+/// ```
+pub fn walk_streamed(
+    db: &Database,
+    poses: impl Iterator<Item = Pose>,
+    cfg: &ReviewConfig,
+    progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+    each: &mut dyn FnMut(&FrameStats) -> Result<()>,
+) -> Result<WalkReport> {
+    super::mode::review::walk_each(
+        db,
+        cfg,
+        &mut WalkLods::new(db),
+        progress,
+        &mut Played::streamed(poses, sink),
+        each,
+    )
 }
 
 /// [`walk_into`] with the poses coming from `viewer` frame by frame (a person at a
@@ -499,54 +551,4 @@ pub(crate) struct Counts {
     pub last_failure: Option<String>,
     /// Index and mesh pages read by frame 0's own query (before any prefetch started).
     pub initial_load_pages: (u64, u64),
-}
-
-/// The walk's summary from its frames and searches.
-pub(crate) fn summarize(
-    frames: &[FrameStats],
-    counts: Counts,
-    cache: Option<CacheStats>,
-) -> WalkSummary {
-    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
-    let queries = counts.sync + counts.adopted + counts.stale;
-    let index_pages: u64 = frames.iter().map(|f| f.index_pages).sum();
-    let mesh_pages: u64 = frames.iter().map(|f| f.mesh_pages).sum();
-    let per_query = |pages: u64| {
-        if queries == 0 {
-            0.0
-        } else {
-            pages as f64 / queries as f64
-        }
-    };
-    WalkSummary {
-        frames: frames.len(),
-        initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
-        initial_load_pages: counts.initial_load_pages,
-        mean_frame_ms: times.mean,
-        max_frame_ms: times.max,
-        frame_ms_variance: times.variance,
-        frames_over_50ms: times.over_50ms,
-        queries,
-        sync_queries: counts.sync,
-        prefetches_adopted: counts.adopted,
-        prefetches_stale: counts.stale,
-        cell_changes: frames.iter().filter(|f| f.queried).count(),
-        prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
-        index_pages,
-        mesh_pages,
-        lod_pages: frames.iter().map(|f| f.lod_pages).sum(),
-        index_pages_per_query: per_query(index_pages),
-        io_per_query: per_query(index_pages + mesh_pages),
-        visual_misses: frames.iter().map(|f| f.visual_misses as u64).sum(),
-        overflow_frames: frames.iter().filter(|f| f.overflow).count(),
-        peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
-        index_cache: cache,
-        queued_queries: counts.queued,
-        frames_outran: frames.iter().filter(|f| f.outran).count(),
-        coarse_draws: frames.iter().map(|f| f.coarse_drawn as u64).sum(),
-        refined: frames.iter().map(|f| f.refined).sum(),
-        first_complete_frame: frames.iter().position(|f| f.visual_misses == 0),
-        failed_loads: counts.failed,
-        last_load_error: counts.last_failure,
-    }
 }

@@ -191,7 +191,7 @@ pub fn walk_into(
     if path.poses.is_empty() {
         return Err(Error::Invalid("the camera path has no poses".into()));
     }
-    walk_live(db, tree, cfg, progress, &mut Played { path, sink })
+    walk_live(db, tree, cfg, progress, &mut Played::path(path, sink))
 }
 
 /// [`walk_into`] with the poses coming from `viewer`.

@@ -59,6 +59,25 @@ pub(crate) struct FrameAt<'p> {
     /// Whether the viewer draws ([`FrameSink::draws`](super::FrameSink::draws)): a mode
     /// that only counts loads no meshes otherwise.
     pub draws: bool,
+    /// The viewer's picture's shape, when the view takes it
+    /// ([`FrameSink::aspect`](super::FrameSink::aspect)).
+    pub aspect: Option<f32>,
+}
+
+impl FrameAt<'_> {
+    /// The camera at this frame's pose: the thesis's 45° × 45° frustum, its horizontal
+    /// field of view fitted to the viewer's picture when it asks, with `far`.
+    pub fn camera(&self, far: Option<f32>) -> Result<Camera> {
+        let p = self.pose;
+        let mut camera = Camera::new(p.position, p.yaw, p.pitch)?;
+        if let Some(far) = far {
+            camera.far = far;
+        }
+        match self.aspect {
+            Some(a) => camera.fitted_to(a),
+            None => Ok(camera),
+        }
+    }
 }
 
 /// The buffered objects a frame may draw.
@@ -86,10 +105,26 @@ pub(crate) fn run<M: Mode + ?Sized>(
     mode: &mut M,
     viewer: &mut dyn Viewer,
     lods: &mut WalkLods<'_>,
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
 ) -> Result<Vec<M::Frame>> {
-    let mut buffer = ObjectBuffer::new(mode.memory_budget());
     let mut frames = Vec::new();
+    run_each(mode, viewer, lods, progress, |f| {
+        frames.push(f);
+        Ok(())
+    })?;
+    Ok(frames)
+}
+
+/// [`run`], handing each frame's figures to `each` as the frame ends instead of keeping
+/// them: a walk of any length in constant memory.
+pub(crate) fn run_each<M: Mode + ?Sized>(
+    mode: &mut M,
+    viewer: &mut dyn Viewer,
+    lods: &mut WalkLods<'_>,
+    mut progress: impl FnMut(usize),
+    mut each: impl FnMut(M::Frame) -> Result<()>,
+) -> Result<()> {
+    let mut buffer = ObjectBuffer::new(mode.memory_budget());
     if let Some(remote) = viewer.lod_remote() {
         lods.set_remote(remote);
     }
@@ -101,6 +136,7 @@ pub(crate) fn run<M: Mode + ?Sized>(
             index,
             pose: &pose,
             draws: viewer.draws(),
+            aspect: viewer.aspect(),
         };
         let camera = mode.retrieve(at, &mut buffer)?;
         let culled = match &camera {
@@ -128,10 +164,10 @@ pub(crate) fn run<M: Mode + ?Sized>(
             streamed: lods.remote_status(),
             ..mode.figures(&frame, &buffer)
         });
-        frames.push(frame);
+        each(frame)?;
         progress(index);
     }
-    Ok(frames)
+    Ok(())
 }
 
 /// The objects of `drawable` in `buffer` that `camera` sees (ViewCulling, Shou 2002
@@ -249,10 +285,7 @@ mod tests {
         let mut ticks = Vec::new();
         let frames = run(
             &mut mode,
-            &mut Played {
-                path: &path,
-                sink: &mut sink,
-            },
+            &mut Played::path(&path, &mut sink),
             &mut WalkLods::default(),
             |i| ticks.push(i),
         )

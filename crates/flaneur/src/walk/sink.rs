@@ -26,6 +26,14 @@ pub trait FrameSink {
         true
     }
 
+    /// The shape of the picture it draws (width / height), when the walk's view should
+    /// take it: the camera keeps its vertical field of view and widens or narrows its
+    /// horizontal one to fill the picture, and selects and culls for that view. `None`
+    /// (the default, and every headless walk's): the thesis's 45° × 45°.
+    fn aspect(&self) -> Option<f32> {
+        None
+    }
+
     /// The screen-space error the walk's LOD selection draws this frame under, a
     /// fraction of the viewport ([`lod_select`](super::lod_select)); `None`: every
     /// object at full detail.
@@ -189,10 +197,37 @@ pub struct FrameFigures {
     pub streamed: Option<String>,
 }
 
-/// A recorded path played to a sink: the viewer of a walk along a fixed path.
+/// Poses played to a sink in order: the viewer of a walk along a fixed path, or along
+/// poses an iterator makes as the walk asks for them (a walk too long to hold its path),
+/// each checked as a [`CameraPath`](super::path::CameraPath)'s are.
 pub(crate) struct Played<'a> {
-    pub path: &'a super::path::CameraPath,
-    pub sink: &'a mut dyn FrameSink,
+    poses: Box<dyn Iterator<Item = super::path::Pose> + 'a>,
+    /// The time of the last pose, when the poses are checked as they come.
+    checked: Option<Option<f64>>,
+    sink: &'a mut dyn FrameSink,
+}
+
+impl<'a> Played<'a> {
+    /// The poses of `path` (checked when it was made).
+    pub(crate) fn path(path: &'a super::path::CameraPath, sink: &'a mut dyn FrameSink) -> Self {
+        Played {
+            poses: Box::new(path.poses.iter().copied()),
+            checked: None,
+            sink,
+        }
+    }
+
+    /// The poses `poses` gives, checked one by one.
+    pub(crate) fn streamed(
+        poses: impl Iterator<Item = super::path::Pose> + 'a,
+        sink: &'a mut dyn FrameSink,
+    ) -> Self {
+        Played {
+            poses: Box::new(poses),
+            checked: Some(None),
+            sink,
+        }
+    }
 }
 
 impl FrameSink for Played<'_> {
@@ -214,6 +249,10 @@ impl FrameSink for Played<'_> {
         self.sink.lod_tau()
     }
 
+    fn aspect(&self) -> Option<f32> {
+        self.sink.aspect()
+    }
+
     fn lod_restart(&mut self) -> bool {
         self.sink.lod_restart()
     }
@@ -233,7 +272,16 @@ impl FrameSink for Played<'_> {
 
 impl Viewer for Played<'_> {
     fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>> {
-        Ok(self.path.poses.get(frame).copied())
+        let Some(pose) = self.poses.next() else {
+            return Ok(None);
+        };
+        if let Some(last) = self.checked.as_mut() {
+            super::path::check_pose(&pose, *last).map_err(|what| {
+                crate::error::Error::Invalid(format!("camera path, pose {frame}: {what}"))
+            })?;
+            *last = Some(pose.time);
+        }
+        Ok(Some(pose))
     }
 }
 

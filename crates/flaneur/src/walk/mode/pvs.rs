@@ -140,7 +140,7 @@ impl Mode for Pvs<'_> {
             return Ok(None);
         }
         self.load_held(buffer)?;
-        Ok(Some(pose.camera()?))
+        Ok(Some(at.camera(None)?))
     }
 
     fn drawable(&self) -> Drawable<'_> {

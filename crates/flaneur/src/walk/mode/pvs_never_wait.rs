@@ -107,7 +107,7 @@ impl Mode for NeverWait<'_> {
         }
         let started = Instant::now();
         let mut frame = PvsFrame::default();
-        let camera = pose.camera()?;
+        let camera = at.camera(None)?;
         let here = match self.db.viewcell_at(pose.position)? {
             Some(id) => {
                 let p = Position::new(f64::from(pose.position.x), f64::from(pose.position.z));

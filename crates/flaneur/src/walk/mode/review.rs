@@ -37,9 +37,8 @@ use crate::walk::mode::loader::{fetch, Answer, Fetched, Request};
 use crate::walk::mode::oracle::Oracle;
 use crate::walk::mode::receive::receive;
 use crate::walk::mode::refining::{refine, Refined};
-use crate::walk::review::{
-    summarize, Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K,
-};
+use crate::walk::review::{Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K};
+use crate::walk::review_tally::ReviewTally;
 use crate::walk::session::{self, Culled, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 use crate::walk::walk_lods::WalkLods;
@@ -59,6 +58,25 @@ pub(crate) fn walk_live<'db>(
     lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
+) -> Result<WalkReport> {
+    let mut frames = Vec::new();
+    let mut report = walk_each(db, cfg, lods, progress, viewer, &mut |f: &FrameStats| {
+        frames.push(f.clone());
+        Ok(())
+    })?;
+    report.frames = frames;
+    Ok(report)
+}
+
+/// [`walk_live`] handing each frame's figures to `each` as the frame ends, keeping
+/// none: the report's `frames` is empty, its summary whole.
+pub(crate) fn walk_each<'db>(
+    db: &'db Database,
+    cfg: &ReviewConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+    each: &mut dyn FnMut(&FrameStats) -> Result<()>,
 ) -> Result<WalkReport> {
     cfg.validate()?;
     let oracle = Oracle::new(db)?;
@@ -95,7 +113,7 @@ pub(crate) fn walk_live<'db>(
     // Set while the viewer's own lane loads: the refining thread gives way to it.
     let now_busy = AtomicBool::new(false);
     let now_busy = &now_busy;
-    let (frames, counts) = std::thread::scope(|scope| -> Result<(Vec<FrameStats>, Counts)> {
+    let (tally, counts) = std::thread::scope(|scope| -> Result<(ReviewTally, Counts)> {
         let (res_tx, res_rx) = mpsc::channel::<(Lane, Answer)>();
         // One thread per lane, each taking its requests in turn.
         let lane = |on: bool, lane: Lane| -> Option<mpsc::Sender<Request>> {
@@ -177,25 +195,29 @@ pub(crate) fn walk_live<'db>(
             clock: Instant::now(),
             pending: None,
         };
-        let frames = session::run(&mut mode, viewer, lods, progress);
+        let mut tally = ReviewTally::default();
+        let walked = session::run_each(&mut mode, viewer, lods, progress, |f| {
+            tally.add(&f);
+            each(&f)
+        });
         ended.store(true, Ordering::Relaxed);
-        let frames = frames?;
-        if frames.is_empty() {
+        walked?;
+        if tally.frames() == 0 {
             return Err(Error::Invalid("the walk had no poses".into()));
         }
         // Closing the request channels ends the loader threads.
         mode.lanes = [None, None];
         mode.fine_tx = None;
-        Ok((frames, mode.counts))
+        Ok((tally, mode.counts))
     })?;
-    let summary = summarize(&frames, counts, pool.as_ref().map(|p| p.stats()));
+    let summary = tally.summary(counts, pool.as_ref().map(|p| p.stats()));
     let trace = pool
         .as_ref()
         .filter(|_| cfg.record_trace)
         .map(|p| p.take_trace());
     Ok(WalkReport {
         config: cfg.clone(),
-        frames,
+        frames: Vec::new(),
         summary,
         trace,
     })
@@ -271,10 +293,7 @@ impl Mode for Review<'_> {
             wait_until_due(pose.time, start, speed, self.clock);
         }
         let motion = self.track.motion();
-        let camera = Camera {
-            far: self.cfg.far,
-            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-        };
+        let camera = at.camera(Some(self.cfg.far))?;
         let frustum = camera.frustum();
         let fcell = frustum.aabb();
         let start = Instant::now();

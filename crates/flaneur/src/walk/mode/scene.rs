@@ -64,10 +64,7 @@ impl Mode for Scene<'_> {
 
     fn retrieve(&mut self, at: FrameAt<'_>, buffer: &mut ObjectBuffer) -> Result<Option<Camera>> {
         let pose = at.pose;
-        let camera = Camera {
-            far: self.cfg.far,
-            ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-        };
+        let camera = at.camera(Some(self.cfg.far))?;
         let pages = self.db.io().page_reads;
         let start = Instant::now();
         let mut frame = SceneFrame {

@@ -297,10 +297,7 @@ pub(super) fn begin_frame(
     if let (Some(speed), Some(start)) = (cfg.pace, track.start()) {
         wait_until_due(pose.time, start, speed, clock);
     }
-    let camera = Camera {
-        far: cfg.far,
-        ..Camera::new(pose.position, pose.yaw, pose.pitch)?
-    };
+    let camera = at.camera(Some(cfg.far))?;
     let frame = VisualFrame {
         frame: at.index,
         time: pose.time,

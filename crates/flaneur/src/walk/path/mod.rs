@@ -122,7 +122,7 @@ impl CameraPath {
 }
 
 /// What makes a pose valid after `prev` (the previous pose's time); the reason if not.
-fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(), String> {
+pub(crate) fn check_pose(p: &Pose, prev: Option<f64>) -> std::result::Result<(), String> {
     if !p.time.is_finite() || !p.position.is_finite() || !p.yaw.is_finite() || !p.pitch.is_finite()
     {
         return Err("a value is not finite".into());

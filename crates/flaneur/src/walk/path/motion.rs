@@ -211,6 +211,31 @@ pub fn generate(
     fps: f32,
     seed: u64,
 ) -> Result<CameraPath> {
+    Ok(CameraPath {
+        poses: poses(bounds, motion, frames, fps, seed)?.collect(),
+    })
+}
+
+/// The poses [`generate`] makes, one at a time as they are asked for, in constant
+/// memory: a walk of an hour, or of a year, need not hold its path.
+///
+/// ```
+/// use flaneur::geom::Aabb;
+/// use flaneur::walk::path::motion::{generate, poses, Motion};
+/// # fn main() -> flaneur::Result<()> {
+/// let city: Aabb = "0,0,0,2000,80,2000".parse()?;
+/// let lazy: Vec<_> = poses(&city, Motion::Turning, 500, 30.0, 3)?.collect();
+/// assert_eq!(lazy, generate(&city, Motion::Turning, 500, 30.0, 3)?.poses);
+/// assert_eq!(poses(&city, Motion::Normal, 1_000_000_000, 30.0, 3)?.len(), 1_000_000_000);
+/// # Ok(()) }
+/// ```
+pub fn poses(
+    bounds: &Aabb,
+    motion: Motion,
+    frames: usize,
+    fps: f32,
+    seed: u64,
+) -> Result<MotionPoses> {
     bounds.validate()?;
     let ext = bounds.extent();
     if !(ext.x > 0.0 && ext.z > 0.0) {
@@ -238,7 +263,7 @@ pub fn generate(
 
     let mut rng =
         ChaCha8Rng::seed_from_u64(seed ^ (motion as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    let mut mover = match params.speed {
+    let mover = match params.speed {
         Speed::Constant(speed) => {
             Mover::Street(Street::new(area, speed, params.turn_probability, &mut rng))
         }
@@ -246,41 +271,83 @@ pub fn generate(
     };
     let pitch_phase = rng.gen_range(0.0..TAU);
     let look_phase = rng.gen_range(0.0..TAU);
-    let mut next_reverse = rng.gen_range(10.0..20.0);
+    let next_reverse = rng.gen_range(10.0..20.0);
+    Ok(MotionPoses {
+        params,
+        mover,
+        rng,
+        pitch_phase,
+        look_phase,
+        next_reverse,
+        fps,
+        eye_y,
+        yaw: f32::NAN,
+        next: 0,
+        frames,
+    })
+}
 
-    let dt = 1.0 / fps;
-    let mut poses = Vec::with_capacity(frames);
-    let mut yaw = f32::NAN;
-    for i in 0..frames {
-        let time = i as f64 / fps as f64;
+/// The poses of a motion pattern, made as they are asked for ([`poses`]).
+pub struct MotionPoses {
+    params: Params,
+    mover: Mover,
+    rng: ChaCha8Rng,
+    pitch_phase: f32,
+    look_phase: f32,
+    next_reverse: f32,
+    fps: f32,
+    eye_y: f32,
+    /// The last pose's yaw; NaN before the first.
+    yaw: f32,
+    /// The index of the next pose.
+    next: usize,
+    frames: usize,
+}
+
+impl Iterator for MotionPoses {
+    type Item = Pose;
+
+    fn next(&mut self) -> Option<Pose> {
+        if self.next >= self.frames {
+            return None;
+        }
+        let (i, params, dt) = (self.next, self.params, 1.0 / self.fps);
+        self.next += 1;
+        let time = i as f64 / self.fps as f64;
         let t = time as f32;
         if i > 0 {
-            if params.backward && t >= next_reverse {
-                mover.reverse();
-                next_reverse = t + rng.gen_range(10.0..20.0);
+            if params.backward && t >= self.next_reverse {
+                self.mover.reverse();
+                self.next_reverse = t + self.rng.gen_range(10.0..20.0);
             }
-            mover.advance(dt, &mut rng);
+            self.mover.advance(dt, &mut self.rng);
         }
-        let mut target = mover.heading();
+        let mut target = self.mover.heading();
         if params.backward {
             target += PI;
         }
-        target += params.look_around * (TAU * t / 4.0 + look_phase).sin();
-        yaw = if yaw.is_nan() {
+        target += params.look_around * (TAU * t / 4.0 + self.look_phase).sin();
+        self.yaw = if self.yaw.is_nan() {
             target
         } else {
-            yaw + wrap(target - yaw).clamp(-params.yaw_rate * dt, params.yaw_rate * dt)
+            self.yaw + wrap(target - self.yaw).clamp(-params.yaw_rate * dt, params.yaw_rate * dt)
         };
-        let p = mover.position();
-        poses.push(Pose {
+        let p = self.mover.position();
+        Some(Pose {
             time,
-            position: Vec3::new(p.x, eye_y, p.y),
-            yaw,
-            pitch: params.pitch_amplitude * (TAU * t / 8.0 + pitch_phase).sin(),
-        });
+            position: Vec3::new(p.x, self.eye_y, p.y),
+            yaw: self.yaw,
+            pitch: params.pitch_amplitude * (TAU * t / 8.0 + self.pitch_phase).sin(),
+        })
     }
-    Ok(CameraPath { poses })
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.frames - self.next;
+        (left, Some(left))
+    }
 }
+
+impl ExactSizeIterator for MotionPoses {}
 
 #[derive(Clone, Copy)]
 enum Speed {
