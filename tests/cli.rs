@@ -213,7 +213,7 @@ fn walk_and_index_cache_bench() {
     );
     // A path file walks its first --frames poses, and is never silently cut short.
     let part = c.dir.path().join("part.csv");
-    let out = flaneur(&[
+    common::succeeded(&flaneur(&[
         "walk",
         db,
         "--path",
@@ -225,12 +225,7 @@ fn walk_and_index_cache_bench() {
         "--quiet",
         "--csv",
         part.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ]));
     assert_eq!(std::fs::read_to_string(&part).unwrap().lines().count(), 31);
     let out = flaneur(&[
         "walk",
