@@ -4,7 +4,8 @@
 //!
 //! Before tobj parses it, the file is read once to name the line of what tobj would
 //! report without one (text that is not UTF-8) or pass over in silence (a face of
-//! fewer than three vertices, which tobj takes for a point or a line and drops).
+//! fewer than three vertices, which tobj takes for a point or a line and drops), and of
+//! an index tobj would overflow on (`check_indices`).
 
 use std::path::Path;
 
@@ -22,6 +23,7 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
     };
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     check_lines(&bytes).map_err(&bad)?;
+    check_indices(&bytes).map_err(&bad)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -103,6 +105,68 @@ fn check_lines(bytes: &[u8]) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// Checks every index of the file's faces and lines (`f`, `l`) against the elements it
+/// names, before tobj reads them: a positive index at most the file's count of its kind
+/// (positions, texture coordinates, normals), a relative (negative) one reaching no
+/// further back than the elements before it. tobj 4 computes an element's place from an
+/// index without a check for overflow: a texture or normal index past 2^62, or a
+/// relative one before the first, panicked with overflow checks and without them read
+/// another element (`f 1//1 2//1 3//6148914691236517207` took the first normal's z and
+/// the second's x and y). An index that does not parse is left to tobj, which refuses it.
+fn check_indices(text: &[u8]) -> std::result::Result<(), String> {
+    const KINDS: [(&str, &str); 3] = [
+        ("v", "position"),
+        ("vt", "texture coordinate"),
+        ("vn", "normal"),
+    ];
+    let lines = || {
+        text.split(|&b| b == b'\n')
+            .map(|l| std::str::from_utf8(l).unwrap_or(""))
+    };
+    let kind_of = |word: Option<&str>| KINDS.iter().position(|(k, _)| word == Some(*k));
+    let mut total = [0usize; 3];
+    for line in lines() {
+        if let Some(k) = kind_of(line.split_whitespace().next()) {
+            total[k] += 1;
+        }
+    }
+    let mut before = [0usize; 3];
+    for (n, line) in lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let first = words.next();
+        if let Some(k) = kind_of(first) {
+            before[k] += 1;
+            continue;
+        }
+        if !matches!(first, Some("f" | "l")) {
+            continue;
+        }
+        for word in words {
+            for (k, part) in word.split('/').enumerate().take(3) {
+                let Ok(x) = part.parse::<isize>() else {
+                    continue;
+                };
+                let name = KINDS[k].1;
+                if x > 0 && x.unsigned_abs() > total[k] {
+                    return Err(format!(
+                        "line {}: index {x} names no {name} (the file has {})",
+                        n + 1,
+                        total[k]
+                    ));
+                }
+                if x < 0 && x.unsigned_abs() > before[k] {
+                    return Err(format!(
+                        "line {}: relative index {x} reaches before the first {name} ({} before it)",
+                        n + 1,
+                        before[k]
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![Vec3::ZERO; positions.len()];
     for t in indices.chunks_exact(3) {
@@ -121,4 +185,42 @@ fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     acc.into_iter()
         .map(|n| n.normalize_or_zero().to_array())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Vec<(String, Mesh)>> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.obj");
+        std::fs::write(&path, text).unwrap();
+        load_obj(&path)
+    }
+
+    const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 1 0 0\n";
+
+    #[test]
+    fn a_triangle_loads() {
+        let objects = load(&format!("{TRIANGLE}f 1//1 2//1 -1//-2\n")).unwrap();
+        assert_eq!(objects[0].1.normals, [[0.0, 0.0, 1.0]; 3]);
+    }
+
+    /// An index tobj would overflow on is refused by name (found by the fuzz target
+    /// `obj`): this one panicked with overflow checks and without them loaded a normal
+    /// made of two others.
+    #[test]
+    fn an_index_past_the_elements_is_refused() {
+        for face in [
+            "f 1//1 2//1 3//6148914691236517207",
+            "f 1/9223372036854775807 2/1 3/1",
+            "f 1//1 2//1 3//-3",
+            "l 1 4",
+        ] {
+            let e = load(&format!("{TRIANGLE}{face}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("line 6") && e.contains("index"), "{face}: {e}");
+        }
+    }
 }
