@@ -37,6 +37,10 @@ mod catalog;
 pub mod check;
 pub mod database;
 pub mod error;
+/// The bodies of the fuzz targets (`fuzz/`), one per decoder of untrusted file bytes,
+/// shared with the replay of their corpora. Not part of the API.
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod geom;
 pub mod hdov;
 pub mod lod;

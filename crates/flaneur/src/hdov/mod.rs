@@ -25,12 +25,12 @@
 mod build;
 mod load;
 mod lods;
-mod node;
+pub(crate) mod node;
 pub mod scene;
 mod scheme;
 mod search;
 mod tree;
-mod vd;
+pub(crate) mod vd;
 
 pub(crate) use build::build_hdov;
 pub use build::{HdovOptions, HdovReport, SchemeReport};

@@ -9,7 +9,7 @@ mod bulk;
 mod complement;
 mod history;
 mod insert;
-mod node;
+pub(crate) mod node;
 mod range;
 mod search;
 mod split;

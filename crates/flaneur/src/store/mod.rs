@@ -36,7 +36,7 @@ mod counters;
 mod extent;
 pub(crate) mod framing;
 mod header;
-mod page;
+pub(crate) mod page;
 mod remote;
 mod scan;
 mod source;

@@ -182,6 +182,24 @@ pub(crate) fn intact(page: &[u8]) -> bool {
             )
 }
 
+/// Rewrites the checksum of `page` to that of its head and payload, when its payload
+/// length fits the page: damaged bytes that pass the checksum, so that a fuzz target
+/// reaches the checks after it.
+pub(crate) fn reseal(page: &mut [u8]) {
+    if page.len() < PAGE_HEADER_LEN {
+        return;
+    }
+    let len = read_u32(page, LEN_OFFSET) as usize;
+    if len > page.len() - PAGE_HEADER_LEN {
+        return;
+    }
+    let crc = page_crc(
+        &page[..CRC_OFFSET],
+        &page[PAYLOAD_OFFSET..PAYLOAD_OFFSET + len],
+    );
+    page[CRC_OFFSET..PAYLOAD_OFFSET].copy_from_slice(&crc.to_le_bytes());
+}
+
 /// Checks one whole page (`page.len()` = page size) against its header and the
 /// expected kind, and returns its payload. The error says what is wrong, for
 /// `Error::CorruptPage`.

@@ -68,7 +68,7 @@ mod occluder;
 mod precompute;
 mod raycast;
 mod stored;
-mod table;
+pub(crate) mod table;
 
 #[cfg(test)]
 mod tests;

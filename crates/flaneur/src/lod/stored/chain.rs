@@ -269,6 +269,35 @@ impl ChainDirectory {
         })
     }
 
+    /// Rewrites the checksums of the chain `b`: each level's in the directory (where
+    /// the level's bytes lie inside `b`), then the directory's own, when `b` holds the
+    /// directory. Damaged bytes that pass the checksums, so that a fuzz target reaches
+    /// the content checks.
+    pub(crate) fn reseal(b: &mut [u8]) {
+        let Ok(head) = ChainDirectory::len_from_prefix(b) else {
+            return;
+        };
+        if head > b.len() {
+            return;
+        }
+        let n = u32_at(b, LEVELS_OFFSET) as usize;
+        for j in 0..n {
+            let at = CHAIN_HEADER_LEN + ENTRY_LEN * j;
+            let (offset, length) = (
+                u32_at(b, at + ENTRY_OFFSET) as usize,
+                u32_at(b, at + ENTRY_LENGTH) as usize,
+            );
+            if let Some(level) = offset
+                .checked_add(length)
+                .and_then(|end| b.get(offset..end))
+            {
+                let crc = crc32fast::hash(level);
+                b[at + ENTRY_CRC..at + ENTRY_LEN].copy_from_slice(&crc.to_le_bytes());
+            }
+        }
+        bytes::reseal(&mut b[..head]);
+    }
+
     /// Levels stored (level 0 is not): levels `1..=count` can be read.
     pub fn stored_levels(&self) -> usize {
         self.entries.len()

@@ -4,10 +4,10 @@
 //! their reading back through the store, every page counted.
 
 mod bake;
-mod chain;
-mod read;
+pub(crate) mod chain;
+pub(crate) mod read;
 mod select;
-mod table;
+pub(crate) mod table;
 
 pub(crate) use bake::LodWriter;
 pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};

@@ -420,6 +420,19 @@ pub(crate) fn read_progressive(store: &Store, e: &LodEntry) -> Result<Option<Pro
 }
 
 impl ProgressiveBytes {
+    /// The bytes `pm` and `dag` of the progressive mesh and DAG of object `id`, of
+    /// `triangles` triangles, as if read from nowhere (errors name no file and page 0):
+    /// for decoding bytes that came from elsewhere.
+    pub(crate) fn from_parts(id: u64, triangles: u32, pm: Vec<u8>, dag: Vec<u8>) -> Self {
+        ProgressiveBytes {
+            path: PathBuf::new(),
+            id,
+            triangles,
+            pm: (Extent::default(), pm),
+            dag: (Extent::default(), dag),
+        }
+    }
+
     /// The object these bytes belong to.
     pub(crate) fn id(&self) -> u64 {
         self.id

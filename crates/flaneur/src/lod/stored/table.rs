@@ -192,7 +192,7 @@ impl LodEntry {
 
     /// What is wrong with an entry read from a store of `pages` pages with `payload`
     /// bytes per page, if anything.
-    fn problem(&self, pages: u64, payload: usize) -> Option<String> {
+    pub(crate) fn problem(&self, pages: u64, payload: usize) -> Option<String> {
         let extents = [
             ("mesh", self.mesh),
             ("chain", self.chain),
@@ -291,7 +291,7 @@ pub(crate) fn encode_table(
 
 /// The decoded head of a table.
 #[derive(Debug)]
-struct Head {
+pub(crate) struct Head {
     stats: LodStats,
     entries: u64,
     per_page: u64,
@@ -387,30 +387,15 @@ impl LodTable {
         }
         let k = k - 1;
         let payload = store.payload_size();
-        let count = (head.entries - k as u64 * head.per_page).min(head.per_page) as usize;
-        let start = (head.head_pages + k as u64) as usize * payload;
-        let page = self.read(store, start, count * ENTRY_LEN)?;
+        let (start, len) = head.entry_page_place(k, payload);
+        let page = self.read(store, start, len)?;
         let page_no = self.extent.first_page + head.head_pages + k as u64;
         let bad = |what: String| Error::CorruptPage {
             path: store.path().to_path_buf(),
             page: page_no,
             what: format!("LOD table entry page {k}: {what}"),
         };
-        let entries: Vec<LodEntry> = page.chunks_exact(ENTRY_LEN).map(LodEntry::decode).collect();
-        if entries[0].id != head.fence[k] {
-            return Err(bad(format!(
-                "it starts at object {}, the fence says {}",
-                entries[0].id, head.fence[k]
-            )));
-        }
-        if entries.windows(2).any(|w| w[0].id >= w[1].id)
-            || head
-                .fence
-                .get(k + 1)
-                .is_some_and(|&next| entries[count - 1].id >= next)
-        {
-            return Err(bad("its object ids are not ascending".into()));
-        }
+        let entries = head.entry_page(k, &page).map_err(bad)?;
         let Ok(i) = entries.binary_search_by_key(&id, |e| e.id) else {
             return Ok(None);
         };
@@ -454,86 +439,157 @@ impl LodTable {
     fn read_head(&self, store: &Store) -> Result<Head> {
         let payload = store.payload_size();
         let total = self.extent.byte_len as usize;
-        let mut b = self.read(store, 0, total.min(payload))?;
-        if b.len() < FENCE_OFFSET + CRC_LEN {
-            return Err(corrupt(format!(
-                "truncated: {} bytes, the head alone takes {}",
-                b.len(),
-                FENCE_OFFSET + CRC_LEN
-            )));
-        }
-        bytes::magic_and_version(&b, "a LOD table", TABLE_MAGIC, TABLE_VERSION).map_err(|w| {
-            // Version 1 kept each chain in one extent; a build of this version splits it.
-            let rebuild = if w.starts_with("version") {
-                ": the database was built by another version of flaneur; build it again"
-            } else {
-                ""
-            };
-            corrupt(format!("{w}{rebuild}"))
-        })?;
-        let entries = u64_at(&b, ENTRIES_OFFSET);
-        let (per_page, entry_pages, head_pages) = shape(entries, payload);
-        let stored = (
-            u32_at(&b, ENTRY_LEN_OFFSET) as u64,
-            u32_at(&b, PER_PAGE_OFFSET) as u64,
-            u32_at(&b, ENTRY_PAGES_OFFSET) as u64,
-            u32_at(&b, HEAD_PAGES_OFFSET) as u64,
-        );
-        if stored != (ENTRY_LEN as u64, per_page, entry_pages, head_pages) {
-            return Err(corrupt(format!(
-                "its shape (entry length, per page, entry pages, head pages) {stored:?} is not \
-                 that of {entries} entries in {payload}-byte pages"
-            )));
-        }
-        let expect_len = if entries == 0 {
-            head_len(0)
-        } else {
-            (head_pages + entry_pages - 1) * payload as u64
-                + (entries - (entry_pages - 1) * per_page) * ENTRY_LEN as u64
-        };
-        if expect_len != total as u64 {
-            return Err(corrupt(format!(
-                "{total} bytes, a table of {entries} entries takes {expect_len}"
-            )));
-        }
-        let len = head_len(entry_pages) as usize;
-        if len > b.len() {
-            b.extend(self.read(store, b.len(), len - b.len())?);
-        }
-        bytes::checksum(&b, len - CRC_LEN).map_err(|w| corrupt(format!("head {w}")))?;
-        let fence: Vec<u64> = (0..entry_pages as usize)
-            .map(|k| u64_at(&b, FENCE_OFFSET + 8 * k))
-            .collect();
-        if fence.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(corrupt("the fence's ids are not ascending".into()));
-        }
-        let stats = LodStats {
-            objects: entries,
-            with_levels: u64_at(&b, WITH_LEVELS_OFFSET),
-            levels: u64_at(&b, LEVELS_OFFSET),
-            with_pm: u64_at(&b, WITH_PM_OFFSET),
-            refused: u64_at(&b, REFUSED_OFFSET),
-            pages: self.pages,
-            ratio: f32_at(&b, RATIO_OFFSET),
-            min_triangles: u32_at(&b, MIN_TRIANGLES_OFFSET),
-            pm_threshold: u64_at(&b, PM_THRESHOLD_OFFSET),
-        };
-        if stats.with_levels > entries
-            || stats.with_pm > entries
-            || stats.levels < stats.with_levels
-        {
-            return Err(corrupt(format!(
-                "counts {stats:?} do not fit {entries} objects"
-            )));
-        }
-        Ok(Head {
-            stats,
-            entries,
-            per_page,
-            head_pages,
-            fence,
+        let first = self.read(store, 0, total.min(payload))?;
+        decode_head(first, total, payload, self.pages, |start, len| {
+            self.read(store, start, len)
         })
     }
+}
+
+impl Head {
+    /// Entry pages in the table (the fence's length).
+    pub(crate) fn entry_pages(&self) -> usize {
+        self.fence.len()
+    }
+
+    /// Where entry page `k` (below [`Head::entry_pages`]) lies in the table, in pages
+    /// of `payload` bytes: (start, length) in bytes.
+    pub(crate) fn entry_page_place(&self, k: usize, payload: usize) -> (usize, usize) {
+        let count = (self.entries - k as u64 * self.per_page).min(self.per_page) as usize;
+        let start = (self.head_pages + k as u64) as usize * payload;
+        (start, count * ENTRY_LEN)
+    }
+
+    /// The entries of entry page `k` (`page`, its bytes), checked against the fence: the
+    /// first id is the fence's, the ids ascend and stay below the next page's first.
+    pub(crate) fn entry_page(
+        &self,
+        k: usize,
+        page: &[u8],
+    ) -> std::result::Result<Vec<LodEntry>, String> {
+        let entries: Vec<LodEntry> = page.chunks_exact(ENTRY_LEN).map(LodEntry::decode).collect();
+        let (Some(first), Some(last)) = (entries.first(), entries.last()) else {
+            return Err("it holds no entry".into());
+        };
+        if Some(&first.id) != self.fence.get(k) {
+            return Err(format!(
+                "it starts at object {}, the fence says {:?}",
+                first.id,
+                self.fence.get(k)
+            ));
+        }
+        if entries.windows(2).any(|w| w[0].id >= w[1].id)
+            || self.fence.get(k + 1).is_some_and(|&next| last.id >= next)
+        {
+            return Err("its object ids are not ascending".into());
+        }
+        Ok(entries)
+    }
+}
+
+/// Rewrites the checksum of the head of the table `b` (pages of `payload` bytes) where
+/// its count of entries puts it, when `b` holds that much: damaged bytes that pass the
+/// checksum, so that a fuzz target reaches the checks after it.
+pub(crate) fn reseal_head(b: &mut [u8], payload: usize) {
+    if b.len() < FENCE_OFFSET + CRC_LEN {
+        return;
+    }
+    let entry_pages = u64_at(b, ENTRIES_OFFSET).div_ceil((payload / ENTRY_LEN).max(1) as u64);
+    let len = entry_pages
+        .checked_mul(8)
+        .and_then(|fence| fence.checked_add((FENCE_OFFSET + CRC_LEN) as u64));
+    if let Some(head) = len.and_then(|l| b.get_mut(..usize::try_from(l).ok()?)) {
+        bytes::reseal(head);
+    }
+}
+
+/// Decodes the head of a table of `total` bytes in pages of `payload` bytes (`pages` of
+/// them of kind `lod` in the file) from its `first` bytes (its first page, or all of a
+/// shorter table), asking `more(start, len)` for the rest of the head where it is longer:
+/// the shape against the count of entries, the length, the checksum, the fence, the
+/// counts. An `Error::Invalid` saying what is wrong, whatever the bytes.
+pub(crate) fn decode_head(
+    mut b: Vec<u8>,
+    total: usize,
+    payload: usize,
+    pages: u64,
+    more: impl FnOnce(usize, usize) -> Result<Vec<u8>>,
+) -> Result<Head> {
+    if b.len() < FENCE_OFFSET + CRC_LEN {
+        return Err(corrupt(format!(
+            "truncated: {} bytes, the head alone takes {}",
+            b.len(),
+            FENCE_OFFSET + CRC_LEN
+        )));
+    }
+    bytes::magic_and_version(&b, "a LOD table", TABLE_MAGIC, TABLE_VERSION).map_err(|w| {
+        // Version 1 kept each chain in one extent; a build of this version splits it.
+        let rebuild = if w.starts_with("version") {
+            ": the database was built by another version of flaneur; build it again"
+        } else {
+            ""
+        };
+        corrupt(format!("{w}{rebuild}"))
+    })?;
+    let entries = u64_at(&b, ENTRIES_OFFSET);
+    let (per_page, entry_pages, head_pages) = shape(entries, payload);
+    let stored = (
+        u32_at(&b, ENTRY_LEN_OFFSET) as u64,
+        u32_at(&b, PER_PAGE_OFFSET) as u64,
+        u32_at(&b, ENTRY_PAGES_OFFSET) as u64,
+        u32_at(&b, HEAD_PAGES_OFFSET) as u64,
+    );
+    if stored != (ENTRY_LEN as u64, per_page, entry_pages, head_pages) {
+        return Err(corrupt(format!(
+            "its shape (entry length, per page, entry pages, head pages) {stored:?} is not \
+             that of {entries} entries in {payload}-byte pages"
+        )));
+    }
+    let expect_len = if entries == 0 {
+        head_len(0)
+    } else {
+        (head_pages + entry_pages - 1) * payload as u64
+            + (entries - (entry_pages - 1) * per_page) * ENTRY_LEN as u64
+    };
+    if expect_len != total as u64 {
+        return Err(corrupt(format!(
+            "{total} bytes, a table of {entries} entries takes {expect_len}"
+        )));
+    }
+    let len = head_len(entry_pages) as usize;
+    if len > b.len() {
+        b.extend(more(b.len(), len - b.len())?);
+    }
+    bytes::checksum(&b, len - CRC_LEN).map_err(|w| corrupt(format!("head {w}")))?;
+    let fence: Vec<u64> = (0..entry_pages as usize)
+        .map(|k| u64_at(&b, FENCE_OFFSET + 8 * k))
+        .collect();
+    if fence.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(corrupt("the fence's ids are not ascending".into()));
+    }
+    let stats = LodStats {
+        objects: entries,
+        with_levels: u64_at(&b, WITH_LEVELS_OFFSET),
+        levels: u64_at(&b, LEVELS_OFFSET),
+        with_pm: u64_at(&b, WITH_PM_OFFSET),
+        refused: u64_at(&b, REFUSED_OFFSET),
+        pages,
+        ratio: f32_at(&b, RATIO_OFFSET),
+        min_triangles: u32_at(&b, MIN_TRIANGLES_OFFSET),
+        pm_threshold: u64_at(&b, PM_THRESHOLD_OFFSET),
+    };
+    if stats.with_levels > entries || stats.with_pm > entries || stats.levels < stats.with_levels {
+        return Err(corrupt(format!(
+            "counts {stats:?} do not fit {entries} objects"
+        )));
+    }
+    Ok(Head {
+        stats,
+        entries,
+        per_page,
+        head_pages,
+        fence,
+    })
 }
 
 #[cfg(test)]

@@ -1,0 +1,150 @@
+//! The corpora's seeds, cut from a real database: the pieces each target takes, as the
+//! file holds them. `write_decoder_seeds` (tests/fuzz_decoders_corpus.rs, ignored)
+//! builds a small city and writes them, with the scene file and OBJ seeds it makes
+//! itself.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::hdov::{TreeHead, HDOV_SEGMENT};
+use crate::lod::stored::table::LodTable;
+use crate::store::{page, PageKind};
+use crate::visibility::VISIBILITY_SEGMENT;
+use crate::Database;
+
+/// Seeds larger than this are left out (a corpus is stored in the repository), but
+/// for the whole file.
+const MAX_SEED: usize = 48 * 1024;
+
+/// One seed: the target whose corpus it joins, a name saying what it is, its bytes.
+#[derive(Clone, Debug)]
+pub struct Seed {
+    /// The target (`TARGETS`' name).
+    pub target: &'static str,
+    /// What the bytes are, for the file name.
+    pub name: String,
+    /// The bytes.
+    pub bytes: Vec<u8>,
+}
+
+/// The seeds of every target but `scene_file` and `obj`, cut from the database at
+/// `path`: its header page; a page of each kind; its R-tree nodes' payloads; objects'
+/// mesh extents; their LOD chains, progressive meshes with DAGs, the LOD table; the
+/// visibility table; the HDoV-tree's head, nodes and V-pages; and the whole file.
+pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
+    let file = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let db = Database::open(path)?;
+    let store = db.store();
+    let page_size = store.page_size();
+    let mut seeds = Vec::new();
+    let mut add = |target: &'static str, name: String, bytes: Vec<u8>| {
+        if bytes.len() <= MAX_SEED || target == "database" {
+            seeds.push(Seed {
+                target,
+                name,
+                bytes,
+            });
+        }
+    };
+    add(
+        "db_header",
+        "header-page".into(),
+        file[..page_size].to_vec(),
+    );
+    add("database", "whole-file".into(), file.clone());
+
+    let mut kinds_seen = [0usize; 16];
+    for (p, raw) in file.chunks_exact(page_size).enumerate().skip(1) {
+        let Some(kind) = PageKind::from_u8(raw[0]) else {
+            continue;
+        };
+        let seen = &mut kinds_seen[kind as usize];
+        *seen += 1;
+        if *seen <= 2 {
+            add("db_page", format!("{}-page-{p}", kind.name()), raw.to_vec());
+        }
+        let payload = page::decode(raw, kind).map_err(|what| Error::CorruptPage {
+            path: path.to_path_buf(),
+            page: p as u64,
+            what,
+        })?;
+        match kind {
+            PageKind::RtreeNode => add("rtree_node", format!("node-page-{p}"), payload.to_vec()),
+            PageKind::HdovNode if *seen <= 8 => {
+                let mut b = vec![1];
+                b.extend_from_slice(&u32::MAX.to_le_bytes());
+                b.extend_from_slice(payload);
+                add("hdov", format!("node-page-{p}"), b);
+            }
+            PageKind::VPage if *seen <= 4 => {
+                let mut b = vec![2];
+                b.extend_from_slice(&((payload.len() / 8).min(64) as u16).to_le_bytes());
+                b.extend_from_slice(&u64::MAX.to_le_bytes());
+                b.extend_from_slice(payload);
+                add("hdov", format!("v-page-{p}"), b);
+            }
+            _ => {}
+        }
+    }
+
+    let objects = db.range(&db.bounds())?.objects;
+    for o in objects.iter().take(6) {
+        let mesh = store.read_extent(&o.mesh, PageKind::Mesh)?;
+        add("mesh_codec", format!("object-{}", o.id), mesh);
+    }
+    if let Some(table) = LodTable::open(store)? {
+        let bytes = store.read_extent(&table.extent(), PageKind::Lod)?;
+        let which = [1012, 4084, 65524]
+            .iter()
+            .position(|&p| p == store.payload_size());
+        if let Some(which) = which {
+            add(
+                "lod_table",
+                "table".into(),
+                [&[which as u8][..], &bytes].concat(),
+            );
+        }
+        for o in &objects {
+            let Some(e) = table.find(store, o.id)? else {
+                continue;
+            };
+            if !e.chain.is_empty() {
+                let mut chain = store.read_extent(&e.chain, PageKind::Lod)?;
+                chain.extend(store.read_extent(&e.chain_rest, PageKind::Lod)?);
+                add("lod_chain", format!("object-{}", o.id), chain);
+            }
+            if !e.pm.is_empty() {
+                let pm = store.read_extent(&e.pm, PageKind::Lod)?;
+                let dag = store.read_extent(&e.dag, PageKind::Lod)?;
+                let split = (pm.len() as u32).to_le_bytes();
+                add(
+                    "lod_pm_dag",
+                    format!("object-{}", o.id),
+                    [&split[..], &pm, &dag].concat(),
+                );
+            }
+        }
+    }
+    if let Some((extent, _)) = store.segment_extent(VISIBILITY_SEGMENT, |_, _| Ok(()))? {
+        let bytes = store.read_extent(&extent, PageKind::Visibility)?;
+        add("visibility_table", "table".into(), bytes);
+    }
+    if let Some((extent, _)) = store.segment_extent(HDOV_SEGMENT, |_, _| Ok(()))? {
+        let bytes = store.read_extent(&extent, PageKind::HdovNode)?;
+        if let Ok(head) = TreeHead::decode(&bytes) {
+            // Node seeds with the tree's real node count.
+            for s in seeds
+                .iter_mut()
+                .filter(|s| s.target == "hdov" && s.bytes[0] == 1)
+            {
+                s.bytes[1..5].copy_from_slice(&head.nodes.to_le_bytes());
+            }
+        }
+        seeds.push(Seed {
+            target: "hdov",
+            name: "tree-head".into(),
+            bytes: [&[0u8][..], &bytes].concat(),
+        });
+    }
+    Ok(seeds)
+}

@@ -1,0 +1,155 @@
+//! The corpora of the engine's fuzz targets (`fuzz/corpus/<target>/`, README "Fuzzing")
+//! replayed through the same functions the targets call (`flaneur::fuzzing`), so that an
+//! input that once found a fault stays a test without libFuzzer or a nightly toolchain.
+//!
+//! `write_decoder_seeds` (ignored) wrote the seeds the corpora grew from: a small city
+//! built with LODs (a low PM threshold, so that progressive meshes are stored),
+//! visibility and an HDoV-tree in 1 KiB pages, cut into the pieces each decoder takes,
+//! with scene files and OBJ files the engine's writers wrote.
+
+use std::fs;
+use std::panic::catch_unwind;
+use std::path::{Path, PathBuf};
+
+use flaneur::fuzzing::{cut_seeds, TARGETS};
+use flaneur::hdov::HdovOptions;
+use flaneur::lod::{LodOptions, ProgressiveMesh};
+use flaneur::scene::{SceneObject, SceneWriter};
+use flaneur::visibility::VisibilityOptions;
+use flaneur::{BuildOptions, Database};
+
+fn corpus(target: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/corpus")
+        .join(target)
+}
+
+/// Every input of `target`'s corpus, by file name; the corpus must be there and hold
+/// some.
+fn inputs(target: &str) -> Vec<(String, Vec<u8>)> {
+    let dir = corpus(target);
+    let mut found: Vec<_> = fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("the {target} corpus at {}: {e}", dir.display()))
+        .map(|entry| {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            (name, fs::read(&path).unwrap())
+        })
+        .collect();
+    assert!(!found.is_empty(), "the {target} corpus is empty");
+    found.sort();
+    found
+}
+
+/// Every input of every target's corpus, through the target's body: none may panic.
+#[test]
+fn every_input_of_every_decoder_corpus_runs_without_a_panic() {
+    let mut failed = Vec::new();
+    for (target, run) in TARGETS {
+        for (name, data) in inputs(target) {
+            if catch_unwind(|| run(&data)).is_err() {
+                failed.push(format!("{target}/{name}"));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "inputs that panicked: {failed:?}");
+}
+
+/// A scene of `objects` citygen buildings, each simplified by the engine to about
+/// `triangles` triangles, so that the seeds stay small (a corpus lives in the
+/// repository, and libFuzzer mutates small inputs faster).
+fn small_city(path: &Path, objects: u64, triangles: usize) {
+    let city = citygen::CityConfig {
+        objects,
+        seed: 5,
+        landmarks: 0.0,
+        ..Default::default()
+    };
+    let mut writer = SceneWriter::create(path).unwrap();
+    citygen::generate(&city, |mut o: SceneObject| {
+        let pm = ProgressiveMesh::build(&o.mesh).unwrap();
+        o.mesh = pm.mesh_at_triangles(triangles).unwrap();
+        writer.write(&o)
+    })
+    .unwrap();
+    writer.finish().unwrap();
+}
+
+/// The city the seeds are cut from: a dozen small buildings with every kind of data a
+/// build stores, in 1 KiB pages.
+fn build_city(dir: &Path) -> (PathBuf, PathBuf) {
+    let (scene, db) = (dir.join("city.scene"), dir.join("city.flaneur"));
+    small_city(&scene, 12, 24);
+    let options = BuildOptions {
+        page_size: 1024,
+        lod: Some(LodOptions {
+            pm_threshold: 16,
+            min_triangles: 8,
+            ..Default::default()
+        }),
+        visibility: Some(VisibilityOptions {
+            resolution: 16,
+            ..Default::default()
+        }),
+        hdov: Some(HdovOptions::default()),
+        ..Default::default()
+    };
+    flaneur::build_from_scene(&scene, &db, &options).unwrap();
+    (scene, db)
+}
+
+/// Writes the seeds: the database's pieces (`cut_seeds`), scene files of one and of
+/// three objects and the city's, one cut short, and OBJ files of the city's meshes and
+/// their coarsest levels. Run once (and again when a format's version changes), then
+/// fuzz and minimise (README, "Fuzzing").
+#[test]
+#[ignore = "writes the fuzz corpora's seeds"]
+fn write_decoder_seeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, db_path) = build_city(dir.path());
+    let mut seeds: Vec<(&str, String, Vec<u8>)> = cut_seeds(&db_path)
+        .unwrap()
+        .into_iter()
+        .map(|s| (s.target, s.name, s.bytes))
+        .collect();
+
+    for objects in [1, 3] {
+        let path = dir.path().join(format!("{objects}.scene"));
+        small_city(&path, objects, 24);
+        seeds.push((
+            "scene_file",
+            format!("{objects}-objects"),
+            fs::read(&path).unwrap(),
+        ));
+    }
+    let city = fs::read(&scene).unwrap();
+    seeds.push(("scene_file", "cut".into(), city[..city.len() / 3].to_vec()));
+    seeds.push(("scene_file", "city".into(), city));
+
+    let db = Database::open(&db_path).unwrap();
+    let objects = db.range(&db.bounds()).unwrap().objects;
+    for o in objects.iter().take(4) {
+        let mesh = db.mesh(o).unwrap();
+        let mut obj = Vec::new();
+        flaneur::scene::write_mesh_obj(&mut obj, &mesh, 1).unwrap();
+        seeds.push(("obj", format!("object-{}", o.id), obj));
+        let levels = db.lod_levels(o.id).unwrap().unwrap_or_default();
+        if let Some(coarsest) = levels.last().filter(|l| l.level > 0) {
+            let mesh = db.lod_mesh(o.id, coarsest.level).unwrap();
+            let mut obj = format!("o object-{}-level-{}\n", o.id, coarsest.level).into_bytes();
+            flaneur::scene::write_mesh_obj(&mut obj, &mesh, 1).unwrap();
+            seeds.push(("obj", format!("object-{}-coarsest", o.id), obj));
+        }
+    }
+
+    for (target, _) in TARGETS {
+        fs::create_dir_all(corpus(target)).unwrap();
+    }
+    for (target, name, bytes) in seeds {
+        assert!(
+            bytes.len() < 64 * 1024 || target == "database",
+            "{target}/{name}"
+        );
+        fs::write(corpus(target).join(format!("seed-{name}")), bytes).unwrap();
+    }
+}
