@@ -287,7 +287,9 @@ impl StoredScheme {
                 let (offset, count) = (u64_at(&d, 0) as usize, u32_at(&d, 8) as usize);
                 let fits = count <= nodes
                     && offset >= HEAD_LEN + cells * DIR_RECORD
-                    && offset + count * PAIR <= self.vpages_at as usize;
+                    && offset
+                        .checked_add(count * PAIR)
+                        .is_some_and(|end| end <= self.vpages_at as usize);
                 if !fits {
                     return Err(self.corrupt(
                         store,

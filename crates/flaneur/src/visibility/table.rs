@@ -153,6 +153,10 @@ fn read_varint(b: &[u8], at: &mut usize) -> Option<u64> {
     for shift in (0..64).step_by(7) {
         let byte = *b.get(*at)?;
         *at += 1;
+        // The tenth byte holds bit 63 alone: more would be dropped, not read.
+        if shift == 63 && byte & 0x7f > 1 {
+            return None;
+        }
         v |= ((byte & 0x7f) as u64) << shift;
         if byte & 0x80 == 0 {
             return Some(v);
@@ -402,6 +406,17 @@ mod tests {
     use super::*;
     use crate::geom::Aabb;
     use crate::store::framing::{mangled, reseal};
+
+    #[test]
+    fn a_varint_past_64_bits_is_refused_not_cut() {
+        let mut max = vec![0xff; 9];
+        max.push(0x01);
+        assert_eq!(read_varint(&max, &mut 0), Some(u64::MAX));
+        let mut over = vec![0xff; 9];
+        over.push(0x03);
+        assert_eq!(read_varint(&over, &mut 0), None);
+        assert_eq!(read_varint(&[0x80; 10], &mut 0), None);
+    }
 
     fn sample() -> (
         ViewcellGrid,
