@@ -18,7 +18,10 @@ use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
 use flaneur::Database;
 
+mod csv_rows;
 mod render;
+
+use csv_rows::CsvRows;
 
 use render::{print_render, rendered, RenderOpts};
 
@@ -381,44 +384,6 @@ fn walk_cmd(
     print_walk(&report);
     print_remote(&db);
     print_render(drawn, render)
-}
-
-/// A walk's CSV, a row written as each frame ends.
-struct CsvRows {
-    path: PathBuf,
-    out: std::io::BufWriter<std::fs::File>,
-}
-
-impl CsvRows {
-    /// Creates `path` and writes the header.
-    fn create(path: &Path) -> Result<CsvRows> {
-        let file =
-            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let mut rows = CsvRows {
-            path: path.to_path_buf(),
-            out: std::io::BufWriter::new(file),
-        };
-        rows.line(review::FrameStats::CSV_HEADER)?;
-        Ok(rows)
-    }
-
-    fn line(&mut self, text: &str) -> flaneur::Result<()> {
-        use std::io::Write;
-        writeln!(self.out, "{text}").map_err(|e| flaneur::Error::io(&self.path, e))
-    }
-
-    /// One frame's row.
-    fn write(&mut self, f: &review::FrameStats) -> flaneur::Result<()> {
-        self.line(&f.csv_row())
-    }
-
-    /// Writes what is buffered.
-    fn finish(mut self) -> Result<()> {
-        use std::io::Write;
-        self.out
-            .flush()
-            .with_context(|| format!("writing {}", self.path.display()))
-    }
 }
 
 /// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable

@@ -22,8 +22,8 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
         what,
     };
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    check_lines(&bytes).map_err(&bad)?;
-    check_indices(&bytes).map_err(&bad)?;
+    let text = check_lines(&bytes).map_err(&bad)?;
+    check_indices(text).map_err(&bad)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -72,8 +72,9 @@ pub fn load_obj(path: &Path) -> Result<Vec<(String, Mesh)>> {
 }
 
 /// What tobj would report without a line, or drop without a word: the first line that
-/// is not UTF-8 text, or holds a face of fewer than three vertices.
-fn check_lines(bytes: &[u8]) -> std::result::Result<(), String> {
+/// is not UTF-8 text, or holds a face of fewer than three vertices. The text, when it
+/// is whole.
+fn check_lines(bytes: &[u8]) -> std::result::Result<&str, String> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let before = &bytes[..e.valid_up_to()];
         let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
@@ -102,7 +103,7 @@ fn check_lines(bytes: &[u8]) -> std::result::Result<(), String> {
             ));
         }
     }
-    Ok(())
+    Ok(text)
 }
 
 /// Checks every index of the file's faces and lines (`f`, `l`) against the elements it
@@ -113,16 +114,13 @@ fn check_lines(bytes: &[u8]) -> std::result::Result<(), String> {
 /// relative one before the first, panicked with overflow checks and without them read
 /// another element (`f 1//1 2//1 3//6148914691236517207` took the first normal's z and
 /// the second's x and y). An index that does not parse is left to tobj, which refuses it.
-fn check_indices(text: &[u8]) -> std::result::Result<(), String> {
+fn check_indices(text: &str) -> std::result::Result<(), String> {
     const KINDS: [(&str, &str); 3] = [
         ("v", "position"),
         ("vt", "texture coordinate"),
         ("vn", "normal"),
     ];
-    let lines = || {
-        text.split(|&b| b == b'\n')
-            .map(|l| std::str::from_utf8(l).unwrap_or(""))
-    };
+    let lines = || text.split('\n');
     let kind_of = |word: Option<&str>| KINDS.iter().position(|(k, _)| word == Some(*k));
     let mut total = [0usize; 3];
     for line in lines() {
