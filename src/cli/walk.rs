@@ -8,20 +8,19 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{pace, parse_size};
 use super::source::SourceArgs;
-use super::write_file;
 use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::{cell_walk, CameraPath, Pose};
-use flaneur::walk::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
+use flaneur::walk::path::{cell_poses, CameraPath, Pose};
+use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
-use flaneur::walk::scene_walk::{self, SceneConfig, SceneReport};
-use flaneur::walk::visual::{self, VisualConfig, VisualReport};
+use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame, SceneReport};
+use flaneur::walk::visual::{self, VisualConfig, VisualFrame, VisualReport};
 use flaneur::Database;
 
 mod csv_rows;
 mod render;
 
-use csv_rows::CsvRows;
+use csv_rows::{write_row, CsvRows};
 
 use render::{print_render, rendered, RenderOpts};
 
@@ -371,11 +370,12 @@ fn walk_cmd(
             (Box::new(path.poses.into_iter()), count)
         }
     };
-    let mut rows = csv.map(CsvRows::create).transpose()?;
+    let mut rows = csv
+        .map(|p| CsvRows::create(p, review::FrameStats::CSV_HEADER))
+        .transpose()?;
     let (report, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
-        review::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| match rows.as_mut() {
-            Some(rows) => rows.write(f),
-            None => Ok(()),
+        review::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| {
+            write_row(&mut rows, || f.csv_row())
         })
     })?;
     if let Some(rows) = rows {
@@ -386,25 +386,26 @@ fn walk_cmd(
     print_render(drawn, render)
 }
 
-/// The poses of `camera` for a walk over viewcells: `cells` (a walk through the walkable
-/// ones at a walker's pace, 1.4 m/s), else as [`camera_path`].
-fn viewcell_path(
-    db: &Database,
+/// The poses of `camera` for a walk over viewcells, made as the walk asks for them where
+/// they are generated, and how many: `cells` (a walk through the walkable ones at a
+/// walker's pace, 1.4 m/s), a motion pattern, or a path file.
+fn viewcell_poses<'db>(
+    db: &'db Database,
     camera: &str,
     frames: Option<usize>,
     fps: f32,
     seed: u64,
-) -> Result<CameraPath> {
-    match camera {
-        "cells" => Ok(cell_walk(
-            db,
-            frames.unwrap_or(DEFAULT_FRAMES),
-            1.4 / fps,
-            fps,
-            seed,
-        )?),
-        other => camera_path(db, other, (frames, DEFAULT_FRAMES), fps, seed),
+) -> Result<(Box<dyn Iterator<Item = Pose> + 'db>, usize)> {
+    let n = frames.unwrap_or(DEFAULT_FRAMES);
+    if camera == "cells" {
+        return Ok((Box::new(cell_poses(db, n, 1.4 / fps, fps, seed)?), n));
     }
+    if let Ok(m) = camera.parse::<Motion>() {
+        return Ok((Box::new(motion::poses(&db.bounds(), m, n, fps, seed)?), n));
+    }
+    let path = camera_path(db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
+    let count = path.len();
+    Ok((Box::new(path.poses.into_iter()), count))
 }
 
 /// Frames a walk makes of a motion pattern when `--frames` is not given.
@@ -454,35 +455,29 @@ fn pvs_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
-    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
+    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
+    let mut rows = csv
+        .map(|p| CsvRows::create(p, PvsFrame::CSV_HEADER))
+        .transpose()?;
     // The PVS walk's cameras have the default frustum (`Pose::camera`).
     let (r, drawn) = rendered(
         &db,
-        (poses.len(), quiet),
+        (count, quiet),
         render,
         flaneur::geom::DEFAULT_FAR,
-        |sink, tick| pvs_walk::walk_pvs_into(&db, &poses, rule, tick, sink),
+        |sink, tick| {
+            pvs_walk::walk_pvs_streamed(&db, poses, rule, tick, sink, &mut |i, f| {
+                write_row(&mut rows, || f.csv_row(i))
+            })
+        },
     )?;
-    if let Some(p) = csv {
-        let mut out = String::from("frame,cell,drawn,transaction,sent,swaps,visual_misses,pages\n");
-        for (i, f) in r.frames.iter().enumerate() {
-            out.push_str(&format!(
-                "{i},{},{},{},{},{},{},{}\n",
-                f.cell.map_or(String::new(), |c| c.to_string()),
-                f.drawn,
-                f.transaction as u8,
-                f.sent,
-                f.swaps,
-                f.visual_misses,
-                f.pages
-            ));
-        }
-        write_file(p, &out)?;
+    if let Some(rows) = rows {
+        rows.finish()?;
     }
     println!(
         "pvs walk, {} prefetch: {} frames ({} outside any walkable cell), {} cells entered",
         r.prefetch.name(),
-        r.frames.len(),
+        r.walked,
         r.frames_outside,
         r.cells_entered
     );
@@ -533,12 +528,17 @@ fn visual_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
-    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
-    let (r, drawn) = rendered(&db, (poses.len(), quiet), render, cfg.far, |sink, tick| {
-        visual::walk_into(&db, &poses, cfg, tick, sink)
+    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
+    let mut rows = csv
+        .map(|p| CsvRows::create(p, VisualFrame::CSV_HEADER))
+        .transpose()?;
+    let (r, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
+        visual::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| {
+            write_row(&mut rows, || f.csv_row())
+        })
     })?;
-    if let Some(p) = csv {
-        write_file(p, &r.to_csv())?;
+    if let Some(rows) = rows {
+        rows.finish()?;
     }
     print_visual(&r);
     print_remote(&db);
@@ -557,7 +557,7 @@ fn scene_walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
-    let poses = viewcell_path(&db, camera, frames, fps, seed)?;
+    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
     let started = std::time::Instant::now();
     let bars = super::bars::Bars::default();
     let mut tree = SceneTree::load(
@@ -575,35 +575,16 @@ fn scene_walk_cmd(
             started.elapsed().as_secs_f64()
         );
     }
-    let (r, drawn) = rendered(&db, (poses.len(), quiet), render, cfg.far, |sink, tick| {
-        scene_walk::walk_into(&db, &mut tree, &poses, cfg, tick, sink)
+    let mut rows = csv
+        .map(|p| CsvRows::create(p, SceneFrame::CSV_HEADER))
+        .transpose()?;
+    let (r, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
+        scene_walk::walk_streamed(&db, &mut tree, poses, cfg, tick, sink, &mut |f| {
+            write_row(&mut rows, || f.csv_row())
+        })
     })?;
-    if let Some(p) = csv {
-        let mut out = String::from(
-            "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,ended,pages
-",
-        );
-        for f in &r.frames {
-            out.push_str(&format!(
-                "{},{:.4},{},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{}
-",
-                f.frame,
-                f.time,
-                f.cell.map_or(String::new(), |c| c.to_string()),
-                f.conv as u8,
-                f.update_ms,
-                f.traverse_ms,
-                f.frame_ms,
-                f.visited,
-                f.drawn,
-                f.internal,
-                f.triangles,
-                f.dropped,
-                f.ended as u8,
-                f.pages
-            ));
-        }
-        write_file(p, &out)?;
+    if let Some(rows) = rows {
+        rows.finish()?;
     }
     print_scene(&r);
     print_remote(&db);

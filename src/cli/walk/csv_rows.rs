@@ -5,8 +5,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use flaneur::walk::review;
-
 /// A walk's CSV, a row written as each frame ends.
 pub(super) struct CsvRows {
     path: PathBuf,
@@ -14,26 +12,22 @@ pub(super) struct CsvRows {
 }
 
 impl CsvRows {
-    /// Creates `path` and writes the header.
-    pub(super) fn create(path: &Path) -> Result<CsvRows> {
+    /// Creates `path` and writes `header`.
+    pub(super) fn create(path: &Path, header: &str) -> Result<CsvRows> {
         let file =
             std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
         let mut rows = CsvRows {
             path: path.to_path_buf(),
             out: std::io::BufWriter::new(file),
         };
-        rows.line(review::FrameStats::CSV_HEADER)?;
+        rows.write(header)?;
         Ok(rows)
     }
 
-    fn line(&mut self, text: &str) -> flaneur::Result<()> {
+    /// One row (no line end).
+    pub(super) fn write(&mut self, row: &str) -> flaneur::Result<()> {
         use std::io::Write;
-        writeln!(self.out, "{text}").map_err(|e| flaneur::Error::io(&self.path, e))
-    }
-
-    /// One frame's row.
-    pub(super) fn write(&mut self, f: &review::FrameStats) -> flaneur::Result<()> {
-        self.line(&f.csv_row())
+        writeln!(self.out, "{row}").map_err(|e| flaneur::Error::io(&self.path, e))
     }
 
     /// Writes what is buffered.
@@ -42,5 +36,16 @@ impl CsvRows {
         self.out
             .flush()
             .with_context(|| format!("writing {}", self.path.display()))
+    }
+}
+
+/// Writes the row `row` makes into `rows`, when the walk writes a CSV.
+pub(super) fn write_row(
+    rows: &mut Option<CsvRows>,
+    row: impl FnOnce() -> String,
+) -> flaneur::Result<()> {
+    match rows.as_mut() {
+        Some(rows) => rows.write(&row()),
+        None => Ok(()),
     }
 }

@@ -55,7 +55,9 @@ impl FrameTimesTally {
     }
 }
 
-/// The figures of `ms`, every frame's time in order, frame 0 left out.
+/// The figures of `ms`, every frame's time in order, frame 0 left out, in two passes:
+/// what the tally is checked against.
+#[cfg(test)]
 pub(crate) fn frame_times(ms: &[f64]) -> FrameTimes {
     let walk = ms.get(1..).unwrap_or_default();
     let n = walk.len().max(1) as f64;

@@ -32,9 +32,11 @@
 //!
 //! The public namespaces, each one idea a user reaches for by name:
 //! - [`review`]: REVIEW and BOX walks ([`review::walk`], [`review::walk_into`] with a
-//!   sink, [`review::walk_live`] with a viewer), their settings ([`review::ReviewConfig`],
+//!   sink, [`review::walk_live`] with a viewer, [`review::walk_streamed`] handing each
+//!   frame on and keeping none, for walks of any length), their settings ([`review::ReviewConfig`],
 //!   the presets of §4.4, the defaults and checks) and figures ([`review::WalkReport`]);
-//! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`] and the rest), its
+//! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`],
+//!   [`pvs_walk::walk_pvs_streamed`] and the rest), its
 //!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
 //! - [`visual`]: the VISUAL walk over the HDoV-tree ([`visual::walk`] and the rest),
 //!   its settings ([`visual::VisualConfig`]) and figures ([`visual::VisualReport`]);
@@ -61,25 +63,34 @@
 //! - `start.rs`: [`busiest_street`], where a viewer starts;
 //! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
 //!   mouse, at [`WALK_SPEED`].
+//!
+//! Private beside them: each mode's summary tallied a frame at a time, so that a walk
+//! that hands its frames on reports what one that keeps them does (`review_tally.rs`,
+//! `pvs_tally.rs`, `visual_tally.rs`, `scene_tally.rs`, over `frame_times.rs`), and
+//! `frame_csv.rs`, the frames of a report that keeps them as one CSV text.
 
 mod adapt_ahead;
 mod buffer;
 mod cells;
+mod frame_csv;
 mod frame_times;
 pub mod live;
 pub mod lod_select;
 mod mode;
 pub mod path;
+mod pvs_tally;
 pub mod pvs_walk;
 mod remote;
 pub mod review;
 mod review_tally;
+mod scene_tally;
 pub mod scene_walk;
 mod session;
 mod sink;
 mod start;
 mod steer;
 pub mod visual;
+mod visual_tally;
 mod walk_lods;
 
 pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer, GROUP_ID};

@@ -29,7 +29,8 @@ use serde::Serialize;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::prefetch::pvs::{Lanp, Pbnp, PrefetchArea, Snp};
-use crate::walk::path::CameraPath;
+use crate::walk::path::{CameraPath, Pose};
+use crate::walk::pvs_tally::PvsTally;
 use crate::walk::sink::Played;
 use crate::walk::walk_lods::WalkLods;
 use crate::walk::{FrameSink, NoSink, Viewer};
@@ -154,6 +155,26 @@ pub struct PvsFrame {
     pub pages: u64,
 }
 
+impl PvsFrame {
+    /// The columns of [`PvsFrame::csv_row`].
+    pub const CSV_HEADER: &'static str =
+        "frame,cell,drawn,transaction,sent,swaps,visual_misses,pages";
+
+    /// Frame `index` as one CSV row (no line end), its columns [`PvsFrame::CSV_HEADER`].
+    pub fn csv_row(&self, index: usize) -> String {
+        format!(
+            "{index},{},{},{},{},{},{},{}",
+            self.cell.map_or(String::new(), |c| c.to_string()),
+            self.drawn,
+            self.transaction as u8,
+            self.sent,
+            self.swaps,
+            self.visual_misses,
+            self.pages
+        )
+    }
+}
+
 /// What a PVS walk did, frame by frame and in all.
 #[derive(Clone, Debug, Serialize)]
 pub struct PvsWalkReport {
@@ -161,8 +182,11 @@ pub struct PvsWalkReport {
     pub prefetch: PvsPrefetch,
     /// Whether the viewer's thread never waited on a read.
     pub never_wait: bool,
-    /// Every frame's figures, in order.
+    /// Every frame's figures, in order (empty for a walk that handed them on,
+    /// [`walk_pvs_streamed`]).
     pub frames: Vec<PvsFrame>,
+    /// Frames walked.
+    pub walked: usize,
     /// Frames whose eye was in no walkable viewcell.
     pub frames_outside: usize,
     /// Moves into a viewcell other than the last frame's.
@@ -240,6 +264,56 @@ pub fn walk_pvs_live(
     walk_pvs_live_with(db, cfg.into(), &mut WalkLods::new(db), tick, viewer)
 }
 
+/// [`walk_pvs_into`] in constant memory, for a walk of any length: the poses come from
+/// `poses` as the walk needs them (each checked as a [`CameraPath`]'s are), and each
+/// frame's figures go to `each` as the frame ends, and are not kept. The report's
+/// `frames` is empty; its figures are whole, and the same as [`walk_pvs_into`]'s.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+/// # let mut opts = flaneur::BuildOptions::default();
+/// # opts.visibility = Some(flaneur::visibility::VisibilityOptions { cell_size: 40.0, ..Default::default() });
+/// # flaneur::build_from_scene(&scene, &path, &opts)?;
+/// use flaneur::walk::{path::cell_poses, pvs_walk, NoSink};
+/// let db = flaneur::Database::open(&path)?;
+/// let poses = cell_poses(&db, 200, 0.05, 30.0, 1)?;
+/// let mut rows = 0;
+/// let report = pvs_walk::walk_pvs_streamed(
+///     &db,
+///     poses,
+///     pvs_walk::PvsPrefetch::Snp,
+///     |_| {},
+///     &mut NoSink,
+///     &mut |_, _| {
+///         rows += 1;
+///         Ok(())
+///     },
+/// )?;
+/// assert!(report.frames.is_empty());
+/// assert_eq!((report.walked, rows), (200, 200));
+/// # Ok(()) }
+/// ```
+pub fn walk_pvs_streamed(
+    db: &Database,
+    poses: impl Iterator<Item = Pose>,
+    cfg: impl Into<PvsWalkConfig>,
+    tick: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+    each: &mut dyn FnMut(usize, &PvsFrame) -> Result<()>,
+) -> Result<PvsWalkReport> {
+    walk_pvs_each(
+        db,
+        cfg.into(),
+        &mut WalkLods::new(db),
+        tick,
+        &mut Played::streamed(poses, sink),
+        each,
+    )
+}
+
 /// [`walk_pvs_live`] with LOD selection `lods` kept from an earlier walk (one before it
 /// at the same window), so that what it read and refined stays so.
 pub(crate) fn walk_pvs_live_with<'db>(
@@ -249,40 +323,32 @@ pub(crate) fn walk_pvs_live_with<'db>(
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<PvsWalkReport> {
+    let mut frames = Vec::new();
+    let mut report = walk_pvs_each(db, cfg, lods, tick, viewer, &mut |_, f| {
+        frames.push(*f);
+        Ok(())
+    })?;
+    report.frames = frames;
+    Ok(report)
+}
+
+/// The walk, each frame handed to `each` (with its index) and tallied, none kept.
+fn walk_pvs_each<'db>(
+    db: &'db Database,
+    cfg: PvsWalkConfig,
+    lods: &mut WalkLods<'db>,
+    tick: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+    each: &mut dyn FnMut(usize, &PvsFrame) -> Result<()>,
+) -> Result<PvsWalkReport> {
     cfg.validate()?;
-    let run = super::mode::pvs::walk_live(db, cfg, lods, tick, viewer)?;
-    let frames = run.frames;
-    let inside: Vec<&PvsFrame> = frames.iter().filter(|f| f.cell.is_some()).collect();
-    let cells_entered = frames
-        .windows(2)
-        .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
-        .count();
-    let ms = &run.frame_ms;
-    let first_complete_frame = frames
-        .iter()
-        .position(|f| f.cell.is_some() && f.visual_misses == 0);
-    Ok(PvsWalkReport {
-        prefetch: cfg.prefetch,
-        never_wait: cfg.never_wait,
-        mean_frame_ms: ms.iter().sum::<f64>() / ms.len().max(1) as f64,
-        max_frame_ms: ms.iter().copied().fold(0.0, f64::max),
-        frames_over_50ms: ms.iter().filter(|&&t| t > 50.0).count(),
-        first_complete_frame,
-        visual_misses_after_start: frames[first_complete_frame.unwrap_or(0)..]
-            .iter()
-            .map(|f| f.visual_misses)
-            .sum(),
-        round_trip_frames: run.round_trip,
-        failed_loads: run.failed_loads,
-        last_load_error: run.last_load_error,
-        frames_outside: frames.len() - inside.len(),
-        cells_entered,
-        transactions: frames.iter().filter(|f| f.transaction).count(),
-        swaps: frames.iter().map(|f| f.swaps).sum(),
-        objects_sent: frames.iter().map(|f| f.sent).sum(),
-        visual_misses: frames.iter().map(|f| f.visual_misses).sum(),
-        mean_drawn: inside.iter().map(|f| f.drawn as f64).sum::<f64>() / inside.len().max(1) as f64,
-        pages: frames.iter().map(|f| f.pages).sum(),
-        frames,
-    })
+    let mut tally = PvsTally::default();
+    let mut index = 0;
+    let run = super::mode::pvs::walk_live(db, cfg, lods, tick, viewer, |(f, ms)| {
+        tally.add(&f, ms);
+        each(index, &f)?;
+        index += 1;
+        Ok(())
+    })?;
+    Ok(tally.report(cfg, run))
 }

@@ -439,12 +439,7 @@ pub struct WalkReport {
 impl WalkReport {
     /// One row per frame, under [`FrameStats::CSV_HEADER`].
     pub fn to_csv(&self) -> String {
-        let mut s = format!("{}\n", FrameStats::CSV_HEADER);
-        for f in &self.frames {
-            s.push_str(&f.csv_row());
-            s.push('\n');
-        }
-        s
+        super::frame_csv::table(FrameStats::CSV_HEADER, &self.frames, FrameStats::csv_row)
     }
 }
 

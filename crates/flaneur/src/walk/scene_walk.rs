@@ -34,8 +34,8 @@
 
 use serde::Serialize;
 
-use super::frame_times::frame_times;
-use super::path::CameraPath;
+use super::path::{CameraPath, Pose};
+use super::scene_tally::SceneTally;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::walk_lods::WalkLods;
 use crate::database::Database;
@@ -97,6 +97,33 @@ pub struct SceneFrame {
     pub pages: u64,
 }
 
+impl SceneFrame {
+    /// The columns of [`SceneFrame::csv_row`].
+    pub const CSV_HEADER: &'static str = "frame,time,cell,conv,update_ms,traverse_ms,frame_ms,visited,drawn,internal,triangles,dropped,ended,pages";
+
+    /// The frame as one CSV row (no line end), its columns [`SceneFrame::CSV_HEADER`].
+    pub fn csv_row(&self) -> String {
+        let f = self;
+        format!(
+            "{},{:.4},{},{},{:.3},{:.3},{:.3},{},{},{},{},{},{},{}",
+            f.frame,
+            f.time,
+            f.cell.map_or(String::new(), |c| c.to_string()),
+            f.conv as u8,
+            f.update_ms,
+            f.traverse_ms,
+            f.frame_ms,
+            f.visited,
+            f.drawn,
+            f.internal,
+            f.triangles,
+            f.dropped,
+            f.ended as u8,
+            f.pages
+        )
+    }
+}
+
 /// A scene-tree walk in all; frame 0 left out of the frame-time figures.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct SceneSummary {
@@ -131,6 +158,9 @@ pub struct SceneSummary {
     pub frames_too_big: usize,
     /// PB: frames whose traversal ran out of attempts and ended early.
     pub frames_ended: usize,
+    /// PB: the first frame that met an object whose coarsest representation alone is
+    /// over the budget, with the object (id, triangles).
+    pub first_too_big: Option<(usize, u64, u32)>,
 }
 
 /// What a scene-tree walk did.
@@ -138,7 +168,8 @@ pub struct SceneSummary {
 pub struct SceneReport {
     /// The settings walked.
     pub config: SceneConfig,
-    /// Every frame's figures, in order.
+    /// Every frame's figures, in order (empty for a walk that handed them on,
+    /// [`walk_streamed`]).
     pub frames: Vec<SceneFrame>,
     /// The walk in all.
     pub summary: SceneSummary,
@@ -147,7 +178,7 @@ pub struct SceneReport {
 impl SceneReport {
     /// PB's budget held on this share of the frames (1 for other traversals).
     pub fn within_budget(&self) -> f64 {
-        1.0 - self.summary.frames_over_budget as f64 / self.frames.len().max(1) as f64
+        1.0 - self.summary.frames_over_budget as f64 / self.summary.frames.max(1) as f64
     }
 
     /// What PB's budget could not hold, in words: the first object whose coarsest
@@ -156,10 +187,7 @@ impl SceneReport {
         let Traversal::Pb { budget } = self.config.traversal else {
             return None;
         };
-        let (frame, (id, t)) = self
-            .frames
-            .iter()
-            .find_map(|f| f.too_big.map(|b| (f.frame, b)))?;
+        let (frame, id, t) = self.summary.first_too_big?;
         Some(format!(
             "object {id}'s coarsest representation alone has {t} triangles, over the budget of {budget} (first on frame {frame}, {} frames in all)",
             self.summary.frames_too_big
@@ -205,6 +233,30 @@ pub fn walk_live(
     walk_live_with(db, tree, cfg, &mut WalkLods::new(db), progress, viewer)
 }
 
+/// [`walk_into`] in constant memory, for a walk of any length: the poses come from
+/// `poses` as the walk needs them (each checked as a [`CameraPath`]'s are), and each
+/// frame's figures go to `each` as the frame ends, and are not kept. The report's
+/// `frames` is empty; its summary is whole, and the same as [`walk_into`]'s.
+pub fn walk_streamed(
+    db: &Database,
+    tree: &mut SceneTree,
+    poses: impl Iterator<Item = Pose>,
+    cfg: &SceneConfig,
+    progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+    each: &mut dyn FnMut(&SceneFrame) -> Result<()>,
+) -> Result<SceneReport> {
+    walk_each(
+        db,
+        tree,
+        cfg,
+        &mut WalkLods::new(db),
+        progress,
+        &mut Played::streamed(poses, sink),
+        each,
+    )
+}
+
 /// [`walk_live`] with LOD selection `lods` kept from an earlier walk.
 pub(crate) fn walk_live_with<'db>(
     db: &'db Database,
@@ -214,44 +266,35 @@ pub(crate) fn walk_live_with<'db>(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<SceneReport> {
-    cfg.traversal.validate()?;
-    super::review::check_far(cfg.far)?;
-    let frames = super::mode::scene::walk_live(db, tree, cfg, lods, progress, viewer)?;
-    let summary = summarize(&frames, cfg);
-    Ok(SceneReport {
-        config: *cfg,
-        frames,
-        summary,
-    })
+    let mut frames = Vec::new();
+    let mut report = walk_each(db, tree, cfg, lods, progress, viewer, &mut |f| {
+        frames.push(f.clone());
+        Ok(())
+    })?;
+    report.frames = frames;
+    Ok(report)
 }
 
-fn summarize(frames: &[SceneFrame], cfg: &SceneConfig) -> SceneSummary {
-    let walk = frames.get(1..).unwrap_or_default();
-    let n = walk.len().max(1) as f64;
-    let all = frames.len().max(1) as f64;
-    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
-    let budget = match cfg.traversal {
-        Traversal::Pb { budget } => Some(budget),
-        _ => None,
-    };
-    SceneSummary {
-        frames: frames.len(),
-        mean_frame_ms: times.mean,
-        frame_ms_variance: times.variance,
-        max_frame_ms: times.max,
-        mean_traverse_ms: walk.iter().map(|f| f.traverse_ms).sum::<f64>() / n,
-        mean_triangles: frames.iter().map(|f| f.triangles as f64).sum::<f64>() / all,
-        mean_visited: frames.iter().map(|f| f.visited as f64).sum::<f64>() / all,
-        mean_drawn: frames.iter().map(|f| f.drawn as f64).sum::<f64>() / all,
-        max_triangles: frames.iter().map(|f| f.triangles).max().unwrap_or(0),
-        cells_entered: frames
-            .windows(2)
-            .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
-            .count(),
-        frames_outside: frames.iter().filter(|f| f.cell.is_none()).count(),
-        frames_conv: frames.iter().filter(|f| f.conv).count(),
-        frames_over_budget: budget.map_or(0, |b| frames.iter().filter(|f| f.triangles > b).count()),
-        frames_too_big: frames.iter().filter(|f| f.too_big.is_some()).count(),
-        frames_ended: frames.iter().filter(|f| f.ended).count(),
-    }
+/// The walk, each frame handed to `each` and tallied, none kept.
+fn walk_each<'db>(
+    db: &'db Database,
+    tree: &mut SceneTree,
+    cfg: &SceneConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+    each: &mut dyn FnMut(&SceneFrame) -> Result<()>,
+) -> Result<SceneReport> {
+    cfg.traversal.validate()?;
+    super::review::check_far(cfg.far)?;
+    let mut tally = SceneTally::default();
+    super::mode::scene::walk_live(db, tree, cfg, lods, progress, viewer, |f| {
+        tally.add(&f, cfg.traversal);
+        each(&f)
+    })?;
+    Ok(SceneReport {
+        config: *cfg,
+        frames: Vec::new(),
+        summary: tally.summary(),
+    })
 }

@@ -202,9 +202,17 @@ pub struct FrameFigures {
 /// each checked as a [`CameraPath`](super::path::CameraPath)'s are.
 pub(crate) struct Played<'a> {
     poses: Box<dyn Iterator<Item = super::path::Pose> + 'a>,
-    /// The time of the last pose, when the poses are checked as they come.
-    checked: Option<Option<f64>>,
+    checks: PoseChecks,
     sink: &'a mut dyn FrameSink,
+}
+
+/// Whether [`Played`] checks its poses as they come, and the last one's time if so.
+#[derive(Clone, Copy, Debug)]
+enum PoseChecks {
+    /// A [`CameraPath`](super::path::CameraPath)'s, checked when it was made.
+    Made,
+    /// An iterator's, each checked against the pose before (none yet: `None`).
+    AsTheyCome { last_time: Option<f64> },
 }
 
 impl<'a> Played<'a> {
@@ -212,7 +220,7 @@ impl<'a> Played<'a> {
     pub(crate) fn path(path: &'a super::path::CameraPath, sink: &'a mut dyn FrameSink) -> Self {
         Played {
             poses: Box::new(path.poses.iter().copied()),
-            checked: None,
+            checks: PoseChecks::Made,
             sink,
         }
     }
@@ -224,7 +232,7 @@ impl<'a> Played<'a> {
     ) -> Self {
         Played {
             poses: Box::new(poses),
-            checked: Some(None),
+            checks: PoseChecks::AsTheyCome { last_time: None },
             sink,
         }
     }
@@ -275,11 +283,11 @@ impl Viewer for Played<'_> {
         let Some(pose) = self.poses.next() else {
             return Ok(None);
         };
-        if let Some(last) = self.checked.as_mut() {
-            super::path::check_pose(&pose, *last).map_err(|what| {
+        if let PoseChecks::AsTheyCome { last_time } = &mut self.checks {
+            super::path::check_pose(&pose, *last_time).map_err(|what| {
                 crate::error::Error::Invalid(format!("camera path, pose {frame}: {what}"))
             })?;
-            *last = Some(pose.time);
+            *last_time = Some(pose.time);
         }
         Ok(Some(pose))
     }

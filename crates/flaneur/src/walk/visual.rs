@@ -62,9 +62,9 @@
 
 use serde::Serialize;
 
-use super::frame_times::frame_times;
-use super::path::CameraPath;
+use super::path::{CameraPath, Pose};
 use super::sink::{FrameSink, NoSink, Played, Viewer};
+use super::visual_tally::VisualTally;
 use super::walk_lods::WalkLods;
 use crate::cache::CacheStats;
 use crate::database::Database;
@@ -286,42 +286,47 @@ pub struct VisualReport {
 }
 
 impl VisualReport {
-    /// One row per frame.
+    /// One row per frame, under [`VisualFrame::CSV_HEADER`].
     pub fn to_csv(&self) -> String {
-        let mut s = String::from(
-            "frame,time,cell,searched,prefetch_used,prefetch_adopted,fallback_query,objects_found,nodes_found,loaded,reused,dropped,left_out,drawn,triangles_drawn,search_ms,load_ms,cull_ms,frame_ms,tree_pages,model_pages,other_pages,buffer_bytes,visual_misses,coarse\n",
-        );
-        for f in &self.frames {
-            s.push_str(&format!(
-                "{},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{}\n",
-                f.frame,
-                f.time,
-                f.cell.map_or(String::new(), |c| c.to_string()),
-                f.searched as u8,
-                f.prefetch_used as u8,
-                f.prefetch_adopted as u8,
-                f.fallback_query as u8,
-                f.objects_found,
-                f.nodes_found,
-                f.loaded,
-                f.reused,
-                f.dropped,
-                f.left_out,
-                f.drawn,
-                f.triangles_drawn,
-                f.search_ms,
-                f.load_ms,
-                f.cull_ms,
-                f.frame_ms,
-                f.tree_pages,
-                f.model_pages,
-                f.other_pages,
-                f.buffer_bytes,
-                f.visual_misses,
-                f.coarse
-            ));
-        }
-        s
+        super::frame_csv::table(VisualFrame::CSV_HEADER, &self.frames, VisualFrame::csv_row)
+    }
+}
+
+impl VisualFrame {
+    /// The columns of [`VisualFrame::csv_row`].
+    pub const CSV_HEADER: &'static str = "frame,time,cell,searched,prefetch_used,prefetch_adopted,fallback_query,objects_found,nodes_found,loaded,reused,dropped,left_out,drawn,triangles_drawn,search_ms,load_ms,cull_ms,frame_ms,tree_pages,model_pages,other_pages,buffer_bytes,visual_misses,coarse";
+
+    /// The frame as one CSV row (no line end), its columns [`VisualFrame::CSV_HEADER`].
+    pub fn csv_row(&self) -> String {
+        let f = self;
+        format!(
+            "{},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{}",
+            f.frame,
+            f.time,
+            f.cell.map_or(String::new(), |c| c.to_string()),
+            f.searched as u8,
+            f.prefetch_used as u8,
+            f.prefetch_adopted as u8,
+            f.fallback_query as u8,
+            f.objects_found,
+            f.nodes_found,
+            f.loaded,
+            f.reused,
+            f.dropped,
+            f.left_out,
+            f.drawn,
+            f.triangles_drawn,
+            f.search_ms,
+            f.load_ms,
+            f.cull_ms,
+            f.frame_ms,
+            f.tree_pages,
+            f.model_pages,
+            f.other_pages,
+            f.buffer_bytes,
+            f.visual_misses,
+            f.coarse
+        )
     }
 }
 
@@ -361,6 +366,54 @@ pub fn walk_live(
     walk_live_with(db, cfg, &mut WalkLods::new(db), progress, viewer)
 }
 
+/// [`walk_into`] in constant memory, for a walk of any length: the poses come from
+/// `poses` as the walk needs them (each checked as a [`CameraPath`]'s are), and each
+/// frame's figures go to `each` as the frame ends, and are not kept. The report's
+/// `frames` is empty; its summary is whole, and the same as [`walk_into`]'s. A walk that
+/// never waits ([`VisualConfig::never_wait`]) is the exception: a frame's misses are
+/// known only once its cell's finds have come, so it keeps its frames, and hands them
+/// to `each` as it ends.
+///
+/// ```
+/// # fn main() -> flaneur::Result<()> {
+/// # let dir = tempfile::tempdir().unwrap();
+/// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+/// # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+/// # let mut opts = flaneur::BuildOptions::default();
+/// # opts.visibility = Some(flaneur::visibility::VisibilityOptions { cell_size: 40.0, ..Default::default() });
+/// # opts.hdov = Some(flaneur::hdov::HdovOptions::default());
+/// # flaneur::build_from_scene(&scene, &path, &opts)?;
+/// use flaneur::walk::{path::cell_poses, visual, NoSink};
+/// let db = flaneur::Database::open(&path)?;
+/// let poses = cell_poses(&db, 100, 0.5, 30.0, 1)?;
+/// let mut rows = 0;
+/// let cfg = visual::VisualConfig::default();
+/// let report = visual::walk_streamed(&db, poses, &cfg, |_| {}, &mut NoSink, &mut |_| {
+///     rows += 1;
+///     Ok(())
+/// })?;
+/// assert!(report.frames.is_empty());
+/// assert_eq!((report.summary.frames, rows), (100, 100));
+/// # Ok(()) }
+/// ```
+pub fn walk_streamed(
+    db: &Database,
+    poses: impl Iterator<Item = Pose>,
+    cfg: &VisualConfig,
+    progress: impl FnMut(usize),
+    sink: &mut dyn FrameSink,
+    each: &mut dyn FnMut(&VisualFrame) -> Result<()>,
+) -> Result<VisualReport> {
+    walk_each(
+        db,
+        cfg,
+        &mut WalkLods::new(db),
+        progress,
+        &mut Played::streamed(poses, sink),
+        each,
+    )
+}
+
 /// [`walk_live`] with LOD selection `lods` kept from an earlier walk.
 pub(crate) fn walk_live_with<'db>(
     db: &'db Database,
@@ -369,63 +422,35 @@ pub(crate) fn walk_live_with<'db>(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<VisualReport> {
-    let (frames, node_cache, run) =
-        super::mode::visual::walk_live(db, cfg, lods, progress, viewer)?;
-    let mut summary = summarize(&frames, node_cache);
+    let mut frames = Vec::new();
+    let mut report = walk_each(db, cfg, lods, progress, viewer, &mut |f| {
+        frames.push(f.clone());
+        Ok(())
+    })?;
+    report.frames = frames;
+    Ok(report)
+}
+
+/// The walk, each frame handed to `each` and tallied, none kept.
+fn walk_each<'db>(
+    db: &'db Database,
+    cfg: &VisualConfig,
+    lods: &mut WalkLods<'db>,
+    progress: impl FnMut(usize),
+    viewer: &mut dyn Viewer,
+    each: &mut dyn FnMut(&VisualFrame) -> Result<()>,
+) -> Result<VisualReport> {
+    let mut tally = VisualTally::default();
+    let (node_cache, run) = super::mode::visual::walk_live(db, cfg, lods, progress, viewer, |f| {
+        tally.add(&f);
+        each(&f)
+    })?;
+    let mut summary = tally.summary(node_cache);
     summary.failed_loads = run.failed_loads;
     summary.last_load_error = run.last_load_error;
     Ok(VisualReport {
         config: cfg.clone(),
-        frames,
+        frames: Vec::new(),
         summary,
     })
-}
-
-/// The walk's summary from its frames (and prefetches, counted in them).
-fn summarize(frames: &[VisualFrame], node_cache: Option<CacheStats>) -> VisualSummary {
-    let times = frame_times(&frames.iter().map(|f| f.frame_ms).collect::<Vec<_>>());
-    let searched: Vec<&VisualFrame> = frames.iter().filter(|f| f.searched).collect();
-    let all = frames.len().max(1) as f64;
-    let first_complete_frame = frames
-        .iter()
-        .position(|f| f.cell.is_some() && f.visual_misses == 0);
-    VisualSummary {
-        frames: frames.len(),
-        initial_load_ms: frames.first().map_or(0.0, |f| f.frame_ms),
-        mean_frame_ms: times.mean,
-        max_frame_ms: times.max,
-        frame_ms_variance: times.variance,
-        frames_over_50ms: times.over_50ms,
-        cells_entered: frames
-            .windows(2)
-            .filter(|w| w[1].cell.is_some() && w[1].cell != w[0].cell)
-            .count(),
-        searches: searched.len(),
-        prefetches: frames.iter().filter(|f| f.prefetch_adopted).count(),
-        prefetches_used: frames.iter().filter(|f| f.prefetch_used).count(),
-        mean_search_ms: if searched.is_empty() {
-            0.0
-        } else {
-            searched.iter().map(|f| f.search_ms).sum::<f64>() / searched.len() as f64
-        },
-        frames_outside: frames.iter().filter(|f| f.cell.is_none()).count(),
-        fallback_queries: frames.iter().filter(|f| f.fallback_query).count(),
-        tree_pages: frames.iter().map(|f| f.tree_pages).sum(),
-        model_pages: frames.iter().map(|f| f.model_pages).sum(),
-        other_pages: frames.iter().map(|f| f.other_pages).sum(),
-        loaded: frames.iter().map(|f| f.loaded).sum(),
-        reused: frames.iter().map(|f| f.reused).sum(),
-        left_out: frames.iter().map(|f| f.left_out).sum(),
-        mean_drawn: frames.iter().map(|f| f.drawn as f64).sum::<f64>() / all,
-        mean_triangles: frames.iter().map(|f| f.triangles_drawn as f64).sum::<f64>() / all,
-        peak_buffer_bytes: frames.iter().map(|f| f.buffer_bytes).max().unwrap_or(0),
-        node_cache,
-        visual_misses: frames.iter().map(|f| f.visual_misses).sum(),
-        first_complete_frame,
-        visual_misses_after_start: first_complete_frame
-            .map_or(0, |k| frames[k..].iter().map(|f| f.visual_misses).sum()),
-        coarse_draws: frames.iter().map(|f| f.coarse).sum(),
-        failed_loads: 0,
-        last_load_error: None,
-    }
 }

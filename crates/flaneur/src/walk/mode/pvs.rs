@@ -42,12 +42,9 @@ impl IndexEntries {
     }
 }
 
-/// What a PVS walk's frames did, and what its client measured.
+/// What a PVS walk's client measured beside its frames.
 #[derive(Debug, Default)]
 pub(crate) struct PvsRun {
-    pub frames: Vec<PvsFrame>,
-    /// The viewer's thread's time per frame, ms.
-    pub frame_ms: Vec<f64>,
     /// The longest round trip the client measured, frames.
     pub round_trip: u32,
     pub failed_loads: usize,
@@ -56,18 +53,22 @@ pub(crate) struct PvsRun {
 
 /// A PVS walk over `db`'s precomputed visibility as `cfg` says, the poses coming from
 /// `viewer`: the walk session with the PVS mode (or, never waiting, its form with a
-/// loader thread).
+/// loader thread). Each frame's figures and its time on the viewer's thread, ms, go to
+/// `each` as the frame ends.
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
     cfg: PvsWalkConfig,
     lods: &mut WalkLods<'db>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
+    each: impl FnMut((PvsFrame, f64)) -> Result<()>,
 ) -> Result<PvsRun> {
     let source = StoredPvs::new(db)?;
     let rule = cfg.prefetch.rule()?;
     if cfg.never_wait {
-        return super::pvs_never_wait::walk_live(db, &source, &*rule, cfg.pace, lods, tick, viewer);
+        return super::pvs_never_wait::walk_live(
+            db, &source, &*rule, cfg.pace, lods, tick, viewer, each,
+        );
     }
     let rule: &dyn PrefetchArea = &*rule;
     let client = PvsClient::new(&source, rule, THESIS_CAPACITY)?;
@@ -85,13 +86,8 @@ pub(crate) fn walk_live<'db>(
         shown: None,
         pending: None,
     };
-    let timed = session::run(&mut mode, viewer, lods, tick)?;
-    let (frames, frame_ms) = timed.into_iter().unzip();
-    Ok(PvsRun {
-        frames,
-        frame_ms,
-        ..PvsRun::default()
-    })
+    session::run_each(&mut mode, viewer, lods, tick, each)?;
+    Ok(PvsRun::default())
 }
 
 /// The PVS mode: the client, and what a drawing viewer needs beside it.

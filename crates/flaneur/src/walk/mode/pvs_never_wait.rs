@@ -24,7 +24,8 @@ use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 use crate::walk::walk_lods::WalkLods;
 
 /// A never-wait PVS walk over `source` (`db`'s visibility) with `rule`, the poses
-/// played at `pace` times real time (`None`: back to back).
+/// played at `pace` times real time (`None`: back to back), each frame handed to `each`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
     source: &StoredPvs<'db>,
@@ -33,6 +34,7 @@ pub(crate) fn walk_live<'db>(
     lods: &mut WalkLods<'db>,
     tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
+    each: impl FnMut((PvsFrame, f64)) -> Result<()>,
 ) -> Result<PvsRun> {
     let mailbox = Mailbox::default();
     let left_out = viewer
@@ -57,14 +59,9 @@ pub(crate) fn walk_live<'db>(
             page_reads: db.io().page_reads,
             run: PvsRun::default(),
         };
-        let walked = session::run(&mut mode, viewer, lods, tick);
+        let walked = session::run_each(&mut mode, viewer, lods, tick, each);
         mailbox.end();
-        let (frames, frame_ms) = walked?.into_iter().unzip();
-        Ok(PvsRun {
-            frames,
-            frame_ms,
-            ..mode.run
-        })
+        walked.map(|()| mode.run)
     })
 }
 

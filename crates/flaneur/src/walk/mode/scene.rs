@@ -22,7 +22,7 @@ use crate::walk::sink::{FrameFigures, Viewer};
 use crate::walk::walk_lods::WalkLods;
 
 /// A walk over `tree` under `cfg` with the poses coming from `viewer`: the walk session
-/// with the scene-tree mode. Every frame's figures.
+/// with the scene-tree mode. Each frame's figures go to `each` as the frame ends.
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
     tree: &mut SceneTree,
@@ -30,7 +30,8 @@ pub(crate) fn walk_live<'db>(
     lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
-) -> Result<Vec<SceneFrame>> {
+    mut each: impl FnMut(SceneFrame) -> Result<()>,
+) -> Result<()> {
     let mut mode = Scene {
         db,
         tree,
@@ -38,11 +39,15 @@ pub(crate) fn walk_live<'db>(
         drawable: Vec::new(),
         pending: None,
     };
-    let frames = session::run(&mut mode, viewer, lods, progress)?;
-    if frames.is_empty() {
+    let mut walked = 0;
+    session::run_each(&mut mode, viewer, lods, progress, |f| {
+        walked += 1;
+        each(f)
+    })?;
+    if walked == 0 {
         return Err(Error::Invalid("the walk had no poses".into()));
     }
-    Ok(frames)
+    Ok(())
 }
 
 struct Scene<'a> {

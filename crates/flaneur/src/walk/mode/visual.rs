@@ -57,14 +57,16 @@ struct Request {
 }
 
 /// A VISUAL walk under `cfg` with the poses coming from `viewer`: the walk session with
-/// the VISUAL mode. Every frame's figures, and the node cache's.
+/// the VISUAL mode. Each frame's figures go to `each` as the frame ends (a never-wait
+/// walk's at its end, their misses counted then); the node cache's figures are returned.
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
     cfg: &VisualConfig,
     lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
-) -> Result<(Vec<VisualFrame>, Option<CacheStats>, NeverWaitRun)> {
+    mut each: impl FnMut(VisualFrame) -> Result<()>,
+) -> Result<(Option<CacheStats>, NeverWaitRun)> {
     cfg.validate()?;
     let head = db.hdov_head()?;
     let scheme = match cfg.scheme {
@@ -99,15 +101,27 @@ pub(crate) fn walk_live<'db>(
     };
     let search = &search;
     db.reset_io();
+    let mut walked = 0;
+    let mut counted = |f: VisualFrame| {
+        walked += 1;
+        each(f)
+    };
     if cfg.never_wait {
-        let (frames, run) =
-            super::visual_never_wait::walk_live(db, cfg, search, lods, progress, viewer)?;
-        if frames.is_empty() {
+        let run = super::visual_never_wait::walk_live(
+            db,
+            cfg,
+            search,
+            lods,
+            progress,
+            viewer,
+            &mut counted,
+        )?;
+        if walked == 0 {
             return Err(Error::Invalid("the walk had no poses".into()));
         }
-        return Ok((frames, pool.as_ref().map(BufferPool::stats), run));
+        return Ok((pool.as_ref().map(BufferPool::stats), run));
     }
-    let frames = std::thread::scope(|scope| -> Result<Vec<VisualFrame>> {
+    std::thread::scope(|scope| -> Result<()> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Prefetched>>();
         if cfg.prefetch_k.is_some() {
@@ -143,15 +157,14 @@ pub(crate) fn walk_live<'db>(
             clock: Instant::now(),
             pending: None,
         };
-        let frames = session::run(&mut mode, viewer, lods, progress)?;
+        let walk = session::run_each(&mut mode, viewer, lods, progress, &mut counted);
         mode.req_tx = None;
-        if frames.is_empty() {
-            return Err(Error::Invalid("the walk had no poses".into()));
-        }
-        Ok(frames)
+        walk
     })?;
+    if walked == 0 {
+        return Err(Error::Invalid("the walk had no poses".into()));
+    }
     Ok((
-        frames,
         pool.as_ref().map(BufferPool::stats),
         NeverWaitRun::default(),
     ))

@@ -40,8 +40,9 @@ pub(crate) struct NeverWaitRun {
 }
 
 /// A never-wait VISUAL walk under `cfg`, searching with `search`, the poses coming from
-/// `viewer`. Every frame's figures, their misses those of frames whose cell's finds had
-/// not come counted once they are known.
+/// `viewer`. Every frame's figures go to `each` once the walk has ended: the misses of
+/// frames whose cell's finds had not come are counted only once they are known, so this
+/// walk keeps its frames until then.
 pub(crate) fn walk_live<'db>(
     db: &'db Database,
     cfg: &VisualConfig,
@@ -49,7 +50,8 @@ pub(crate) fn walk_live<'db>(
     lods: &mut WalkLods<'db>,
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
-) -> Result<(Vec<VisualFrame>, NeverWaitRun)> {
+    each: &mut dyn FnMut(VisualFrame) -> Result<()>,
+) -> Result<NeverWaitRun> {
     // Read before the walk, so that finding the eye's viewcell reads nothing on the
     // viewer's thread.
     db.hdov_head()?;
@@ -98,7 +100,8 @@ pub(crate) fn walk_live<'db>(
             f.visual_misses = count;
         }
     }
-    Ok((frames, run))
+    frames.into_iter().try_for_each(each)?;
+    Ok(run)
 }
 
 /// The viewer's side of the walk.

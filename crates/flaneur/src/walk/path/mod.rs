@@ -24,7 +24,7 @@ mod street;
 mod viewcells;
 
 pub use street::street_walk;
-pub use viewcells::cell_walk;
+pub use viewcells::{cell_poses, cell_walk, CellPoses};
 
 /// Eye height of a walker, metres.
 pub const EYE_HEIGHT: f32 = 1.7;
