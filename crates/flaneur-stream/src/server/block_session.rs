@@ -46,7 +46,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::{each_once, out_of_place, stalled, Selective, ServerConfig, Session, Shared, Streams};
+use super::session::{each_once, out_of_place, stalled, Session, Streams};
+use super::{Selective, ServerConfig, Shared};
 use crate::error::StreamError;
 use crate::prediction::Predictor;
 use crate::protocol::{receive, Hello, Message, ObjectBlocks, Switch, MAX_SWITCH, MAX_TO_CLIENT};

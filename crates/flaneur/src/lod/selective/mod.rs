@@ -33,6 +33,7 @@ mod client;
 mod cut_mesh;
 mod front;
 mod leaf_mesh;
+mod partial;
 mod stream;
 #[cfg(test)]
 mod testing;
