@@ -10,8 +10,9 @@
 use std::fs;
 use std::net::SocketAddr;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+use flaneur::fuzzing::{corpus_dir, corpus_inputs};
 
 use flaneur::lod::{
     bumpy_torus, BlockClient, BlockServer, Dag, DagConstruction, NodeName, ProgressiveMesh,
@@ -47,12 +48,6 @@ fn source() -> (SelectiveSource, View) {
     (SelectiveSource::new(&pm, &dag).unwrap(), view)
 }
 
-fn corpus(target: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fuzz/corpus")
-        .join(target)
-}
-
 fn peer() -> SocketAddr {
     SocketAddr::from(([127, 0, 0, 1], 9))
 }
@@ -79,18 +74,12 @@ fn take_blocks(source: &SelectiveSource, view: &View, mut input: &[u8]) -> usize
 #[test]
 fn every_blocks_batch_of_the_corpus_ends_without_a_panic() {
     let (source, view) = source();
-    let dir = corpus("blocks_batch");
-    let mut inputs: Vec<PathBuf> = fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("the blocks_batch corpus at {}: {e}", dir.display()))
-        .map(|entry| entry.unwrap().path())
-        .collect();
-    inputs.sort();
+    let inputs = corpus_inputs("blocks_batch").unwrap();
     assert!(inputs.len() > 5, "{} inputs", inputs.len());
     let mut taken = 0;
-    for path in &inputs {
-        let data = fs::read(path).unwrap();
-        let got = catch_unwind(AssertUnwindSafe(|| take_blocks(&source, &view, &data)));
-        taken += got.unwrap_or_else(|_| panic!("{} panicked", path.display()));
+    for (name, data) in &inputs {
+        let got = catch_unwind(AssertUnwindSafe(|| take_blocks(&source, &view, data)));
+        taken += got.unwrap_or_else(|_| panic!("blocks_batch/{name} panicked"));
     }
     // The seeds are real sessions: their blocks are taken.
     assert!(taken > 100, "{taken} blocks taken");
@@ -262,7 +251,7 @@ fn blocks_seed_sessions() -> Vec<(String, Vec<u8>)> {
 fn write_blocks_seeds() {
     let server = server();
     for target in ["stream_session", "stream_batch", "blocks_batch"] {
-        fs::create_dir_all(corpus(target)).unwrap();
+        fs::create_dir_all(corpus_dir(target)).unwrap();
     }
     for (name, data) in blocks_seed_sessions() {
         let mut answer = Vec::new();
@@ -273,9 +262,13 @@ fn write_blocks_seeds() {
             "{name}: {:?}",
             end.reason
         );
-        fs::write(corpus("stream_session").join(format!("seed-{name}")), &data).unwrap();
+        fs::write(
+            corpus_dir("stream_session").join(format!("seed-{name}")),
+            &data,
+        )
+        .unwrap();
         for target in ["stream_batch", "blocks_batch"] {
-            fs::write(corpus(target).join(format!("seed-{name}")), &answer).unwrap();
+            fs::write(corpus_dir(target).join(format!("seed-{name}")), &answer).unwrap();
         }
     }
 }

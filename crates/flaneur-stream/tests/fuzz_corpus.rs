@@ -13,8 +13,9 @@ use std::fs;
 use std::io;
 use std::net::SocketAddr;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+use flaneur::fuzzing::{corpus_dir, corpus_inputs};
 
 use flaneur::lod::{bumpy_torus, Dag, DagConstruction, ProgressiveMesh, Traversal, View};
 use flaneur::lod::{
@@ -43,29 +44,6 @@ fn peer() -> SocketAddr {
     SocketAddr::from(([127, 0, 0, 1], 9))
 }
 
-fn corpus(target: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fuzz/corpus")
-        .join(target)
-}
-
-/// Every input of `target`'s corpus, by file name; the corpus must be there and hold
-/// some.
-fn inputs(target: &str) -> Vec<(String, Vec<u8>)> {
-    let dir = corpus(target);
-    let mut found: Vec<_> = fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("the {target} corpus at {}: {e}", dir.display()))
-        .map(|entry| {
-            let path = entry.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            (name, fs::read(&path).unwrap())
-        })
-        .collect();
-    assert!(!found.is_empty(), "the {target} corpus is empty");
-    found.sort();
-    found
-}
-
 /// What the `stream_batch` target does with an input: the messages read before an
 /// error or the end.
 fn read_as_client(data: &[u8]) -> usize {
@@ -81,7 +59,7 @@ fn read_as_client(data: &[u8]) -> usize {
 fn every_session_of_the_corpus_ends_without_a_panic() {
     let server = server();
     let (mut answered, mut refused) = (0, 0);
-    for (name, data) in inputs("stream_session") {
+    for (name, data) in corpus_inputs("stream_session").unwrap() {
         let end = catch_unwind(AssertUnwindSafe(|| {
             server.serve(&data[..], io::sink(), peer())
         }))
@@ -98,7 +76,7 @@ fn every_session_of_the_corpus_ends_without_a_panic() {
 #[test]
 fn every_server_stream_of_the_corpus_reads_without_a_panic() {
     let mut read = 0;
-    for (name, data) in inputs("stream_batch") {
+    for (name, data) in corpus_inputs("stream_batch").unwrap() {
         read += catch_unwind(|| read_as_client(&data))
             .unwrap_or_else(|_| panic!("stream_batch input {name} panicked the client's reader"));
     }
@@ -130,7 +108,7 @@ fn selective_sources() -> [(SelectiveSource, View); 2] {
 fn every_selective_batch_of_the_corpus_ends_without_a_panic() {
     let sources = selective_sources();
     let (mut decoded, mut refused, mut taken) = (0, 0, [0, 0]);
-    for (name, data) in inputs("selective_batch") {
+    for (name, data) in corpus_inputs("selective_batch").unwrap() {
         catch_unwind(AssertUnwindSafe(|| match decode_vsplits(&data) {
             Ok(packets) => {
                 decoded += 1;
@@ -160,7 +138,7 @@ fn every_selective_batch_of_the_corpus_ends_without_a_panic() {
 #[test]
 #[ignore = "writes the fuzz corpus's seeds; run by hand"]
 fn write_selective_seeds() {
-    let dir = corpus("selective_batch");
+    let dir = corpus_dir("selective_batch");
     fs::create_dir_all(&dir).unwrap();
     let sources = ["torus", "building"].into_iter().zip(selective_sources());
     for ((name, (source, view)), distance) in sources.zip([2.0f32, 40.0]) {
@@ -468,7 +446,7 @@ fn held_leaves(mut answer: &[u8]) -> Vec<NodeName> {
 #[ignore = "writes the fuzz corpora's seeds"]
 fn write_seed_corpus() {
     let server = server();
-    let (sessions, streams) = (corpus("stream_session"), corpus("stream_batch"));
+    let (sessions, streams) = (corpus_dir("stream_session"), corpus_dir("stream_batch"));
     fs::create_dir_all(&sessions).unwrap();
     fs::create_dir_all(&streams).unwrap();
     for (name, data) in seed_sessions(&server) {

@@ -11,42 +11,19 @@ use std::fs;
 use std::panic::catch_unwind;
 use std::path::{Path, PathBuf};
 
-use flaneur::fuzzing::{cut_seeds, TARGETS};
+use flaneur::fuzzing::{corpus_dir, corpus_inputs, cut_seeds, TARGETS};
 use flaneur::hdov::HdovOptions;
 use flaneur::lod::{LodOptions, ProgressiveMesh};
 use flaneur::scene::{SceneObject, SceneWriter};
 use flaneur::visibility::VisibilityOptions;
 use flaneur::{BuildOptions, Database};
 
-fn corpus(target: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fuzz/corpus")
-        .join(target)
-}
-
-/// Every input of `target`'s corpus, by file name; the corpus must be there and hold
-/// some.
-fn inputs(target: &str) -> Vec<(String, Vec<u8>)> {
-    let dir = corpus(target);
-    let mut found: Vec<_> = fs::read_dir(&dir)
-        .unwrap_or_else(|e| panic!("the {target} corpus at {}: {e}", dir.display()))
-        .map(|entry| {
-            let path = entry.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            (name, fs::read(&path).unwrap())
-        })
-        .collect();
-    assert!(!found.is_empty(), "the {target} corpus is empty");
-    found.sort();
-    found
-}
-
 /// Every input of every target's corpus, through the target's body: none may panic.
 #[test]
 fn every_input_of_every_decoder_corpus_runs_without_a_panic() {
     let mut failed = Vec::new();
     for (target, run) in TARGETS {
-        for (name, data) in inputs(target) {
+        for (name, data) in corpus_inputs(target).unwrap() {
             if catch_unwind(|| run(&data)).is_err() {
                 failed.push(format!("{target}/{name}"));
             }
@@ -143,13 +120,13 @@ fn write_decoder_seeds() {
     }
 
     for (target, _) in TARGETS {
-        fs::create_dir_all(corpus(target)).unwrap();
+        fs::create_dir_all(corpus_dir(target)).unwrap();
     }
     for (target, name, bytes) in seeds {
         assert!(
             bytes.len() < 64 * 1024 || target == "database",
             "{target}/{name}"
         );
-        fs::write(corpus(target).join(format!("seed-{name}")), bytes).unwrap();
+        fs::write(corpus_dir(target).join(format!("seed-{name}")), bytes).unwrap();
     }
 }

@@ -12,6 +12,7 @@
 //!
 //! Hidden from the documentation: not part of the engine's API, and free to change.
 
+mod corpus;
 mod files;
 mod index;
 mod lod;
@@ -22,6 +23,7 @@ mod visibility;
 use std::cell::RefCell;
 use std::path::PathBuf;
 
+pub use corpus::{corpus_dir, corpus_inputs};
 pub use files::{database, obj, scene_file};
 pub use index::{hdov, mesh_codec, rtree_node};
 pub use lod::{lod_chain, lod_pm_dag, lod_table};
