@@ -26,6 +26,16 @@ pub fn display() -> Option<Display> {
     if std::env::var_os("DISPLAY").is_some() {
         return Some(Display(None));
     }
+    xvfb(&[])
+}
+
+/// An Xvfb server of our own whose screen is also a file in `dir` (XWD, `Xvfb_screen0`),
+/// so that a test can see the window's pixels, on a black root. `None` without Xvfb.
+pub fn display_in(dir: &std::path::Path) -> Option<Display> {
+    xvfb(&["-fbdir", dir.to_str()?, "-br"])
+}
+
+fn xvfb(extra: &[&str]) -> Option<Display> {
     // Xvfb picks a free display and writes its number on stdout once it takes clients.
     let child = Command::new("Xvfb")
         .args([
@@ -37,6 +47,7 @@ pub fn display() -> Option<Display> {
             "-nolisten",
             "tcp",
         ])
+        .args(extra)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
@@ -111,5 +122,44 @@ pub fn options(db: &Database, poses: &flaneur::walk::path::CameraPath) -> ViewOp
         play: Some(poses.clone()),
         gpu_budget: Some(4 << 20),
         ..ViewOptions::new(db.bounds(), flaneur::walk::busiest_street(db).unwrap())
+    }
+}
+
+/// An X screen's pixels, read from the XWD file Xvfb keeps it in (`-fbdir`): 8-bit RGB.
+pub struct Screen {
+    pub width: usize,
+    pub height: usize,
+    rgb: Vec<[u8; 3]>,
+}
+
+impl Screen {
+    /// Reads the XWD dump at `path` (32 bits a pixel, as Xvfb writes a 24-bit screen).
+    pub fn read(path: &std::path::Path) -> Screen {
+        let bytes = std::fs::read(path).unwrap();
+        let field = |i: usize| u32::from_be_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap());
+        let (header, width, height) = (field(0) as usize, field(4) as usize, field(5) as usize);
+        let (lsb_first, bits, line) = (field(7) == 0, field(11), field(12) as usize);
+        let masks = [field(14), field(15), field(16)];
+        let colours = field(19) as usize;
+        assert_eq!(bits, 32, "{bits} bits a pixel");
+        let start = header + colours * 12;
+        let mut rgb = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for x in 0..width {
+                let at = start + y * line + x * 4;
+                let b: [u8; 4] = bytes[at..at + 4].try_into().unwrap();
+                let v = if lsb_first {
+                    u32::from_le_bytes(b)
+                } else {
+                    u32::from_be_bytes(b)
+                };
+                rgb.push(masks.map(|m| ((v & m) >> m.trailing_zeros()) as u8));
+            }
+        }
+        Screen { width, height, rgb }
+    }
+
+    pub fn at(&self, x: usize, y: usize) -> [u8; 3] {
+        self.rgb[y * self.width + x]
     }
 }
