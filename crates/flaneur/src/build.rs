@@ -21,7 +21,9 @@ use crate::hdov::{build_hdov, HdovOptions, HdovReport};
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
-use crate::scene::{load_obj, Mesh, SceneObject, SceneReader, KIND_IMPORTED};
+use crate::scene::{
+    load_gltf, load_obj, GltfObjects, Mesh, SceneObject, SceneReader, KIND_IMPORTED,
+};
 use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
 use crate::write_order::{hilbert_order, WriteOrder};
@@ -55,6 +57,9 @@ pub struct BuildOptions {
     /// curve over their positions by default, so that a cell's objects lie in few byte
     /// runs; ids, the index and page counts do not depend on it.
     pub order: WriteOrder,
+    /// What one object of a glTF input is: each node with a mesh (the default), or each
+    /// mesh with all its placements (`--gltf-objects`).
+    pub gltf_objects: GltfObjects,
 }
 
 impl BuildOptions {
@@ -106,6 +111,7 @@ impl Default for BuildOptions {
             visibility: None,
             hdov: None,
             order: WriteOrder::default(),
+            gltf_objects: GltfObjects::default(),
         }
     }
 }
@@ -255,8 +261,9 @@ fn ground_centre(mesh: &Mesh) -> [f32; 2] {
     [(min[0] + max[0]) / 2.0, (min[2] + max[2]) / 2.0]
 }
 
-/// Builds a database from OBJ files: every object or group becomes an object, with
-/// ids in file order.
+/// Builds a database from OBJ and glTF files (`.obj`, `.gltf`, `.glb`): every object or
+/// group of an OBJ file becomes an object, as does every node with a mesh of a glTF
+/// file (or every mesh, by [`BuildOptions::gltf_objects`]), with ids in file order.
 ///
 /// ```
 /// # fn main() -> flaneur::Result<()> {
@@ -295,11 +302,15 @@ pub fn build_from_obj_with_progress(
 ) -> Result<BuildSummary> {
     opts.validate()?;
     if files.is_empty() {
-        return Err(Error::Invalid("no OBJ file to build from".into()));
+        return Err(Error::Invalid("no OBJ or glTF file to build from".into()));
     }
     let mut meshes = Vec::new();
     for f in files {
-        meshes.extend(load_obj(f)?.into_iter().map(|(_, m)| m));
+        meshes.extend(
+            load_model(f, opts.gltf_objects)?
+                .into_iter()
+                .map(|(_, m)| m),
+        );
     }
     let total = meshes.len() as u64;
     let order: Vec<usize> = match opts.order {
@@ -312,6 +323,37 @@ pub fn build_from_obj_with_progress(
         Ok((i as u64, KIND_IMPORTED, mesh))
     });
     build(objects, Some(total), db, opts, progress)
+}
+
+/// The objects of an OBJ or glTF file, by its extension.
+fn load_model(path: &Path, gltf: GltfObjects) -> Result<Vec<(String, Mesh)>> {
+    match model_format(path) {
+        Some(ModelFormat::Obj) => load_obj(path),
+        Some(ModelFormat::Gltf) => load_gltf(path, gltf),
+        None => Err(Error::BadInput {
+            path: path.to_path_buf(),
+            what: "not an OBJ (.obj) or glTF (.gltf, .glb) file, by its name".into(),
+        }),
+    }
+}
+
+/// The kinds of model file a database is built from besides a scene file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelFormat {
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// glTF 2.0 (`.gltf`, `.glb`).
+    Gltf,
+}
+
+/// The model format `path`'s extension names, if any.
+pub fn model_format(path: &Path) -> Option<ModelFormat> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    match ext.as_str() {
+        "obj" => Some(ModelFormat::Obj),
+        "gltf" | "glb" => Some(ModelFormat::Gltf),
+        _ => None,
+    }
 }
 
 fn build(

@@ -55,7 +55,7 @@ mod write_order;
 
 pub use build::{
     build_from_obj, build_from_obj_with_progress, build_from_scene, build_from_scene_with_progress,
-    BuildOptions, BuildSummary,
+    model_format, BuildOptions, BuildSummary,
 };
 pub use database::{Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};

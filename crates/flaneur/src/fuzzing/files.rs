@@ -1,5 +1,6 @@
-//! Whole files: a scene file, an OBJ file, a database. Each input is written to a
-//! scratch file and opened as the engine opens one.
+//! Whole files: a scene file, an OBJ file, a glTF file, a database. Each input but the
+//! glTF (decoded from memory, as its import does once it has read the file) is written
+//! to a scratch file and opened as the engine opens one.
 
 use super::{with_file, MAX_ITEMS};
 use crate::geom::Aabb;
@@ -30,6 +31,15 @@ pub fn obj(data: &[u8]) {
     with_file("fuzz.obj", data, |path| {
         let _ = load_obj(path);
     });
+}
+
+/// A glTF file (JSON or GLB) through the import, as one object per node and per mesh:
+/// no buffer beside it, so an external one is an error like any other.
+pub fn gltf(data: &[u8]) {
+    use crate::scene::GltfObjects;
+    for objects in [GltfObjects::PerNode, GltfObjects::PerMesh] {
+        let _ = crate::scene::gltf_from_bytes(data, None, objects);
+    }
 }
 
 /// A whole database file, opened with each local backend (memory map, pread): its
