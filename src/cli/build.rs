@@ -1,5 +1,5 @@
-//! `flaneur build`: a database from a citygen scene file or OBJ files, and what went
-//! into it.
+//! `flaneur build`: a database from a citygen scene file or OBJ and glTF files, and
+//! what went into it.
 
 use crate::cli::args::finite_f32;
 use std::path::{Path, PathBuf};
@@ -15,7 +15,7 @@ use flaneur::{BuildOptions, WriteOrder};
 /// `flaneur build`'s arguments.
 #[derive(clap::Args)]
 pub struct BuildArgs {
-    /// A `.scene` file from citygen, or one or more `.obj` files.
+    /// A `.scene` file from citygen, or one or more `.obj`, `.gltf` and `.glb` files.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// The database file to write.
@@ -64,6 +64,17 @@ pub struct BuildArgs {
     /// runs (fewer requests over HTTP), or `input`, as the input lists them.
     #[arg(long, default_value_t = WriteOrder::default())]
     order: WriteOrder,
+    /// What one object of a glTF input is: `node`, each node with a mesh, or `mesh`,
+    /// each mesh with all the nodes that place it.
+    #[arg(long, value_name = "node|mesh", default_value = "node")]
+    gltf_objects: flaneur::scene::GltfObjects,
+    /// The axis that points up in OBJ inputs: `y` (as flaneur), `z` (as GIS and many CAD
+    /// exports: turned to y up), or `auto`, y unless the files' bounds plainly say z.
+    #[arg(long, value_name = "y|z|auto", default_value = "auto")]
+    up: flaneur::scene::Up,
+    /// Metres per unit of OBJ inputs (0.01 for centimetres, 0.3048 for feet).
+    #[arg(long, value_name = "METRES", default_value_t = 1.0, value_parser = finite_f32, allow_negative_numbers = true)]
+    scale: f32,
     #[arg(long, short)]
     quiet: bool,
 }
@@ -86,6 +97,9 @@ impl BuildArgs {
             occluder_radius,
             hdov,
             order,
+            gltf_objects,
+            up,
+            scale,
             quiet,
         } = self;
         if let Ok(target) = std::fs::canonicalize(&out) {
@@ -123,6 +137,8 @@ impl BuildArgs {
                 ..Default::default()
             }),
             order,
+            gltf_objects,
+            obj_axes: flaneur::scene::ObjAxes { up, scale },
         };
         let summary = build(&inputs, &out, &opts, !quiet)?;
         println!(
@@ -136,6 +152,9 @@ impl BuildArgs {
             order,
             summary.seconds
         );
+        if let Some(p) = &summary.obj_placed {
+            print_placed(p);
+        }
         print_lod_report(summary.lod.as_ref(), summary.bytes);
         if let Some(v) = &summary.visibility {
             println!(
@@ -194,9 +213,9 @@ fn build(
     opts: &BuildOptions,
     bars: bool,
 ) -> Result<flaneur::BuildSummary> {
-    let is_obj = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let is_model = |p: &PathBuf| flaneur::model_format(p).is_some();
     let progress: &dyn Progress = if bars { &Bars::default() } else { &Silent };
-    if inputs.iter().all(is_obj) {
+    if inputs.iter().all(is_model) {
         Ok(flaneur::build_from_obj_with_progress(
             inputs, out, opts, progress,
         )?)
@@ -205,8 +224,21 @@ fn build(
             &inputs[0], out, opts, progress,
         )?)
     } else {
-        bail!("give one scene file, or OBJ files only")
+        bail!("give one scene file, or OBJ and glTF files only")
     }
+}
+
+/// How the OBJ inputs were placed: the up axis taken and why, and the scale.
+fn print_placed(p: &flaneur::scene::Placed) {
+    let [x, y, z] = p.extent;
+    let axes = match (p.turned, p.detected) {
+        (true, true) => format!(
+            "z up, turned to y up: they are plainly z-up, {x:.0} × {y:.0} wide and {z:.0} tall (--up y keeps them as they are)"
+        ),
+        (true, false) => "z up (--up z), turned to y up".to_string(),
+        (false, _) => format!("y up, as flaneur ({x:.0} × {z:.0} wide, {y:.0} tall; --up z turns them)"),
+    };
+    println!("  OBJ inputs: {axes}; {} m a unit", p.scale);
 }
 
 /// The LOD lines of a build's summary.

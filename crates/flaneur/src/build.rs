@@ -22,7 +22,8 @@ use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
 use crate::scene::{
-    load_gltf, load_obj, GltfObjects, Mesh, SceneObject, SceneReader, KIND_IMPORTED,
+    load_gltf, load_obj, place, GltfObjects, Mesh, ObjAxes, Placed, SceneObject, SceneReader,
+    KIND_IMPORTED,
 };
 use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
@@ -60,6 +61,9 @@ pub struct BuildOptions {
     /// What one object of a glTF input is: each node with a mesh (the default), or each
     /// mesh with all its placements (`--gltf-objects`).
     pub gltf_objects: GltfObjects,
+    /// The up axis and the scale to metres of OBJ inputs (`--up`, `--scale`); glTF is
+    /// y-up in metres by its specification.
+    pub obj_axes: ObjAxes,
 }
 
 impl BuildOptions {
@@ -68,6 +72,7 @@ impl BuildOptions {
     /// factor, the LOD, visibility and HDoV-tree settings, and that an HDoV-tree comes
     /// with visibility. The error names the bad one.
     pub fn validate(&self) -> Result<()> {
+        self.obj_axes.validate()?;
         if !crate::store::valid_page_size(self.page_size) {
             return Err(Error::Invalid(format!(
                 "page size {} is not a power of two in {}..={}",
@@ -112,6 +117,7 @@ impl Default for BuildOptions {
             hdov: None,
             order: WriteOrder::default(),
             gltf_objects: GltfObjects::default(),
+            obj_axes: ObjAxes::default(),
         }
     }
 }
@@ -149,6 +155,8 @@ pub struct BuildSummary {
     pub visibility: Option<VisibilityReport>,
     /// What the HDoV-tree took; `None` when none was built.
     pub hdov: Option<HdovReport>,
+    /// How OBJ inputs were placed (turned z-up to y-up, scaled); `None` without any.
+    pub obj_placed: Option<Placed>,
 }
 
 /// What `flaneur build --visibility` computed.
@@ -304,14 +312,31 @@ pub fn build_from_obj_with_progress(
     if files.is_empty() {
         return Err(Error::Invalid("no OBJ or glTF file to build from".into()));
     }
-    let mut meshes = Vec::new();
+    // OBJ meshes are placed together, by the bounds of them all; glTF's need nothing.
+    let (mut meshes, mut obj) = (Vec::new(), Vec::new());
     for f in files {
-        meshes.extend(
-            load_model(f, opts.gltf_objects)?
-                .into_iter()
-                .map(|(_, m)| m),
-        );
+        let loaded = load_model(f, opts.gltf_objects)?
+            .into_iter()
+            .map(|(_, m)| m);
+        let start = meshes.len();
+        meshes.extend(loaded);
+        if model_format(f) == Some(ModelFormat::Obj) {
+            obj.extend(start..meshes.len());
+        }
     }
+    let obj_placed = if obj.is_empty() {
+        None
+    } else {
+        let mut objs: Vec<Mesh> = obj
+            .iter()
+            .map(|&i| std::mem::take(&mut meshes[i]))
+            .collect();
+        let placed = place(&mut objs, &opts.obj_axes)?;
+        for (&i, m) in obj.iter().zip(objs) {
+            meshes[i] = m;
+        }
+        Some(placed)
+    };
     let total = meshes.len() as u64;
     let order: Vec<usize> = match opts.order {
         WriteOrder::Input => (0..meshes.len()).collect(),
@@ -322,7 +347,9 @@ pub fn build_from_obj_with_progress(
         let mesh = meshes[i].take().expect("each index once");
         Ok((i as u64, KIND_IMPORTED, mesh))
     });
-    build(objects, Some(total), db, opts, progress)
+    let mut summary = build(objects, Some(total), db, opts, progress)?;
+    summary.obj_placed = obj_placed;
+    Ok(summary)
 }
 
 /// The objects of an OBJ or glTF file, by its extension.
@@ -454,6 +481,7 @@ fn build(
         lod,
         visibility,
         hdov,
+        obj_placed: None,
     })
 }
 

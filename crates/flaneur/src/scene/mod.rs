@@ -2,10 +2,12 @@
 //! (the `flaneur-scene` crate, shared with the generator), OBJ and glTF import, and the mesh
 //! codec of the database.
 
+mod axes;
 mod gltf;
 mod mesh_codec;
 mod obj;
 
+pub use axes::{place, plainly_z_up, ObjAxes, Placed, Up};
 pub use flaneur_scene::{
     bunny, write_mesh_obj, Mesh, ObjectKind, RecordPos, SceneError, SceneObject, SceneReader,
     SceneSummary, SceneWriter,
