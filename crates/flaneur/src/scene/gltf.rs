@@ -89,9 +89,14 @@ pub(crate) fn gltf_from_bytes(
     dir: Option<&Path>,
     objects: GltfObjects,
 ) -> std::result::Result<Vec<(String, Mesh)>, String> {
-    let file = gltf::Gltf::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
-    let buffers = buffers(&file, dir)?;
-    let doc = &file.document;
+    let malformed = |e: gltf::Error| format!("malformed glTF: {e}");
+    let file = gltf::Gltf::from_slice_without_validation(bytes).map_err(malformed)?;
+    // gltf-json 1.4's validation indexes the accessors by each POSITION attribute before
+    // it checks the index (a panic, found by the gltf fuzz target): checked first here.
+    check_position_indices(file.document.as_json())?;
+    let document = gltf::Document::from_json(file.document.into_json()).map_err(malformed)?;
+    let buffers = buffers(&document, file.blob, dir)?;
+    let doc = &document;
     let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
         None => return Err("no scene to import".into()),
@@ -155,13 +160,38 @@ fn name_of(name: Option<&str>, kind: &str, index: usize) -> String {
     }
 }
 
-/// Every buffer's bytes: the GLB's binary chunk, a data URI's, or a file beside the glTF.
-fn buffers(file: &gltf::Gltf, dir: Option<&Path>) -> std::result::Result<Vec<Vec<u8>>, String> {
+/// That every primitive's POSITION attribute names an accessor the file has.
+fn check_position_indices(json: &gltf::json::Root) -> std::result::Result<(), String> {
+    use gltf::json::validation::Checked;
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = Checked::Valid(gltf::json::mesh::Semantic::Positions);
+            if let Some(a) = primitive.attributes.get(&position) {
+                if a.value() >= json.accessors.len() {
+                    return Err(format!(
+                        "malformed glTF: mesh {m} primitive {p}: POSITION is accessor {}, of {}",
+                        a.value(),
+                        json.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every buffer's bytes: the GLB's binary chunk (`blob`), a data URI's, or a file beside
+/// the glTF.
+fn buffers(
+    doc: &gltf::Document,
+    blob: Option<Vec<u8>>,
+    dir: Option<&Path>,
+) -> std::result::Result<Vec<Vec<u8>>, String> {
     let mut out = Vec::new();
-    for buffer in file.document.buffers() {
+    for buffer in doc.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => file.blob.clone().ok_or(format!(
+            gltf::buffer::Source::Bin => blob.clone().ok_or(format!(
                 "buffer {i} is the GLB's binary chunk, which it lacks"
             ))?,
             gltf::buffer::Source::Uri(uri) => {
