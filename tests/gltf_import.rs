@@ -283,6 +283,12 @@ fn malformed_gltf_files_are_errors_that_say_what_is_wrong() {
         err.contains("malformed glTF") && err.contains("broken.glb"),
         "{err}"
     );
+    // A GLB header naming fewer bytes than itself (gltf 1.4 overflows on it).
+    std::fs::write(&glb, b"glTF\x02\x00\x00\x00\x08\x00\x00\x00JSON").unwrap();
+    let err = load_gltf(&glb, GltfObjects::PerNode)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("a GLB of 8 bytes"), "{err}");
 }
 
 #[test]

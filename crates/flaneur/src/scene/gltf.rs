@@ -90,6 +90,16 @@ pub(crate) fn gltf_from_bytes(
     objects: GltfObjects,
 ) -> std::result::Result<Vec<(String, Mesh)>, String> {
     let malformed = |e: gltf::Error| format!("malformed glTF: {e}");
+    // gltf 1.4 takes 12 from a GLB's length before it compares (an overflow, found by
+    // the gltf fuzz target): a length under the header's own is refused first.
+    if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
+        let len = u32::from_le_bytes([len[0], len[1], len[2], len[3]]);
+        if len < 12 {
+            return Err(format!(
+                "malformed glTF: a GLB of {len} bytes, less than its 12-byte header"
+            ));
+        }
+    }
     let file = gltf::Gltf::from_slice_without_validation(bytes).map_err(malformed)?;
     // gltf-json 1.4's validation indexes the accessors by each POSITION attribute before
     // it checks the index (a panic, found by the gltf fuzz target): checked first here.
