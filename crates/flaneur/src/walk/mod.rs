@@ -66,12 +66,14 @@
 //!
 //! Private beside them: each mode's summary tallied a frame at a time, so that a walk
 //! that hands its frames on reports what one that keeps them does (`review_tally.rs`,
-//! `pvs_tally.rs`, `visual_tally.rs`, `scene_tally.rs`, over `frame_times.rs`), and
+//! `pvs_tally.rs`, `visual_tally.rs`, `scene_tally.rs`, over `frame_times.rs` and
+//! `cells_entered.rs`), and
 //! `frame_csv.rs`, the frames of a report that keeps them as one CSV text.
 
 mod adapt_ahead;
 mod buffer;
 mod cells;
+mod cells_entered;
 mod frame_csv;
 mod frame_times;
 pub mod live;

@@ -1,6 +1,7 @@
 //! A PVS walk's figures, tallied a frame at a time: the same whether the walk keeps its
 //! frames or hands each one on and forgets it, in constant memory.
 
+use super::cells_entered::CellsEntered;
 use super::mode::pvs::PvsRun;
 use super::pvs_walk::{PvsFrame, PvsWalkConfig, PvsWalkReport};
 
@@ -8,11 +9,9 @@ use super::pvs_walk::{PvsFrame, PvsWalkConfig, PvsWalkReport};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PvsTally {
     frames: usize,
-    /// The last frame's cell, once a frame has been seen.
-    last_cell: Option<Option<u32>>,
     inside: usize,
     drawn_inside: f64,
-    cells_entered: usize,
+    cells_entered: CellsEntered,
     transactions: usize,
     swaps: usize,
     sent: usize,
@@ -31,9 +30,6 @@ impl PvsTally {
         if f.cell.is_some() {
             self.inside += 1;
             self.drawn_inside += f.drawn as f64;
-            if self.last_cell.is_some_and(|last| last != f.cell) {
-                self.cells_entered += 1;
-            }
             if self.first_complete_frame.is_none() && f.visual_misses == 0 {
                 self.first_complete_frame = Some(self.frames);
             }
@@ -41,7 +37,7 @@ impl PvsTally {
         if self.first_complete_frame.is_some() {
             self.misses_after_start += f.visual_misses;
         }
-        self.last_cell = Some(f.cell);
+        self.cells_entered.add(f.cell);
         self.frames += 1;
         self.transactions += usize::from(f.transaction);
         self.swaps += f.swaps;
@@ -61,7 +57,7 @@ impl PvsTally {
             frames: Vec::new(),
             walked: self.frames,
             frames_outside: self.frames - self.inside,
-            cells_entered: self.cells_entered,
+            cells_entered: self.cells_entered.count(),
             transactions: self.transactions,
             swaps: self.swaps,
             objects_sent: self.sent,

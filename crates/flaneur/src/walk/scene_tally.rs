@@ -1,6 +1,7 @@
 //! A scene-tree walk's summary, tallied a frame at a time: the same whether the walk
 //! keeps its frames or hands each one on and forgets it, in constant memory.
 
+use super::cells_entered::CellsEntered;
 use super::frame_times::FrameTimesTally;
 use super::scene_walk::{SceneFrame, SceneSummary};
 use crate::hdov::scene::Traversal;
@@ -9,8 +10,7 @@ use crate::hdov::scene::Traversal;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SceneTally {
     times: FrameTimesTally,
-    /// The last frame's cell, once a frame has been seen.
-    last_cell: Option<Option<u32>>,
+    cells_entered: CellsEntered,
     /// Traversal times from frame 1 on, ms.
     traverse_ms: f64,
     triangles: f64,
@@ -27,10 +27,7 @@ impl SceneTally {
         if s.frames > 0 {
             self.traverse_ms += f.traverse_ms;
         }
-        if self.last_cell.is_some_and(|last| last != f.cell) && f.cell.is_some() {
-            s.cells_entered += 1;
-        }
-        self.last_cell = Some(f.cell);
+        self.cells_entered.add(f.cell);
         if let (None, Some((id, t))) = (s.first_too_big, f.too_big) {
             s.first_too_big = Some((s.frames, id, t));
         }
@@ -61,6 +58,7 @@ impl SceneTally {
             mean_triangles: self.triangles / all,
             mean_visited: self.visited / all,
             mean_drawn: self.drawn / all,
+            cells_entered: self.cells_entered.count(),
             ..self.sum.clone()
         }
     }

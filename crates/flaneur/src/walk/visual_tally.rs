@@ -1,6 +1,7 @@
 //! A VISUAL walk's summary, tallied a frame at a time: the same whether the walk keeps
 //! its frames or hands each one on and forgets it, in constant memory.
 
+use super::cells_entered::CellsEntered;
 use super::frame_times::FrameTimesTally;
 use super::visual::{VisualFrame, VisualSummary};
 use crate::cache::CacheStats;
@@ -11,9 +12,7 @@ pub(crate) struct VisualTally {
     frames: usize,
     initial_load_ms: f64,
     times: FrameTimesTally,
-    /// The last frame's cell, once a frame has been seen.
-    last_cell: Option<Option<u32>>,
-    cells_entered: usize,
+    cells_entered: CellsEntered,
     searches: usize,
     search_ms: f64,
     /// Figures summed over frames, named as the summary's.
@@ -28,10 +27,7 @@ impl VisualTally {
         if self.frames == 0 {
             self.initial_load_ms = f.frame_ms;
         }
-        if self.last_cell.is_some_and(|last| last != f.cell) && f.cell.is_some() {
-            self.cells_entered += 1;
-        }
-        self.last_cell = Some(f.cell);
+        self.cells_entered.add(f.cell);
         if f.cell.is_some() && f.visual_misses == 0 && self.sum.first_complete_frame.is_none() {
             self.sum.first_complete_frame = Some(self.frames);
         }
@@ -73,7 +69,7 @@ impl VisualTally {
             max_frame_ms: times.max,
             frame_ms_variance: times.variance,
             frames_over_50ms: times.over_50ms,
-            cells_entered: self.cells_entered,
+            cells_entered: self.cells_entered.count(),
             searches: self.searches,
             mean_search_ms: if self.searches == 0 {
                 0.0
