@@ -9,6 +9,7 @@ mod servers;
 use std::path::Path;
 use std::time::{Duration, SystemTime};
 
+use common::recorder::Recorder;
 use flaneur::geom::Aabb;
 use flaneur::store::HttpOptions;
 use flaneur::walk::path::motion::{self, Motion};
@@ -127,34 +128,6 @@ fn a_walk_over_http_reads_what_the_local_walk_reads() {
     assert_eq!(figures(&a), figures(&b));
 }
 
-/// Plays a path and keeps each frame's network figures, as the window's HUD gets them.
-struct Recorder<'p> {
-    path: &'p flaneur::walk::path::CameraPath,
-    remote: Vec<Option<flaneur::store::RemoteStats>>,
-}
-
-impl flaneur::walk::FrameSink for Recorder<'_> {
-    fn frame(
-        &mut self,
-        _: usize,
-        _: &flaneur::geom::Camera,
-        _: &flaneur::walk::ObjectBuffer,
-        _: &mut flaneur::walk::Selection<'_>,
-    ) -> flaneur::Result<()> {
-        Ok(())
-    }
-}
-
-impl flaneur::walk::Viewer for Recorder<'_> {
-    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
-        Ok(self.path.poses.get(frame).cloned())
-    }
-
-    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
-        self.remote.push(figures.remote);
-    }
-}
-
 #[test]
 fn each_frame_over_http_reports_the_client_cache() {
     let c = city(200, 5);
@@ -166,25 +139,19 @@ fn each_frame_over_http_reports_the_client_cache() {
         pace: None,
         ..ReviewConfig::preset(Preset::Box)
     };
-    let mut here = Recorder {
-        path: &path,
-        remote: Vec::new(),
-    };
+    let mut here = Recorder::new(path.poses.clone());
     review::walk_live(&local, &cfg, |_| {}, &mut here).unwrap();
-    assert_eq!(here.remote.len(), 60);
+    assert_eq!(here.figures.len(), 60);
     assert!(
-        here.remote.iter().all(Option::is_none),
+        here.figures.iter().all(|f| f.remote.is_none()),
         "a local file has no network figures"
     );
-    let mut there = Recorder {
-        path: &path,
-        remote: Vec::new(),
-    };
+    let mut there = Recorder::new(path.poses.clone());
     review::walk_live(&remote, &cfg, |_| {}, &mut there).unwrap();
     let seen: Vec<_> = there
-        .remote
+        .figures
         .iter()
-        .map(|r| r.expect("figures over HTTP"))
+        .map(|f| f.remote.expect("figures over HTTP"))
         .collect();
     assert_eq!(seen.len(), 60);
     // Cumulative, and the last frame's are the reader's own.

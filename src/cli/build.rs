@@ -1,5 +1,5 @@
-//! `flaneur build`: a database from a citygen scene file or OBJ and glTF files, and
-//! what went into it.
+//! `flaneur build`: a database from a citygen scene file or OBJ, glTF and OpenStreetMap
+//! files, and what went into it.
 
 use crate::cli::args::finite_f32;
 use std::path::{Path, PathBuf};
@@ -15,7 +15,8 @@ use flaneur::{BuildOptions, WriteOrder};
 /// `flaneur build`'s arguments.
 #[derive(clap::Args)]
 pub struct BuildArgs {
-    /// A `.scene` file from citygen, or one or more `.obj`, `.gltf` and `.glb` files.
+    /// A `.scene` file from citygen, or one or more `.obj`, `.gltf` and `.glb` files and
+    /// at most one OpenStreetMap extract (`.osm.pbf`).
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
     /// The database file to write.
@@ -75,6 +76,16 @@ pub struct BuildArgs {
     /// Metres per unit of OBJ inputs (0.01 for centimetres, 0.3048 for feet).
     #[arg(long, value_name = "METRES", default_value_t = 1.0, value_parser = finite_f32, allow_negative_numbers = true)]
     scale: f32,
+    /// Metres per storey of OpenStreetMap buildings, for `building:levels`.
+    #[arg(long, value_name = "METRES", default_value_t = flaneur::scene::OsmOptions::default().storey_height, value_parser = finite_f32, allow_negative_numbers = true)]
+    storey_height: f32,
+    /// Height of an OpenStreetMap building with neither `height` nor `building:levels`.
+    #[arg(long, value_name = "METRES", default_value_t = flaneur::scene::OsmOptions::default().default_height, value_parser = finite_f32, allow_negative_numbers = true)]
+    default_height: f32,
+    /// OpenStreetMap heights above this are taken as mistakes (levels or the default
+    /// are used instead).
+    #[arg(long, value_name = "METRES", default_value_t = flaneur::scene::OsmOptions::default().max_height, value_parser = finite_f32, allow_negative_numbers = true)]
+    max_height: f32,
     #[arg(long, short)]
     quiet: bool,
 }
@@ -100,6 +111,9 @@ impl BuildArgs {
             gltf_objects,
             up,
             scale,
+            storey_height,
+            default_height,
+            max_height,
             quiet,
         } = self;
         if let Ok(target) = std::fs::canonicalize(&out) {
@@ -139,6 +153,11 @@ impl BuildArgs {
             order,
             gltf_objects,
             obj_axes: flaneur::scene::ObjAxes { up, scale },
+            osm: flaneur::scene::OsmOptions {
+                storey_height,
+                default_height,
+                max_height,
+            },
         };
         let summary = build(&inputs, &out, &opts, !quiet)?;
         println!(
@@ -154,6 +173,9 @@ impl BuildArgs {
         );
         if let Some(p) = &summary.obj_placed {
             print_placed(p);
+        }
+        if let Some(r) = &summary.osm {
+            print_osm(r);
         }
         print_lod_report(summary.lod.as_ref(), summary.bytes);
         if let Some(v) = &summary.visibility {
@@ -224,7 +246,7 @@ fn build(
             &inputs[0], out, opts, progress,
         )?)
     } else {
-        bail!("give one scene file, or OBJ and glTF files only")
+        bail!("give one scene file, or OBJ, glTF and OpenStreetMap files only")
     }
 }
 
@@ -239,6 +261,26 @@ fn print_placed(p: &flaneur::scene::Placed) {
         (false, _) => format!("y up, as flaneur ({x:.0} × {z:.0} wide, {y:.0} tall; --up z turns them)"),
     };
     println!("  OBJ inputs: {axes}; {} m a unit", p.scale);
+}
+
+/// What the OpenStreetMap import made of its extract: buildings, then every repair and
+/// every skip with its count.
+fn print_osm(r: &flaneur::scene::OsmReport) {
+    println!(
+        "  OpenStreetMap buildings: {} ({} ways, {} multipolygons), {} skipped; projected about {:.5}° N, {:.5}° E (equirectangular, metres)",
+        r.buildings(),
+        r.from_ways,
+        r.from_relations,
+        r.skipped_total(),
+        r.centre[0],
+        r.centre[1]
+    );
+    for (repair, n) in &r.repaired {
+        println!("    repaired {n:>6}: {}", repair.describe());
+    }
+    for (skip, n) in &r.skipped {
+        println!("    skipped  {n:>6}: {}", skip.describe());
+    }
 }
 
 /// The LOD lines of a build's summary.

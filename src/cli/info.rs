@@ -122,6 +122,12 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
             );
         }
     }
+    if info.named_objects > 0 {
+        println!(
+            "names       {} objects named by the file they came from (`query` shows them)",
+            info.named_objects
+        );
+    }
     let b = info.bounds;
     println!(
         "bounds      x {:.1}..{:.1}  y {:.1}..{:.1}  z {:.1}..{:.1}",

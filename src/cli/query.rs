@@ -1,5 +1,6 @@
 //! `flaneur query`: one range query (BOX), or CSearch against history cells, with the
-//! pages it read and its time.
+//! pages it read and its time; each object with its name where the database keeps names
+//! (an imported OpenStreetMap building's `way/…` or `relation/…`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -54,6 +55,14 @@ fn run_query(
     };
     let us = t.elapsed().as_secs_f64() * 1e6;
     let io = db.io();
+    // Names are looked up after the query's figures are taken: they are not its reads.
+    let names = if db.named_objects() > 0 {
+        let names: flaneur::Result<Vec<Option<String>>> =
+            result.ids().iter().map(|&id| db.object_name(id)).collect();
+        Some(names?)
+    } else {
+        None
+    };
     if json {
         let mut v = serde_json::json!({
             "query": if history.is_empty() { "box" } else { "csearch" },
@@ -62,6 +71,9 @@ fn run_query(
             "page_reads": io.page_reads,
             "micros": us,
         });
+        if let Some(names) = &names {
+            v["names"] = serde_json::json!(names);
+        }
         if let Some(s) = db.remote_stats() {
             v["http"] = serde_json::json!({
                 "requests": s.requests,
@@ -75,7 +87,18 @@ fn run_query(
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let ids: Vec<String> = result.ids().iter().map(u64::to_string).collect();
+    let ids: Vec<String> = match &names {
+        Some(names) => result
+            .ids()
+            .iter()
+            .zip(names)
+            .map(|(id, n)| match n {
+                Some(n) => format!("{id} ({n})"),
+                None => id.to_string(),
+            })
+            .collect(),
+        None => result.ids().iter().map(u64::to_string).collect(),
+    };
     println!("{} objects: {}", ids.len(), ids.join(" "));
     let pages: Vec<String> = result.pages.iter().map(u64::to_string).collect();
     println!("{} pages read: {}", pages.len(), pages.join(" "));

@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+pub mod recorder;
+
 use flaneur::geom::Aabb;
 use flaneur::BuildOptions;
 

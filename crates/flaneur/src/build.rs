@@ -19,11 +19,12 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::hdov::{build_hdov, HdovOptions, HdovReport};
 use crate::lod::{LodOptions, LodReport, LodWriter};
+use crate::names::store_names;
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
 use crate::scene::{
-    load_gltf, load_obj, place, GltfObjects, Mesh, ObjAxes, Placed, SceneObject, SceneReader,
-    KIND_IMPORTED,
+    load_gltf, load_obj, load_osm, place, GltfObjects, Mesh, ObjAxes, OsmOptions, OsmReport,
+    Placed, SceneObject, SceneReader, KIND_IMPORTED,
 };
 use crate::store::{PageKind, Segment, Store};
 use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
@@ -64,6 +65,9 @@ pub struct BuildOptions {
     /// The up axis and the scale to metres of OBJ inputs (`--up`, `--scale`); glTF is
     /// y-up in metres by its specification.
     pub obj_axes: ObjAxes,
+    /// How OpenStreetMap footprints become buildings: storey height, default and
+    /// maximum heights (`--storey-height`, `--default-height`, `--max-height`).
+    pub osm: OsmOptions,
 }
 
 impl BuildOptions {
@@ -73,6 +77,7 @@ impl BuildOptions {
     /// with visibility. The error names the bad one.
     pub fn validate(&self) -> Result<()> {
         self.obj_axes.validate()?;
+        self.osm.validate()?;
         if !crate::store::valid_page_size(self.page_size) {
             return Err(Error::Invalid(format!(
                 "page size {} is not a power of two in {}..={}",
@@ -118,6 +123,7 @@ impl Default for BuildOptions {
             order: WriteOrder::default(),
             gltf_objects: GltfObjects::default(),
             obj_axes: ObjAxes::default(),
+            osm: OsmOptions::default(),
         }
     }
 }
@@ -157,6 +163,8 @@ pub struct BuildSummary {
     pub hdov: Option<HdovReport>,
     /// How OBJ inputs were placed (turned z-up to y-up, scaled); `None` without any.
     pub obj_placed: Option<Placed>,
+    /// What the OpenStreetMap import made of its extract; `None` without one.
+    pub osm: Option<OsmReport>,
 }
 
 /// What `flaneur build --visibility` computed.
@@ -234,7 +242,7 @@ pub fn build_from_scene_with_progress(
     match opts.order {
         WriteOrder::Input => {
             let objects = reader.map(|r| r.map(unpack).map_err(Error::from));
-            build(objects, Some(total), db, opts, progress)
+            build(objects, Some(total), None, db, opts, progress)
         }
         WriteOrder::Hilbert => {
             // One pass to learn where each object stands (and to check the whole file),
@@ -254,7 +262,7 @@ pub fn build_from_scene_with_progress(
             let objects = hilbert_order(&centres)
                 .into_iter()
                 .map(move |i| reader.read_at(places[i]).map(unpack).map_err(Error::from));
-            build(objects, Some(total), db, opts, progress)
+            build(objects, Some(total), None, db, opts, progress)
         }
     }
 }
@@ -312,14 +320,27 @@ pub fn build_from_obj_with_progress(
     if files.is_empty() {
         return Err(Error::Invalid("no OBJ or glTF file to build from".into()));
     }
-    // OBJ meshes are placed together, by the bounds of them all; glTF's need nothing.
-    let (mut meshes, mut obj) = (Vec::new(), Vec::new());
+    if files
+        .iter()
+        .filter(|f| model_format(f) == Some(ModelFormat::Osm))
+        .count()
+        > 1
+    {
+        return Err(Error::Invalid(
+            "more than one OpenStreetMap extract: each is projected about its own centre, so build one at a time".into(),
+        ));
+    }
+    // OBJ meshes are placed together, by the bounds of them all; the others need nothing.
+    let (mut meshes, mut names, mut obj) = (Vec::new(), Vec::new(), Vec::new());
+    let mut osm = None;
     for f in files {
-        let loaded = load_model(f, opts.gltf_objects)?
-            .into_iter()
-            .map(|(_, m)| m);
+        let loaded = load_model(f, opts)?;
+        osm = osm.or(loaded.osm);
         let start = meshes.len();
-        meshes.extend(loaded);
+        for (name, mesh) in loaded.objects {
+            names.push(name);
+            meshes.push(mesh);
+        }
         if model_format(f) == Some(ModelFormat::Obj) {
             obj.extend(start..meshes.len());
         }
@@ -347,21 +368,40 @@ pub fn build_from_obj_with_progress(
         let mesh = meshes[i].take().expect("each index once");
         Ok((i as u64, KIND_IMPORTED, mesh))
     });
-    let mut summary = build(objects, Some(total), db, opts, progress)?;
+    // Names are kept when the inputs give any.
+    let names = names.iter().any(|n| !n.is_empty()).then_some(names);
+    let mut summary = build(objects, Some(total), names.as_deref(), db, opts, progress)?;
     summary.obj_placed = obj_placed;
+    summary.osm = osm;
     Ok(summary)
 }
 
-/// The objects of an OBJ or glTF file, by its extension.
-fn load_model(path: &Path, gltf: GltfObjects) -> Result<Vec<(String, Mesh)>> {
-    match model_format(path) {
-        Some(ModelFormat::Obj) => load_obj(path),
-        Some(ModelFormat::Gltf) => load_gltf(path, gltf),
-        None => Err(Error::BadInput {
-            path: path.to_path_buf(),
-            what: "not an OBJ (.obj) or glTF (.gltf, .glb) file, by its name".into(),
-        }),
-    }
+/// The objects of one model file, named, and the OpenStreetMap import's report.
+struct Loaded {
+    objects: Vec<(String, Mesh)>,
+    osm: Option<OsmReport>,
+}
+
+/// The objects of an OBJ, glTF or OpenStreetMap file, by its extension.
+fn load_model(path: &Path, opts: &BuildOptions) -> Result<Loaded> {
+    let objects = match model_format(path) {
+        Some(ModelFormat::Obj) => load_obj(path)?,
+        Some(ModelFormat::Gltf) => load_gltf(path, opts.gltf_objects)?,
+        Some(ModelFormat::Osm) => {
+            let city = load_osm(path, &opts.osm)?;
+            return Ok(Loaded {
+                objects: city.objects,
+                osm: Some(city.report),
+            });
+        }
+        None => {
+            return Err(Error::BadInput {
+                path: path.to_path_buf(),
+                what: "not an OBJ (.obj), glTF (.gltf, .glb) or OpenStreetMap (.osm.pbf) file, by its name".into(),
+            })
+        }
+    };
+    Ok(Loaded { objects, osm: None })
 }
 
 /// The kinds of model file a database is built from besides a scene file.
@@ -371,6 +411,8 @@ pub enum ModelFormat {
     Obj,
     /// glTF 2.0 (`.gltf`, `.glb`).
     Gltf,
+    /// An OpenStreetMap extract in the PBF format (`.osm.pbf`, `.pbf`).
+    Osm,
 }
 
 /// The model format `path`'s extension names, if any.
@@ -379,6 +421,7 @@ pub fn model_format(path: &Path) -> Option<ModelFormat> {
     match ext.as_str() {
         "obj" => Some(ModelFormat::Obj),
         "gltf" | "glb" => Some(ModelFormat::Gltf),
+        "pbf" => Some(ModelFormat::Osm),
         _ => None,
     }
 }
@@ -386,6 +429,7 @@ pub fn model_format(path: &Path) -> Option<ModelFormat> {
 fn build(
     objects: impl Iterator<Item = Result<(u64, u8, Mesh)>>,
     total: Option<u64>,
+    names: Option<&[String]>,
     db: &Path,
     opts: &BuildOptions,
     progress: &dyn Progress,
@@ -445,6 +489,9 @@ fn build(
         None => None,
     };
     drop(kept);
+    if let Some(names) = names {
+        kinds.meta += store_names(&mut store, names)?;
+    }
     // What follows sees the objects in id order, whatever order they were written in,
     // so that the index (and the HDoV-tree) are the same for every write order.
     entries.sort_unstable_by_key(|e| e.id);
@@ -482,6 +529,7 @@ fn build(
         visibility,
         hdov,
         obj_placed: None,
+        osm: None,
     })
 }
 

@@ -87,6 +87,7 @@ pub(super) fn hud_content(
         ),
         format!("{} at {:.0}, {:.1}, {:.0}", f.cell, p.x, p.y, p.z),
     ];
+    lines.extend(f.looking_at.as_ref().map(|l| format!("looking at {l}")));
     lines.extend(network_line(f));
     lines.extend(f.streamed.as_ref().map(|s| format!("stream: {s}")));
     lines.push(format!(

@@ -13,6 +13,7 @@
 //!   decoding to objects the database holds;
 //! - the HDoV-tree: its head, every node, every internal LOD chain, and each scheme's
 //!   V-pages for every cell;
+//! - the object names: no more than the objects, each one readable;
 //! - no two structures claim one page, and the pages of each kind are as many as the
 //!   header counts.
 //!
@@ -37,6 +38,7 @@ use crate::catalog::load_meta;
 use crate::error::{Error, Result};
 use crate::hdov::HdovTree;
 use crate::lod::stored::LodTable;
+use crate::names::NameTable;
 use crate::rtree::RTree;
 use crate::store::{Backend, PageKind, Store};
 use crate::visibility::VisibilityTable;
@@ -163,7 +165,31 @@ fn structures(store: &Store, c: &mut Claims, report: &mut CheckReport) {
         Ok(None) => {}
         Err(e) => c.problem(&e, header),
     }
+    match NameTable::open(store) {
+        Ok(Some(t)) => names(store, &t, report.objects, c),
+        Ok(None) => {}
+        Err(e) => c.problem(&e, header),
+    }
     c.check_kind_counts();
+}
+
+/// The names table: its pages, a name for no more objects than there are, and every
+/// name readable (the first bad one reported).
+fn names(store: &Store, t: &NameTable, objects: u64, c: &mut Claims) {
+    let part = "the object names";
+    if !c.claim_extent(&t.extent(), PageKind::Meta, part) {
+        return;
+    }
+    if t.len() > objects {
+        c.found(
+            Some(t.extent().first_page),
+            part,
+            format!("{} names for {objects} objects", t.len()),
+        );
+    }
+    if let Some(e) = (0..t.len()).find_map(|id| t.name(store, id).err()) {
+        c.problem(&e, part);
+    }
 }
 
 /// An error as a problem of `part`: the page it names, else none.

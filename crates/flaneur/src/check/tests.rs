@@ -226,3 +226,68 @@ fn what_is_not_a_database_is_a_report_and_a_missing_file_an_error() {
         Err(Error::Io { .. })
     ));
 }
+
+#[test]
+fn an_imported_citys_names_are_checked_and_a_bad_offset_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("two.obj");
+    let tetra = |x: f32| format!("v {x} 0 0\nv {} 0 0\nv {x} 1 0\nv {x} 0 1\n", x + 1.0);
+    let faces = |b: u32| {
+        format!(
+            "f {} {} {}\nf {} {} {}\nf {} {} {}\nf {} {} {}\n",
+            b,
+            b + 2,
+            b + 1,
+            b,
+            b + 1,
+            b + 3,
+            b,
+            b + 3,
+            b + 2,
+            b + 1,
+            b + 2,
+            b + 3
+        )
+    };
+    let text = format!(
+        "o left\n{}{}o right\n{}{}",
+        tetra(0.0),
+        faces(1),
+        tetra(10.0),
+        faces(5)
+    );
+    std::fs::write(&obj, text).unwrap();
+    let path = dir.path().join("two.flaneur");
+    let opts = BuildOptions {
+        page_size: 1024,
+        lod: None,
+        ..Default::default()
+    };
+    crate::build_from_obj(&[obj], &path, &opts).unwrap();
+    let db = crate::Database::open(&path).unwrap();
+    assert_eq!(db.object_name(1).unwrap().as_deref(), Some("right"));
+    drop(db);
+    let report = check(&path).unwrap();
+    assert!(report.ok(), "{:?}", report.problems);
+    assert!(report.unclaimed.is_empty(), "{:?}", report.unclaimed);
+
+    // Name 1 said to end past the text, the page's checksum made to match.
+    let mut s = Store::open_writable(&path, Backend::Pread { direct: false }).unwrap();
+    let (extent, _) = s
+        .segment_extent(crate::names::NAMES_SEGMENT, |_, _| Ok(()))
+        .unwrap()
+        .unwrap();
+    let mut page = s.read_page(extent.first_page, PageKind::Meta).unwrap();
+    page[16 + 16..16 + 24].copy_from_slice(&999u64.to_le_bytes());
+    s.write_page(extent.first_page, PageKind::Meta, &page)
+        .unwrap();
+    s.finish().unwrap();
+    let report = check(&path).unwrap();
+    let found = report
+        .problems
+        .iter()
+        .find(|p| p.part == "the object names")
+        .unwrap();
+    assert!(found.what.contains("name 1 at bytes"), "{found:?}");
+    assert_eq!(found.page, Some(extent.first_page));
+}

@@ -12,6 +12,7 @@ use crate::geom::{Aabb, Camera};
 use crate::hdov::{self, HdovTree};
 use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
+use crate::names::NameTable;
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::Mesh;
 use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, RequestTimes, Store};
@@ -59,6 +60,9 @@ pub struct DatabaseInfo {
     pub fanout_leaf: usize,
     /// The most entries an internal node holds.
     pub fanout_internal: usize,
+    /// Objects with a name from the file they were imported from (0 without a names
+    /// table: see [`Database::object_name`]).
+    pub named_objects: u64,
     /// What the database holds as LODs; `None` when it holds none (built with
     /// `--no-lod`, or before LODs were stored).
     pub lod: Option<LodStats>,
@@ -168,6 +172,7 @@ pub struct Database {
     lod: Option<LodTable>,
     visibility: Option<VisibilityTable>,
     hdov: Option<HdovTree>,
+    names: Option<NameTable>,
 }
 
 impl Database {
@@ -237,6 +242,7 @@ impl Database {
         let lod = LodTable::open(&store)?;
         let visibility = VisibilityTable::open(&store)?;
         let hdov = HdovTree::open(&store)?;
+        let names = NameTable::open(&store)?;
         let kinds = KindCounts {
             lod: lod.as_ref().map_or(0, LodTable::pages),
             visibility: visibility.as_ref().map_or(0, VisibilityTable::pages),
@@ -261,8 +267,36 @@ impl Database {
             lod,
             visibility,
             hdov,
+            names,
             store,
         })
+    }
+
+    /// What object `id` was called in the file it was imported from: its OpenStreetMap
+    /// element (`way/123`, `relation/45`), its glTF node's or OBJ object's name. `None`
+    /// for an object without one: from a scene file, unnamed, or inserted later.
+    /// Reads the pages that hold that one name.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # citygen::write_city(&citygen::CityConfig { objects: 10, ..Default::default() }, &scene)?;
+    /// flaneur::build_from_scene(&scene, &path, &Default::default())?;
+    /// // A generated city's objects have ids, not names.
+    /// assert_eq!(flaneur::Database::open(&path)?.object_name(3)?, None);
+    /// # Ok(()) }
+    /// ```
+    pub fn object_name(&self, id: u64) -> Result<Option<String>> {
+        match &self.names {
+            Some(t) => t.name(&self.store, id),
+            None => Ok(None),
+        }
+    }
+
+    /// Objects with an entry in the names table (0 without a table).
+    pub fn named_objects(&self) -> u64 {
+        self.names.as_ref().map_or(0, NameTable::len)
     }
 
     /// BOX: every object whose box overlaps `query`.
@@ -619,6 +653,7 @@ impl Database {
             tree,
             fanout_leaf: self.tree.fanout.leaf,
             fanout_internal: self.tree.fanout.internal,
+            named_objects: self.named_objects(),
             lod: self.lod_stats()?,
             visibility: self.visibility_info()?,
             hdov: self.hdov()?.map(|h| HdovInfo {

@@ -42,6 +42,17 @@ pub fn gltf(data: &[u8]) {
     }
 }
 
+/// An OpenStreetMap PBF extract through the import: its three passes, the rings, the
+/// heights and the extrusion of every building found.
+pub fn osm_pbf(data: &[u8]) {
+    // The import turns a panic inside the PBF reader into an error; the fuzzer's hook
+    // would abort on it first and call the caught panic a finding.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let _ = crate::scene::osm_from_bytes(data, &crate::scene::OsmOptions::default());
+    std::panic::set_hook(hook);
+}
+
 /// A whole database file, opened with each local backend (memory map, pread): its
 /// info, a range query over its bounds and over half of them, every object found with
 /// its mesh, LOD levels and progressive mesh, the coarsest levels of them all, a few
@@ -95,6 +106,7 @@ fn walk(db: &Database) {
             }
         }
         let _ = db.progressive(o.id);
+        let _ = db.object_name(o.id);
     }
     let _ = db.coarsest_meshes(objects);
     if let Ok(Some(table)) = db.visibility() {

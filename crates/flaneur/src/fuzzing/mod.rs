@@ -24,7 +24,7 @@ use std::cell::RefCell;
 use std::path::PathBuf;
 
 pub use corpus::{corpus_dir, corpus_inputs};
-pub use files::{database, gltf, obj, scene_file};
+pub use files::{database, gltf, obj, osm_pbf, scene_file};
 pub use index::{hdov, mesh_codec, rtree_node};
 pub use lod::{lod_chain, lod_pm_dag, lod_table};
 pub use seeds::{cut_seeds, Seed};
@@ -35,7 +35,7 @@ pub use visibility::visibility_table;
 pub type Target = fn(&[u8]);
 
 /// Every target: its name (its corpus is `fuzz/corpus/<name>/`) and its body.
-pub const TARGETS: [(&str, Target); 13] = [
+pub const TARGETS: [(&str, Target); 14] = [
     ("db_header", db_header),
     ("db_page", db_page),
     ("rtree_node", rtree_node),
@@ -48,6 +48,7 @@ pub const TARGETS: [(&str, Target); 13] = [
     ("scene_file", scene_file),
     ("obj", obj),
     ("gltf", gltf),
+    ("osm_pbf", osm_pbf),
     ("database", database),
 ];
 

@@ -40,7 +40,7 @@
 
 mod dag;
 #[cfg(test)]
-mod fixtures;
+pub(crate) mod fixtures;
 mod hausdorff;
 mod pm;
 mod refine;

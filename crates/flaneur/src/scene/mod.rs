@@ -1,11 +1,12 @@
 //! Objects and meshes as the engine reads them: the scene types and the scene file
-//! (the `flaneur-scene` crate, shared with the generator), OBJ and glTF import, and the mesh
+//! (the `flaneur-scene` crate, shared with the generator), OBJ, glTF and OpenStreetMap import, and the mesh
 //! codec of the database.
 
 mod axes;
 mod gltf;
 mod mesh_codec;
 mod obj;
+mod osm;
 
 pub use axes::{place, plainly_z_up, ObjAxes, Placed, Up};
 pub use flaneur_scene::{
@@ -16,6 +17,8 @@ pub(crate) use gltf::gltf_from_bytes;
 pub use gltf::{load_gltf, GltfObjects};
 pub(crate) use mesh_codec::{decode_mesh, encode_mesh};
 pub use obj::load_obj;
+pub(crate) use osm::osm_from_bytes;
+pub use osm::{load_osm, OsmImport, OsmOptions, OsmReport, Repair, Skip};
 
-/// The kind byte of objects that did not come from citygen (OBJ and glTF imports).
+/// The kind byte of objects that did not come from citygen (OBJ, glTF and OpenStreetMap imports).
 pub const KIND_IMPORTED: u8 = 255;

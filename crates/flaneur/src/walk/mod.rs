@@ -78,6 +78,7 @@ mod frame_csv;
 mod frame_times;
 pub mod live;
 pub mod lod_select;
+mod looked_at;
 mod mode;
 pub mod path;
 mod pvs_tally;

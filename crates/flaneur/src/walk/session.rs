@@ -19,6 +19,7 @@
 use std::time::Instant;
 
 use super::buffer::{Loaded, ObjectBuffer};
+use super::looked_at::looked_at;
 use super::path::Pose;
 use super::sink::{FrameFigures, Viewer};
 use super::walk_lods::{LodWanted, WalkLods};
@@ -125,6 +126,8 @@ pub(crate) fn run_each<M: Mode + ?Sized>(
     mut each: impl FnMut(M::Frame) -> Result<()>,
 ) -> Result<()> {
     let mut buffer = ObjectBuffer::new(mode.memory_budget());
+    // The object last looked at, with its name: asked of the database once per object.
+    let mut named: Option<(u64, Option<String>)> = None;
     if let Some(remote) = viewer.lod_remote() {
         lods.set_remote(remote);
     }
@@ -145,6 +148,18 @@ pub(crate) fn run_each<M: Mode + ?Sized>(
         };
         let frame = mode.finish(&culled, &buffer)?;
         let mut lod_pages = 0;
+        let mut looking_at = None;
+        if let (Some(camera), true) = (&camera, at.draws) {
+            looking_at = looked_at(camera, &culled.drawn).map(|(id, metres)| {
+                if named.as_ref().is_none_or(|n| n.0 != id) {
+                    named = Some((id, lods.object_name(id)));
+                }
+                match named.as_ref().and_then(|n| n.1.as_deref()) {
+                    Some(name) => format!("{name} (object {id}), {metres:.0} m"),
+                    None => format!("object {id}, {metres:.0} m"),
+                }
+            });
+        }
         if let Some(camera) = &camera {
             let want = LodWanted {
                 tau: viewer.lod_tau(),
@@ -162,6 +177,7 @@ pub(crate) fn run_each<M: Mode + ?Sized>(
             lod_pages,
             remote: lods.remote_stats(),
             streamed: lods.remote_status(),
+            looking_at,
             ..mode.figures(&frame, &buffer)
         });
         each(frame)?;

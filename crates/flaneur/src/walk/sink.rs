@@ -195,6 +195,9 @@ pub struct FrameFigures {
     /// round trip, prediction span, batches); `None` without them
     /// ([`RemoteRefinements::status`](super::RemoteRefinements::status)).
     pub streamed: Option<String>,
+    /// The object straight ahead, for a viewer that draws: its name where the database
+    /// keeps one (an OpenStreetMap building's `way/…`), its id and distance, in words.
+    pub looking_at: Option<String>,
 }
 
 /// Poses played to a sink in order: the viewer of a walk along a fixed path, or along

@@ -43,6 +43,12 @@ pub(crate) struct LodWanted {
 }
 
 impl<'db> WalkLods<'db> {
+    /// Object `id`'s name in the database walked, where it keeps one; a names table that
+    /// cannot be read names nothing (the walk goes on).
+    pub(crate) fn object_name(&self, id: u64) -> Option<String> {
+        self.db?.object_name(id).ok().flatten()
+    }
+
     /// LOD selection over `db`, before any frame.
     pub(crate) fn new(db: &'db Database) -> WalkLods<'db> {
         WalkLods {

@@ -428,9 +428,11 @@ impl Mode for Review<'_> {
                 .left_out
                 .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
                 .unwrap_or_default(),
-            // The session adds what reading over HTTP cost, and what the stream did.
+            // The session adds what reading over HTTP cost, what the stream did, and
+            // what is straight ahead.
             remote: None,
             streamed: None,
+            looking_at: None,
         }
     }
 }
