@@ -5,7 +5,8 @@ use clap::{Parser, Subcommand};
 
 mod cli;
 use cli::{
-    bench, build, check, demo, info, insert, lod, query, serve, serve_stream, shot, view, walk,
+    bench, build, check, demo, info, insert, lod, merge, query, serve, serve_stream, shot, view,
+    walk,
 };
 
 #[derive(Parser)]
@@ -24,8 +25,12 @@ enum Command {
     /// Generate a default city (once, into a cache folder), build it, and walk it headless
     /// in REVIEW mode, then with plain BOX queries.
     Demo(demo::DemoArgs),
-    /// Build a database from a citygen scene file or OBJ files.
+    /// Build a database from a citygen scene file, or OBJ, glTF and OpenStreetMap files
+    /// (with --shard K/N, only one shard of its visibility, for merge).
     Build(build::BuildArgs),
+    /// Build a database as build does, its visibility joined from shard files that
+    /// build --visibility --shard K/N computed, each on any machine.
+    Merge(merge::MergeArgs),
     /// The LOD core on a mesh file: its levels written as OBJ (--out), or one view's
     /// selective mesh measured (--refine --eye --look --tau).
     Lod(lod::LodArgs),
@@ -115,6 +120,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(a) => a.run(),
         Command::Build(a) => a.run(),
+        Command::Merge(a) => a.run(),
         Command::Lod(a) => a.run(),
         Command::Shot(a) => a.run(),
         Command::View(a) => a.run(),

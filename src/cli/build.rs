@@ -86,117 +86,164 @@ pub struct BuildArgs {
     /// are used instead).
     #[arg(long, value_name = "METRES", default_value_t = flaneur::scene::OsmOptions::default().max_height, value_parser = finite_f32, allow_negative_numbers = true)]
     max_height: f32,
+    /// Compute only shard K of N of the visibility (K from 0), into the file --out
+    /// names, for `flaneur merge` to join: each shard a process of its own, on any
+    /// machine (with --visibility).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<flaneur::visibility::Shard>,
+    /// Store no build times in the file, so that it is a function of its inputs and
+    /// options: two builds, or a build and a merge of shards, give the same bytes.
+    #[arg(long)]
+    reproducible: bool,
     #[arg(long, short)]
     quiet: bool,
 }
 
 impl BuildArgs {
-    /// Builds the database, with bars unless quiet, and prints its summary.
+    /// The inputs to build from.
+    pub fn inputs(&self) -> &[PathBuf] {
+        &self.inputs
+    }
+
+    /// The file to write.
+    pub fn out(&self) -> &Path {
+        &self.out
+    }
+
+    /// The visibility shard asked for, if any.
+    pub fn shard(&self) -> Option<flaneur::visibility::Shard> {
+        self.shard
+    }
+
+    /// Whether bars are left out.
+    pub fn quiet(&self) -> bool {
+        self.quiet
+    }
+
+    /// Builds the database (or, with `--shard`, one shard of its visibility), with bars
+    /// unless quiet, and prints its summary.
     pub fn run(self) -> Result<()> {
-        let BuildArgs {
-            inputs,
-            out,
-            page_size,
-            fill,
-            insertion,
-            no_lod,
-            pm_threshold,
-            visibility,
-            cell_size,
-            dov_resolution,
-            sample_spacing,
-            occluder_radius,
-            hdov,
-            order,
-            gltf_objects,
-            up,
-            scale,
-            storey_height,
-            default_height,
-            max_height,
-            quiet,
-        } = self;
-        if let Ok(target) = std::fs::canonicalize(&out) {
-            for input in &inputs {
+        let opts = self.options(false)?;
+        let progress: &dyn Progress = if self.quiet {
+            &Silent
+        } else {
+            &Bars::default()
+        };
+        if let Some(shard) = self.shard {
+            let made =
+                flaneur::build_visibility_shard(&self.inputs, &self.out, &opts, shard, progress)?;
+            let entries: usize = made.cells.iter().map(|(_, p)| p.ids.len()).sum();
+            println!(
+                "visibility shard {shard} written to {}: {} of {} walkable cells, {:.1} objects per PVS, {:.1} s (of which DoV {:.1} s); join the shards with flaneur merge",
+                self.out.display(),
+                made.cells.len(),
+                made.walkable,
+                entries as f64 / made.cells.len().max(1) as f64,
+                made.seconds,
+                made.dov_seconds
+            );
+            return Ok(());
+        }
+        let summary = build(&self.inputs, &self.out, &opts, progress)?;
+        print_summary(&self.out, &summary, self.order);
+        Ok(())
+    }
+
+    /// The build's options from the arguments, checked; a merge (`merging`) takes its
+    /// visibility from the shards.
+    pub fn options(&self, merging: bool) -> Result<BuildOptions> {
+        let a = self;
+        if let Ok(target) = std::fs::canonicalize(&a.out) {
+            for input in &a.inputs {
                 if std::fs::canonicalize(input).is_ok_and(|i| i == target) {
                     bail!(
                         "--out {} is an input of the build: give the database another path",
-                        out.display()
+                        a.out.display()
                     );
                 }
             }
         }
-        if hdov.is_some() && !visibility {
+        if a.hdov.is_some() && !a.visibility && !merging {
             bail!("--hdov needs --visibility: the HDoV-tree is built from the viewcells' DoVs");
         }
-        let opts = BuildOptions {
-            visibility: visibility.then(|| VisibilityOptions {
-                cell_size,
-                resolution: dov_resolution,
+        if a.shard.is_some() && !a.visibility {
+            bail!("--shard computes a shard of the visibility: give --visibility too");
+        }
+        Ok(BuildOptions {
+            visibility: a.visibility.then(|| VisibilityOptions {
+                cell_size: a.cell_size,
+                resolution: a.dov_resolution,
                 samples: SampleOptions {
-                    spacing: sample_spacing,
-                    radius: occluder_radius,
+                    spacing: a.sample_spacing,
+                    radius: a.occluder_radius,
                 },
                 ..VisibilityOptions::default()
             }),
-            page_size,
-            fill,
-            insertion,
-            lod: (!no_lod).then(|| LodOptions {
-                pm_threshold,
+            page_size: a.page_size,
+            fill: a.fill,
+            insertion: a.insertion,
+            lod: (!a.no_lod).then(|| LodOptions {
+                pm_threshold: a.pm_threshold,
                 ..LodOptions::default()
             }),
-            hdov: hdov.map(|schemes| flaneur::hdov::HdovOptions {
+            hdov: a.hdov.clone().map(|schemes| flaneur::hdov::HdovOptions {
                 schemes,
                 ..Default::default()
             }),
-            order,
-            gltf_objects,
-            obj_axes: flaneur::scene::ObjAxes { up, scale },
-            osm: flaneur::scene::OsmOptions {
-                storey_height,
-                default_height,
-                max_height,
+            order: a.order,
+            gltf_objects: a.gltf_objects,
+            obj_axes: flaneur::scene::ObjAxes {
+                up: a.up,
+                scale: a.scale,
             },
-        };
-        let summary = build(&inputs, &out, &opts, !quiet)?;
+            osm: flaneur::scene::OsmOptions {
+                storey_height: a.storey_height,
+                default_height: a.default_height,
+                max_height: a.max_height,
+            },
+            reproducible: a.reproducible,
+        })
+    }
+}
+
+/// A build's summary: what was written, how the inputs were placed or imported, the
+/// LODs, the visibility and the HDoV-tree.
+pub fn print_summary(out: &Path, summary: &flaneur::BuildSummary, order: WriteOrder) {
+    println!(
+        "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, written in {} order, {:.1} s",
+        out.display(),
+        summary.objects,
+        summary.triangles,
+        summary.pages,
+        summary.bytes as f64 / (1 << 20) as f64,
+        summary.height,
+        order,
+        summary.seconds
+    );
+    if let Some(p) = &summary.obj_placed {
+        print_placed(p);
+    }
+    if let Some(r) = &summary.osm {
+        print_osm(r);
+    }
+    print_lod_report(summary.lod.as_ref(), summary.bytes);
+    if let Some(v) = &summary.visibility {
         println!(
-            "built {}: {} objects, {} triangles, {} pages ({:.1} MiB), tree height {}, written in {} order, {:.1} s",
-            out.display(),
-            summary.objects,
-            summary.triangles,
-            summary.pages,
-            summary.bytes as f64 / (1 << 20) as f64,
-            summary.height,
-            order,
-            summary.seconds
+            "  visibility: {} walkable cells of {} × {}, {:.1} objects per PVS, {} occluders; \
+             {:.1} s ({:.3} s per cell, of which DoV {:.3} s at {:.2} M rays/s)",
+            v.cells,
+            v.rows,
+            v.columns,
+            v.entries as f64 / v.cells.max(1) as f64,
+            v.occluders,
+            v.seconds,
+            v.seconds / v.cells.max(1) as f64,
+            v.dov_seconds / v.cells.max(1) as f64,
+            v.rays as f64 / v.dov_seconds.max(1e-9) / 1e6
         );
-        if let Some(p) = &summary.obj_placed {
-            print_placed(p);
-        }
-        if let Some(r) = &summary.osm {
-            print_osm(r);
-        }
-        print_lod_report(summary.lod.as_ref(), summary.bytes);
-        if let Some(v) = &summary.visibility {
-            println!(
-                "  visibility: {} walkable cells of {} × {}, {:.1} objects per PVS, {} occluders; \
-                 {:.1} s ({:.3} s per cell, of which DoV {:.3} s at {:.2} M rays/s)",
-                v.cells,
-                v.rows,
-                v.columns,
-                v.entries as f64 / v.cells.max(1) as f64,
-                v.occluders,
-                v.seconds,
-                v.seconds / v.cells.max(1) as f64,
-                v.dov_seconds / v.cells.max(1) as f64,
-                v.rays as f64 / v.dov_seconds.max(1e-9) / 1e6
-            );
-        }
-        if let Some(h) = &summary.hdov {
-            print_hdov_report(h);
-        }
-        Ok(())
+    }
+    if let Some(h) = &summary.hdov {
+        print_hdov_report(h);
     }
 }
 
@@ -233,10 +280,9 @@ fn build(
     inputs: &[PathBuf],
     out: &Path,
     opts: &BuildOptions,
-    bars: bool,
+    progress: &dyn Progress,
 ) -> Result<flaneur::BuildSummary> {
     let is_model = |p: &PathBuf| flaneur::model_format(p).is_some();
-    let progress: &dyn Progress = if bars { &Bars::default() } else { &Silent };
     if inputs.iter().all(is_model) {
         Ok(flaneur::build_from_obj_with_progress(
             inputs, out, opts, progress,

@@ -91,15 +91,22 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
                 v.sample_spacing,
                 v.occluder_radius
             );
-            println!(
-                "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {:.3} s per cell, {} rays, {:.2} M rays/s",
-                v.seconds,
-                v.seconds_per_cell,
-                v.resolution,
-                v.dov_seconds_per_cell,
-                v.rays,
-                v.rays_per_second / 1e6
-            );
+            if v.seconds > 0.0 {
+                println!(
+                    "  computed  in {:.1} s, {:.3} s per cell; DoV at N = {}: {:.3} s per cell, {} rays, {:.2} M rays/s",
+                    v.seconds,
+                    v.seconds_per_cell,
+                    v.resolution,
+                    v.dov_seconds_per_cell,
+                    v.rays,
+                    v.rays_per_second / 1e6
+                );
+            } else {
+                println!(
+                    "  computed  DoV at N = {}, {} rays (times not recorded: a reproducible build)",
+                    v.resolution, v.rays
+                );
+            }
         }
     }
     if let Some(h) = &info.hdov {

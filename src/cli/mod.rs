@@ -9,6 +9,7 @@ pub mod demo;
 pub mod info;
 pub mod insert;
 pub mod lod;
+pub mod merge;
 pub mod query;
 pub mod serve;
 pub mod serve_stream;

@@ -56,7 +56,7 @@ mod write_order;
 
 pub use build::{
     build_from_obj, build_from_obj_with_progress, build_from_scene, build_from_scene_with_progress,
-    model_format, BuildOptions, BuildSummary,
+    build_visibility_shard, merge_visibility_shards, model_format, BuildOptions, BuildSummary,
 };
 pub use database::{Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};

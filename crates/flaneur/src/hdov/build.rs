@@ -218,6 +218,7 @@ pub(crate) fn build_hdov(
     store: &mut Store,
     objects: Vec<ObjectEntry>,
     opts: &HdovOptions,
+    record_seconds: bool,
     progress: &dyn Progress,
 ) -> Result<HdovReport> {
     let start = Instant::now();
@@ -411,7 +412,12 @@ pub(crate) fn build_hdov(
         fanout: cap as u32,
         objects: object_count,
         vpage_len: shape.vpage_len as u32,
-        seconds: start.elapsed().as_secs_f64(),
+        // A reproducible build stores no time.
+        seconds: if record_seconds {
+            start.elapsed().as_secs_f64()
+        } else {
+            0.0
+        },
         lod_pages,
         visible_nodes,
         schemes: stored,

@@ -165,6 +165,14 @@ pub struct CornerMemo {
     last: HashMap<[u32; 3], PointDov>,
 }
 
+/// The distinct corners of `cells`, as the memo keys them.
+pub(super) fn corner_keys(cells: &[Aabb]) -> std::collections::HashSet<[u32; 3]> {
+    cells
+        .iter()
+        .flat_map(|c| corners(c).map(corner_key))
+        .collect()
+}
+
 /// A corner's key: its coordinates' bits, with −0 made +0 (adding +0 does that).
 fn corner_key(p: [f32; 3]) -> [u32; 3] {
     p.map(|c| (c + 0.0).to_bits())

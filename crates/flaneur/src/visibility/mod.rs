@@ -11,6 +11,8 @@
 //!   [`VisibilityOptions`]; `table` its bytes ([`TableHead`], each cell's [`CellPvs`]),
 //!   `stored` their reading through the store ([`Database::visibility`],
 //!   [`Database::pvs`]).
+//! - `shard`: the precomputation split across processes ([`Shard`], [`ShardCells`],
+//!   [`precompute_shard`]), merged by the build into the same table.
 //! - `raycast`: [`RayScene`], the scene's triangles in one BVH; the first hit of a ray as
 //!   an object ([`Hit`]).
 //! - `cube`: [`CubicProjection`], the cube's faces, pixels and their ΔDoV; the identity
@@ -67,6 +69,7 @@ mod intersect;
 mod occluder;
 mod precompute;
 mod raycast;
+mod shard;
 mod stored;
 pub(crate) mod table;
 
@@ -80,6 +83,8 @@ pub use dov::{cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovSt
 pub(crate) use precompute::precompute;
 pub use precompute::VisibilityOptions;
 pub use raycast::{Hit, RayScene};
+pub(crate) use shard::merge_shards;
+pub use shard::{fingerprint, precompute_shard, Shard, ShardCells};
 pub(crate) use stored::VisibilityTable;
 pub(crate) use table::encode_table;
 pub use table::{

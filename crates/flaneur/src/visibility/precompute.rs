@@ -17,6 +17,7 @@ use rayon::prelude::*;
 
 use super::cells::{Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
+use super::dov::corner_keys;
 use super::occluder::occluder_boxes;
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
 use super::{cell_dovs_after, CornerMemo, CubicProjection, RayScene};
@@ -80,65 +81,154 @@ pub fn precompute(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Precomputed> {
     let started = Instant::now();
+    let prep = prepare(objects, opts)?;
+    let bands = bands(&prep.walkable);
+    let made = compute(&prep, objects, opts, &bands, progress)?;
+    Ok(Precomputed {
+        stats: VisibilityStats {
+            seconds: started.elapsed().as_secs_f64(),
+            dov_seconds: made.dov_seconds,
+            rays: made.rays,
+            entries: made.cells.iter().map(|(_, p)| p.ids.len() as u64).sum(),
+            objects: objects.len() as u64,
+        },
+        settings: prep.settings(opts),
+        grid: prep.grid,
+        cells: made.cells,
+        occluders: prep.occluders,
+    })
+}
+
+/// What every cell's computation shares, made once per build (or per shard): the
+/// objects' boxes and occluders, the ray scene, the cube, and the walkable cells.
+pub(super) struct Prepared {
+    scene: Scene,
+    rays: RayScene,
+    projection: CubicProjection,
+    pub grid: ViewcellGrid,
+    pub walkable: Vec<Viewcell>,
+    dov_s: f32,
+    /// Objects with an occluder box.
+    pub occluders: usize,
+}
+
+impl Prepared {
+    pub fn settings(&self, opts: &VisibilityOptions) -> VisibilitySettings {
+        VisibilitySettings {
+            resolution: opts.resolution,
+            dov_s: self.dov_s,
+            samples: opts.samples,
+            bins: super::horizon::BINS as u32,
+        }
+    }
+}
+
+/// The objects' boxes, each checked.
+fn boxes(objects: &[(u64, Mesh)]) -> Result<Vec<Aabb>> {
     if objects.is_empty() {
         return Err(Error::Invalid(
             "visibility of a city with no objects".into(),
         ));
     }
-    opts.validate()?;
-    let boxes: Vec<Aabb> = objects
+    objects
         .iter()
         .map(|(id, m)| {
             let (lo, hi) = m.bounds();
             Aabb::new(lo, hi).map_err(|e| Error::Invalid(format!("object {id}: {e}")))
         })
-        .collect::<Result<_>>()?;
+        .collect()
+}
+
+/// The viewcell grid over `boxes` and its walkable cells: all a merge of shards needs.
+pub(super) fn grid_and_walkable(
+    boxes: &[Aabb],
+    opts: &VisibilityOptions,
+) -> Result<(ViewcellGrid, Vec<Viewcell>)> {
+    let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+    let grid = ViewcellGrid::new(&city, opts.cell_size, opts.eye)?;
+    let walkable = grid.walkable(boxes);
+    Ok((grid, walkable))
+}
+
+/// Everything the cells' computation shares.
+pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Result<Prepared> {
+    opts.validate()?;
+    let boxes = boxes(objects)?;
     let occluders: Vec<Vec<Aabb>> = objects.par_iter().map(|(_, m)| occluder_boxes(m)).collect();
     let scene = Scene::new(&boxes, &occluders)?;
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let projection = CubicProjection::new(opts.resolution)?;
-    let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
-    let grid = ViewcellGrid::new(&city, opts.cell_size, opts.eye)?;
-    let walkable = grid.walkable(&boxes);
-    let dov_s = projection.zero_dov_floor();
-
-    let mut cells = Vec::with_capacity(walkable.len());
-    let mut cast = 0u64;
-    let mut dov_seconds = 0.0;
-    let mut memo = CornerMemo::default();
-    progress(0, walkable.len());
-    for band in walkable.chunk_by(|a, b| a.row / BAND_ROWS == b.row / BAND_ROWS) {
-        let bounds: Vec<Aabb> = band.iter().map(|c| c.bounds).collect();
-        let dovs = cell_dovs_after(&rays, &projection, &bounds, &mut memo)?;
-        cast += dovs.stats.rays;
-        dov_seconds += dovs.stats.elapsed.as_secs_f64();
-        let made: Vec<(u32, CellPvs)> = band
-            .par_iter()
-            .zip(dovs.cells.par_iter())
-            .map(|(cell, seen)| cell_pvs(&scene, opts, cell, seen, objects, dov_s))
-            .collect::<Result<_>>()?;
-        cells.extend(made);
-        progress(cells.len(), walkable.len());
-    }
-    let entries = cells.iter().map(|(_, p)| p.ids.len() as u64).sum();
-    Ok(Precomputed {
+    let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
+    Ok(Prepared {
+        scene,
+        rays,
+        dov_s: projection.zero_dov_floor(),
+        projection,
         grid,
-        settings: VisibilitySettings {
-            resolution: opts.resolution,
-            dov_s,
-            samples: opts.samples,
-            bins: super::horizon::BINS as u32,
-        },
-        stats: VisibilityStats {
-            seconds: started.elapsed().as_secs_f64(),
-            dov_seconds,
-            rays: cast,
-            entries,
-            objects: objects.len() as u64,
-        },
-        cells,
+        walkable,
         occluders: occluders.iter().filter(|o| !o.is_empty()).count(),
     })
+}
+
+/// The walkable cells in the bands of rows they are computed in.
+pub(super) fn bands(walkable: &[Viewcell]) -> Vec<&[Viewcell]> {
+    walkable
+        .chunk_by(|a, b| a.row / BAND_ROWS == b.row / BAND_ROWS)
+        .collect()
+}
+
+/// The rays a whole build casts for `walkable`: each band casts the corners it does not
+/// share with the band before it (`CornerMemo`). What a merge of shards stores, whose
+/// shards cast the corners at their edges twice.
+pub(super) fn whole_build_rays(walkable: &[Viewcell], projection: &CubicProjection) -> u64 {
+    let mut before = std::collections::HashSet::new();
+    let mut corners = 0;
+    for band in bands(walkable) {
+        let here = corner_keys(&band.iter().map(|c| c.bounds).collect::<Vec<_>>());
+        corners += here.difference(&before).count() as u64;
+        before = here;
+    }
+    corners * projection.rays_per_point()
+}
+
+/// The cells computed, and what computing them cast.
+pub(super) struct Computed {
+    pub cells: Vec<(u32, CellPvs)>,
+    pub rays: u64,
+    pub dov_seconds: f64,
+}
+
+/// Each cell of `bands` with its PVS, in the bands' order; `progress` is told the cells
+/// done of the bands' cells after each band.
+pub(super) fn compute(
+    prep: &Prepared,
+    objects: &[(u64, Mesh)],
+    opts: &VisibilityOptions,
+    bands: &[&[Viewcell]],
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Computed> {
+    let total = bands.iter().map(|b| b.len()).sum();
+    let mut made = Computed {
+        cells: Vec::with_capacity(total),
+        rays: 0,
+        dov_seconds: 0.0,
+    };
+    let mut memo = CornerMemo::default();
+    progress(0, total);
+    for band in bands {
+        let bounds: Vec<Aabb> = band.iter().map(|c| c.bounds).collect();
+        let dovs = cell_dovs_after(&prep.rays, &prep.projection, &bounds, &mut memo)?;
+        made.rays += dovs.stats.rays;
+        made.dov_seconds += dovs.stats.elapsed.as_secs_f64();
+        let cells: Vec<(u32, CellPvs)> = band
+            .par_iter()
+            .zip(dovs.cells.par_iter())
+            .map(|(cell, seen)| cell_pvs(&prep.scene, opts, cell, seen, objects, prep.dov_s))
+            .collect::<Result<_>>()?;
+        made.cells.extend(cells);
+        progress(made.cells.len(), total);
+    }
+    Ok(made)
 }
 
 /// One cell's PVS from its conservative set and the DoVs its corners saw (by object

@@ -337,11 +337,13 @@ pub fn decode_head(b: &[u8], table_len: u64) -> Result<TableHead> {
     let (rows, columns) = (u32_at(b, 12), u32_at(b, 16));
     let origin = Vec3::new(f32_at(b, 20), f32_at(b, 24), f32_at(b, 28));
     let (size, eye) = (f32_at(b, 32), [f32_at(b, 36), f32_at(b, 40)]);
+    // Half a cell short of the grid's far side: origin + columns × size, rounded to
+    // f32, may lie past it and round up to one column more.
     let city_max = origin
         + Vec3::new(
-            columns as f32 * size,
+            (columns as f32 - 0.5) * size,
             eye[1].max(0.0) + 1.0,
-            rows as f32 * size,
+            (rows as f32 - 0.5) * size,
         );
     let city = crate::geom::Aabb {
         min: origin,
@@ -457,6 +459,28 @@ mod tests {
             ),
         ];
         (grid, settings, stats, cells)
+    }
+
+    #[test]
+    fn every_grid_reads_back_whatever_its_origin_and_size_round_to() {
+        // Cities whose far side, origin + columns × size in f32, rounds past the grid: the
+        // head once read one such as a column more, and refused its own file.
+        let (_, settings, stats, cells) = sample();
+        let mut checked = 0;
+        for i in 0..400 {
+            let origin = -437.17 + i as f32 * 3.331;
+            for size in [7.3f32, 20.0, 33.3, 40.0] {
+                let far = origin + 17.9 * size;
+                let city = Aabb::new([origin, 0.0, origin - 11.1], [far, 40.0, far]).unwrap();
+                let grid = ViewcellGrid::new(&city, size, [1.2, 2.0]).unwrap();
+                let b = encode_table(&grid, &settings, &stats, &cells).unwrap();
+                let n = cell_count(&b[..HEAD_FIXED]).unwrap();
+                let head = decode_head(&b[..TableHead::len_for(n)], b.len() as u64).unwrap();
+                assert_eq!(head.grid, grid, "origin {origin}, size {size}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 1600);
     }
 
     #[test]

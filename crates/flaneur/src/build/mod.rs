@@ -23,12 +23,21 @@ use crate::names::store_names;
 use crate::progress::{Progress, Silent, Step};
 use crate::rtree::{RTree, DEFAULT_FILL};
 use crate::scene::{
-    load_gltf, load_obj, load_osm, place, GltfObjects, Mesh, ObjAxes, OsmOptions, OsmReport,
-    Placed, SceneObject, SceneReader, KIND_IMPORTED,
+    GltfObjects, Mesh, ObjAxes, OsmOptions, OsmReport, Placed, SceneObject, SceneReader,
+    KIND_IMPORTED,
 };
 use crate::store::{PageKind, Segment, Store};
-use crate::visibility::{encode_table, precompute, VisibilityOptions, VISIBILITY_SEGMENT};
+use crate::visibility::{
+    encode_table, merge_shards, precompute, ShardCells, VisibilityOptions, VISIBILITY_SEGMENT,
+};
 use crate::write_order::{hilbert_order, WriteOrder};
+
+mod models;
+mod shards;
+
+use models::{load_models, Models};
+pub use models::{model_format, ModelFormat};
+pub use shards::{build_visibility_shard, merge_visibility_shards};
 
 /// How to build.
 ///
@@ -68,6 +77,11 @@ pub struct BuildOptions {
     /// How OpenStreetMap footprints become buildings: storey height, default and
     /// maximum heights (`--storey-height`, `--default-height`, `--max-height`).
     pub osm: OsmOptions,
+    /// Store no build times in the file (the visibility table's and the HDoV-tree's
+    /// seconds are 0), so that the file is a function of its inputs and options: two
+    /// builds, or a build and a merge of visibility shards, give the same bytes
+    /// (`--reproducible`).
+    pub reproducible: bool,
 }
 
 impl BuildOptions {
@@ -124,6 +138,7 @@ impl Default for BuildOptions {
             gltf_objects: GltfObjects::default(),
             obj_axes: ObjAxes::default(),
             osm: OsmOptions::default(),
+            reproducible: false,
         }
     }
 }
@@ -235,6 +250,17 @@ pub fn build_from_scene_with_progress(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
+    scene_build(scene, db, opts, progress, None)
+}
+
+/// [`build_from_scene_with_progress`], the visibility taken from `shards` when given.
+fn scene_build(
+    scene: &Path,
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+    shards: Option<&[ShardCells]>,
+) -> Result<BuildSummary> {
     opts.validate()?;
     let mut reader = SceneReader::open(scene)?;
     let total = reader.object_count();
@@ -242,7 +268,7 @@ pub fn build_from_scene_with_progress(
     match opts.order {
         WriteOrder::Input => {
             let objects = reader.map(|r| r.map(unpack).map_err(Error::from));
-            build(objects, Some(total), None, db, opts, progress)
+            build(objects, Some(total), None, db, opts, progress, shards)
         }
         WriteOrder::Hilbert => {
             // One pass to learn where each object stands (and to check the whole file),
@@ -262,7 +288,7 @@ pub fn build_from_scene_with_progress(
             let objects = hilbert_order(&centres)
                 .into_iter()
                 .map(move |i| reader.read_at(places[i]).map(unpack).map_err(Error::from));
-            build(objects, Some(total), None, db, opts, progress)
+            build(objects, Some(total), None, db, opts, progress, shards)
         }
     }
 }
@@ -316,48 +342,24 @@ pub fn build_from_obj_with_progress(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<BuildSummary> {
+    models_build(files, db, opts, progress, None)
+}
+
+/// [`build_from_obj_with_progress`], the visibility taken from `shards` when given.
+fn models_build(
+    files: &[PathBuf],
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+    shards: Option<&[ShardCells]>,
+) -> Result<BuildSummary> {
     opts.validate()?;
-    if files.is_empty() {
-        return Err(Error::Invalid("no OBJ or glTF file to build from".into()));
-    }
-    if files
-        .iter()
-        .filter(|f| model_format(f) == Some(ModelFormat::Osm))
-        .count()
-        > 1
-    {
-        return Err(Error::Invalid(
-            "more than one OpenStreetMap extract: each is projected about its own centre, so build one at a time".into(),
-        ));
-    }
-    // OBJ meshes are placed together, by the bounds of them all; the others need nothing.
-    let (mut meshes, mut names, mut obj) = (Vec::new(), Vec::new(), Vec::new());
-    let mut osm = None;
-    for f in files {
-        let loaded = load_model(f, opts)?;
-        osm = osm.or(loaded.osm);
-        let start = meshes.len();
-        for (name, mesh) in loaded.objects {
-            names.push(name);
-            meshes.push(mesh);
-        }
-        if model_format(f) == Some(ModelFormat::Obj) {
-            obj.extend(start..meshes.len());
-        }
-    }
-    let obj_placed = if obj.is_empty() {
-        None
-    } else {
-        let mut objs: Vec<Mesh> = obj
-            .iter()
-            .map(|&i| std::mem::take(&mut meshes[i]))
-            .collect();
-        let placed = place(&mut objs, &opts.obj_axes)?;
-        for (&i, m) in obj.iter().zip(objs) {
-            meshes[i] = m;
-        }
-        Some(placed)
-    };
+    let Models {
+        meshes,
+        names,
+        obj_placed,
+        osm,
+    } = load_models(files, opts)?;
     let total = meshes.len() as u64;
     let order: Vec<usize> = match opts.order {
         WriteOrder::Input => (0..meshes.len()).collect(),
@@ -370,60 +372,18 @@ pub fn build_from_obj_with_progress(
     });
     // Names are kept when the inputs give any.
     let names = names.iter().any(|n| !n.is_empty()).then_some(names);
-    let mut summary = build(objects, Some(total), names.as_deref(), db, opts, progress)?;
+    let mut summary = build(
+        objects,
+        Some(total),
+        names.as_deref(),
+        db,
+        opts,
+        progress,
+        shards,
+    )?;
     summary.obj_placed = obj_placed;
     summary.osm = osm;
     Ok(summary)
-}
-
-/// The objects of one model file, named, and the OpenStreetMap import's report.
-struct Loaded {
-    objects: Vec<(String, Mesh)>,
-    osm: Option<OsmReport>,
-}
-
-/// The objects of an OBJ, glTF or OpenStreetMap file, by its extension.
-fn load_model(path: &Path, opts: &BuildOptions) -> Result<Loaded> {
-    let objects = match model_format(path) {
-        Some(ModelFormat::Obj) => load_obj(path)?,
-        Some(ModelFormat::Gltf) => load_gltf(path, opts.gltf_objects)?,
-        Some(ModelFormat::Osm) => {
-            let city = load_osm(path, &opts.osm)?;
-            return Ok(Loaded {
-                objects: city.objects,
-                osm: Some(city.report),
-            });
-        }
-        None => {
-            return Err(Error::BadInput {
-                path: path.to_path_buf(),
-                what: "not an OBJ (.obj), glTF (.gltf, .glb) or OpenStreetMap (.osm.pbf) file, by its name".into(),
-            })
-        }
-    };
-    Ok(Loaded { objects, osm: None })
-}
-
-/// The kinds of model file a database is built from besides a scene file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ModelFormat {
-    /// Wavefront OBJ (`.obj`).
-    Obj,
-    /// glTF 2.0 (`.gltf`, `.glb`).
-    Gltf,
-    /// An OpenStreetMap extract in the PBF format (`.osm.pbf`, `.pbf`).
-    Osm,
-}
-
-/// The model format `path`'s extension names, if any.
-pub fn model_format(path: &Path) -> Option<ModelFormat> {
-    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-    match ext.as_str() {
-        "obj" => Some(ModelFormat::Obj),
-        "gltf" | "glb" => Some(ModelFormat::Gltf),
-        "pbf" => Some(ModelFormat::Osm),
-        _ => None,
-    }
 }
 
 fn build(
@@ -433,6 +393,7 @@ fn build(
     db: &Path,
     opts: &BuildOptions,
     progress: &dyn Progress,
+    shards: Option<&[ShardCells]>,
 ) -> Result<BuildSummary> {
     let start = Instant::now();
     opts.validate()?;
@@ -482,7 +443,8 @@ fn build(
     let visibility = match &opts.visibility {
         Some(v) => {
             kept.sort_unstable_by_key(|(id, _)| *id);
-            let report = store_visibility(&mut store, &kept, v, progress)?;
+            let report =
+                store_visibility(&mut store, &kept, (v, shards), opts.reproducible, progress)?;
             kinds.visibility = report.pages;
             Some(report)
         }
@@ -497,7 +459,13 @@ fn build(
     entries.sort_unstable_by_key(|e| e.id);
     let objects = entries.len() as u64;
     let hdov = match &opts.hdov {
-        Some(h) => Some(build_hdov(&mut store, entries.clone(), h, progress)?),
+        Some(h) => Some(build_hdov(
+            &mut store,
+            entries.clone(),
+            h,
+            !opts.reproducible,
+            progress,
+        )?),
         None => None,
     };
     // The R-tree goes last, its root on the last page: a reader over HTTP fetches the
@@ -533,19 +501,27 @@ fn build(
     })
 }
 
-/// Precomputes the visibility of `objects` and appends its table, telling `progress`
-/// the cells done.
+/// Precomputes the visibility of `objects` (or merges it from `shards`) and appends its
+/// table, telling `progress` the cells done; a reproducible build stores no seconds.
 fn store_visibility(
     store: &mut Store,
     objects: &[(u64, Mesh)],
-    opts: &VisibilityOptions,
+    (opts, shards): (&VisibilityOptions, Option<&[ShardCells]>),
+    reproducible: bool,
     progress: &dyn Progress,
 ) -> Result<VisibilityReport> {
-    let made = precompute(objects, opts, &|done, total| {
-        progress.update(Step::Visibility, done as u64, Some(total as u64));
-    })?;
+    let made = match shards {
+        Some(shards) => merge_shards(objects, shards)?,
+        None => precompute(objects, opts, &|done, total| {
+            progress.update(Step::Visibility, done as u64, Some(total as u64));
+        })?,
+    };
     progress.finish(Step::Visibility);
-    let bytes = encode_table(&made.grid, &made.settings, &made.stats, &made.cells)?;
+    let mut stats = made.stats;
+    if reproducible {
+        (stats.seconds, stats.dov_seconds) = (0.0, 0.0);
+    }
+    let bytes = encode_table(&made.grid, &made.settings, &stats, &made.cells)?;
     let extent = store.append_extent(PageKind::Visibility, &bytes)?;
     store.set_segment(Segment::new(
         VISIBILITY_SEGMENT,
