@@ -118,3 +118,50 @@ fn z_up_and_centimetre_cities_build_back_to_their_own_bounds() {
     ]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("y, z or auto"));
 }
+
+#[test]
+fn insert_turns_and_scales_its_obj_files_as_build_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = city_obj(dir.path());
+    let (_, city) = build(&obj, &dir.path().join("y.flaneur"), &[]);
+    // The city in centimetres and z up, inserted into a database of one far-off object.
+    let cm_z = dir.path().join("cm-z.obj");
+    rewrite(&obj, &cm_z, |[x, y, z]| [x * 100.0, -z * 100.0, y * 100.0], true);
+    let seed = dir.path().join("seed.obj");
+    std::fs::write(
+        &seed,
+        "o seed\nv 2000 0 2000\nv 2001 0 2000\nv 2000 1 2000\nv 2000 0 2001\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
+    let db = dir.path().join("insert.flaneur");
+    build(&seed, &db, &[]);
+    let text = common::succeeded(&common::flaneur(&[
+        "insert",
+        db.to_str().unwrap(),
+        cm_z.to_str().unwrap(),
+        "--up",
+        "z",
+        "--scale",
+        "0.01",
+    ]));
+    assert!(text.contains("inserted 300 objects"), "{text}");
+    assert!(text.contains("z up (--up z), turned to y up; 0.01 m a unit"), "{text}");
+    let d = Database::open(&db).unwrap();
+    assert_eq!(d.objects(), 301);
+    // The inserted city stands where the city does, the seed beside it.
+    let inserted = d.range(&city).unwrap();
+    assert_eq!(inserted.objects.len(), 300);
+    let union = inserted.objects.iter().fold(Aabb::EMPTY, |a, o| a.union(&o.bounds));
+    assert!(close(&union, &city), "{union} against {city}");
+    // Unasked, plainly z-up files are turned, and saying so.
+    let db2 = dir.path().join("insert2.flaneur");
+    build(&seed, &db2, &[]);
+    let text = common::succeeded(&common::flaneur(&[
+        "insert",
+        db2.to_str().unwrap(),
+        cm_z.to_str().unwrap(),
+        "--scale",
+        "0.01",
+    ]));
+    assert!(text.contains("plainly z-up"), "{text}");
+}

@@ -297,7 +297,7 @@ fn build(
 }
 
 /// How the OBJ inputs were placed: the up axis taken and why, and the scale.
-fn print_placed(p: &flaneur::scene::Placed) {
+pub fn print_placed(p: &flaneur::scene::Placed) {
     let [x, y, z] = p.extent;
     let axes = match (p.turned, p.detected) {
         (true, true) => format!(
