@@ -126,7 +126,12 @@ fn insert_turns_and_scales_its_obj_files_as_build_does() {
     let (_, city) = build(&obj, &dir.path().join("y.flaneur"), &[]);
     // The city in centimetres and z up, inserted into a database of one far-off object.
     let cm_z = dir.path().join("cm-z.obj");
-    rewrite(&obj, &cm_z, |[x, y, z]| [x * 100.0, -z * 100.0, y * 100.0], true);
+    rewrite(
+        &obj,
+        &cm_z,
+        |[x, y, z]| [x * 100.0, -z * 100.0, y * 100.0],
+        true,
+    );
     let seed = dir.path().join("seed.obj");
     std::fs::write(
         &seed,
@@ -145,13 +150,19 @@ fn insert_turns_and_scales_its_obj_files_as_build_does() {
         "0.01",
     ]));
     assert!(text.contains("inserted 300 objects"), "{text}");
-    assert!(text.contains("z up (--up z), turned to y up; 0.01 m a unit"), "{text}");
+    assert!(
+        text.contains("z up (--up z), turned to y up; 0.01 m a unit"),
+        "{text}"
+    );
     let d = Database::open(&db).unwrap();
     assert_eq!(d.objects(), 301);
     // The inserted city stands where the city does, the seed beside it.
     let inserted = d.range(&city).unwrap();
     assert_eq!(inserted.objects.len(), 300);
-    let union = inserted.objects.iter().fold(Aabb::EMPTY, |a, o| a.union(&o.bounds));
+    let union = inserted
+        .objects
+        .iter()
+        .fold(Aabb::EMPTY, |a, o| a.union(&o.bounds));
     assert!(close(&union, &city), "{union} against {city}");
     // Unasked, plainly z-up files are turned, and saying so.
     let db2 = dir.path().join("insert2.flaneur");

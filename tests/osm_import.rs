@@ -300,3 +300,34 @@ fn malformed_extracts_are_errors_that_say_what_is_wrong() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("not a readable OSM PBF file"), "{stderr}");
 }
+
+#[test]
+fn the_walker_can_walk_down_the_street_it_starts_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("helsinki.flaneur");
+    let opts = flaneur::BuildOptions {
+        lod: None,
+        ..Default::default()
+    };
+    flaneur::build_from_obj(&[extract()], &out, &opts).unwrap();
+    let db = Database::open(&out).unwrap();
+    let start = flaneur::walk::busiest_street(&db).unwrap();
+    let mut steer = flaneur::walk::Steer::new(start, db.bounds().min.y).unwrap();
+    steer.key(flaneur::walk::Move::Forward, true);
+    // Twenty seconds ahead at walking pace, stopped by the buildings' boxes near the eye
+    // (what the window gives it: the buffered objects around the walker).
+    let mut pose = start;
+    for _ in 0..600 {
+        let near = db
+            .range(&flaneur::geom::Aabb::around(
+                pose.position,
+                glam::Vec3::new(30.0, 30.0, 30.0),
+            ))
+            .unwrap();
+        let boxes: Vec<flaneur::geom::Aabb> = near.objects.iter().map(|o| o.bounds).collect();
+        pose = steer.step(1.0 / 30.0, &boxes).unwrap();
+    }
+    let walked = (pose.position - start.position).length();
+    eprintln!("walked {walked:.1} m from {start:?}");
+    assert!(walked > 20.0, "walked {walked:.1} m from {start:?}");
+}
