@@ -19,13 +19,22 @@ pub(crate) fn looked_at(camera: &Camera, objects: &[&Loaded]) -> Option<(u64, f3
         0.0,
         camera.far,
     );
+    // Boxes the view meets, nearest first: an object whose box lies beyond the nearest
+    // triangle met so far cannot be nearer, so most meshes are never looked into.
+    let mut met: Vec<(f32, &Loaded)> = objects
+        .iter()
+        .filter_map(|o| {
+            let b = &o.entry.bounds;
+            let reach =
+                RayBox::new(b.min.to_array().into(), b.max.to_array().into()).intersect_ray(&ray);
+            reach.is_finite().then_some((reach, *o))
+        })
+        .collect();
+    met.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let mut nearest: Option<(u64, f32)> = None;
-    for o in objects {
-        let b = &o.entry.bounds;
-        let reach =
-            RayBox::new(b.min.to_array().into(), b.max.to_array().into()).intersect_ray(&ray);
-        if !reach.is_finite() || nearest.is_some_and(|(_, t)| reach >= t) {
-            continue;
+    for (reach, o) in met {
+        if nearest.is_some_and(|(_, t)| reach >= t) {
+            break;
         }
         let p = &o.mesh.positions;
         for t in o.mesh.indices.chunks_exact(3) {
