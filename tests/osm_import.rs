@@ -165,16 +165,21 @@ fn the_extract_builds_with_visibility_and_walks_queries_and_checks() {
     }
 }
 
-#[test]
-fn a_walk_starts_on_a_street_says_which_building_is_ahead_and_draws_them() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("helsinki.flaneur");
+/// The extract built in `dir` without LODs, opened.
+fn built_without_lods(dir: &Path) -> Database {
+    let out = dir.join("helsinki.flaneur");
     let opts = flaneur::BuildOptions {
         lod: None,
         ..Default::default()
     };
     flaneur::build_from_obj(&[extract()], &out, &opts).unwrap();
-    let db = Database::open(&out).unwrap();
+    Database::open(&out).unwrap()
+}
+
+#[test]
+fn a_walk_starts_on_a_street_says_which_building_is_ahead_and_draws_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = built_without_lods(dir.path());
 
     // The start: a street among footprints of every angle, clear of every box.
     let start = flaneur::walk::busiest_street(&db).unwrap();
@@ -304,13 +309,7 @@ fn malformed_extracts_are_errors_that_say_what_is_wrong() {
 #[test]
 fn the_walker_can_walk_down_the_street_it_starts_on() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("helsinki.flaneur");
-    let opts = flaneur::BuildOptions {
-        lod: None,
-        ..Default::default()
-    };
-    flaneur::build_from_obj(&[extract()], &out, &opts).unwrap();
-    let db = Database::open(&out).unwrap();
+    let db = built_without_lods(dir.path());
     let start = flaneur::walk::busiest_street(&db).unwrap();
     let mut steer = flaneur::walk::Steer::new(start, db.bounds().min.y).unwrap();
     steer.key(flaneur::walk::Move::Forward, true);

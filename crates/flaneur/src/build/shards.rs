@@ -86,14 +86,9 @@ pub fn merge_visibility_shards(
         visibility: Some(first.options),
         ..opts.clone()
     };
-    match inputs {
-        _ if !inputs.is_empty() && inputs.iter().all(|p| model_format(p).is_some()) => {
-            models_build(inputs, db, &opts, progress, Some(&cells))
-        }
-        [scene] => scene_build(scene, db, &opts, progress, Some(&cells)),
-        _ => Err(Error::Invalid(
-            "give one scene file, or OBJ, glTF and OpenStreetMap files only".into(),
-        )),
+    match Inputs::of(inputs)? {
+        Inputs::Models(files) => models_build(files, db, &opts, progress, Some(&cells)),
+        Inputs::Scene(scene) => scene_build(scene, db, &opts, progress, Some(&cells)),
     }
 }
 
@@ -103,12 +98,12 @@ fn input_objects(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Vec<(u64, Mesh)>> {
-    match inputs {
-        _ if !inputs.is_empty() && inputs.iter().all(|p| model_format(p).is_some()) => {
-            let models = super::load_models(inputs, opts)?;
+    match Inputs::of(inputs)? {
+        Inputs::Models(files) => {
+            let models = super::load_models(files, opts)?;
             Ok((0u64..).zip(models.meshes).collect())
         }
-        [scene] => {
+        Inputs::Scene(scene) => {
             let reader = SceneReader::open(scene)?;
             let total = reader.object_count();
             let mut objects = Vec::with_capacity(total.min(10_000_000) as usize);
@@ -121,8 +116,25 @@ fn input_objects(
             objects.sort_unstable_by_key(|(id, _)| *id);
             Ok(objects)
         }
-        _ => Err(Error::Invalid(
-            "give one scene file, or OBJ, glTF and OpenStreetMap files only".into(),
-        )),
+    }
+}
+
+/// What a build reads: one scene file, or model files (OBJ, glTF, OpenStreetMap).
+enum Inputs<'a> {
+    Scene(&'a Path),
+    Models(&'a [PathBuf]),
+}
+
+impl Inputs<'_> {
+    fn of(inputs: &[PathBuf]) -> Result<Inputs<'_>> {
+        match inputs {
+            _ if !inputs.is_empty() && inputs.iter().all(|p| model_format(p).is_some()) => {
+                Ok(Inputs::Models(inputs))
+            }
+            [scene] => Ok(Inputs::Scene(scene)),
+            _ => Err(Error::Invalid(
+                "give one scene file, or OBJ, glTF and OpenStreetMap files only".into(),
+            )),
+        }
     }
 }

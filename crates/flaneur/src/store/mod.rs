@@ -130,6 +130,31 @@ impl fmt::Debug for Store {
     }
 }
 
+/// Renames the finished temporary `temp` to `path` and makes the rename durable (best
+/// effort: not every platform can fsync a folder). On failure the temporary is dropped,
+/// which removes it.
+fn persist(temp: tempfile::TempPath, path: &Path) -> Result<()> {
+    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` as a build writes a database: into a temporary beside it,
+/// synced, then renamed into place, so that a writer killed midway leaves the old file
+/// or none, never a part of the new one.
+pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut temp = temp_file(path).map_err(|e| Error::io(path, e))?;
+    io::Write::write_all(&mut temp, bytes).map_err(|e| Error::io(path, e))?;
+    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    persist(temp.into_temp_path(), path)
+}
+
 /// A new, uniquely named temporary file in `path`'s folder, where the database that
 /// will be `path` is built: `.<name>.<random>.tmp`, created with mode 0666 less the
 /// umask, as `File::create` would, whatever a stale temporary's mode.
@@ -396,17 +421,7 @@ impl Store {
         w.commit(&self.header)
             .map_err(|e| Error::io(&file_path, e))?;
         if let Some(temp) = w.take_temp() {
-            // On failure the temporary is dropped, which removes it.
-            temp.persist(&self.path)
-                .map_err(|e| Error::io(&self.path, e.error))?;
-            // Make the rename durable; best effort (not every platform can fsync a dir).
-            let dir = match self.path.parent() {
-                Some(d) if !d.as_os_str().is_empty() => d,
-                _ => Path::new("."),
-            };
-            if let Ok(d) = File::open(dir) {
-                let _ = d.sync_all();
-            }
+            persist(temp, &self.path)?;
         }
         Ok(())
     }

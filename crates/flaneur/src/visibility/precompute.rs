@@ -92,7 +92,7 @@ pub fn precompute(
             entries: made.cells.iter().map(|(_, p)| p.ids.len() as u64).sum(),
             objects: objects.len() as u64,
         },
-        settings: prep.settings(opts),
+        settings: settings(opts, prep.dov_s),
         grid: prep.grid,
         cells: made.cells,
         occluders: prep.occluders,
@@ -112,19 +112,19 @@ pub(super) struct Prepared {
     pub occluders: usize,
 }
 
-impl Prepared {
-    pub fn settings(&self, opts: &VisibilityOptions) -> VisibilitySettings {
-        VisibilitySettings {
-            resolution: opts.resolution,
-            dov_s: self.dov_s,
-            samples: opts.samples,
-            bins: super::horizon::BINS as u32,
-        }
+/// The settings a table records for a precomputation under `opts`, whose visible
+/// zero-DoV objects get `dov_s`.
+pub(super) fn settings(opts: &VisibilityOptions, dov_s: f32) -> VisibilitySettings {
+    VisibilitySettings {
+        resolution: opts.resolution,
+        dov_s,
+        samples: opts.samples,
+        bins: super::horizon::BINS as u32,
     }
 }
 
 /// The objects' boxes, each checked.
-fn boxes(objects: &[(u64, Mesh)]) -> Result<Vec<Aabb>> {
+pub(super) fn boxes(objects: &[(u64, Mesh)]) -> Result<Vec<Aabb>> {
     if objects.is_empty() {
         return Err(Error::Invalid(
             "visibility of a city with no objects".into(),

@@ -35,12 +35,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::precompute::{
-    bands, compute, grid_and_walkable, prepare, whole_build_rays, Precomputed,
+    bands, boxes, compute, grid_and_walkable, prepare, settings, whole_build_rays, Precomputed,
 };
-use super::table::{decode_record, encode_record, CellPvs, VisibilitySettings, VisibilityStats};
+use super::table::{decode_record, encode_record, CellPvs, VisibilityStats};
 use super::{CubicProjection, SampleOptions, VisibilityOptions};
 use crate::error::{Error, Result};
-use crate::geom::Aabb;
 use crate::scene::Mesh;
 use crate::store::framing::{f32_at, f64_at, push_crc, u32_at, u64_at, CRC_LEN};
 
@@ -126,7 +125,7 @@ pub fn fingerprint(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> u64 {
         crc32fast::Hasher::new_with_initial(0x5eed),
     ];
     for h in &mut halves {
-        settings_bytes(opts).iter().for_each(|b| h.update(&[*b]));
+        h.update(&settings_bytes(opts));
         for (id, m) in objects {
             h.update(&id.to_le_bytes());
             h.update(&(m.positions.len() as u64).to_le_bytes());
@@ -231,13 +230,7 @@ pub(crate) fn merge_shards(objects: &[(u64, Mesh)], shards: &[ShardCells]) -> Re
     if let Some(k) = seen.iter().position(|s| !s) {
         return Err(Error::Invalid(format!("shard {k}/{n} is missing")));
     }
-    let boxes: Vec<Aabb> = objects
-        .iter()
-        .map(|(id, m)| {
-            let (lo, hi) = m.bounds();
-            Aabb::new(lo, hi).map_err(|e| Error::Invalid(format!("object {id}: {e}")))
-        })
-        .collect::<Result<_>>()?;
+    let boxes = boxes(objects)?;
     let (grid, walkable) = grid_and_walkable(&boxes, &opts)?;
     let mut cells: Vec<(u32, CellPvs)> = shards
         .iter()
@@ -254,12 +247,7 @@ pub(crate) fn merge_shards(objects: &[(u64, Mesh)], shards: &[ShardCells]) -> Re
     }
     let projection = CubicProjection::new(opts.resolution)?;
     Ok(Precomputed {
-        settings: VisibilitySettings {
-            resolution: opts.resolution,
-            dov_s: projection.zero_dov_floor(),
-            samples: opts.samples,
-            bins: super::horizon::BINS as u32,
-        },
+        settings: settings(&opts, projection.zero_dov_floor()),
         stats: VisibilityStats {
             seconds: shards.iter().map(|s| s.seconds).sum(),
             dov_seconds: shards.iter().map(|s| s.dov_seconds).sum(),
@@ -373,28 +361,12 @@ impl ShardCells {
     /// Writes the shard file at `path` (through a temporary beside it, renamed into
     /// place, so that a shard killed mid-write leaves no file a merge would take).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let bytes = self.encode()?;
-        let dir = path
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        let io = |e: std::io::Error| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        };
-        let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
-        std::io::Write::write_all(&mut tmp, &bytes).map_err(io)?;
-        tmp.as_file().sync_all().map_err(io)?;
-        tmp.persist(path).map_err(|e| io(e.error))?;
-        Ok(())
+        crate::store::write_file_atomically(path, &self.encode()?)
     }
 
     /// Reads the shard file at `path`.
     pub fn read(path: &Path) -> Result<ShardCells> {
-        let bytes = std::fs::read(path).map_err(|e| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        })?;
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
         ShardCells::decode(&bytes).map_err(|what| Error::BadInput {
             path: path.to_path_buf(),
             what,
