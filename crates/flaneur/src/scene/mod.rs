@@ -17,6 +17,8 @@ pub(crate) use gltf::gltf_from_bytes;
 pub use gltf::{load_gltf, GltfObjects};
 pub(crate) use mesh_codec::{decode_mesh, encode_mesh};
 pub use obj::load_obj;
+#[cfg(test)]
+pub(crate) use osm::extruded;
 pub(crate) use osm::osm_from_bytes;
 pub use osm::{load_osm, OsmImport, OsmOptions, OsmReport, Repair, Skip};
 

@@ -25,7 +25,8 @@
 //! own, so occluders fuse freely, across gaps and depths.
 //!
 //! Choices made here:
-//! - Occluders are prisms: each building's occluder boxes ([`occluder_boxes`]) that
+//! - Occluders are prisms: each building's occluder boxes ([`occluders`]), in a frame
+//!   turned to its walls, that
 //!   stand on the ground, or on such a box within its footprint, taken down to the
 //!   ground. The ground is the city's lowest point; no sight line between an eye and
 //!   an object passes under it. The centimetres between stacked boxes (their safety
@@ -37,13 +38,14 @@
 //!   whole, as the thesis drops hidden nodes; objects already known visible (a ray of
 //!   the DoV met them, or an earlier sample's horizon left them) are not tested again.
 //!
-//! [`occluder_boxes`]: super::occluder_boxes
+//! [`occluders`]: super::occluder::occluders
 
 use glam::{Vec2, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, SelectionFunction, AABB};
 
 use super::horizon::{Horizon, Prism};
+use super::occluder::Occluders;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 
@@ -112,28 +114,33 @@ impl SampleOptions {
 }
 
 /// The prisms among one object's occluder boxes (see the module's notes).
-pub fn prisms(boxes: &[Aabb], ground: f32) -> Vec<Prism> {
+pub fn prisms(occluders: &Occluders, ground: f32) -> Vec<Prism> {
     const TOUCH: f32 = 0.05;
-    let mut out: Vec<Prism> = Vec::new();
-    for b in boxes {
+    // Footprints in the boxes' own frame first, where they are plan rectangles.
+    let mut out: Vec<(Vec2, Vec2, f32)> = Vec::new();
+    for b in &occluders.boxes {
         let (min, max) = (Vec2::new(b.min.x, b.min.z), Vec2::new(b.max.x, b.max.z));
         let on_ground = b.min.y <= ground + TOUCH;
-        let on_prism = out.iter().any(|p| {
-            b.min.y <= p.top + TOUCH
-                && min.x >= p.min.x - TOUCH
-                && min.y >= p.min.y - TOUCH
-                && max.x <= p.max.x + TOUCH
-                && max.y <= p.max.y + TOUCH
+        let on_prism = out.iter().any(|&(lo, hi, top)| {
+            b.min.y <= top + TOUCH
+                && min.x >= lo.x - TOUCH
+                && min.y >= lo.y - TOUCH
+                && max.x <= hi.x + TOUCH
+                && max.y <= hi.y + TOUCH
         });
         if on_ground || on_prism {
-            out.push(Prism {
-                min,
-                max,
-                top: b.max.y,
-            });
+            out.push((min, max, b.max.y));
         }
     }
-    out
+    let axis = occluders.axis;
+    out.into_iter()
+        .map(|(min, max, top)| {
+            let mut p = Prism::aligned(min, max, top);
+            p.centre = p.centre.x * axis + p.centre.y * axis.perp();
+            p.axis = axis;
+            p
+        })
+        .collect()
 }
 
 /// The objects and their occluders, indexed for the test of many cells.
@@ -146,9 +153,8 @@ pub struct Scene {
 
 impl Scene {
     /// The objects' boxes, and each object's occluder boxes (see
-    /// [`occluder_boxes`](super::occluder_boxes); none for an object that occludes
-    /// nothing).
-    pub fn new(objects: &[Aabb], occluders: &[Vec<Aabb>]) -> Result<Scene> {
+    /// [`occluders`](super::occluder::occluders); none for an object that occludes nothing).
+    pub fn new(objects: &[Aabb], occluders: &[Occluders]) -> Result<Scene> {
         if objects.len() != occluders.len() {
             return Err(Error::Invalid(format!(
                 "{} objects but {} occluder entries",
@@ -160,8 +166,9 @@ impl Scene {
             b.validate()
                 .map_err(|e| Error::Invalid(format!("object {i}: {e}")))?;
         }
-        for b in occluders.iter().flatten() {
-            b.validate()?;
+        for (i, o) in occluders.iter().enumerate() {
+            o.validate()
+                .map_err(|e| Error::Invalid(format!("object {i}'s occluders: {e}")))?;
         }
         let ground = objects
             .iter()
@@ -173,8 +180,9 @@ impl Scene {
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
+                    let (lo, hi) = p.bounds();
                     GeomWithData::new(
-                        Rectangle::from_corners(p.min.to_array(), p.max.to_array()),
+                        Rectangle::from_corners(lo.to_array(), hi.to_array()),
                         i as u32,
                     )
                 })
@@ -313,7 +321,15 @@ mod tests {
         let beside = b([200.0, 0.0, 40.0], [204.0, 5.0, 44.0]);
         let front = b([2.0, 0.0, 12.0], [6.0, 5.0, 16.0]);
         let objects = [wall, behind, tall_behind, beside, front];
-        let scene = Scene::new(&objects, &[vec![wall], vec![], vec![], vec![], vec![]]).unwrap();
+        let none = || Occluders::aligned(vec![]);
+        let occluders = [
+            Occluders::aligned(vec![wall]),
+            none(),
+            none(),
+            none(),
+            none(),
+        ];
+        let scene = Scene::new(&objects, &occluders).unwrap();
         assert_eq!(scene.prism_count(), 1);
         let opts = SampleOptions::default();
         assert_eq!(
@@ -342,9 +358,25 @@ mod tests {
         let on_it = b([2.0, 10.0, 2.0], [8.0, 20.0, 8.0]);
         let floating = b([20.0, 5.0, 0.0], [30.0, 10.0, 10.0]);
         let overhang = b([-5.0, 10.0, 2.0], [8.0, 20.0, 8.0]);
-        let p = prisms(&[ground, on_it, floating, overhang], 0.0);
+        let boxes = vec![ground, on_it, floating, overhang];
+        let p = prisms(&Occluders::aligned(boxes.clone()), 0.0);
         assert_eq!(p.len(), 2);
         assert_eq!(p[1].top, 20.0);
+        // The same boxes in a frame turned a quarter: the same prisms, turned.
+        let turned = Occluders {
+            axis: Vec2::Y,
+            boxes,
+        };
+        let q = prisms(&turned, 0.0);
+        assert_eq!(q.len(), 2);
+        assert!(
+            (q[0].centre - Vec2::new(-5.0, 5.0)).length() < 1e-5,
+            "{q:?}"
+        );
+        assert!(
+            (q[1].bounds().0 - Vec2::new(-8.0, 2.0)).length() < 1e-5,
+            "{q:?}"
+        );
     }
 
     #[test]
@@ -355,8 +387,17 @@ mod tests {
             min: Vec3::splat(f32::NAN),
             max: Vec3::ONE,
         };
-        assert!(Scene::new(&[nan], &[vec![]]).is_err());
-        let scene = Scene::new(&[ok], &[vec![]]).unwrap();
+        let none = || Occluders::aligned(vec![]);
+        assert!(Scene::new(&[nan], &[none()]).is_err());
+        for axis in [Vec2::ZERO, Vec2::NAN, Vec2::new(1.0, 1.0)] {
+            let bad = Occluders {
+                axis,
+                boxes: vec![],
+            };
+            assert!(Scene::new(&[ok], &[bad]).is_err(), "{axis}");
+        }
+        assert!(Scene::new(&[ok], &[Occluders::aligned(vec![nan])]).is_err());
+        let scene = Scene::new(&[ok], &[none()]).unwrap();
         let opts = SampleOptions::default();
         assert!(scene.visible_from(&nan, &opts, &[]).is_err());
         for bad in [
@@ -386,7 +427,7 @@ mod city_tests {
     use super::*;
     use crate::visibility::cells::{ViewcellGrid, DEFAULT_EYE_RANGE};
     use crate::visibility::intersect::{ray_triangle_distance, triangles};
-    use crate::visibility::occluder::occluder_boxes;
+    use crate::visibility::occluder::occluders;
 
     /// Rays from random walkable points of random cells of a small generated city: the
     /// first object each ray meets is in the cell's PVS.
@@ -400,7 +441,7 @@ mod city_tests {
                 Aabb::new(lo, hi).unwrap()
             })
             .collect();
-        let occluders: Vec<Vec<Aabb>> = objects.iter().map(|o| occluder_boxes(&o.mesh)).collect();
+        let occluders: Vec<Occluders> = objects.iter().map(|o| occluders(&o.mesh)).collect();
         let triangles: Vec<Vec<[Vec3; 3]>> = objects.iter().map(|o| triangles(&o.mesh)).collect();
         let scene = Scene::new(&boxes, &occluders).unwrap();
         let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));

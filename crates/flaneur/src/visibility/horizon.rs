@@ -6,7 +6,8 @@
 //! from there.
 //!
 //! Why it is exact (never hides a visible point): a prism stands on the ground with
-//! footprint F and top h. A sight line from the eye p (height y) to a point q (plan
+//! footprint F (a rectangle, its sides at any angle: buildings follow their streets,
+//! not the axes) and top h. A sight line from the eye p (height y) to a point q (plan
 //! distance d, height ≤ H) that enters F at plan distance e < d is, there, at height
 //! y + (e/d)(q_y − y) ≤ y + (e/d)·max(H − y, 0). If that is at most h, the line is in
 //! the prism, and q is hidden. In a bin the occluder is counted only where it covers
@@ -30,34 +31,94 @@ const TURN: f32 = 4.0;
 /// never widens what an occluder covers or narrows what a box spans.
 const PAD: f32 = 1e-5;
 
-/// An occluder standing on the ground: a footprint in (x, z) and the height of its top.
-/// Everything of it from the ground up to `top` is inside a solid.
+/// An occluder standing on the ground: a rectangular footprint in (x, z), turned
+/// about the vertical by any angle, and the height of its top. Everything of it from
+/// the ground up to `top` is inside a solid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prism {
-    pub min: Vec2,
-    pub max: Vec2,
+    /// The footprint's centre.
+    pub centre: Vec2,
+    /// The unit direction of the footprint's first pair of sides; the second pair runs
+    /// across it, along `axis.perp()`.
+    pub axis: Vec2,
+    /// Half the footprint's sides: along `axis`, then across it.
+    pub half: Vec2,
     pub top: f32,
 }
 
 impl Prism {
+    /// The prism whose footprint is the plan rectangle `min`..`max`, sides along x and z.
+    pub fn aligned(min: Vec2, max: Vec2, top: f32) -> Prism {
+        Prism {
+            centre: 0.5 * (min + max),
+            axis: Vec2::X,
+            half: 0.5 * (max - min),
+            top,
+        }
+    }
+
+    /// `v` (plan) in the footprint's own frame: along `axis` and across it, from the
+    /// centre.
+    fn local(&self, v: Vec2) -> Vec2 {
+        let d = v - self.centre;
+        Vec2::new(d.dot(self.axis), d.dot(self.axis.perp()))
+    }
+
+    /// A plan direction in the footprint's own frame.
+    fn local_direction(&self, v: Vec2) -> Vec2 {
+        Vec2::new(v.dot(self.axis), v.dot(self.axis.perp()))
+    }
+
+    /// The footprint's corners, in turn around it.
+    pub fn corners(&self) -> [Vec2; 4] {
+        let (a, b) = (self.axis * self.half.x, self.axis.perp() * self.half.y);
+        let c = self.centre;
+        [c - a - b, c + a - b, c + a + b, c - a + b]
+    }
+
+    /// The plan box around the footprint.
+    pub fn bounds(&self) -> (Vec2, Vec2) {
+        let reach = self.axis.abs() * self.half.x + self.axis.perp().abs() * self.half.y;
+        (self.centre - reach, self.centre + reach)
+    }
+
     /// The prism shrunk by `e` on every side and at the top; `None` when nothing is
     /// left of its footprint.
     pub fn shrunk(&self, e: f32) -> Option<Prism> {
-        let (min, max) = (self.min + e, self.max - e);
-        (min.x < max.x && min.y < max.y).then_some(Prism {
-            min,
-            max,
+        let half = self.half - e;
+        (half.x > 0.0 && half.y > 0.0).then_some(Prism {
+            half,
             top: self.top - e,
+            ..*self
         })
     }
 
     /// Whether the point `p` (x, y, z) is inside the prism (standing on the ground).
     pub fn contains(&self, p: Vec3) -> bool {
-        p.x > self.min.x
-            && p.x < self.max.x
-            && p.z > self.min.y
-            && p.z < self.max.y
-            && p.y < self.top
+        let l = self.local(plan(p)).abs();
+        l.x < self.half.x && l.y < self.half.y && p.y < self.top
+    }
+
+    /// Whether the plan point `p` is on the footprint, its edge included.
+    fn covers(&self, p: Vec2) -> bool {
+        let l = self.local(p).abs();
+        l.x <= self.half.x && l.y <= self.half.y
+    }
+
+    /// The plan distance from `p` to the footprint.
+    fn distance(&self, p: Vec2) -> f32 {
+        let l = self.local(p);
+        (l.clamp(-self.half, self.half) - l).length()
+    }
+
+    /// The plan distance at which the ray from `eye` along `dir` enters the footprint.
+    fn entry(&self, eye: Vec2, dir: Vec2) -> Option<f32> {
+        entry(
+            self.local(eye),
+            self.local_direction(dir),
+            -self.half,
+            self.half,
+        )
     }
 }
 
@@ -110,13 +171,13 @@ fn unwrapped(v: Vec2, reference: f32) -> f32 {
     a
 }
 
-/// The angular span of the rectangle seen from `eye`, which lies outside it, as
-/// (low, high) in pseudo-angles with high − low < 2 (half a turn), and each corner's
-/// pseudo-angle on the same unwrapped scale.
-fn span(eye: Vec2, min: Vec2, max: Vec2) -> (f32, f32, [f32; 4]) {
-    let centre = 0.5 * (min + max) - eye;
+/// The angular span of the convex quadrilateral `corners` seen from `eye`, which lies
+/// outside it, as (low, high) in pseudo-angles with high − low < 2 (half a turn), and
+/// each corner's pseudo-angle on the same unwrapped scale.
+fn span(eye: Vec2, corners: &[Vec2; 4]) -> (f32, f32, [f32; 4]) {
+    let centre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]) - eye;
     let reference = pseudo_angle(centre);
-    let angles = corners2(min, max).map(|c| unwrapped(c - eye, reference));
+    let angles = corners.map(|c| unwrapped(c - eye, reference));
     let lo = angles.iter().copied().fold(f32::INFINITY, f32::min);
     let hi = angles.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     (lo, hi, angles)
@@ -176,11 +237,8 @@ impl Horizon {
         let edges = edges();
         let mut near: Vec<(f32, Prism)> = prisms
             .into_iter()
-            .filter(|o| {
-                let inside = p.x >= o.min.x && p.x <= o.max.x && p.y >= o.min.y && p.y <= o.max.y;
-                o.top > eye.y && !inside
-            })
-            .map(|o| ((p.clamp(o.min, o.max) - p).length(), o))
+            .filter(|o| o.top > eye.y && !o.covers(p))
+            .map(|o| (o.distance(p), o))
             .collect();
         if prune {
             near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
@@ -196,7 +254,8 @@ impl Horizon {
                 let (e, s) = steepest[b];
                 prune && e <= least && s >= most
             };
-            let (lo, hi, angles) = span(p, o.min, o.max);
+            let corners = o.corners();
+            let (lo, hi, angles) = span(p, &corners);
             let first = ((lo + PAD) / BIN).ceil() as i64;
             let last = ((hi - PAD) / BIN).floor() as i64 - 1;
             if first > last {
@@ -206,8 +265,7 @@ impl Horizon {
             if (first..=last).all(|k| dominated(&steepest, bin(k))) {
                 continue;
             }
-            let corners = corners2(o.min, o.max);
-            let at_edge = |k: i64| entry(p, edges[bin(k)], o.min, o.max);
+            let at_edge = |k: i64| o.entry(p, edges[bin(k)]);
             // Entry distances at the covered bins' edges, each edge shared by two bins.
             let mut before: Option<(i64, Option<f32>)> = None;
             for k in first..=last {
@@ -286,7 +344,7 @@ impl Horizon {
             return false;
         }
         let need = (b.max.y - self.eye.y).max(0.0) / d;
-        let (lo, hi, _) = span(p, min, max);
+        let (lo, hi, _) = span(p, &corners2(min, max));
         let first = ((lo - PAD) / BIN).floor() as i64;
         let last = ((hi + PAD) / BIN).floor() as i64;
         if last - first >= BINS as i64 {
@@ -307,11 +365,7 @@ mod tests {
     use super::*;
 
     fn prism(min: [f32; 2], max: [f32; 2], top: f32) -> Prism {
-        Prism {
-            min: Vec2::from(min),
-            max: Vec2::from(max),
-            top,
-        }
+        Prism::aligned(Vec2::from(min), Vec2::from(max), top)
     }
 
     fn b(min: [f32; 3], max: [f32; 3]) -> Aabb {
@@ -344,6 +398,41 @@ mod tests {
         assert!(!h.hides(&b([25.0, 0.0, 30.0], [200.0, 5.0, 34.0])));
         // Behind the eye.
         assert!(!h.hides(&b([-2.0, 0.0, -34.0], [2.0, 5.0, -30.0])));
+    }
+
+    #[test]
+    fn a_turned_wall_hides_what_is_low_behind_it() {
+        let eye = Vec3::new(0.0, 1.6, 0.0);
+        let mut wall = prism([-30.0, 19.0], [30.0, 21.0], 10.0);
+        wall.axis = Vec2::from_angle(0.4);
+        let h = Horizon::new(eye, [wall]);
+        // Straight behind its middle, and behind it off to one side.
+        assert!(h.hides(&b([-2.0, 0.0, 40.0], [2.0, 5.0, 44.0])));
+        assert!(h.hides(&b([18.0, 0.0, 30.0], [20.0, 5.0, 32.0])));
+        // Behind where the unturned wall would stand, but in front of the turned one:
+        // at x = 22 its line is at z = 20 + 22 tan 0.4 ≈ 29.3.
+        assert!(!h.hides(&b([20.0, 0.0, 22.0], [24.0, 5.0, 26.0])));
+        let unturned = Horizon::new(eye, [prism([-30.0, 19.0], [30.0, 21.0], 10.0)]);
+        assert!(unturned.hides(&b([20.0, 0.0, 22.0], [24.0, 5.0, 26.0])));
+        assert!(!h.hides(&b([-2.0, 0.0, 40.0], [2.0, 40.0, 44.0])));
+    }
+
+    #[test]
+    fn a_turned_footprint_keeps_its_shape() {
+        let mut o = prism([-4.0, -1.0], [4.0, 1.0], 10.0);
+        o.axis = Vec2::from_angle(std::f32::consts::FRAC_PI_2);
+        // Now 2 m wide in x and 8 m deep in z.
+        let (lo, hi) = o.bounds();
+        assert!((lo - Vec2::new(-1.0, -4.0)).length() < 1e-5, "{lo}");
+        assert!((hi - Vec2::new(1.0, 4.0)).length() < 1e-5, "{hi}");
+        assert!(o.contains(Vec3::new(0.5, 1.0, 3.5)));
+        assert!(!o.contains(Vec3::new(3.5, 1.0, 0.5)));
+        assert!((o.distance(Vec2::new(5.0, 0.0)) - 4.0).abs() < 1e-5);
+        let s = o.shrunk(0.5).unwrap();
+        assert_eq!((s.half, s.top), (Vec2::new(3.5, 0.5), 9.5));
+        assert!(o.shrunk(1.0).is_none());
+        let e = o.entry(Vec2::new(-10.0, 0.0), Vec2::X).unwrap();
+        assert!((e - 9.0).abs() < 1e-5, "{e}");
     }
 
     #[test]
@@ -404,20 +493,43 @@ mod tests {
         assert!(!Horizon::new(eye, [around]).hides(&b([20.0, 0.0, 0.0], [22.0, 1.0, 1.0])));
     }
 
+    /// A prism standing within `spread` of the origin, half-sides `half` at most, top
+    /// `top`; turned by a random angle when `turned`.
+    fn random_prism(
+        rng: &mut impl rand::Rng,
+        spread: f32,
+        half: (f32, f32),
+        top: (f32, f32),
+        turned: bool,
+    ) -> Prism {
+        let c = Vec2::new(
+            rng.gen_range(-spread..spread),
+            rng.gen_range(-spread..spread),
+        );
+        let h = Vec2::new(rng.gen_range(half.0..half.1), rng.gen_range(half.0..half.1));
+        let mut o = prism((c - h).into(), (c + h).into(), rng.gen_range(top.0..top.1));
+        if turned {
+            o.axis = Vec2::from_angle(rng.gen_range(0.0..std::f32::consts::TAU));
+        }
+        o
+    }
+
     /// A street of random blocks, where pruning skips most entries: the pruned horizon
     /// hides exactly what the full one hides.
     #[test]
     fn pruning_changes_nothing_it_hides() {
+        for turned in [false, true] {
+            pruning_changes_nothing_it_hides_with(turned);
+        }
+    }
+
+    fn pruning_changes_nothing_it_hides_with(turned: bool) {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let (mut hidden, mut shown) = (0, 0);
         for _ in 0..40 {
             let prisms: Vec<Prism> = (0..120)
-                .map(|_| {
-                    let c = Vec2::new(rng.gen_range(-300.0..300.0), rng.gen_range(-300.0..300.0));
-                    let h = Vec2::new(rng.gen_range(2.0..20.0), rng.gen_range(2.0..20.0));
-                    prism((c - h).into(), (c + h).into(), rng.gen_range(3.0..60.0))
-                })
+                .map(|_| random_prism(&mut rng, 300.0, (2.0, 20.0), (3.0, 60.0), turned))
                 .collect();
             let eye = Vec3::new(
                 rng.gen_range(-100.0..100.0),
@@ -440,14 +552,21 @@ mod tests {
         }
         assert!(
             hidden > 1_000 && shown > 1_000,
-            "{hidden} hidden, {shown} shown"
+            "{hidden} hidden, {shown} shown (turned: {turned})"
         );
     }
 
     /// Random prisms and boxes: whenever the horizon hides a box, every sight line from
-    /// the eye to a point of the box passes through a prism.
+    /// the eye to a point of the box passes through a prism. Prisms along the axes, then
+    /// turned ones.
     #[test]
     fn what_it_hides_is_behind_a_prism_on_every_sight_line() {
+        for turned in [false, true] {
+            what_it_hides_is_behind_a_prism_with(turned);
+        }
+    }
+
+    fn what_it_hides_is_behind_a_prism_with(turned: bool) {
         use crate::visibility::intersect::segment_meets_box;
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -455,14 +574,8 @@ mod tests {
         for _ in 0..200 {
             let eye = Vec3::new(0.0, rng.gen_range(1.2..2.0), 0.0);
             let prisms: Vec<Prism> = (0..12)
-                .map(|_| {
-                    let c = Vec2::new(rng.gen_range(-60.0..60.0), rng.gen_range(-60.0..60.0));
-                    let h = Vec2::new(rng.gen_range(1.0..15.0), rng.gen_range(1.0..15.0));
-                    prism((c - h).into(), (c + h).into(), rng.gen_range(1.0..30.0))
-                })
-                .filter(|o| {
-                    !o.contains(eye) && (plan(eye).clamp(o.min, o.max) - plan(eye)).length() > 0.5
-                })
+                .map(|_| random_prism(&mut rng, 60.0, (1.0, 15.0), (1.0, 30.0), turned))
+                .filter(|o| !o.contains(eye) && o.distance(plan(eye)) > 0.5)
                 .collect();
             let horizon = Horizon::new(eye, prisms.iter().copied());
             for _ in 0..50 {
@@ -476,16 +589,24 @@ mod tests {
                     let q = target.min + f * target.extent();
                     lines += 1;
                     assert!(
-                        prisms.iter().any(|o| segment_meets_box(
-                            eye,
-                            q,
-                            &b([o.min.x, -1.0, o.min.y], [o.max.x, o.top, o.max.y])
-                        )),
+                        prisms.iter().any(|o| {
+                            // In the prism's own frame, where it is a box.
+                            let local = |v: Vec3| {
+                                let l = o.local(plan(v));
+                                Vec3::new(l.x, v.y, l.y)
+                            };
+                            let h = o.half;
+                            let own = b([-h.x, -1.0, -h.y], [h.x, o.top, h.y]);
+                            segment_meets_box(local(eye), local(q), &own)
+                        }),
                         "the sight line from {eye} to {q} meets no prism"
                     );
                 }
             }
         }
-        assert!(hidden > 500 && lines > 20_000, "{hidden} boxes hidden");
+        assert!(
+            hidden > 500 && lines > 20_000,
+            "{hidden} boxes hidden (turned: {turned})"
+        );
     }
 }

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use super::cells::{Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
 use super::dov::corner_keys;
-use super::occluder::occluder_boxes;
+use super::occluder::{occluders, Occluders};
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
 use super::{cell_dovs_after, CornerMemo, CubicProjection, RayScene};
 use crate::error::{Error, Result};
@@ -154,8 +154,8 @@ pub(super) fn grid_and_walkable(
 pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Result<Prepared> {
     opts.validate()?;
     let boxes = boxes(objects)?;
-    let occluders: Vec<Vec<Aabb>> = objects.par_iter().map(|(_, m)| occluder_boxes(m)).collect();
-    let scene = Scene::new(&boxes, &occluders)?;
+    let found: Vec<Occluders> = objects.par_iter().map(|(_, m)| occluders(m)).collect();
+    let scene = Scene::new(&boxes, &found)?;
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let projection = CubicProjection::new(opts.resolution)?;
     let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
@@ -166,7 +166,7 @@ pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Resu
         projection,
         grid,
         walkable,
-        occluders: occluders.iter().filter(|o| !o.is_empty()).count(),
+        occluders: found.iter().filter(|o| !o.boxes.is_empty()).count(),
     })
 }
 

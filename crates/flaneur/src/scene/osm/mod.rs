@@ -280,3 +280,12 @@ fn project(nodes: &HashMap<i64, (f64, f64)>) -> (Map, [f64; 2]) {
     }
     (Map { at, off_globe }, centre)
 }
+
+/// A footprint (map metres; the outer ring counter-clockwise seen from above, holes
+/// clockwise) extruded from the ground to `top` as the import draws a building: for
+/// other modules' tests.
+#[cfg(test)]
+pub(crate) fn extruded(outer: Vec<[f64; 2]>, holes: Vec<Vec<[f64; 2]>>, top: f64) -> Mesh {
+    extrude::extrude(&[rings::Polygon { outer, holes }], 0.0, top)
+        .expect("a footprint that triangulates")
+}
