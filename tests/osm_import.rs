@@ -118,7 +118,7 @@ fn the_extract_builds_with_visibility_and_walks_queries_and_checks() {
         "{info}"
     );
     // Occluders that follow real footprints (turned to their walls, a box for each
-    // wing): the PVS keeps 46.6 % of the extract at these settings, where boxes along
+    // wing): the PVS keeps 46.8 % of the extract at these settings, where boxes along
     // the axes about each footprint's centre kept 88.2 %.
     let share: f64 = info
         .lines()

@@ -132,12 +132,11 @@ pub fn prisms(occluders: &Occluders, ground: f32) -> Vec<Prism> {
             out.push((min, max, b.max.y));
         }
     }
-    let axis = occluders.axis;
     out.into_iter()
         .map(|(min, max, top)| {
             let mut p = Prism::aligned(min, max, top);
-            p.centre = p.centre.x * axis + p.centre.y * axis.perp();
-            p.axis = axis;
+            p.centre = occluders.plan_of(p.centre);
+            p.axis = occluders.axis;
             p
         })
         .collect()
@@ -364,6 +363,7 @@ mod tests {
         assert_eq!(p[1].top, 20.0);
         // The same boxes in a frame turned a quarter: the same prisms, turned.
         let turned = Occluders {
+            origin: Vec2::ZERO,
             axis: Vec2::Y,
             boxes,
         };
@@ -376,6 +376,16 @@ mod tests {
         assert!(
             (q[1].bounds().0 - Vec2::new(-8.0, 2.0)).length() < 1e-5,
             "{q:?}"
+        );
+        // And with the frame's origin moved: moved with it.
+        let moved = Occluders {
+            origin: Vec2::new(1000.0, -2000.0),
+            ..turned
+        };
+        let r = prisms(&moved, 0.0);
+        assert!(
+            (r[0].centre - Vec2::new(995.0, -1995.0)).length() < 1e-3,
+            "{r:?}"
         );
     }
 
@@ -391,11 +401,17 @@ mod tests {
         assert!(Scene::new(&[nan], &[none()]).is_err());
         for axis in [Vec2::ZERO, Vec2::NAN, Vec2::new(1.0, 1.0)] {
             let bad = Occluders {
+                origin: Vec2::ZERO,
                 axis,
                 boxes: vec![],
             };
             assert!(Scene::new(&[ok], &[bad]).is_err(), "{axis}");
         }
+        let far = Occluders {
+            origin: Vec2::new(f32::INFINITY, 0.0),
+            ..Occluders::aligned(vec![])
+        };
+        assert!(Scene::new(&[ok], &[far]).is_err());
         assert!(Scene::new(&[ok], &[Occluders::aligned(vec![nan])]).is_err());
         let scene = Scene::new(&[ok], &[none()]).unwrap();
         let opts = SampleOptions::default();

@@ -23,9 +23,13 @@ use crate::scene::Mesh;
 /// One object's occluder boxes, in a frame turned about the vertical.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Occluders {
+    /// Where the frame's origin is in plan (x, z): near the object, so that its
+    /// coordinates in the frame are small and turning them loses nothing that matters
+    /// (a city tens of kilometres across has millimetre steps in f32).
+    pub origin: Vec2,
     /// The unit plan direction (x, z) of the frame's first axis. Its third axis is
     /// `axis.perp()`, and a point (u, y, v) of the frame is at plan position
-    /// u·`axis` + v·`axis.perp()`, height y.
+    /// `origin` + u·`axis` + v·`axis.perp()`, height y.
     pub axis: Vec2,
     /// Boxes inside the object's solid, in the frame.
     pub boxes: Vec<Aabb>,
@@ -35,6 +39,7 @@ impl Occluders {
     /// Boxes in the world's own frame.
     pub fn aligned(boxes: Vec<Aabb>) -> Occluders {
         Occluders {
+            origin: Vec2::ZERO,
             axis: Vec2::X,
             boxes,
         }
@@ -42,12 +47,24 @@ impl Occluders {
 
     /// `p` in the frame.
     pub fn to_frame(&self, p: Vec3) -> Vec3 {
-        let plan = Vec2::new(p.x, p.z);
+        let plan = Vec2::new(p.x, p.z) - self.origin;
         Vec3::new(plan.dot(self.axis), p.y, plan.dot(self.axis.perp()))
     }
 
-    /// Checks that the axis is a unit direction and every box is valid.
+    /// The plan position of the frame's plan point `(u, v)`.
+    pub fn plan_of(&self, local: Vec2) -> Vec2 {
+        self.origin + local.x * self.axis + local.y * self.axis.perp()
+    }
+
+    /// Checks that the origin is finite, the axis a unit direction, and every box
+    /// valid.
     pub fn validate(&self) -> Result<()> {
+        if !self.origin.is_finite() {
+            return Err(Error::Invalid(format!(
+                "the occluders' origin {} is not finite",
+                self.origin
+            )));
+        }
         if !(self.axis.is_finite() && (self.axis.length() - 1.0).abs() < 1e-3) {
             return Err(Error::Invalid(format!(
                 "the occluders' axis {} is not a unit direction",
@@ -68,6 +85,12 @@ pub fn occluders(mesh: &Mesh) -> Occluders {
     let world = triangles(mesh);
     let mut found = Occluders::aligned(Vec::new());
     found.axis = wall_axis(&world);
+    if found.axis != Vec2::X {
+        // Turned, about the middle of the object's plan bounds. (Along the axes the
+        // world's own frame is kept: its coordinates are taken unchanged.)
+        let (lo, hi) = mesh.bounds();
+        found.origin = 0.5 * (Vec2::new(lo[0], lo[2]) + Vec2::new(hi[0], hi[2]));
+    }
     let local = world.iter().map(|t| t.map(|v| found.to_frame(v))).collect();
     found.boxes = boxes::occluder_boxes(local);
     found
