@@ -14,7 +14,8 @@
 //!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
 //! - `append.rs`: the store's writes as a build makes them (pages, extents, overwrites),
 //!   checked;
-//! - `writer.rs`: buffered appends, overwrites and the commit.
+//! - `writer.rs`: buffered appends, overwrites and the commit;
+//! - `replace.rs`: a new file written beside the old and renamed into its place.
 //!
 //! Every read goes through [`Store`], which checks the page (range, kind, length,
 //! checksum), counts it, and names the page in any error. Nothing in a file can make
@@ -38,6 +39,7 @@ pub(crate) mod framing;
 mod header;
 pub(crate) mod page;
 mod remote;
+mod replace;
 mod scan;
 mod source;
 mod writer;
@@ -62,6 +64,8 @@ pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
 pub use header::{Header, Segment, DEFAULT_PAGE_SIZE};
 pub use page::{PageKind, PAGE_HEADER_LEN};
 pub use remote::{is_url, HttpOptions, RemoteStats, RequestTimes};
+pub(crate) use replace::write_file_atomically;
+use replace::{persist, temp_file};
 pub use source::{NodeHint, PageSource};
 
 use backend::{MmapSource, PreadSource, RawPageSource};
@@ -128,48 +132,6 @@ impl fmt::Debug for Store {
             .field("writable", &self.writer.is_some())
             .finish()
     }
-}
-
-/// Renames the finished temporary `temp` to `path` and makes the rename durable (best
-/// effort: not every platform can fsync a folder). On failure the temporary is dropped,
-/// which removes it.
-fn persist(temp: tempfile::TempPath, path: &Path) -> Result<()> {
-    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
-}
-
-/// Writes `bytes` to `path` as a build writes a database: into a temporary beside it,
-/// synced, then renamed into place, so that a writer killed midway leaves the old file
-/// or none, never a part of the new one.
-pub(crate) fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut temp = temp_file(path).map_err(|e| Error::io(path, e))?;
-    io::Write::write_all(&mut temp, bytes).map_err(|e| Error::io(path, e))?;
-    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    persist(temp.into_temp_path(), path)
-}
-
-/// A new, uniquely named temporary file in `path`'s folder, where the database that
-/// will be `path` is built: `.<name>.<random>.tmp`, created with mode 0666 less the
-/// umask, as `File::create` would, whatever a stale temporary's mode.
-fn temp_file(path: &Path) -> io::Result<tempfile::NamedTempFile> {
-    use std::os::unix::fs::PermissionsExt;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .permissions(std::fs::Permissions::from_mode(0o666))
-        .tempfile_in(dir)
 }
 
 /// Takes the advisory lock that keeps a database to one writer at a time (`flock`,
