@@ -234,7 +234,7 @@ fn meshes_come_and_go_and_their_bytes_are_counted() {
     assert_eq!(meshes.bytes(), 2 * one);
     // Drawn: the nearer quad hides the farther one in the middle of the image.
     let target = flaneur_render::Offscreen::new(&gpu, 32, 32).unwrap();
-    let view_proj = glam::Mat4::perspective_rh(1.0, 1.0, 0.5, 100.0);
+    let view_proj = glam::camera::rh::proj::directx::perspective(1.0, 1.0, 0.5, 100.0);
     let frame = target
         .render(&gpu, view_proj, &meshes, &[(1, 0), (2, 0)])
         .unwrap();

@@ -67,7 +67,21 @@ fn draw(path: &Path, plot: &LinePlot) -> std::result::Result<(), String> {
     let y1 = points().fold(0.0f64, |b, (_, y)| b.max(y));
     let (x0, x1) = if x0 < x1 { (x0, x1) } else { (0.0, 1.0) };
     let y1 = if y1 > 0.0 { y1 * 1.05 } else { 1.0 };
-    let root = BitMapBackend::new(path, (800, 500)).into_drawing_area();
+    let (width, height) = (800u32, 500u32);
+    let mut pixels = vec![0u8; (width * height * 3) as usize];
+    draw_into(&mut pixels, (width, height), plot, (x0, x1), y1)?;
+    image::save_buffer(path, &pixels, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())
+}
+
+fn draw_into(
+    pixels: &mut [u8],
+    size: (u32, u32),
+    plot: &LinePlot,
+    (x0, x1): (f64, f64),
+    y1: f64,
+) -> std::result::Result<(), String> {
+    let root = BitMapBackend::with_buffer(pixels, size).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
         .caption(&plot.title, ("sans-serif", 22))

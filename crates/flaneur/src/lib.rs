@@ -60,6 +60,10 @@ pub use build::{
 };
 pub use database::{Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};
+/// The vector math crate of the engine's public types ([`geom::Aabb`], [`geom::Camera`],
+/// meshes), re-exported so that a program names the same version the engine was built
+/// with: `flaneur::glam::Vec3`, with no `glam` line of its own to keep in step.
+pub use glam;
 pub use rtree::{History, ObjectEntry, QueryResult};
 pub use store::Backend;
 pub use write_order::WriteOrder;

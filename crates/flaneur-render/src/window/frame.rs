@@ -213,6 +213,6 @@ fn top_view(camera: &Camera) -> glam::Mat4 {
     let (sin, cos) = camera.yaw.sin_cos();
     let heading = glam::Vec3::new(cos, 0.0, sin);
     let eye = camera.position + glam::Vec3::Y * 400.0;
-    glam::Mat4::perspective_rh(60f32.to_radians(), 1.0, 1.0, 5000.0)
-        * glam::Mat4::look_at_rh(eye, camera.position, heading)
+    glam::camera::rh::proj::directx::perspective(60f32.to_radians(), 1.0, 1.0, 5000.0)
+        * glam::camera::rh::view::look_at_mat4(eye, camera.position, heading)
 }

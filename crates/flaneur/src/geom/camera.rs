@@ -217,8 +217,9 @@ impl Camera {
                 "aspect {aspect} must be a positive number"
             )));
         }
-        let proj = Mat4::perspective_rh(self.fov_y, aspect, self.near, self.far);
-        let view = Mat4::look_to_rh(self.position, self.forward(), Vec3::Y);
+        let proj =
+            glam::camera::rh::proj::directx::perspective(self.fov_y, aspect, self.near, self.far);
+        let view = glam::camera::rh::view::look_to_mat4(self.position, self.forward(), Vec3::Y);
         Ok(proj * view)
     }
 }
