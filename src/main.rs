@@ -54,7 +54,10 @@ enum Command {
     /// Walk a database headless along a camera path (REVIEW, Shou 2002 ch. 4) and
     /// report per-frame figures.
     Walk(walk::WalkArgs),
-    /// Rerun an experiment of the papers on a database.
+    /// Rerun an experiment of the papers, or one of ours. Most run on a database given
+    /// to them (each says how it must be built); nine make their own data and need none:
+    /// hdov-scaling, lod-dag, lod-parallel, lod-refine, pvs-prefetch, stream,
+    /// stream-crowd, stream-bytes and stream-blocks.
     Bench(bench::BenchArgs),
     /// Serve database files over HTTP with byte ranges, ETag and If-Match, for every
     /// command to open by URL (any static server that honours Range does as well).

@@ -491,3 +491,75 @@ fn numbers_are_finite_and_may_be_negative() {
     assert!(out.status.success(), "{err}");
     assert!(String::from_utf8_lossy(&out.stdout).contains("prefetch off"));
 }
+
+/// Every duration an option takes is checked against its range as the arguments are
+/// read: `--idle-s 1e20` once reached `Duration::from_secs_f64` and panicked. A real
+/// database with landmarks, so that nothing but the parse stands before that point.
+#[test]
+fn a_duration_out_of_range_is_refused_by_name_not_a_panic() {
+    let c = common::city(
+        20,
+        31,
+        &BuildOptions {
+            lod: Some(flaneur::lod::LodOptions {
+                pm_threshold: 0,
+                ..Default::default()
+            }),
+            ..Default::default()
+        },
+    );
+    let db = c.db.to_str().unwrap();
+    for value in ["1e20", "-1", "0", "nan", "inf"] {
+        let out = flaneur(&["serve-stream", db, "--port", "0", "--idle-s", value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "--idle-s {value}: {err}");
+        assert_eq!(out.status.code(), Some(2), "--idle-s {value}: {err}");
+        assert!(err.contains("--idle-s"), "{err}");
+        assert!(
+            err.contains("within (0, 86400] s") || err.contains("not a finite number"),
+            "--idle-s {value}: {err}"
+        );
+    }
+}
+
+/// The durations, rates, τ, η and the other fractions every command takes are refused
+/// outside their ranges before anything is opened (the database named here does not
+/// exist), each refusal naming the option and the range.
+#[test]
+fn durations_and_fractions_are_checked_as_the_arguments_are_read() {
+    let db = "no-such.flaneur";
+    #[rustfmt::skip]
+    let cases: &[(&[&str], &str)] = &[
+        (&["serve-stream", db, "--predict-after-ms", "99999999999"], "[0, 3600000] ms"),
+        (&["walk", db, "--lod-tau", "-1"], "within [0, 1) of the viewport"),
+        (&["walk", db, "--lod-tau", "1"], "within [0, 1) of the viewport"),
+        (&["view", db, "--lod-tau", "-1"], "within [0, 1) of the viewport"),
+        (&["bench", "fidelity", db, "--lod-tau", "-0.5"], "within [0, 1)"),
+        (&["lod", "x.obj", "--refine", "--tau", "0"], "within (0, 1) of the viewport"),
+        (&["bench", "lod-refine", "--taus", "0.001,2"], "within (0, 1)"),
+        (&["bench", "stream", "--tau", "-1"], "within (0, 1)"),
+        (&["walk", db, "--eta", "-0.1"], "within [0, 1] of the view"),
+        (&["view", db, "--eta", "2"], "within [0, 1]"),
+        (&["bench", "hdov-search", db, "--etas", "0,-1"], "within [0, 1]"),
+        (&["walk", db, "--border", "0.7"], "within (0, 0.5] of the cell's side"),
+        (&["build", "x.scene", "-o", "x.flaneur", "--fill", "0"], "within [0.1, 1]"),
+        (&["lod", "x.obj", "--out", "x", "--ratio", "1"], "within (0, 1)"),
+        (&["walk", db, "--fps", "1e-30"], "within [0.1, 1000] frames/s"),
+        (&["walk", db, "--speed", "1e9"], "or 0 for unpaced"),
+        (&["walk", db, "--k", "1e9"], "within [0, 60] s"),
+        (&["bench", "stream", "--frame-ms", "1e300"], "within (0, 10000] ms"),
+        (&["bench", "stream", "--rtts", "100,1000000"], "within [0, 60000] ms"),
+        (&["bench", "stream-blocks", "--idle-ms", "99999999999"], "within [0, 3600000] ms"),
+        (&["bench", "http", db, "--mbits", "1e-300"], "within [0.001, 1000000] Mbit/s"),
+    ];
+    for (args, range) in cases {
+        let out = flaneur(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        let option = args.iter().rev().nth(1).unwrap();
+        assert!(
+            err.contains(option) && err.contains(range),
+            "{args:?}: {err}"
+        );
+    }
+}

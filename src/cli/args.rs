@@ -85,3 +85,280 @@ pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
         _ => Err(format!("{s:?} is not three finite numbers x,y,z")),
     }
 }
+
+/// The numbers an option takes: from `lo` to `hi`, each end in or out, in `unit`. A
+/// number outside is refused at parse time with the range named, so that no absurd
+/// value reaches a `Duration` (whose conversions panic past about 584 billion years) or
+/// a threshold that would quietly select nothing.
+struct Bounds {
+    lo: f64,
+    lo_in: bool,
+    hi: f64,
+    hi_in: bool,
+    unit: &'static str,
+    /// What the number is, for the refusal ("an idle timeout").
+    what: &'static str,
+}
+
+impl Bounds {
+    /// `x` if within, else the refusal, naming the number as it was `given`.
+    fn check(&self, x: f64, given: &str) -> std::result::Result<f64, String> {
+        let above = if self.lo_in {
+            x >= self.lo
+        } else {
+            x > self.lo
+        };
+        let below = if self.hi_in {
+            x <= self.hi
+        } else {
+            x < self.hi
+        };
+        if above && below {
+            return Ok(x);
+        }
+        let (open, close) = (
+            if self.lo_in { '[' } else { '(' },
+            if self.hi_in { ']' } else { ')' },
+        );
+        let unit = if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        };
+        Err(format!(
+            "{} of {}{unit}: give one within {open}{}, {}{close}{unit}",
+            self.what,
+            given.trim(),
+            self.lo,
+            self.hi
+        ))
+    }
+
+    /// The number `s` gives, if finite and within.
+    fn parse(&self, s: &str) -> std::result::Result<f64, String> {
+        self.check(finite_f64(s)?, s)
+    }
+
+    /// [`Bounds::parse`] for options kept in 32 bits: the number checked is the one kept.
+    fn parse32(&self, s: &str) -> std::result::Result<f32, String> {
+        let x = finite_f32(s)?;
+        self.check(f64::from(x), s).map(|_| x)
+    }
+
+    /// A whole number of the option's unit, for options kept as integers.
+    fn parse_whole(&self, s: &str) -> std::result::Result<u64, String> {
+        let n: u64 = s
+            .trim()
+            .parse()
+            .map_err(|e| format!("{s:?} is not a whole number of {}: {e}", self.unit))?;
+        self.check(n as f64, s).map(|_| n)
+    }
+}
+
+/// The longest a stream session may stay idle: a day.
+const DAY_S: f64 = 86_400.0;
+
+/// `serve-stream --idle-s`: an idle timeout, seconds within (0, a day].
+pub fn idle_seconds(s: &str) -> std::result::Result<f64, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: false,
+        hi: DAY_S,
+        hi_in: true,
+        unit: "s",
+        what: "an idle timeout",
+    }
+    .parse(s)
+}
+
+/// A wait before the server acts unasked (`--predict-after-ms`, `--idle-ms`):
+/// milliseconds within [0, an hour].
+pub fn wait_ms(s: &str) -> std::result::Result<u64, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: true,
+        hi: 3_600_000.0,
+        hi_in: true,
+        unit: "ms",
+        what: "a wait",
+    }
+    .parse_whole(s)
+}
+
+/// A client's frame period (`--frame-ms`): milliseconds within (0, 10 000].
+pub fn frame_ms(s: &str) -> std::result::Result<f64, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: false,
+        hi: 10_000.0,
+        hi_in: true,
+        unit: "ms",
+        what: "a frame period",
+    }
+    .parse(s)
+}
+
+/// A link's round trip (`--rtt`, `--rtts`): milliseconds within [0, a minute].
+pub fn round_trip_ms(s: &str) -> std::result::Result<u32, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: true,
+        hi: 60_000.0,
+        hi_in: true,
+        unit: "ms",
+        what: "a round trip",
+    }
+    .parse_whole(s)
+    .map(|n| n as u32)
+}
+
+/// A link's bandwidth (`--mbit`, `--mbits`): Mbit/s within [0.001, 1 000 000]; a
+/// message's time on the link is its size over it.
+pub fn bandwidth_mbit(s: &str) -> std::result::Result<f64, String> {
+    Bounds {
+        lo: 0.001,
+        lo_in: true,
+        hi: 1e6,
+        hi_in: true,
+        unit: "Mbit/s",
+        what: "a bandwidth",
+    }
+    .parse(s)
+}
+
+/// A walk's frame rate (`--fps`), whose inverse is a path's time step: frames a
+/// second within [0.1, 1000].
+pub fn frame_rate(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.1,
+        lo_in: true,
+        hi: 1000.0,
+        hi_in: true,
+        unit: "frames/s",
+        what: "a frame rate",
+    }
+    .parse32(s)
+}
+
+/// A playback speed, times real time, that a path's times are divided by: 0
+/// (unpaced) or within [0.01, 1000].
+pub fn pace_factor(s: &str) -> std::result::Result<f32, String> {
+    let x = finite_f32(s)?;
+    if x == 0.0 {
+        return Ok(0.0);
+    }
+    Bounds {
+        lo: 0.01,
+        lo_in: true,
+        hi: 1000.0,
+        hi_in: true,
+        unit: "× real time",
+        what: "a playback speed",
+    }
+    .check(f64::from(x), s)
+    .map(|_| x)
+    .map_err(|e| format!("{e}, or 0 for unpaced"))
+}
+
+/// A prefetch's look-ahead, seconds of motion (`--k`, `--ks`, `--next-cell-prefetch`):
+/// at most a minute; a negative one turns prefetching off where the option says so.
+pub fn seconds_ahead(s: &str) -> std::result::Result<f32, String> {
+    let x = finite_f32(s)?;
+    if x < 0.0 {
+        return Ok(x);
+    }
+    Bounds {
+        lo: 0.0,
+        lo_in: true,
+        hi: 60.0,
+        hi_in: true,
+        unit: "s",
+        what: "a look-ahead",
+    }
+    .check(f64::from(x), s)
+    .map(|_| x)
+    .map_err(|e| format!("{e} (negative: no prefetching)"))
+}
+
+/// LOD selection's screen-space error τ (`--lod-tau`): a fraction of the viewport
+/// within [0, 1), 0 for full detail.
+pub fn lod_tau(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: true,
+        hi: 1.0,
+        hi_in: false,
+        unit: "of the viewport",
+        what: "a screen-space error τ",
+    }
+    .parse32(s)
+    .map_err(|e| format!("{e} (0: full detail)"))
+}
+
+/// A refinement's screen-space error τ (`--tau`, `--taus`): a fraction of the viewport
+/// within (0, 1).
+pub fn tau(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: false,
+        hi: 1.0,
+        hi_in: false,
+        unit: "of the viewport",
+        what: "a screen-space error τ",
+    }
+    .parse32(s)
+}
+
+/// A DoV threshold η (`--eta`, `--etas`): a degree of visibility, the share of the
+/// view an object covers, within [0, 1].
+pub fn eta(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: true,
+        hi: 1.0,
+        hi_in: true,
+        unit: "of the view",
+        what: "a DoV threshold η",
+    }
+    .parse32(s)
+}
+
+/// PBNP's and LANP's border regions (`--border`, `--borders`): a fraction of a cell's
+/// side within (0, 0.5].
+pub fn border(s: &str) -> std::result::Result<f64, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: false,
+        hi: 0.5,
+        hi_in: true,
+        unit: "of the cell's side",
+        what: "a region border",
+    }
+    .parse(s)
+}
+
+/// `build --fill`: the share of each R-tree node bulk loading fills, within [0.1, 1].
+pub fn fill(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.1,
+        lo_in: true,
+        hi: 1.0,
+        hi_in: true,
+        unit: "of a node",
+        what: "a fill factor",
+    }
+    .parse32(s)
+}
+
+/// `lod --ratio`: each level's triangles over the one before's, within (0, 1).
+pub fn lod_ratio(s: &str) -> std::result::Result<f32, String> {
+    Bounds {
+        lo: 0.0,
+        lo_in: false,
+        hi: 1.0,
+        hi_in: false,
+        unit: "",
+        what: "a level ratio",
+    }
+    .parse32(s)
+}

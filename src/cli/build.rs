@@ -1,7 +1,7 @@
 //! `flaneur build`: a database from a citygen scene file or OBJ, glTF and OpenStreetMap
 //! files, and what went into it.
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{fill, finite_f32};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
@@ -12,9 +12,10 @@ use flaneur::progress::{Progress, Silent};
 use flaneur::visibility::{SampleOptions, VisibilityOptions};
 use flaneur::{BuildOptions, WriteOrder};
 
-/// `flaneur build`'s arguments.
+/// What `flaneur build` and `flaneur merge` share: the inputs, the file written, and
+/// every setting of the database but its visibility's (a merge takes the shards').
 #[derive(clap::Args)]
-pub struct BuildArgs {
+pub struct DatabaseArgs {
     /// A `.scene` file from citygen, or one or more `.obj`, `.gltf` and `.glb` files and
     /// at most one OpenStreetMap extract (`.osm.pbf`).
     #[arg(required = true)]
@@ -22,10 +23,11 @@ pub struct BuildArgs {
     /// The database file to write.
     #[arg(long, short)]
     out: PathBuf,
-    #[arg(long, default_value_t = 4096)]
+    /// Bytes per page of the database file: a power of two from 1024 to 65536.
+    #[arg(long, value_name = "BYTES", default_value_t = 4096)]
     page_size: usize,
-    /// Share of each R-tree node that bulk loading fills.
-    #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Share of each R-tree node that bulk loading fills, within [0.1, 1].
+    #[arg(long, default_value_t = flaneur::rtree::DEFAULT_FILL, value_parser = fill, allow_negative_numbers = true)]
     fill: f32,
     /// Build the index by one-by-one insertion (linear split), as the thesis did.
     #[arg(long)]
@@ -37,27 +39,9 @@ pub struct BuildArgs {
     /// DAG, for view-dependent refinement.
     #[arg(long, value_name = "N", default_value_t = flaneur::lod::DEFAULT_PM_THRESHOLD)]
     pm_threshold: usize,
-    /// Precompute each viewcell's potentially visible set and its objects' degrees
-    /// of visibility (the long step of a build; see --cell-size).
-    #[arg(long)]
-    visibility: bool,
-    /// Side of a viewcell in metres (with --visibility).
-    #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size, value_parser = finite_f32, allow_negative_numbers = true)]
-    cell_size: f32,
-    /// Pixels per side of each cube face the DoV is measured on (with --visibility).
-    #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
-    dov_resolution: u32,
-    /// Widest patch of a viewcell the conservative test samples, in metres (with
-    /// --visibility): smaller is a tighter PVS and a slower build.
-    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing, value_parser = finite_f32, allow_negative_numbers = true)]
-    sample_spacing: f32,
-    /// Occluders further than this from a sample point are not used, in metres
-    /// (with --visibility).
-    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius, value_parser = finite_f32, allow_negative_numbers = true)]
-    occluder_radius: f32,
-    /// Build the HDoV-tree over the objects, their LODs and the visibility (needs
-    /// --visibility), storing its V-pages under these schemes: any of horizontal,
-    /// vertical and indexed, comma-separated.
+    /// Build the HDoV-tree over the objects, their LODs and the visibility (a build's
+    /// --visibility, a merge's shards), storing its V-pages under these schemes: any of
+    /// horizontal, vertical and indexed, comma-separated (default: none, no HDoV-tree).
     #[arg(long, value_name = "SCHEMES", value_delimiter = ',')]
     hdov: Option<Vec<flaneur::hdov::Scheme>>,
     /// The order objects' meshes and LODs are written in: `hilbert`, along a Hilbert
@@ -86,20 +70,102 @@ pub struct BuildArgs {
     /// are used instead).
     #[arg(long, value_name = "METRES", default_value_t = flaneur::scene::OsmOptions::default().max_height, value_parser = finite_f32, allow_negative_numbers = true)]
     max_height: f32,
-    /// Compute only shard K of N of the visibility (K from 0), into the file --out
-    /// names, for `flaneur merge` to join: each shard a process of its own, on any
-    /// machine (with --visibility).
-    #[arg(long, value_name = "K/N")]
-    shard: Option<flaneur::visibility::Shard>,
     /// Store no build times in the file, so that it is a function of its inputs and
     /// options: two builds, or a build and a merge of shards, give the same bytes.
     #[arg(long)]
     reproducible: bool,
+    /// No progress bars: only the summary.
     #[arg(long, short)]
     quiet: bool,
 }
 
+/// `flaneur build`'s arguments: what it shares with `merge`, and the visibility's.
+#[derive(clap::Args)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    db: DatabaseArgs,
+    /// Precompute each viewcell's potentially visible set and its objects' degrees
+    /// of visibility (the long step of a build; see --cell-size).
+    #[arg(long)]
+    visibility: bool,
+    /// Side of a viewcell in metres (with --visibility).
+    #[arg(long, value_name = "METRES", default_value_t = VisibilityOptions::default().cell_size, value_parser = finite_f32, allow_negative_numbers = true)]
+    cell_size: f32,
+    /// Pixels per side of each cube face the DoV is measured on (with --visibility).
+    #[arg(long, value_name = "N", default_value_t = VisibilityOptions::default().resolution)]
+    dov_resolution: u32,
+    /// Widest patch of a viewcell the conservative test samples, in metres (with
+    /// --visibility): smaller is a tighter PVS and a slower build.
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().spacing, value_parser = finite_f32, allow_negative_numbers = true)]
+    sample_spacing: f32,
+    /// Occluders further than this from a sample point are not used, in metres
+    /// (with --visibility).
+    #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius, value_parser = finite_f32, allow_negative_numbers = true)]
+    occluder_radius: f32,
+    /// Compute only shard K of N of the visibility (K from 0), into the file --out
+    /// names, for `flaneur merge` to join: each shard a process of its own, on any
+    /// machine (with --visibility; default: none, the whole visibility).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<flaneur::visibility::Shard>,
+}
+
 impl BuildArgs {
+    /// Builds the database (or, with `--shard`, one shard of its visibility), with bars
+    /// unless quiet, and prints its summary.
+    pub fn run(self) -> Result<()> {
+        let opts = self.options()?;
+        let progress: &dyn Progress = if self.db.quiet {
+            &Silent
+        } else {
+            &Bars::default()
+        };
+        if let Some(shard) = self.shard {
+            let made = flaneur::build_visibility_shard(
+                &self.db.inputs,
+                &self.db.out,
+                &opts,
+                shard,
+                progress,
+            )?;
+            let entries: usize = made.cells.iter().map(|(_, p)| p.ids.len()).sum();
+            println!(
+                "visibility shard {shard} written to {}: {} of {} walkable cells, {:.1} objects per PVS, {:.1} s (of which DoV {:.1} s); join the shards with flaneur merge",
+                self.db.out.display(),
+                made.cells.len(),
+                made.walkable,
+                entries as f64 / made.cells.len().max(1) as f64,
+                made.seconds,
+                made.dov_seconds
+            );
+            return Ok(());
+        }
+        let summary = build(&self.db.inputs, &self.db.out, &opts, progress)?;
+        print_summary(&self.db.out, &summary, self.db.order);
+        Ok(())
+    }
+
+    /// The build's options from the arguments, checked.
+    fn options(&self) -> Result<BuildOptions> {
+        let a = self;
+        if a.db.hdov.is_some() && !a.visibility {
+            bail!("--hdov needs --visibility: the HDoV-tree is built from the viewcells' DoVs");
+        }
+        if a.shard.is_some() && !a.visibility {
+            bail!("--shard computes a shard of the visibility: give --visibility too");
+        }
+        a.db.options(a.visibility.then(|| VisibilityOptions {
+            cell_size: a.cell_size,
+            resolution: a.dov_resolution,
+            samples: SampleOptions {
+                spacing: a.sample_spacing,
+                radius: a.occluder_radius,
+            },
+            ..VisibilityOptions::default()
+        }))
+    }
+}
+
+impl DatabaseArgs {
     /// The inputs to build from.
     pub fn inputs(&self) -> &[PathBuf] {
         &self.inputs
@@ -110,48 +176,14 @@ impl BuildArgs {
         &self.out
     }
 
-    /// The visibility shard asked for, if any.
-    pub fn shard(&self) -> Option<flaneur::visibility::Shard> {
-        self.shard
-    }
-
     /// Whether bars are left out.
     pub fn quiet(&self) -> bool {
         self.quiet
     }
 
-    /// Builds the database (or, with `--shard`, one shard of its visibility), with bars
-    /// unless quiet, and prints its summary.
-    pub fn run(self) -> Result<()> {
-        let opts = self.options(false)?;
-        let progress: &dyn Progress = if self.quiet {
-            &Silent
-        } else {
-            &Bars::default()
-        };
-        if let Some(shard) = self.shard {
-            let made =
-                flaneur::build_visibility_shard(&self.inputs, &self.out, &opts, shard, progress)?;
-            let entries: usize = made.cells.iter().map(|(_, p)| p.ids.len()).sum();
-            println!(
-                "visibility shard {shard} written to {}: {} of {} walkable cells, {:.1} objects per PVS, {:.1} s (of which DoV {:.1} s); join the shards with flaneur merge",
-                self.out.display(),
-                made.cells.len(),
-                made.walkable,
-                entries as f64 / made.cells.len().max(1) as f64,
-                made.seconds,
-                made.dov_seconds
-            );
-            return Ok(());
-        }
-        let summary = build(&self.inputs, &self.out, &opts, progress)?;
-        print_summary(&self.out, &summary, self.order);
-        Ok(())
-    }
-
-    /// The build's options from the arguments, checked; a merge (`merging`) takes its
-    /// visibility from the shards.
-    pub fn options(&self, merging: bool) -> Result<BuildOptions> {
+    /// The build's options from the arguments, checked, with `visibility`'s settings
+    /// (none for a merge, which takes the shards').
+    pub fn options(&self, visibility: Option<VisibilityOptions>) -> Result<BuildOptions> {
         let a = self;
         if let Ok(target) = std::fs::canonicalize(&a.out) {
             for input in &a.inputs {
@@ -163,22 +195,8 @@ impl BuildArgs {
                 }
             }
         }
-        if a.hdov.is_some() && !a.visibility && !merging {
-            bail!("--hdov needs --visibility: the HDoV-tree is built from the viewcells' DoVs");
-        }
-        if a.shard.is_some() && !a.visibility {
-            bail!("--shard computes a shard of the visibility: give --visibility too");
-        }
         Ok(BuildOptions {
-            visibility: a.visibility.then(|| VisibilityOptions {
-                cell_size: a.cell_size,
-                resolution: a.dov_resolution,
-                samples: SampleOptions {
-                    spacing: a.sample_spacing,
-                    radius: a.occluder_radius,
-                },
-                ..VisibilityOptions::default()
-            }),
+            visibility,
             page_size: a.page_size,
             fill: a.fill,
             insertion: a.insertion,

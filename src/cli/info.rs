@@ -9,7 +9,9 @@ use super::source::{remote_line, SourceArgs};
 /// `flaneur info`'s arguments.
 #[derive(clap::Args)]
 pub struct InfoArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
+    /// Print the figures as JSON.
     #[arg(long)]
     json: bool,
     #[command(flatten)]

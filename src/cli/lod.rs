@@ -1,7 +1,7 @@
 //! `flaneur lod`: the LOD core on one mesh file, its levels written or one view's
 //! selective mesh measured.
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{lod_ratio, tau};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -14,11 +14,13 @@ use super::args::{parse_fov_degrees, parse_vec3};
 pub struct LodArgs {
     /// An OBJ file; its objects are simplified together as disjoint pieces.
     mesh: PathBuf,
-    /// Write level-0.obj (the original), level-1.obj, … here.
-    #[arg(long)]
+    /// Write level-0.obj (the original), level-1.obj, … into this folder (default:
+    /// none; --out or --refine is needed).
+    #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Triangles of each level over the one before (as `build` stores them).
-    #[arg(long, default_value_t = flaneur::lod::LodOptions::default().ratio, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Triangles of each level over the one before, within (0, 1) (as `build` stores
+    /// them).
+    #[arg(long, default_value_t = flaneur::lod::LodOptions::default().ratio, value_parser = lod_ratio, allow_negative_numbers = true)]
     ratio: f32,
     /// Stop the chain of levels at this many triangles.
     #[arg(long, default_value_t = flaneur::lod::LodOptions::default().min_triangles)]
@@ -26,14 +28,15 @@ pub struct LodArgs {
     /// Refine view-dependently for one view instead.
     #[arg(long)]
     refine: bool,
-    /// The eye, x,y,z.
+    /// The eye, x,y,z: with --refine, and then needed.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     eye: Option<glam::Vec3>,
-    /// The point looked at, x,y,z.
+    /// The point looked at, x,y,z: with --refine, and then needed.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     look: Option<glam::Vec3>,
-    /// Screen-space error, a fraction of the viewport (the thesis: 0.001).
-    #[arg(long, default_value_t = 0.001, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Screen-space error, a fraction of the viewport within (0, 1) (the thesis's:
+    /// 0.001).
+    #[arg(long, default_value_t = 0.001, value_parser = tau, allow_negative_numbers = true)]
     tau: f32,
     /// Full apex angle of the view cone, degrees.
     #[arg(long, default_value_t = 60.0, value_parser = parse_fov_degrees)]

@@ -3,31 +3,27 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 
 use super::bars::Bars;
-use super::build::{print_summary, BuildArgs};
+use super::build::{print_summary, DatabaseArgs};
 use flaneur::progress::{Progress, Silent};
 
-/// `flaneur merge`'s arguments: the build's, and the shard files. The visibility
-/// settings (cell size, resolution, sampling) are the shards' own: those options here
-/// are not read.
+/// `flaneur merge`'s arguments: the build's less its visibility's, which are the
+/// shards' own, and the shard files.
 #[derive(clap::Args)]
 pub struct MergeArgs {
     /// The shard files, every shard of one split (in any order).
     #[arg(long, num_args = 1.., required = true, value_name = "SHARD")]
     shards: Vec<PathBuf>,
     #[command(flatten)]
-    build: BuildArgs,
+    build: DatabaseArgs,
 }
 
 impl MergeArgs {
     /// Builds the database with the shards' visibility and prints its summary.
     pub fn run(self) -> Result<()> {
-        if self.build.shard().is_some() {
-            bail!("--shard makes a shard; merge joins them: give the shard files to --shards");
-        }
-        let opts = self.build.options(true)?;
+        let opts = self.build.options(None)?;
         let progress: &dyn Progress = if self.build.quiet() {
             &Silent
         } else {

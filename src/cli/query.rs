@@ -13,15 +13,18 @@ use flaneur::geom::Aabb;
 /// `flaneur query`'s arguments.
 #[derive(clap::Args)]
 pub struct QueryArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     /// The query box: x0,y0,z0,x1,y1,z1.
     #[arg(long = "box", value_name = "BOX", allow_hyphen_values = true)]
     query: Aabb,
-    /// History cells for CSearch (repeatable).
+    /// History cells for CSearch (repeatable; default: none, a plain BOX query).
     #[arg(long, value_name = "BOX", allow_hyphen_values = true)]
     history: Vec<Aabb>,
     #[command(flatten)]
     source: SourceArgs,
+    /// Print the answer as JSON: the ids (and names), pages, page reads, microseconds,
+    /// and the HTTP figures of a URL.
     #[arg(long)]
     json: bool,
 }

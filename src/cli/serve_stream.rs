@@ -2,7 +2,7 @@
 //! objects its build stored a progressive mesh and DAG for), one thread per client. It
 //! prints each session's end, with the reason when the server closed it.
 
-use crate::cli::args::finite_f64;
+use crate::cli::args::{idle_seconds, wait_ms};
 use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -27,15 +27,17 @@ pub struct ServeStreamArgs {
     /// Stream at most this many landmarks, the largest.
     #[arg(long, default_value_t = 64)]
     landmarks: usize,
-    /// Close a session that sends nothing for this many seconds.
-    #[arg(long, default_value_t = 60.0, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// Close a session that sends nothing for this many seconds, within (0, 86400] (a
+    /// day).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = idle_seconds, allow_negative_numbers = true)]
     idle_s: f64,
     /// Levels of a block in sessions of El-Sana's blocks.
     #[arg(long, default_value_t = ServerConfig::default().block_levels)]
     block_levels: u8,
     /// In sessions of blocks, predict the client's next view and send the blocks it
-    /// will want after this many milliseconds without a message (0: never).
-    #[arg(long, default_value_t = ServerConfig::default().idle.as_millis() as u64)]
+    /// will want after this many milliseconds without a message (0: never), within
+    /// [0, 3600000] (an hour).
+    #[arg(long, value_name = "MS", default_value_t = ServerConfig::default().idle.as_millis() as u64, value_parser = wait_ms)]
     predict_after_ms: u64,
     /// The most blocks a prediction asks for per landmark.
     #[arg(long, default_value_t = ServerConfig::default().predict_blocks)]

@@ -11,6 +11,7 @@ use super::source::SourceArgs;
 /// `flaneur shot`'s arguments.
 #[derive(clap::Args)]
 pub struct ShotArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     /// The eye: x,y,z in metres.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -25,7 +26,8 @@ pub struct ShotArgs {
     /// Vertical field of view, degrees.
     #[arg(long, default_value_t = 60.0, value_parser = parse_fov_degrees)]
     fov: f32,
-    #[arg(short, long, default_value = "shot.png")]
+    /// The PNG file to write.
+    #[arg(short, long, value_name = "PNG", default_value = "shot.png")]
     out: PathBuf,
     #[command(flatten)]
     source: SourceArgs,

@@ -19,7 +19,8 @@ pub struct SourceArgs {
     #[arg(long, default_value_t = 256, value_name = "MIB")]
     pub cache_mb: usize,
     /// For a database given as a URL: keep fetched pages in this folder, so that a
-    /// second visit to the same version of the file reads them there, not over HTTP.
+    /// second visit to the same version of the file reads them there, not over HTTP
+    /// (default: none, pages kept in memory only).
     #[arg(long, value_name = "DIR")]
     pub cache_dir: Option<PathBuf>,
 }

@@ -1,7 +1,7 @@
 //! `flaneur view`: a walk through the city in a window, restarted from where the viewer
 //! stands whenever a key changes its mode or budget.
 
-use crate::cli::args::{finite_f32, finite_f64};
+use crate::cli::args::{eta, finite_f32, finite_f64, lod_tau};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -15,6 +15,7 @@ use flaneur_render::{ViewMode, WalkWindow};
 /// `flaneur view`'s arguments.
 #[derive(clap::Args)]
 pub struct ViewArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     /// review (CSearch, index cache, prefetching), box (plain range queries), pvs
     /// (the current viewcell's PVS, PBNP prefetching; a database built with
@@ -23,24 +24,28 @@ pub struct ViewArgs {
     /// conv (frustum culling only); 1 to 7 switch while walking.
     #[arg(long, default_value = "review")]
     mode: String,
-    /// Window size, WIDTHxHEIGHT pixels (the walk's 45° view is its centred square).
+    /// Window size, WIDTHxHEIGHT pixels. The walk's view fills it: 45° high, and as
+    /// wide as the window's shape makes it, the walk selecting and culling for that
+    /// view; the view from above (T) is the window's largest centred square.
     #[arg(long, value_parser = parse_size, default_value = "1024x768")]
     size: (u32, u32),
     /// LOD selection's screen-space error, a fraction of the viewport (0: full
-    /// detail); [ and ] halve and double it while walking.
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// detail), within [0, 1); [ and ] halve and double it while walking.
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = lod_tau, allow_negative_numbers = true)]
     lod_tau: f32,
-    /// Start here (x,y,z metres) instead of the busiest street.
+    /// Start here (x,y,z metres); by default on the busiest street.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     at: Option<glam::Vec3>,
     /// Heading and elevation at the start, degrees (with --at).
     #[arg(long, value_parser = parse_look, default_value = "0,0", allow_hyphen_values = true)]
     look: (f32, f32),
-    /// Save the poses walked as a path CSV when the window closes.
-    #[arg(long)]
+    /// Save the poses walked to this path CSV file when the window closes (default:
+    /// none).
+    #[arg(long, value_name = "FILE")]
     record: Option<PathBuf>,
-    /// Play a path CSV (from --record, --save-path or by hand) instead of steering.
-    #[arg(long)]
+    /// Play a path CSV file (from --record, --save-path or by hand) instead of
+    /// steering (default: none, steered).
+    #[arg(long, value_name = "FILE")]
     play: Option<PathBuf>,
     /// GPU memory the meshes may take, MiB (0: as much as the walk's buffer holds);
     /// meshes not drawn are freed to make room, largest first.
@@ -49,20 +54,22 @@ pub struct ViewArgs {
     /// Walking speed, m/s (Shift runs at four times it).
     #[arg(long, default_value_t = flaneur::walk::WALK_SPEED, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
-    /// Start with the bounding boxes on (B), and seen from above (T).
+    /// Start with the bounding boxes drawn (B toggles them while walking).
     #[arg(long)]
     boxes: bool,
+    /// Start with the city seen from above (T toggles it while walking).
     #[arg(long)]
     top_view: bool,
-    /// The VISUAL and VSC modes' DoV threshold η.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// The VISUAL and VSC modes' DoV threshold η, within [0, 1].
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
     /// The PB mode's polygon budget, triangles a frame.
     #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
     budget: u64,
     /// Draw the city's landmarks from a stream server (`flaneur serve-stream` of the same
     /// database) at this address (host:port), its round trip, prediction span and
-    /// bytes/s on the HUD; the rest as ever.
+    /// bytes/s on the HUD; the rest as ever. Default: none, every object read from
+    /// the database.
     #[arg(long, value_name = "HOST:PORT")]
     stream: Option<String>,
     /// Refine the landmarks for the next frame on the thread pool while a frame draws

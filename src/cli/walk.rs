@@ -1,7 +1,7 @@
 //! `flaneur walk`: a headless walk along a camera path (REVIEW, Shou 2002 ch. 4, or
 //! the viewcells' PVS), its per-frame figures, and its frames drawn when asked.
 
-use crate::cli::args::{finite_f32, finite_f64};
+use crate::cli::args::{border, eta, finite_f32, frame_rate, lod_tau, pace_factor, seconds_ahead};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -28,6 +28,7 @@ use render::{print_render, rendered, RenderOpts};
 #[derive(clap::Args)]
 pub struct WalkArgs {
     db: PathBuf,
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     /// `review` (CSearch with index cache and prefetching), `box` (plain range
     /// queries), `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
     /// database built with --visibility), `visual` (the HDoV-tree searched under
@@ -36,12 +37,14 @@ pub struct WalkArgs {
     /// `conv` (frustum culling only; each needs --visibility).
     #[arg(long, default_value = "review")]
     mode: String,
-    /// One of the thesis's configurations instead of --mode: optimal, nc, np, box.
+    /// One of the thesis's configurations instead of --mode: optimal (review's
+    /// default), nc (no index cache), np (no prefetching), box (neither, BOX queries).
+    /// Default: none, --mode decides.
     #[arg(long)]
     config: Option<Preset>,
     /// A motion pattern (normal, fast, slow, turning, backward, random), `cells` (a
-    /// walk through the walkable viewcells; the default of --mode pvs) or a path CSV
-    /// file. Default: normal.
+    /// walk through the walkable viewcells) or a path CSV file. Default: normal; cells
+    /// for --mode pvs, visual, vsc, pb and conv.
     #[arg(long)]
     path: Option<String>,
     /// With --mode pvs: which neighbours' PVS the client prefetches, snp, pbnp or lanp
@@ -49,40 +52,59 @@ pub struct WalkArgs {
     #[arg(long, default_value = "pbnp")]
     prefetch: String,
     /// With --mode pvs and pbnp or lanp: the border regions' width, a share of the
-    /// cell's side.
-    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// cell's side, within (0, 0.5].
+    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = border, allow_negative_numbers = true)]
     border: f64,
     /// Frames to walk: of a motion pattern or `cells`, how many to make (default 600);
     /// of a path file, its first N poses (default: all of them; more than it holds is an
     /// error).
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
-    #[arg(long, default_value_t = 30.0, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Frames a second of a generated path: its poses' times, which a paced walk
+    /// plays at (within [0.1, 1000]).
+    #[arg(long, default_value_t = 30.0, value_parser = frame_rate, allow_negative_numbers = true)]
     fps: f32,
     #[arg(long, default_value_t = 1)]
+    /// Seed of a generated path (a motion pattern or `cells`): the same seed, the same
+    /// path.
     seed: u64,
-    /// Index cache policy: lru, dplru, dov, dovtime, path.
-    #[arg(long)]
+    #[arg(long, value_name = "POLICY", help = format!(
+        "Index cache policy: lru, dplru, dov, dovtime, path [default: {}; {} for --mode visual's node cache]",
+        review::ReviewConfig::preset(Preset::Optimal).index_cache.map_or(String::new(), |c| c.0),
+        VisualConfig::default().node_cache.map_or(String::new(), |c| c.0),
+    ))]
     policy: Option<String>,
-    /// Index cache size in bytes (0: no index cache).
-    #[arg(long)]
+    #[arg(long, value_name = "BYTES", help = format!(
+        "Index cache size in bytes, not MiB (0: no index cache) [default: {} ({} KiB) for --mode review, --config optimal and np; none for nc and box; {} ({} KiB) for --mode visual's node cache]",
+        review::DEFAULT_INDEX_CACHE,
+        review::DEFAULT_INDEX_CACHE >> 10,
+        visual::DEFAULT_NODE_CACHE,
+        visual::DEFAULT_NODE_CACHE >> 10,
+    ))]
     cache_bytes: Option<usize>,
-    /// Prefetch factor k in seconds: prefetch the cell of the frustum k seconds of
-    /// motion ahead (negative: no prefetching).
-    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
+    #[arg(long, value_name = "SECONDS", value_parser = seconds_ahead, allow_negative_numbers = true, help = format!(
+        "Prefetch factor k: prefetch the cell of the frustum k seconds of motion ahead, at most 60 (negative: no prefetching) [default: {} for --mode review, --config optimal and nc; none for np and box]",
+        review::DEFAULT_K,
+    ))]
     k: Option<f32>,
-    /// Scale factor SF of the disk cell over the frustum cell.
-    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true, help = format!(
+        "Scale factor SF of the disk cell over the frustum cell, at least 1 [default: {}]",
+        review::DEFAULT_SF,
+    ))]
     sf: Option<f32>,
-    /// Frustum depth, metres.
-    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
+    #[arg(long, value_name = "METRES", value_parser = finite_f32, allow_negative_numbers = true, help = format!(
+        "Frustum depth, metres: how far ahead the walk sees [default: {}]",
+        review::DEFAULT_FAR,
+    ))]
     far: Option<f32>,
-    /// Object buffer budget, MiB.
-    #[arg(long)]
+    #[arg(long, value_name = "MIB", help = format!(
+        "Object buffer budget, MiB (--mode review and box) [default: {}]",
+        review::DEFAULT_MEMORY_BUDGET >> 20,
+    ))]
     budget_mb: Option<usize>,
-    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
-    /// to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Playback speed of walks that prefetch, times real time, within [0.01, 1000] (0:
+    /// unpaced, frames back to back; the prefetch thread then rarely finishes in time).
+    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
     speed: f32,
     /// REVIEW, BOX, PVS and VISUAL: the viewer's thread never waits on a read (ours): a
     /// search the viewer needs (PVS: the client and its rows; VISUAL: the HDoV-tree's)
@@ -91,21 +113,24 @@ pub struct WalkArgs {
     /// asked for again and the walk goes on.
     #[arg(long)]
     never_wait: bool,
-    /// Write one row per frame here.
-    #[arg(long)]
+    /// Write one row per frame to this CSV file (default: none).
+    #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
-    /// Save the camera path as CSV (time, x, y, z, yaw, pitch).
-    #[arg(long)]
+    /// Save the camera path to this CSV file, time, x, y, z, yaw, pitch (default:
+    /// none).
+    #[arg(long, value_name = "FILE")]
     save_path: Option<PathBuf>,
     #[command(flatten)]
     source: SourceArgs,
     #[arg(long, short)]
+    /// Print the summary only, not the progress.
     quiet: bool,
     /// Draw every frame headless (no window) as the walk selects it, and write them
     /// as PNGs to --frames-dir.
     #[arg(long)]
     render: bool,
-    #[arg(long, default_value = "frames")]
+    /// The folder --render writes its PNGs into (made if missing).
+    #[arg(long, value_name = "DIR", default_value = "frames")]
     frames_dir: PathBuf,
     /// Rendered image size, WIDTHxHEIGHT; square fits the walk's 45° × 45° view.
     #[arg(long, value_parser = parse_size, default_value = "512x512")]
@@ -116,8 +141,8 @@ pub struct WalkArgs {
     /// With --mode pb: the polygon budget, triangles a frame.
     #[arg(long, default_value_t = 20_000)]
     budget: u64,
-    /// With --mode visual or vsc: the DoV threshold η of the search.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// With --mode visual or vsc: the DoV threshold η of the search, within [0, 1].
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
     /// With --mode visual: the storage scheme searched (horizontal, vertical, indexed;
     /// default the smallest built).
@@ -132,12 +157,12 @@ pub struct WalkArgs {
     #[arg(long)]
     finer_by_tau: bool,
     /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
-    /// many seconds on (ours, not the thesis's; default off).
-    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// many seconds on, at most 60 (ours, not the thesis's; default off).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds_ahead, allow_negative_numbers = true)]
     next_cell_prefetch: Option<f32>,
     /// LOD selection's screen-space error, a fraction of the viewport: each object
-    /// drawn at the coarsest stored level under it (0: full detail).
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// drawn at the coarsest stored level under it, within [0, 1) (0: full detail).
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = lod_tau, allow_negative_numbers = true)]
     lod_tau: f32,
     /// With --render: objects refined view by view are refined on the thread pool once
     /// a frame is drawn, for the view predicted for the next (El-Sana–Varshney's Adapt
@@ -146,7 +171,8 @@ pub struct WalkArgs {
     adapt_ahead: bool,
     /// With --render: draw the city's landmarks from a stream server (`flaneur
     /// serve-stream` of the same database) at this address (host:port), the rest as
-    /// ever; the predictive client hides the round trip (Zheng ch. 5-6).
+    /// ever; the predictive client hides the round trip (Zheng ch. 5-6). Default: none,
+    /// every object read from the database.
     #[arg(long, value_name = "HOST:PORT")]
     stream: Option<String>,
 }

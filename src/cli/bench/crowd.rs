@@ -36,7 +36,8 @@ pub struct CrowdArgs {
     /// Each walker's client page cache, MiB.
     #[arg(long, default_value_t = crowd::DEFAULT_CACHE_BYTES >> 20)]
     cache_mb: usize,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -21,13 +21,18 @@ use flaneur_bench::walk_setup::WalkSetup;
 /// `flaneur bench csearch`'s arguments.
 #[derive(clap::Args)]
 pub struct CsearchArgs {
+    /// The database file (the insertion-built copy is made beside it in --out).
     db: PathBuf,
-    #[arg(long, default_value_t = CsearchConfig::default().cell, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Side of the query-by-query run's disk cells on the ground, metres.
+    #[arg(long, value_name = "METRES", default_value_t = CsearchConfig::default().cell, value_parser = finite_f32, allow_negative_numbers = true)]
     cell: f32,
-    #[arg(long, default_value_t = CsearchConfig::default().step, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Metres walked between two queries of that run.
+    #[arg(long, value_name = "METRES", default_value_t = CsearchConfig::default().step, value_parser = finite_f32, allow_negative_numbers = true)]
     step: f32,
+    /// Queries of that run.
     #[arg(long, default_value_t = CsearchConfig::default().steps)]
     steps: usize,
+    /// Earlier disk cells CSearch keeps as its history.
     #[arg(long, default_value_t = CsearchConfig::default().history_len)]
     history_len: usize,
     /// The REVIEW walks; --seed also seeds the street walk of the query-by-query run.
@@ -47,6 +52,8 @@ pub struct CsearchArgs {
     /// linear split (the thesis's setting), which is built in `--out`.
     #[arg(long)]
     packed_only: bool,
+    /// How the database file is read: mmap, pread, or direct (O_DIRECT, past the page
+    /// cache).
     #[arg(long, default_value = "mmap")]
     backend: Backend,
     /// Folder for the CSVs, plots and summary.

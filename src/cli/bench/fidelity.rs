@@ -1,7 +1,7 @@
 //! `flaneur bench fidelity`: each frame of a walk drawn with the mode's selection and
 //! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers).
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{eta, lod_tau};
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -20,6 +20,7 @@ use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 /// `flaneur bench fidelity`'s arguments.
 #[derive(clap::Args)]
 pub struct FidelityArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     /// A motion pattern (normal, fast, slow, turning, backward, random), a path
     /// CSV file, or (pvs mode) cells: a walk along the walkable viewcells [default:
@@ -36,17 +37,18 @@ pub struct FidelityArgs {
     /// of a path file, its first N poses (default: all of them).
     #[arg(long, value_name = "N")]
     frames: Option<usize>,
+    /// Seed of a generated path: the same seed, the same path.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "256x256")]
     size: (u32, u32),
     /// LOD selection's screen-space error for the mode's pictures, a fraction of the
-    /// viewport (0: the mode's objects at full detail).
-    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// viewport within [0, 1) (0: the mode's objects at full detail).
+    #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = lod_tau, allow_negative_numbers = true)]
     lod_tau: f32,
-    /// With --mode visual: the DoV threshold η.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// With --mode visual: the DoV threshold η, within [0, 1].
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
     /// With --mode pb: the polygon budget, triangles a frame.
     #[arg(long, default_value_t = 20_000)]
@@ -59,7 +61,8 @@ pub struct FidelityArgs {
     /// --lod-tau asks for it (ours).
     #[arg(long)]
     finer_by_tau: bool,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

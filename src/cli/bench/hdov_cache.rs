@@ -1,5 +1,6 @@
 //! `flaneur bench hdov-cache` (Shou 2002, Figs. 5.15–5.20).
 
+use crate::cli::args::eta;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -17,7 +18,7 @@ pub struct HdovCacheArgs {
     #[arg(long, default_value_t = HdovCacheConfig::default().queries)]
     queries: usize,
     /// DoV thresholds η, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = HdovCacheConfig::default().etas)]
+    #[arg(long, value_delimiter = ',', default_values_t = HdovCacheConfig::default().etas, value_parser = eta)]
     etas: Vec<f32>,
     /// Cache sizes in node pages, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = HdovCacheConfig::default().sizes)]
@@ -29,7 +30,8 @@ pub struct HdovCacheArgs {
     /// Seed of the viewcells queried.
     #[arg(long, default_value_t = HdovCacheConfig::default().seed)]
     seed: u64,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,5 +1,6 @@
 //! `flaneur bench hdov-scaling` (Shou 2002, Fig. 5.23).
 
+use crate::cli::args::eta;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -31,9 +32,10 @@ pub struct HdovScalingArgs {
     #[arg(long, default_value_t = HdovScalingConfig::default().search.load_queries)]
     load_queries: usize,
     /// DoV thresholds η, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = HdovScalingConfig::default().search.etas)]
+    #[arg(long, value_delimiter = ',', default_values_t = HdovScalingConfig::default().search.etas, value_parser = eta)]
     etas: Vec<f32>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

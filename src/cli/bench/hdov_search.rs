@@ -1,5 +1,6 @@
 //! `flaneur bench hdov-search` (Shou 2002, Figs. 5.21–5.22).
 
+use crate::cli::args::eta;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -20,12 +21,13 @@ pub struct HdovSearchArgs {
     #[arg(long, default_value_t = HdovSearchConfig::default().load_queries)]
     load_queries: usize,
     /// DoV thresholds η, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = HdovSearchConfig::default().etas)]
+    #[arg(long, value_delimiter = ',', default_values_t = HdovSearchConfig::default().etas, value_parser = eta)]
     etas: Vec<f32>,
     /// Seed of the viewcells queried.
     #[arg(long, default_value_t = HdovSearchConfig::default().seed)]
     seed: u64,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -13,7 +13,8 @@ pub struct HdovStorageArgs {
     /// A database built with --visibility --hdov (all three schemes for the whole
     /// table).
     db: PathBuf,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
 use crate::cli::args::or_default;
+use crate::cli::args::{bandwidth_mbit, round_trip_ms};
 use flaneur::Database;
 use flaneur_bench::http_walk::{self, HttpBenchConfig};
 
@@ -19,13 +20,15 @@ pub struct HttpArgs {
     #[command(flatten)]
     walk: WalkSetupArgs,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_name = "MS", value_delimiter = ',', value_parser = round_trip_ms)]
     rtts: Vec<u32>,
     /// Bandwidths of the link, Mbit/s, comma-separated (default 20, 100).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = bandwidth_mbit)]
     mbits: Vec<f64>,
-    /// The client page cache, MiB.
-    #[arg(long)]
+    #[arg(long, value_name = "MIB", help = format!(
+        "The client page cache, MiB [default: {}]",
+        flaneur::store::HttpOptions::default().cache_bytes >> 20
+    ))]
     cache_mb: Option<usize>,
     /// The index cache's policy: lru, dplru, dov, dovtime, path (default: the Optimal
     /// configuration's, DPLRU).
@@ -34,7 +37,8 @@ pub struct HttpArgs {
     /// The index cache's size, KiB (default: the Optimal configuration's, 1024).
     #[arg(long)]
     index_cache_kb: Option<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

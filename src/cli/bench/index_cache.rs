@@ -11,13 +11,15 @@ use flaneur_bench::index_cache::{self, IndexCacheConfig};
 /// `flaneur bench index-cache`'s arguments.
 #[derive(clap::Args)]
 pub struct IndexCacheArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     #[command(flatten)]
     walk: WalkSetupArgs,
     /// Cache sizes in pages, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = IndexCacheConfig::default().sizes)]
     sizes: Vec<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -16,15 +16,21 @@ pub struct LayoutArgs {
     /// input`, say): each is served over HTTP on loopback and asked the same queries.
     #[arg(required = true)]
     dbs: Vec<PathBuf>,
-    /// Queries per box side.
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Queries per box side [default: {}]",
+        flaneur_bench::layout::LayoutBenchConfig::default().queries
+    ))]
     queries: Option<usize>,
     /// Sides of the square query boxes, metres, comma-separated (default 100, 200, 400).
     #[arg(long, value_delimiter = ',')]
     sides: Vec<f32>,
-    #[arg(long)]
+    #[arg(long, help = format!(
+        "Seed of the query boxes' places [default: {}]",
+        flaneur_bench::layout::LayoutBenchConfig::default().seed
+    ))]
     seed: Option<u64>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -22,7 +22,8 @@ pub struct LodDagArgs {
     /// triangles [default: always].
     #[arg(long)]
     non_redundant_max: Option<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -28,7 +28,8 @@ pub struct LodParallelArgs {
     /// Octree leaves hold at most this many triangles on average.
     #[arg(long, default_value_t = LodParallelConfig::default().options.leaf_triangles)]
     leaf_triangles: usize,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

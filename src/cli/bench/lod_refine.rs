@@ -6,6 +6,7 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::args::or_default;
+use crate::cli::args::tau;
 use flaneur_bench::lod_refine::{self, LodRefineConfig};
 
 /// `flaneur bench lod-refine`'s arguments.
@@ -14,11 +15,12 @@ pub struct LodRefineArgs {
     /// Triangles of the bumpy-torus landmark.
     #[arg(long, default_value_t = lod_refine::DEFAULT_TRIANGLES)]
     triangles: usize,
+    /// Frames of the scripted orbit.
     #[arg(long, default_value_t = lod_refine::DEFAULT_FRAMES)]
     frames: usize,
     /// Screen-space errors τ, fractions of the viewport, comma-separated; one run each
     /// [default: 0.001 (the thesis's), 0.0003, 0.0002, 0.0001].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = tau)]
     taus: Vec<f32>,
     /// Triangle budget (0: none, fidelity alone).
     #[arg(long, default_value_t = flaneur::lod::THESIS_BUDGET)]
@@ -29,7 +31,8 @@ pub struct LodRefineArgs {
     /// Runs of each orbit; a frame's times are the shortest over them.
     #[arg(long, default_value_t = LodRefineConfig::default().repeats)]
     repeats: usize,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

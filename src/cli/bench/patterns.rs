@@ -11,10 +11,12 @@ use flaneur_bench::patterns::{self, PatternsConfig};
 /// `flaneur bench patterns`'s arguments.
 #[derive(clap::Args)]
 pub struct PatternsArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     #[command(flatten)]
     walk: WalkSetupArgs,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

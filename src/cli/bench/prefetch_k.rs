@@ -7,21 +7,25 @@ use anyhow::Result;
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
 use crate::cli::args::or_default;
+use crate::cli::args::seconds_ahead;
 use flaneur_bench::prefetch_k::{self, PrefetchKConfig};
 
 /// `flaneur bench prefetch-k`'s arguments.
 #[derive(clap::Args)]
 pub struct PrefetchKArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     #[command(flatten)]
     walk: WalkSetupArgs,
-    /// The k values in seconds, comma-separated (default 0, 0.4, 0.8, 1.2, 1.6, 2, 3, 4, 6, 8).
-    #[arg(long, value_delimiter = ',')]
+    /// The k values in seconds, at most 60, comma-separated (default 0, 0.4, 0.8, 1.2,
+    /// 1.6, 2, 3, 4, 6, 8).
+    #[arg(long, value_delimiter = ',', value_parser = seconds_ahead, allow_negative_numbers = true)]
     ks: Vec<f32>,
     /// Walks per pattern and k (the median is reported, with the spread).
     #[arg(long, default_value_t = 1)]
     repeats: usize,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,7 +1,7 @@
 //! `flaneur bench pvs-http` (ours): the PVS walk's prefetchers over HTTP at set round
 //! trips.
 
-use crate::cli::args::finite_f64;
+use crate::cli::args::{bandwidth_mbit, border, round_trip_ms};
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
@@ -25,19 +25,22 @@ pub struct PvsHttpArgs {
     /// The rules, comma-separated: snp, pbnp, lanp (default all three).
     #[arg(long, value_delimiter = ',')]
     rules: Vec<String>,
-    /// PBNP's and LANP's border regions, a share of the cell's side.
-    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// PBNP's and LANP's border regions, a share of the cell's side within (0, 0.5].
+    #[arg(long, default_value_t = flaneur::prefetch::pvs::DEFAULT_BORDER, value_parser = border, allow_negative_numbers = true)]
     border: f64,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_name = "MS", value_delimiter = ',', value_parser = round_trip_ms)]
     rtts: Vec<u32>,
     /// The link's bandwidth, Mbit/s.
-    #[arg(long, default_value_t = 100.0, value_parser = finite_f64, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 100.0, value_parser = bandwidth_mbit, allow_negative_numbers = true)]
     mbit: f64,
-    /// The client page cache, MiB.
-    #[arg(long)]
+    #[arg(long, value_name = "MIB", help = format!(
+        "The client page cache, MiB [default: {}]",
+        flaneur::store::HttpOptions::default().cache_bytes >> 20
+    ))]
     cache_mb: Option<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,6 +1,6 @@
 //! `flaneur bench pvs-prefetch` (Zheng 2007, Table 7.2, Figs. 7.6–7.8).
 
-use crate::cli::args::finite_f64;
+use crate::cli::args::{border, finite_f64};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -29,10 +29,10 @@ pub struct PvsPrefetchArgs {
     #[arg(long, default_value_t = RouteConfig::default().step, value_parser = finite_f64, allow_negative_numbers = true)]
     step: f64,
     /// PBNP's side and corner regions, a fraction of a cell's side, in (0, 0.5].
-    #[arg(long, default_value_t = PvsPrefetchConfig::default().border, value_parser = finite_f64, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = PvsPrefetchConfig::default().border, value_parser = border, allow_negative_numbers = true)]
     border: f64,
     /// Region sizes of PBNP's sweep, comma-separated [default: 0.1, 0.15, … 0.5].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = border)]
     borders: Vec<f64>,
     /// Latencies to walk SNP, PBNP and LANP at, steps from asking a transaction to
     /// its answer, comma-separated [default: 0, 1, … 8].
@@ -46,10 +46,11 @@ pub struct PvsPrefetchArgs {
     seed: u64,
     /// Also run the experiment, both routes and the region sweep, over this
     /// database's precomputed visibility (built with --visibility); its files go to
-    /// OUT/pvs-prefetch-db.
+    /// OUT/pvs-prefetch-db (default: none, the synthetic city only).
     #[arg(long)]
     db: Option<PathBuf>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

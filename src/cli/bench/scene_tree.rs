@@ -1,6 +1,6 @@
 //! `flaneur bench scene-tree` (Shou 2002, Table 6.1, Fig. 6.7).
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{eta, finite_f32, frame_rate};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -14,22 +14,26 @@ use flaneur_bench::scene_tree::{self, SceneTreeConfig};
 pub struct SceneTreeArgs {
     /// A database built with --visibility.
     db: PathBuf,
+    /// Frames of the walk through the walkable viewcells.
     #[arg(long, default_value_t = SceneTreeConfig::default().frames)]
     frames: usize,
-    #[arg(long, default_value_t = SceneTreeConfig::default().fps, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Frames a second of the walk, within [0.1, 1000].
+    #[arg(long, default_value_t = SceneTreeConfig::default().fps, value_parser = frame_rate, allow_negative_numbers = true)]
     fps: f32,
     /// The walker's speed, m/s.
     #[arg(long, default_value_t = SceneTreeConfig::default().speed, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// VSC's DoV thresholds η, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = SceneTreeConfig::default().etas)]
+    #[arg(long, value_delimiter = ',', default_values_t = SceneTreeConfig::default().etas, value_parser = eta)]
     etas: Vec<f32>,
     /// PB's polygon budgets, triangles, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = SceneTreeConfig::default().budgets)]
     budgets: Vec<u64>,
+    /// Seed of the walk's path: the same seed, the same path.
     #[arg(long, default_value_t = SceneTreeConfig::default().seed)]
     seed: u64,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -10,6 +10,7 @@ use flaneur_bench::soak::{self, SoakConfig};
 /// `flaneur bench soak`'s arguments.
 #[derive(clap::Args)]
 pub struct SoakArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     /// Frames to walk (108,000: an hour at 30 frames a second).
     #[arg(long, default_value_t = SoakConfig::default().frames)]
@@ -23,10 +24,13 @@ pub struct SoakArgs {
     /// The motion pattern walked.
     #[arg(long, default_value = "random")]
     path: String,
-    /// The object buffer's budget, MiB.
-    #[arg(long, value_name = "MIB")]
+    #[arg(long, value_name = "MIB", help = format!(
+        "The object buffer's budget, MiB [default: {}]",
+        SoakConfig::default().review.memory_budget >> 20
+    ))]
     budget_mb: Option<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,7 +1,7 @@
 //! `flaneur bench stream` (Zheng 2007 Tables 5.1, 6.1, Fig. 6.6): a landmark streamed at
 //! set round trips, sequential against predictive.
 
-use crate::cli::args::{finite_f32, finite_f64};
+use crate::cli::args::{frame_ms, round_trip_ms, tau};
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -17,16 +17,17 @@ pub struct StreamArgs {
     /// Triangles of the bumpy-torus landmark.
     #[arg(long, default_value_t = StreamBenchConfig::default().triangles)]
     triangles: usize,
+    /// Frames of each walk.
     #[arg(long, default_value_t = StreamBenchConfig::default().frames)]
     frames: usize,
-    /// The client's frame period, ms.
-    #[arg(long, default_value_t = StreamBenchConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// The client's frame period, ms, within (0, 10000].
+    #[arg(long, default_value_t = StreamBenchConfig::default().frame_ms, value_parser = frame_ms, allow_negative_numbers = true)]
     frame_ms: f64,
     /// Round trips of the link, ms, comma-separated [default: 80, 170, 260, 350 (Table 6.1)].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_name = "MS", value_delimiter = ',', value_parser = round_trip_ms)]
     rtts: Vec<u32>,
-    /// τ, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBenchConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// τ, a fraction of the viewport within (0, 1).
+    #[arg(long, default_value_t = StreamBenchConfig::default().tau, value_parser = tau, allow_negative_numbers = true)]
     tau: f32,
     /// The predictive clients, comma-separated: linear (Zheng's first order), quadratic
     /// (ours) [default: both].
@@ -36,7 +37,8 @@ pub struct StreamArgs {
     /// trips).
     #[arg(long)]
     no_sequential: bool,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,7 +1,7 @@
 //! `flaneur bench stream-blocks`: a walk's cost per frame by each stream scheme
 //! (El-Sana's Table 1).
 
-use crate::cli::args::{finite_f32, finite_f64};
+use crate::cli::args::{frame_ms, round_trip_ms, tau, wait_ms};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -18,14 +18,15 @@ pub struct StreamBlocksArgs {
     /// Frames of the walk.
     #[arg(long, default_value_t = StreamBlocksConfig::default().frames)]
     frames: usize,
-    /// The frame period, ms (what a frame's refinement leaves of it is idle time).
-    #[arg(long, default_value_t = StreamBlocksConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// The frame period, ms, within (0, 10000] (what a frame's refinement leaves of it
+    /// is idle time).
+    #[arg(long, default_value_t = StreamBlocksConfig::default().frame_ms, value_parser = frame_ms, allow_negative_numbers = true)]
     frame_ms: f64,
-    /// The link's round trip, ms (0: straight to the server).
-    #[arg(long, default_value_t = StreamBlocksConfig::default().rtt_ms)]
+    /// The link's round trip, ms, within [0, 60000] (0: straight to the server).
+    #[arg(long, value_name = "MS", default_value_t = StreamBlocksConfig::default().rtt_ms, value_parser = round_trip_ms)]
     rtt: u32,
-    /// The screen-space error streamed to, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBlocksConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// The screen-space error streamed to, a fraction of the viewport within (0, 1).
+    #[arg(long, default_value_t = StreamBlocksConfig::default().tau, value_parser = tau, allow_negative_numbers = true)]
     tau: f32,
     /// Levels of a block.
     #[arg(long, default_value_t = StreamBlocksConfig::default().levels)]
@@ -36,10 +37,11 @@ pub struct StreamBlocksArgs {
     /// Blocks a prediction asks for.
     #[arg(long, default_value_t = StreamBlocksConfig::default().predict_blocks)]
     predict: usize,
-    /// The server's wait after an answer before it predicts, ms.
-    #[arg(long, default_value_t = StreamBlocksConfig::default().idle_ms)]
+    /// The server's wait after an answer before it predicts, ms, within [0, 3600000].
+    #[arg(long, value_name = "MS", default_value_t = StreamBlocksConfig::default().idle_ms, value_parser = wait_ms)]
     idle_ms: u64,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -1,7 +1,7 @@
 //! `flaneur bench stream-bytes`: one view's stream, view-dependent against
 //! view-independent (Kim–Lee–Kobbelt Figs. 8–9).
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::tau;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -15,13 +15,14 @@ pub struct StreamBytesArgs {
     /// Triangles of the bumpy-torus landmark.
     #[arg(long, default_value_t = StreamBytesConfig::default().triangles)]
     triangles: usize,
-    /// The screen-space error streamed to, a fraction of the viewport.
-    #[arg(long, default_value_t = StreamBytesConfig::default().tau, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// The screen-space error streamed to, a fraction of the viewport within (0, 1).
+    #[arg(long, default_value_t = StreamBytesConfig::default().tau, value_parser = tau, allow_negative_numbers = true)]
     tau: f32,
     /// The byte cap the two are compared at.
     #[arg(long, default_value_t = StreamBytesConfig::default().cap)]
     cap: usize,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

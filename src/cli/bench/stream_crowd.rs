@@ -1,6 +1,6 @@
 //! `flaneur bench stream-crowd` (ours): many clients on one stream server.
 
-use crate::cli::args::finite_f64;
+use crate::cli::args::frame_ms;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -26,16 +26,18 @@ pub struct StreamCrowdArgs {
     /// Triangles of the bumpy-torus landmark.
     #[arg(long, default_value_t = StreamCrowdConfig::default().triangles)]
     triangles: usize,
+    /// Frames each client walks.
     #[arg(long, default_value_t = StreamCrowdConfig::default().frames)]
     frames: usize,
-    /// Each client's frame period, ms.
-    #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms, value_parser = finite_f64, allow_negative_numbers = true)]
+    /// Each client's frame period, ms, within (0, 10000].
+    #[arg(long, default_value_t = StreamCrowdConfig::default().frame_ms, value_parser = frame_ms, allow_negative_numbers = true)]
     frame_ms: f64,
     /// The sessions' traversal: priority, linear or constant (constant-time, whose
     /// evaluations N bounds).
     #[arg(long, default_value = "priority", value_parser = parse_traversal)]
     traversal: Traversal,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

@@ -12,13 +12,15 @@ use flaneur_bench::view_culling::{self, ViewCullingConfig};
 /// `flaneur bench view-culling`'s arguments.
 #[derive(clap::Args)]
 pub struct ViewCullingArgs {
+    /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
     #[command(flatten)]
     walk: WalkSetupArgs,
     /// The scale factors, comma-separated (default the thesis's 1.0 ... 3.1).
     #[arg(long, value_delimiter = ',')]
     sfs: Vec<f32>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

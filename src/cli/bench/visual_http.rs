@@ -1,7 +1,7 @@
 //! `flaneur bench visual-http` (ours): the VISUAL walk never waiting on a read, over
 //! HTTP at set round trips.
 
-use crate::cli::args::{finite_f32, finite_f64};
+use crate::cli::args::{bandwidth_mbit, eta, round_trip_ms, seconds_ahead};
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -21,22 +21,25 @@ pub struct VisualHttpArgs {
     db: PathBuf,
     #[command(flatten)]
     walk: WalkSetupArgs,
-    /// The DoV threshold η of the searches.
-    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// The DoV threshold η of the searches, within [0, 1].
+    #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
-    /// The next-cell prefetch, seconds ahead (ours; negative: off).
-    #[arg(long, default_value_t = flaneur::walk::review::DEFAULT_K, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// The next-cell prefetch, seconds ahead, at most 60 (ours; negative: off).
+    #[arg(long, value_name = "SECONDS", default_value_t = flaneur::walk::review::DEFAULT_K, value_parser = seconds_ahead, allow_negative_numbers = true)]
     k: f32,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_name = "MS", value_delimiter = ',', value_parser = round_trip_ms)]
     rtts: Vec<u32>,
     /// The link's bandwidth, Mbit/s.
-    #[arg(long, default_value_t = 100.0, value_parser = finite_f64, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 100.0, value_parser = bandwidth_mbit, allow_negative_numbers = true)]
     mbit: f64,
-    /// The client page cache, MiB.
-    #[arg(long)]
+    #[arg(long, value_name = "MIB", help = format!(
+        "The client page cache, MiB [default: {}]",
+        flaneur::store::HttpOptions::default().cache_bytes >> 20
+    ))]
     cache_mb: Option<usize>,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

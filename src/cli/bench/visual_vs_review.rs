@@ -1,6 +1,6 @@
 //! `flaneur bench visual-vs-review` (Shou 2002, Table 5.3, Figs. 5.24–5.27).
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{eta, finite_f32, frame_rate, pace_factor};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -17,13 +17,14 @@ pub struct VisualVsReviewArgs {
     /// Frames per session.
     #[arg(long, default_value_t = VisualVsReviewConfig::default().frames)]
     frames: usize,
-    #[arg(long, default_value_t = VisualVsReviewConfig::default().fps, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Frames a second of the sessions, within [0.1, 1000].
+    #[arg(long, default_value_t = VisualVsReviewConfig::default().fps, value_parser = frame_rate, allow_negative_numbers = true)]
     fps: f32,
     /// The walker's speed, m/s.
     #[arg(long, default_value_t = VisualVsReviewConfig::default().speed, value_parser = finite_f32, allow_negative_numbers = true)]
     speed: f32,
     /// VISUAL's DoV thresholds η, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().etas)]
+    #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().etas, value_parser = eta)]
     etas: Vec<f32>,
     /// REVIEW's query boxes, metres, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().boxes)]
@@ -31,12 +32,14 @@ pub struct VisualVsReviewArgs {
     /// Sessions: normal, turning, back-forth, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = VisualVsReviewConfig::default().sessions)]
     sessions: Vec<String>,
-    /// Playback speed, times real time.
-    #[arg(long, default_value_t = VisualVsReviewConfig::default().pace, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Playback speed, times real time, within [0.01, 1000].
+    #[arg(long, default_value_t = VisualVsReviewConfig::default().pace, value_parser = pace_factor, allow_negative_numbers = true)]
     pace: f32,
+    /// Seed of the sessions' paths: the same seed, the same paths.
     #[arg(long, default_value_t = VisualVsReviewConfig::default().seed)]
     seed: u64,
-    #[arg(long, default_value = "bench-out")]
+    /// Folder for the CSVs, plots and summary.
+    #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
 }
 

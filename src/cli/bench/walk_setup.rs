@@ -1,6 +1,6 @@
 //! The walk settings every walking experiment takes, as arguments.
 
-use crate::cli::args::finite_f32;
+use crate::cli::args::{finite_f32, frame_rate, pace_factor};
 use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review;
 use flaneur_bench::walk_setup::{self, WalkSetup};
@@ -12,9 +12,11 @@ use crate::cli::args::{or_default, pace};
 pub struct WalkSetupArgs {
     #[arg(long, help = frames_help())]
     frames: Option<usize>,
-    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Frames a second of the walks, within [0.1, 1000].
+    #[arg(long, default_value_t = walk_setup::DEFAULT_FPS, value_parser = frame_rate, allow_negative_numbers = true)]
     fps: f32,
-    // Also seeds bench csearch's street walk.
+    /// Seed of the walks' paths (and of bench csearch's street walk): the same seed,
+    /// the same paths.
     #[arg(long, default_value_t = walk_setup::DEFAULT_SEED)]
     pub(super) seed: u64,
     /// Frustum depth, metres.
@@ -30,9 +32,9 @@ pub struct WalkSetupArgs {
     /// path is walked).
     #[arg(long, value_delimiter = ',')]
     patterns: Vec<Motion>,
-    /// Playback speed of walks that prefetch, times real time (0: unpaced, frames back
-    /// to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = finite_f32, allow_negative_numbers = true)]
+    /// Playback speed of walks that prefetch, times real time, within [0.01, 1000] (0:
+    /// unpaced, frames back to back; the prefetch thread then rarely finishes in time).
+    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
     speed: f32,
 }
 
