@@ -848,3 +848,141 @@ fn a_file_swapped_under_a_walk_at_a_window_stops_it_though_damage_would_not() {
         Ok(_) => panic!("walked on across a swap of its file: {:?}", viewer.damaged),
     }
 }
+
+#[test]
+fn a_server_naming_no_version_is_warned_of_once() {
+    let c = city(60, 16);
+    let server = Misbehaving::start(std::fs::read(&c.db).unwrap(), 0, Fault::NoValidators);
+    let url = server.url();
+    let db = Database::open_url_with(&url, &impatient()).unwrap();
+    let warnings = db.remote_warnings();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains(&url) && warnings[0].contains("ETag"),
+        "{warnings:?}"
+    );
+    // The command line says it once, on standard error.
+    let out = common::flaneur(&["info", &url]);
+    let stdout = common::succeeded(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.matches("warning:").count(), 1, "{stderr}");
+    assert!(stderr.contains(&url) && stderr.contains("Last-Modified"), "{stderr}");
+    assert!(!stdout.contains("warning"), "{stdout}");
+    // A well-kept server gets none.
+    let nginx = Nginx::start(c.dir.path());
+    let db = Database::open_url_with(&nginx.url("city.flaneur"), &impatient()).unwrap();
+    assert!(db.remote_warnings().is_empty(), "{:?}", db.remote_warnings());
+}
+
+#[test]
+fn a_compressed_answer_is_named_as_such() {
+    match misbehaved(Fault::Gzip) {
+        Error::Remote { what, .. } => assert!(
+            what.contains("Content-Encoding: gzip") && what.contains("must not compress"),
+            "{what}"
+        ),
+        e => panic!("{e}"),
+    }
+}
+
+/// Runs `flaneur` with `args` and waits for it by its own pid, to read its peak resident
+/// memory (`ru_maxrss`, KiB) from that wait alone rather than from every child of the
+/// test process; its exit status (success) and standard error.
+fn flaneur_peak_rss(args: &[&str]) -> (bool, String, u64) {
+    use std::io::Read;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
+    let mut status = 0;
+    // SAFETY: rusage is plain data; wait4 fills it for the child named.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let pid = child.id() as libc::pid_t;
+    // SAFETY: waits for our own child, whose pid std's Child no longer waits on.
+    let got = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(got, pid);
+    let ok = libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0;
+    (ok, reader.join().unwrap(), usage.ru_maxrss as u64)
+}
+
+#[test]
+fn cache_mb_is_bounded_and_reserves_nothing_up_front() {
+    let c = city(200, 17);
+    let server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    // No memory size at all: refused, naming the value and the limit (a cap would
+    // hide a slip such as bytes given for MiB).
+    let (ok, err, _) = flaneur_peak_rss(&["info", &url, "--cache-mb", "4294967296"]);
+    assert!(!ok, "took --cache-mb 4294967296");
+    assert!(
+        err.contains("--cache-mb 4294967296") && err.contains("134217728 MiB"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked") && !err.contains("memory allocation"), "{err}");
+    // A bound far above the file: taken, capped at the file, nothing reserved for it.
+    // Sized from the bound, the cache's map for a million MiB of 1 KiB pages took
+    // gigabytes at once.
+    let (ok, err, default_peak) = flaneur_peak_rss(&["info", &url]);
+    assert!(ok, "{err}");
+    let (ok, err, huge_peak) = flaneur_peak_rss(&["info", &url, "--cache-mb", "1000000"]);
+    assert!(ok, "{err}");
+    assert!(
+        huge_peak < default_peak + 32 * 1024,
+        "peak RSS {huge_peak} KiB with --cache-mb 1000000, {default_peak} KiB with the default"
+    );
+    assert!(!err.contains("warning"), "{err}");
+}
+
+#[test]
+fn check_reads_a_url_as_it_reads_the_file() {
+    let c = city(200, 18);
+    let server = Nginx::start(c.dir.path());
+    let url = server.url("city.flaneur");
+    let local = common::succeeded(&common::flaneur(&["check", c.db.to_str().unwrap()]));
+    let remote = common::succeeded(&common::flaneur(&["check", &url]));
+    // "ok: NAME — P pages, O objects, … (R page reads)": the same but the name.
+    let figures = |s: &str| s.split_once(" — ").map(|(_, rest)| rest.to_string());
+    assert!(remote.starts_with("ok: "), "{remote}");
+    assert_eq!(figures(&local), figures(&remote));
+    // A damaged page is named over HTTP as on disk.
+    let bad = c.dir.path().join("bad.flaneur");
+    let mut bytes = std::fs::read(&c.db).unwrap();
+    bytes[3 * 1024 + 100] ^= 0x40;
+    std::fs::write(&bad, bytes).unwrap();
+    let out = common::flaneur(&["check", &server.url("bad.flaneur")]);
+    assert!(!out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("page 3 "), "{text}");
+}
+
+#[test]
+fn a_build_input_given_for_a_database_says_how_to_build_one() {
+    let c = city(30, 19);
+    let obj = c.dir.path().join("house.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    for (input, what) in [(&c.scene, "a scene file"), (&obj, "an OBJ model")] {
+        let input = input.to_str().unwrap();
+        let out = common::flaneur(&["info", input]);
+        assert!(!out.status.success(), "info took {input}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(what), "{err}");
+        assert!(
+            err.contains(&format!("flaneur build {input} -o city.flaneur")),
+            "{err}"
+        );
+    }
+    // Anything else is still only "not a database".
+    let junk = c.dir.path().join("junk.bin");
+    std::fs::write(&junk, b"seven sevens").unwrap();
+    let out = common::flaneur(&["info", junk.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && !err.contains("flaneur build"), "{err}");
+}

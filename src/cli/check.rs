@@ -18,7 +18,13 @@ pub struct CheckArgs {
 impl CheckArgs {
     /// Runs the check and prints its report; fails (exit 1) when a problem was found.
     pub fn run(self) -> Result<()> {
-        let report = flaneur::check::check(&self.db)?;
+        // A URL is read by byte ranges, as every command reads one.
+        let report = match self.db.to_str() {
+            Some(url) if flaneur::store::is_url(url) => {
+                flaneur::check::check_url(url, &flaneur::store::HttpOptions::default())?
+            }
+            _ => flaneur::check::check(&self.db)?,
+        };
         if self.json {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {

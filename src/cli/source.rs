@@ -3,10 +3,16 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{anyhow, bail, Result};
 
+use flaneur::database::BuildInput;
 use flaneur::store::{is_url, Backend, HttpOptions, RemoteStats};
 use flaneur::Database;
+
+/// The largest `--cache-mb` taken: 128 TiB, what a process can address with 48-bit
+/// addresses (x86-64, aarch64). A larger value is no memory size but a slip (bytes given
+/// for MiB); below it, the cache is capped at the file's size and the memory available.
+pub const MAX_CACHE_MIB: usize = 1 << 27;
 
 /// How a command reaches its database.
 #[derive(clap::Args, Clone, Debug)]
@@ -36,17 +42,51 @@ impl Default for SourceArgs {
 }
 
 impl SourceArgs {
-    /// Opens `db`: a URL over HTTP, else the file with the chosen backend.
+    /// Opens `db`: a URL over HTTP, else the file with the chosen backend. Prints, once,
+    /// what the open of a URL warns of; a build's input given for a database is an
+    /// error saying how to build one from it.
     pub fn open(&self, db: &Path) -> Result<Database> {
-        let http = HttpOptions {
+        let opened = match db.to_str() {
+            Some(location) if is_url(location) => {
+                Database::open_url_with(location, &self.http_options()?)
+            }
+            _ => Database::open_with(db, self.backend),
+        };
+        let db = opened.map_err(|e| suggest_build(e, db))?;
+        for warning in db.remote_warnings() {
+            eprintln!("warning: {warning}");
+        }
+        Ok(db)
+    }
+
+    /// The HTTP client's settings these arguments ask for; an error for a `--cache-mb`
+    /// that is no memory size.
+    pub fn http_options(&self) -> Result<HttpOptions> {
+        if self.cache_mb > MAX_CACHE_MIB {
+            bail!(
+                "--cache-mb {}: {} TiB, more than a process can address; the most taken is \
+                 {MAX_CACHE_MIB} MiB (128 TiB). The value is in MiB, and the cache is capped \
+                 at the file's size and at the memory available anyway",
+                self.cache_mb,
+                self.cache_mb >> 20
+            );
+        }
+        Ok(HttpOptions {
             cache_bytes: self.cache_mb.saturating_mul(1 << 20),
             cache_dir: self.cache_dir.clone(),
             ..HttpOptions::default()
-        };
-        Ok(match db.to_str() {
-            Some(location) if is_url(location) => Database::open_url_with(location, &http)?,
-            _ => Database::open_with(db, self.backend)?,
         })
+    }
+}
+
+/// `e`, with the command that builds a database when `db` is a build's input.
+pub fn suggest_build(e: flaneur::Error, db: &Path) -> anyhow::Error {
+    match (&e, BuildInput::of(db)) {
+        (flaneur::Error::NotADatabase { .. }, Some(_)) => anyhow!(
+            "{e}\nbuild a database from it first: flaneur build {} -o city.flaneur",
+            db.display()
+        ),
+        _ => e.into(),
     }
 }
 

@@ -67,9 +67,18 @@ pub enum Fault {
     Status(u16),
     /// Flips one byte of every body.
     Garble,
+    /// Reads the request and resets the connection (a TCP RST, no answer): a server
+    /// that lets the open through and then refuses everything.
+    Reset,
     /// Answers this many requests with 503 and an empty body, then well again (a server
     /// that was away for a while).
     Outage(usize),
+    /// Sends the right bytes but neither an ETag nor a Last-Modified, on every answer (the
+    /// honest ones too): a server that names no version of the file.
+    NoValidators,
+    /// Sends the range gzip-compressed (`gzip -n`), saying so in Content-Encoding and
+    /// Content-Length, though the client asked for no encoding.
+    Gzip,
 }
 
 /// A server of our own on real TCP, serving `bytes` as one file at any path, honest for
@@ -158,9 +167,14 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
         let (a, b) = range.unwrap_or((0, file.len() - 1));
         let mut body = file[a..=b].to_vec();
         let total = file.len();
+        let etag = if matches!(fault, Fault::NoValidators) {
+            ""
+        } else {
+            "ETag: \"v1\"\r\n"
+        };
         let head = |len: usize, a: usize, b: usize| {
             format!(
-                "HTTP/1.1 206 Partial Content\r\nContent-Length: {len}\r\nContent-Range: bytes {a}-{b}/{total}\r\nETag: \"v1\"\r\n\r\n"
+                "HTTP/1.1 206 Partial Content\r\nContent-Length: {len}\r\nContent-Range: bytes {a}-{b}/{total}\r\n{etag}\r\n"
             )
         };
         let back = matches!(fault, Fault::Outage(away) if n >= honest + away);
@@ -173,6 +187,10 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
             Fault::CutBody => {
                 let _ = out.write_all(head(body.len(), a, b).as_bytes());
                 let _ = out.write_all(&body[..body.len() / 2]);
+                return;
+            }
+            Fault::Reset => {
+                reset(&out);
                 return;
             }
             Fault::LongBody => {
@@ -194,6 +212,17 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
                     format!("HTTP/1.1 {code} Oops\r\nContent-Length: 0\r\n\r\n").as_bytes(),
                 );
             }
+            Fault::NoValidators => {
+                let _ = out.write_all(head(body.len(), a, b).as_bytes());
+                let _ = out.write_all(&body);
+            }
+            Fault::Gzip => {
+                let packed = gzip(&body);
+                let head = head(packed.len(), a, b);
+                let head = head.replace("\r\n\r\n", "\r\nContent-Encoding: gzip\r\n\r\n");
+                let _ = out.write_all(head.as_bytes());
+                let _ = out.write_all(&packed);
+            }
             Fault::Garble => {
                 let mid = body.len() / 2;
                 body[mid] ^= 0x5a;
@@ -203,5 +232,43 @@ fn serve(stream: TcpStream, file: &[u8], honest: usize, fault: Fault, requests: 
         }
         let _ = out.flush();
         let _ = reader.get_mut().read(&mut []);
+    }
+}
+
+/// `bytes` compressed by the system's gzip.
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut child = std::process::Command::new("gzip")
+        .args(["-c", "-n"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("gzip (a Debian essential package)");
+    let mut stdin = child.stdin.take().unwrap();
+    let input = bytes.to_vec();
+    let feeder = thread::spawn(move || stdin.write_all(&input));
+    let out = child.wait_with_output().unwrap();
+    feeder.join().unwrap().unwrap();
+    assert!(out.status.success());
+    out.stdout
+}
+
+/// Closes `stream` with a reset rather than a FIN: a linger of 0 seconds, which the
+/// standard library does not set.
+fn reset(stream: &TcpStream) {
+    use std::os::fd::AsRawFd;
+    let linger = libc::linger {
+        l_onoff: 1,
+        l_linger: 0,
+    };
+    // SAFETY: the descriptor is open for the call, and the option is a `linger` of
+    // the length given.
+    unsafe {
+        libc::setsockopt(
+            stream.as_raw_fd(),
+            libc::SOL_SOCKET,
+            libc::SO_LINGER,
+            (&linger as *const libc::linger).cast(),
+            std::mem::size_of::<libc::linger>() as libc::socklen_t,
+        );
     }
 }

@@ -8,6 +8,10 @@ use super::{problem_of, Problem};
 use crate::error::Error;
 use crate::store::{Extent, PageKind, Store};
 
+/// Pages the scan announces at once: as many as a remote store reads in one chunk, so
+/// that its page cache (two chunks at the least) keeps them until they are read.
+const SCAN_AHEAD: u64 = 256;
+
 /// Pages, their kinds and their owners, and the problems found so far.
 pub(super) struct Claims {
     /// Each page's kind; `None` for page 0 and for damaged pages.
@@ -35,6 +39,11 @@ impl Claims {
             problems: Vec::new(),
         };
         for page in 1..n as u64 {
+            if (page - 1).is_multiple_of(SCAN_AHEAD) {
+                // A remote store fetches the next pages in one request, not one each.
+                let ahead: Vec<u64> = (page..(page + SCAN_AHEAD).min(n as u64)).collect();
+                store.announce(&ahead);
+            }
             match store.read_any_page(page) {
                 Ok((kind, _)) => c.kinds[page as usize] = Some(kind),
                 Err(Error::CorruptPage { what, .. }) => {

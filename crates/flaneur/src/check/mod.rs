@@ -40,7 +40,7 @@ use crate::hdov::HdovTree;
 use crate::lod::stored::LodTable;
 use crate::names::NameTable;
 use crate::rtree::RTree;
-use crate::store::{Backend, PageKind, Store};
+use crate::store::{Backend, HttpOptions, PageKind, Store};
 use crate::visibility::VisibilityTable;
 
 use claims::Claims;
@@ -100,28 +100,49 @@ impl CheckReport {
 /// # Ok(()) }
 /// ```
 pub fn check(path: &Path) -> Result<CheckReport> {
-    let store = match Store::open(path, Backend::Pread { direct: false }) {
-        Ok(s) => s,
-        Err(e @ Error::Io { .. }) => return Err(e),
-        Err(e) => {
-            let mut report = CheckReport::default();
-            report.problems.push(problem_of(&e, "the file header"));
-            return Ok(report);
+    match Store::open(path, Backend::Pread { direct: false }) {
+        Ok(store) => Ok(check_store(&store)),
+        Err(e @ Error::Io { .. }) => Err(e),
+        Err(e) => Ok(header_unreadable(&e)),
+    }
+}
+
+/// [`check`] for a database on an HTTP server, read by byte ranges with `opts`: every
+/// page fetched, a chunk of them a request. `Err` when the server cannot be read at the
+/// open ([`Error::Remote`], [`Error::RemoteChanged`]); what fails later is a problem of
+/// the pages it kept from the check.
+pub fn check_url(url: &str, opts: &HttpOptions) -> Result<CheckReport> {
+    match Store::open_url(url, opts) {
+        Ok(store) => Ok(check_store(&store)),
+        Err(e @ (Error::Io { .. } | Error::Remote { .. } | Error::RemoteChanged { .. })) => {
+            Err(e)
         }
-    };
-    let mut c = Claims::scan(&store);
+        Err(e) => Ok(header_unreadable(&e)),
+    }
+}
+
+/// The report on a file whose header cannot be read as a database's.
+fn header_unreadable(e: &Error) -> CheckReport {
+    let mut report = CheckReport::default();
+    report.problems.push(problem_of(e, "the file header"));
+    report
+}
+
+/// Every page and structure of an open store.
+fn check_store(store: &Store) -> CheckReport {
+    let mut c = Claims::scan(store);
     let mut report = CheckReport {
         pages: store.page_count(),
         uncommitted_bytes: store.uncommitted_bytes(),
         ..Default::default()
     };
-    structures(&store, &mut c, &mut report);
+    structures(store, &mut c, &mut report);
     report.unclaimed = c.unclaimed();
     let mut problems = c.into_problems();
     problems.append(&mut report.problems);
     report.problems = problems;
     report.page_reads = store.stats().page_reads;
-    Ok(report)
+    report
 }
 
 /// Walks the structures the header names; each records its own problems and goes on.

@@ -2,6 +2,7 @@
 //! queries a library user runs on it. No window, no GPU, no global state. What it
 //! answers of its precomputed visibility and HDoV-tree is `visibility`'s.
 
+mod build_input;
 mod visibility;
 
 use std::path::Path;
@@ -19,6 +20,7 @@ use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, RequestTimes, Sto
 use crate::visibility::VisibilityTable;
 
 pub use crate::catalog::KindCounts;
+pub use build_input::BuildInput;
 
 /// What `flaneur info` prints.
 ///
@@ -181,9 +183,11 @@ impl Database {
         Database::open_with(path, Backend::default())
     }
 
-    /// Opens read-only with the given backend.
+    /// Opens read-only with the given backend. A file that is not a database but a
+    /// build's input (a scene file, a model: see [`BuildInput`]) is
+    /// [`Error::NotADatabase`] saying what it is.
     pub fn open_with(path: &Path, backend: Backend) -> Result<Database> {
-        Database::from_store(Store::open(path, backend)?)
+        Database::from_store(Store::open(path, backend).map_err(build_input::explain)?)
     }
 
     /// Opens a database on an HTTP server, read by byte ranges through a client page
@@ -205,7 +209,7 @@ impl Database {
 
     /// [`Database::open_url`] with the client's cache, timeouts and retries chosen.
     pub fn open_url_with(url: &str, opts: &HttpOptions) -> Result<Database> {
-        Database::from_store(Store::open_url(url, opts)?)
+        Database::from_store(Store::open_url(url, opts).map_err(build_input::explain)?)
     }
 
     /// Opens `location`: a URL (`http://…`, `https://…`) over HTTP with `http`'s
@@ -222,6 +226,15 @@ impl Database {
     /// What reading this database over HTTP has cost so far; `None` for a local file.
     pub fn remote_stats(&self) -> Option<RemoteStats> {
         self.store.remote_stats()
+    }
+
+    /// What a reader of this database over HTTP should be told once, at the open (see
+    /// [`RemoteStats::warnings`]): a server that names no version of the file, a page
+    /// cache capped by the memory available. Empty for a local file.
+    pub fn remote_warnings(&self) -> Vec<String> {
+        self.remote_stats()
+            .map(|s| s.warnings(&self.store.path().to_string_lossy()))
+            .unwrap_or_default()
     }
 
     /// How long each of this reader's requests over HTTP took (sent to last body byte),

@@ -81,9 +81,6 @@ impl Fetcher {
         }
     }
 
-    /// The first round trip: the file's first `head` bytes and its last `tail` bytes (fewer
-    /// when the file is shorter), asked for together, pinning the file's version. Returns
-    /// the head, the tail with the offset it starts at, and the file's length.
     /// The version the first answer pinned, as a key for a cache of its pages: its ETag,
     /// else its Last-Modified; `None` before the open or when the server gave neither.
     pub(crate) fn version_key(&self) -> Option<String> {
@@ -97,6 +94,9 @@ impl Fetcher {
         &self.url
     }
 
+    /// The first round trip: the file's first `head` bytes and its last `tail` bytes (fewer
+    /// when the file is shorter), asked for together, pinning the file's version. Returns
+    /// the head, the tail with the offset it starts at, and the file's length.
     pub(crate) fn open(&self, head: u64, tail: u64) -> Result<Ends, RemoteError> {
         self.counters.round_trips.fetch_add(1, Ordering::Relaxed);
         let (first, last) = thread::scope(|s| {
@@ -187,6 +187,10 @@ impl Fetcher {
             round_trips: c.round_trips.load(Ordering::Relaxed),
             bytes: c.bytes.load(Ordering::Relaxed),
             retries: c.retries.load(Ordering::Relaxed),
+            unversioned: self
+                .version
+                .get()
+                .is_some_and(|v| v.etag.is_none() && v.last_modified.is_none()),
             ..RemoteStats::default()
         }
     }
@@ -226,7 +230,13 @@ impl Fetcher {
     }
 
     fn attempt(&self, span: Span, first: bool) -> Result<(u64, Vec<u8>), Failure> {
-        let mut request = self.agent.get(&self.url).header("Range", span.header());
+        // The pages are read at their offsets in the file itself: a compressed body has
+        // other offsets and another length.
+        let mut request = self
+            .agent
+            .get(&self.url)
+            .header("Range", span.header())
+            .header("Accept-Encoding", "identity");
         if let Some(etag) = self.version.get().and_then(|v| v.etag.as_deref()) {
             request = request.header("If-Match", etag);
         }
@@ -270,6 +280,17 @@ impl Fetcher {
                 return Err(Failure::Retry(format!("HTTP {s}")))
             }
             s => return fail(format!("HTTP {s} to a request for {span}")),
+        }
+        if let Some(coding) = header(&headers, "content-encoding")
+            .map(str::trim)
+            .filter(|c| !c.is_empty() && !c.eq_ignore_ascii_case("identity"))
+        {
+            return fail(format!(
+                "the server sent {span} compressed (Content-Encoding: {coding}) though the \
+                 request asked for none: a database is read by byte ranges of the file as it \
+                 is stored, so the server must not compress it (turn its compression off for \
+                 this file)"
+            ));
         }
         let (got_start, got_end, total) = header(&headers, "content-range")
             .and_then(parse_content_range)

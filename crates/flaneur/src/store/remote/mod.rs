@@ -38,7 +38,10 @@ pub(crate) use source::{HttpSource, CHUNK_PAGES};
 #[derive(Clone, Debug, PartialEq)]
 pub struct HttpOptions {
     /// The client page cache's bound, in bytes: every page read (index, meshes, LODs,
-    /// visibility records) is kept here, least recently used out first.
+    /// visibility records) is kept here, least recently used out first. Capped at the
+    /// file's own size and at the memory available at the open (`MemAvailable`, where
+    /// /proc/meminfo says); nothing is reserved for it up front, the cache growing with
+    /// the pages it holds.
     pub cache_bytes: usize,
     /// The longest one request may take, connection included.
     pub timeout: Duration,
@@ -98,6 +101,16 @@ pub struct RemoteStats {
     pub page_reads: u64,
     /// Of those, pages that were not in the cache and had to be fetched.
     pub pages_fetched: u64,
+    /// The client page cache's bound in effect, in bytes: [`HttpOptions::cache_bytes`]
+    /// capped at the file's own size and at the memory available at the open.
+    pub cache_bytes: u64,
+    /// Whether the memory available at the open, being less than the bound asked for,
+    /// capped the cache.
+    pub cache_capped_by_memory: bool,
+    /// Whether the server named no version of the file, neither an ETag nor a
+    /// Last-Modified: another file put in its place while it is read then goes
+    /// unnoticed until a page fails its checksum, and no cache folder is kept.
+    pub unversioned: bool,
 }
 
 impl RemoteStats {
@@ -110,7 +123,36 @@ impl RemoteStats {
             retries: self.retries.saturating_sub(earlier.retries),
             page_reads: self.page_reads.saturating_sub(earlier.page_reads),
             pages_fetched: self.pages_fetched.saturating_sub(earlier.pages_fetched),
+            ..*self
         }
+    }
+
+    /// What a reader of `url` should be told once, at the open: a server that names no
+    /// version of the file, a cache capped by the memory available. The library never
+    /// prints: the command line does.
+    ///
+    /// ```
+    /// let s = flaneur::store::RemoteStats { unversioned: true, ..Default::default() };
+    /// let w = s.warnings("http://example.org/c.flaneur");
+    /// assert!(w.len() == 1 && w[0].contains("http://example.org/c.flaneur"));
+    /// ```
+    pub fn warnings(&self, url: &str) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.unversioned {
+            out.push(format!(
+                "{url}: the server sends neither an ETag nor a Last-Modified, so a new \
+                 version of the file put there while it is read goes unnoticed until a page \
+                 fails its checksum (and no cache folder is kept); a well-kept static server \
+                 sends both"
+            ));
+        }
+        if self.cache_capped_by_memory {
+            out.push(format!(
+                "{url}: the page cache is capped at the memory available, {} MiB",
+                self.cache_bytes >> 20
+            ));
+        }
+        out
     }
 
     /// The share of page reads the client cache answered without a request (1 with no reads).

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::disk_cache::DiskCache;
 use super::fetch::{Ends, Fetcher};
-use super::page_cache::PageCache;
+use super::page_cache::{self, Bound, PageCache};
 use super::{HttpOptions, RemoteError, RemoteStats, RequestTimes};
 use crate::store::backend::RawPageSource;
 
@@ -32,6 +32,7 @@ pub(crate) struct HttpSource {
     fetcher: Fetcher,
     page_size: usize,
     cache: PageCache,
+    cache_bound: Bound,
     disk: Option<DiskCache>,
     page_reads: AtomicU64,
     pages_fetched: AtomicU64,
@@ -47,9 +48,10 @@ impl HttpSource {
         Ok(Connected { fetcher, ends })
     }
 
-    /// The source over a connection, its cache seeded with the whole pages it brought;
-    /// with `opts.cache_dir`, the cache on disk of this version of the file opened (an
-    /// error when it cannot be).
+    /// The source over a connection, its cache seeded with the whole pages it brought
+    /// and bounded by `opts.cache_bytes`, the file's size and the memory available (see
+    /// [`page_cache::bound`]); with `opts.cache_dir`, the cache on disk of this version
+    /// of the file opened (an error when it cannot be).
     pub(crate) fn new(
         c: Connected,
         page_size: usize,
@@ -65,10 +67,17 @@ impl HttpSource {
             ),
             _ => None,
         };
+        let cache_bound = page_cache::bound(
+            opts.cache_bytes,
+            c.ends.len,
+            page_size,
+            page_cache::mem_available(),
+        );
         let source = HttpSource {
             fetcher: c.fetcher,
             page_size,
-            cache: PageCache::new(opts.cache_bytes, page_size),
+            cache: PageCache::new(cache_bound.pages),
+            cache_bound,
             disk,
             page_reads: AtomicU64::new(0),
             pages_fetched: AtomicU64::new(0),
@@ -199,6 +208,8 @@ impl RawPageSource for HttpSource {
         Some(RemoteStats {
             page_reads: self.page_reads.load(Ordering::Relaxed),
             pages_fetched: self.pages_fetched.load(Ordering::Relaxed),
+            cache_bytes: (self.cache_bound.pages as u64).saturating_mul(self.page_size as u64),
+            cache_capped_by_memory: self.cache_bound.by_memory,
             ..self.fetcher.stats()
         })
     }
