@@ -32,9 +32,11 @@ use crate::visibility::{
 };
 use crate::write_order::{hilbert_order, WriteOrder};
 
+mod check;
 mod models;
 mod shards;
 
+use check::{check_costs, Survey, Work};
 use models::{load_models, Models};
 pub use models::{model_format, ModelFormat};
 pub use shards::{build_visibility_shard, merge_visibility_shards};
@@ -88,13 +90,15 @@ impl BuildOptions {
     /// Checks every option before any work, so that a bad one fails in a moment, not
     /// after the long steps before the one that takes it: the page size, the fill
     /// factor, the LOD, visibility and HDoV-tree settings, and that an HDoV-tree comes
-    /// with visibility. The error names the bad one.
+    /// with visibility. The error names the bad one. What the visibility options cost
+    /// over a city ([`VisibilityOptions::cost`]) every build checks too, after one pass
+    /// over its objects' bounds and before its LODs.
     pub fn validate(&self) -> Result<()> {
         self.obj_axes.validate()?;
         self.osm.validate()?;
         if !crate::store::valid_page_size(self.page_size) {
             return Err(Error::Invalid(format!(
-                "page size {} is not a power of two in {}..={}",
+                "page size {} (--page-size) is not a power of two in {}..={}",
                 self.page_size,
                 crate::store::MIN_PAGE_SIZE,
                 crate::store::MAX_PAGE_SIZE
@@ -102,7 +106,7 @@ impl BuildOptions {
         }
         if !(0.1..=1.0).contains(&self.fill) {
             return Err(Error::Invalid(format!(
-                "fill factor {} is outside 0.1..=1",
+                "fill factor {} (--fill) is outside 0.1..=1",
                 self.fill
             )));
         }
@@ -265,8 +269,20 @@ fn scene_build(
     let mut reader = SceneReader::open(scene)?;
     let total = reader.object_count();
     let unpack = |o: SceneObject| (o.id, o.kind.as_u8(), o.mesh);
+    let work = Work::of_build(shards.is_some());
+    let mut survey = Survey::new(opts);
     match opts.order {
         WriteOrder::Input => {
+            if survey.wanted() {
+                // The bounds pass the checks need, before the objects stream into the
+                // build (the Hilbert order's pass does it on its way).
+                for (n, object) in SceneReader::open(scene)?.enumerate() {
+                    survey.add(&object?.mesh);
+                    progress.update(Step::Ordering, n as u64 + 1, Some(total));
+                }
+                progress.finish(Step::Ordering);
+            }
+            check_costs(opts, &survey, work)?;
             let objects = reader.map(|r| r.map(unpack).map_err(Error::from));
             build(objects, Some(total), None, db, opts, progress, shards)
         }
@@ -282,9 +298,11 @@ fn scene_build(
                 };
                 places.push(at);
                 centres.push(ground_centre(&object.mesh));
+                survey.add(&object.mesh);
                 progress.update(Step::Ordering, places.len() as u64, Some(total));
             }
             progress.finish(Step::Ordering);
+            check_costs(opts, &survey, work)?;
             let objects = hilbert_order(&centres)
                 .into_iter()
                 .map(move |i| reader.read_at(places[i]).map(unpack).map_err(Error::from));
@@ -360,6 +378,10 @@ fn models_build(
         obj_placed,
         osm,
     } = load_models(files, opts)?;
+    let mut survey = Survey::new(opts);
+    meshes.iter().for_each(|m| survey.add(m));
+    let work = Work::of_build(shards.is_some());
+    check_costs(opts, &survey, work)?;
     let total = meshes.len() as u64;
     let order: Vec<usize> = match opts.order {
         WriteOrder::Input => (0..meshes.len()).collect(),

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::check::{check_costs, Survey, Work};
 use super::{model_format, models_build, scene_build, BuildOptions, BuildSummary};
 use crate::error::{Error, Result};
 use crate::progress::{Progress, Step};
@@ -52,6 +53,9 @@ pub fn build_visibility_shard(
         Error::Invalid("a visibility shard computes visibility: give --visibility too".into())
     })?;
     let objects = input_objects(inputs, opts, progress)?;
+    let mut survey = Survey::new(opts);
+    objects.iter().for_each(|(_, m)| survey.add(m));
+    check_costs(opts, &survey, Work::Shard)?;
     let made = precompute_shard(&objects, v, shard, &|done, total| {
         progress.update(Step::Visibility, done as u64, Some(total as u64));
     })?;

@@ -67,7 +67,7 @@ impl ViewcellGrid {
     pub fn check(size: f32, eye: [f32; 2]) -> Result<()> {
         if !(size.is_finite() && size > 0.0) {
             return Err(Error::Invalid(format!(
-                "viewcell size {size} m: it must be a positive number of metres"
+                "viewcell size {size} m (--cell-size): it must be a positive number of metres"
             )));
         }
         if !(eye[0].is_finite() && eye[1].is_finite() && 0.0 <= eye[0] && eye[0] < eye[1]) {
@@ -161,6 +161,21 @@ impl ViewcellGrid {
     /// Every cell whose centre, at the middle of the eye's range, lies in none of
     /// `obstacles` (the objects' boxes), in id order.
     pub fn walkable(&self, obstacles: &[Aabb]) -> Vec<Viewcell> {
+        let mut cells = Vec::new();
+        self.each_walkable(obstacles, |cell| cells.push(cell));
+        cells
+    }
+
+    /// How many cells [`walkable`](Self::walkable) would give, without holding them:
+    /// what a build checks its memory by before it computes them.
+    pub fn walkable_count(&self, obstacles: &[Aabb]) -> u64 {
+        let mut count = 0;
+        self.each_walkable(obstacles, |_| count += 1);
+        count
+    }
+
+    /// Hands `found` every walkable cell, in id order.
+    fn each_walkable(&self, obstacles: &[Aabb], mut found: impl FnMut(Viewcell)) {
         let index = rstar::RTree::bulk_load(
             obstacles
                 .iter()
@@ -169,7 +184,6 @@ impl ViewcellGrid {
                 })
                 .collect(),
         );
-        let mut cells = Vec::new();
         for row in 0..self.rows {
             for column in 0..self.columns {
                 let bounds = self.cell_bounds(row, column);
@@ -180,7 +194,7 @@ impl ViewcellGrid {
                     .next()
                     .is_none()
                 {
-                    cells.push(Viewcell {
+                    found(Viewcell {
                         id: self.id(row, column),
                         row,
                         column,
@@ -189,7 +203,6 @@ impl ViewcellGrid {
                 }
             }
         }
-        cells
     }
 }
 

@@ -76,13 +76,13 @@ impl SampleOptions {
     pub fn validate(&self) -> Result<()> {
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(Error::Invalid(format!(
-                "sample spacing {} m must be a positive number",
+                "sample spacing {} m (--sample-spacing) must be a positive number",
                 self.spacing
             )));
         }
         if !(self.radius.is_finite() && self.radius >= 0.0) {
             return Err(Error::Invalid(format!(
-                "occluder radius {} m must be a number from 0 up",
+                "occluder radius {} m (--occluder-radius) must be a number from 0 up",
                 self.radius
             )));
         }
@@ -90,26 +90,47 @@ impl SampleOptions {
     }
 
     /// The sample points of `cell` and their ε: patch centres, at most `spacing`
-    /// apart, each within ε of every point of its patch.
-    pub fn samples(&self, cell: &Aabb) -> (Vec<Vec3>, f32) {
+    /// apart, each within ε of every point of its patch. An error, before anything is
+    /// allocated, when they would be more than [`MAX_SAMPLES_PER_CELL`] (a build checks
+    /// that before it starts: see `VisibilityOptions::cost`) or do not fit in memory.
+    ///
+    /// [`MAX_SAMPLES_PER_CELL`]: super::MAX_SAMPLES_PER_CELL
+    pub fn samples(&self, cell: &Aabb) -> Result<(Vec<Vec3>, f32)> {
         let e = cell.extent();
-        let nx = (e.x / self.spacing).ceil().max(1.0) as u32;
-        let nz = (e.z / self.spacing).ceil().max(1.0) as u32;
+        // In f32, as the patches are laid out, so that the count is theirs.
+        let across = |len: f32| (len / self.spacing).ceil().max(1.0);
+        let count = across(e.x) as f64 * across(e.z) as f64;
+        if !(count <= super::MAX_SAMPLES_PER_CELL as f64) {
+            return Err(Error::Invalid(format!(
+                "sample spacing {} m (--sample-spacing) makes {count:.3e} sample points in a \
+                 {} × {} m viewcell: more than the {} a cell takes",
+                super::cost::shown(self.spacing),
+                e.x,
+                e.z,
+                super::MAX_SAMPLES_PER_CELL
+            )));
+        }
+        let (nx, nz) = (across(e.x) as u32, across(e.z) as u32);
         let (dx, dz) = (e.x / nx as f32, e.z / nz as f32);
         let eps = 0.5 * Vec3::new(dx, e.y, dz).length();
         let y = cell.center().y;
-        let points = (0..nz)
-            .flat_map(|j| {
-                (0..nx).map(move |i| {
-                    Vec3::new(
-                        cell.min.x + (i as f32 + 0.5) * dx,
-                        y,
-                        cell.min.z + (j as f32 + 0.5) * dz,
-                    )
-                })
+        let mut points = Vec::new();
+        points.try_reserve_exact(count as usize).map_err(|_| {
+            Error::Invalid(format!(
+                "{count} sample points of a viewcell do not fit in memory (--sample-spacing {})",
+                super::cost::shown(self.spacing)
+            ))
+        })?;
+        points.extend((0..nz).flat_map(|j| {
+            (0..nx).map(move |i| {
+                Vec3::new(
+                    cell.min.x + (i as f32 + 0.5) * dx,
+                    y,
+                    cell.min.z + (j as f32 + 0.5) * dz,
+                )
             })
-            .collect();
-        (points, eps)
+        }));
+        Ok((points, eps))
     }
 }
 
@@ -238,7 +259,7 @@ impl Scene {
                 .ok_or_else(|| Error::Invalid(format!("seen object {i} is not in the scene")))? =
                 true;
         }
-        let (points, eps) = opts.samples(cell);
+        let (points, eps) = opts.samples(cell)?;
         for p in points {
             let here = AABB::from_point([p.x, p.z]);
             let inside = self

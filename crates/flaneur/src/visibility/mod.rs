@@ -13,6 +13,8 @@
 //!   [`Database::pvs`]).
 //! - `shard`: the precomputation split across processes ([`Shard`], [`ShardCells`],
 //!   [`precompute_shard`]), merged by the build into the same table.
+//! - `cost`: what the options imply over a city before any of it runs
+//!   ([`VisibilityCost`]: cells, sample points, memory), checked by every build.
 //! - `raycast`: [`RayScene`], the scene's triangles in one BVH; the first hit of a ray as
 //!   an object ([`Hit`]).
 //! - `cube`: [`CubicProjection`], the cube's faces, pixels and their ΔDoV; the identity
@@ -62,6 +64,7 @@
 
 mod cells;
 mod conservative;
+mod cost;
 mod cube;
 mod dov;
 mod horizon;
@@ -78,6 +81,8 @@ mod tests;
 
 pub use cells::{Viewcell, ViewcellGrid};
 pub use conservative::SampleOptions;
+pub(crate) use cost::{shown, walkable_cells};
+pub use cost::{VisibilityCost, MAX_SAMPLES_PER_CELL, MAX_VIEWCELLS};
 pub use cube::{CubicProjection, SKY};
 pub use dov::{cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovStats, PointDov};
 pub(crate) use precompute::precompute;

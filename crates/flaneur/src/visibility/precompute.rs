@@ -26,7 +26,7 @@ use crate::geom::Aabb;
 use crate::scene::Mesh;
 
 /// Rows of cells computed together.
-const BAND_ROWS: u32 = 8;
+pub(super) const BAND_ROWS: u32 = 8;
 
 /// How `flaneur build --visibility` computes visibility.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,7 +57,8 @@ impl VisibilityOptions {
     /// faces' resolution, the sampling. The error names the bad one.
     pub fn validate(&self) -> Result<()> {
         ViewcellGrid::check(self.cell_size, self.eye)?;
-        CubicProjection::check(self.resolution)?;
+        CubicProjection::check(self.resolution)
+            .map_err(|e| Error::Invalid(format!("{e} (--dov-resolution)")))?;
         self.samples.validate()
     }
 }
@@ -140,11 +141,14 @@ pub(super) fn boxes(objects: &[(u64, Mesh)]) -> Result<Vec<Aabb>> {
 }
 
 /// The viewcell grid over `boxes` and its walkable cells: all a merge of shards needs.
+/// Options that would make more cells (or sample points) than a build takes are refused
+/// first, as a build refuses them before it starts (`VisibilityOptions::cost`).
 pub(super) fn grid_and_walkable(
     boxes: &[Aabb],
     opts: &VisibilityOptions,
 ) -> Result<(ViewcellGrid, Vec<Viewcell>)> {
     let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+    opts.cost(&city, boxes.len() as u64, None)?;
     let grid = ViewcellGrid::new(&city, opts.cell_size, opts.eye)?;
     let walkable = grid.walkable(boxes);
     Ok((grid, walkable))
@@ -154,11 +158,12 @@ pub(super) fn grid_and_walkable(
 pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Result<Prepared> {
     opts.validate()?;
     let boxes = boxes(objects)?;
+    // The grid first: what the options make of the city is refused before the slow steps.
+    let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
     let found: Vec<Occluders> = objects.par_iter().map(|(_, m)| occluders(m)).collect();
     let scene = Scene::new(&boxes, &found)?;
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let projection = CubicProjection::new(opts.resolution)?;
-    let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
     Ok(Prepared {
         scene,
         rays,
