@@ -24,7 +24,8 @@ pub struct DemoArgs {
     /// Where the city and its database are kept between runs.
     #[arg(long, env = "FLANEUR_CACHE", default_value = "cache")]
     cache: PathBuf,
-    /// Frames of the walk (30 per second).
+    /// Frames of each walk (30 per second); the headless flight, where there is no display,
+    /// draws as many, at most 120.
     #[arg(long, default_value_t = 1800)]
     frames: usize,
 }
@@ -92,6 +93,11 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             b.pages, b.height, b.seconds
         );
         print_lod_report(b.lod.as_ref(), b.bytes);
+        println!(
+            "  (LODs: each object's coarser levels of detail, read instead of its full mesh when it is far; \
+             PM + DAG: the largest objects' progressive meshes and their dependency graphs, \
+             refined view by view as the viewer comes near: Zheng 2007)"
+        );
         Database::open(&db_path)?
     };
     let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
@@ -100,11 +106,19 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         frames as f64 / 30.0,
         review::DEFAULT_PACE
     );
+    print_legend();
     for preset in [Preset::Optimal, Preset::Box] {
         let bar = indicatif::ProgressBar::new(frames as u64);
         let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
         bar.finish_and_clear();
-        println!("{}:", preset.name());
+        println!(
+            "{}",
+            match preset {
+                Preset::Optimal =>
+                    "REVIEW (the thesis's 'optimal' configuration, `--config optimal`):",
+                _ => "BOX (`--config box`):",
+            }
+        );
         for f in report
             .frames
             .iter()
@@ -133,16 +147,78 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         let start = flaneur::walk::busiest_street(&db)?;
         let opts = window_options(&db, start);
         match view(&db, opts, ViewMode::Review, (false, false), None, None) {
-            Ok(()) => return Ok(()),
+            Ok(()) => {
+                print_next_steps(&db_path);
+                return Ok(());
+            }
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }
     }
-    demo_flight(&db, &cache.join("demo-frames"))
+    demo_flight(&db, &cache.join("demo-frames"), frames.min(FLIGHT_FRAMES))?;
+    print_next_steps(&db_path);
+    Ok(())
+}
+
+/// The flight's frames where there is no display: four seconds at 30 a second, or the
+/// walk's own length where that is shorter.
+const FLIGHT_FRAMES: usize = 120;
+
+/// The words the walks' lines use, said once before them.
+fn print_legend() {
+    for line in [
+        "REVIEW (Shou 2002) asks the paged R-tree only for what each new disk cell adds to",
+        "those it already holds (CSearch), keeps R-tree pages in a 1 MB index cache",
+        "(distance-priority LRU) and prefetches the cell the viewer will reach k seconds",
+        "ahead. BOX asks for the whole cell again at every change, with neither.",
+        "SF: the scale factor, how many times larger than the view's own box (the frustum",
+        "cell, as deep as the frustum's metres) the disk cell that is queried is.",
+        "Pages read are counted exactly. Visual misses: objects in view whose mesh had not",
+        "arrived when a frame was drawn, counted once a frame.",
+    ] {
+        println!("  {line}");
+    }
+}
+
+/// Where the demo's database is, and what to do with it next.
+fn print_next_steps(db_path: &Path) {
+    let db = db_path.display();
+    let name = db_path
+        .file_name()
+        .map_or_else(|| db.to_string(), |n| n.to_string_lossy().into_owned());
+    println!("\nthe city's database is {db}; the next demo reuses it (delete it to build again).");
+    println!("What to try next (`flaneur` is target/release/flaneur; `cargo run --release --` does the same):");
+    let steps = [
+        (
+            format!("flaneur view {db}"),
+            "walk it yourself: WASD and the mouse, 1-7 the modes, H the HUD",
+        ),
+        (
+            format!("flaneur info {db}"),
+            "what it holds: objects, pages by kind, levels of detail",
+        ),
+        (
+            format!("flaneur walk {db} --config box"),
+            "the walk again, headless, with other settings (--help)",
+        ),
+        (
+            format!("flaneur serve {db} --port 8080"),
+            "publish it over HTTP; then, from anywhere:",
+        ),
+        (
+            format!("flaneur walk http://127.0.0.1:8080/{name} --never-wait"),
+            "",
+        ),
+    ];
+    let width = steps.iter().map(|(c, _)| c.len()).max().unwrap_or(0);
+    for (command, what) in steps {
+        println!("  {command:width$}   {what}");
+    }
+    println!("The README's \"The commands\" lists the rest.");
 }
 
 /// The demo's last part where there is no display: a short flight over the city drawn
 /// headless to PNG frames. Without a GPU adapter, it says so and the demo ends well.
-fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
+fn demo_flight(db: &Database, dir: &Path, frames: usize) -> Result<()> {
     let gpu = match flaneur_render::Gpu::headless() {
         Ok(gpu) => gpu,
         Err(e) => {
@@ -158,7 +234,7 @@ fn demo_flight(db: &Database, dir: &Path) -> Result<()> {
         glam::Vec3::new(c.x + 0.1 * e.x, b.min.y + 120.0, c.z + 0.1 * e.z),
     );
     let yaw = (to.z - from.z).atan2(to.x - from.x);
-    let frames = 120;
+    let frames = frames.max(2);
     let poses = (0..frames)
         .map(|i| {
             let t = i as f32 / (frames - 1) as f32;
