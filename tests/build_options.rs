@@ -152,6 +152,19 @@ fn model_files_and_a_shard_are_checked_before_their_slow_steps() {
         assert!(!steps.saw(Step::Visibility), "the shard started its cells");
         assert_eq!(left_in(dir.path(), &[&obj]), Vec::<String>::new());
     }
+    // A scale that puts the files past the largest coordinate there is says so.
+    let huge = BuildOptions {
+        obj_axes: flaneur::scene::ObjAxes {
+            scale: 1e38,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let e = flaneur::build_from_obj(std::slice::from_ref(&obj), &db, &huge)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--scale"), "{e}");
+    assert_eq!(left_in(dir.path(), &[&obj]), Vec::<String>::new());
 }
 
 #[test]

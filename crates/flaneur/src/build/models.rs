@@ -59,6 +59,23 @@ pub(super) fn load_models(files: &[PathBuf], opts: &BuildOptions) -> Result<Mode
             .map(|&i| std::mem::take(&mut meshes[i]))
             .collect();
         let placed = place(&mut objs, &opts.obj_axes)?;
+        // The files' coordinates are finite (the loader checks them): one that is not
+        // now is the scale's doing.
+        if let Some(k) = objs
+            .iter()
+            .position(|m| m.positions.iter().flatten().any(|c| !c.is_finite()))
+        {
+            return Err(Error::Invalid(format!(
+                "scale {} m a unit (--scale) puts OBJ object {} beyond the largest coordinate \
+                 there is ({:e} m): the files are {:.1} × {:.1} × {:.1} units",
+                crate::visibility::shown(opts.obj_axes.scale),
+                obj[k],
+                f32::MAX,
+                placed.extent[0],
+                placed.extent[1],
+                placed.extent[2]
+            )));
+        }
         for (&i, m) in obj.iter().zip(objs) {
             meshes[i] = m;
         }

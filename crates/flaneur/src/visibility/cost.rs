@@ -101,12 +101,14 @@ impl VisibilityOptions {
                 / MAX_VIEWCELLS as f64)
                 .sqrt();
             return Err(Error::Invalid(format!(
-                "viewcell size {} m (--cell-size) makes {columns} × {rows} viewcells over this \
-                 city ({:.0} × {:.0} m): more than the {MAX_VIEWCELLS} a build takes; give a \
-                 cell size of at least about {} m",
+                "viewcell size {} m (--cell-size) makes {} × {} viewcells over this city \
+                 ({} × {} m): more than the {MAX_VIEWCELLS} a build takes; give a cell size of \
+                 at least about {} m",
                 shown(self.cell_size),
-                extent.x,
-                extent.z,
+                large(extent.x as f64 / self.cell_size as f64, 0),
+                large(extent.z as f64 / self.cell_size as f64, 0),
+                large(extent.x as f64, 0),
+                large(extent.z as f64, 0),
                 rounded_up(least)
             )));
         }
@@ -157,17 +159,28 @@ pub(crate) fn shown(v: f32) -> String {
     }
 }
 
+/// A count or a length in a refusal: with `decimals` while it is short, in
+/// scientific notation beyond ten million.
+fn large(v: f64, decimals: usize) -> String {
+    if v.abs() >= 1e7 {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.decimals$}")
+    }
+}
+
 /// `v` rounded up to three significant digits: a bound a refusal may suggest.
-fn rounded_up(v: f64) -> f64 {
+fn rounded_up(v: f64) -> String {
     if !(v.is_finite() && v > 0.0) {
-        return v;
+        return v.to_string();
     }
     let unit = 10f64.powf(v.log10().floor() - 2.0);
     let up = (v / unit).ceil() * unit;
+    if up >= 1e7 {
+        return format!("{up:.2e}");
+    }
     // Printed at the digits kept, not with the float's tail.
     format!("{up:.*}", (2.0 - v.log10().floor()).max(0.0) as usize)
-        .parse()
-        .unwrap_or(up)
 }
 
 /// Walkable cells of the grid `opts` lays over the objects' `boxes`: what
@@ -231,9 +244,12 @@ mod tests {
         assert_eq!(shown(40.0), "40");
         assert_eq!(shown(0.5), "0.5");
         assert_eq!(shown(3e9), "3e9");
-        assert_eq!(rounded_up(0.033_61), 0.0337);
-        assert_eq!(rounded_up(19.531), 19.6);
-        assert_eq!(rounded_up(1234.5), 1240.0);
+        assert_eq!(rounded_up(0.033_61), "0.0337");
+        assert_eq!(rounded_up(19.531), "19.6");
+        assert_eq!(rounded_up(1234.5), "1240");
+        assert_eq!(rounded_up(8.1e26), "8.10e26");
+        assert_eq!(large(735.6, 0), "736");
+        assert_eq!(large(1.1e31, 0), "1.100e31");
     }
 
     #[test]
