@@ -18,6 +18,7 @@ use flaneur::walk::visual::{self, VisualConfig, VisualFrame, VisualReport};
 use flaneur::Database;
 
 mod csv_rows;
+mod gaps;
 mod render;
 
 use csv_rows::{write_row, CsvRows};
@@ -409,7 +410,9 @@ fn walk_cmd(
     }
     print_walk(&report);
     print_remote(&db);
-    print_render(drawn, render)
+    print_render(drawn, render)?;
+    let s = &report.summary;
+    gaps::went_without(&s.damaged, s.failed_loads, s.last_load_error.as_deref())
 }
 
 /// The poses of `camera` for a walk over viewcells, made as the walk asks for them where
@@ -538,8 +541,10 @@ fn pvs_walk_cmd(
             r.last_load_error.as_deref().unwrap_or("")
         );
     }
+    gaps::print_damaged(&r.damaged);
     print_remote(&db);
-    print_render(drawn, render)
+    print_render(drawn, render)?;
+    gaps::went_without(&r.damaged, r.failed_loads, r.last_load_error.as_deref())
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -568,7 +573,10 @@ fn visual_walk_cmd(
     }
     print_visual(&r);
     print_remote(&db);
-    print_render(drawn, render)
+    print_render(drawn, render)?;
+    // Its damage stops the walk where met, or is left out at a window.
+    let s = &r.summary;
+    gaps::went_without(&[], s.failed_loads, s.last_load_error.as_deref())
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -780,6 +788,7 @@ pub fn print_walk(r: &WalkReport) {
             s.last_load_error.as_deref().unwrap_or("")
         );
     }
+    gaps::print_damaged(&s.damaged);
 }
 
 /// For a database read over HTTP: what the network cost.

@@ -76,6 +76,7 @@ impl PvsTally {
             round_trip_frames: run.round_trip,
             failed_loads: run.failed_loads,
             last_load_error: run.last_load_error,
+            damaged: run.damaged,
         }
     }
 }

@@ -153,24 +153,28 @@ pub struct PvsFrame {
     /// Pages read during the frame (visibility pages included; never waiting, by the
     /// loader too).
     pub pages: u64,
+    /// Never waiting: objects whose coarse level the loader found damaged, learnt of on
+    /// this frame (named in [`PvsWalkReport::damaged`]).
+    pub damaged: usize,
 }
 
 impl PvsFrame {
     /// The columns of [`PvsFrame::csv_row`].
     pub const CSV_HEADER: &'static str =
-        "frame,cell,drawn,transaction,sent,swaps,visual_misses,pages";
+        "frame,cell,drawn,transaction,sent,swaps,visual_misses,pages,damaged";
 
     /// Frame `index` as one CSV row (no line end), its columns [`PvsFrame::CSV_HEADER`].
     pub fn csv_row(&self, index: usize) -> String {
         format!(
-            "{index},{},{},{},{},{},{},{}",
+            "{index},{},{},{},{},{},{},{},{}",
             self.cell.map_or(String::new(), |c| c.to_string()),
             self.drawn,
             self.transaction as u8,
             self.sent,
             self.swaps,
             self.visual_misses,
-            self.pages
+            self.pages,
+            self.damaged
         )
     }
 }
@@ -222,6 +226,11 @@ pub struct PvsWalkReport {
     pub failed_loads: usize,
     /// The last of those failures.
     pub last_load_error: Option<String>,
+    /// What the walk could not read for damage and went on without, each object once,
+    /// in words that name its page (never waiting: coarse levels, their objects loaded
+    /// at full detail instead; a waiting walk stops at damage). A headless walk with
+    /// any fails at its end.
+    pub damaged: Vec<String>,
 }
 
 impl PvsWalkReport {

@@ -312,18 +312,21 @@ pub struct FrameStats {
     /// With [`ReviewConfig::never_wait`]: the viewer was outside every cell it held, and
     /// the frame drew what the buffer held while the loader searched for it.
     pub outran: bool,
+    /// Objects whose coarse level the loaders found damaged by this frame's end, since
+    /// the last frame (named in [`WalkSummary::damaged`]).
+    pub damaged: usize,
 }
 
 impl FrameStats {
     /// The columns of [`FrameStats::csv_row`].
-    pub const CSV_HEADER: &'static str = "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow,outran,coarse_drawn,refined";
+    pub const CSV_HEADER: &'static str = "frame,time,frame_ms,query_ms,load_ms,cull_ms,prep_ms,queried,sync_query,prefetch_used,prefetch_adopted,objects_loaded,objects_buffered,objects_drawn,triangles_drawn,visual_misses,index_pages,mesh_pages,buffer_bytes,evicted,overflow,outran,coarse_drawn,refined,damaged";
 
     /// The frame as one CSV row (no line end), its columns [`FrameStats::CSV_HEADER`]:
     /// what a walk writes as each frame ends.
     pub fn csv_row(&self) -> String {
         let f = self;
         format!(
-                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 f.frame,
                 f.time,
                 f.frame_ms,
@@ -347,7 +350,8 @@ impl FrameStats {
                 f.overflow as u8,
                 f.outran as u8,
                 f.coarse_drawn,
-                f.refined
+                f.refined,
+                f.damaged
             )
     }
 }
@@ -420,6 +424,11 @@ pub struct WalkSummary {
     pub failed_loads: usize,
     /// The last failed load's error.
     pub last_load_error: Option<String>,
+    /// What the walk could not read for damage and went on without, each object once,
+    /// in words that name its page (a never-wait walk's coarse levels, its objects
+    /// loaded at full detail instead; a waiting walk stops at damage instead). A
+    /// headless walk with any fails at its end.
+    pub damaged: Vec<String>,
 }
 
 /// What a REVIEW or BOX walk did: its settings, every frame's figures, their summary.

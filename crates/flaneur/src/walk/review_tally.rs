@@ -95,6 +95,7 @@ impl ReviewTally {
             first_complete_frame: self.first_complete_frame,
             failed_loads: counts.failed,
             last_load_error: counts.last_failure,
+            damaged: Vec::new(),
         }
     }
 }

@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use super::damage::{coarsest_or_full, Damaged};
 use super::mesh_batch::read_meshes;
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -61,13 +62,18 @@ pub(super) enum Answer {
 }
 
 /// Runs one query and loads the meshes of what it returned (those it had time for, when
-/// `ended` says the walk is over and no one will take them).
+/// `ended` says the walk is over and no one will take them). Coarse levels that cannot
+/// be read for damage are named in `damaged`, their objects read at full detail.
 pub(super) fn fetch(
     db: &Database,
     source: &(dyn PageSource + Sync),
     retrieval: Retrieval,
     req: &Request,
-    (resident, left_out): (&Mutex<HashSet<u64>>, Option<&Mutex<LeftOut>>),
+    (resident, left_out, damaged): (
+        &Mutex<HashSet<u64>>,
+        Option<&Mutex<LeftOut>>,
+        &Mutex<Damaged>,
+    ),
     ended: &AtomicBool,
     part: &mut dyn FnMut(&[Loaded]),
 ) -> Result<Fetched> {
@@ -105,39 +111,32 @@ pub(super) fn fetch(
             part(&objects[handed..]);
             handed = objects.len();
         }
-        if req.coarse {
-            let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
-            match db.coarsest_meshes(&entries) {
-                Ok(meshes) => {
-                    objects.extend(
-                        entries
-                            .into_iter()
-                            .zip(meshes)
-                            .map(|(e, (level, mesh))| Loaded::at_level(e, mesh, level)),
-                    );
-                    continue;
-                }
-                Err(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => return Err(e),
-                // Damage somewhere in the batch: read it object by object below, which
-                // names (or, for a viewer that walks on, leaves out) the damaged one.
-                Err(_) => {}
+        let entries: Vec<ObjectEntry> = batch.iter().map(|e| **e).collect();
+        // Coarse first: an object whose coarse level is damaged comes at full detail,
+        // named, rather than costing its batch's coarse levels.
+        let full = match req.coarse {
+            true => {
+                let (coarse, full) = coarsest_or_full(db, &entries, damaged)?;
+                objects.extend(coarse);
+                full
             }
+            false => entries,
+        };
+        if full.is_empty() {
+            continue;
         }
         // A viewer that walks on past damage walks on past a network's failure too, but
         // without the object only until the cell is asked for again.
-        objects.extend(read_meshes(
-            db,
-            batch.iter().copied(),
-            left_out,
-            |_, err| match (err, left_out) {
+        objects.extend(read_meshes(db, full.iter(), left_out, |_, err| {
+            match (err, left_out) {
                 (err @ Error::Remote { .. }, Some(_)) => {
                     unloaded += 1;
                     failure = Some(err.to_string());
                     Ok(())
                 }
                 (err, _) => Err(err),
-            },
-        )?);
+            }
+        })?);
     }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Fetched {

@@ -7,8 +7,10 @@
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
 //! the full meshes of the objects it drew coarse, `loader` what its loader threads are asked and
 //! hand back, `load_order` the order their loads come in, and `oracle` the ground truth
-//! of its visual misses; `pace` plays a paced walk's poses at their times.
+//! of its visual misses; `pace` plays a paced walk's poses at their times; `damage` what
+//! a never-wait walk's loaders could not read for damage, named for its summary.
 
+mod damage;
 mod load_order;
 mod loader;
 mod mailbox;

@@ -49,6 +49,9 @@ pub(crate) struct PvsRun {
     pub round_trip: u32,
     pub failed_loads: usize,
     pub last_load_error: Option<String>,
+    /// What the loader could not read for damage, each object once, named (never
+    /// waiting).
+    pub damaged: Vec<String>,
 }
 
 /// A PVS walk over `db`'s precomputed visibility as `cfg` says, the poses coming from

@@ -10,8 +10,9 @@
 //! nearest first); a newer position reorders what is still to load. On a database with
 //! LODs each object comes first at its coarsest stored level (a few pages, its batch's
 //! side by side in the file), and its full mesh once nothing coarse is left to load, as
-//! a never-wait REVIEW walk draws coarse first. A transaction is delivered to the client
-//! when the last of its objects has arrived (or has been left out as damaged, or
+//! a never-wait REVIEW walk draws coarse first; one whose coarse level cannot be read
+//! for damage comes at full detail, named (`damage`). A transaction is delivered to the
+//! client when the last of its objects has arrived (or has been left out as damaged, or
 //! dropped by the cache).
 
 use std::collections::{HashSet, VecDeque};
@@ -19,6 +20,7 @@ use std::sync::{mpsc, Mutex};
 
 use glam::Vec3;
 
+use super::damage::{coarsest_or_full, Damaged};
 use super::mesh_batch::read_meshes;
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -72,16 +74,17 @@ pub(super) enum Update {
 }
 
 /// Runs the loader until the walk ends, telling `tx` what it does. `left_out` is kept
-/// when the viewer walks on past damaged objects.
+/// when the viewer walks on past damaged objects; `damaged` names the coarse levels
+/// that could not be read.
 pub(super) fn run(
     db: &Database,
     source: &StoredPvs<'_>,
     rule: &(dyn PrefetchArea + Sync),
     mailbox: &Mailbox,
-    left_out: Option<&Mutex<LeftOut>>,
+    (left_out, damaged): (Option<&Mutex<LeftOut>>, &Mutex<Damaged>),
     tx: mpsc::Sender<Update>,
 ) {
-    let mut loader = match Loader::new(db, source, rule, left_out, &tx) {
+    let mut loader = match Loader::new(db, source, rule, (left_out, damaged), &tx) {
         Ok(l) => l,
         Err(e) => {
             let _ = tx.send(Update::Stopped(e));
@@ -102,6 +105,7 @@ struct Loader<'a, 't> {
     client: PvsClient<'a, StoredPvs<'a>, dyn PrefetchArea + Sync + 'a>,
     entries: IndexEntries,
     left_out: Option<&'a Mutex<LeftOut>>,
+    damaged: &'a Mutex<Damaged>,
     tx: &'t mpsc::Sender<Update>,
     /// Objects to load, in order.
     queue: VecDeque<u64>,
@@ -121,7 +125,7 @@ impl<'a, 't> Loader<'a, 't> {
         db: &'a Database,
         source: &'a StoredPvs<'a>,
         rule: &'a (dyn PrefetchArea + Sync),
-        left_out: Option<&'a Mutex<LeftOut>>,
+        (left_out, damaged): (Option<&'a Mutex<LeftOut>>, &'a Mutex<Damaged>),
         tx: &'t mpsc::Sender<Update>,
     ) -> Result<Self> {
         // Every object's index entry, to read the meshes of what the client holds:
@@ -131,6 +135,7 @@ impl<'a, 't> Loader<'a, 't> {
             client: PvsClient::new(source, rule, THESIS_CAPACITY)?,
             entries: IndexEntries::read(db)?,
             left_out,
+            damaged,
             tx,
             queue: VecDeque::new(),
             coarse: db.has_lods(),
@@ -247,29 +252,26 @@ impl<'a, 't> Loader<'a, 't> {
             let (loaded, done) = self.load_full(batch, !from_queue)?;
             return self.hand_over(loaded, &done);
         }
-        let (loaded, done) = match self.db.coarsest_meshes(&batch) {
-            Ok(meshes) => {
-                let mut loaded = Vec::with_capacity(batch.len());
-                for (entry, (level, mesh)) in batch.into_iter().zip(meshes) {
-                    if level > 0 {
-                        self.fine.push_back(entry.id);
-                    }
-                    loaded.push(Loaded::at_level(entry, mesh, level));
-                }
-                let done = loaded.iter().map(|o| o.entry.id).collect();
-                (loaded, done)
-            }
+        let (mut loaded, full) = match coarsest_or_full(self.db, &batch, self.damaged) {
+            Ok(got) => got,
             Err(e @ Error::Remote { .. }) => {
                 self.queue.extend(batch.iter().map(|e| e.id));
                 let _ = self.tx.send(Update::Retrying(e.to_string()));
                 return Ok(());
             }
             // The file changed under the walk: never mix its pages with the old ones'.
-            Err(e @ Error::RemoteChanged { .. }) => return Err(e),
-            // Damage somewhere in the batch: read it object by object, which names (or,
-            // for a viewer that walks on, leaves out) the damaged one.
-            Err(_) => self.load_full(batch, false)?,
+            Err(e) => return Err(e),
         };
+        self.fine
+            .extend(loaded.iter().filter(|o| o.level > 0).map(|o| o.entry.id));
+        let mut done: Vec<u64> = loaded.iter().map(|o| o.entry.id).collect();
+        // Those whose coarse level is damaged, at full detail: read one by one, which
+        // names (or, for a viewer that walks on, leaves out) a damaged mesh too.
+        if !full.is_empty() {
+            let (more, more_done) = self.load_full(full, false)?;
+            loaded.extend(more);
+            done.extend(more_done);
+        }
         self.hand_over(loaded, &done)
     }
 

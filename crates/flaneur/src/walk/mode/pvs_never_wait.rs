@@ -3,18 +3,22 @@
 //! where it stands to the loader thread (`pvs_loader`), takes what has arrived (rows,
 //! meshes, the cache's evictions) and draws the current cell's PVS of what it holds.
 //! What has not arrived is a visual miss, counted at every frame: all of the cell's PVS
-//! while its row has not come, the frame then drawing the last cell's.
+//! while its row has not come, the frame then drawing the last cell's. Coarse levels
+//! the loader found damaged are counted at the frame that learns of them and named in
+//! the walk's figures; what the loader was still reading when the walk ended is taken
+//! once it stops, so that failures at the end are counted too.
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Mutex};
 use std::time::Instant;
 
+use super::damage::{self, DamageCursor, Damaged};
 use super::pace::wait_until_due;
 use super::pvs::{self, PvsRun};
 use super::pvs_loader::{self, Mailbox, Stand, Update};
 use super::receive::receive;
 use crate::database::Database;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::geom::Camera;
 use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsSource, StoredPvs};
 use crate::walk::buffer::ObjectBuffer;
@@ -40,16 +44,19 @@ pub(crate) fn walk_live<'db>(
     let left_out = viewer
         .skips_damaged()
         .then(|| Mutex::new(LeftOut::default()));
+    let met = Mutex::new(Damaged::default());
     let (tx, rx) = mpsc::channel();
-    std::thread::scope(|scope| {
-        let (mb, lo) = (&mailbox, left_out.as_ref());
-        scope.spawn(move || pvs_loader::run(db, source, rule, mb, lo, tx));
+    let (walked, rx, mut run) = std::thread::scope(|scope| {
+        let (mb, lo, dm) = (&mailbox, left_out.as_ref(), &met);
+        scope.spawn(move || pvs_loader::run(db, source, rule, mb, (lo, dm), tx));
         let mut mode = NeverWait {
             db,
             source,
             mailbox: &mailbox,
             rx,
             left_out: left_out.as_ref(),
+            damaged: &met,
+            damage_seen: DamageCursor::default(),
             rows: HashMap::new(),
             shown: None,
             pace,
@@ -61,8 +68,31 @@ pub(crate) fn walk_live<'db>(
         };
         let walked = session::run_each(&mut mode, viewer, lods, tick, each);
         mailbox.end();
-        walked.map(|()| mode.run)
-    })
+        (walked, mode.rx, mode.run)
+    });
+    walked?;
+    // The loader has stopped (the scope waited for it): what it was reading as the walk
+    // ended has failed or come, and a failure is counted.
+    for update in rx.try_iter() {
+        match update {
+            Update::Retrying(why) => {
+                run.failed_loads += 1;
+                run.last_load_error = Some(why);
+            }
+            Update::Stopped(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => {
+                run.failed_loads += 1;
+                run.last_load_error = Some(e.to_string());
+            }
+            Update::Stopped(e) => {
+                if let Ok(mut d) = met.lock() {
+                    d.note_words(e.to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    run.damaged = damage::named(met);
+    Ok(run)
 }
 
 /// The viewer's side of the walk.
@@ -72,6 +102,10 @@ struct NeverWait<'a> {
     mailbox: &'a Mailbox,
     rx: mpsc::Receiver<Update>,
     left_out: Option<&'a Mutex<LeftOut>>,
+    /// Coarse levels the loader found damaged, and how far the frames have counted and
+    /// the viewer been told of them.
+    damaged: &'a Mutex<Damaged>,
+    damage_seen: DamageCursor,
     /// The rows the client's cache holds, as the loader has told them.
     rows: HashMap<Cell, Vec<u64>>,
     /// The cell whose PVS the frames draw: the current one once its row has come, else
@@ -123,6 +157,7 @@ impl Mode for NeverWait<'_> {
             None => None,
         };
         self.take_updates(buffer, &mut frame)?;
+        frame.damaged = self.damage_seen.count_new(self.damaged);
         if let Some(cell) = here {
             if self.rows.contains_key(&cell) {
                 self.shown = Some(cell);
@@ -160,10 +195,12 @@ impl Mode for NeverWait<'_> {
     }
 
     fn figures(&mut self, frame: &(PvsFrame, f64), buffer: &ObjectBuffer) -> FrameFigures {
-        let damaged = self
+        let mut damaged = self
             .left_out
-            .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()));
-        pvs::figures(frame, buffer, damaged.unwrap_or_default())
+            .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
+            .unwrap_or_default();
+        damaged.extend(self.damage_seen.take_untold(self.damaged));
+        pvs::figures(frame, buffer, damaged)
     }
 }
 

@@ -13,7 +13,10 @@
 //! pages together, so that over HTTP they come in parallel. On a database with LODs the
 //! viewer's lane loads each object's coarsest stored level (a few pages) and a third
 //! thread then fetches the full meshes, whenever the viewer's lane is idle, and puts
-//! them in place of the coarse ones.
+//! them in place of the coarse ones. A coarse level that cannot be read for damage
+//! costs its object's coarse level alone: the object comes at full detail, and is named
+//! (`damage`) in the frame's figures and the walk's summary. What the loaders were still
+//! reading when the walk ended is waited for, and its failures counted.
 
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -22,6 +25,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use super::damage::{self, DamageCursor, Damaged};
 use super::pace::wait_until_due;
 use crate::cache::{policy_by_name, BufferPool, Lookahead};
 use crate::database::Database;
@@ -107,6 +111,10 @@ pub(crate) fn walk_each<'db>(
         .skips_damaged()
         .then(|| Mutex::new(LeftOut::default()));
     let left_out = left_out.as_ref();
+    // Coarse levels the loaders could not read for damage (their objects loaded at full
+    // detail), named for the summary.
+    let met = Mutex::new(Damaged::default());
+    let damaged = &met;
     // Set when the walk ends: a loader stops reading for a result no one will take.
     let ended = AtomicBool::new(false);
     let ended = &ended;
@@ -138,7 +146,7 @@ pub(crate) fn walk_each<'db>(
                         source,
                         cfg.retrieval,
                         &req,
-                        (resident, left_out),
+                        (resident, left_out, damaged),
                         ended,
                         &mut part,
                     );
@@ -187,6 +195,8 @@ pub(crate) fn walk_each<'db>(
             latency_s: None,
             resident,
             left_out,
+            damaged,
+            damage_seen: DamageCursor::default(),
             counts: Counts::default(),
             track: MotionTrack::default(),
             pace: cfg
@@ -205,12 +215,15 @@ pub(crate) fn walk_each<'db>(
         if tally.frames() == 0 {
             return Err(Error::Invalid("the walk had no poses".into()));
         }
-        // Closing the request channels ends the loader threads.
+        // Closing the request channels ends the loader threads, once they have read
+        // what they were reading.
         mode.lanes = [None, None];
         mode.fine_tx = None;
+        mode.take_last_answers(refining);
         Ok((tally, mode.counts))
     })?;
-    let summary = tally.summary(counts, pool.as_ref().map(|p| p.stats()));
+    let mut summary = tally.summary(counts, pool.as_ref().map(|p| p.stats()));
+    summary.damaged = damage::named(met);
     let trace = pool
         .as_ref()
         .filter(|_| cfg.record_trace)
@@ -257,6 +270,10 @@ struct Review<'a> {
     resident: &'a Mutex<HashSet<u64>>,
     /// With a viewer that walks on past unreadable objects, those left out.
     left_out: Option<&'a Mutex<LeftOut>>,
+    /// Coarse levels the loaders found damaged, and how far the frames have counted and
+    /// the viewer been told of them.
+    damaged: &'a Mutex<Damaged>,
+    damage_seen: DamageCursor,
     counts: Counts,
     /// The viewer's poses so far, for its motion.
     track: MotionTrack,
@@ -337,7 +354,7 @@ impl Mode for Review<'_> {
                         self.source,
                         self.cfg.retrieval,
                         &req,
-                        (self.resident, self.left_out),
+                        (self.resident, self.left_out, self.damaged),
                         &AtomicBool::new(false),
                         &mut |_| {},
                     )?;
@@ -403,6 +420,7 @@ impl Mode for Review<'_> {
         stats.mesh_pages = io.reads_of(PageKind::Mesh);
         stats.lod_pages = io.reads_of(PageKind::Lod);
         stats.buffer_bytes = buffer.bytes();
+        stats.damaged = self.damage_seen.count_new(self.damaged);
         Ok(stats)
     }
 
@@ -427,7 +445,10 @@ impl Mode for Review<'_> {
             damaged: self
                 .left_out
                 .and_then(|l| l.lock().ok().map(|mut l| l.take_untold()))
-                .unwrap_or_default(),
+                .unwrap_or_default()
+                .into_iter()
+                .chain(self.damage_seen.take_untold(self.damaged))
+                .collect(),
             // The session adds what reading over HTTP cost, what the stream did, and
             // what is straight ahead.
             remote: None,
@@ -596,6 +617,47 @@ impl Review<'_> {
                 Ok(())
             }
             e => Err(e),
+        }
+    }
+
+    /// What the loaders were still reading when the walk ended, taken as they finish
+    /// (the walk's scope waits for them in any case): their failures counted and their
+    /// damage named, so that a walk that ends while its loads still fail says so. Only
+    /// once the request channels are closed (and, when `refining`, the refining lane's).
+    fn take_last_answers(&mut self, refining: bool) {
+        while let Ok((_, answer)) = self.res_rx.recv() {
+            match answer {
+                Answer::Part { .. } => {}
+                Answer::Done(Ok(f)) if f.unloaded > 0 => {
+                    self.counts.failed += 1;
+                    self.counts.last_failure = f.failure;
+                }
+                Answer::Done(Ok(_)) => {}
+                Answer::Done(Err(e)) => self.failed_late(e),
+            }
+        }
+        if refining {
+            while let Ok(got) = self.refined_rx.recv() {
+                if let Err(e) = got {
+                    self.failed_late(e);
+                }
+            }
+        }
+    }
+
+    /// A load that failed after the walk's last frame: on the network, counted with
+    /// the others; anything else, named with the damage.
+    fn failed_late(&mut self, e: Error) {
+        match e {
+            Error::Remote { .. } | Error::RemoteChanged { .. } => {
+                self.counts.failed += 1;
+                self.counts.last_failure = Some(e.to_string());
+            }
+            e => {
+                if let Ok(mut d) = self.damaged.lock() {
+                    d.note_words(e.to_string());
+                }
+            }
         }
     }
 
