@@ -2,6 +2,8 @@
 //! client against it.
 
 mod common;
+#[path = "common/http.rs"]
+mod http;
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, ChildStdout, Command, Stdio};
@@ -116,6 +118,34 @@ fn serve_stream_streams_a_databases_landmarks_to_a_client() {
         end.contains("1 views answered") && end.ends_with("the client ended it"),
         "{end}"
     );
+}
+
+/// A database given as a URL is read over HTTP, as every command reads one: the same
+/// landmarks as from the file.
+#[test]
+fn serve_stream_streams_a_database_given_as_a_url() {
+    let c = common::city(60, 3, &common::with_landmarks());
+    let nginx = http::Nginx::start(c.dir.path());
+    let url = nginx.url("city.flaneur");
+    let mut served = serve_stream(std::path::Path::new(&url), &["--landmarks", "4"]);
+    let (first, addr) = served.first_line();
+    let local = Landmark::all_in(&Database::open(&c.db).unwrap(), 4).unwrap();
+    assert!(
+        first.starts_with(&format!("streaming {} landmarks", local.len())),
+        "{first}"
+    );
+    let hello = Hello {
+        traversal: Traversal::Priority,
+        fov: 1.0,
+        budget: None,
+        out_of_view: false,
+        back_face: false,
+        scheme: flaneur_stream::Scheme::Dag,
+    };
+    let client = StreamClient::connect(&addr, hello, Duration::from_secs(20)).unwrap();
+    let ids: Vec<u64> = client.objects().iter().map(|o| o.id).collect();
+    assert_eq!(ids, local.iter().map(|l| l.id).collect::<Vec<_>>());
+    client.bye().unwrap();
 }
 
 #[test]

@@ -9,14 +9,16 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 
-use flaneur::Database;
+use super::source::SourceArgs;
+
+use clap::builder::RangedU64ValueParser;
 use flaneur_stream::{Landmark, ServerConfig, StreamServer};
 
 /// `flaneur serve-stream`'s arguments.
 #[derive(clap::Args)]
 pub struct ServeStreamArgs {
-    /// The database (a local file): built with LODs, its objects above `--pm-threshold`
-    /// have the progressive meshes it streams.
+    /// The database (a file, or an http:// or https:// URL): built with LODs, its
+    /// objects above `--pm-threshold` have the progressive meshes it streams.
     db: PathBuf,
     /// The port to listen on; 0 picks a free one (printed).
     #[arg(long, default_value_t = 7878)]
@@ -42,6 +44,18 @@ pub struct ServeStreamArgs {
     /// The most blocks a prediction asks for per landmark.
     #[arg(long, default_value_t = ServerConfig::default().predict_blocks)]
     predict_blocks: usize,
+    /// The most sessions served at once, 1 to 65536: a client that connects past them
+    /// is told so (REFUSED) and closed.
+    #[arg(long, value_name = "N", default_value_t = ServerConfig::default().max_sessions,
+          value_parser = RangedU64ValueParser::<usize>::new().range(1..=65536))]
+    max_sessions: usize,
+    /// The most MiB of a client's messages one session holds at once, a message being
+    /// received included, 1 to 1024: a longer message is refused before it is read.
+    #[arg(long, value_name = "MIB", default_value_t = ServerConfig::default().session_budget >> 20,
+          value_parser = RangedU64ValueParser::<usize>::new().range(1..=1024))]
+    session_mb: usize,
+    #[command(flatten)]
+    source: SourceArgs,
 }
 
 impl ServeStreamArgs {
@@ -56,7 +70,8 @@ impl ServeStreamArgs {
         if self.block_levels == 0 {
             bail!("--block-levels must be at least 1");
         }
-        let db = Database::open(&self.db)?;
+        return_freed_blocks();
+        let db = self.source.open(&self.db)?;
         let landmarks = Landmark::all_in(&db, self.landmarks)
             .with_context(|| format!("reading the landmarks of {}", self.db.display()))?;
         if landmarks.is_empty() {
@@ -73,13 +88,19 @@ impl ServeStreamArgs {
             block_levels: self.block_levels,
             idle: Duration::from_millis(self.predict_after_ms),
             predict_blocks: self.predict_blocks,
+            max_sessions: self.max_sessions,
+            session_budget: self.session_mb << 20,
         };
         let server = StreamServer::bind(SocketAddr::new(self.bind, self.port), landmarks, config)
             .with_context(|| format!("listening on {}:{}", self.bind, self.port))?
             .spawn()?;
         println!(
-            "streaming {count} landmarks ({triangles} triangles in full) on tcp://{}; stop with Ctrl-C",
-            server.addr()
+            "streaming {count} landmarks ({triangles} triangles in full) on tcp://{}; at most \
+             {} sessions at once, each holding at most {} MiB of its client's messages; stop \
+             with Ctrl-C",
+            server.addr(),
+            self.max_sessions,
+            self.session_mb
         );
         for end in server.ends() {
             match end.reason {
@@ -94,5 +115,23 @@ impl ServeStreamArgs {
             }
         }
         Ok(())
+    }
+}
+
+/// Fixes glibc's mmap and trim thresholds at their defaults (128 KiB). Left dynamic,
+/// each large block freed raises the mmap threshold to its size (up to 32 MiB) and the
+/// trim threshold to twice that, so that once a session's large arrays or a long
+/// message have been freed, later ones come from the per-thread arenas, each of which
+/// keeps what it is given back: a server of one thread per session then holds far
+/// more than its sessions. Fixed, a block above 128 KiB is mapped on its own and
+/// returned when freed. (Fewer arenas, `M_ARENA_MAX`, made it worse: sessions on
+/// many threads then share and fragment them.)
+fn return_freed_blocks() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets the allocator's parameters, and is called before the
+    // server starts its threads.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 128 << 10);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 128 << 10);
     }
 }

@@ -64,5 +64,5 @@ pub use prediction::Predictor;
 pub use predictive::{PredictiveClient, PredictiveFrame, Refinement, ADJUST_EVERY, MAX_SPAN};
 pub use protocol::{HeldLeaves, HeldNodes, Hello, Message, Scheme, ViewPacket};
 pub use selective_client::{SelectiveLandmark, SelectiveStreamClient, VsplitsReport};
-pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer};
+pub use server::{RunningServer, ServerConfig, SessionEnd, StreamServer, MIN_SESSION_BUDGET};
 pub use walk_source::{StreamFigures, StreamedLandmarks, RETRY_AFTER};

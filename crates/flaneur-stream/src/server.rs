@@ -26,20 +26,30 @@
 //! [`BlockServer`](flaneur::lod::BlockServer) per landmark, its messages read on a
 //! thread of their own so that the session can tell the client's silence and predict
 //! (El-Sana §6.2).
+//!
+//! Limits, so that no set of clients can take the server's memory: at most
+//! [`ServerConfig::max_sessions`] sessions at once (a client past them is answered
+//! REFUSED, saying so, and closed, and its end is logged as any other's), and per
+//! session at most [`ServerConfig::session_budget`] bytes of the client's messages
+//! held at once. A frame announced longer than the budget allows is refused before any
+//! of it is read, and one within it is read as its bytes come (`protocol::receive`),
+//! so that a client that announces a long message and stalls makes the server hold
+//! only what it sent. What a session holds besides is its traversal's state, the same
+//! for every session of a scheme (`SessionEnd::memory`).
 
 mod block_session;
 mod session;
 
 use std::io::{self, Read, Write};
-use std::net::{SocketAddr, TcpListener, ToSocketAddrs};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, OnceLock};
 use std::thread;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::error::StreamError;
 use crate::landmark::Landmark;
-use crate::protocol::{Message, SelectiveObject, WelcomeObject, MAX_OBJECTS};
+use crate::protocol::{send, Message, SelectiveObject, WelcomeObject, MAX_OBJECTS, MAX_TO_SERVER};
 use flaneur::lod::{Refiner, SelectiveSource};
 use session::{serve, session};
 
@@ -59,7 +69,21 @@ pub struct ServerConfig {
     /// The most blocks a prediction asks for per landmark (each with the blocks above
     /// it and those its splits force, which come with it); zero: no prediction.
     pub predict_blocks: usize,
+    /// The most sessions served at once (at least 1): a client that connects past them
+    /// is answered REFUSED, saying so, and closed.
+    pub max_sessions: usize,
+    /// The most bytes of the client's messages one session holds at once, a message
+    /// being received included (at least [`MIN_SESSION_BUDGET`]): a frame announced
+    /// longer is refused before it is read. A RESUME is read up to this (and
+    /// [`MAX_RESUME`](crate::protocol::MAX_RESUME)); a session of blocks, which reads
+    /// a message ahead while it answers one, reads a SWITCH up to a third of it (and
+    /// [`MAX_SWITCH`](crate::protocol::MAX_SWITCH)).
+    pub session_budget: usize,
 }
+
+/// The least [`ServerConfig::session_budget`]: three of the longest frames a session
+/// reads besides RESUME and SWITCH, so that every scheme's VIEW fits.
+pub const MIN_SESSION_BUDGET: usize = 3 * MAX_TO_SERVER;
 
 impl Default for ServerConfig {
     fn default() -> ServerConfig {
@@ -68,6 +92,10 @@ impl Default for ServerConfig {
             block_levels: 2,
             idle: Duration::from_millis(10),
             predict_blocks: 8,
+            max_sessions: 64,
+            // A RESUME of a million nodes held split; a session of blocks' SWITCH of
+            // MAX_SWITCH, three at once.
+            session_budget: 4 << 20,
         }
     }
 }
@@ -194,6 +222,18 @@ impl StreamServer {
                 "blocks of 0 levels: give at least 1".into(),
             ));
         }
+        if config.max_sessions == 0 {
+            return Err(StreamError::Malformed(
+                "at most 0 sessions at once: give at least 1".into(),
+            ));
+        }
+        if config.session_budget < MIN_SESSION_BUDGET {
+            return Err(StreamError::Malformed(format!(
+                "a session budget of {} bytes, below the {MIN_SESSION_BUDGET} a session \
+                 needs to read its messages",
+                config.session_budget
+            )));
+        }
         if landmarks.len() > MAX_OBJECTS {
             return Err(StreamError::Malformed(format!(
                 "{} landmarks, above the {MAX_OBJECTS} a session streams",
@@ -292,16 +332,39 @@ impl StreamServer {
     }
 
     fn accept_until(&self, stop: &AtomicBool, ends: &mpsc::Sender<SessionEnd>) {
+        let active = Arc::new(AtomicUsize::new(0));
+        let mut refused = Refused::default();
         while !stop.load(Ordering::Relaxed) {
+            refused.drain();
             match self.listener.accept() {
+                Ok((stream, peer))
+                    if active.load(Ordering::Acquire) >= self.config.max_sessions =>
+                {
+                    let why = format!(
+                        "the server is serving its most sessions at once ({}): try again later",
+                        self.config.max_sessions
+                    );
+                    refused.refuse(stream, &why);
+                    let _ = ends.send(session::ended(peer, None, Some(why)));
+                }
                 Ok((stream, peer)) => {
-                    let (shared, config, ends) = (self.shared.clone(), self.config, ends.clone());
-                    let _ =
+                    let (shared, config, log) = (self.shared.clone(), self.config, ends.clone());
+                    // Counted before the thread starts, so that the next accept sees it.
+                    let slot = Slot::take(&active);
+                    let spawned =
                         thread::Builder::new()
                             .name(format!("stream-{peer}"))
                             .spawn(move || {
-                                let _ = ends.send(session(stream, peer, &shared, config));
+                                let end = session(stream, peer, &shared, config);
+                                // Free before the end is logged: whoever reads the log
+                                // may connect again at once.
+                                drop(slot);
+                                let _ = log.send(end);
                             });
+                    if let Err(e) = spawned {
+                        let why = format!("no thread for the session: {e}");
+                        let _ = ends.send(session::ended(peer, None, Some(why)));
+                    }
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                     thread::sleep(Duration::from_millis(5))
@@ -309,6 +372,71 @@ impl StreamServer {
                 Err(_) => thread::sleep(Duration::from_millis(50)),
             }
         }
+    }
+}
+
+/// A session's place among [`ServerConfig::max_sessions`], given back when dropped:
+/// when its thread ends, however it ends, or with the closure of a thread that could
+/// not start.
+struct Slot(Arc<AtomicUsize>);
+
+impl Slot {
+    fn take(active: &Arc<AtomicUsize>) -> Slot {
+        active.fetch_add(1, Ordering::AcqRel);
+        Slot(active.clone())
+    }
+}
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// Connections refused past the sessions' limit, each told why and kept open a little
+/// while, its input read and thrown away: a connection closed with a HELLO unread is
+/// reset, which may reach the client before it reads the reason.
+#[derive(Default)]
+struct Refused(Vec<(TcpStream, Instant)>);
+
+impl Refused {
+    /// How long a refused connection is kept for its client to read why.
+    const LINGER: Duration = Duration::from_secs(2);
+    /// The most refused connections kept at once; past them, the oldest is closed.
+    const MOST: usize = 256;
+
+    /// Tells `stream`'s client `why` and keeps the connection.
+    fn refuse(&mut self, stream: TcpStream, why: &str) {
+        // A refusal is a few dozen bytes into an empty send buffer: it never waits.
+        let told = stream.set_nonblocking(true).is_ok()
+            && send(&mut &stream, &Message::Refused(why.into())).is_ok()
+            && stream.shutdown(Shutdown::Write).is_ok();
+        if !told {
+            return;
+        }
+        if self.0.len() >= Self::MOST {
+            self.0.remove(0);
+        }
+        self.0.push((stream, Instant::now()));
+    }
+
+    /// Reads what the refused clients sent, and closes those that closed, failed, or
+    /// were kept long enough.
+    fn drain(&mut self) {
+        let mut scratch = [0u8; 4096];
+        self.0.retain(|(stream, since)| {
+            if since.elapsed() > Self::LINGER {
+                return false;
+            }
+            loop {
+                match (&*stream).read(&mut scratch) {
+                    Ok(0) => return false,
+                    Ok(_) => continue,
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
+                    Err(_) => return false,
+                }
+            }
+        });
     }
 }
 

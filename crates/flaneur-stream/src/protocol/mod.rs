@@ -730,9 +730,27 @@ pub fn send(out: &mut impl std::io::Write, m: &Message) -> Result<usize, StreamE
 
 /// Reads one frame of at most `max` bytes and decodes it; `Ok(None)` when the peer
 /// closed the connection between frames. Also returns the frame's length on the wire.
+///
+/// The frame's buffer grows with the bytes that come (see [`READ_CHUNK`]), not to the
+/// length the peer announced, so a peer that announces a long frame and sends little
+/// of it makes this side hold little.
 pub fn receive(
     input: &mut impl std::io::Read,
     max: usize,
+) -> Result<Option<(Message, usize)>, StreamError> {
+    receive_within(input, max, "this side reads")
+}
+
+/// The most a frame's buffer grows by before the bytes already in it have come: a
+/// frame is read in pieces of this size, then of the size read so far, so that what a
+/// frame holds is at most twice what was sent of it, or this.
+pub const READ_CHUNK: usize = 64 << 10;
+
+/// [`receive`], a frame over `max` refused as above the `max` of `bound`'s naming.
+pub(crate) fn receive_within(
+    input: &mut impl std::io::Read,
+    max: usize,
+    bound: &str,
 ) -> Result<Option<(Message, usize)>, StreamError> {
     let mut len = [0u8; 4];
     match input.read_exact(&mut len) {
@@ -743,11 +761,16 @@ pub fn receive(
     let len = u32::from_le_bytes(len) as usize;
     if len > max {
         return Err(StreamError::Malformed(format!(
-            "a frame of {len} bytes, above the {max} this side reads"
+            "a frame of {len} bytes, above the {max} {bound}"
         )));
     }
-    let mut body = vec![0u8; len];
-    input.read_exact(&mut body)?;
+    let mut body = Vec::new();
+    while body.len() < len {
+        let (start, grow) = (body.len(), body.len().max(READ_CHUNK).min(len - body.len()));
+        body.reserve_exact(grow);
+        body.resize(start + grow, 0);
+        input.read_exact(&mut body[start..])?;
+    }
     Ok(Some((Message::decode(&body)?, 4 + len)))
 }
 

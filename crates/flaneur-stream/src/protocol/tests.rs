@@ -452,3 +452,64 @@ fn a_switch_is_cut_to_its_bound_by_the_tops_it_can_ask_again() {
     let e = switch.within(40).unwrap_err().to_string();
     assert!(e.contains("releases alone take"), "{e}");
 }
+
+/// A peer's bytes, 4 KiB a read at most, up to `cut` of them (then the connection
+/// breaks); the longest buffer a read was handed.
+struct Trickle {
+    bytes: Vec<u8>,
+    at: usize,
+    cut: usize,
+    longest_ask: usize,
+}
+
+impl std::io::Read for Trickle {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.longest_ask = self.longest_ask.max(buf.len());
+        if self.at >= self.cut.min(self.bytes.len()) {
+            return Err(std::io::ErrorKind::ConnectionReset.into());
+        }
+        let n = buf.len().min(4096).min(self.cut - self.at);
+        buf[..n].copy_from_slice(&self.bytes[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+/// A frame announced at the protocol's longest and cut short is read into a buffer no
+/// longer than what came (and a piece), not one of the announced length; a frame that
+/// comes whole in small reads is the message sent.
+#[test]
+fn a_frame_is_read_as_its_bytes_come_not_as_long_as_announced() {
+    let resume = Message::Resume {
+        next_frame: 9,
+        objects: vec![HeldNodes {
+            index: 0,
+            nodes: (0..100_000).collect(),
+        }],
+    };
+    let whole = resume.encode();
+    let mut announced = whole.clone();
+    announced[..4].copy_from_slice(&(MAX_RESUME as u32).to_le_bytes());
+    let cut = 200 << 10;
+    let mut peer = Trickle {
+        bytes: announced,
+        at: 0,
+        cut,
+        longest_ask: 0,
+    };
+    assert!(receive(&mut peer, MAX_RESUME).is_err());
+    assert_eq!(peer.at, cut);
+    assert!(
+        peer.longest_ask <= 2 * cut,
+        "a read was handed {} bytes for a frame cut at {cut}",
+        peer.longest_ask
+    );
+    let mut peer = Trickle {
+        cut: whole.len(),
+        bytes: whole.clone(),
+        at: 0,
+        longest_ask: 0,
+    };
+    let (back, len) = receive(&mut peer, MAX_RESUME).unwrap().unwrap();
+    assert_eq!((back, len), (resume, whole.len()));
+}

@@ -46,11 +46,11 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::session::{each_once, out_of_place, stalled, Session, Streams};
+use super::session::{each_once, out_of_place, receive_held, stalled, Session, Streams};
 use super::{Selective, ServerConfig, Shared};
 use crate::error::StreamError;
 use crate::prediction::Predictor;
-use crate::protocol::{receive, Hello, Message, ObjectBlocks, Switch, MAX_SWITCH, MAX_TO_CLIENT};
+use crate::protocol::{Hello, Message, ObjectBlocks, Switch, MAX_SWITCH, MAX_TO_CLIENT};
 use flaneur::lod::{Block, BlockServer, NodeName, SelectiveSource};
 
 /// What the reader thread hands the session: a message, the end of the input (`None`),
@@ -163,7 +163,9 @@ pub(super) fn dialogue<R: Read + Send, W: Write>(
         let (tx, rx) = mpsc::sync_channel(1);
         let reader = thread::Builder::new()
             .name("stream-blocks-reader".into())
-            .spawn_scoped(scope, move || read_messages(input, &tx))?;
+            .spawn_scoped(scope, move || {
+                read_messages(input, &tx, config.session_budget)
+            })?;
         let end = answer_until_bye(&rx, output, s, config);
         // The reader's next hand-over fails; a read under way ends.
         drop(rx);
@@ -176,10 +178,11 @@ pub(super) fn dialogue<R: Read + Send, W: Write>(
 }
 
 /// Reads messages into `tx` until the input ends, fails or says BYE, or the session
-/// stops taking them.
-fn read_messages(input: &mut impl Read, tx: &SyncSender<Incoming>) {
+/// stops taking them. The session holds up to three at once (one answered, one in
+/// the channel, one being read), so each is at most a third of the session's `budget`.
+fn read_messages(input: &mut impl Read, tx: &SyncSender<Incoming>, budget: usize) {
     loop {
-        let next: Incoming = receive(input, MAX_SWITCH).map(|m| m.map(|(m, _)| m));
+        let next: Incoming = receive_held(input, MAX_SWITCH, budget / 3).map(|m| m.map(|(m, _)| m));
         let goes_on = matches!(&next, Ok(Some(m)) if !matches!(m, Message::Bye));
         if tx.send(next).is_err() || !goes_on {
             return;

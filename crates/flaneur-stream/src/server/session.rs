@@ -12,8 +12,8 @@ use super::block_session::{self, BlockStreams};
 use super::{ServerConfig, SessionEnd, Shared};
 use crate::error::StreamError;
 use crate::protocol::{
-    receive, send, HeldLeaves, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates, ObjectVsplits,
-    Scheme, ViewPacket, MAX_N, MAX_RESUME, MAX_TO_SERVER,
+    receive, receive_within, send, HeldLeaves, HeldNodes, Hello, Message, NodeSplit, ObjectUpdates,
+    ObjectVsplits, Scheme, ViewPacket, MAX_N, MAX_RESUME, MAX_TO_SERVER,
 };
 use flaneur::lod::{Criteria, RefineParams, Refiner, SelectiveServer, SelectiveSource, View};
 
@@ -78,7 +78,11 @@ pub(super) fn session(
 }
 
 /// How a session of `peer` ended, `s` what it did (`None` before WELCOME).
-fn ended(peer: SocketAddr, s: Option<Session<'_>>, reason: Option<String>) -> SessionEnd {
+pub(super) fn ended(
+    peer: SocketAddr,
+    s: Option<Session<'_>>,
+    reason: Option<String>,
+) -> SessionEnd {
     let Some(s) = s else {
         return SessionEnd {
             peer,
@@ -217,7 +221,7 @@ fn run<'a, R: Read + Send, W: Write>(
     let mut first = true;
     loop {
         let bound = if first { MAX_RESUME } else { MAX_TO_SERVER };
-        match receive(input, bound)? {
+        match receive_held(input, bound, config.session_budget)? {
             Some((
                 Message::Resume {
                     next_frame,
@@ -248,6 +252,21 @@ fn run<'a, R: Read + Send, W: Write>(
             Some((m, _)) => return Err(out_of_place("VIEW or BYE", &m)),
         }
         first = false;
+    }
+}
+
+/// Reads the client's next frame, of at most `bound` bytes (the protocol's bound for
+/// it) and at most `budget` (what the session may hold of it).
+pub(super) fn receive_held(
+    input: &mut impl Read,
+    bound: usize,
+    budget: usize,
+) -> Result<Option<(Message, usize)>, StreamError> {
+    if budget < bound {
+        let why = "bytes a session may hold on this server (its memory budget per session)";
+        receive_within(input, budget, why)
+    } else {
+        receive(input, bound)
     }
 }
 
