@@ -27,8 +27,9 @@ pub struct ViewArgs {
     /// Window size, WIDTHxHEIGHT pixels. The walk's view fills it: 45° high, and as
     /// wide as the window's shape makes it, the walk selecting and culling for that
     /// view; the view from above (T) is the window's largest centred square.
-    #[arg(long, value_parser = parse_size, default_value = "1024x768")]
-    size: (u32, u32),
+    /// Default: 1024x768, shrunk (its shape kept) to fit a smaller screen.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
     /// LOD selection's screen-space error, a fraction of the viewport (0: full
     /// detail), within [0, 1); [ and ] halve and double it while walking.
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = lod_tau, allow_negative_numbers = true)]
@@ -127,8 +128,11 @@ impl ViewArgs {
         let play = play
             .map(|p| CameraPath::load_csv(&p).with_context(|| format!("reading {}", p.display())))
             .transpose()?;
+        let defaults = window_options(&db, start);
         let opts = flaneur_render::ViewOptions {
-            size,
+            // A size asked for is kept whatever the screen; the default one fits it.
+            size: size.unwrap_or(defaults.size),
+            fit_screen: size.is_none(),
             lod_tau: (lod_tau != 0.0).then_some(lod_tau),
             play,
             gpu_budget: (gpu_budget_mb > 0.0).then_some((gpu_budget_mb * 1048576.0) as u64),
@@ -136,7 +140,7 @@ impl ViewArgs {
             eta,
             polygon_budget: budget,
             adapt_ahead,
-            ..window_options(&db, start)
+            ..defaults
         };
         let remote = match &stream {
             Some(_) if lod_tau == 0.0 => {

@@ -26,16 +26,22 @@ pub fn display() -> Option<Display> {
     if std::env::var_os("DISPLAY").is_some() {
         return Some(Display(None));
     }
-    xvfb(&[])
+    xvfb((800, 600), &[])
 }
 
 /// An Xvfb server of our own whose screen is also a file in `dir` (XWD, `Xvfb_screen0`),
 /// so that a test can see the window's pixels, on a black root. `None` without Xvfb.
 pub fn display_in(dir: &std::path::Path) -> Option<Display> {
-    xvfb(&["-fbdir", dir.to_str()?, "-br"])
+    display_sized_in(dir, (800, 600))
 }
 
-fn xvfb(extra: &[&str]) -> Option<Display> {
+/// [`display_in`] with a screen of `(width, height)` pixels.
+pub fn display_sized_in(dir: &std::path::Path, screen: (u32, u32)) -> Option<Display> {
+    xvfb(screen, &["-fbdir", dir.to_str()?, "-br"])
+}
+
+fn xvfb((width, height): (u32, u32), extra: &[&str]) -> Option<Display> {
+    let screen = format!("{width}x{height}x24");
     // Xvfb picks a free display and writes its number on stdout once it takes clients.
     let child = Command::new("Xvfb")
         .args([
@@ -43,7 +49,7 @@ fn xvfb(extra: &[&str]) -> Option<Display> {
             "1",
             "-screen",
             "0",
-            "800x600x24",
+            screen.as_str(),
             "-nolisten",
             "tcp",
         ])

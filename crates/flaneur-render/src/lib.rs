@@ -25,7 +25,7 @@ pub use gpu::Gpu;
 pub use hud::{rasterise, Hud, HudContent};
 pub use meshes::{gpu_bytes, Followed, GpuMesh, GpuMeshes, MeshKey, Vertex};
 pub use offscreen::{Frame, Offscreen};
-pub use scene::{ScenePass, SceneView};
+pub use scene::{drawing_view_proj, Fade, ScenePass, SceneView};
 pub use shot::{shot, Shot};
 /// The adapter a [`Gpu`] runs on (its name, driver and backend), as wgpu reports it.
 pub use wgpu::AdapterInfo;

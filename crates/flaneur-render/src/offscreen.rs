@@ -87,13 +87,16 @@ impl Offscreen {
     }
 
     /// Draws a ground under `city`: a plane at its lowest point reaching `margin`
-    /// metres past it on every side. The id target shows the ground as the sky.
+    /// metres past it on every side. The id target shows the ground as the sky. The
+    /// city's heights also set where a camera's picture fades
+    /// ([`Offscreen::render_camera`]).
     pub fn set_ground(&mut self, gpu: &Gpu, city: &Aabb, margin: f32) {
         self.scene.set_ground(gpu, city, margin);
     }
 
     /// Draws `draw` as `camera` sees it, its vertical field of view kept and its
-    /// horizontal one fitted to the image.
+    /// horizontal one fitted to the image: whole, with no far plane, fading into the
+    /// sky before the camera's far plane ([`ScenePass::camera_view`]).
     pub fn render_camera(
         &self,
         gpu: &Gpu,
@@ -102,7 +105,8 @@ impl Offscreen {
         draw: &[MeshKey],
     ) -> Result<Frame> {
         let (camera, aspect) = self.fitted(camera)?;
-        self.render(gpu, camera.view_proj(aspect)?, meshes, draw)
+        let view = self.scene.camera_view(&camera, aspect)?;
+        self.render_view(gpu, view, meshes, draw, |_, _| Ok(()))
     }
 
     /// `camera` with its vertical field of view kept and its horizontal one fitted to
@@ -135,6 +139,25 @@ impl Offscreen {
         draw: &[MeshKey],
         overlay: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView) -> Result<()>,
     ) -> Result<Frame> {
+        let view = SceneView {
+            view_proj,
+            viewport: None,
+            wireframe: false,
+            fade: None,
+        };
+        self.render_view(gpu, view, meshes, draw, overlay)
+    }
+
+    /// Draws `draw` as `view` says (as lines where [`Offscreen::wireframe`] asks),
+    /// then `overlay`, and reads the image back.
+    fn render_view(
+        &self,
+        gpu: &Gpu,
+        view: SceneView,
+        meshes: &GpuMeshes,
+        draw: &[MeshKey],
+        overlay: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::TextureView) -> Result<()>,
+    ) -> Result<Frame> {
         let [colour, ids, depth] = &self.views;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.scene.encode(
@@ -144,9 +167,8 @@ impl Offscreen {
             meshes,
             draw,
             &SceneView {
-                view_proj,
-                viewport: None,
                 wireframe: self.wireframe,
+                ..view
             },
         )?;
         overlay(&mut encoder, colour)?;

@@ -27,7 +27,9 @@ pub struct Shot {
 /// Renders `meshes` (each object's id and mesh) as `camera` sees them, over the ground
 /// of a city within `city`, into a `width` × `height` frame. `camera` keeps its
 /// vertical field of view and has its horizontal one fitted to the image
-/// ([`Camera::fitted_to`]): select the meshes with the fitted camera.
+/// ([`Camera::fitted_to`]): select the meshes with the fitted camera. What it selects
+/// is drawn whole, past its far plane, fading into the sky before it
+/// ([`Offscreen::render_camera`]).
 ///
 /// ```no_run
 /// # fn main() -> flaneur::Result<()> {
@@ -54,7 +56,7 @@ pub fn shot(
 ) -> Result<Shot> {
     let mut target = Offscreen::new(gpu, width, height)?;
     target.set_ground(gpu, city, camera.far);
-    let (camera, aspect) = target.fitted(camera)?;
+    let (camera, _) = target.fitted(camera)?;
     let started = Instant::now();
     let mut resident = GpuMeshes::default();
     for (id, mesh) in meshes {
@@ -63,7 +65,7 @@ pub fn shot(
     let upload = started.elapsed();
     let started = Instant::now();
     let ids: Vec<_> = meshes.iter().map(|m| (m.0, 0)).collect();
-    let frame = target.render(gpu, camera.view_proj(aspect)?, &resident, &ids)?;
+    let frame = target.render_camera(gpu, &camera, &resident, &ids)?;
     Ok(Shot {
         frame,
         objects: meshes.len(),

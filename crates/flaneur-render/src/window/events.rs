@@ -18,6 +18,8 @@ pub(super) struct Events {
     pub(super) error: Option<String>,
     pub(super) size: (u32, u32),
     pub(super) title: String,
+    /// Whether the window opens fitted to the screen (`ViewOptions::fit_screen`).
+    pub(super) fit_screen: bool,
     pub(super) closed: bool,
     pub(super) resized: bool,
     pub(super) focus_lost: bool,
@@ -30,6 +32,17 @@ impl ApplicationHandler for Events {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         if self.window.is_some() {
             return;
+        }
+        if self.fit_screen {
+            // The window is not there yet to say which screen it is on: the primary
+            // one, or the first the system lists (Wayland names no primary).
+            let screen = event_loop
+                .primary_monitor()
+                .or_else(|| event_loop.available_monitors().next())
+                .map(|m| m.size());
+            if let Some(s) = screen {
+                self.size = super::options::fit_to_screen(self.size, (s.width, s.height));
+            }
         }
         let attributes = Window::default_attributes()
             .with_title(self.title.clone())

@@ -73,15 +73,24 @@ impl WalkWindow {
         let view = texture.texture.create_view(&Default::default());
         // The walk's view fills the window: the walk fitted its camera's horizontal
         // field of view to the window's shape (`FrameSink::aspect`). The view from
-        // above stays square, centred.
-        let (viewport, view_proj) = if self.top_view {
+        // above stays square, centred, unfaded. The walk's view is drawn as headless
+        // frames are (`ScenePass::camera_view`): whole, fading before the far plane.
+        let (viewport, scene_view) = if self.top_view {
             let side = w.min(h) as f32;
             let square = [(w as f32 - side) * 0.5, (h as f32 - side) * 0.5, side, side];
-            (square, top_view(camera))
+            let above = SceneView {
+                view_proj: top_view(camera),
+                viewport: None,
+                wireframe: false,
+                fade: None,
+            };
+            (square, above)
         } else {
             let aspect = w as f32 / h.max(1) as f32;
-            ([0.0, 0.0, w as f32, h as f32], camera.view_proj(aspect)?)
+            let whole = [0.0, 0.0, w as f32, h as f32];
+            (whole, s.scene.camera_view(camera, aspect)?)
         };
+        let view_proj = scene_view.view_proj;
         let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
         s.scene.encode(
             &s.gpu,
@@ -90,9 +99,9 @@ impl WalkWindow {
             &s.meshes,
             &keys,
             &SceneView {
-                view_proj,
                 viewport: Some(viewport),
                 wireframe: self.wireframe,
+                ..scene_view
             },
         )?;
         if self.boxes {

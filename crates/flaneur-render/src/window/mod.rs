@@ -136,6 +136,7 @@ impl WalkWindow {
         let mut events = Events {
             size: opts.size,
             title: opts.title.clone(),
+            fit_screen: opts.fit_screen,
             ..Default::default()
         };
         let started = Instant::now();
@@ -152,6 +153,9 @@ impl WalkWindow {
             .window
             .clone()
             .expect("the loop above ends with a window");
+        // The size it opened at, fitted to the screen.
+        let mut opts = opts;
+        opts.size = events.size;
         let surfaced = Surfaced::new(&instance, &window, &opts)?;
         if let Some(tau) = opts.lod_tau {
             flaneur::walk::lod_select::check_tau(tau)?;

@@ -12,6 +12,11 @@ pub struct ViewOptions {
     /// The window's title, and its size in pixels.
     pub title: String,
     pub size: (u32, u32),
+    /// Whether the window opens smaller than `size` where the screen is too small for
+    /// it: shrunk, its shape kept, to 90 % of the screen each way at most (the rest left
+    /// to its title bar and borders, and the desktop's panels). On for the default
+    /// size, off for a size asked for.
+    pub fit_screen: bool,
     /// LOD selection's threshold, a fraction of the viewport; `None`: full detail.
     pub lod_tau: Option<f32>,
     /// Where the viewer starts, over a ground at `ground` metres.
@@ -39,13 +44,14 @@ pub struct ViewOptions {
 
 impl ViewOptions {
     /// Walking a city within `city` from `start`: a 1024 × 768 window titled
-    /// "flaneur", LODs under the thesis's τ, VISUAL under its η, a 256 MiB GPU budget, a
-    /// walker's pace, and
+    /// "flaneur" (smaller on a smaller screen, [`ViewOptions::fit_screen`]), LODs under
+    /// the thesis's τ, VISUAL under its η, a 256 MiB GPU budget, a walker's pace, and
     /// the ground, at the city's foot, reaching the default frustum's depth past it.
     pub fn new(city: Aabb, start: Pose) -> ViewOptions {
         ViewOptions {
             title: "flaneur".into(),
             size: (1024, 768),
+            fit_screen: true,
             lod_tau: Some(flaneur::walk::lod_select::DEFAULT_TAU),
             start,
             ground: city.min.y,
@@ -75,4 +81,49 @@ pub struct ViewSummary {
     pub over_budget: usize,
     /// Problems met and got over (lost surfaces, a lost device, drawing errors).
     pub problems: Vec<String>,
+}
+
+/// How much of the screen the first window may take each way, when it fits itself.
+const SCREEN_SHARE: u64 = 90;
+
+/// `size` shrunk to fit within [`SCREEN_SHARE`] % of a screen of `screen` pixels each
+/// way, its shape kept (as nearly as whole pixels allow); `size` itself where it fits
+/// already, or where the screen's size is unknown (0).
+pub(super) fn fit_to_screen((w, h): (u32, u32), (sw, sh): (u32, u32)) -> (u32, u32) {
+    if sw == 0 || sh == 0 || w == 0 || h == 0 {
+        return (w, h);
+    }
+    let (room_w, room_h) = (
+        sw as u64 * SCREEN_SHARE / 100,
+        sh as u64 * SCREEN_SHARE / 100,
+    );
+    let (w64, h64) = (w as u64, h as u64);
+    if w64 <= room_w && h64 <= room_h {
+        return (w, h);
+    }
+    // The tighter side decides: the other is scaled by the same ratio, rounded down.
+    if w64 * room_h > h64 * room_w {
+        (room_w as u32, ((h64 * room_w / w64) as u32).max(1))
+    } else {
+        (((w64 * room_h / h64) as u32).max(1), room_h as u32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fit_to_screen;
+
+    #[test]
+    fn the_first_window_fits_the_screen() {
+        // Fits: kept.
+        assert_eq!(fit_to_screen((1024, 768), (1920, 1080)), (1024, 768));
+        assert_eq!(fit_to_screen((1024, 768), (1280, 1024)), (1024, 768));
+        // Too tall for a 720-pixel screen: 90 % of its height, the shape kept.
+        assert_eq!(fit_to_screen((1024, 768), (1280, 720)), (864, 648));
+        // Too wide: the width decides.
+        assert_eq!(fit_to_screen((2000, 500), (1000, 1000)), (900, 225));
+        // An unknown screen leaves the size alone.
+        assert_eq!(fit_to_screen((1024, 768), (0, 0)), (1024, 768));
+        assert_eq!(fit_to_screen((5000, 1), (100, 100)), (90, 1));
+    }
 }
