@@ -3,7 +3,9 @@
 //! Every message is a frame: a `u32` length `L` (the bytes after it), then `L` bytes,
 //! the first of them the message's kind. All numbers are little-endian; floats are
 //! IEEE 754 `f32` and must be finite. A receiver refuses a frame longer than its bound
-//! ([`MAX_TO_SERVER`], [`MAX_TO_CLIENT`]) before reading it.
+//! ([`MAX_TO_SERVER`], [`MAX_TO_CLIENT`]) before reading it (a server also one
+//! longer than a session may hold: `ServerConfig::session_budget`), and reads one within
+//! it as its bytes come, not into a buffer of the length announced ([`receive`]).
 //!
 //! ```text
 //! client → server
