@@ -114,13 +114,13 @@ fn check_within(
     let Some(available) = available() else {
         return Ok(());
     };
-    if needs(opts, survey, &cost, work).total() <= available {
+    if needs(opts, v, survey, &cost, work).total() <= available {
         return Ok(());
     }
     // Over on the grid's every cell: count the walkable ones, the precomputation's own.
     let walkable = walkable_cells(v, &survey.boxes)?;
     let cost = v.cost(&city, objects, Some(walkable))?;
-    let need = needs(opts, survey, &cost, work);
+    let need = needs(opts, v, survey, &cost, work);
     if need.total() <= available {
         return Ok(());
     }
@@ -133,9 +133,15 @@ struct Needs {
     parts: Vec<(u64, &'static str, String)>,
 }
 
-/// What `work` under `opts` holds at least over the city of `survey` with `cost`.
-fn needs(opts: &BuildOptions, survey: &Survey, cost: &VisibilityCost, work: Work) -> Needs {
-    let v = opts.visibility.as_ref().expect("checked with visibility");
+/// What `work` under `opts` (its visibility `v`) holds at least over the city of
+/// `survey` with `cost`.
+fn needs(
+    opts: &BuildOptions,
+    v: &VisibilityOptions,
+    survey: &Survey,
+    cost: &VisibilityCost,
+    work: Work,
+) -> Needs {
     let mut parts = vec![(
         cost.cell_bytes,
         "the viewcells' lists",
