@@ -4,11 +4,15 @@
 //!
 //! The window is a [`Viewer`]: the walk asks it for each frame's pose (it pumps the
 //! window's events, then steers) and hands it each frame to draw. The walk's view is
-//! 45° × 45°, so the picture is the largest centred square of the window; the HUD uses
-//! the whole of it. Things that go wrong while walking do not end the walk: a window
-//! minimised or hidden skips drawing, a lost or outdated surface is configured again,
-//! a lost device is reported and a new one sought every second (the walk goes on,
-//! undrawn, meanwhile); drawing errors go to stderr and the HUD.
+//! 45° high and as wide as the window's shape makes it
+//! ([`FrameSink::aspect`](flaneur::walk::FrameSink::aspect)), so the picture fills the
+//! window, drawn whole past the walk's far plane and fading into the sky before it, as
+//! headless frames are; the HUD uses the whole window too. The window opens at the size
+//! asked for, or at its default fitted to the screen ([`ViewOptions::fit_screen`]).
+//! Things that go wrong while walking do not end the walk: a window minimised or hidden
+//! skips drawing, a lost or outdated surface is configured again, a lost device is
+//! reported and a new one sought every second (the walk goes on, undrawn, meanwhile);
+//! drawing errors go to stderr and the HUD.
 //!
 //! Keys: W A S D move, Shift runs, Space and C climb and sink when flying, F flies or
 //! walks, 1, 2 and 3 choose REVIEW, BOX or PVS, the brackets halve or double the LOD threshold
