@@ -888,6 +888,8 @@ fn a_compressed_answer_is_named_as_such() {
 /// Runs `flaneur` with `args` and waits for it by its own pid, to read its peak resident
 /// memory (`ru_maxrss`, KiB) from that wait alone rather than from every child of the
 /// test process; its exit status (success) and standard error.
+// The child is reaped by wait4, which clippy does not see.
+#[allow(clippy::zombie_processes)]
 fn flaneur_peak_rss(args: &[&str]) -> (bool, String, u64) {
     use std::io::Read;
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_flaneur"))

@@ -4,8 +4,12 @@
 //! exactly the bytes asked for, of the same version of the file every time. The first
 //! answer pins that version (its ETag, else its Last-Modified, and its length); every
 //! later request carries the ETag as `If-Match`, and every answer is checked against the
-//! pin, so pages of two versions are never mixed. A failed connection, a timeout or a
-//! 5xx is tried again with a doubling wait; anything else is an error at once.
+//! pin, so pages of two versions are never mixed. A server that names no version (neither
+//! header) is read all the same, and says so in [`RemoteStats::unversioned`]. Every
+//! request asks for the identity encoding: a compressed answer's bytes are not the file's
+//! at the offsets asked, so one is an error naming its encoding. A failed connection, a
+//! timeout or a 5xx is tried again with a doubling wait; anything else is an error at
+//! once.
 
 use std::fmt;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};

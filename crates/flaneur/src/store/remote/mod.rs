@@ -7,7 +7,8 @@
 //! - `fetch.rs`: one ranged GET and what its answer must be (206 with the bytes asked
 //!   for, of the version first opened: its ETag pinned and sent back as `If-Match`),
 //!   retried with backoff when the connection fails; several in flight at once;
-//! - `page_cache.rs`: the client's page cache, bounded in bytes;
+//! - `page_cache.rs`: the client's page cache, its bound capped at the file's size and the
+//!   memory available, grown as pages come;
 //! - `disk_cache.rs`: the optional cache on disk, one sparse file per version of a file;
 //! - `request_times.rs`: how long each request took, as a histogram;
 //! - `source.rs`: the page source the store reads through: cached pages, missing runs
