@@ -153,7 +153,13 @@ pub fn run(cfg: &StreamCrowdConfig, mut progress: impl FnMut(&str)) -> Result<St
     let model_triangles = landmark.triangles();
     let fov = crate::lod_refine::DEFAULT_FOV_DEGREES.to_radians();
     let views = Arc::new(orbit_path(centre, radius, cfg.frames, fov)?);
-    let server = StreamServer::bind("127.0.0.1:0", vec![landmark], ServerConfig::default())
+    // Every walker of the crowd is served: the server's default cap is for a public
+    // server, not for an experiment that asks for more clients on purpose.
+    let config = ServerConfig {
+        max_sessions: cfg.clients.max(1),
+        ..ServerConfig::default()
+    };
+    let server = StreamServer::bind("127.0.0.1:0", vec![landmark], config)
         .map_err(|e| Error::Invalid(format!("stream-crowd: {e}")))?;
     let shared_memory = server.shared_memory();
     let server = server
