@@ -9,7 +9,8 @@
 //! search has not come back, the frame then drawing the last place's finds. A frame's
 //! finds held coarser than their DoV deserves are counted too. Outside every viewcell
 //! the frames draw the fallback's disk cell as it arrives, and count no misses, as the
-//! waiting walk counts none there.
+//! waiting walk counts none there. A read the loader was still asking for when the walk
+//! ended is counted once the loader stops, failed or not.
 
 use std::collections::HashMap;
 use std::sync::{mpsc, Mutex};
@@ -20,7 +21,7 @@ use super::receive::receive;
 use super::visual::{begin_frame, cell_at, finish_frame, Searcher};
 use super::visual_loader::{self, Place, Stand, Update};
 use crate::database::Database;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::prefetch::motion::MotionTrack;
 use crate::store::IoStats;
@@ -61,7 +62,7 @@ pub(crate) fn walk_live<'db>(
         .skips_damaged()
         .then(|| Mutex::new(LeftOut::default()));
     let (tx, rx) = mpsc::channel();
-    let (mut frames, unknown, cells, run) = std::thread::scope(|scope| {
+    let (walked, rx) = std::thread::scope(|scope| {
         let (mb, lo) = (&mailbox, left_out.as_ref());
         scope.spawn(move || visual_loader::run(search, mb, lo, tx));
         let mut mode = NeverWait {
@@ -84,8 +85,27 @@ pub(crate) fn walk_live<'db>(
         };
         let walked = session::run(&mut mode, viewer, lods, progress);
         mailbox.end();
-        walked.map(|frames| (frames, mode.unknown, mode.cells, mode.run))
-    })?;
+        (
+            walked.map(|frames| (frames, mode.unknown, mode.cells, mode.run)),
+            mode.rx,
+        )
+    });
+    let (mut frames, unknown, cells, mut run) = walked?;
+    // The loader has stopped (the scope waited for it): a read it was still asking for
+    // as the walk ended has failed or come, and a failure is counted.
+    for update in rx.try_iter() {
+        match update {
+            Update::Retrying(why) => {
+                run.failed_loads += 1;
+                run.last_load_error = Some(why);
+            }
+            Update::Stopped(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => {
+                run.failed_loads += 1;
+                run.last_load_error = Some(e.to_string());
+            }
+            _ => {}
+        }
+    }
     // Frames whose cell's finds had not come missed all of them: counted now, a cell the
     // loader never searched searched here, outside the walk's figures.
     for (frame, cell) in unknown {
