@@ -33,7 +33,9 @@ use tower_http::services::fs::{Backend, ServeDir};
 /// `flaneur serve`'s arguments.
 #[derive(clap::Args)]
 pub struct ServeArgs {
-    /// The database files to serve, each at /<its file name>.
+    /// The database files to serve, each at /<its file name>; or one folder, whose regular
+    /// files (subfolders included; no links, no hidden names) are served at their paths
+    /// below it.
     #[arg(required = true)]
     dbs: Vec<PathBuf>,
     /// The port to listen on; 0 picks a free one (printed).

@@ -44,6 +44,7 @@ pub mod fuzzing;
 pub mod geom;
 pub mod hdov;
 pub mod lod;
+mod memory;
 mod names;
 pub mod prefetch;
 pub mod progress;

@@ -53,21 +53,6 @@ pub(crate) fn bound(
     }
 }
 
-/// The memory available for new allocations without swapping, in bytes: the kernel's
-/// `MemAvailable` estimate; `None` where /proc/meminfo cannot be read or lacks it.
-pub(crate) fn mem_available() -> Option<u64> {
-    parse_mem_available(&std::fs::read_to_string("/proc/meminfo").ok()?)
-}
-
-/// `MemAvailable:   123456 kB` → bytes.
-fn parse_mem_available(meminfo: &str) -> Option<u64> {
-    let line = meminfo
-        .lines()
-        .find_map(|l| l.strip_prefix("MemAvailable:"))?;
-    let kib: u64 = line.trim().strip_suffix("kB")?.trim().parse().ok()?;
-    kib.checked_mul(1024)
-}
-
 pub(crate) struct PageCache {
     pages: Mutex<LruCache<u64, Box<[u8]>>>,
     max_pages: usize,
@@ -205,13 +190,5 @@ mod tests {
             cache.insert(p, &[p as u8; 16]);
         }
         assert_eq!(cache.len(), 10);
-    }
-
-    #[test]
-    fn mem_available_is_read_from_meminfo() {
-        let text = "MemTotal:       24683520 kB\nMemFree:        22862048 kB\nMemAvailable:   24076288 kB\n";
-        assert_eq!(parse_mem_available(text), Some(24_076_288 * 1024));
-        assert_eq!(parse_mem_available("MemTotal: 5 kB\n"), None);
-        assert_eq!(parse_mem_available("MemAvailable: lots\n"), None);
     }
 }

@@ -71,7 +71,7 @@ impl HttpSource {
             opts.cache_bytes,
             c.ends.len,
             page_size,
-            page_cache::mem_available(),
+            crate::memory::available(),
         );
         let source = HttpSource {
             fetcher: c.fetcher,
