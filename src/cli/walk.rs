@@ -28,8 +28,8 @@ use render::{print_render, rendered, RenderOpts};
 /// `flaneur walk`'s arguments.
 #[derive(clap::Args)]
 pub struct WalkArgs {
-    db: PathBuf,
     /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
+    db: PathBuf,
     /// `review` (CSearch with index cache and prefetching), `box` (plain range
     /// queries), `pvs` (the current viewcell's PVS, neighbours prefetched; needs a
     /// database built with --visibility), `visual` (the HDoV-tree searched under
@@ -65,9 +65,9 @@ pub struct WalkArgs {
     /// plays at (within [0.1, 1000]).
     #[arg(long, default_value_t = 30.0, value_parser = frame_rate, allow_negative_numbers = true)]
     fps: f32,
-    #[arg(long, default_value_t = 1)]
     /// Seed of a generated path (a motion pattern or `cells`): the same seed, the same
     /// path.
+    #[arg(long, default_value_t = 1)]
     seed: u64,
     #[arg(long, value_name = "POLICY", help = format!(
         "Index cache policy: lru, dplru, dov, dovtime, path [default: {}; {} for --mode visual's node cache]",
@@ -123,8 +123,8 @@ pub struct WalkArgs {
     save_path: Option<PathBuf>,
     #[command(flatten)]
     source: SourceArgs,
-    #[arg(long, short)]
     /// Print the summary only, not the progress.
+    #[arg(long, short)]
     quiet: bool,
     /// Draw every frame headless (no window) as the walk selects it, and write them
     /// as PNGs to --frames-dir.
