@@ -211,7 +211,7 @@ fn print_next_steps(db_path: &Path) {
     ];
     let width = steps.iter().map(|(c, _)| c.len()).max().unwrap_or(0);
     for (command, what) in steps {
-        println!("  {command:width$}   {what}");
+        println!("{}", format!("  {command:width$}   {what}").trim_end());
     }
     println!("The README's \"The commands\" lists the rest.");
 }
