@@ -224,28 +224,9 @@ fn a_database_built_without_lods_opens_and_says_so() {
     );
 }
 
-/// The first page of object `id`'s chain, found by its documented layout: a `lod` page
-/// whose payload starts with the chain's magic, version and the object's id.
-fn chain_page(db: &Path, id: u64) -> u64 {
-    let bytes = std::fs::read(db).unwrap();
-    let page = bytes
-        .chunks(PAGE)
-        .enumerate()
-        .skip(1)
-        .find(|(_, p)| {
-            let payload = &p[PAGE_HEADER_LEN..];
-            p[0] == PageKind::Lod as u8
-                && payload[..4] == flaneur::lod::CHAIN_MAGIC
-                && payload[8..16] == id.to_le_bytes()
-        })
-        .expect("the object's chain")
-        .0;
-    page as u64
-}
-
 /// Damages the first page of object `id`'s chain, past its header; that page.
 fn damage_chain(db: &Path, id: u64) -> u64 {
-    let page = chain_page(db, id);
+    let page = common::lod_chain_page(db, id);
     let file = std::fs::OpenOptions::new().write(true).open(db).unwrap();
     file.write_all_at(&[0x77], page * PAGE as u64 + PAGE_HEADER_LEN as u64 + 200)
         .unwrap();

@@ -14,26 +14,13 @@ use std::path::Path;
 
 use common::recorder::Recorder;
 use flaneur::geom::Aabb;
-use flaneur::store::{PageKind, PAGE_HEADER_LEN};
+use flaneur::store::PAGE_HEADER_LEN;
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::{cell_poses, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::{BuildOptions, Database};
+use flaneur::Database;
 use glam::Vec3;
 use servers::{Fault, Misbehaving};
-
-/// A small city with LODs (so never-wait walks load coarse levels first) and visibility
-/// (for the PVS walk).
-fn city(seed: u64) -> common::City {
-    common::city(
-        120,
-        seed,
-        &BuildOptions {
-            lod: BuildOptions::default().lod,
-            ..common::with_visibility()
-        },
-    )
-}
 
 /// The object nearest a point 20 m ahead of `pose`'s eye: one the walk's first loads
 /// bring, whatever the mode.
@@ -55,26 +42,11 @@ fn ahead_of(db: &Database, pose: &Pose) -> u64 {
         .id
 }
 
-/// Damages the first page of object `id`'s LOD chain (found by the chain's documented
-/// layout: a `lod` page whose payload starts with the chain's magic, version and the
-/// object's id), past its header, as `tests/lod_store.rs` does; that page.
+/// Damages the first page of object `id`'s LOD chain past its header, as
+/// `tests/lod_store.rs` does; that page.
 fn damage_chain(path: &Path, id: u64) -> u64 {
-    let db = Database::open(path).unwrap();
-    let page_size = db.store().page_size();
-    drop(db);
-    let bytes = std::fs::read(path).unwrap();
-    let page = bytes
-        .chunks(page_size)
-        .enumerate()
-        .skip(1)
-        .find(|(_, p)| {
-            let payload = &p[PAGE_HEADER_LEN..];
-            p[0] == PageKind::Lod as u8
-                && payload[..4] == flaneur::lod::CHAIN_MAGIC
-                && payload[8..16] == id.to_le_bytes()
-        })
-        .expect("the object's chain")
-        .0 as u64;
+    let page_size = Database::open(path).unwrap().store().page_size();
+    let page = common::lod_chain_page(path, id);
     let file = std::fs::OpenOptions::new().write(true).open(path).unwrap();
     file.write_all_at(
         &[0x77],
@@ -142,7 +114,7 @@ fn fails_naming(db: &Path, args: &[&str], page: u64, id: u64) {
 #[test]
 fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
     // REVIEW and BOX from the first pose of the CLI's default path, a motion pattern.
-    let c = city(41);
+    let c = common::city_with_lods_and_visibility(41);
     let victim = {
         let db = Database::open(&c.db).unwrap();
         let path = motion::generate(&db.bounds(), Motion::Normal, 2, 30.0, 1).unwrap();
@@ -154,7 +126,7 @@ fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
     fails_naming(&c.db, &["--config", "box", "--frames", "60"], page, victim);
 
     // PVS from the first pose of its default path, a walk through the viewcells.
-    let c = city(42);
+    let c = common::city_with_lods_and_visibility(42);
     let victim = {
         let db = Database::open(&c.db).unwrap();
         let first = cell_poses(&db, 2, 1.4 / 30.0, 30.0, 1)
@@ -169,7 +141,7 @@ fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
 
 #[test]
 fn a_never_wait_walk_tells_its_viewer_and_its_report_of_a_damaged_lod_page() {
-    let c = city(43);
+    let c = common::city_with_lods_and_visibility(43);
     let db = Database::open(&c.db).unwrap();
     let path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 1).unwrap();
     let victim = ahead_of(&db, &path.poses[0]);
@@ -202,7 +174,7 @@ fn a_never_wait_walk_tells_its_viewer_and_its_report_of_a_damaged_lod_page() {
 
 #[test]
 fn a_never_wait_walk_whose_server_resets_after_the_open_names_it_and_fails() {
-    let c = city(44);
+    let c = common::city_with_lods_and_visibility(44);
     let bytes = std::fs::read(&c.db).unwrap();
     // PVS reads the viewcells before its walk, on the viewer's thread: those requests
     // too are answered, counted on an honest server.

@@ -25,18 +25,6 @@ fn rules() -> [PvsPrefetch; 3] {
     ]
 }
 
-/// A small city with visibility and LODs (so objects come coarse first).
-fn city(seed: u64) -> common::City {
-    common::city(
-        120,
-        seed,
-        &BuildOptions {
-            lod: BuildOptions::default().lod,
-            ..common::with_visibility()
-        },
-    )
-}
-
 fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
     PvsWalkConfig {
         pace: Some(1.0),
@@ -71,7 +59,7 @@ fn check_against_waiting(path: &CameraPath, r: &PvsWalkReport, waits: &PvsWalkRe
 
 #[test]
 fn a_never_wait_pvs_walk_draws_what_arrives_and_ends_with_its_whole_pvs() {
-    let c = city(21);
+    let c = common::city_with_lods_and_visibility(21);
     let db = Database::open(&c.db).unwrap();
     let path = common::walk_then_stand(&db);
     for prefetch in rules() {
@@ -85,7 +73,7 @@ fn a_never_wait_pvs_walk_draws_what_arrives_and_ends_with_its_whole_pvs() {
 
 #[test]
 fn a_never_wait_pvs_walk_over_http_ends_as_the_local_one() {
-    let c = city(22);
+    let c = common::city_with_lods_and_visibility(22);
     let server = Nginx::start(c.dir.path());
     let local = Database::open(&c.db).unwrap();
     let path = common::walk_then_stand(&local);
@@ -100,7 +88,7 @@ fn a_never_wait_pvs_walk_over_http_ends_as_the_local_one() {
 
 #[test]
 fn a_never_wait_pvs_walk_goes_on_without_its_server_and_says_so() {
-    let c = city(23);
+    let c = common::city_with_lods_and_visibility(23);
     let mut server = Nginx::start(c.dir.path());
     let url = server.url("city.flaneur");
     let db = Database::open_url_with(&url, &servers::impatient()).unwrap();
@@ -269,8 +257,8 @@ fn a_transactions_rows_come_over_http_in_one_round_trip_not_one_each() {
 
 #[test]
 fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
-    let c = city(27);
-    let other = city(28);
+    let c = common::city_with_lods_and_visibility(27);
+    let other = common::city_with_lods_and_visibility(28);
     let server = Nginx::start(c.dir.path());
     let db = Database::open_url(&server.url("city.flaneur")).unwrap();
     let path = common::walk_then_stand(&db);
@@ -295,7 +283,7 @@ fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
 
 #[test]
 fn a_cold_info_of_a_city_with_lods_and_visibility_takes_two_round_trips() {
-    let c = city(29);
+    let c = common::city_with_lods_and_visibility(29);
     let server = Nginx::start(c.dir.path());
     // The first round trip's two ends kept short, so that the LOD and visibility
     // tables' heads lie between them, as they do in a large city's file.

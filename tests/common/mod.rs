@@ -224,3 +224,38 @@ pub fn box_mesh(min: [f32; 3], max: [f32; 3]) -> flaneur::scene::Mesh {
         indices,
     }
 }
+
+/// A small city with LODs (so never-wait walks load coarse levels first) and visibility
+/// (for the PVS and VISUAL walks): 120 objects.
+pub fn city_with_lods_and_visibility(seed: u64) -> City {
+    city(
+        120,
+        seed,
+        &BuildOptions {
+            lod: BuildOptions::default().lod,
+            ..with_visibility()
+        },
+    )
+}
+
+/// The first page of object `id`'s LOD chain in the database at `db`, found by the
+/// chain's documented layout: a `lod` page whose payload starts with the chain's magic,
+/// version and the object's id.
+pub fn lod_chain_page(db: &std::path::Path, id: u64) -> u64 {
+    use flaneur::store::{PageKind, PAGE_HEADER_LEN};
+    let page_size = flaneur::Database::open(db).unwrap().store().page_size();
+    let bytes = std::fs::read(db).unwrap();
+    let page = bytes
+        .chunks(page_size)
+        .enumerate()
+        .skip(1)
+        .find(|(_, p)| {
+            let payload = &p[PAGE_HEADER_LEN..];
+            p[0] == PageKind::Lod as u8
+                && payload[..4] == flaneur::lod::CHAIN_MAGIC
+                && payload[8..16] == id.to_le_bytes()
+        })
+        .expect("the object's chain")
+        .0;
+    page as u64
+}
