@@ -74,8 +74,8 @@ impl PvsTally {
                 None => self.visual_misses,
             },
             round_trip_frames: run.round_trip,
-            failed_loads: run.failed_loads,
-            last_load_error: run.last_load_error,
+            failed_loads: run.failures.count,
+            last_load_error: run.failures.last,
             damaged: run.damaged,
         }
     }

@@ -446,8 +446,8 @@ fn walk_each<'db>(
         each(&f)
     })?;
     let mut summary = tally.summary(node_cache);
-    summary.failed_loads = run.failed_loads;
-    summary.last_load_error = run.last_load_error;
+    summary.failed_loads = run.failures.count;
+    summary.last_load_error = run.failures.last;
     Ok(VisualReport {
         config: cfg.clone(),
         frames: Vec::new(),

@@ -11,6 +11,7 @@
 //! a never-wait walk's loaders could not read for damage, named for its summary.
 
 mod damage;
+mod load_failures;
 mod load_order;
 mod loader;
 mod mailbox;

@@ -47,8 +47,8 @@ impl IndexEntries {
 pub(crate) struct PvsRun {
     /// The longest round trip the client measured, frames.
     pub round_trip: u32,
-    pub failed_loads: usize,
-    pub last_load_error: Option<String>,
+    /// Reads the network failed (never waiting).
+    pub failures: super::load_failures::LoadFailures,
     /// What the loader could not read for damage, each object once, named (never
     /// waiting).
     pub damaged: Vec<String>,

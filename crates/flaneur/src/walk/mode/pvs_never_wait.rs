@@ -18,7 +18,7 @@ use super::pvs::{self, PvsRun};
 use super::pvs_loader::{self, Mailbox, Stand, Update};
 use super::receive::receive;
 use crate::database::Database;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::geom::Camera;
 use crate::prefetch::pvs::{Cell, Position, PrefetchArea, PvsSource, StoredPvs};
 use crate::walk::buffer::ObjectBuffer;
@@ -75,16 +75,9 @@ pub(crate) fn walk_live<'db>(
     // ended has failed or come, and a failure is counted.
     for update in rx.try_iter() {
         match update {
-            Update::Retrying(why) => {
-                run.failed_loads += 1;
-                run.last_load_error = Some(why);
-            }
-            Update::Stopped(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => {
-                run.failed_loads += 1;
-                run.last_load_error = Some(e.to_string());
-            }
+            Update::Retrying(why) => run.failures.note(why),
             Update::Stopped(e) => {
-                if let Ok(mut d) = met.lock() {
+                if let (Some(e), Ok(mut d)) = (run.failures.note_stop(e), met.lock()) {
                     d.note_words(e.to_string());
                 }
             }
@@ -244,10 +237,7 @@ impl NeverWait<'_> {
                     }
                 }
                 Update::RoundTrip(trip) => self.run.round_trip = self.run.round_trip.max(trip),
-                Update::Retrying(why) => {
-                    self.run.failed_loads += 1;
-                    self.run.last_load_error = Some(why);
-                }
+                Update::Retrying(why) => self.run.failures.note(why),
                 Update::Stopped(e) => return Err(e),
             }
         }

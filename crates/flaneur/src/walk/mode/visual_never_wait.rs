@@ -21,7 +21,7 @@ use super::receive::receive;
 use super::visual::{begin_frame, cell_at, finish_frame, Searcher};
 use super::visual_loader::{self, Place, Stand, Update};
 use crate::database::Database;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::geom::{Aabb, Camera};
 use crate::prefetch::motion::MotionTrack;
 use crate::store::IoStats;
@@ -35,9 +35,8 @@ use crate::walk::walk_lods::WalkLods;
 /// What a never-wait VISUAL walk reports beside its frames.
 #[derive(Debug, Default)]
 pub(crate) struct NeverWaitRun {
-    /// Reads the network failed (each asked for again), and the last one's words.
-    pub failed_loads: usize,
-    pub last_load_error: Option<String>,
+    /// Reads the network failed (each asked for again).
+    pub failures: super::load_failures::LoadFailures,
 }
 
 /// A never-wait VISUAL walk under `cfg`, searching with `search`, the poses coming from
@@ -95,14 +94,9 @@ pub(crate) fn walk_live<'db>(
     // as the walk ended has failed or come, and a failure is counted.
     for update in rx.try_iter() {
         match update {
-            Update::Retrying(why) => {
-                run.failed_loads += 1;
-                run.last_load_error = Some(why);
-            }
-            Update::Stopped(e @ (Error::Remote { .. } | Error::RemoteChanged { .. })) => {
-                run.failed_loads += 1;
-                run.last_load_error = Some(e.to_string());
-            }
+            Update::Retrying(why) => run.failures.note(why),
+            // Only the network's failures are counted here.
+            Update::Stopped(e) => drop(run.failures.note_stop(e)),
             _ => {}
         }
     }
@@ -307,10 +301,7 @@ impl NeverWait<'_> {
                         buffer.remove(k);
                     }
                 }
-                Update::Retrying(why) => {
-                    self.run.failed_loads += 1;
-                    self.run.last_load_error = Some(why);
-                }
+                Update::Retrying(why) => self.run.failures.note(why),
                 Update::Stopped(e) => return Err(e),
             }
         }
