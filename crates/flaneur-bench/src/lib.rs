@@ -48,6 +48,7 @@ pub mod prefetch_k;
 pub mod pvs_http;
 pub mod pvs_prefetch;
 pub mod pvs_stats;
+pub mod pvs_tightness;
 pub mod report;
 pub mod scene_tree;
 pub mod soak;

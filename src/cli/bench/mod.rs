@@ -19,6 +19,7 @@ mod patterns;
 mod prefetch_k;
 mod pvs_http;
 mod pvs_prefetch;
+mod pvs_tightness;
 mod report;
 mod scene_tree;
 mod soak;
@@ -96,6 +97,11 @@ enum Experiment {
     /// waiting: visual misses, frames over 50 ms, coarse draws (ours). Needs a database
     /// built with --visibility --hdov.
     VisualHttp(visual_http::VisualHttpArgs),
+    /// Each sampled viewcell's conservative PVS against what a dense sampling of the
+    /// cell sees (32 viewpoints, 256 × 256 rays a cube face): the ratio per cell, and
+    /// every seen object missing from a PVS, which fails the command (ours). Needs a
+    /// database built with --visibility.
+    PvsTightness(pvs_tightness::PvsTightnessArgs),
     /// The same city in files of different object orders (`build --order`), served over
     /// HTTP and asked the same range queries from cold clients: pages, requests, round
     /// trips and bytes per query for the query, the coarse levels and the full meshes
@@ -163,6 +169,7 @@ impl BenchArgs {
             Experiment::Http(a) => a.run(),
             Experiment::PvsHttp(a) => a.run(),
             Experiment::VisualHttp(a) => a.run(),
+            Experiment::PvsTightness(a) => a.run(),
             Experiment::Layout(a) => a.run(),
             Experiment::Crowd(a) => a.run(),
             Experiment::Csearch(a) => a.run(),

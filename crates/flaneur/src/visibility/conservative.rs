@@ -44,10 +44,13 @@ use glam::{Vec2, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, SelectionFunction, AABB};
 
+use rayon::prelude::*;
+
 use super::horizon::{Horizon, Prism};
-use super::occluder::Occluders;
+use super::occluder::{occluders, Occluders};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::scene::Mesh;
 
 type Entry = GeomWithData<Rectangle<[f32; 3]>, u32>;
 type PlanEntry = GeomWithData<Rectangle<[f32; 2]>, u32>;
@@ -163,18 +166,36 @@ pub fn prisms(occluders: &Occluders, ground: f32) -> Vec<Prism> {
         .collect()
 }
 
-/// The objects and their occluders, indexed for the test of many cells.
+/// The objects and their occluders, indexed for the conservative test of many cells
+/// (see the module's notes).
 pub struct Scene {
     boxes: Vec<Aabb>,
     objects: RTree<Entry>,
     prisms: Vec<Prism>,
     prism_index: RTree<PlanEntry>,
+    /// Objects with at least one occluder box.
+    occluding: usize,
 }
 
 impl Scene {
+    /// The scene of `objects` (their ids aside, in the order given, which is the order
+    /// of the indices [`Scene::visible_from`] answers with): each mesh's box and
+    /// occluders, the occluders found on all cores.
+    pub fn from_meshes(objects: &[(u64, Mesh)]) -> Result<Scene> {
+        let boxes = objects
+            .iter()
+            .map(|(id, m)| {
+                let (lo, hi) = m.bounds();
+                Aabb::new(lo, hi).map_err(|e| Error::Invalid(format!("object {id}: {e}")))
+            })
+            .collect::<Result<Vec<Aabb>>>()?;
+        let found: Vec<Occluders> = objects.par_iter().map(|(_, m)| occluders(m)).collect();
+        Scene::new(&boxes, &found)
+    }
+
     /// The objects' boxes, and each object's occluder boxes (see
     /// [`occluders`](super::occluder::occluders); none for an object that occludes nothing).
-    pub fn new(objects: &[Aabb], occluders: &[Occluders]) -> Result<Scene> {
+    pub(crate) fn new(objects: &[Aabb], occluders: &[Occluders]) -> Result<Scene> {
         if objects.len() != occluders.len() {
             return Err(Error::Invalid(format!(
                 "{} objects but {} occluder entries",
@@ -225,11 +246,21 @@ impl Scene {
             objects: objects_index,
             prisms,
             prism_index,
+            occluding: occluders.iter().filter(|o| !o.boxes.is_empty()).count(),
         })
     }
 
+    /// Objects in the scene.
+    pub fn object_count(&self) -> usize {
+        self.boxes.len()
+    }
+
+    /// Objects with at least one occluder box.
+    pub fn occluding_objects(&self) -> usize {
+        self.occluding
+    }
+
     /// Occluder prisms found among the objects' occluder boxes.
-    #[cfg(test)]
     pub fn prism_count(&self) -> usize {
         self.prisms.len()
     }

@@ -80,7 +80,7 @@ pub(crate) mod table;
 mod tests;
 
 pub use cells::{Viewcell, ViewcellGrid};
-pub use conservative::SampleOptions;
+pub use conservative::{SampleOptions, Scene as ConservativeScene};
 pub(crate) use cost::{shown, walkable_cells};
 pub use cost::{VisibilityCost, MAX_SAMPLES_PER_CELL, MAX_VIEWCELLS};
 pub use cube::{CubicProjection, SKY};

@@ -18,7 +18,6 @@ use rayon::prelude::*;
 use super::cells::{Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
 use super::dov::corner_keys;
-use super::occluder::{occluders, Occluders};
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
 use super::{cell_dovs_after, CornerMemo, CubicProjection, RayScene};
 use crate::error::{Error, Result};
@@ -160,18 +159,17 @@ pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Resu
     let boxes = boxes(objects)?;
     // The grid first: what the options make of the city is refused before the slow steps.
     let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
-    let found: Vec<Occluders> = objects.par_iter().map(|(_, m)| occluders(m)).collect();
-    let scene = Scene::new(&boxes, &found)?;
+    let scene = Scene::from_meshes(objects)?;
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let projection = CubicProjection::new(opts.resolution)?;
     Ok(Prepared {
+        occluders: scene.occluding_objects(),
         scene,
         rays,
         dov_s: projection.zero_dov_floor(),
         projection,
         grid,
         walkable,
-        occluders: found.iter().filter(|o| !o.boxes.is_empty()).count(),
     })
 }
 
