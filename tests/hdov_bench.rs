@@ -189,8 +189,20 @@ fn hdov_cache_policies_stay_at_or_below_belady() {
 fn hdov_storage_reads_each_scheme_and_its_estimate() {
     let city = city();
     let db = Database::open(&city.db).unwrap();
-    let r = flaneur_bench::hdov_storage::run(&db).unwrap();
+    let fanout = db.hdov_head().unwrap().fanout;
+    let r = flaneur_bench::hdov_storage::run(&db, &[4, fanout]).unwrap();
     assert_eq!(r.rows.len(), 3);
+    // Sized at the tree's own fan-out, each scheme is what the build stored, and the
+    // visible nodes are the same; a smaller fan-out makes more nodes.
+    let own = &r.fanouts[1];
+    assert_eq!((own.nodes, own.visible_nodes), (r.nodes, r.visible_nodes));
+    for row in &r.rows {
+        let sized = own.schemes.iter().find(|s| s.0 == row.scheme).unwrap().1;
+        assert_eq!(sized, row.estimate_bytes, "{row:?}");
+    }
+    assert!(r.fanouts[0].nodes > own.nodes && r.fanouts[0].visible_nodes > own.visible_nodes);
+    assert!(r.markdown().contains("## At other fan-outs"));
+    assert_eq!(r.extra_csvs()[0].1.lines().count(), 3);
     for row in &r.rows {
         // Each scheme is its estimate plus a 44-byte head (and the indexed scheme's
         // directory of 12 bytes a cell).
@@ -201,6 +213,36 @@ fn hdov_storage_reads_each_scheme_and_its_estimate() {
     assert!(r.visible_share > 0.0 && r.visible_share <= 1.0);
     assert!(r.markdown().contains("| indexed |"), "{}", r.markdown());
     assert_eq!(r.to_csv().lines().count(), 4);
+}
+
+#[test]
+fn a_tree_built_at_a_fanout_packs_that_many_and_refuses_more_than_a_page_holds() {
+    let opts = |fanout| BuildOptions {
+        page_size: 1024,
+        visibility: Some(VisibilityOptions {
+            resolution: 16,
+            ..Default::default()
+        }),
+        hdov: Some(HdovOptions {
+            fanout: Some(fanout),
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let city = common::city(120, 9, &opts(5));
+    let db = Database::open(&city.db).unwrap();
+    let head = db.hdov_head().unwrap();
+    // 120 objects in leaves of 5, and V-pages of 5 entries.
+    assert_eq!((head.fanout, head.vpage_len), (5, 40));
+    assert!(head.nodes >= 24 + 5 + 1, "{}", head.nodes);
+    let sized = db.hdov_sizes_at(5).unwrap();
+    assert_eq!((sized.nodes, sized.visible_nodes), (head.nodes, head.visible_nodes));
+    // A 1 KiB page holds 17 entries: 18 is refused by name, before any work.
+    let dir = tempfile::tempdir().unwrap();
+    let err = flaneur::build_from_scene(&city.scene, &dir.path().join("x.flaneur"), &opts(18))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("--hdov-fanout") && err.contains("17"), "{err}");
 }
 
 #[test]

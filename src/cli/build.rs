@@ -44,6 +44,11 @@ pub struct DatabaseArgs {
     /// horizontal, vertical and indexed, comma-separated (default: none, no HDoV-tree).
     #[arg(long, value_name = "SCHEMES", value_delimiter = ',')]
     hdov: Option<Vec<flaneur::hdov::Scheme>>,
+    /// Entries an HDoV-tree node holds (M, with --hdov): from 2 up to what a page holds
+    /// (72 in a 4096-byte page, the default). Smaller nodes make a taller tree of which a
+    /// viewcell sees a smaller share, and smaller V-pages.
+    #[arg(long, value_name = "M", requires = "hdov")]
+    hdov_fanout: Option<u32>,
     /// The order objects' meshes and LODs are written in: `hilbert`, along a Hilbert
     /// curve over their positions, so that the objects of one cell lie in a few byte
     /// runs (fewer requests over HTTP), or `input`, as the input lists them.
@@ -206,6 +211,7 @@ impl DatabaseArgs {
             }),
             hdov: a.hdov.clone().map(|schemes| flaneur::hdov::HdovOptions {
                 schemes,
+                fanout: a.hdov_fanout,
                 ..Default::default()
             }),
             order: a.order,

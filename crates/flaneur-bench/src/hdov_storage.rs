@@ -6,13 +6,17 @@
 //! The schemes' sizes follow from the share of the tree a cell sees: horizontal stores
 //! a V-page per node and cell, the vertical schemes one per *visible* node and cell,
 //! so the report gives N_vnode / N_node, the quantity the savings are made of.
+//!
+//! With fan-outs asked for, it also sizes the schemes of trees over the same objects and
+//! viewcells at each of them, without building them ([`Database::hdov_sizes_at`]): a
+//! smaller fan-out makes more, smaller nodes, of which a cell sees a smaller share.
 
 use std::path::Path;
 
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::Result;
-use flaneur::hdov::Scheme;
+use flaneur::hdov::{FanoutSizes, Scheme};
 
 /// Table 5.2 of the thesis, bytes.
 pub const THESIS_TABLE_5_2: [(Scheme, f64); 3] = [
@@ -50,10 +54,12 @@ pub struct HdovStorageReport {
     pub database_pages: u64,
     pub page_size: usize,
     pub rows: Vec<HdovStorageRow>,
+    /// The schemes of trees over the same objects and cells at other fan-outs.
+    pub fanouts: Vec<FanoutSizes>,
 }
 
-/// Reads what `db`'s HDoV-tree takes.
-pub fn run(db: &Database) -> Result<HdovStorageReport> {
+/// Reads what `db`'s HDoV-tree takes, and sizes the schemes at each of `fanouts`.
+pub fn run(db: &Database, fanouts: &[u32]) -> Result<HdovStorageReport> {
     let head = db.hdov_head()?;
     let (c, n, nv) = (
         head.cells.len() as u64,
@@ -89,6 +95,10 @@ pub fn run(db: &Database) -> Result<HdovStorageReport> {
         database_pages: db.store().page_count(),
         page_size: db.store().page_size(),
         rows,
+        fanouts: fanouts
+            .iter()
+            .map(|&m| db.hdov_sizes_at(m))
+            .collect::<Result<_>>()?,
     })
 }
 
@@ -111,6 +121,34 @@ impl Report for HdovStorageReport {
             ));
         }
         s
+    }
+
+    /// One line per fan-out sized.
+    fn extra_csvs(&self) -> Vec<(&'static str, String)> {
+        if self.fanouts.is_empty() {
+            return Vec::new();
+        }
+        let mut s = String::from(
+            "fanout,nodes,height,cells,visible_nodes,visible_share,horizontal_bytes,\
+             vertical_bytes,indexed_bytes,indexed_of_horizontal\n",
+        );
+        for f in &self.fanouts {
+            let bytes = |k: Scheme| f.schemes.iter().find(|x| x.0 == k).map_or(0, |x| x.1);
+            s.push_str(&format!(
+                "{},{},{},{},{},{:.5},{},{},{},{:.5}\n",
+                f.fanout,
+                f.nodes,
+                f.height,
+                f.cells,
+                f.visible_nodes,
+                f.visible_share(),
+                bytes(Scheme::Horizontal),
+                bytes(Scheme::Vertical),
+                bytes(Scheme::Indexed),
+                f.share_of_horizontal(Scheme::Indexed)
+            ));
+        }
+        vec![("hdov-storage-fanouts.csv", s)]
     }
 
     fn markdown(&self) -> String {
@@ -150,6 +188,31 @@ impl Report for HdovStorageReport {
             "\nThe thesis's vertical scheme is 1/15 and its indexed-vertical 1/27 of the \
              horizontal one; here the ratio follows the share of the tree a cell sees.\n",
         );
+        if !self.fanouts.is_empty() {
+            s.push_str(
+                "\n## At other fan-outs\n\nThe same objects and viewcells packed into trees \
+                 of other fan-outs (M entries a node, V-pages of 8·M bytes), sized by eqs. \
+                 5.7–5.9 without building them (heads and directories aside).\n\n\
+                 | fan-out | nodes | height | visible nodes a cell | of the nodes | horizontal MiB \
+                 | vertical MiB | indexed MiB | indexed of horizontal |\n\
+                 |---|---|---|---|---|---|---|---|---|\n",
+            );
+            for f in &self.fanouts {
+                let bytes = |k: Scheme| f.schemes.iter().find(|x| x.0 == k).map_or(0, |x| x.1);
+                s.push_str(&format!(
+                    "| {} | {} | {} | {:.1} | {:.1} % | {:.2} | {:.2} | {:.2} | 1/{:.1} |\n",
+                    f.fanout,
+                    f.nodes,
+                    f.height,
+                    f.visible_nodes as f64 / f.cells.max(1) as f64,
+                    100.0 * f.visible_share(),
+                    mib(bytes(Scheme::Horizontal) as f64),
+                    mib(bytes(Scheme::Vertical) as f64),
+                    mib(bytes(Scheme::Indexed) as f64),
+                    1.0 / f.share_of_horizontal(Scheme::Indexed).max(f64::MIN_POSITIVE)
+                ));
+            }
+        }
         s
     }
 

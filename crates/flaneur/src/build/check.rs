@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::hdov::node::capacity;
 use crate::hdov::vd::VENTRY_LEN;
-use crate::hdov::Scheme;
+use crate::hdov::{HdovOptions, Scheme};
 use crate::scene::Mesh;
 use crate::store::PAGE_HEADER_LEN;
 use crate::visibility::{shown, walkable_cells, VisibilityCost, VisibilityOptions};
@@ -180,7 +180,7 @@ fn needs(
             vpage_bytes(
                 opts,
                 &h.schemes,
-                h.fill,
+                h,
                 cost.walkable,
                 survey.boxes.len() as u64,
             ),
@@ -236,12 +236,12 @@ impl Needs {
 fn vpage_bytes(
     opts: &BuildOptions,
     schemes: &[Scheme],
-    fill: f32,
+    hdov: &HdovOptions,
     walkable: u64,
     objects: u64,
 ) -> u64 {
     let max = capacity(opts.page_size.saturating_sub(PAGE_HEADER_LEN)).max(2);
-    let cap = ((max as f32 * fill).floor() as usize).clamp(2, max) as u64;
+    let cap = hdov.node_capacity(max, opts.page_size).unwrap_or(max) as u64;
     let leaves = objects.div_ceil(cap);
     let per = |s: &Scheme| match s {
         Scheme::Horizontal => VENTRY_LEN as u64,
@@ -255,20 +255,26 @@ fn vpage_bytes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hdov::HdovOptions;
 
     #[test]
     fn the_horizontal_scheme_costs_a_vpage_per_node_and_cell() {
         let opts = BuildOptions::default();
-        let horizontal = vpage_bytes(&opts, &[Scheme::Horizontal], 1.0, 1000, 10_000);
-        let vertical = vpage_bytes(&opts, &[Scheme::Vertical], 1.0, 1000, 10_000);
-        assert_eq!(horizontal, 2 * vertical);
-        assert_eq!(vpage_bytes(&opts, &[Scheme::Indexed], 1.0, 1000, 10_000), 0);
         let all = HdovOptions::default();
+        let horizontal = vpage_bytes(&opts, &[Scheme::Horizontal], &all, 1000, 10_000);
+        let vertical = vpage_bytes(&opts, &[Scheme::Vertical], &all, 1000, 10_000);
+        assert_eq!(horizontal, 2 * vertical);
+        assert_eq!(vpage_bytes(&opts, &[Scheme::Indexed], &all, 1000, 10_000), 0);
         assert_eq!(
-            vpage_bytes(&opts, &all.schemes, all.fill, 1000, 10_000),
+            vpage_bytes(&opts, &all.schemes, &all, 1000, 10_000),
             horizontal
         );
+        // Leaves of 10 entries rather than a page's 72: 7.2 times the nodes.
+        let ten = HdovOptions {
+            fanout: Some(10),
+            ..HdovOptions::default()
+        };
+        let leaves = |o: &HdovOptions| vpage_bytes(&opts, &[Scheme::Vertical], o, 1, 10_000) / 4;
+        assert_eq!((leaves(&all), leaves(&ten)), (139, 1000));
     }
 
     /// A survey of boxes, each given by its two corners.

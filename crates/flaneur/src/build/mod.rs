@@ -118,6 +118,8 @@ impl BuildOptions {
         }
         if let Some(h) = &self.hdov {
             h.validate()?;
+            let payload = self.page_size.saturating_sub(crate::store::PAGE_HEADER_LEN);
+            h.node_capacity(crate::hdov::node::capacity(payload), self.page_size)?;
             if self.visibility.is_none() {
                 return Err(Error::Invalid(
                     "the HDoV-tree needs the viewcells' visibility: build with --visibility too"

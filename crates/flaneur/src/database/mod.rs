@@ -3,6 +3,7 @@
 //! answers of its precomputed visibility and HDoV-tree is `visibility`'s.
 
 mod build_input;
+mod hdov_sizes;
 mod visibility;
 
 use std::path::Path;

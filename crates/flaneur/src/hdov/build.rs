@@ -38,6 +38,10 @@ pub struct HdovOptions {
     pub schemes: Vec<Scheme>,
     /// Share of a node's fan-out that packing fills.
     pub fill: f32,
+    /// Entries a node holds (M), from 2 up to what a page holds (72 in a 4 KiB page);
+    /// `None`: what a page holds, times [`fill`](Self::fill). Eqs. 5.3–5.4 and the
+    /// V-pages' size follow it: a V-page holds M V-entries.
+    pub fanout: Option<u32>,
 }
 
 impl Default for HdovOptions {
@@ -46,6 +50,7 @@ impl Default for HdovOptions {
         HdovOptions {
             schemes: Scheme::ALL.to_vec(),
             fill: 1.0,
+            fanout: None,
         }
     }
 }
@@ -64,7 +69,32 @@ impl HdovOptions {
                 self.fill
             )));
         }
+        if let Some(m) = self.fanout {
+            if m < 2 {
+                return Err(Error::Invalid(format!(
+                    "HDoV fan-out {m} (--hdov-fanout) must be at least 2"
+                )));
+            }
+        }
         Ok(())
+    }
+
+    /// The entries a node holds when a page's payload holds `max` of them: the fan-out
+    /// asked for, or `max` times the fill. An error names a fan-out a page cannot hold.
+    pub(crate) fn node_capacity(&self, max: usize, page_size: usize) -> Result<usize> {
+        if max < 2 {
+            return Err(Error::Invalid(format!(
+                "page size {page_size} is too small for HDoV nodes"
+            )));
+        }
+        match self.fanout {
+            Some(m) if m as usize > max => Err(Error::Invalid(format!(
+                "HDoV fan-out {m} (--hdov-fanout) is more than the {max} entries a node page \
+                 of {page_size} bytes holds: choose at most {max}, or a larger --page-size"
+            ))),
+            Some(m) => Ok((m as usize).max(2)),
+            None => Ok(((max as f32 * self.fill).floor() as usize).clamp(2, max)),
+        }
     }
 }
 
@@ -118,8 +148,8 @@ pub struct HdovReport {
 }
 
 /// A node as packing makes it, before it is numbered.
-struct Packed {
-    level: u16,
+pub(super) struct Packed {
+    pub(super) level: u16,
     mbr: Aabb,
     objects_below: u32,
     /// Leaf: its objects; internal: its children (indices into the packed nodes).
@@ -129,7 +159,7 @@ struct Packed {
 
 /// Packs `objects` into leaves and levels above of at most `cap` entries; the root is
 /// the last node.
-fn pack(objects: Vec<ObjectEntry>, cap: usize) -> Vec<Packed> {
+pub(super) fn pack(objects: Vec<ObjectEntry>, cap: usize) -> Vec<Packed> {
     let mut nodes = Vec::new();
     let mut level: Vec<usize> = Vec::new();
     for group in str_tile(objects, cap, |o| o.bounds.center()) {
@@ -166,8 +196,36 @@ fn pack(objects: Vec<ObjectEntry>, cap: usize) -> Vec<Packed> {
     nodes
 }
 
+/// Where each packed node (numbered by `number`) and object sits: what a cell's VDs
+/// are summed up by.
+pub(super) fn topology(packed: &[Packed], number: &[u32]) -> Topology {
+    let objects = packed.iter().map(|p| p.objects.len()).sum();
+    let mut topology = Topology {
+        entries: vec![0; packed.len()],
+        parent: vec![None; packed.len()],
+        level: vec![0; packed.len()],
+        object: HashMap::with_capacity(objects),
+    };
+    for (n, p) in packed.iter().enumerate() {
+        let k = number[n] as usize;
+        topology.level[k] = p.level;
+        if p.level == 0 {
+            topology.entries[k] = p.objects.len() as u16;
+            for (slot, o) in p.objects.iter().enumerate() {
+                topology.object.insert(o.id, (k as u32, slot as u16));
+            }
+        } else {
+            topology.entries[k] = p.children.len() as u16;
+            for (slot, &c) in p.children.iter().enumerate() {
+                topology.parent[number[c] as usize] = Some((k as u32, slot as u16));
+            }
+        }
+    }
+    topology
+}
+
 /// The packed nodes in depth-first preorder from the root (the last one).
-fn preorder(nodes: &[Packed]) -> Vec<usize> {
+pub(super) fn preorder(nodes: &[Packed]) -> Vec<usize> {
     let mut order = Vec::with_capacity(nodes.len());
     let mut stack = vec![nodes.len() - 1];
     while let Some(n) = stack.pop() {
@@ -228,14 +286,7 @@ pub(crate) fn build_hdov(
             "the HDoV-tree needs the viewcells' visibility: build with --visibility".into(),
         )
     })?;
-    let max = capacity(store.payload_size());
-    if max < 2 {
-        return Err(Error::Invalid(format!(
-            "page size {} is too small for HDoV nodes",
-            store.page_size()
-        )));
-    }
-    let cap = ((max as f32 * opts.fill).floor() as usize).clamp(2, max);
+    let cap = opts.node_capacity(capacity(store.payload_size()), store.page_size())?;
     let object_count = objects.len() as u64;
     let coarse = coarsest_meshes(store, &objects)?;
     let packed = pack(objects, cap);
@@ -328,27 +379,12 @@ pub(crate) fn build_hdov(
         }
     };
     let first_node = store.page_count();
-    let mut topology = Topology {
-        entries: vec![0; packed.len()],
-        parent: vec![None; packed.len()],
-        level: vec![0; packed.len()],
-        object: HashMap::with_capacity(object_count as usize),
-    };
+    let topology = topology(&packed, &number);
     for &n in &order {
         let p = &packed[n];
-        let k = number[n] as usize;
-        topology.level[k] = p.level;
         let kind = if p.level == 0 {
-            topology.entries[k] = p.objects.len() as u16;
-            for (slot, o) in p.objects.iter().enumerate() {
-                topology.object.insert(o.id, (k as u32, slot as u16));
-            }
             HNodeKind::Leaf(p.objects.clone())
         } else {
-            topology.entries[k] = p.children.len() as u16;
-            for (slot, &c) in p.children.iter().enumerate() {
-                topology.parent[number[c] as usize] = Some((k as u32, slot as u16));
-            }
             HNodeKind::Internal {
                 level: p.level,
                 children: p.children.iter().map(|&c| child_ref(c)).collect(),
@@ -381,7 +417,7 @@ pub(crate) fn build_hdov(
     let shape = Shape {
         cells: cells.len(),
         nodes: packed.len(),
-        vpage_len: max * VENTRY_LEN,
+        vpage_len: cap * VENTRY_LEN,
     };
     let visible_nodes: u64 = vds.iter().map(|v| v.len() as u64).sum();
     let mut schemes = Vec::new();

@@ -29,6 +29,7 @@ pub(crate) mod node;
 pub mod scene;
 mod scheme;
 mod search;
+mod sizing;
 mod tree;
 pub(crate) mod vd;
 
@@ -40,6 +41,8 @@ pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
 pub(crate) use node::HNodeKind;
 pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;
+pub(crate) use sizing::sizes_at;
+pub use sizing::FanoutSizes;
 pub use search::{level_for_detail, stops, Found, SearchResult, MAXDOV};
 pub(crate) use tree::HdovTree;
 pub use tree::{TreeHead, HDOV_SEGMENT};
