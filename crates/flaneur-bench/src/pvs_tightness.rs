@@ -40,7 +40,8 @@ pub struct PvsTightnessConfig {
     /// Seeds the interior viewpoints.
     pub seed: u64,
     /// Recompute each cell's PVS with this binary's conservative test instead of
-    /// reading the stored one; `Some` sampling overrides the stored settings.
+    /// reading the stored one (see [`run`]); `Some` sampling overrides the stored
+    /// settings.
     pub recompute: Option<Option<SampleOptions>>,
 }
 
@@ -169,18 +170,54 @@ pub fn seen_from(
 /// A cell's PVS as the experiment is told it: object ids, ascending.
 pub type PvsOf<'a> = dyn Fn(u32) -> Result<Vec<u64>> + Sync + 'a;
 
-/// Measures `db` (built with --visibility) as `cfg` says.
-pub fn run(db: &Database, cfg: &PvsTightnessConfig) -> Result<PvsTightnessReport> {
-    run_with(db, cfg, None)
+/// Where the PVS measured comes from.
+pub enum PvsSource<'a> {
+    /// The database's stored PVS.
+    Stored,
+    /// This binary's conservative test, sampling as given, told what the corners'
+    /// rays met (as a build tells it).
+    Recomputed(SampleOptions),
+    /// Given by the caller, by cell id (a test breaks a PVS on purpose through it).
+    Given(&'a PvsOf<'a>),
 }
 
-/// As [`run`], with each cell's PVS taken from `pvs_of` when given (a test breaks a
-/// PVS on purpose through it), else as `cfg.recompute` says.
-pub fn run_with(
-    db: &Database,
-    cfg: &PvsTightnessConfig,
-    pvs_of: Option<&PvsOf>,
-) -> Result<PvsTightnessReport> {
+/// One sampled cell: what its corners' rays met, and what all its viewpoints' did.
+#[derive(Clone, Debug)]
+pub struct SampledCell {
+    pub cell: u32,
+    pub bounds: Aabb,
+    /// Object indices (into [`Sampling::ids`]), ascending.
+    pub corners_seen: Vec<u32>,
+    pub seen: Vec<u32>,
+}
+
+/// The dense sampling of a database's cells, made once and set against any PVS.
+pub struct Sampling {
+    pub objects: Vec<(u64, Mesh)>,
+    /// The object id of each index.
+    pub ids: Vec<u64>,
+    pub walkable_cells: usize,
+    pub viewpoints_per_cell: usize,
+    pub resolution: u32,
+    pub rays: u64,
+    pub seconds: f64,
+    /// The stored conservative test's sampling.
+    pub stored_samples: SampleOptions,
+    pub cells: Vec<SampledCell>,
+}
+
+/// Measures `db` (built with --visibility) as `cfg` says.
+pub fn run(db: &Database, cfg: &PvsTightnessConfig) -> Result<PvsTightnessReport> {
+    let sampling = sample(db, cfg)?;
+    let source = match cfg.recompute {
+        None => PvsSource::Stored,
+        Some(s) => PvsSource::Recomputed(s.unwrap_or(sampling.stored_samples)),
+    };
+    measure(db, &sampling, &source)
+}
+
+/// Samples `db`'s cells densely, as `cfg` says.
+pub fn sample(db: &Database, cfg: &PvsTightnessConfig) -> Result<Sampling> {
     if cfg.cells == 0 {
         return Err(Error::Invalid("--cells must be at least 1".into()));
     }
@@ -194,7 +231,6 @@ pub fn run_with(
     })?;
     let head = head.clone();
     let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
-    let cells = spread(&walkable, cfg.cells);
     let entries = db.range(&db.bounds())?.objects;
     let objects: Vec<(u64, Mesh)> = entries
         .iter()
@@ -204,64 +240,91 @@ pub fn run_with(
     let ids: Vec<u64> = (0..rays.object_count() as u32)
         .map(|i| rays.object_id(i).unwrap_or(u64::MAX))
         .collect();
-    let samples = match cfg.recompute {
-        Some(Some(s)) => s,
-        _ => head.settings.samples,
-    };
-    samples.validate()?;
     let started = Instant::now();
-    let conservative = match (cfg.recompute, pvs_of) {
-        (Some(_), None) => Some(ConservativeScene::from_meshes(&objects)?),
-        _ => None,
-    };
-    let setup_seconds = started.elapsed().as_secs_f64();
-    let mut rows = Vec::with_capacity(cells.len());
-    let mut sampling = 0.0;
-    for &cell in &cells {
+    let mut cells = Vec::new();
+    for cell in spread(&walkable, cfg.cells) {
         let (r, c) = head.grid.place(cell);
         let bounds = head.grid.cell_bounds(r, c);
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ (u64::from(cell) << 20));
         let points = viewpoints(&bounds, cfg.interior, &mut rng);
-        let t = Instant::now();
-        let corners = seen_from(&rays, &projection, &points[..8])?;
-        let others = seen_from(&rays, &projection, &points[8..])?;
-        sampling += t.elapsed().as_secs_f64();
-        let mut seen = corners.clone();
-        seen.extend(others);
+        let corners_seen = seen_from(&rays, &projection, &points[..8])?;
+        let mut seen = corners_seen.clone();
+        seen.extend(seen_from(&rays, &projection, &points[8..])?);
         seen.sort_unstable();
         seen.dedup();
+        cells.push(SampledCell {
+            cell,
+            bounds,
+            corners_seen,
+            seen,
+        });
+    }
+    let viewpoints_per_cell = 12 + cfg.interior;
+    Ok(Sampling {
+        ids,
+        walkable_cells: walkable.len(),
+        viewpoints_per_cell,
+        resolution: cfg.resolution,
+        rays: cells.len() as u64 * viewpoints_per_cell as u64 * projection.rays_per_point(),
+        seconds: started.elapsed().as_secs_f64(),
+        stored_samples: head.settings.samples,
+        cells,
+        objects,
+    })
+}
+
+/// Sets each sampled cell's PVS from `source` against what the sampling saw.
+pub fn measure(
+    db: &Database,
+    sampling: &Sampling,
+    source: &PvsSource,
+) -> Result<PvsTightnessReport> {
+    let samples = match source {
+        PvsSource::Recomputed(s) => *s,
+        _ => sampling.stored_samples,
+    };
+    samples.validate()?;
+    let started = Instant::now();
+    let conservative = match source {
+        PvsSource::Recomputed(_) => Some(ConservativeScene::from_meshes(&sampling.objects)?),
+        _ => None,
+    };
+    let setup_seconds = started.elapsed().as_secs_f64();
+    let ids = &sampling.ids;
+    let mut rows = Vec::with_capacity(sampling.cells.len());
+    for c in &sampling.cells {
         let mut conservative_seconds = 0.0;
-        let mut pvs: Vec<u64> = match (pvs_of, &conservative) {
-            (Some(f), _) => f(cell)?,
-            (None, Some(scene)) => {
-                // As the build: what the corners' rays met is kept untested.
+        let mut pvs: Vec<u64> = match (source, &conservative) {
+            (PvsSource::Given(f), _) => f(c.cell)?,
+            (_, Some(scene)) => {
                 let t = Instant::now();
-                let kept = scene.visible_from(&bounds, &samples, &corners)?;
+                let kept = scene.visible_from(&c.bounds, &samples, &c.corners_seen)?;
                 conservative_seconds = t.elapsed().as_secs_f64();
                 kept.iter().map(|&i| ids[i as usize]).collect()
             }
-            (None, None) => db.pvs(cell)?.map(|p| p.ids).unwrap_or_default(),
+            _ => db.pvs(c.cell)?.map(|p| p.ids).unwrap_or_default(),
         };
         pvs.sort_unstable();
-        let mut missing: Vec<u64> = seen
+        let mut missing: Vec<u64> = c
+            .seen
             .iter()
             .map(|&i| ids[i as usize])
             .filter(|id| pvs.binary_search(id).is_err())
             .collect();
         missing.sort_unstable();
-        let ratio = if seen.is_empty() {
+        let ratio = if c.seen.is_empty() {
             if pvs.is_empty() {
                 1.0
             } else {
                 f64::INFINITY
             }
         } else {
-            pvs.len() as f64 / seen.len() as f64
+            pvs.len() as f64 / c.seen.len() as f64
         };
         rows.push(CellRow {
-            cell,
+            cell: c.cell,
             pvs: pvs.len(),
-            seen: seen.len(),
+            seen: c.seen.len(),
             ratio,
             missing,
             conservative_seconds,
@@ -279,24 +342,22 @@ pub fn run_with(
         ratios[((ratios.len() - 1) as f64 * q).round() as usize]
     };
     Ok(PvsTightnessReport {
-        objects: objects.len() as u64,
-        walkable_cells: walkable.len(),
-        viewpoints_per_cell: 12 + cfg.interior,
-        resolution: cfg.resolution,
-        rays: rows.len() as u64 * (12 + cfg.interior) as u64 * projection.rays_per_point(),
-        source: if pvs_of.is_some() {
-            "given"
-        } else if conservative.is_some() {
-            "recomputed"
-        } else {
-            "stored"
+        objects: sampling.objects.len() as u64,
+        walkable_cells: sampling.walkable_cells,
+        viewpoints_per_cell: sampling.viewpoints_per_cell,
+        resolution: sampling.resolution,
+        rays: sampling.rays,
+        source: match source {
+            PvsSource::Stored => "stored",
+            PvsSource::Recomputed(_) => "recomputed",
+            PvsSource::Given(_) => "given",
         },
         spacing: samples.spacing,
         radius: samples.radius,
         setup_seconds,
         occluding_objects: conservative.as_ref().map_or(0, |s| s.occluding_objects()),
         prisms: conservative.as_ref().map_or(0, |s| s.prism_count()),
-        sampling_seconds: sampling,
+        sampling_seconds: sampling.seconds,
         mean_pvs,
         mean_seen,
         ratio_of_means: mean_pvs / mean_seen.max(f64::MIN_POSITIVE),
