@@ -139,7 +139,12 @@ fn cells_come_in_by_delta_and_each_frame_draws_its_cells_finds() {
     let db = Database::open(&city().db).unwrap();
     let path = cell_walk(&db, 300, 1.5, 10.0, 2).unwrap();
     let mut seen = Recorder::default();
-    let r = visual::walk_into(&db, &path, &unpaced(0.002), |_| {}, &mut seen).unwrap();
+    // The thesis's selection, whose finds `Database::hdov_search` gives.
+    let cfg = VisualConfig {
+        selection: flaneur::hdov::Selection::Thesis,
+        ..unpaced(0.002)
+    };
+    let r = visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
     let s = &r.summary;
     assert!(s.cells_entered >= 3, "{s:?}");
     assert_eq!(s.searches, s.cells_entered + 1);
@@ -449,6 +454,7 @@ fn finer_by_tau_lets_lod_selection_draw_near_objects_finer_than_eq_5_6() {
     let walk = |finer_by_tau: bool| {
         let cfg = VisualConfig {
             finer_by_tau,
+            selection: flaneur::hdov::Selection::Thesis,
             ..unpaced(0.0)
         };
         let mut seen = Levels {

@@ -295,6 +295,12 @@ pub fn lod_tau(s: &str) -> std::result::Result<f32, String> {
     .map_err(|e| format!("{e} (0: full detail)"))
 }
 
+/// The rule that picks VISUAL's, VSC's and PB's internal LODs and levels
+/// (`--selection`): `screen` (ours) or `thesis`.
+pub fn selection(s: &str) -> std::result::Result<flaneur::hdov::Selection, String> {
+    flaneur::hdov::Selection::from_name(s).map_err(|e| e.to_string())
+}
+
 /// A refinement's screen-space error τ (`--tau`, `--taus`): a fraction of the viewport
 /// within (0, 1).
 pub fn tau(s: &str) -> std::result::Result<f32, String> {

@@ -1,7 +1,7 @@
 //! `flaneur view`: a walk through the city in a window, restarted from where the viewer
 //! stands whenever a key changes its mode or budget.
 
-use crate::cli::args::{eta, finite_f32, finite_f64, lod_tau};
+use crate::cli::args::{eta, finite_f32, finite_f64, lod_tau, selection};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -67,6 +67,12 @@ pub struct ViewArgs {
     /// The PB mode's polygon budget, triangles a frame.
     #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
     budget: u64,
+    /// The rule that picks the VISUAL, VSC and PB modes' internal LODs and levels.
+    /// `screen` (ours, the default): a node's internal LOD only where its DoV ≤ η and
+    /// eq. 5.4 allow it and its stored error projects under --lod-tau, each object at the
+    /// finer of eq. 5.6's level and --lod-tau's. `thesis`: Shou 2002's rules.
+    #[arg(long, default_value = "screen", value_parser = selection)]
+    selection: flaneur::hdov::Selection,
     /// Draw the city's landmarks from a stream server (`flaneur serve-stream` of the same
     /// database) at this address (host:port), its round trip, prediction span and
     /// bytes/s on the HUD; the rest as ever. Default: none, every object read from
@@ -99,6 +105,7 @@ impl ViewArgs {
             top_view,
             eta,
             budget,
+            selection,
             stream,
             adapt_ahead,
             source,
@@ -139,6 +146,7 @@ impl ViewArgs {
             speed,
             eta,
             polygon_budget: budget,
+            selection,
             adapt_ahead,
             ..defaults
         };

@@ -1,7 +1,9 @@
 //! `flaneur walk`: a headless walk along a camera path (REVIEW, Shou 2002 ch. 4, or
 //! the viewcells' PVS), its per-frame figures, and its frames drawn when asked.
 
-use crate::cli::args::{border, eta, finite_f32, frame_rate, lod_tau, pace_factor, seconds_ahead};
+use crate::cli::args::{
+    border, eta, finite_f32, frame_rate, lod_tau, pace_factor, seconds_ahead, selection,
+};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -153,10 +155,19 @@ pub struct WalkArgs {
     /// (ours; default off).
     #[arg(long)]
     dov_tau: bool,
-    /// With --mode visual: an object may be drawn finer than eq. 5.6's level where
-    /// --lod-tau asks for it (ours; default off).
+    /// With --mode visual --selection thesis: each object at the finer of eq. 5.6's
+    /// level and --lod-tau's (ours: the object half of --selection screen, which implies
+    /// it; default off).
     #[arg(long)]
     finer_by_tau: bool,
+    /// With --mode visual, vsc or pb: the rule that picks internal LODs and levels.
+    /// `screen` (ours, the default): a node's internal LOD only where its DoV ≤ η and
+    /// eq. 5.4 allow it and its stored error projects under --lod-tau (from the viewcell
+    /// for visual, from the eye for vsc and pb), each object at the finer of eq. 5.6's
+    /// level and --lod-tau's. `thesis`: Shou 2002's rules, whatever the screen says (the
+    /// Table 5.3 and 6.1 reproductions).
+    #[arg(long, default_value = "screen", value_parser = selection)]
+    selection: flaneur::hdov::Selection,
     /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
     /// many seconds on, at most 60 (ours, not the thesis's; default off).
     #[arg(long, value_name = "SECONDS", value_parser = seconds_ahead, allow_negative_numbers = true)]
@@ -214,6 +225,7 @@ impl WalkArgs {
             budget,
             dov_tau,
             finer_by_tau,
+            selection,
             adapt_ahead,
             stream,
         } = self;
@@ -279,6 +291,8 @@ impl WalkArgs {
         if let (Some(how), None) = (traversal, config) {
             let cfg = SceneConfig {
                 far: far.unwrap_or(review::DEFAULT_FAR),
+                selection,
+                tau: lod_tau,
                 ..SceneConfig::new(how)
             };
             return scene_walk_cmd(
@@ -299,6 +313,8 @@ impl WalkArgs {
                 pace: pace(speed),
                 dov_tau,
                 finer_by_tau,
+                selection,
+                tau: lod_tau,
                 never_wait,
                 ..VisualConfig::default()
             };
@@ -629,8 +645,9 @@ fn scene_walk_cmd(
 fn print_scene(r: &SceneReport) {
     let s = &r.summary;
     println!(
-        "scene tree walk, {}: frames {}   mean {:.3} ms   max {:.2} ms   variance {:.4}   traversal {:.3} ms",
+        "scene tree walk, {} ({} selection): frames {}   mean {:.3} ms   max {:.2} ms   variance {:.4}   traversal {:.3} ms",
         r.config.traversal.label(),
+        r.config.selection.name(),
         s.frames,
         s.mean_frame_ms,
         s.max_frame_ms,
@@ -667,8 +684,9 @@ pub fn print_visual(r: &VisualReport) {
         )
     });
     println!(
-        "visual walk: η = {}, {} scheme, node cache {cache}, next-cell prefetch {prefetch}, frustum {} m",
+        "visual walk: η = {}, {} selection, {} scheme, node cache {cache}, next-cell prefetch {prefetch}, frustum {} m",
         c.eta,
+        c.selection.name(),
         c.scheme.map_or("smallest", |s| s.name()),
         c.far
     );

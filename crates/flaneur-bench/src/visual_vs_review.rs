@@ -54,6 +54,9 @@ pub struct VisualVsReviewConfig {
     pub pace: f32,
     /// Seed of the walk.
     pub seed: u64,
+    /// VISUAL's selection rule: ours (screen, the default) or the thesis's (Table 5.3's
+    /// own), under the thesis's τ.
+    pub selection: flaneur::hdov::Selection,
 }
 
 impl Default for VisualVsReviewConfig {
@@ -69,6 +72,7 @@ impl Default for VisualVsReviewConfig {
             sessions: SESSIONS.iter().map(|s| s.to_string()).collect(),
             pace: review::DEFAULT_PACE,
             seed: 1,
+            selection: flaneur::hdov::Selection::Screen,
         }
     }
 }
@@ -214,6 +218,7 @@ pub fn run(
                     VisualConfig {
                         eta,
                         pace: Some(cfg.pace),
+                        selection: cfg.selection,
                         ..VisualConfig::default()
                     },
                 )
@@ -225,6 +230,7 @@ pub fn run(
                 eta: COMPARED_ETA,
                 prefetch_k: Some(review::DEFAULT_K),
                 pace: Some(cfg.pace),
+                selection: cfg.selection,
                 ..VisualConfig::default()
             },
         ));
@@ -469,10 +475,17 @@ impl Report for VisualVsReviewReport {
         let mut s = format!(
             "# VISUAL against REVIEW (Shou 2002 §5.8.5, Table 5.3, Figs. 5.24–5.27)\n\n\
              Sessions of {} frames at {} fps through the walkable viewcells of a city of {} \
-             objects at {} m/s (seed {}), played {}× real time. Frame time is the walk's own \
+             objects at {} m/s (seed {}), played {}× real time; VISUAL under the {} selection. \
+             Frame time is the walk's own \
              (retrieval, reading, culling), frame 0 left out; the thesis's includes rendering. \
              Missed: visible objects within the frustum that the walk did not draw, per frame.\n\n",
-            c.frames, c.fps, self.objects, c.speed, c.seed, c.pace
+            c.frames,
+            c.fps,
+            self.objects,
+            c.speed,
+            c.seed,
+            c.pace,
+            c.selection.name()
         );
         for session in &c.sessions {
             s.push_str(&format!(

@@ -1,7 +1,7 @@
 //! `flaneur bench fidelity`: each frame of a walk drawn with the mode's selection and
 //! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers).
 
-use crate::cli::args::{eta, lod_tau};
+use crate::cli::args::{eta, lod_tau, selection};
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -57,10 +57,18 @@ pub struct FidelityArgs {
     /// DoV (ours).
     #[arg(long)]
     dov_tau: bool,
-    /// With --mode visual: an object may be drawn finer than eq. 5.6's level where
-    /// --lod-tau asks for it (ours).
+    /// With --mode visual --selection thesis: each object at the finer of eq. 5.6's
+    /// level and --lod-tau's (ours: the object half of --selection screen, which implies
+    /// it).
     #[arg(long)]
     finer_by_tau: bool,
+    /// With --mode visual, vsc or pb: the rule that picks internal LODs and levels.
+    /// `screen` (ours, the default): a node's internal LOD only where its DoV ≤ η and
+    /// eq. 5.4 allow it and its stored error projects under --lod-tau (from the viewcell
+    /// for visual, from the eye for vsc and pb), each object at the finer of eq. 5.6's
+    /// level and --lod-tau's. `thesis`: Shou 2002's rules, whatever the screen says.
+    #[arg(long, default_value = "screen", value_parser = selection)]
+    selection: flaneur::hdov::Selection,
     /// Folder for the CSVs, plots and summary.
     #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
@@ -80,6 +88,7 @@ impl FidelityArgs {
             eta,
             dov_tau,
             finer_by_tau,
+            selection,
             budget,
             out,
         } = self;
@@ -115,14 +124,20 @@ impl FidelityArgs {
             eta,
             dov_tau,
             finer_by_tau,
+            selection,
+            tau: lod_tau,
             pace: None,
             ..VisualConfig::default()
         };
-        let scene = SceneConfig::new(match mode.as_str() {
-            "vsc" => Traversal::Vsc { eta },
-            "pb" => Traversal::Pb { budget },
-            _ => Traversal::Conv,
-        });
+        let scene = SceneConfig {
+            selection,
+            tau: lod_tau,
+            ..SceneConfig::new(match mode.as_str() {
+                "vsc" => Traversal::Vsc { eta },
+                "pb" => Traversal::Pb { budget },
+                _ => Traversal::Conv,
+            })
+        };
         let walk = match preset {
             Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
             None if mode == "visual" => flaneur_bench::fidelity::ModeWalk::Visual(&visual),
@@ -149,11 +164,17 @@ impl FidelityArgs {
         };
         let label = match mode.as_str() {
             "visual" => format!(
-                "visual (η = {eta}{}{})",
+                "visual (η = {eta}, {} selection{}{})",
+                selection.name(),
                 if dov_tau { ", DoV τ" } else { "" },
                 if finer_by_tau { ", finer by τ" } else { "" }
             ),
-            "vsc" | "pb" | "conv" => scene.traversal.label(),
+            "vsc" | "pb" => format!(
+                "{}, {} selection",
+                scene.traversal.label(),
+                selection.name()
+            ),
+            "conv" => scene.traversal.label(),
             _ => mode.clone(),
         };
         let r = flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, |_| {

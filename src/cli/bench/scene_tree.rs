@@ -32,6 +32,11 @@ pub struct SceneTreeArgs {
     /// Seed of the walk's path: the same seed, the same path.
     #[arg(long, default_value_t = SceneTreeConfig::default().seed)]
     seed: u64,
+    /// VSC's and PB's rule for internal LODs and levels: `screen` (ours, the default:
+    /// each representation's stored error held under the thesis's τ of 0.1 % from the
+    /// eye) or `thesis` (Table 6.1's own).
+    #[arg(long, default_value = "screen", value_parser = crate::cli::args::selection)]
+    selection: flaneur::hdov::Selection,
     /// Folder for the CSVs, plots and summary.
     #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
@@ -48,6 +53,7 @@ impl SceneTreeArgs {
             etas,
             budgets,
             seed,
+            selection,
             out,
         } = self;
         let cfg = SceneTreeConfig {
@@ -57,6 +63,7 @@ impl SceneTreeArgs {
             etas,
             budgets,
             seed,
+            selection,
         };
         let db = crate::cli::source::open(&db)?;
         let r = with_bar("scene-tree", |tick| scene_tree::run(&db, &cfg, tick))?;

@@ -1,6 +1,6 @@
 //! `flaneur bench visual-vs-review` (Shou 2002, Table 5.3, Figs. 5.24–5.27).
 
-use crate::cli::args::{eta, finite_f32, frame_rate, pace_factor};
+use crate::cli::args::{eta, finite_f32, frame_rate, pace_factor, selection};
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -38,6 +38,11 @@ pub struct VisualVsReviewArgs {
     /// Seed of the sessions' paths: the same seed, the same paths.
     #[arg(long, default_value_t = VisualVsReviewConfig::default().seed)]
     seed: u64,
+    /// VISUAL's rule for internal LODs and levels: `screen` (ours, the default: a
+    /// node's internal LOD only where its stored error also projects under the thesis's
+    /// τ of 0.1 % from the viewcell) or `thesis` (Table 5.3's own).
+    #[arg(long, default_value = "screen", value_parser = selection)]
+    selection: flaneur::hdov::Selection,
     /// Folder for the CSVs, plots and summary.
     #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
@@ -56,6 +61,7 @@ impl VisualVsReviewArgs {
             sessions,
             pace,
             seed,
+            selection,
             out,
         } = self;
         let cfg = VisualVsReviewConfig {
@@ -67,6 +73,7 @@ impl VisualVsReviewArgs {
             sessions,
             pace,
             seed,
+            selection,
         };
         let db = crate::cli::source::open(&db)?;
         let r = with_bar("visual-vs-review", |tick| {

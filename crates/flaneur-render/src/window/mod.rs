@@ -374,4 +374,8 @@ impl LiveViewer for WalkWindow {
     fn polygon_budget(&self) -> u64 {
         self.opts.polygon_budget
     }
+
+    fn selection(&self) -> flaneur::hdov::Selection {
+        self.opts.selection
+    }
 }

@@ -35,6 +35,9 @@ pub struct ViewOptions {
     pub eta: f32,
     /// The PB mode's polygon budget, triangles a frame.
     pub polygon_budget: u64,
+    /// The rule that picks the VISUAL, VSC and PB modes' internal LODs and levels, under
+    /// `lod_tau`: ours (screen) or the thesis's.
+    pub selection: flaneur::hdov::Selection,
     /// Whether the landmarks are refined for the next frame on the thread pool while a
     /// frame draws (Adapt and Display, [`FrameSink::lod_adapt_ahead`]).
     ///
@@ -62,6 +65,7 @@ impl ViewOptions {
             speed: flaneur::walk::WALK_SPEED,
             eta: flaneur::walk::visual::DEFAULT_ETA,
             polygon_budget: flaneur::walk::live::DEFAULT_BUDGET,
+            selection: flaneur::hdov::Selection::Screen,
             adapt_ahead: false,
         }
     }

@@ -43,7 +43,10 @@ pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;
 pub(crate) use sizing::sizes_at;
 pub use sizing::FanoutSizes;
-pub use search::{level_for_detail, stops, Found, SearchResult, MAXDOV};
+pub use search::{
+    box_distance, level_for_detail, search_cell, stops, Found, NodeErrors, ScreenRule,
+    ScreenTest, SearchResult, Selection, MAXDOV,
+};
 pub(crate) use tree::HdovTree;
 pub use tree::{TreeHead, HDOV_SEGMENT};
 pub use vd::Vd;

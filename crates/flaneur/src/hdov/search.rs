@@ -12,12 +12,32 @@
 //! (eq. 5.5: DoV/η for an internal LOD; eq. 5.6: min(DoV/MAXDOV, 1) for an object); the
 //! level they pick is the loader's ([`level_for_detail`]), so that the search reads only
 //! the tree and the V-pages, which is what the thesis's search I/O counts.
+//!
+//! **Ours, beside the thesis's rule** ([`Selection::Screen`], the default of the walks;
+//! [`Selection::Thesis`] keeps the rule above for the Table 5.3 reproduction): the thesis's
+//! internal LODs carry no error bound and eq. 5.6 ignores the screen, which measured 14 dB
+//! (η 0) to 23 dB (η 0.001) below the PVS walk's picture. Under ours a search also stops at
+//! a node only where its finest internal LOD's stored error ε (metres) projects under the
+//! LOD threshold τ from **anywhere in the viewcell**: ε < 2τ·tan(α)·d, the criterion of
+//! [`lod::level_for`](crate::lod::level_for), with d the distance from the viewcell's box
+//! (its eye heights widened by a kerb's step) to the node's box ([`ScreenTest`]). The
+//! viewcell rather than the eye because a search answers for a cell and a walk keeps its
+//! finds while the eye stays in it: a proxy fit for the cell's nearest point is fit for
+//! every frame there. The error is read from the node's LOD directory (one page, once a
+//! walk, [`NodeErrors`]): the node entry has no room for it, so these reads are counted
+//! as model pages, not as the search's. The node is then drawn at the finer of eq. 5.5's
+//! level and the coarsest whose error passes; an object at the finer of eq. 5.6's level
+//! and its screen-space one (the walk's LOD selection, from the eye, frame by frame).
+
+use std::collections::HashMap;
+use std::sync::Mutex;
 
 use super::node::HNodeKind;
-use super::scheme::{Entered, StoredScheme};
+use super::scheme::{Entered, Scheme, StoredScheme};
 use super::tree::HdovTree;
 use super::vd::Vd;
 use crate::cache::{BufferPool, Hint};
+use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
@@ -27,6 +47,202 @@ use crate::store::{Extent, Store};
 /// The largest DoV an object seen from outside its box can have (half the sphere),
 /// eq. 5.6's MAXDOV.
 pub const MAXDOV: f32 = 0.5;
+
+/// Which rule picks what a VISUAL, VSC or PB walk draws, and at what detail.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Selection {
+    /// Ours, the default: a node's internal LOD only where the thesis's rule allows it
+    /// **and** its stored error projects under the LOD threshold τ ([`ScreenTest`]); an
+    /// object at the finer of eq. 5.6's level and the screen-space one.
+    #[default]
+    Screen,
+    /// The thesis's (§5.3, §6.1): a node's internal LOD wherever DoV ≤ η and eq. 5.4
+    /// hold, an object at eq. 5.6's level whatever the screen says; for the Table 5.3
+    /// and Table 6.1 reproductions.
+    Thesis,
+}
+
+impl Selection {
+    /// The names [`Selection::from_name`] takes.
+    pub const NAMES: [&'static str; 2] = ["screen", "thesis"];
+
+    /// Its name: `screen` or `thesis`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Selection::Screen => "screen",
+            Selection::Thesis => "thesis",
+        }
+    }
+
+    /// The rule named `name` (`screen` or `thesis`); an error naming the choices.
+    ///
+    /// ```
+    /// use flaneur::hdov::Selection;
+    /// assert_eq!(Selection::from_name("thesis").unwrap(), Selection::Thesis);
+    /// assert!(Selection::from_name("eyeball").is_err());
+    /// ```
+    pub fn from_name(name: &str) -> Result<Selection> {
+        match name {
+            "screen" => Ok(Selection::Screen),
+            "thesis" => Ok(Selection::Thesis),
+            _ => Err(Error::Invalid(format!(
+                "a selection rule named {name:?}: give one of {}",
+                Selection::NAMES.join(", ")
+            ))),
+        }
+    }
+}
+
+impl std::str::FromStr for Selection {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Selection> {
+        Selection::from_name(s)
+    }
+}
+
+/// The distance between the nearest points of two boxes, 0 where they touch.
+pub fn box_distance(a: &Aabb, b: &Aabb) -> f32 {
+    (a.min - b.max)
+        .max(b.min - a.max)
+        .max(glam::Vec3::ZERO)
+        .length()
+}
+
+/// The screen-space test of a representation's stored error, seen from anywhere in a
+/// box (a viewcell; an eye is a box of no size): the criterion of
+/// [`lod::level_for`](crate::lod::level_for), ε < 2τ·tan(α)·d, α half the vertical field
+/// of view, d the distance between the boxes.
+///
+/// ```
+/// use flaneur::geom::Aabb;
+/// use flaneur::hdov::ScreenTest;
+/// let cell = Aabb::new([0.0, 1.0, 0.0], [40.0, 2.0, 40.0]).unwrap();
+/// let test = ScreenTest { from: cell, fov_y: 45f32.to_radians(), tau: 0.001 };
+/// let far = Aabb::new([1040.0, 0.0, 0.0], [1100.0, 30.0, 40.0]).unwrap();
+/// // 1,000 m away, 0.83 m projects under 0.1 % of the viewport; 2 m does not.
+/// assert_eq!(test.coarsest_fit(&[0.5, 2.0], &far), Some(0));
+/// assert_eq!(test.coarsest_fit(&[2.0, 8.0], &far), None);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenTest {
+    /// Where the eye may be.
+    pub from: Aabb,
+    /// The vertical field of view, radians.
+    pub fov_y: f32,
+    /// τ, a fraction of the viewport.
+    pub tau: f32,
+}
+
+impl ScreenTest {
+    /// The largest error, metres, that projects under τ at `to` from anywhere in `from`.
+    pub fn threshold(&self, to: &Aabb) -> f32 {
+        2.0 * self.tau * (self.fov_y * 0.5).tan() * box_distance(&self.from, to)
+    }
+
+    /// The coarsest of the representations whose stored `errors` (metres, finest
+    /// first) project under τ at `to`; `None` when none does. An error that is not a
+    /// number ≥ 0 never passes.
+    pub fn coarsest_fit(&self, errors: &[f32], to: &Aabb) -> Option<usize> {
+        let t = self.threshold(to);
+        errors.iter().rposition(|&e| e >= 0.0 && e < t)
+    }
+}
+
+/// The stored errors of HDoV nodes' internal LODs (metres, finest first), each read
+/// from its LOD directory the first time it is asked and kept: a walk's, shared by its
+/// threads.
+#[derive(Debug, Default)]
+pub struct NodeErrors {
+    known: Mutex<HashMap<u32, Vec<f32>>>,
+    /// Nodes whose errors could not be read, with why, not yet taken.
+    damaged: Mutex<Vec<(u32, Error)>>,
+}
+
+impl NodeErrors {
+    /// Node `node`'s internal LODs' errors, read from the chain at `lods` the first
+    /// time (one page, counted as an LOD page). An error names a damaged chain.
+    pub(crate) fn of(&self, store: &Store, node: u32, lods: &Extent) -> Result<Vec<f32>> {
+        let lock = || self.known.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(e) = lock().get(&node) {
+            return Ok(e.clone());
+        }
+        let what = format!("internal LODs of HDoV node {node}");
+        let levels = crate::lod::stored::chain_levels(store, lods, &what)?;
+        let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
+        lock().insert(node, errors.clone());
+        Ok(errors)
+    }
+
+    /// Node `node`'s errors, when they have been read.
+    pub fn known(&self, node: u32) -> Option<Vec<f32>> {
+        let known = self.known.lock().unwrap_or_else(|p| p.into_inner());
+        known.get(&node).cloned()
+    }
+
+    /// Node `node`'s errors could not be read: from now on it has none (its internal
+    /// LODs never pass), and the damage waits to be taken.
+    fn damage(&self, node: u32, e: Error) {
+        let mut known = self.known.lock().unwrap_or_else(|p| p.into_inner());
+        known.insert(node, Vec::new());
+        let mut damaged = self.damaged.lock().unwrap_or_else(|p| p.into_inner());
+        damaged.push((node, e));
+    }
+
+    /// The nodes whose errors a tolerant search could not read since the last call,
+    /// with why (their objects were found instead).
+    pub fn take_damaged(&self) -> Vec<(u32, Error)> {
+        let mut damaged = self.damaged.lock().unwrap_or_else(|p| p.into_inner());
+        std::mem::take(&mut *damaged)
+    }
+}
+
+/// What a search under [`Selection::Screen`] holds nodes' internal LODs to: the test from
+/// the viewcell, and the errors read so far.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenRule<'e> {
+    /// The test, from the viewcell searched
+    /// ([`visual::screen_test`](crate::walk::visual::screen_test)).
+    pub test: ScreenTest,
+    /// Where the nodes' errors are read and kept.
+    pub errors: &'e NodeErrors,
+    /// A node whose errors cannot be read (a damaged page) is searched past, its damage
+    /// kept for [`NodeErrors::take_damaged`], rather than failing the search: for a
+    /// viewer that walks on.
+    pub tolerant: bool,
+}
+
+/// [`Database::hdov_search_cached`] with the selection rule: under `screen` (ours) a
+/// node's internal LOD is used only where its stored error also passes the rule's test;
+/// `None` is the thesis's search. `scheme` `None`: the smallest one built.
+pub fn search_cell(
+    db: &Database,
+    cell: u32,
+    eta: f32,
+    scheme: Option<Scheme>,
+    cache: Option<&BufferPool<'_>>,
+    screen: Option<&ScreenRule<'_>>,
+) -> Result<SearchResult> {
+    let tree = db.hdov_tree()?;
+    let store = db.store();
+    let head = tree.head(store)?;
+    let slot = head.slot(cell).ok_or_else(|| {
+        Error::Invalid(format!(
+            "viewcell {cell} is not a walkable cell of the HDoV-tree"
+        ))
+    })?;
+    let scheme = match scheme {
+        Some(s) => s,
+        None => head.smallest_scheme()?,
+    };
+    let stored = tree.scheme(store, scheme)?;
+    let found = search_in(store, tree, stored, slot, eta, cache, screen);
+    if let Some(c) = cache {
+        c.end_search();
+    }
+    found
+}
 
 /// What the search found: an object, or a node drawn at one of its internal LODs.
 #[derive(Clone, Debug, PartialEq)]
@@ -132,7 +348,7 @@ pub fn search(
     eta: f32,
     cache: Option<&BufferPool<'_>>,
 ) -> Result<SearchResult> {
-    let found = search_in(store, tree, scheme, slot, eta, cache);
+    let found = search_in(store, tree, scheme, slot, eta, cache, None);
     if let Some(c) = cache {
         c.end_search();
     }
@@ -146,6 +362,7 @@ fn search_in(
     slot: usize,
     eta: f32,
     cache: Option<&BufferPool<'_>>,
+    screen: Option<&ScreenRule<'_>>,
 ) -> Result<SearchResult> {
     if !(eta.is_finite() && eta >= 0.0) {
         return Err(Error::Invalid(format!(
@@ -178,6 +395,7 @@ fn search_in(
         fanout,
         height,
         cache,
+        screen,
     };
     walk.visit(root, &vds, &mut out)?;
     Ok(out)
@@ -193,9 +411,26 @@ struct Walk<'a> {
     fanout: f64,
     height: u32,
     cache: Option<&'a BufferPool<'a>>,
+    screen: Option<&'a ScreenRule<'a>>,
 }
 
 impl Walk<'_> {
+    /// Whether node `node`'s internal LODs pass the screen rule, when there is one.
+    fn fits(&self, node: u32, mbr: &Aabb, lods: &Extent) -> Result<bool> {
+        let Some(rule) = self.screen else {
+            return Ok(true);
+        };
+        let errors = match rule.errors.of(self.store, node, lods) {
+            Ok(e) => e,
+            Err(e) if rule.tolerant => {
+                rule.errors.damage(node, e);
+                return Ok(false);
+            }
+            Err(e) => return Err(e),
+        };
+        Ok(rule.test.coarsest_fit(&errors, mbr).is_some())
+    }
+
     fn visit(&self, node: super::node::HNode, vds: &[Vd], out: &mut SearchResult) -> Result<()> {
         match node.kind {
             HNodeKind::Leaf(objects) => {
@@ -214,7 +449,10 @@ impl Walk<'_> {
                     if vd.dov <= 0.0 {
                         continue;
                     }
-                    if !c.lods.is_empty() && stops(vd, self.eta, c.h, c.s, self.fanout) {
+                    if !c.lods.is_empty()
+                        && stops(vd, self.eta, c.h, c.s, self.fanout)
+                        && self.fits(c.node, &c.mbr, &c.lods)?
+                    {
                         out.found.push(Found::Node {
                             node: c.node,
                             mbr: c.mbr,

@@ -36,6 +36,10 @@ pub struct Loaded {
     /// loaded it) unless the walk lets the screen-space error ask for more (VISUAL's
     /// `finer_by_tau`), the finer level then read when first wanted.
     pub finest: usize,
+    /// LOD selection draws it at the finer of `level` and the screen-space level, never
+    /// coarser than loaded (VISUAL's screen rule: the finer of eq. 5.6's level and τ's),
+    /// rather than at the coarser of the screen-space level and `finest`.
+    pub finer_of: bool,
     /// Its DoV from the viewer's cell, when the walk hands it on for LOD selection
     /// (VISUAL with `dov_tau`): an object refined view by view then takes a τ its DoV
     /// stretches ([`dov_tau`](super::lod_select::dov_tau)).
@@ -60,6 +64,7 @@ impl Loaded {
             mesh: Arc::new(mesh),
             level,
             finest: level,
+            finer_of: false,
             dov: None,
         }
     }
@@ -274,6 +279,7 @@ pub(crate) mod tests {
             bytes,
             level: 0,
             finest: 0,
+            finer_of: false,
             dov: None,
         }
     }

@@ -15,6 +15,7 @@ use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::hdov::scene::{SceneTree, Traversal};
+use crate::hdov::Selection;
 use crate::prefetch::pvs::DEFAULT_BORDER;
 
 /// Failed walks in a row that end the session: the walk is then not getting over it.
@@ -94,6 +95,12 @@ pub trait LiveViewer: Viewer {
     /// The polygon budget a PB walk draws under, triangles a frame.
     fn polygon_budget(&self) -> u64 {
         DEFAULT_BUDGET
+    }
+
+    /// The rule that picks a VISUAL, VSC or PB walk's internal LODs and levels, under
+    /// the viewer's LOD τ: ours by default.
+    fn selection(&self) -> Selection {
+        Selection::Screen
     }
 }
 
@@ -217,11 +224,19 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                     _ => Traversal::Conv,
                 };
                 let tree = tree.as_mut().expect("loaded above");
-                let cfg = SceneConfig::new(how);
+                let cfg = SceneConfig {
+                    selection: viewer.selection(),
+                    tau: viewer.lod_tau().unwrap_or(0.0),
+                    ..SceneConfig::new(how)
+                };
                 scene_walk::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Visual => {
-                let cfg = visual_config(viewer.eta(), remote);
+                let cfg = VisualConfig {
+                    selection: viewer.selection(),
+                    tau: viewer.lod_tau().unwrap_or(0.0),
+                    ..visual_config(viewer.eta(), remote)
+                };
                 visual::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Pvs => {

@@ -10,8 +10,10 @@
 //!
 //! The mesh the walk loaded into its object buffer is the object's level 0, or the
 //! coarser level the walk chose for it ([`Loaded::level`], VISUAL's), which selection
-//! never draws finer unless the walk allows it ([`Loaded::finest`]: VISUAL's
-//! `finer_by_tau`, the finer level then read like a coarse one); the coarser ones are read from the database's LOD chains when
+//! never draws finer unless the walk allows it ([`Loaded::finest`]), nor, for VISUAL's
+//! screen rule ([`Loaded::finer_of`]), coarser: it is then drawn at the finer of the
+//! level the walk chose (eq. 5.6's) and the screen-space one, the finer level read like
+//! a coarse one; the coarser ones are read from the database's LOD chains when
 //! first chosen (only the pages of that level), and kept while the object stays in the
 //! buffer. A group of objects drawn as one (an HDoV node) is drawn as loaded. A database without LODs, or an object
 //! without them, is drawn at full detail. The pages read are counted apart from the
@@ -423,11 +425,18 @@ impl<'a> LodSelector<'a> {
                 self.counts.drawn_while_decoding += 1;
             }
             let d = distance_to(&o.entry.bounds, camera.position);
-            // Never finer than the walk allows (the level it loaded, unless it says).
+            // Never finer than the walk allows (the level it loaded, unless it says); for
+            // VISUAL's screen rule, the finer of the level it loaded and τ's.
             let level = match levels.levels.is_empty() {
                 // No levels to choose from (none stored, or unreadable): as loaded.
                 true => o.level,
-                false => level_for(&levels.levels, d, camera.fov_y, self.tau).max(o.finest),
+                false => {
+                    let by_tau = level_for(&levels.levels, d, camera.fov_y, self.tau);
+                    match o.finer_of {
+                        true => by_tau.min(o.level),
+                        false => by_tau.max(o.finest),
+                    }
+                }
             };
             let mesh = if level == o.level {
                 o.mesh.clone()

@@ -41,6 +41,7 @@ use super::walk_lods::WalkLods;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::hdov::scene::{SceneTree, Traversal};
+use crate::hdov::Selection;
 
 /// What a scene-tree walk can vary.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -49,14 +50,25 @@ pub struct SceneConfig {
     pub traversal: Traversal,
     /// Depth of the view frustum, metres.
     pub far: f32,
+    /// Which rule picks VSC's and PB's representations: ours ([`Selection::Screen`], the
+    /// default) holds each to its stored error projecting under [`SceneConfig::tau`]
+    /// from the eye (`hdov::scene::traverse_screened`); the thesis's
+    /// ([`Selection::Thesis`]) for the Table 6.1 reproduction.
+    pub selection: Selection,
+    /// The screen rule's threshold, a fraction of the viewport within [0, 1): the
+    /// viewer's LOD τ (0, full detail, lets no internal LOD pass).
+    pub tau: f32,
 }
 
 impl SceneConfig {
-    /// `traversal` with REVIEW's frustum depth.
+    /// `traversal` with REVIEW's frustum depth, under our screen rule at the thesis's τ
+    /// of 0.1 %.
     pub fn new(traversal: Traversal) -> SceneConfig {
         SceneConfig {
             traversal,
             far: super::review::DEFAULT_FAR,
+            selection: Selection::Screen,
+            tau: super::lod_select::DEFAULT_TAU,
         }
     }
 }
@@ -287,6 +299,7 @@ fn walk_each<'db>(
 ) -> Result<SceneReport> {
     cfg.traversal.validate()?;
     super::review::check_far(cfg.far)?;
+    super::visual::check_screen_tau(cfg.tau)?;
     let mut tally = SceneTally::default();
     super::mode::scene::walk_live(db, tree, cfg, lods, progress, viewer, |f| {
         tally.add(&f, cfg.traversal);

@@ -69,7 +69,8 @@ use super::walk_lods::WalkLods;
 use crate::cache::CacheStats;
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::hdov::Scheme;
+use crate::geom::Aabb;
+use crate::hdov::{Scheme, ScreenTest, Selection};
 
 /// The thesis's threshold for VISUAL's walks (Table 5.3, Figs. 5.24–5.26).
 pub const DEFAULT_ETA: f32 = 0.001;
@@ -95,11 +96,23 @@ pub struct VisualConfig {
     pub far: f32,
     /// The fallback's disk cell outside every viewcell: SF times the frustum's box.
     pub fallback_sf: f32,
-    /// An object may be drawn finer than eq. 5.6's level where LOD selection's
-    /// screen-space error asks for it (ours, not the thesis's): eq. 5.6 gives full
-    /// detail only at a DoV of MAXDOV, half the view's sphere, so a near façade of DoV
-    /// 0.1 would stay close to its coarsest level. The finer level is read by LOD
-    /// selection when first wanted. Off by default.
+    /// Which rule picks what is drawn: ours ([`Selection::Screen`], the default) holds a
+    /// node's internal LOD to its stored error projecting under [`VisualConfig::tau`]
+    /// from the viewcell, and draws each object at the finer of eq. 5.6's level and the
+    /// screen-space one; the thesis's ([`Selection::Thesis`]) for the Table 5.3
+    /// reproduction.
+    pub selection: Selection,
+    /// The screen-space threshold the screen rule holds nodes' internal LODs to, a
+    /// fraction of the viewport within [0, 1): the viewer's LOD τ (the thesis's 0.1 %;
+    /// 0, full detail, lets no internal LOD pass). The objects' levels are LOD
+    /// selection's, under the τ the viewer asks for.
+    pub tau: f32,
+    /// Under the thesis's selection, each object still at the finer of eq. 5.6's level
+    /// and LOD selection's screen-space one (ours, the object half of
+    /// [`Selection::Screen`]): eq. 5.6 gives full detail only at a DoV of MAXDOV, half
+    /// the view's sphere, so a near façade of DoV 0.1 would stay close to its coarsest
+    /// level. The finer level is read by LOD selection when first wanted. Off by
+    /// default; the screen rule implies it.
     pub finer_by_tau: bool,
     /// Objects refined view by view take a τ stretched by their DoV
     /// ([`dov_tau`](super::lod_select::dov_tau)): ours, not the thesis's. Off by
@@ -117,7 +130,8 @@ pub struct VisualConfig {
 
 impl Default for VisualConfig {
     /// The thesis's VISUAL: η = 0.001, the smallest scheme, a DoV-Time node cache of
-    /// 400 pages, no prefetch, REVIEW's frustum depth and SF.
+    /// 400 pages, no prefetch, REVIEW's frustum depth and SF; with our screen-space
+    /// selection under the thesis's τ of 0.1 %.
     fn default() -> VisualConfig {
         VisualConfig {
             eta: DEFAULT_ETA,
@@ -127,6 +141,8 @@ impl Default for VisualConfig {
             far: super::review::DEFAULT_FAR,
             fallback_sf: super::review::DEFAULT_SF,
             dov_tau: false,
+            selection: Selection::Screen,
+            tau: super::lod_select::DEFAULT_TAU,
             finer_by_tau: false,
             pace: Some(super::review::DEFAULT_PACE),
             never_wait: false,
@@ -135,6 +151,12 @@ impl Default for VisualConfig {
 }
 
 impl VisualConfig {
+    /// Whether objects are drawn at the finer of eq. 5.6's level and the screen-space
+    /// one: the screen rule, or the thesis's with [`VisualConfig::finer_by_tau`].
+    pub fn finer_of(&self) -> bool {
+        self.selection == Selection::Screen || self.finer_by_tau
+    }
+
     pub(crate) fn validate(&self) -> Result<()> {
         if !(self.eta.is_finite() && self.eta >= 0.0) {
             return Err(Error::Invalid(format!(
@@ -142,6 +164,7 @@ impl VisualConfig {
                 self.eta
             )));
         }
+        check_screen_tau(self.tau)?;
         if let Some(k) = self.prefetch_k {
             super::review::check_k(k)?;
         }
@@ -452,5 +475,43 @@ fn walk_each<'db>(
         config: cfg.clone(),
         frames: Vec::new(),
         summary,
+    })
+}
+
+/// Whether `tau` can be the screen rule's threshold: a fraction of the viewport within
+/// [0, 1), 0 letting no internal LOD pass.
+pub(crate) fn check_screen_tau(tau: f32) -> Result<()> {
+    if !(0.0..1.0).contains(&tau) {
+        return Err(Error::Invalid(format!(
+            "the screen rule's τ = {tau}: give a fraction of the viewport within [0, 1) (0: no internal LOD passes)"
+        )));
+    }
+    Ok(())
+}
+
+/// The screen-space test of the screen rule from viewcell `cell` of `db` under `tau` for
+/// a vertical field of view `fov_y` (radians): from the cell's box, its eye heights
+/// widened by the step an eye may take and stay in it
+/// ([`viewcell_holding`](super::cells)), so that what passes it passes from every eye
+/// the cell's finds are drawn for. An error for a database without visibility, or a τ
+/// outside [0, 1).
+pub fn screen_test(db: &Database, cell: u32, tau: f32, fov_y: f32) -> Result<ScreenTest> {
+    check_screen_tau(tau)?;
+    let vis = db.visibility()?.ok_or_else(|| {
+        Error::Invalid(format!(
+            "{} has no visibility: build it with --visibility",
+            db.store().path().display()
+        ))
+    })?;
+    let (row, column) = vis.grid.place(cell);
+    let b = vis.grid.cell_bounds(row, column);
+    let slack = glam::Vec3::new(0.0, super::cells::EYE_SLACK, 0.0);
+    Ok(ScreenTest {
+        from: Aabb {
+            min: b.min - slack,
+            max: b.max + slack,
+        },
+        fov_y,
+        tau,
     })
 }

@@ -37,5 +37,8 @@
 mod traverse;
 mod tree;
 
-pub use traverse::{traverse, Active, Traversal, Traversed, MAX_ATTEMPTS};
+pub use traverse::{
+    traverse, traverse_screened, Active, SceneErrors, ScreenView, Traversal, Traversed,
+    MAX_ATTEMPTS,
+};
 pub use tree::{SceneNode, SceneTree};

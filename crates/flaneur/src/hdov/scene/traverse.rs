@@ -14,6 +14,23 @@
 //!   representation instead of its children's; after [`MAX_ATTEMPTS`] retreats that do
 //!   not fit in a row the traversal ends and draws what is active.
 //!
+//! **Ours, beside the thesis's** ([`traverse_screened`] with a [`ScreenView`], the walks'
+//! default; `hdov::Selection`): the thesis's internal LODs carry no error bound and
+//! eq. 5.6 ignores the screen. Under ours a representation's stored error ε (metres,
+//! [`SceneErrors`]) is held to the LOD threshold τ from the eye, ε < 2τ·tan(α)·d with d
+//! the distance from the eye to the node's box (the criterion of `lod::level_for`; the
+//! eye rather than its viewcell, since the traversal runs every frame):
+//! - VSC: an internal node stops at its internal LOD only where the thesis's rule allows
+//!   it **and** one of its internal LODs passes, drawn at the finer of eq. 5.5's level
+//!   and the coarsest that passes; a leaf at the finer of eq. 5.6's level and the
+//!   coarsest of its object's levels that passes (its full mesh when none does).
+//! - PB: a representation is never coarser than the one that passes τ (the finest when
+//!   none does) where the node's share of the budget holds it; the budget still bounds
+//!   the frame, so where the share does not hold it the share wins, and a parent's
+//!   retreat to its own representation is the thesis's (a hole where its children
+//!   overdrew would be worse than a coarse proxy).
+//! A representation whose error is not known never passes.
+//!
 //! Choices the thesis leaves open, named: a representation "of about" t triangles is
 //! the finest with at most t (the coarsest when none has so few); a retreat undoes what
 //! the node's children had chosen (they are not drawn beside it); a node culled by the
@@ -25,10 +42,13 @@
 //! each failed retreat undoes a larger subtree, and at 128 PB(20000) drew the root's
 //! coarsest LOD, 177 triangles, on most frames.
 
-use super::super::search::{level_for_detail, stops, MAXDOV};
+use glam::Vec3;
+
+use super::super::search::{level_for_detail, stops, ScreenTest, MAXDOV};
 use super::tree::{SceneNode, SceneTree};
+use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::geom::Frustum;
+use crate::geom::{Aabb, Frustum};
 
 /// Retreats to a parent's representation that do not fit, in a row, before PB ends its
 /// traversal (the thesis's MAX_ATTEMPTS, whose value it does not give).
@@ -104,18 +124,117 @@ pub struct Traversed {
     pub too_big: Option<(u64, u32)>,
 }
 
-/// Traverses `tree` as `how` says for a view of `frustum`. VSC and PB use the VDs of
-/// the tree's current cell.
+/// The stored errors of each scene node's representations, metres, finest first: a
+/// leaf's its object's stored levels' (0 for its full mesh), an internal node's its
+/// internal LODs'. Empty where not known (an object without LOD data, or a tree whose
+/// internal LODs keep no error): such a representation never passes the screen test.
+#[derive(Clone, Debug, Default)]
+pub struct SceneErrors {
+    nodes: Vec<Vec<f32>>,
+}
+
+impl SceneErrors {
+    /// The errors of `tree`'s nodes: its leaves' read from `db`'s LOD directories (a
+    /// page or two an object, once). An error names an object whose LOD data cannot be
+    /// read.
+    pub fn load(db: &Database, tree: &SceneTree) -> Result<SceneErrors> {
+        let mut nodes = Vec::with_capacity(tree.nodes.len());
+        for n in &tree.nodes {
+            let errors = match n.object {
+                Some(id) => match db.lod_entry(id)? {
+                    Some(e) if e.levels > 0 => {
+                        let levels = crate::lod::stored::levels(db.store(), &e)?;
+                        let errors: Vec<f32> = levels.iter().map(|l| l.error).collect();
+                        // Only errors that describe the node's own representations.
+                        match errors.len() == n.triangles.len() {
+                            true => errors,
+                            false => Vec::new(),
+                        }
+                    }
+                    _ if n.triangles.len() == 1 => vec![0.0],
+                    _ => Vec::new(),
+                },
+                None => Vec::new(),
+            };
+            nodes.push(errors);
+        }
+        Ok(SceneErrors { nodes })
+    }
+
+    /// Node `k`'s representations' errors (empty where not known).
+    pub fn of(&self, k: u32) -> &[f32] {
+        self.nodes.get(k as usize).map_or(&[], |e| e.as_slice())
+    }
+
+    /// Sets node `k`'s errors (a tree whose internal LODs carry them, or a test).
+    pub fn set(&mut self, k: u32, errors: Vec<f32>) {
+        if self.nodes.len() <= k as usize {
+            self.nodes.resize(k as usize + 1, Vec::new());
+        }
+        self.nodes[k as usize] = errors;
+    }
+}
+
+/// What the screen rule holds a traversal to (ours): the eye, the view's vertical field
+/// of view (radians), τ (a fraction of the viewport) and the nodes' errors.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenView<'e> {
+    /// Where the eye is.
+    pub eye: Vec3,
+    /// The vertical field of view, radians.
+    pub fov_y: f32,
+    /// The LOD threshold τ, a fraction of the viewport.
+    pub tau: f32,
+    /// The nodes' representations' errors.
+    pub errors: &'e SceneErrors,
+}
+
+impl ScreenView<'_> {
+    /// The coarsest of node `k`'s representations whose error passes from the eye;
+    /// `None` when none does.
+    fn fit(&self, k: u32, bounds: &Aabb) -> Option<usize> {
+        let test = ScreenTest {
+            from: Aabb {
+                min: self.eye,
+                max: self.eye,
+            },
+            fov_y: self.fov_y,
+            tau: self.tau,
+        };
+        test.coarsest_fit(self.errors.of(k), bounds)
+    }
+}
+
+/// Traverses `tree` as `how` says for a view of `frustum`, by the thesis's rules. VSC and
+/// PB use the VDs of the tree's current cell.
 pub fn traverse(tree: &SceneTree, how: Traversal, frustum: &Frustum) -> Result<Traversed> {
+    traverse_screened(tree, how, frustum, None)
+}
+
+/// [`traverse`], VSC and PB holding representations to the screen rule of `screen`
+/// (ours) when given; `None` is the thesis's traversal.
+pub fn traverse_screened(
+    tree: &SceneTree,
+    how: Traversal,
+    frustum: &Frustum,
+    screen: Option<&ScreenView<'_>>,
+) -> Result<Traversed> {
     how.validate()?;
+    if let Some(v) = screen.filter(|v| !(0.0..1.0).contains(&v.tau)) {
+        return Err(Error::Invalid(format!(
+            "LOD threshold τ = {}: give a fraction of the viewport within [0, 1)",
+            v.tau
+        )));
+    }
     let mut out = Traversed::default();
     match how {
         Traversal::Conv => conv(tree, 0, frustum, &mut out),
-        Traversal::Vsc { eta } => vsc(tree, 0, eta, frustum, &mut out),
+        Traversal::Vsc { eta } => vsc(tree, 0, eta, frustum, screen, &mut out),
         Traversal::Pb { budget } => {
             let mut pb = Budget {
                 tree,
                 frustum,
+                screen,
                 initial: budget as f64,
                 remaining: budget as f64,
                 attempts: 0,
@@ -148,29 +267,47 @@ fn conv(tree: &SceneTree, k: u32, frustum: &Frustum, out: &mut Traversed) {
     }
 }
 
-fn vsc(tree: &SceneTree, k: u32, eta: f32, frustum: &Frustum, out: &mut Traversed) {
+fn vsc(
+    tree: &SceneTree,
+    k: u32,
+    eta: f32,
+    frustum: &Frustum,
+    screen: Option<&ScreenView<'_>>,
+    out: &mut Traversed,
+) {
     out.visited += 1;
     let n = &tree.nodes[k as usize];
     if n.vd.dov <= 0.0 || !frustum.overlaps_aabb(&n.bounds) {
         return;
     }
+    // Under the screen rule, the coarsest representation that passes (a leaf's full
+    // mesh when none does; an internal node's internal LODs only where one does).
+    let fit = screen.map(|v| v.fit(k, &n.bounds));
     match n.children {
-        None => out
-            .active
-            .push(at_detail(k, n, (n.vd.dov / MAXDOV).min(1.0))),
-        Some(_) if !n.levels.is_empty() && stops(n.vd, eta, n.h, n.s, 2.0) => {
-            out.active.push(at_detail(k, n, (n.vd.dov / eta).min(1.0)))
+        None => {
+            let finest = fit.map(|f| f.unwrap_or(0));
+            out.active
+                .push(at_detail(k, n, (n.vd.dov / MAXDOV).min(1.0), finest))
+        }
+        Some(_)
+            if !n.levels.is_empty()
+                && stops(n.vd, eta, n.h, n.s, 2.0)
+                && fit.is_none_or(|f| f.is_some()) =>
+        {
+            out.active
+                .push(at_detail(k, n, (n.vd.dov / eta).min(1.0), fit.flatten()))
         }
         Some([a, b]) => {
-            vsc(tree, a, eta, frustum, out);
-            vsc(tree, b, eta, frustum, out);
+            vsc(tree, a, eta, frustum, screen, out);
+            vsc(tree, b, eta, frustum, screen, out);
         }
     }
 }
 
-/// Node `k` at the level of `detail` (eqs. 5.5–5.6).
-fn at_detail(k: u32, n: &SceneNode, detail: f32) -> Active {
-    let level = level_for_detail(&n.triangles, detail);
+/// Node `k` at the level of `detail` (eqs. 5.5–5.6), or at `finest` where that is finer.
+fn at_detail(k: u32, n: &SceneNode, detail: f32, finest: Option<usize>) -> Active {
+    let by_detail = level_for_detail(&n.triangles, detail);
+    let level = finest.map_or(by_detail, |f| by_detail.min(f));
     Active {
         node: k,
         level,
@@ -182,6 +319,7 @@ fn at_detail(k: u32, n: &SceneNode, detail: f32) -> Active {
 struct Budget<'a> {
     tree: &'a SceneTree,
     frustum: &'a Frustum,
+    screen: Option<&'a ScreenView<'a>>,
     initial: f64,
     remaining: f64,
     attempts: u32,
@@ -201,7 +339,10 @@ impl Budget<'_> {
         if n.vd.dov <= 0.0 || !self.frustum.overlaps_aabb(&n.bounds) {
             return true;
         }
-        let lod = lod_for_budget(n, budget);
+        // Under the screen rule, no coarser than what passes τ (the finest when none
+        // does), where the share holds it.
+        let floor = self.screen.map(|v| v.fit(k, &n.bounds).unwrap_or(0));
+        let lod = lod_for_budget(n, budget, floor);
         let Some([a, b]) = n.children else {
             let (level, t) = lod.expect("a leaf has its object's mesh");
             if (t as f64) < self.remaining {
@@ -266,11 +407,17 @@ impl Budget<'_> {
 
 /// The representation of node `n` for a share `budget`: the finest with at most
 /// min(λ·finest + (1 − λ)·coarsest, budget) triangles (the coarsest when none has so
-/// few), λ = min(DoV/MAXDOV, 1). `None` for a node without representations.
-fn lod_for_budget(n: &SceneNode, budget: f64) -> Option<(usize, u32)> {
+/// few), λ = min(DoV/MAXDOV, 1); with a `floor` (the screen rule's level), at most
+/// min(max(that, the floor's triangles), budget). `None` for a node without
+/// representations.
+fn lod_for_budget(n: &SceneNode, budget: f64, floor: Option<usize>) -> Option<(usize, u32)> {
     let (&finest, &coarsest) = (n.triangles.first()?, n.triangles.last()?);
     let lambda = (n.vd.dov / MAXDOV).min(1.0) as f64;
-    let want = (lambda * finest as f64 + (1.0 - lambda) * coarsest as f64).min(budget);
+    let mut want = lambda * finest as f64 + (1.0 - lambda) * coarsest as f64;
+    if let Some(&t) = floor.and_then(|f| n.triangles.get(f)) {
+        want = want.max(t as f64);
+    }
+    let want = want.min(budget);
     let level = n
         .triangles
         .iter()

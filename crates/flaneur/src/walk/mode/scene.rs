@@ -12,7 +12,8 @@ use std::time::Instant;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Camera;
-use crate::hdov::scene::{traverse, SceneTree, Traversal};
+use crate::hdov::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
+use crate::hdov::Selection;
 use crate::rtree::ObjectEntry;
 use crate::walk::buffer::{mesh_bytes, Loaded, ObjectBuffer};
 use crate::walk::cells::viewcell_holding;
@@ -32,10 +33,16 @@ pub(crate) fn walk_live<'db>(
     viewer: &mut dyn Viewer,
     mut each: impl FnMut(SceneFrame) -> Result<()>,
 ) -> Result<()> {
+    // The screen rule's errors, read once a walk (its leaves' LOD directories).
+    let errors = match cfg.selection {
+        Selection::Screen => Some(SceneErrors::load(db, tree)?),
+        Selection::Thesis => None,
+    };
     let mut mode = Scene {
         db,
         tree,
         cfg,
+        errors: errors.as_ref(),
         drawable: Vec::new(),
         pending: None,
     };
@@ -54,6 +61,8 @@ struct Scene<'a> {
     db: &'a Database,
     tree: &'a mut SceneTree,
     cfg: &'a SceneConfig,
+    /// The representations' errors, under the screen rule.
+    errors: Option<&'a SceneErrors>,
     /// What the traversal chose, as keys into the buffer.
     drawable: Vec<u64>,
     pending: Option<(SceneFrame, Instant, u64)>,
@@ -91,7 +100,13 @@ impl Mode for Scene<'_> {
             }
         };
         let t = Instant::now();
-        let chosen = traverse(self.tree, how, &camera.frustum())?;
+        let screen = self.errors.map(|errors| ScreenView {
+            eye: camera.position,
+            fov_y: camera.fov_y,
+            tau: self.cfg.tau,
+            errors,
+        });
+        let chosen = traverse_screened(self.tree, how, &camera.frustum(), screen.as_ref())?;
         frame.traverse_ms = t.elapsed().as_secs_f64() * 1e3;
         frame.visited = chosen.visited;
         frame.drawn = chosen.active.len();
@@ -127,6 +142,7 @@ impl Mode for Scene<'_> {
                 mesh,
                 level: a.level,
                 finest: a.level,
+                finer_of: false,
                 dov: None,
             });
         }

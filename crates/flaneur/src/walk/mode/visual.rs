@@ -14,8 +14,9 @@ use super::visual_never_wait::NeverWaitRun;
 use crate::cache::{policy_by_name, BufferPool, CacheStats};
 use crate::database::Database;
 use crate::error::{Error, Result};
+use crate::geom::DEFAULT_FOV;
 use crate::geom::{Aabb, Camera};
-use crate::hdov::{Found, Loader, Scheme};
+use crate::hdov::{search_cell, Found, Loader, NodeErrors, Scheme, ScreenRule, Selection};
 use crate::prefetch::motion::MotionTrack;
 use crate::rtree::ObjectEntry;
 use crate::scene::Mesh;
@@ -25,7 +26,7 @@ use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
 use crate::walk::mode::receive::receive;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
-use crate::walk::visual::{VisualConfig, VisualFrame};
+use crate::walk::visual::{screen_test, VisualConfig, VisualFrame};
 use crate::walk::walk_lods::WalkLods;
 
 /// How long the viewer waits for a prefetch of the cell it enters before it searches
@@ -97,7 +98,10 @@ pub(crate) fn walk_live<'db>(
         pool: pool.as_ref(),
         tolerant,
         dov_tau: cfg.dov_tau,
-        finer_by_tau: cfg.finer_by_tau,
+        finer_of: cfg.finer_of(),
+        selection: cfg.selection,
+        tau: cfg.tau,
+        errors: NodeErrors::default(),
     };
     let search = &search;
     db.reset_io();
@@ -187,8 +191,14 @@ pub(super) struct Searcher<'a> {
     pub tolerant: bool,
     /// Whether objects carry their DoV to LOD selection.
     pub dov_tau: bool,
-    /// Whether LOD selection may draw objects finer than they were loaded.
-    pub finer_by_tau: bool,
+    /// Whether LOD selection draws objects at the finer of the level they were loaded
+    /// at (eq. 5.6's) and the screen-space one.
+    pub finer_of: bool,
+    /// The rule that picks nodes' internal LODs, and the τ the screen rule holds them to.
+    pub selection: Selection,
+    pub tau: f32,
+    /// The nodes' internal LODs' stored errors read so far (the screen rule's).
+    pub errors: NodeErrors,
 }
 
 impl Searcher<'_> {
@@ -196,22 +206,80 @@ impl Searcher<'_> {
     /// level could not be read left apart when tolerant; otherwise the error).
     pub(super) fn finds(&self, loader: &mut Loader<'_>, cell: u32) -> Result<Finds> {
         let t = Instant::now();
-        let result = self
-            .db
-            .hdov_search_cached(cell, self.eta, self.scheme, self.pool)?;
+        let screen = self.screen_rule(cell)?;
+        let result = search_cell(
+            self.db,
+            cell,
+            self.eta,
+            Some(self.scheme),
+            self.pool,
+            screen.as_ref(),
+        )?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
         loader.learn(&result.found);
         let mut pieces = Vec::with_capacity(result.found.len());
-        let mut failed = Vec::new();
+        // A node whose errors could not be read was searched past (tolerant only): its
+        // objects are found instead, and the damage told.
+        let mut failed: Vec<(u64, Error)> = self
+            .errors
+            .take_damaged()
+            .into_iter()
+            .map(|(node, e)| (GROUP_ID | node as u64, e))
+            .collect();
         for found in result.found {
             let key = key_of(&found)?;
             match loader.level(&found) {
-                Ok(level) => pieces.push(Piece { key, level, found }),
+                Ok(level) => {
+                    let level = self.screened(&found, level, screen.as_ref());
+                    pieces.push(Piece { key, level, found })
+                }
                 Err(e) if self.tolerant => failed.push((key, e)),
                 Err(e) => return Err(e),
             }
         }
         Ok(Finds { pieces, failed, ms })
+    }
+
+    /// The screen rule from `cell`, under ours; `None` under the thesis's selection.
+    fn screen_rule(&self, cell: u32) -> Result<Option<ScreenRule<'_>>> {
+        Ok(match self.selection {
+            Selection::Thesis => None,
+            Selection::Screen => Some(ScreenRule {
+                test: screen_test(self.db, cell, self.tau, DEFAULT_FOV)?,
+                errors: &self.errors,
+                tolerant: self.tolerant,
+            }),
+        })
+    }
+
+    /// The level a find is read at: the loader's (eqs. 5.5–5.6), or for a node under the
+    /// screen rule the finer of that and the coarsest internal LOD whose error passes
+    /// (the search stopped there because one does; levels count from 1).
+    fn screened(&self, found: &Found, level: usize, screen: Option<&ScreenRule<'_>>) -> usize {
+        let (Some(rule), Found::Node { node, mbr, .. }) = (screen, found) else {
+            return level;
+        };
+        match self.errors.known(*node) {
+            Some(errors) => match rule.test.coarsest_fit(&errors, mbr) {
+                Some(fit) => level.min(fit + 1),
+                None => level,
+            },
+            None => level,
+        }
+    }
+
+    /// How many finds `cell` has, searched apart from the walk's figures (no node cache).
+    pub(super) fn count(&self, cell: u32) -> Result<usize> {
+        let screen = self.screen_rule(cell)?;
+        let found = search_cell(
+            self.db,
+            cell,
+            self.eta,
+            Some(self.scheme),
+            None,
+            screen.as_ref(),
+        )?;
+        Ok(found.found.len())
     }
 
     /// The prefetch thread's work: `req`'s cell searched, and what the buffer did not
@@ -286,8 +354,9 @@ pub(super) fn loaded(piece: &Piece, mesh: Mesh, level: usize, search: &Searcher<
         if search.dov_tau && *dov > 0.0 {
             loaded.dov = Some(*dov);
         }
-        if search.finer_by_tau {
+        if search.finer_of {
             loaded.finest = 0;
+            loaded.finer_of = true;
         }
     }
     loaded

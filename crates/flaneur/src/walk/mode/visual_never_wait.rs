@@ -105,10 +105,7 @@ pub(crate) fn walk_live<'db>(
     for (frame, cell) in unknown {
         let count = match cells.get(&cell) {
             Some(&n) => n,
-            None => db
-                .hdov_search_with(cell, cfg.eta, search.scheme)?
-                .found
-                .len(),
+            None => search.count(cell)?,
         };
         if let Some(f) = frames.get_mut(frame) {
             f.visual_misses = count;

@@ -1,0 +1,333 @@
+//! Our screen-space selection beside the thesis's (VISUAL, VSC and PB) on a small city
+//! built with LODs, visibility and the HDoV-tree: a node's internal LOD is used only
+//! where its stored error projects under τ from the viewcell (VISUAL) or the eye (VSC),
+//! where the thesis's rule stops at it whatever the screen says; each object is drawn at
+//! the finer of eq. 5.6's level and the screen-space one, where the thesis's draws it
+//! at the coarser; PB's budget still bounds every frame; and a bad rule's name or τ is
+//! an error that says what to give.
+
+mod common;
+
+use std::collections::HashSet;
+
+use flaneur::geom::{Camera, DEFAULT_FOV};
+use flaneur::hdov::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
+use flaneur::hdov::{search_cell, Found, HdovOptions, NodeErrors, ScreenRule, Selection};
+use flaneur::walk::path::cell_walk;
+use flaneur::walk::visual::{self, screen_test, VisualConfig};
+use flaneur::walk::{FrameSink, ObjectBuffer, GROUP_ID};
+use flaneur::{BuildOptions, Database};
+
+/// The thesis's τ, 0.1 % of the viewport.
+const TAU: f32 = 0.001;
+
+fn city() -> &'static common::City {
+    static CITY: std::sync::OnceLock<common::City> = std::sync::OnceLock::new();
+    CITY.get_or_init(|| {
+        common::city(
+            160,
+            5,
+            &BuildOptions {
+                lod: BuildOptions::default().lod,
+                hdov: Some(HdovOptions::default()),
+                ..common::with_visibility()
+            },
+        )
+    })
+}
+
+fn cells(db: &Database) -> Vec<u32> {
+    db.hdov().unwrap().expect("built with --hdov").cells.clone()
+}
+
+fn nodes(found: &[Found]) -> HashSet<u32> {
+    found
+        .iter()
+        .filter_map(|f| match f {
+            Found::Node { node, .. } => Some(*node),
+            Found::Object { .. } => None,
+        })
+        .collect()
+}
+
+fn objects(found: &[Found]) -> HashSet<u64> {
+    found
+        .iter()
+        .filter_map(|f| match f {
+            Found::Object { entry, .. } => Some(entry.id),
+            Found::Node { .. } => None,
+        })
+        .collect()
+}
+
+#[test]
+fn the_screen_rule_refuses_a_proxy_whose_error_projects_over_tau_where_the_thesis_stops() {
+    let db = Database::open(&city().db).unwrap();
+    // A large η, so that the thesis's search stops at many nodes.
+    let eta = 0.05;
+    let (mut thesis_stops, mut refused, mut kept) = (0, 0, 0);
+    for cell in cells(&db) {
+        let thesis = search_cell(&db, cell, eta, None, None, None).unwrap();
+        let errors = NodeErrors::default();
+        let rule = ScreenRule {
+            test: screen_test(&db, cell, TAU, DEFAULT_FOV).unwrap(),
+            errors: &errors,
+            tolerant: false,
+        };
+        let screen = search_cell(&db, cell, eta, None, None, Some(&rule)).unwrap();
+        let ours = nodes(&screen.found);
+        // Every internal LOD ours draws passes the test from anywhere in the cell.
+        for f in &screen.found {
+            if let Found::Node { node, mbr, .. } = f {
+                let e = errors
+                    .known(*node)
+                    .expect("its errors were read to stop there");
+                assert!(
+                    rule.test.coarsest_fit(&e, mbr).is_some(),
+                    "cell {cell}: node {node} drawn with errors {e:?} over τ at {} m",
+                    flaneur::hdov::box_distance(&rule.test.from, mbr)
+                );
+            }
+        }
+        // Where the thesis stops, ours stops too exactly when the proxy passes.
+        for f in &thesis.found {
+            let Found::Node { node, mbr, .. } = f else {
+                continue;
+            };
+            thesis_stops += 1;
+            let e = errors
+                .known(*node)
+                .expect("ours tested every node the thesis stops at");
+            match rule.test.coarsest_fit(&e, mbr) {
+                Some(_) => {
+                    kept += 1;
+                    assert!(ours.contains(node), "cell {cell}: node {node} passes");
+                }
+                None => {
+                    refused += 1;
+                    assert!(!ours.contains(node), "cell {cell}: node {node} over τ");
+                }
+            }
+        }
+        // Ours descends where it refuses: every object the thesis finds, ours finds.
+        let (t, s) = (objects(&thesis.found), objects(&screen.found));
+        assert!(t.is_subset(&s), "cell {cell}: {:?}", t.difference(&s));
+        // τ = 0 (full detail) lets no internal LOD pass.
+        let strict = ScreenRule {
+            test: screen_test(&db, cell, 0.0, DEFAULT_FOV).unwrap(),
+            errors: &errors,
+            tolerant: false,
+        };
+        let none = search_cell(&db, cell, eta, None, None, Some(&strict)).unwrap();
+        assert!(nodes(&none.found).is_empty(), "cell {cell}");
+    }
+    assert!(
+        thesis_stops > 0,
+        "the thesis's search never stopped at a node"
+    );
+    assert!(
+        refused > 0,
+        "no node whose proxy's error projects over τ ({kept} kept of {thesis_stops})"
+    );
+}
+
+/// Each drawn object's level against the level VISUAL loaded it at (eq. 5.6's) and the
+/// screen-space one from the eye.
+struct Levels<'d> {
+    db: &'d Database,
+    /// Objects drawn finer than eq. 5.6's level, and all checked.
+    finer: usize,
+    checked: usize,
+    /// Levels that break the rule: (id, drawn, eq. 5.6's, τ's).
+    wrong: Vec<(u64, usize, usize, usize)>,
+    /// Whether the rule is the finer of the two (ours) or the coarser (the thesis's).
+    finer_of: bool,
+}
+
+impl FrameSink for Levels<'_> {
+    fn frame(
+        &mut self,
+        _: usize,
+        camera: &Camera,
+        _: &ObjectBuffer,
+        s: &mut flaneur::walk::Selection<'_>,
+    ) -> flaneur::Result<()> {
+        for (d, o) in s.drawn.iter().zip(s.culled) {
+            if o.entry.id & GROUP_ID != 0 || d.level == flaneur::walk::lod_select::REFINED {
+                continue;
+            }
+            let by_tau = self
+                .db
+                .lod_level_for(&o.entry, camera.position, camera.fov_y, TAU)?
+                .level;
+            let want = match self.finer_of {
+                true => by_tau.min(o.level),
+                false => by_tau.max(o.level),
+            };
+            self.checked += 1;
+            if d.level < o.level {
+                self.finer += 1;
+            }
+            if d.level != want {
+                self.wrong.push((o.entry.id, d.level, o.level, by_tau));
+            }
+        }
+        Ok(())
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        Some(TAU)
+    }
+}
+
+#[test]
+fn an_object_near_the_eye_with_a_small_dov_is_drawn_at_its_tau_level_not_eq_5_6s() {
+    let db = Database::open(&city().db).unwrap();
+    let path = cell_walk(&db, 60, 1.5, 10.0, 2).unwrap();
+    let walk = |selection: Selection| {
+        let cfg = VisualConfig {
+            eta: 0.0,
+            pace: None,
+            selection,
+            ..VisualConfig::default()
+        };
+        let mut seen = Levels {
+            db: &db,
+            finer: 0,
+            checked: 0,
+            wrong: Vec::new(),
+            finer_of: selection == Selection::Screen,
+        };
+        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        seen
+    };
+    let ours = walk(Selection::Screen);
+    assert!(ours.checked > 0);
+    assert!(
+        ours.wrong.is_empty(),
+        "{:?}",
+        &ours.wrong[..ours.wrong.len().min(5)]
+    );
+    assert!(
+        ours.finer > 0,
+        "no object drawn finer than eq. 5.6's level ({} checked)",
+        ours.checked
+    );
+    // The thesis's: eq. 5.6's level, coarser still where τ allows; never finer.
+    let thesis = walk(Selection::Thesis);
+    assert!(
+        thesis.wrong.is_empty(),
+        "{:?}",
+        &thesis.wrong[..thesis.wrong.len().min(5)]
+    );
+    assert_eq!(thesis.finer, 0);
+}
+
+/// The screen rule from `eye` at the walks' field of view under τ.
+fn view(eye: glam::Vec3, errors: &SceneErrors) -> ScreenView<'_> {
+    ScreenView {
+        eye,
+        fov_y: DEFAULT_FOV,
+        tau: TAU,
+        errors,
+    }
+}
+
+#[test]
+fn vsc_and_pb_hold_internal_lods_and_levels_to_the_screen_rule() {
+    let db = Database::open(&city().db).unwrap();
+    let mut tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
+    let mut errors = SceneErrors::load(&db, &tree).unwrap();
+    let internal: Vec<u32> = (0..tree.nodes.len() as u32)
+        .filter(|&k| tree.nodes[k as usize].object.is_none())
+        .collect();
+    let (mut thesis_internal, mut compared) = (0, 0);
+    for cell in cells(&db).into_iter().step_by(3) {
+        tree.enter(&db, cell).unwrap();
+        let grid = &db.visibility().unwrap().unwrap().grid;
+        let (r, c) = grid.place(cell);
+        let eye = grid.cell_bounds(r, c).center();
+        for yaw in [0.0f32, 1.6, 3.2, 4.8] {
+            let camera = Camera::new(eye, yaw, 0.0).unwrap();
+            let frustum = camera.frustum();
+            let how = Traversal::Vsc { eta: 0.05 };
+            let thesis = traverse_screened(&tree, how, &frustum, None).unwrap();
+            let drawn_internal = |t: &flaneur::hdov::scene::Traversed| -> HashSet<u32> {
+                t.active
+                    .iter()
+                    .filter(|a| tree.nodes[a.node as usize].object.is_none())
+                    .map(|a| a.node)
+                    .collect()
+            };
+            thesis_internal += drawn_internal(&thesis).len();
+            // Internal LODs with no bound on their error are never drawn under ours.
+            for &k in &internal {
+                errors.set(k, vec![f32::INFINITY; tree.nodes[k as usize].levels.len()]);
+            }
+            let ours = traverse_screened(&tree, how, &frustum, Some(&view(eye, &errors))).unwrap();
+            assert!(drawn_internal(&ours).is_empty(), "cell {cell}");
+            // Leaves at the finer of eq. 5.6's level and τ's: never coarser than the
+            // thesis's, and exactly τ's where that is finer.
+            let thesis_level: std::collections::HashMap<u32, usize> =
+                thesis.active.iter().map(|a| (a.node, a.level)).collect();
+            for a in &ours.active {
+                if let Some(&l) = thesis_level.get(&a.node) {
+                    assert!(
+                        a.level <= l,
+                        "cell {cell}: node {} at {} > {l}",
+                        a.node,
+                        a.level
+                    );
+                    compared += 1;
+                }
+            }
+            // With errors of 0, ours draws an internal LOD only where the thesis does
+            // (and the eye is outside the node's box).
+            for &k in &internal {
+                errors.set(k, vec![0.0; tree.nodes[k as usize].levels.len()]);
+            }
+            let ours = traverse_screened(&tree, how, &frustum, Some(&view(eye, &errors))).unwrap();
+            assert!(drawn_internal(&ours).is_subset(&drawn_internal(&thesis)));
+            // PB's budget bounds the frame under ours too.
+            let budget = 3_000;
+            let pb = Traversal::Pb { budget };
+            let ours = traverse_screened(&tree, pb, &frustum, Some(&view(eye, &errors))).unwrap();
+            assert!(ours.triangles <= budget, "cell {cell}: {}", ours.triangles);
+        }
+    }
+    assert!(thesis_internal > 0, "VSC(0.05) never drew an internal LOD");
+    assert!(compared > 0);
+}
+
+#[test]
+fn a_bad_rule_or_tau_is_an_error_that_says_what_to_give() {
+    let db = city().db.to_str().unwrap().to_string();
+    let out = common::flaneur(&["walk", &db, "--mode", "visual", "--selection", "eyeball"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("screen") && err.contains("thesis"), "{err}");
+    let opened = Database::open(&city().db).unwrap();
+    let cell = cells(&opened)[0];
+    let e = screen_test(&opened, cell, 1.5, DEFAULT_FOV).unwrap_err();
+    assert!(e.to_string().contains("[0, 1)"), "{e}");
+    let cfg = VisualConfig {
+        tau: f32::NAN,
+        ..VisualConfig::default()
+    };
+    let path = cell_walk(&opened, 2, 1.0, 10.0, 1).unwrap();
+    let e = visual::walk(&opened, &path, &cfg, |_| {}).unwrap_err();
+    assert!(e.to_string().contains("τ"), "{e}");
+    // Both rules walk.
+    let thesis = common::flaneur(&[
+        "walk",
+        &db,
+        "--mode",
+        "vsc",
+        "--selection",
+        "thesis",
+        "--frames",
+        "5",
+        "-q",
+    ]);
+    common::succeeded(&thesis);
+}
