@@ -1,5 +1,6 @@
-//! `flaneur demo`: a default city generated, built and walked, then shown in a window
-//! or, with no display, flown over headless.
+//! `flaneur demo`: a default city generated, built with its visibility and HDoV-tree,
+//! walked by REVIEW and BOX and then by the four modes side by side (`demo_modes`), and
+//! shown in a window or, with no display, flown over headless.
 
 use std::path::{Path, PathBuf};
 
@@ -19,7 +20,7 @@ use flaneur_render::ViewMode;
 #[derive(clap::Args)]
 pub struct DemoArgs {
     /// Objects in the generated city.
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = DEMO_OBJECTS)]
     objects: u64,
     /// Where the city and its database are kept between runs.
     #[arg(long, env = "FLANEUR_CACHE", default_value = "cache")]
@@ -37,6 +38,23 @@ impl DemoArgs {
     }
 }
 
+/// The demo city's objects: a city whose visibility and HDoV-tree build in a minute or
+/// two on two cores.
+const DEMO_OBJECTS: u64 = 3_000;
+
+/// The demo's build: LODs, the visibility at its defaults, and the HDoV-tree under the
+/// indexed-vertical scheme (the smallest; VISUAL reads it).
+fn demo_build_options() -> BuildOptions {
+    BuildOptions {
+        visibility: Some(flaneur::visibility::VisibilityOptions::default()),
+        hdov: Some(flaneur::hdov::HdovOptions {
+            schemes: vec![flaneur::hdov::Scheme::Indexed],
+            ..Default::default()
+        }),
+        ..BuildOptions::default()
+    }
+}
+
 fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     std::fs::create_dir_all(cache)
         .with_context(|| format!("creating cache folder {}", cache.display()))?;
@@ -50,7 +68,14 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     // (its LOD table, say): built again rather than failing halfway through the demo.
     let cached = if db_path.exists() {
         match Database::open(&db_path).and_then(|db| db.lod_stats().map(|_| db)) {
-            Ok(db) => Some(db),
+            Ok(db) if db.hdov().is_ok_and(|h| h.is_some()) => Some(db),
+            Ok(_) => {
+                println!(
+                    "{} has no HDoV-tree (an older demo's): building it again",
+                    db_path.display()
+                );
+                None
+            }
             Err(e) => {
                 println!(
                     "{} cannot be read by this version of flaneur ({e}): building it again",
@@ -85,7 +110,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         let b = flaneur::build_from_scene_with_progress(
             &scene,
             &db_path,
-            &BuildOptions::default(),
+            &demo_build_options(),
             &Bars::default(),
         )?;
         println!(
@@ -93,6 +118,17 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             b.pages, b.height, b.seconds
         );
         print_lod_report(b.lod.as_ref(), b.bytes);
+        if let Some(v) = &b.visibility {
+            println!(
+                "  visibility: {} walkable viewcells of {} m, {:.0} objects in a cell's PVS on \
+                 average, {:.1} s ({:.1} ms a cell)",
+                v.cells,
+                flaneur::visibility::VisibilityOptions::default().cell_size,
+                v.entries as f64 / v.cells.max(1) as f64,
+                v.seconds,
+                1000.0 * v.seconds / v.cells.max(1) as f64
+            );
+        }
         println!(
             "  (LODs: each object's coarser levels of detail, read instead of its full mesh when it is far; \
              PM + DAG: the largest objects' progressive meshes and their dependency graphs, \
@@ -137,6 +173,8 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         }
         print_walk(&report);
     }
+    let gpu = flaneur_render::Gpu::headless();
+    super::demo_modes::walk_modes(&db, frames, gpu.as_ref().ok())?;
     let display = ["DISPLAY", "WAYLAND_DISPLAY"]
         .iter()
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
@@ -154,7 +192,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }
     }
-    demo_flight(&db, &cache.join("demo-frames"), frames.min(FLIGHT_FRAMES))?;
+    demo_flight(gpu, &db, &cache.join("demo-frames"), frames.min(FLIGHT_FRAMES))?;
     print_next_steps(&db_path);
     Ok(())
 }
@@ -218,8 +256,13 @@ fn print_next_steps(db_path: &Path) {
 
 /// The demo's last part where there is no display: a short flight over the city drawn
 /// headless to PNG frames. Without a GPU adapter, it says so and the demo ends well.
-fn demo_flight(db: &Database, dir: &Path, frames: usize) -> Result<()> {
-    let gpu = match flaneur_render::Gpu::headless() {
+fn demo_flight(
+    gpu: flaneur::Result<flaneur_render::Gpu>,
+    db: &Database,
+    dir: &Path,
+    frames: usize,
+) -> Result<()> {
+    let gpu = match gpu {
         Ok(gpu) => gpu,
         Err(e) => {
             println!("no flight drawn: {e}");

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod build;
 pub mod check;
 pub mod demo;
+mod demo_modes;
 pub mod info;
 pub mod insert;
 pub mod lod;
