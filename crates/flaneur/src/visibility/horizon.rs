@@ -13,8 +13,10 @@
 //! the prism, and q is hidden. In a bin the occluder is counted only where it covers
 //! the bin's whole angle, with e the largest entry distance over the bin (reached at a
 //! bin edge or a corner, the front of a convex footprint being a chain of segments),
-//! and a box is tested with its least plan distance and its top: each bound makes the
-//! test stricter. Many occluders fuse: each bin may be closed by a different one.
+//! and a box is tested, bin by bin, with its least plan distance within the bin and its
+//! top: each bound makes the test stricter. (Its least distance over the whole box in
+//! every bin, as a first version took, leaves a long box whose near end shows.) Many
+//! occluders fuse: each bin may be closed by a different one.
 
 use std::sync::OnceLock;
 
@@ -82,15 +84,11 @@ impl Prism {
         (self.centre - reach, self.centre + reach)
     }
 
-    /// The prism shrunk by `e` on every side and at the top; `None` when nothing is
-    /// left of its footprint.
+    /// The prism with its footprint shrunk by `e` on every side, its top kept; `None`
+    /// when nothing is left of its footprint.
     pub fn shrunk(&self, e: f32) -> Option<Prism> {
         let half = self.half - e;
-        (half.x > 0.0 && half.y > 0.0).then_some(Prism {
-            half,
-            top: self.top - e,
-            ..*self
-        })
+        (half.x > 0.0 && half.y > 0.0).then_some(Prism { half, ..*self })
     }
 
     /// Whether the point `p` (x, y, z) is inside the prism (standing on the ground).
@@ -112,6 +110,7 @@ impl Prism {
     }
 
     /// The plan distance at which the ray from `eye` along `dir` enters the footprint.
+    #[cfg(test)]
     fn entry(&self, eye: Vec2, dir: Vec2) -> Option<f32> {
         entry(
             self.local(eye),
@@ -265,7 +264,11 @@ impl Horizon {
             if (first..=last).all(|k| dominated(&steepest, bin(k))) {
                 continue;
             }
-            let at_edge = |k: i64| o.entry(p, edges[bin(k)]);
+            // The eye in the footprint's frame once per prism; per bin edge only the
+            // edge's direction is turned into it.
+            let local_eye = o.local(p);
+            let at_edge =
+                |k: i64| entry(local_eye, o.local_direction(edges[bin(k)]), -o.half, o.half);
             // Entry distances at the covered bins' edges, each edge shared by two bins.
             let mut before: Option<(i64, Option<f32>)> = None;
             for k in first..=last {
@@ -343,19 +346,52 @@ impl Horizon {
         if d <= 0.0 {
             return false;
         }
-        let need = (b.max.y - self.eye.y).max(0.0) / d;
-        let (lo, hi, _) = span(p, &corners2(min, max));
+        let rise = (b.max.y - self.eye.y).max(0.0);
+        let corners = corners2(min, max);
+        let (lo, hi, angles) = span(p, &corners);
         let first = ((lo - PAD) / BIN).floor() as i64;
         let last = ((hi + PAD) / BIN).floor() as i64;
         if last - first >= BINS as i64 {
             return false;
         }
+        let edges = edges();
+        let reference = 0.5 * (lo + hi);
         (first..=last).all(|k| {
-            let b = k.rem_euclid(BINS as i64) as usize;
-            let front = &self.fronts[self.starts[b] as usize..self.starts[b + 1] as usize];
-            // The steepest occluder entered before the box's nearest point.
-            let before = front.partition_point(|&(e, _)| e < d);
-            before > 0 && front[before - 1].1 >= need
+            let bin = k.rem_euclid(BINS as i64) as usize;
+            let front = &self.fronts[self.starts[bin] as usize..self.starts[bin + 1] as usize];
+            // The steepest occluder entered before distance `d` rises above `rise / d`.
+            let blocked = |d: f32| {
+                let before = front.partition_point(|&(e, _)| e < d);
+                before > 0 && front[before - 1].1 >= rise / d
+            };
+            if blocked(d) {
+                return true;
+            }
+            // Within this bin the box may lie further than its nearest point: its least
+            // distance over the bin's wedge is at its nearest point, when that is in the
+            // wedge, else where a side of the wedge enters it (the least of a convex
+            // function over a convex set), or at a corner in the wedge (taken too, so
+            // that a side grazing a corner loses nothing to rounding).
+            let (a0, a1) = (bin_start(k) - PAD, bin_start(k + 1) + PAD);
+            let inside = |a: f32| a >= a0 && a <= a1;
+            if inside(unwrapped(nearest - p, reference)) {
+                return false;
+            }
+            let mut least = f32::INFINITY;
+            for edge in [k, k + 1] {
+                let dir = edges[edge.rem_euclid(BINS as i64) as usize];
+                if let Some(e) = entry(p, dir, min, max) {
+                    least = least.min(e);
+                }
+            }
+            for (c, &a) in corners.iter().zip(&angles) {
+                if inside(a) {
+                    least = least.min((*c - p).length());
+                }
+            }
+            // A hair nearer, for rounding; never nearer than the nearest point.
+            let least = (least * (1.0 - 1e-5)).max(d);
+            least.is_finite() && least > d && blocked(least)
         })
     }
 }
@@ -429,10 +465,27 @@ mod tests {
         assert!(!o.contains(Vec3::new(3.5, 1.0, 0.5)));
         assert!((o.distance(Vec2::new(5.0, 0.0)) - 4.0).abs() < 1e-5);
         let s = o.shrunk(0.5).unwrap();
-        assert_eq!((s.half, s.top), (Vec2::new(3.5, 0.5), 9.5));
+        assert_eq!((s.half, s.top), (Vec2::new(3.5, 0.5), 10.0));
         assert!(o.shrunk(1.0).is_none());
         let e = o.entry(Vec2::new(-10.0, 0.0), Vec2::X).unwrap();
         assert!((e - 9.0).abs() < 1e-5, "{e}");
+    }
+
+    /// A long low box close behind a long wall, seen end on: its nearest point is
+    /// straight ahead, where it would show over the wall at its full height, but in
+    /// the bins towards its far end it lies further, where the wall hides it.
+    #[test]
+    fn a_box_is_tested_bin_by_bin_at_its_distance_there() {
+        let eye = Vec3::new(0.0, 1.6, 0.0);
+        let wall = prism([-30.0, 10.0], [80.0, 12.0], 10.0);
+        let h = Horizon::new(eye, [wall]);
+        // Nearest at 13 m: it needs 9.4 / 13 = 0.72; the wall rises 8.4 / 10 there.
+        assert!(h.hides(&b([0.0, 0.0, 13.0], [40.0, 11.0, 15.0])));
+        // Towards (40, 13) the wall is entered at 32 m and rises 0.26; the box, at
+        // its nearest point, would need 0.72 there.
+        assert!(!h.hides(&b([-1.0, 0.0, 13.0], [40.0, 14.0, 15.0])));
+        // Past the wall's end.
+        assert!(!h.hides(&b([0.0, 0.0, 13.0], [150.0, 11.0, 15.0])));
     }
 
     #[test]
