@@ -82,7 +82,17 @@ pub(super) fn occluder_boxes(triangles: Vec<[Vec3; 3]>) -> Vec<Aabb> {
         .filter(|t| solid.is_outside(t))
         .copied()
         .collect();
-    let free = |b: &Aabb| !outside.iter().any(|t| triangle_meets_box(t, b));
+    // Each outside face's bounds, once: most faces are apart from a candidate box, and
+    // the bounds tell that before the face's separating-axis test.
+    let bounds: Vec<(Vec3, Vec3)> = outside
+        .iter()
+        .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
+        .collect();
+    let free = |b: &Aabb| {
+        !outside.iter().zip(&bounds).any(|(t, (tlo, thi))| {
+            tlo.cmple(b.max).all() && b.min.cmple(*thi).all() && triangle_meets_box(t, b)
+        })
+    };
     let inset = |b: &Aabb| Aabb {
         min: b.min + Vec3::splat(SAFETY),
         max: b.max - Vec3::splat(SAFETY),
