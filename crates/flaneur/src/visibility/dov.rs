@@ -31,6 +31,81 @@ pub struct PointDov {
     pub sky: f32,
 }
 
+/// A source of point DoVs: a scene that can say, for a viewpoint, which object each
+/// pixel of the cubic projection shows, summed by object. The ray-cast [`RayScene`] is
+/// the reference; the rasterised [`RasterScene`](super::RasterScene) is what the
+/// precomputation uses by default; a GPU renderer of item buffers (the thesis's own
+/// means) would be a third, outside the engine.
+///
+/// Objects are named by index, `0..object_count()`, in the order the scene was built.
+pub trait DovSource: Sync {
+    /// The objects a result may name.
+    fn object_count(&self) -> usize;
+
+    /// What `point` sees: every object at least one pixel shows, by index, and the sky.
+    /// Errors: a point that is not finite; whatever the source itself can fail with.
+    fn point_dov(&self, projection: &CubicProjection, point: [f32; 3]) -> Result<PointDov>;
+
+    /// [`point_dov`](Self::point_dov) of each of `points`, in order. By default the
+    /// points are spread over rayon's threads, each point on one; a source that renders
+    /// batches (a GPU) would override this.
+    fn point_dovs(
+        &self,
+        projection: &CubicProjection,
+        points: &[[f32; 3]],
+    ) -> Result<Vec<PointDov>> {
+        points
+            .par_iter()
+            .map(|&p| self.point_dov(projection, p))
+            .collect()
+    }
+}
+
+impl DovSource for RayScene {
+    fn object_count(&self) -> usize {
+        RayScene::object_count(self)
+    }
+
+    fn point_dov(&self, projection: &CubicProjection, point: [f32; 3]) -> Result<PointDov> {
+        point_dov(self, projection, point)
+    }
+}
+
+impl DovSource for super::RasterScene {
+    fn object_count(&self) -> usize {
+        super::RasterScene::object_count(self)
+    }
+
+    fn point_dov(&self, projection: &CubicProjection, point: [f32; 3]) -> Result<PointDov> {
+        check_point("viewpoint", point)?;
+        Ok(self.point_dov_checked(projection, point))
+    }
+}
+
+/// Which [`DovSource`] a precomputation builds from the objects' meshes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DovMethod {
+    /// [`RasterScene`](super::RasterScene): item buffers drawn by the CPU rasteriser,
+    /// front to back with hierarchical depth.
+    #[default]
+    Raster,
+    /// [`RayScene`]: one ray per pixel into a BVH of every triangle; the reference.
+    RayCast,
+}
+
+impl DovMethod {
+    /// The source over `(id, mesh)` pairs, objects indexed in their order.
+    pub fn scene<'a, I>(self, objects: I) -> Result<Box<dyn DovSource + Send>>
+    where
+        I: IntoIterator<Item = (u64, &'a crate::scene::Mesh)>,
+    {
+        Ok(match self {
+            DovMethod::Raster => Box::new(super::RasterScene::new(objects)?),
+            DovMethod::RayCast => Box::new(RayScene::new(objects)?),
+        })
+    }
+}
+
 /// The DoV of every object from `point` by cubic projection: 6N² rays, each pixel's
 /// ΔDoV credited to the object its ray meets first.
 ///
@@ -69,7 +144,7 @@ pub fn point_dov(
     Ok(point_dov_checked(scene, projection, point))
 }
 
-fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32; 3]) -> PointDov {
+pub(super) fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32; 3]) -> PointDov {
     let n = projection.resolution() as usize;
     let weights = projection.weights();
     // Each band of rows sums its pixels into runs of one object, so that all bands of all
@@ -135,14 +210,14 @@ pub struct DovStats {
     pub cells: usize,
     /// Distinct corners cast (at most 8 per cell; fewer where a batch before cast some).
     pub corners: usize,
-    /// Rays cast: `corners` × 6N².
+    /// Pixels sampled (rays cast, for the ray-cast): `corners` × 6N².
     pub rays: u64,
     /// Wall-clock time of the whole batch.
     pub elapsed: Duration,
 }
 
 impl DovStats {
-    /// Rays cast per second of wall-clock time.
+    /// Pixels (rays) per second of wall-clock time.
     pub fn rays_per_second(&self) -> f64 {
         self.rays as f64 / self.elapsed.as_secs_f64().max(f64::MIN_POSITIVE)
     }
@@ -210,8 +285,8 @@ pub fn corners(cell: &Aabb) -> [[f32; 3]; 8] {
 /// assert!(result.cells.iter().all(|c| c.len() == 1 && c[0].0 == 0 && c[0].1 > 0.0));
 /// # Ok(()) }
 /// ```
-pub fn cell_dovs(
-    scene: &RayScene,
+pub fn cell_dovs<S: DovSource + ?Sized>(
+    scene: &S,
     projection: &CubicProjection,
     cells: &[Aabb],
 ) -> Result<CellDovs> {
@@ -243,8 +318,8 @@ pub fn cell_dovs(
 /// assert_eq!(next.cells, cell_dovs(&scene, &cube, &second)?.cells);
 /// # Ok(()) }
 /// ```
-pub fn cell_dovs_after(
-    scene: &RayScene,
+pub fn cell_dovs_after<S: DovSource + ?Sized>(
+    scene: &S,
     projection: &CubicProjection,
     cells: &[Aabb],
     memo: &mut CornerMemo,
@@ -271,12 +346,19 @@ pub fn cell_dovs_after(
         .iter()
         .map(|&p| last.remove(&corner_key(p)))
         .collect();
-    let cast = known.iter().filter(|k| k.is_none()).count();
-    let seen: Vec<PointDov> = points
-        .par_iter()
-        .zip(known)
-        .map(|(&p, known)| known.unwrap_or_else(|| point_dov_checked(scene, projection, p)))
+    let missing: Vec<[f32; 3]> = points
+        .iter()
+        .zip(&known)
+        .filter(|(_, k)| k.is_none())
+        .map(|(&p, _)| p)
         .collect();
+    let cast = missing.len();
+    let mut drawn = scene.point_dovs(projection, &missing)?.into_iter();
+    let seen: Vec<PointDov> = known
+        .into_iter()
+        .map(|k| k.or_else(|| drawn.next()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| Error::Invalid("a DoV source returned too few viewpoints".into()))?;
     let dovs = cell_corners
         .iter()
         .map(|corner| {

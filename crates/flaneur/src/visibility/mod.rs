@@ -71,6 +71,7 @@ mod horizon;
 mod intersect;
 mod occluder;
 mod precompute;
+mod raster;
 mod raycast;
 mod shard;
 mod stored;
@@ -84,9 +85,13 @@ pub use conservative::{SampleOptions, Scene as ConservativeScene};
 pub(crate) use cost::{shown, walkable_cells};
 pub use cost::{VisibilityCost, MAX_SAMPLES_PER_CELL, MAX_VIEWCELLS};
 pub use cube::{CubicProjection, SKY};
-pub use dov::{cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovStats, PointDov};
+pub use dov::{
+    cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovMethod, DovSource, DovStats,
+    PointDov,
+};
 pub(crate) use precompute::precompute;
 pub use precompute::VisibilityOptions;
+pub use raster::RasterScene;
 pub use raycast::{Hit, RayScene};
 pub(crate) use shard::merge_shards;
 pub use shard::{fingerprint, precompute_shard, Shard, ShardCells};

@@ -19,7 +19,7 @@ use super::cells::{Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
 use super::dov::corner_keys;
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
-use super::{cell_dovs_after, CornerMemo, CubicProjection, RayScene};
+use super::{cell_dovs_after, CornerMemo, CubicProjection, DovMethod, DovSource};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::scene::Mesh;
@@ -38,6 +38,9 @@ pub struct VisibilityOptions {
     pub resolution: u32,
     /// How the conservative test samples a cell.
     pub samples: SampleOptions,
+    /// How the DoV is computed: rasterised by default, ray-cast as the reference. The
+    /// shard file does not record it: shards by either merge.
+    pub dov: DovMethod,
 }
 
 impl Default for VisibilityOptions {
@@ -47,6 +50,7 @@ impl Default for VisibilityOptions {
             eye: super::cells::DEFAULT_EYE_RANGE,
             resolution: 256,
             samples: SampleOptions::default(),
+            dov: DovMethod::default(),
         }
     }
 }
@@ -103,7 +107,7 @@ pub fn precompute(
 /// objects' boxes and occluders, the ray scene, the cube, and the walkable cells.
 pub(super) struct Prepared {
     scene: Scene,
-    rays: RayScene,
+    dov: Box<dyn DovSource + Send>,
     projection: CubicProjection,
     pub grid: ViewcellGrid,
     pub walkable: Vec<Viewcell>,
@@ -160,12 +164,12 @@ pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Resu
     // The grid first: what the options make of the city is refused before the slow steps.
     let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
     let scene = Scene::from_meshes(objects)?;
-    let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
+    let dov = opts.dov.scene(objects.iter().map(|(id, m)| (*id, m)))?;
     let projection = CubicProjection::new(opts.resolution)?;
     Ok(Prepared {
         occluders: scene.occluding_objects(),
         scene,
-        rays,
+        dov,
         dov_s: projection.zero_dov_floor(),
         projection,
         grid,
@@ -220,7 +224,7 @@ pub(super) fn compute(
     progress(0, total);
     for band in bands {
         let bounds: Vec<Aabb> = band.iter().map(|c| c.bounds).collect();
-        let dovs = cell_dovs_after(&prep.rays, &prep.projection, &bounds, &mut memo)?;
+        let dovs = cell_dovs_after(prep.dov.as_ref(), &prep.projection, &bounds, &mut memo)?;
         made.rays += dovs.stats.rays;
         made.dov_seconds += dovs.stats.elapsed.as_secs_f64();
         let cells: Vec<(u32, CellPvs)> = band

@@ -250,7 +250,7 @@ impl std::fmt::Debug for RayScene {
 
 /// Whether the triangle's edge vectors are parallel (or one is zero), as f32 computes it:
 /// the ray test divides by this cross product, so such a triangle is never hit.
-fn zero_area(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> bool {
+pub(super) fn zero_area(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> bool {
     let e = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let f = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
     e[1] * f[2] - e[2] * f[1] == 0.0
@@ -269,7 +269,7 @@ pub(crate) fn check_point(what: &str, p: [f32; 3]) -> Result<()> {
     }
 }
 
-fn check_mesh(id: u64, mesh: &Mesh) -> Result<()> {
+pub(super) fn check_mesh(id: u64, mesh: &Mesh) -> Result<()> {
     let bad = |what: String| Err(Error::BadMesh { id, what });
     if mesh.indices.is_empty() {
         return bad("it has no triangles".into());

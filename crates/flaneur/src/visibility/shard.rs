@@ -38,7 +38,7 @@ use super::precompute::{
     bands, boxes, compute, grid_and_walkable, prepare, settings, whole_build_rays, Precomputed,
 };
 use super::table::{decode_record, encode_record, CellPvs, VisibilityStats};
-use super::{CubicProjection, SampleOptions, VisibilityOptions};
+use super::{CubicProjection, DovMethod, SampleOptions, VisibilityOptions};
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use crate::store::framing::{f32_at, f64_at, push_crc, u32_at, u64_at, CRC_LEN};
@@ -315,6 +315,7 @@ impl ShardCells {
                 spacing: f32_at(b, 40),
                 radius: f32_at(b, 44),
             },
+            dov: DovMethod::default(),
         };
         options.validate().map_err(|e| e.to_string())?;
         let count = u32_at(b, 88) as usize;
