@@ -306,7 +306,10 @@ impl Scene {
             [cell.min.x - r, cell.min.z - r],
             [cell.max.x + r, cell.max.z + r],
         );
-        let shrunk: Vec<(Prism, Vec2, Vec2)> = self
+        // Nearest the cell's centre first: each sample's horizon prunes best taking its
+        // prisms nearest first, and this order is near enough to each sample's own.
+        let centre = Vec2::new(cell.center().x, cell.center().z);
+        let mut shrunk: Vec<(Prism, Vec2, Vec2)> = self
             .prism_index
             .locate_in_envelope_intersecting(&reach)
             .filter_map(|e| {
@@ -315,6 +318,9 @@ impl Scene {
                 unshrunk.shrunk(eps).map(|o| (o, lo, hi))
             })
             .collect();
+        let from_centre =
+            |(_, lo, hi): &(Prism, Vec2, Vec2)| (centre.clamp(*lo, *hi) - centre).length_squared();
+        shrunk.sort_by_cached_key(|e| ordered(from_centre(e)));
         for p in points {
             if shrunk.iter().any(|(o, _, _)| o.contains(p)) {
                 continue;
@@ -324,7 +330,7 @@ impl Scene {
                 .iter()
                 .filter(|(_, a, b)| a.cmple(hi).all() && lo.cmple(*b).all())
                 .map(|(o, _, _)| *o);
-            let horizon = Horizon::new(p, near);
+            let horizon = Horizon::nearly_ordered(p, near);
             let found: Vec<u32> = self
                 .objects
                 .locate_with_selection_function(Unhidden {
@@ -341,6 +347,11 @@ impl Scene {
             .filter(|&i| visible[i as usize])
             .collect())
     }
+}
+
+/// A key that orders finite non-negative floats as they compare.
+fn ordered(x: f32) -> u32 {
+    x.to_bits()
 }
 
 struct Unhidden<'a> {
