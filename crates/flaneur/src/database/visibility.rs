@@ -161,12 +161,12 @@ impl Database {
     /// stored level eq. 5.6 picks, a node at the internal LOD eq. 5.5 picks
     /// (`hdov::level_for_detail`). Every page counted.
     pub fn hdov_load(&self, found: &hdov::Found) -> Result<hdov::Representation> {
-        hdov::load(&self.store, self.lod.as_ref(), found)
+        hdov::load(&self.store, self.lod.as_ref(), self.hdov.as_ref(), found)
     }
 
     /// A reader of what HDoV searches find, remembering their levels (a walk's).
     pub(crate) fn hdov_loader(&self) -> hdov::Loader<'_> {
-        hdov::Loader::new(&self.store, self.lod.as_ref())
+        hdov::Loader::new(&self.store, self.lod.as_ref(), self.hdov.as_ref())
     }
 
     pub(crate) fn hdov_tree(&self) -> Result<&HdovTree> {

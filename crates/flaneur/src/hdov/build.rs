@@ -16,13 +16,14 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::lods::{aggregate, internal_levels};
+use super::lods::{aggregate, internal_levels, Reference, DIRECT_TRIANGLES, ERROR_SAMPLES};
 use super::node::{capacity, ChildRef, HNode, HNodeKind};
 use super::scheme::{self, Scheme, Shape};
-use super::tree::{TreeHead, HDOV_SEGMENT};
+use super::tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
 use super::vd::{CellVd, Topology, VENTRY_LEN};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::lod::hausdorff;
 use crate::lod::stored::encode_chain;
 use crate::lod::stored::{level_mesh, LodTable};
 use crate::progress::{Progress, Step};
@@ -235,9 +236,9 @@ pub(super) fn preorder(nodes: &[Packed]) -> Vec<usize> {
     order
 }
 
-/// Each object's coarsest stored level (its full mesh when it has none), read from the
-/// store being built.
-fn coarsest_meshes(store: &Store, objects: &[ObjectEntry]) -> Result<HashMap<u64, Mesh>> {
+/// Each object's coarsest stored level (its full mesh when it has none), and whether
+/// it is a stored level, read from the store being built.
+fn coarsest_meshes(store: &Store, objects: &[ObjectEntry]) -> Result<HashMap<u64, (Mesh, bool)>> {
     let table = LodTable::open(store)?;
     let mut out = HashMap::with_capacity(objects.len());
     for o in objects {
@@ -245,21 +246,31 @@ fn coarsest_meshes(store: &Store, objects: &[ObjectEntry]) -> Result<HashMap<u64
             Some(t) => t.find(store, o.id)?,
             None => None,
         };
-        let mesh = match entry {
-            Some(e) if e.levels > 0 => level_mesh(store, &e, e.levels as usize)?,
-            _ => crate::catalog::read_mesh(store, o)?,
+        let coarse = match entry {
+            Some(e) if e.levels > 0 => (level_mesh(store, &e, e.levels as usize)?, true),
+            _ => (crate::catalog::read_mesh(store, o)?, false),
         };
-        out.insert(o.id, mesh);
+        out.insert(o.id, coarse);
     }
     Ok(out)
 }
 
+/// The objects below packed node `n`.
+fn objects_below<'p>(packed: &'p [Packed], n: usize, out: &mut Vec<&'p ObjectEntry>) {
+    out.extend(packed[n].objects.iter());
+    for &c in &packed[n].children {
+        objects_below(packed, c, out);
+    }
+}
+
 /// A node's internal LODs once made: its levels, and the geometry its parent is made
-/// from (its coarsest level, or its source when it has none).
+/// from (its coarsest level, or its source when it has none) with that geometry's
+/// error against the node's full geometry (metres).
 struct Made {
     levels: Vec<crate::lod::Level>,
     source_triangles: usize,
     coarsest: Mesh,
+    coarsest_error: f32,
 }
 
 impl Made {
@@ -269,6 +280,74 @@ impl Made {
             .first()
             .map_or(self.source_triangles, |l| l.mesh.triangle_count())
     }
+}
+
+/// Node `n`'s internal LODs, its children's made. Its proxies are measured against its
+/// objects' full meshes when they have at most [`DIRECT_TRIANGLES`] together, else
+/// bounded through its parts' errors (`lods`).
+fn make_node(
+    store: &Store,
+    packed: &[Packed],
+    n: usize,
+    coarse: &HashMap<u64, (Mesh, bool)>,
+    made: &[Option<Made>],
+) -> Result<Made> {
+    let p = &packed[n];
+    let child = |c: usize| made[c].as_ref().expect("made below");
+    let parts: Vec<&Mesh> = if p.level == 0 {
+        p.objects.iter().map(|o| &coarse[&o.id].0).collect()
+    } else {
+        p.children.iter().map(|&c| &child(c).coarsest).collect()
+    };
+    let source = aggregate(parts);
+    // The largest distance of a part of the source from its own full geometry.
+    let parts_error = || -> Result<f32> {
+        if p.level > 0 {
+            return Ok(p
+                .children
+                .iter()
+                .map(|&c| child(c).coarsest_error)
+                .fold(0.0, f32::max));
+        }
+        let mut worst = 0.0f32;
+        for o in &p.objects {
+            let (mesh, stored) = &coarse[&o.id];
+            if *stored && !mesh.indices.is_empty() {
+                let full = crate::catalog::read_mesh(store, o)?;
+                worst = worst.max(hausdorff(mesh, &full, ERROR_SAMPLES)?);
+            }
+        }
+        Ok(worst)
+    };
+    let mut below = Vec::new();
+    objects_below(packed, n, &mut below);
+    let full_triangles: usize = below.iter().map(|o| o.triangles as usize).sum();
+    let levels = if source.indices.is_empty() {
+        Vec::new()
+    } else if full_triangles <= DIRECT_TRIANGLES {
+        let meshes = below
+            .iter()
+            .map(|o| crate::catalog::read_mesh(store, o))
+            .collect::<Result<Vec<Mesh>>>()?;
+        internal_levels(&source, Reference::Full(&aggregate(&meshes)))?
+    } else {
+        internal_levels(
+            &source,
+            Reference::Source {
+                parts_error: parts_error()?,
+            },
+        )?
+    };
+    let (coarsest, coarsest_error) = match levels.last() {
+        Some(l) => (l.mesh.clone(), l.error),
+        None => (source.clone(), parts_error()?),
+    };
+    Ok(Made {
+        source_triangles: source.triangle_count(),
+        coarsest,
+        coarsest_error,
+        levels,
+    })
 }
 
 /// Builds the HDoV-tree over `objects` into `store` as `opts` say.
@@ -306,27 +385,10 @@ pub(crate) fn build_hdov(
         let at: Vec<usize> = (0..packed.len())
             .filter(|&n| packed[n].level == level && n != root)
             .collect();
+        let reader: &Store = store;
         let results: Vec<Result<Made>> = at
             .par_iter()
-            .map(|&n| {
-                let p = &packed[n];
-                let parts: Vec<&Mesh> = if p.level == 0 {
-                    p.objects.iter().map(|o| &coarse[&o.id]).collect()
-                } else {
-                    p.children
-                        .iter()
-                        .map(|&c| &made[c].as_ref().expect("made below").coarsest)
-                        .collect()
-                };
-                let source = aggregate(parts);
-                let levels = internal_levels(&source)?;
-                let coarsest = levels.last().map(|l| l.mesh.clone());
-                Ok(Made {
-                    source_triangles: source.triangle_count(),
-                    coarsest: coarsest.unwrap_or(source),
-                    levels,
-                })
-            })
+            .map(|&n| make_node(reader, &packed, n, &coarse, &made))
             .collect();
         for (&n, r) in at.iter().zip(results) {
             made[n] = Some(r?);
@@ -458,6 +520,7 @@ pub(crate) fn build_hdov(
         visible_nodes,
         schemes: stored,
         cells,
+        proxy_errors: ProxyErrors::Hausdorff,
     };
     let e = store.append_extent(PageKind::HdovNode, &head.encode())?;
     store.set_segment(Segment::new(

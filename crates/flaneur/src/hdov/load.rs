@@ -2,6 +2,11 @@
 //! its eq. 5.6 weight picks (its full mesh when it has no coarser level), a node at the
 //! internal LOD its eq. 5.5 weight picks ([`level_for_detail`]). Every page counted.
 //!
+//! A node's levels come with their errors ([`Loader::node_levels`]): in metres, a sampled
+//! Hausdorff distance from the node's full geometry, as a version-2 tree stores them
+//! (`hdov::lods`); a version-1 tree's are quadric errors, no distance, and are read as
+//! infinite, so that no screen-space test takes such a proxy for fine enough.
+//!
 //! A walk keeps one [`Loader`] from search to search: it remembers each object's and
 //! node's levels once their directory is read, so that the level a later search's find
 //! deserves is known without a read, and only what is not already held at that level is
@@ -15,6 +20,7 @@
 use std::collections::HashMap;
 
 use super::search::{level_for_detail, Found};
+use super::tree::{HdovTree, ProxyErrors};
 use crate::catalog::read_mesh;
 use crate::error::{Error, Result};
 use crate::lod::stored::{
@@ -38,13 +44,15 @@ fn triangles(levels: &[LevelInfo]) -> Vec<u32> {
     levels.iter().map(|l| l.triangles).collect()
 }
 
-/// Reads `found` from `store`, finding objects' LODs through `lods`.
+/// Reads `found` from `store`, finding objects' LODs through `lods` (a node's through
+/// `tree`'s head, which says what their errors mean).
 pub(crate) fn load(
     store: &Store,
     lods: Option<&LodTable>,
+    tree: Option<&HdovTree>,
     found: &Found,
 ) -> Result<Representation> {
-    let mut loader = Loader::new(store, lods);
+    let mut loader = Loader::new(store, lods, tree);
     let level = loader.level(found)?;
     Ok(Representation {
         mesh: loader.mesh(found, level)?,
@@ -60,16 +68,23 @@ type ObjectLevels = Option<(LodEntry, Vec<u32>)>;
 pub(crate) struct Loader<'a> {
     store: &'a Store,
     lods: Option<&'a LodTable>,
+    /// The tree whose nodes it reads: its head says what their errors mean.
+    tree: Option<&'a HdovTree>,
     objects: HashMap<u64, ObjectLevels>,
-    /// Each node's internal LODs' triangles, finest (level 1) first.
-    nodes: HashMap<u32, Vec<u32>>,
+    /// Each node's internal LODs, finest (level 1) first, their errors in metres.
+    nodes: HashMap<u32, Vec<LevelInfo>>,
 }
 
 impl<'a> Loader<'a> {
-    pub(crate) fn new(store: &'a Store, lods: Option<&'a LodTable>) -> Loader<'a> {
+    pub(crate) fn new(
+        store: &'a Store,
+        lods: Option<&'a LodTable>,
+        tree: Option<&'a HdovTree>,
+    ) -> Loader<'a> {
         Loader {
             store,
             lods,
+            tree,
             objects: HashMap::new(),
             nodes: HashMap::new(),
         }
@@ -82,16 +97,34 @@ impl<'a> Loader<'a> {
                 Some((e, t)) if e.levels > 0 => level_for_detail(t, *detail),
                 _ => 0,
             }),
-            Found::Node {
-                node, lods, detail, ..
-            } => {
-                if !self.nodes.contains_key(node) {
-                    let levels = chain_levels(self.store, lods, &node_chain(*node))?;
-                    self.nodes.insert(*node, triangles(&levels));
-                }
-                Ok(level_for_detail(&self.nodes[node], *detail) + 1)
+            Found::Node { detail, .. } => {
+                let t = triangles(self.node_levels(found)?);
+                Ok(level_for_detail(&t, *detail) + 1)
             }
         }
+    }
+
+    /// Node `found`'s internal LODs, finest (level 1) first, each with its triangles
+    /// and its error in metres (a version-1 tree's read as infinite). Reads its chain's directory the first time
+    /// only; an object's find has none.
+    pub(crate) fn node_levels(&mut self, found: &Found) -> Result<&[LevelInfo]> {
+        let Found::Node { node, lods, .. } = found else {
+            return Err(Error::Invalid("an object has no internal LODs".into()));
+        };
+        if !self.nodes.contains_key(node) {
+            let mut levels = chain_levels(self.store, lods, &node_chain(*node))?;
+            let errors = match self.tree {
+                Some(t) => t.head(self.store)?.proxy_errors,
+                None => ProxyErrors::Hausdorff,
+            };
+            if errors == ProxyErrors::Quadric {
+                for l in levels.iter_mut() {
+                    l.error = f32::INFINITY;
+                }
+            }
+            self.nodes.insert(*node, levels);
+        }
+        Ok(&self.nodes[node])
     }
 
     /// `found`'s mesh at `level` (one [`Loader::level`] gave).

@@ -6,7 +6,7 @@
 //! - The **view-invariant** part (§5.2.2, §5.6): nodes packed over the objects' boxes
 //!   (`node` is the page layout), each parent entry carrying its child's h and s
 //!   (eqs. 5.3–5.4) and internal LODs made from the children's simplified geometry
-//!   (`lods`).
+//!   by aggregate simplification, each with its error in metres (`lods`).
 //! - The **view-variant** part (§5.2.2, §5.5.3): per viewcell, each entry's VD = (DoV,
 //!   NVO) summed bottom-up from the visibility table (`vd`), in V-pages stored under
 //!   the horizontal, vertical or indexed-vertical scheme (§5.4, [`Scheme`]).
@@ -18,8 +18,9 @@
 //! searches it with [`Database::hdov_search`](crate::Database::hdov_search).
 //!
 //! The choices the thesis leaves open are named where they are made: the tree has its
-//! own pages, packed like the R-tree (`build`); three internal LODs per node (`lods`);
-//! pointers of 4 bytes (`scheme`); the details of eqs. 5.5–5.6 read as triangle counts
+//! own pages, packed like the R-tree (`build`); up to three internal LODs per node,
+//! their shares and how their errors are measured (`lods`); pointers of 4 bytes
+//! (`scheme`); the details of eqs. 5.5–5.6 read as triangle counts
 //! ([`level_for_detail`]).
 
 mod build;
@@ -37,7 +38,7 @@ pub(crate) use build::build_hdov;
 pub use build::{HdovOptions, HdovReport, SchemeReport};
 pub use load::Representation;
 pub(crate) use load::{load, Loader};
-pub use lods::{LEVEL_SHARES, MIN_TRIANGLES};
+pub use lods::{DIRECT_TRIANGLES, ERROR_SAMPLES, LEVEL_SHARES, MIN_TRIANGLES};
 pub(crate) use node::HNodeKind;
 pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;
@@ -48,7 +49,7 @@ pub use search::{
     ScreenTest, SearchResult, Selection, MAXDOV,
 };
 pub(crate) use tree::HdovTree;
-pub use tree::{TreeHead, HDOV_SEGMENT};
+pub use tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
 pub use vd::Vd;
 
 #[cfg(test)]

@@ -5,7 +5,8 @@
 //! ```text
 //! head
 //!   0  magic          b"FLHD"
-//!   4  version        u32, TREE_VERSION
+//!   4  version        u32, TREE_VERSION (2); version 1, whose internal LODs' errors
+//!                     are not distances, is read as [`ProxyErrors::Quadric`]
 //!   8  first node     u64, the page of node 0 (the root); node n is page first + n
 //!  16  nodes          u32, N_node
 //!  20  height         u32, levels of nodes
@@ -34,8 +35,28 @@ use crate::store::{Extent, PageKind, Store};
 /// The header segment that names the HDoV-tree's head.
 pub const HDOV_SEGMENT: &str = "hdov";
 const MAGIC: [u8; 4] = *b"FLHD";
-/// The tree encoding this build writes and reads.
-pub const TREE_VERSION: u32 = 1;
+/// The tree encoding this build writes (it reads version 1 too).
+pub const TREE_VERSION: u32 = 2;
+
+/// What the `error` of each stored internal LOD level means, by the tree's version.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum ProxyErrors {
+    /// Version 1: the LOD core's quadric error of the collapses that made the level,
+    /// not a bound on its distance from the objects; readers take it as unknown.
+    Quadric,
+    /// Version 2: a sampled Hausdorff distance in metres, in the objects' frame, from
+    /// the node's full geometry (`hdov::lods`).
+    Hausdorff,
+}
+
+impl ProxyErrors {
+    fn version(self) -> u32 {
+        match self {
+            ProxyErrors::Quadric => 1,
+            ProxyErrors::Hausdorff => TREE_VERSION,
+        }
+    }
+}
 const FIXED: usize = 72;
 const SCHEME_RECORD: usize = 24;
 
@@ -64,6 +85,8 @@ pub struct TreeHead {
     pub schemes: Vec<(Scheme, Extent)>,
     /// The viewcell id of each slot, ascending.
     pub cells: Vec<u32>,
+    /// What its internal LODs' errors mean (the head's version says).
+    pub proxy_errors: ProxyErrors,
 }
 
 impl TreeHead {
@@ -71,7 +94,7 @@ impl TreeHead {
     pub fn encode(&self) -> Vec<u8> {
         let mut b = Vec::new();
         b.extend_from_slice(&MAGIC);
-        b.extend_from_slice(&TREE_VERSION.to_le_bytes());
+        b.extend_from_slice(&self.proxy_errors.version().to_le_bytes());
         b.extend_from_slice(&self.first_node.to_le_bytes());
         for v in [
             self.nodes,
@@ -104,12 +127,15 @@ impl TreeHead {
         if b.len() < FIXED + CRC_LEN || b[..4] != MAGIC {
             return Err("not an HDoV-tree head".into());
         }
-        if u32_at(b, 4) != TREE_VERSION {
-            return Err(format!(
-                "HDoV-tree version {}, this build reads {TREE_VERSION}",
-                u32_at(b, 4)
-            ));
-        }
+        let proxy_errors = match u32_at(b, 4) {
+            1 => ProxyErrors::Quadric,
+            TREE_VERSION => ProxyErrors::Hausdorff,
+            v => {
+                return Err(format!(
+                    "HDoV-tree version {v}, this build reads 1 and {TREE_VERSION}"
+                ))
+            }
+        };
         let (cells, k) = (u32_at(b, 28) as usize, u32_at(b, 44) as usize);
         let len = (FIXED + CRC_LEN) as u64 + SCHEME_RECORD as u64 * k as u64 + 4 * cells as u64;
         if len != b.len() as u64 {
@@ -150,6 +176,7 @@ impl TreeHead {
             visible_nodes: u64_at(b, 64),
             schemes,
             cells: ids,
+            proxy_errors,
         };
         if head.nodes == 0 || head.height == 0 || head.fanout < 2 || head.vpage_len == 0 {
             return Err(format!(
@@ -330,9 +357,21 @@ mod tests {
             visible_nodes: 200,
             schemes: vec![(Scheme::Vertical, Extent::default())],
             cells: vec![3, 7, 8],
+            proxy_errors: ProxyErrors::Hausdorff,
         };
         let b = head.encode();
         assert_eq!(TreeHead::decode(&b).unwrap(), head);
+        // A version-1 head, whose proxies' errors are quadric, says so.
+        let old = TreeHead {
+            proxy_errors: ProxyErrors::Quadric,
+            ..head.clone()
+        };
+        assert_eq!(u32_at(&old.encode(), 4), 1);
+        assert_eq!(TreeHead::decode(&old.encode()).unwrap(), old);
+        let mut future = b.clone();
+        future[4..8].copy_from_slice(&3u32.to_le_bytes());
+        crate::store::framing::reseal(&mut future);
+        assert!(TreeHead::decode(&future).unwrap_err().contains("version 3"));
         assert_eq!(head.slot(7), Some(1));
         assert_eq!(head.slot(4), None);
         let mut bad = b.clone();

@@ -8,19 +8,22 @@
 //! longer side of the node's box on the ground, down to one object a leaf (the thesis
 //! gives no rule); it is built in memory when loaded, not stored (seconds); a leaf's
 //! representations are its object's stored levels, full mesh first; an internal node's
-//! are made as the HDoV-tree's are (`hdov::lods`), from its children's coarsest ones.
+//! are made as the HDoV-tree's are (`hdov::lods`), from its children's coarsest ones,
+//! each with its error: a Hausdorff distance in metres against the node's full geometry
+//! (measured whole up to `lods::DIRECT_TRIANGLES`, bounded through its children's
+//! errors above, as `hdov::lods` says).
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::super::lods::{aggregate, internal_levels};
+use super::super::lods::{aggregate, internal_levels, Reference, DIRECT_TRIANGLES, ERROR_SAMPLES};
 use super::super::vd::Vd;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::lod::stored;
+use crate::lod::{hausdorff, stored};
 use crate::progress::{Progress, Step};
 use crate::rtree::ObjectEntry;
 use crate::scene::Mesh;
@@ -48,6 +51,10 @@ pub struct SceneNode {
     pub levels: Vec<Arc<Mesh>>,
     /// Their triangles, in the same order.
     pub triangles: Vec<u32>,
+    /// Their errors in metres, in the same order: a leaf's its object's stored levels'
+    /// (0 for the full mesh), an internal node's its internal LODs' sampled Hausdorff
+    /// distances from its objects' full meshes (`hdov::lods`).
+    pub errors: Vec<f32>,
     /// Its VD from the current viewcell.
     pub vd: Vd,
 }
@@ -101,9 +108,10 @@ impl SceneTree {
         for (k, n) in tree.nodes.iter_mut().enumerate() {
             if let Some(id) = n.object {
                 tree.leaf_of.insert(id, k as u32);
-                let (levels, triangles) = leaves.remove(&id).expect("every object loaded");
+                let (levels, triangles, errors) = leaves.remove(&id).expect("every object loaded");
                 n.levels = levels;
                 n.triangles = triangles;
+                n.errors = errors;
             }
         }
         tree.make_internal_lods(progress)?;
@@ -117,30 +125,22 @@ impl SceneTree {
         let top = height.iter().copied().max().unwrap_or(0);
         let internal = self.nodes.iter().filter(|n| n.object.is_none()).count() as u64;
         let mut done = 0;
+        // Each internal node's coarsest geometry's error against its full geometry.
+        let mut coarsest_error: Vec<Option<f32>> = vec![None; self.nodes.len()];
         for level in 1..=top {
             let at: Vec<usize> = (0..self.nodes.len())
                 .filter(|&k| height[k] == level)
                 .collect();
-            let made: Vec<Result<Levels>> = at
+            let made: Vec<Result<(Levels, f32)>> = at
                 .par_iter()
-                .map(|&k| {
-                    let [a, b] = self.nodes[k].children.expect("internal");
-                    let parts = [self.coarsest(a), self.coarsest(b)];
-                    let source = aggregate(parts.iter().map(|m| m.as_ref()));
-                    let levels = internal_levels(&source)?;
-                    Ok(levels
-                        .into_iter()
-                        .map(|l| {
-                            let t = l.mesh.triangle_count() as u32;
-                            (Arc::new(l.mesh), t)
-                        })
-                        .unzip())
-                })
+                .map(|&k| self.make_node(k as u32, &coarsest_error))
                 .collect();
             for (&k, m) in at.iter().zip(made) {
-                let (levels, triangles) = m?;
+                let ((levels, triangles, errors), error) = m?;
                 self.nodes[k].levels = levels;
                 self.nodes[k].triangles = triangles;
+                self.nodes[k].errors = errors;
+                coarsest_error[k] = Some(error);
             }
             done += at.len() as u64;
             progress.update(Step::SceneLods, done, Some(internal));
@@ -159,6 +159,76 @@ impl SceneTree {
             n.s = s as f32;
         }
         Ok(())
+    }
+
+    /// Internal node `k`'s internal LODs (its children's made), and its coarsest
+    /// geometry's error against its full geometry; `errors` holds the internal nodes'
+    /// made so far.
+    fn make_node(&self, k: u32, errors: &[Option<f32>]) -> Result<(Levels, f32)> {
+        let [a, b] = self.nodes[k as usize].children.expect("internal");
+        let parts = [self.coarsest(a), self.coarsest(b)];
+        let source = aggregate(parts.iter().map(|m| m.as_ref()));
+        // The largest distance of a child's coarsest geometry from its full geometry.
+        let parts_error = || -> Result<f32> {
+            let mut worst = 0.0f32;
+            for c in [a, b] {
+                let n = &self.nodes[c as usize];
+                let e = match (errors[c as usize], n.object, &n.levels[..]) {
+                    (Some(e), _, _) => e,
+                    (None, Some(_), [full, .., coarsest]) if !coarsest.indices.is_empty() => {
+                        hausdorff(coarsest, full, ERROR_SAMPLES)?
+                    }
+                    _ => 0.0,
+                };
+                worst = worst.max(e);
+            }
+            Ok(worst)
+        };
+        let mut below = Vec::new();
+        self.leaves_below(k, &mut below);
+        let full_triangles: usize = below
+            .iter()
+            .map(|&l| self.nodes[l as usize].triangles[0] as usize)
+            .sum();
+        let levels = if source.indices.is_empty() {
+            Vec::new()
+        } else if full_triangles <= DIRECT_TRIANGLES {
+            let full = aggregate(
+                below
+                    .iter()
+                    .map(|&l| self.nodes[l as usize].levels[0].as_ref()),
+            );
+            internal_levels(&source, Reference::Full(&full))?
+        } else {
+            internal_levels(
+                &source,
+                Reference::Source {
+                    parts_error: parts_error()?,
+                },
+            )?
+        };
+        let error = match levels.last() {
+            Some(l) => l.error,
+            None => parts_error()?,
+        };
+        let mut made: Levels = Default::default();
+        for l in levels {
+            made.1.push(l.mesh.triangle_count() as u32);
+            made.2.push(l.error);
+            made.0.push(Arc::new(l.mesh));
+        }
+        Ok((made, error))
+    }
+
+    /// The leaves below node `k`.
+    fn leaves_below(&self, k: u32, out: &mut Vec<u32>) {
+        match self.nodes[k as usize].children {
+            Some([a, b]) => {
+                self.leaves_below(a, out);
+                self.leaves_below(b, out);
+            }
+            None => out.push(k),
+        }
     }
 
     /// Each node's height: 0 for a leaf.
@@ -247,22 +317,25 @@ impl SceneTree {
     }
 }
 
-/// A node's representations, finest first, and their triangles.
-type Levels = (Vec<Arc<Mesh>>, Vec<u32>);
+/// A node's representations, finest first, their triangles and their errors (metres).
+type Levels = (Vec<Arc<Mesh>>, Vec<u32>, Vec<f32>);
 
 /// Object `o`'s stored levels, full mesh first, and their triangles.
 fn object_levels(db: &Database, o: &ObjectEntry) -> Result<Levels> {
     let full = db.mesh(o)?;
     let mut triangles = vec![full.triangle_count() as u32];
+    let mut errors = vec![0.0];
     let mut levels = vec![Arc::new(full)];
     if let Some(e) = db.lod_entry(o.id)? {
+        let infos = stored::levels(db.store(), &e)?;
         for k in 1..=e.levels as usize {
             let m = stored::level_mesh(db.store(), &e, k)?;
             triangles.push(m.triangle_count() as u32);
+            errors.push(infos.get(k).map_or(0.0, |l| l.error));
             levels.push(Arc::new(m));
         }
     }
-    Ok((levels, triangles))
+    Ok((levels, triangles, errors))
 }
 
 /// Appends the subtree over `objects` to `nodes` under `parent`: a leaf for one object,
@@ -281,6 +354,7 @@ fn split(nodes: &mut Vec<SceneNode>, mut objects: Vec<ObjectEntry>, parent: Opti
         s: 1.0,
         levels: Vec::new(),
         triangles: Vec::new(),
+        errors: Vec::new(),
         vd: Vd::default(),
     });
     if objects.len() == 1 {
