@@ -3,7 +3,7 @@
 //! corners pixel by pixel.
 
 use flaneur::geom::Aabb;
-use flaneur::visibility::{cell_dovs, CubicProjection, RasterScene, RayScene, ViewcellGrid, SKY};
+use flaneur::visibility::{cell_dovs, CubicProjection, RasterScene, RayScene, ViewcellGrid};
 
 /// A city of `objects` generated objects, and its walkable cells (40 m, eye 1.2–2 m).
 fn city(objects: u64) -> (Vec<citygen::SceneObject>, Vec<Aabb>) {
@@ -79,7 +79,7 @@ fn every_cell_sees_what_the_rays_see_to_within_one_percent() {
 fn item_buffers_differ_only_along_edges() {
     // The rule: a pixel the two buffers give to different objects (or one to sky) lies on
     // an edge of the reference, within one pixel of one showing something else in the
-XX, where a silhouette edge
+    // ray-cast's buffer; but for at most 1 in 200,000 pixels, where a silhouette edge
     // lying within 1/512 of a pixel of a row of pixel centres is snapped onto them. A
     // crack along the edges that triangles share, a hole or a misplaced object breaks it
     // (with every edge strict, no top-left rule, 515 pixels of these 15.7 million were

@@ -144,7 +144,7 @@ pub fn point_dov(
     Ok(point_dov_checked(scene, projection, point))
 }
 
-pub(super) fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32; 3]) -> PointDov {
+fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32; 3]) -> PointDov {
     let n = projection.resolution() as usize;
     let weights = projection.weights();
     // Each band of rows sums its pixels into runs of one object, so that all bands of all
