@@ -15,7 +15,7 @@ pub struct HdovStorageArgs {
     db: PathBuf,
     /// Also size the schemes of trees over the same objects and viewcells at these
     /// fan-outs (entries a node, comma-separated, each at least 2), without building
-    /// them.
+    /// them (default: none, only the tree the database holds).
     #[arg(long, value_name = "M,M,...", value_delimiter = ',')]
     fanouts: Vec<u32>,
     /// Folder for the CSVs, plots and summary.
