@@ -16,14 +16,13 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::lods::{aggregate, internal_levels, Reference, DIRECT_TRIANGLES, ERROR_SAMPLES};
+use super::lods::{aggregate, error_between, internal_levels, Reference, DIRECT_TRIANGLES};
 use super::node::{capacity, ChildRef, HNode, HNodeKind};
 use super::scheme::{self, Scheme, Shape};
 use super::tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
 use super::vd::{CellVd, Topology, VENTRY_LEN};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::lod::hausdorff;
 use crate::lod::stored::encode_chain;
 use crate::lod::stored::{level_mesh, LodTable};
 use crate::progress::{Progress, Step};
@@ -314,7 +313,7 @@ fn make_node(
             let (mesh, stored) = &coarse[&o.id];
             if *stored && !mesh.indices.is_empty() {
                 let full = crate::catalog::read_mesh(store, o)?;
-                worst = worst.max(hausdorff(mesh, &full, ERROR_SAMPLES)?);
+                worst = worst.max(error_between(mesh, &full)?);
             }
         }
         Ok(worst)
