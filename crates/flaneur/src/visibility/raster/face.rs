@@ -123,14 +123,13 @@ impl Face {
         let (x, y) = (rel(b), rel(c));
         let distance2 = gap(x).powi(2) + gap(y).powi(2) + zmin.max(0.0).powi(2);
         let last = self.n - 1;
-        if zmin < NEAR {
-            return Some(Footprint {
-                cols: (0, last),
-                rows: (0, last),
-                near_w: f32::INFINITY,
-                distance2,
-            });
-        }
+        // A box reaching the near plane: only its part beyond it is drawn, and that part
+        // may still lie off the face (a building beside the viewpoint, on the up face).
+        let (near_w, zmin) = if zmin < NEAR {
+            (f32::INFINITY, NEAR)
+        } else {
+            (1.0 / zmin, zmin)
+        };
         // x/z over the box: its least at the nearest z when x < 0, at the farthest when not.
         let span = |(l, h): (f32, f32)| {
             let low = if l < 0.0 { l / zmin } else { l / zmax };
@@ -149,7 +148,7 @@ impl Face {
         Some(Footprint {
             cols: pixels(span(x))?,
             rows: pixels(span(y))?,
-            near_w: 1.0 / zmin,
+            near_w,
             distance2,
         })
     }
