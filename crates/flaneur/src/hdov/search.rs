@@ -25,7 +25,8 @@
 //! finds while the eye stays in it: a proxy fit for the cell's nearest point is fit for
 //! every frame there. The error is read from the node's LOD directory (one page, once a
 //! walk, [`NodeErrors`]): the node entry has no room for it, so these reads are counted
-//! as model pages, not as the search's. The node is then drawn at the finer of eq. 5.5's
+//! as model pages, not as the search's; a version-1 tree's errors are quadric errors, no
+//! bound, and none of its internal LODs passes. The node is then drawn at the finer of eq. 5.5's
 //! level and the coarsest whose error passes; an object at the finer of eq. 5.6's level
 //! and its screen-space one (the walk's LOD selection, from the eye, frame by frame).
 
@@ -34,7 +35,7 @@ use std::sync::Mutex;
 
 use super::node::HNodeKind;
 use super::scheme::{Entered, Scheme, StoredScheme};
-use super::tree::HdovTree;
+use super::tree::{HdovTree, ProxyErrors};
 use super::vd::Vd;
 use crate::cache::{BufferPool, Hint};
 use crate::database::Database;
@@ -396,6 +397,7 @@ fn search_in(
         height,
         cache,
         screen,
+        bounded: head.proxy_errors == ProxyErrors::Hausdorff,
     };
     walk.visit(root, &vds, &mut out)?;
     Ok(out)
@@ -412,6 +414,9 @@ struct Walk<'a> {
     height: u32,
     cache: Option<&'a BufferPool<'a>>,
     screen: Option<&'a ScreenRule<'a>>,
+    /// Whether the tree's stored errors are distances (a version-1 tree's are quadric
+    /// errors, no bound: none of its internal LODs passes the screen rule).
+    bounded: bool,
 }
 
 impl Walk<'_> {
@@ -420,6 +425,9 @@ impl Walk<'_> {
         let Some(rule) = self.screen else {
             return Ok(true);
         };
+        if !self.bounded {
+            return Ok(false);
+        }
         let errors = match rule.errors.of(self.store, node, lods) {
             Ok(e) => e,
             Err(e) if rule.tolerant => {

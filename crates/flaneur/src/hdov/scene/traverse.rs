@@ -135,8 +135,9 @@ pub struct SceneErrors {
 
 impl SceneErrors {
     /// The errors of `tree`'s nodes: its leaves' read from `db`'s LOD directories (a
-    /// page or two an object, once). An error names an object whose LOD data cannot be
-    /// read.
+    /// page or two an object, once), its internal nodes' those their internal LODs were
+    /// made with ([`SceneNode::errors`](super::SceneNode::errors)). An error names an
+    /// object whose LOD data cannot be read.
     pub fn load(db: &Database, tree: &SceneTree) -> Result<SceneErrors> {
         let mut nodes = Vec::with_capacity(tree.nodes.len());
         for n in &tree.nodes {
@@ -154,6 +155,7 @@ impl SceneErrors {
                     _ if n.triangles.len() == 1 => vec![0.0],
                     _ => Vec::new(),
                 },
+                None if n.errors.len() == n.triangles.len() => n.errors.clone(),
                 None => Vec::new(),
             };
             nodes.push(errors);
