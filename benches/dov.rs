@@ -1,21 +1,25 @@
-//! DoV micro benches (Shou 2002, §5.5.2): one viewpoint's cubic projection at N = 256
-//! (393,216 rays) from street height in a 400-object generated city, reported as rays per
-//! second; and a 2×2 grid of 3 m viewcells (18 distinct corners). Before the timed runs
-//! it prints one pass over the 36 street cells nearest the centre, whose shared corners
-//! bring the cost under 8 corners per cell: seconds per cell and rays per second as a
-//! precomputation would see them.
+//! DoV micro benches (Shou 2002, §5.5.2), the ray-cast reference beside the rasterised
+//! item buffers on the same viewpoints: one viewpoint's cubic projection at N = 256
+//! (393,216 pixels) from street height in a 400-object generated city, reported as
+//! pixels (rays) per second; and a 2×2 grid of 3 m viewcells (18 distinct corners).
+//! Before the timed runs it prints one pass of each over the 36 street cells nearest the
+//! centre, whose shared corners bring the cost under 8 corners per cell: seconds per cell
+//! as a precomputation would see them, each scene's build time, and how far the raster's
+//! DoVs are from the reference's (per cell, the sum over objects of the absolute
+//! differences, as a share of the sphere).
 
 use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use flaneur::geom::Aabb;
-use flaneur::visibility::{cell_dovs, point_dov, CubicProjection, RayScene};
+use flaneur::visibility::{cell_dovs, CellDovs, CubicProjection, DovSource, RasterScene, RayScene};
 
 const OBJECTS: u64 = 400;
 
 struct Fixture {
     scene: RayScene,
+    raster: RasterScene,
     /// An eye-height point in a street, 3 m from every building, near the city's centre.
     eye: [f32; 3],
     /// The 36 street cells nearest the centre: 4 m squares of a city-wide grid, eye height
@@ -33,6 +37,7 @@ fn fixture() -> Fixture {
         .map(|id| citygen::object(&config, id).unwrap())
         .collect();
     let scene = RayScene::new(objects.iter().map(|o| (o.id, &o.mesh))).unwrap();
+    let raster = RasterScene::new(objects.iter().map(|o| (o.id, &o.mesh))).unwrap();
     let boxes: Vec<([f32; 3], [f32; 3])> = objects.iter().map(|o| o.mesh.bounds()).collect();
     let (lo, hi) = boxes
         .iter()
@@ -70,7 +75,28 @@ fn fixture() -> Fixture {
         .expect("a city has streets");
     cells.sort_by(|a, b| from_centre(a.min.x, a.min.z).total_cmp(&from_centre(b.min.x, b.min.z)));
     cells.truncate(36);
-    Fixture { scene, eye, cells }
+    Fixture {
+        scene,
+        raster,
+        eye,
+        cells,
+    }
+}
+
+/// Per cell, the sum over objects of the absolute difference of two runs' DoVs.
+fn differences(a: &CellDovs, b: &CellDovs) -> Vec<f64> {
+    a.cells
+        .iter()
+        .zip(&b.cells)
+        .map(|(x, y)| {
+            let mut all: Vec<(u32, f64)> = x.iter().map(|&(o, d)| (o, d as f64)).collect();
+            all.extend(y.iter().map(|&(o, d)| (o, -(d as f64))));
+            all.sort_unstable_by_key(|p| p.0);
+            all.chunk_by(|p, q| p.0 == q.0)
+                .map(|same| same.iter().map(|p| p.1).sum::<f64>().abs())
+                .sum()
+        })
+        .collect()
 }
 
 /// A 2×2 grid of `size`-metre cells, eye height 1.2–2.0 m, centred on `p`.
@@ -89,33 +115,56 @@ fn benches(c: &mut Criterion) {
     let cube = CubicProjection::default();
     let eye = f.eye;
 
-    let s = cell_dovs(&f.scene, &cube, &f.cells).unwrap().stats;
+    let reference = cell_dovs(&f.scene, &cube, &f.cells).unwrap();
+    let drawn = cell_dovs(&f.raster, &cube, &f.cells).unwrap();
+    let s = reference.stats;
     eprintln!(
-        "dov: {} objects, {} triangles (BVH built in {:.0} ms); {} street cells at N = {}: \
-         {} corners ({:.2} per cell), {:.3} s per cell, {:.2} M rays/s on {} threads",
+        "dov: {} objects, {} triangles; {} street cells at N = {}: {} corners ({:.2} per cell), \
+         on {} threads",
         f.scene.object_count(),
         f.scene.triangle_count(),
-        f.scene.build_time().as_secs_f64() * 1e3,
         s.cells,
         cube.resolution(),
         s.corners,
         s.corners_per_cell(),
-        s.seconds_per_cell(),
-        s.rays_per_second() / 1e6,
         rayon::current_num_threads(),
+    );
+    for (name, built, run) in [
+        ("ray-cast", f.scene.build_time(), &reference),
+        ("raster", f.raster.build_time(), &drawn),
+    ] {
+        eprintln!(
+            "dov: {name:>8}: scene built in {:.0} ms; {:.4} s per cell, {:.2} M pixels/s",
+            built.as_secs_f64() * 1e3,
+            run.stats.seconds_per_cell(),
+            run.stats.rays_per_second() / 1e6,
+        );
+    }
+    let diffs = differences(&reference, &drawn);
+    eprintln!(
+        "dov: raster against ray-cast, per cell the sum of |DoV difference|: mean {:.2e}, \
+         largest {:.2e} (of the whole sphere, 1)",
+        diffs.iter().sum::<f64>() / diffs.len().max(1) as f64,
+        diffs.iter().copied().fold(0.0, f64::max),
     );
 
     let mut g = c.benchmark_group("dov");
     g.sample_size(10);
     g.throughput(Throughput::Elements(cube.rays_per_point()));
-    g.bench_function("point_n256", |b| {
-        b.iter(|| black_box(point_dov(&f.scene, &cube, eye).unwrap()))
-    });
-    let cells = grid(eye, 3.0);
-    g.throughput(Throughput::Elements(18 * cube.rays_per_point()));
-    g.bench_function("cells_2x2_n256", |b| {
-        b.iter(|| black_box(cell_dovs(&f.scene, &cube, &cells).unwrap()))
-    });
+    for (name, scene) in [
+        ("raycast", &f.scene as &dyn DovSource),
+        ("raster", &f.raster as &dyn DovSource),
+    ] {
+        g.throughput(Throughput::Elements(cube.rays_per_point()));
+        g.bench_function(format!("point_n256_{name}"), |b| {
+            b.iter(|| black_box(scene.point_dov(&cube, eye).unwrap()))
+        });
+        let cells = grid(eye, 3.0);
+        g.throughput(Throughput::Elements(18 * cube.rays_per_point()));
+        g.bench_function(format!("cells_2x2_n256_{name}"), |b| {
+            b.iter(|| black_box(cell_dovs(scene, &cube, &cells).unwrap()))
+        });
+    }
     g.finish();
 }
 

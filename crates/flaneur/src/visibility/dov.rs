@@ -10,6 +10,12 @@
 //! the same (−0 and +0 aside): cells cut from one grid by the same arithmetic are.
 //! Batches taken one after another share corners too (the row of corners between two
 //! bands of rows): [`CornerMemo`] keeps the last batch's corners for the next.
+//!
+//! A corner's point DoV comes from a [`DovSource`]: the rasterised item buffers
+//! (`raster`, the precomputation's default) or the ray-cast (the reference, [`RayScene`]).
+//! On an 80-object generated city's 17 cells at N = 256 the two differ by at most
+//! 2·10⁻⁴ of the sphere a cell (the sum over objects of the absolute differences), and
+//! the raster took 0.52 s against the rays' 2.8 s (`tests/dov_raster.rs`).
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
