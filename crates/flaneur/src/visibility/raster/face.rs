@@ -50,7 +50,7 @@ impl Face {
     pub fn new(face: usize, eye: [f32; 3], n: u32) -> Face {
         Face {
             axis: face / 2,
-            sign: if face % 2 == 0 { 1.0 } else { -1.0 },
+            sign: if face.is_multiple_of(2) { 1.0 } else { -1.0 },
             eye,
             n,
             guard: 1.0 + 2.0 * GUARD_PIXELS / n as f32,
