@@ -129,6 +129,11 @@ pub fn internal_levels(source: &Mesh, reference: Reference<'_>) -> Result<Vec<Le
             continue;
         };
         let t = mesh.triangle_count();
+        // A chain holds only levels coarser than the one before (`encode_chain` refuses
+        // others): a level that is not is left out, as one that cannot be made.
+        if t == 0 || t >= finer.0 {
+            continue;
+        }
         let error = match reference {
             Reference::Full(f) => error_between(&mesh, f)?,
             Reference::Source { parts_error } => error_between(&mesh, source)? + parts_error,
@@ -191,7 +196,7 @@ fn proxy(source: &Mesh, target: usize, below: usize) -> Option<Mesh> {
         let t = mesh.triangle_count();
         if t <= target {
             lo = grid + 1;
-            if t > 0 && under.as_ref().is_none_or(|u| t > u.triangle_count()) {
+            if t > 0 && t < below && under.as_ref().is_none_or(|u| t > u.triangle_count()) {
                 under = Some(mesh);
             }
         } else {
@@ -318,6 +323,28 @@ mod tests {
         // The coarsest level has merged or dropped buildings: fewer triangles than
         // the 36 boxes' 12 each.
         assert!(levels.last().unwrap().mesh.triangle_count() < 36 * 12);
+    }
+
+    #[test]
+    fn every_chain_a_node_gets_can_be_stored() {
+        // Small groups, as the leaves of a tree of small fan-out make: the clustering's
+        // best count under one share may be no coarser than the level before, which
+        // the stored chain refuses.
+        for side in 1..=4 {
+            for raise in [0.0, 3.0, 7.5] {
+                let mut full = block(side);
+                full.positions
+                    .iter_mut()
+                    .filter(|p| p[1] > 0.0)
+                    .for_each(|p| p[1] += raise);
+                let levels = internal_levels(&full, Reference::Full(&full)).unwrap();
+                if levels.is_empty() {
+                    continue;
+                }
+                crate::lod::stored::encode_chain(1, full.triangle_count(), &levels)
+                    .unwrap_or_else(|e| panic!("{side} × {side} raised {raise}: {e}"));
+            }
+        }
     }
 
     #[test]
