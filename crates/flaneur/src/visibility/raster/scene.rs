@@ -10,7 +10,7 @@ use super::triangle;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use crate::visibility::cube::{CubicProjection, SKY};
-use crate::visibility::dov::PointDov;
+use crate::visibility::dov::{DovSums, PointDov};
 use crate::visibility::raycast::{check_mesh, check_point, zero_area};
 
 type Triangle = [[f32; 3]; 3];
@@ -128,41 +128,20 @@ impl RasterScene {
         point: [f32; 3],
     ) -> PointDov {
         let weights = projection.weights();
-        let mut sums = vec![0.0f64; self.ids.len()];
-        let mut seen = Vec::new();
-        let mut sky = 0.0f64;
+        let mut sums = DovSums::new(self.ids.len());
         self.draw(projection, point, |_, buf| {
             // Runs of one object, mostly long, summed before they are credited.
             let (mut run, mut sum) = (SKY, 0.0f64);
-            let mut credit = |id: u32, w: f64| {
-                if id == SKY {
-                    sky += w;
-                } else {
-                    let s = &mut sums[id as usize];
-                    // Every weight is positive, so a zero sum is an object not yet seen.
-                    if *s == 0.0 {
-                        seen.push(id);
-                    }
-                    *s += w;
-                }
-            };
             for (&id, &w) in buf.ids.iter().zip(weights) {
                 if id != run {
-                    credit(run, sum);
+                    sums.credit(run, sum);
                     (run, sum) = (id, 0.0);
                 }
                 sum += w as f64;
             }
-            credit(run, sum);
+            sums.credit(run, sum);
         });
-        seen.sort_unstable();
-        PointDov {
-            objects: seen
-                .into_iter()
-                .map(|o| (o, sums[o as usize] as f32))
-                .collect(),
-            sky: sky as f32,
-        }
+        sums.finish()
     }
 
     /// Draws the six faces around `eye` in turn, handing each finished one to `done`.
