@@ -130,48 +130,31 @@ fn walk_one(
         frames: 0,
         triangles: 0,
     };
-    let mut row = match walk {
+    // Each walk's own frames, frames over 50 ms and visual misses.
+    let (frames, over_50ms, misses) = match walk {
         ModeWalk::Review(cfg) => {
             let s = review::walk_into(db, path, cfg, tick, &mut sink)?.summary;
-            ModeRow {
-                name,
-                frames: s.frames,
-                over_50ms: s.frames_over_50ms,
-                pages: 0,
-                misses: s.visual_misses,
-                triangles: 0.0,
-                psnr: None,
-            }
+            (s.frames, s.frames_over_50ms, s.visual_misses)
         }
         ModeWalk::Pvs(prefetch) => {
             let r = pvs_walk::walk_pvs_into(db, path, prefetch, tick, &mut sink)?;
-            ModeRow {
-                name,
-                frames: r.walked,
-                over_50ms: r.frames_over_50ms,
-                pages: 0,
-                misses: r.visual_misses as u64,
-                triangles: 0.0,
-                psnr: None,
-            }
+            (r.walked, r.frames_over_50ms, r.visual_misses as u64)
         }
         ModeWalk::Visual(cfg) => {
             let s = visual::walk_into(db, path, cfg, tick, &mut sink)?.summary;
-            ModeRow {
-                name,
-                frames: s.frames,
-                over_50ms: s.frames_over_50ms,
-                pages: 0,
-                misses: s.visual_misses as u64,
-                triangles: 0.0,
-                psnr: None,
-            }
+            (s.frames, s.frames_over_50ms, s.visual_misses as u64)
         }
-        ModeWalk::Scene(_) => unreachable!("the demo walks no scene tree"),
+        ModeWalk::Scene(_) => anyhow::bail!("the demo walks no memory scene tree ({name})"),
     };
-    row.pages = db.io().page_reads;
-    row.triangles = sink.triangles as f64 / sink.frames.max(1) as f64;
-    Ok(row)
+    Ok(ModeRow {
+        name,
+        frames,
+        over_50ms,
+        pages: db.io().page_reads,
+        misses,
+        triangles: sink.triangles as f64 / sink.frames.max(1) as f64,
+        psnr: None,
+    })
 }
 
 /// The first frames of `path` drawn by `walk` and at full detail: their mean PSNR (an

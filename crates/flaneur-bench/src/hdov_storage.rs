@@ -133,7 +133,6 @@ impl Report for HdovStorageReport {
              vertical_bytes,indexed_bytes,indexed_of_horizontal\n",
         );
         for f in &self.fanouts {
-            let bytes = |k: Scheme| f.schemes.iter().find(|x| x.0 == k).map_or(0, |x| x.1);
             s.push_str(&format!(
                 "{},{},{},{},{},{:.5},{},{},{},{:.5}\n",
                 f.fanout,
@@ -142,9 +141,9 @@ impl Report for HdovStorageReport {
                 f.cells,
                 f.visible_nodes,
                 f.visible_share(),
-                bytes(Scheme::Horizontal),
-                bytes(Scheme::Vertical),
-                bytes(Scheme::Indexed),
+                f.bytes(Scheme::Horizontal),
+                f.bytes(Scheme::Vertical),
+                f.bytes(Scheme::Indexed),
                 f.share_of_horizontal(Scheme::Indexed)
             ));
         }
@@ -198,7 +197,6 @@ impl Report for HdovStorageReport {
                  |---|---|---|---|---|---|---|---|---|\n",
             );
             for f in &self.fanouts {
-                let bytes = |k: Scheme| f.schemes.iter().find(|x| x.0 == k).map_or(0, |x| x.1);
                 s.push_str(&format!(
                     "| {} | {} | {} | {:.1} | {:.1} % | {:.2} | {:.2} | {:.2} | 1/{:.1} |\n",
                     f.fanout,
@@ -206,9 +204,9 @@ impl Report for HdovStorageReport {
                     f.height,
                     f.visible_nodes as f64 / f.cells.max(1) as f64,
                     100.0 * f.visible_share(),
-                    mib(bytes(Scheme::Horizontal) as f64),
-                    mib(bytes(Scheme::Vertical) as f64),
-                    mib(bytes(Scheme::Indexed) as f64),
+                    mib(f.bytes(Scheme::Horizontal) as f64),
+                    mib(f.bytes(Scheme::Vertical) as f64),
+                    mib(f.bytes(Scheme::Indexed) as f64),
                     1.0 / f.share_of_horizontal(Scheme::Indexed).max(f64::MIN_POSITIVE)
                 ));
             }

@@ -37,15 +37,17 @@ impl FanoutSizes {
         self.visible_nodes as f64 / (self.nodes as f64 * self.cells as f64).max(1.0)
     }
 
+    /// `scheme`'s V-page bytes.
+    pub fn bytes(&self, scheme: Scheme) -> u64 {
+        self.schemes
+            .iter()
+            .find(|(k, _)| *k == scheme)
+            .map_or(0, |(_, b)| *b)
+    }
+
     /// `scheme`'s bytes over the horizontal scheme's.
     pub fn share_of_horizontal(&self, scheme: Scheme) -> f64 {
-        let bytes = |s| {
-            self.schemes
-                .iter()
-                .find(|(k, _)| *k == s)
-                .map_or(0, |(_, b)| *b)
-        };
-        bytes(scheme) as f64 / bytes(Scheme::Horizontal).max(1) as f64
+        self.bytes(scheme) as f64 / self.bytes(Scheme::Horizontal).max(1) as f64
     }
 }
 
