@@ -143,3 +143,52 @@ fn the_command_writes_its_report_and_refuses_what_it_cannot_measure() {
         "{err}"
     );
 }
+
+/// `bench dov-accuracy` on the same city: the raster against the rays on three cells,
+/// within the criterion, and what it cannot measure refused by name.
+#[test]
+fn the_dov_accuracy_command_compares_the_raster_with_the_rays() {
+    let city = city();
+    let out = city.dir.path().join("dov");
+    let db = city.db.to_str().unwrap();
+    let run = common::flaneur(&[
+        "bench",
+        "dov-accuracy",
+        db,
+        "--cells",
+        "3",
+        "--resolution",
+        "64",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = common::succeeded(&run);
+    assert!(text.contains("a corner (all cores)"), "{text}");
+    let csv = common::Csv::read(&out.join("dov-accuracy.csv"));
+    assert_eq!(csv.rows.len(), 3);
+    for row in &csv.rows {
+        assert!(csv.num(row, "raster_objects") > 0.0);
+        assert!(csv.num(row, "difference") <= 0.01, "{:?}", row);
+    }
+    for (args, says) in [
+        (vec!["--cells", "0"], "--cells"),
+        (vec!["--resolution", "0"], "--resolution"),
+        (vec!["--limit", "-1"], "--limit"),
+    ] {
+        let mut all = vec!["bench", "dov-accuracy", db];
+        all.extend(args);
+        let run = common::flaneur(&all);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            !run.status.success() && err.contains(says),
+            "{all:?}: {err}"
+        );
+    }
+    let plain = common::city(10, 1, &BuildOptions::default());
+    let run = common::flaneur(&["bench", "dov-accuracy", plain.db.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && err.contains("--visibility"),
+        "{err}"
+    );
+}

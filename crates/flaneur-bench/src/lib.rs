@@ -24,6 +24,7 @@ pub mod cell_size;
 pub mod city_series;
 pub mod crowd;
 pub mod csearch;
+pub mod dov_accuracy;
 pub mod db_size;
 pub mod fidelity;
 pub mod frame_time;

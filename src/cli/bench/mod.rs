@@ -4,6 +4,7 @@
 
 mod crowd;
 mod csearch;
+mod dov_accuracy;
 mod fidelity;
 mod hdov_cache;
 mod hdov_scaling;
@@ -102,6 +103,11 @@ enum Experiment {
     /// every seen object missing from a PVS, which fails the command (ours). Needs a
     /// database built with --visibility.
     PvsTightness(pvs_tightness::PvsTightnessArgs),
+    /// The DoVs a build stores (the CPU rasteriser's item buffers) against the ray-cast
+    /// reference on the database's own meshes, cell by cell: the sum of absolute
+    /// differences a cell, which fails the command over --limit, and each one's time a
+    /// corner (ours). Needs a database built with --visibility.
+    DovAccuracy(dov_accuracy::DovAccuracyArgs),
     /// The same city in files of different object orders (`build --order`), served over
     /// HTTP and asked the same range queries from cold clients: pages, requests, round
     /// trips and bytes per query for the query, the coarse levels and the full meshes
@@ -170,6 +176,7 @@ impl BenchArgs {
             Experiment::PvsHttp(a) => a.run(),
             Experiment::VisualHttp(a) => a.run(),
             Experiment::PvsTightness(a) => a.run(),
+            Experiment::DovAccuracy(a) => a.run(),
             Experiment::Layout(a) => a.run(),
             Experiment::Crowd(a) => a.run(),
             Experiment::Csearch(a) => a.run(),
