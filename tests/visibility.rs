@@ -221,6 +221,37 @@ fn build_and_info_on_the_command_line() {
     assert!(on_db.join("pvs-prefetch-route2-pbnp.png").exists());
     let summary = std::fs::read_to_string(on_db.join("pvs-prefetch.md")).unwrap();
     assert!(summary.contains("| pages read (PVS records)"), "{summary}");
+    // The ray-cast reference builds the same cells on request; a method it does not
+    // know is refused by the option's name.
+    let rays = dir.path().join("rays.flaneur");
+    let args = [
+        "--no-lod",
+        "--visibility",
+        "--cell-size",
+        "15",
+        "--dov-resolution",
+        "16",
+    ];
+    let out = build_cli(
+        &scene,
+        &rays,
+        &[&args[..], &["--dov-method", "ray-cast"]].concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (a, b) = (Database::open(&db).unwrap(), Database::open(&rays).unwrap());
+    let cells = |d: &Database| d.visibility().unwrap().unwrap().cells.len();
+    assert_eq!(cells(&a), cells(&b));
+    let out = build_cli(
+        &scene,
+        &rays,
+        &[&args[..], &["--dov-method", "gpu"]].concat(),
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--dov-method"));
     let out = build_cli(&scene, &db, &["--visibility", "--cell-size", "0"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("viewcell size"));

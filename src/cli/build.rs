@@ -9,7 +9,7 @@ use anyhow::{bail, Result};
 use super::bars::Bars;
 use flaneur::lod::{LodOptions, LodReport};
 use flaneur::progress::{Progress, Silent};
-use flaneur::visibility::{SampleOptions, VisibilityOptions};
+use flaneur::visibility::{DovMethod, SampleOptions, VisibilityOptions};
 use flaneur::{BuildOptions, WriteOrder};
 
 /// What `flaneur build` and `flaneur merge` share: the inputs, the file written, and
@@ -107,6 +107,10 @@ pub struct BuildArgs {
     /// (with --visibility).
     #[arg(long, value_name = "METRES", default_value_t = SampleOptions::default().radius, value_parser = finite_f32, allow_negative_numbers = true)]
     occluder_radius: f32,
+    /// How the DoV's item buffers are drawn (with --visibility): by the CPU rasteriser,
+    /// or by one ray per pixel, the slower reference it is tested against.
+    #[arg(long, value_enum, value_name = "METHOD", default_value_t = DovMethodArg::Raster)]
+    dov_method: DovMethodArg,
     /// Compute only shard K of N of the visibility (K from 0), into the file --out
     /// names, for `flaneur merge` to join: each shard a process of its own, on any
     /// machine (with --visibility; default: none, the whole visibility).
@@ -165,9 +169,22 @@ impl BuildArgs {
                 spacing: a.sample_spacing,
                 radius: a.occluder_radius,
             },
+            dov: match a.dov_method {
+                DovMethodArg::Raster => DovMethod::Raster,
+                DovMethodArg::RayCast => DovMethod::RayCast,
+            },
             ..VisibilityOptions::default()
         }))
     }
+}
+
+/// `--dov-method`'s values: the engine's [`DovMethod`], named for the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum DovMethodArg {
+    /// Item buffers drawn by the CPU rasteriser, front to back with hierarchical depth.
+    Raster,
+    /// One ray per pixel into a BVH of every triangle: the reference, several times slower.
+    RayCast,
 }
 
 impl DatabaseArgs {
