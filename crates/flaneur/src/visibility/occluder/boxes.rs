@@ -37,6 +37,8 @@
 //!
 //! [`Solid`]: super::solid::Solid
 
+use std::cell::Cell;
+
 use glam::{Vec2, Vec3};
 
 use super::solid::Solid;
@@ -76,23 +78,8 @@ pub(super) fn occluder_boxes(triangles: Vec<[Vec3; 3]>) -> Vec<Aabb> {
         return boxes;
     }
     let solid = Solid::new(triangles, lo, hi);
-    let outside: Vec<[Vec3; 3]> = solid
-        .triangles
-        .iter()
-        .filter(|t| solid.is_outside(t))
-        .copied()
-        .collect();
-    // Each outside face's bounds, once: most faces are apart from a candidate box, and
-    // the bounds tell that before the face's separating-axis test.
-    let bounds: Vec<(Vec3, Vec3)> = outside
-        .iter()
-        .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
-        .collect();
-    let free = |b: &Aabb| {
-        !outside.iter().zip(&bounds).any(|(t, (tlo, thi))| {
-            tlo.cmple(b.max).all() && b.min.cmple(*thi).all() && triangle_meets_box(t, b)
-        })
-    };
+    let outside = Outside::new(&solid);
+    let free = |b: &Aabb| outside.free(b);
     let inset = |b: &Aabb| Aabb {
         min: b.min + Vec3::splat(SAFETY),
         max: b.max - Vec3::splat(SAFETY),
@@ -154,6 +141,58 @@ pub(super) fn occluder_boxes(triangles: Vec<[Vec3; 3]>) -> Vec<Aabb> {
     let grown = grown_from_samples(&solid, lo, hi, &boxes, &free);
     boxes.extend(grown.iter().map(inset));
     boxes
+}
+
+/// The faces of a solid that are on the outside somewhere (see
+/// [`Solid::is_outside`]): a box is free when it meets none of them.
+struct Outside {
+    faces: Vec<[Vec3; 3]>,
+    /// Each face's bounds: most faces are apart from a candidate box, and the bounds
+    /// tell that before the face's separating-axis test.
+    bounds: Vec<(Vec3, Vec3)>,
+    /// The face that last met a box: the searches ask about boxes a little apart
+    /// each time, and a face that met one likely meets the next, so it is tried
+    /// first (whether any face meets a box does not depend on the order).
+    last: Cell<usize>,
+}
+
+impl Outside {
+    fn new(solid: &Solid) -> Outside {
+        let faces: Vec<[Vec3; 3]> = solid
+            .triangles
+            .iter()
+            .filter(|t| solid.is_outside(t))
+            .copied()
+            .collect();
+        let bounds = faces
+            .iter()
+            .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
+            .collect();
+        Outside {
+            faces,
+            bounds,
+            last: Cell::new(0),
+        }
+    }
+
+    /// Whether the closed box `b` meets none of the faces.
+    fn free(&self, b: &Aabb) -> bool {
+        let meets = |i: usize| {
+            let (lo, hi) = self.bounds[i];
+            lo.cmple(b.max).all() && b.min.cmple(hi).all() && triangle_meets_box(&self.faces[i], b)
+        };
+        let last = self.last.get();
+        if last < self.faces.len() && meets(last) {
+            return false;
+        }
+        match (0..self.faces.len()).find(|&i| meets(i)) {
+            Some(i) => {
+                self.last.set(i);
+                false
+            }
+            None => true,
+        }
+    }
 }
 
 /// The bounds of `triangles`; `None` when there are none or one is not finite.

@@ -1,16 +1,40 @@
 //! Which points a building's faces enclose, and which of its faces are on the outside:
 //! what the occluder search needs to know of a mesh that is not one oriented solid.
+//!
+//! A point is enclosed when each of six rays from it (the axes, tilted a little)
+//! meets a face. The faces a ray may meet are sorted into columns across its axis,
+//! and within a column by how far along the ray's way they reach, so that a ray
+//! tests only the faces in its column that reach past its origin; each face's part
+//! of the ray–triangle test that does not depend on the ray's origin is computed
+//! once per direction. Both give the same answers as testing every face of the
+//! column with [`ray_triangle_distance`]:
+//! - A face the ray's test rejects whatever the origin (one the ray runs along, its
+//!   determinant under the test's threshold) is left out.
+//! - A face that ends behind the origin, along the ray's axis, by more than its
+//!   margin is skipped: it cannot be crossed ahead. Only rounding could make the
+//!   ray–triangle test see it crossed, and its error in where the ray meets the
+//!   face's plane and where in the face that is stays under some 2·10⁻⁶ of the
+//!   distance from the origin to the face's corner over the face's steepness to the
+//!   ray (its determinant over its two edges' lengths' product: the sine of the
+//!   angle the ray meets its plane at, times that between the edges). The margin is
+//!   1 cm plus ten times that bound for the farthest origin that takes the cut (the
+//!   bounds grown by [`NEAR`]); an origin farther out tests its whole column. A face
+//!   the ray meets at a grazing angle thus keeps a wide margin, and a degenerate
+//!   one is never skipped.
+//! - The six rays' answers are all needed, in any order, and the first open one
+//!   ends the search: the direction that was open last time is tried first.
+//!
+//! [`ray_triangle_distance`]: crate::visibility::intersect::ray_triangle_distance
 
 use glam::Vec3;
-
-use crate::visibility::intersect::ray_triangle_distance;
 
 /// How far outside a face its samples are taken, in metres.
 const PROBE: f32 = 1e-3;
 /// Columns of the grids that sort faces for the enclosure rays, per side.
 const COLUMNS: usize = 16;
 
-/// The six directions an enclosed point's rays take: the axes, tilted a little.
+/// The six directions an enclosed point's rays take: the axes, tilted a little. Each
+/// is a unit step along its own axis (`DIRECTIONS[k][k / 2]` is ±1).
 const DIRECTIONS: [Vec3; 6] = [
     Vec3::new(1.0, 0.0021, 0.0013),
     Vec3::new(-1.0, -0.0017, 0.0023),
@@ -20,81 +44,280 @@ const DIRECTIONS: [Vec3; 6] = [
     Vec3::new(-0.0011, 0.0023, -1.0),
 ];
 
-/// An object's triangles, sorted into columns along each axis for the rays that tell
-/// enclosed points from open ones.
+/// A face's margin behind an origin, in metres, before its share for rounding (see
+/// the module's notes).
+const BEHIND: f32 = 0.01;
+/// The rounding error of the ray–triangle test, over the distance from the origin
+/// to the face and the face's steepness, with a tenfold safety.
+const ROUNDING: f32 = 2e-5;
+/// How far outside the object's bounds an origin may be and still skip faces
+/// behind it, in metres.
+const NEAR: f32 = 1.0;
+
+/// An object's triangles, sorted into columns along each ray direction for the rays
+/// that tell enclosed points from open ones.
 pub(super) struct Solid {
     pub(super) triangles: Vec<[Vec3; 3]>,
-    /// Per axis: the columns of faces that rays along that axis may meet.
-    grids: [Columns; 3],
+    /// Per direction of [`DIRECTIONS`]: the faces its rays may meet.
+    rays: [Rays; 6],
+    /// The bounds grown by [`NEAR`]: an origin within them may skip faces behind it.
+    near: (Vec3, Vec3),
+    /// The direction found open last: the first tried next.
+    open: std::cell::Cell<usize>,
 }
 
-/// Faces sorted into a square grid of columns across one axis.
-struct Columns {
+/// A face as one direction's ray test needs it: what [`ray_triangle_distance`]
+/// computes from the face and the direction alone, computed once.
+///
+/// [`ray_triangle_distance`]: crate::visibility::intersect::ray_triangle_distance
+#[derive(Clone, Copy, Default)]
+struct Prepared {
+    t0: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    p: Vec3,
+    inv: f32,
+}
+
+impl Prepared {
+    /// `t` prepared for rays along `dir`; `None` when no such ray crosses it
+    /// (Möller–Trumbore's determinant is under its threshold).
+    fn new(dir: Vec3, t: &[Vec3; 3]) -> Option<(Prepared, f32)> {
+        let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+        let p = dir.cross(e2);
+        let det = e1.dot(p);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let steepness = det.abs() / (e1.length() * e2.length());
+        let inv = 1.0 / det;
+        Some((
+            Prepared {
+                t0: t[0],
+                e1,
+                e2,
+                p,
+                inv,
+            },
+            steepness,
+        ))
+    }
+
+    /// Whether the ray from `origin` along `dir` (the direction it was prepared for)
+    /// crosses the face ahead: `ray_triangle_distance(origin, dir, t).is_some()`,
+    /// the same operations in the same order.
+    #[inline]
+    fn crossed(&self, origin: Vec3, dir: Vec3) -> bool {
+        let s = origin - self.t0;
+        let u = s.dot(self.p) * self.inv;
+        if !(0.0..=1.0).contains(&u) {
+            return false;
+        }
+        let q = s.cross(self.e1);
+        let v = dir.dot(q) * self.inv;
+        if v < 0.0 || u + v > 1.0 {
+            return false;
+        }
+        let d = self.e2.dot(q) * self.inv;
+        d > 0.0
+    }
+}
+
+/// The grid of columns across one axis.
+#[derive(Clone, Copy)]
+struct Grid {
     /// The two axes across the columns.
     across: [usize; 2],
     lo: [f32; 2],
     cell: [f32; 2],
-    columns: Vec<Vec<u32>>,
 }
 
-impl Columns {
-    fn new(axis: usize, triangles: &[[Vec3; 3]], lo: Vec3, hi: Vec3) -> Columns {
+impl Grid {
+    fn new(axis: usize, lo: Vec3, hi: Vec3) -> Grid {
         let across = [(axis + 1) % 3, (axis + 2) % 3];
-        let cell = across.map(|a| ((hi[a] - lo[a]) / COLUMNS as f32).max(1e-3));
-        let lo2 = across.map(|a| lo[a]);
-        // A tilted ray drifts sideways as it goes: a face joins every column the drift
-        // can bring a ray into.
-        let drift = (hi - lo).max_element() * 0.0025 + PROBE;
-        let mut columns = vec![Vec::new(); COLUMNS * COLUMNS];
-        for (i, t) in triangles.iter().enumerate() {
-            let tlo = t[0].min(t[1]).min(t[2]) - Vec3::splat(drift);
-            let thi = t[0].max(t[1]).max(t[2]) + Vec3::splat(drift);
-            let range = |k: usize| {
-                let f =
-                    |v: f32| (((v - lo2[k]) / cell[k]).floor().max(0.0) as usize).min(COLUMNS - 1);
-                f(tlo[across[k]])..=f(thi[across[k]])
-            };
-            for r in range(1) {
-                for c in range(0) {
-                    columns[r * COLUMNS + c].push(i as u32);
+        Grid {
+            across,
+            lo: across.map(|a| lo[a]),
+            cell: across.map(|a| ((hi[a] - lo[a]) / COLUMNS as f32).max(1e-3)),
+        }
+    }
+
+    /// The column of `p`; `None` when `p` is beside the bounds, where a ray along the
+    /// axis meets nothing.
+    #[inline]
+    fn column(&self, p: Vec3) -> Option<usize> {
+        // Truncation is the floor here: negative steps are refused first (a NaN goes
+        // to column 0, as its floor would).
+        let k = |i: usize| (p[self.across[i]] - self.lo[i]) / self.cell[i];
+        let (c, r) = (k(0), k(1));
+        if c < 0.0 || r < 0.0 || c >= COLUMNS as f32 || r >= COLUMNS as f32 {
+            return None;
+        }
+        Some(r as usize * COLUMNS + c as usize)
+    }
+
+    /// The columns, as rows and columns, that the face `t` joins: every one that a
+    /// tilted ray drifting sideways by up to `drift` on its way can bring into it.
+    fn columns_of(&self, t: &[Vec3; 3], drift: f32) -> Span {
+        let tlo = t[0].min(t[1]).min(t[2]) - Vec3::splat(drift);
+        let thi = t[0].max(t[1]).max(t[2]) + Vec3::splat(drift);
+        let range = |k: usize| {
+            // Truncation saturates a negative step to 0, as floor then max(0) did.
+            let f = |v: f32| (((v - self.lo[k]) / self.cell[k]) as usize).min(COLUMNS - 1);
+            f(tlo[self.across[k]])..=f(thi[self.across[k]])
+        };
+        [range(1), range(0)]
+    }
+}
+
+/// The faces rays along one direction may meet, column by column, each column's
+/// sorted by how far along the direction they reach.
+struct Rays {
+    dir: Vec3,
+    axis: usize,
+    forward: bool,
+    grid: Grid,
+    /// Per triangle (by its index): prepared for this direction.
+    prepared: Vec<Prepared>,
+    /// Column `c`'s faces are `faces[starts[c]..starts[c + 1]]`, with `reach` the
+    /// same range: how far along the direction each reaches with its margin (its
+    /// furthest corner's coordinate, negated for a backward ray, plus the margin),
+    /// ascending.
+    starts: Vec<u32>,
+    reach: Vec<f32>,
+    faces: Vec<u32>,
+}
+
+impl Rays {
+    /// The faces that rays along direction `k` may cross, each in the columns of
+    /// `spans` (per triangle, its rows and columns) that it joins; `far` is the most
+    /// an origin that skips faces can be from a face's corner.
+    fn new(k: usize, grid: Grid, triangles: &[[Vec3; 3]], spans: &[Span], far: f32) -> Rays {
+        let dir = DIRECTIONS[k];
+        let (axis, forward) = (k / 2, k % 2 == 0);
+        let mut keyed: Vec<(f32, u32)> = Vec::with_capacity(triangles.len());
+        let prepared = triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let Some((f, steepness)) = Prepared::new(dir, t) else {
+                    return Prepared::default();
+                };
+                let end = if forward {
+                    t[0][axis].max(t[1][axis]).max(t[2][axis])
+                } else {
+                    -t[0][axis].min(t[1][axis]).min(t[2][axis])
+                };
+                keyed.push((end + BEHIND + ROUNDING * far / steepness, i as u32));
+                f
+            })
+            .collect();
+        // Sorted once, then dealt out to the columns in that order: each column's
+        // faces come sorted.
+        keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut starts = vec![0u32; COLUMNS * COLUMNS + 1];
+        for &(_, i) in &keyed {
+            let [rows, cols] = &spans[i as usize];
+            for r in rows.clone() {
+                for c in cols.clone() {
+                    starts[r * COLUMNS + c + 1] += 1;
                 }
             }
         }
-        Columns {
-            across,
-            lo: lo2,
-            cell,
-            columns,
+        for c in 0..COLUMNS * COLUMNS {
+            starts[c + 1] += starts[c];
+        }
+        let mut next = starts.clone();
+        let total = starts[COLUMNS * COLUMNS] as usize;
+        let (mut reach, mut faces) = (vec![0.0f32; total], vec![0u32; total]);
+        for &(key, i) in &keyed {
+            let [rows, cols] = &spans[i as usize];
+            for r in rows.clone() {
+                for c in cols.clone() {
+                    let at = &mut next[r * COLUMNS + c];
+                    (reach[*at as usize], faces[*at as usize]) = (key, i);
+                    *at += 1;
+                }
+            }
+        }
+        Rays {
+            dir,
+            axis,
+            forward,
+            grid,
+            prepared,
+            starts,
+            reach,
+            faces,
         }
     }
 
-    /// The faces a ray along the axis from `p` may meet; none when `p` is beside the
-    /// bounds, where such a ray meets nothing.
-    fn column(&self, p: Vec3) -> &[u32] {
-        let k = |i: usize| ((p[self.across[i]] - self.lo[i]) / self.cell[i]).floor();
-        let (c, r) = (k(0), k(1));
-        if c < 0.0 || r < 0.0 || c >= COLUMNS as f32 || r >= COLUMNS as f32 {
-            return &[];
+    /// Whether the ray from `p` meets a face; `skip` when faces that end behind `p`
+    /// by more than their margins may be skipped.
+    #[inline]
+    fn meets(&self, p: Vec3, skip: bool) -> bool {
+        let Some(c) = self.grid.column(p) else {
+            return false;
+        };
+        let (mut from, to) = (self.starts[c] as usize, self.starts[c + 1] as usize);
+        if skip {
+            let at = if self.forward {
+                p[self.axis]
+            } else {
+                -p[self.axis]
+            };
+            from += self.reach[from..to].partition_point(|&r| r < at);
         }
-        &self.columns[r as usize * COLUMNS + c as usize]
+        self.faces[from..to]
+            .iter()
+            .any(|&i| self.prepared[i as usize].crossed(p, self.dir))
     }
 }
+
+/// The rows and columns of a grid that a face joins.
+type Span = [std::ops::RangeInclusive<usize>; 2];
 
 impl Solid {
     /// The solid of `triangles`, all of them within `lo`..`hi`.
     pub(super) fn new(triangles: Vec<[Vec3; 3]>, lo: Vec3, hi: Vec3) -> Solid {
-        let grids = [0, 1, 2].map(|axis| Columns::new(axis, &triangles, lo, hi));
-        Solid { triangles, grids }
+        // A tilted ray drifts sideways as it goes: a face joins every column the drift
+        // can bring a ray into.
+        let drift = (hi - lo).max_element() * 0.0025 + PROBE;
+        let near = (lo - Vec3::splat(NEAR), hi + Vec3::splat(NEAR));
+        // The farthest an origin within `near` is from a corner of a face.
+        let far = (near.1 - near.0).element_sum();
+        let rays = std::array::from_fn(|k| {
+            let grid = Grid::new(k / 2, lo, hi);
+            let spans: Vec<Span> = triangles
+                .iter()
+                .map(|t| grid.columns_of(t, drift))
+                .collect();
+            Rays::new(k, grid, &triangles, &spans, far)
+        });
+        Solid {
+            triangles,
+            rays,
+            near,
+            open: std::cell::Cell::new(0),
+        }
     }
 
     /// Whether every one of the six rays from `p` meets a face.
     pub(super) fn encloses(&self, p: Vec3) -> bool {
-        DIRECTIONS.iter().enumerate().all(|(k, &dir)| {
-            self.grids[k / 2]
-                .column(p)
-                .iter()
-                .any(|&i| ray_triangle_distance(p, dir, &self.triangles[i as usize]).is_some())
-        })
+        self.encloses_first(p, self.open.get())
+    }
+
+    /// [`Solid::encloses`], trying direction `first` first: the answer is the same
+    /// whatever the order, but the first open direction ends the search.
+    fn encloses_first(&self, p: Vec3, first: usize) -> bool {
+        let skip = p.cmpge(self.near.0).all() && p.cmple(self.near.1).all();
+        for k in (first..6).chain(0..first) {
+            if !self.rays[k].meets(p, skip) {
+                self.open.set(k);
+                return false;
+            }
+        }
+        true
     }
 
     /// Whether the face `t` is on the outside somewhere: a point just off either side
@@ -105,6 +328,18 @@ impl Solid {
             return false;
         }
         let off = n.normalize() * PROBE;
+        // The direction most along the normal: the likeliest to be open from the
+        // point off the face on its side (its opposite, `out ^ 1`, from the other).
+        let (axis, _) =
+            off.abs()
+                .to_array()
+                .into_iter()
+                .enumerate()
+                .fold(
+                    (0, -1.0),
+                    |best, (a, v)| if v > best.1 { (a, v) } else { best },
+                );
+        let out = 2 * axis + usize::from(off[axis] < 0.0);
         let centre = (t[0] + t[1] + t[2]) / 3.0;
         [
             centre,
@@ -113,6 +348,124 @@ impl Solid {
             0.5 * (centre + t[2]),
         ]
         .into_iter()
-        .any(|p| !self.encloses(p + off) || !self.encloses(p - off))
+        .any(|p| !self.encloses_first(p + off, out) || !self.encloses_first(p - off, out ^ 1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Mesh;
+    use crate::visibility::intersect::{ray_triangle_distance, triangles};
+
+    /// Per direction, whether a ray from `p` meets a face, by testing every face of
+    /// its column as the search did before faces were prepared and sorted: the
+    /// answers the solid must keep.
+    fn every_face_of_the_column(triangles: &[[Vec3; 3]], lo: Vec3, hi: Vec3, p: Vec3) -> [bool; 6] {
+        let drift = (hi - lo).max_element() * 0.0025 + PROBE;
+        std::array::from_fn(|k| {
+            let (axis, dir) = (k / 2, DIRECTIONS[k]);
+            let across = [(axis + 1) % 3, (axis + 2) % 3];
+            let cell = across.map(|a| ((hi[a] - lo[a]) / COLUMNS as f32).max(1e-3));
+            let step = |v: f32, a: usize| ((v - lo[across[a]]) / cell[a]).floor();
+            let (c, r) = (step(p[across[0]], 0), step(p[across[1]], 1));
+            if c < 0.0 || r < 0.0 || c >= COLUMNS as f32 || r >= COLUMNS as f32 {
+                return false;
+            }
+            let joins = |t: &[Vec3; 3]| {
+                let tlo = t[0].min(t[1]).min(t[2]) - Vec3::splat(drift);
+                let thi = t[0].max(t[1]).max(t[2]) + Vec3::splat(drift);
+                let f = |v: f32, a: usize| step(v, a).max(0.0).min((COLUMNS - 1) as f32);
+                (f(tlo[across[0]], 0)..=f(thi[across[0]], 0)).contains(&c)
+                    && (f(tlo[across[1]], 1)..=f(thi[across[1]], 1)).contains(&r)
+            };
+            triangles
+                .iter()
+                .any(|t| joins(t) && ray_triangle_distance(p, dir, t).is_some())
+        })
+    }
+
+    /// Points to ask about: just off each face (as `is_outside` asks), and a grid
+    /// over the bounds and a little beyond.
+    fn probes(triangles: &[[Vec3; 3]], lo: Vec3, hi: Vec3) -> Vec<Vec3> {
+        let mut points = Vec::new();
+        for t in triangles {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            if n.length_squared() == 0.0 {
+                continue;
+            }
+            let off = n.normalize() * PROBE;
+            let centre = (t[0] + t[1] + t[2]) / 3.0;
+            for p in [centre, 0.5 * (centre + t[0]), 0.5 * (centre + t[2])] {
+                points.extend([p + off, p - off]);
+            }
+        }
+        for i in 0..9 * 9 * 9 {
+            let f = Vec3::new((i % 9) as f32, (i / 9 % 9) as f32, (i / 81) as f32) / 8.0;
+            points.push(lo - 0.05 * (hi - lo) + 1.1 * f * (hi - lo));
+        }
+        points
+    }
+
+    fn assert_same_answers(mesh: &Mesh, name: &str) {
+        let triangles = triangles(mesh);
+        let (lo, hi) = mesh.bounds();
+        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+        let solid = Solid::new(triangles.clone(), lo, hi);
+        for p in probes(&triangles, lo, hi) {
+            let skip = p.cmpge(solid.near.0).all() && p.cmple(solid.near.1).all();
+            let got: [bool; 6] = std::array::from_fn(|k| solid.rays[k].meets(p, skip));
+            let want = every_face_of_the_column(&triangles, lo, hi, p);
+            assert_eq!(got, want, "{name}: the rays from {p}");
+            assert_eq!(solid.encloses(p), want.iter().all(|&m| m), "{name}: {p}");
+        }
+    }
+
+    #[test]
+    fn sorted_columns_answer_as_every_face_of_the_column_does() {
+        for o in crate::visibility::tests::city(24) {
+            assert_same_answers(&o.mesh, &format!("object {}", o.id));
+        }
+        // A footprint at an angle, far from the origin: the faces along no axis.
+        let ring: Vec<[f64; 2]> = [[0.0, 0.0], [30.0, 4.0], [26.0, 20.0], [8.0, 26.0]]
+            .iter()
+            .map(|p| [p[0] + 2400.0, p[1] - 1800.0])
+            .collect();
+        let mesh = crate::scene::extruded(ring, vec![], 21.0);
+        assert_same_answers(&mesh, "turned footprint");
+    }
+
+    #[test]
+    fn a_prepared_face_is_crossed_as_the_ray_test_says() {
+        // Rays along each direction from a lattice of origins, against faces of every
+        // slant (and some the rays run along).
+        let faces = [
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::ZERO, Vec3::Z, Vec3::X],
+            [
+                Vec3::new(0.3, 0.0, 0.0),
+                Vec3::new(0.9, 1.0, 0.2),
+                Vec3::new(0.1, 0.4, 1.0),
+            ],
+            [
+                Vec3::new(1.0, 1.0, 1.0),
+                Vec3::new(-0.5, 0.2, 0.7),
+                Vec3::new(0.6, -0.3, 0.1),
+            ],
+            [Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
+        ];
+        for (k, &dir) in DIRECTIONS.iter().enumerate() {
+            for t in &faces {
+                let prepared = Prepared::new(dir, t);
+                for i in 0..11 * 11 * 11 {
+                    let o = Vec3::new((i % 11) as f32, (i / 11 % 11) as f32, (i / 121) as f32)
+                        / 5.0
+                        - 1.0;
+                    let want = ray_triangle_distance(o, dir, t).is_some();
+                    let got = prepared.is_some_and(|(f, _)| f.crossed(o, dir));
+                    assert_eq!(got, want, "direction {k}, face {t:?}, origin {o}");
+                }
+            }
+        }
     }
 }
