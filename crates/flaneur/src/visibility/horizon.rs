@@ -209,6 +209,138 @@ fn bin_start(k: i64) -> f32 {
     k as f32 * BIN
 }
 
+/// How a box lies from a plan point, as [`Horizon::hides`] and [`Wanted::add`] both see
+/// it: its nearest point and distance, its corners and their pseudo-angles, and the
+/// bins it may touch, `first..=last` (unwrapped).
+struct BoxView {
+    nearest: Vec2,
+    d: f32,
+    corners: [Vec2; 4],
+    angles: [f32; 4],
+    reference: f32,
+    first: i64,
+    last: i64,
+}
+
+impl BoxView {
+    /// `None` when no horizon of `p` can hide the box: `p` is over it in plan, or it
+    /// spans every bin.
+    fn of(p: Vec2, min: Vec2, max: Vec2) -> Option<BoxView> {
+        let nearest = p.clamp(min, max);
+        let d = (nearest - p).length();
+        if d <= 0.0 {
+            return None;
+        }
+        let corners = corners2(min, max);
+        let (lo, hi, angles) = span(p, &corners);
+        let first = ((lo - PAD) / BIN).floor() as i64;
+        let last = ((hi + PAD) / BIN).floor() as i64;
+        if last - first >= BINS as i64 {
+            return None;
+        }
+        Some(BoxView {
+            nearest,
+            d,
+            corners,
+            angles,
+            reference: 0.5 * (lo + hi),
+            first,
+            last,
+        })
+    }
+}
+
+fn bin_of(k: i64) -> usize {
+    k.rem_euclid(BINS as i64) as usize
+}
+
+/// The boxes a horizon will be asked about, as the bins they touch and how far out in
+/// each: a horizon built for them ([`Horizon::rebuild`]) leaves out every occluder entry
+/// that no question about them can reach (in a bin none of them touches, or further
+/// than the furthest of them there), and answers for them exactly as the whole horizon
+/// would.
+pub struct Wanted {
+    eye: Vec2,
+    /// Per bin, a plan distance beyond every point of every box added that touches it
+    /// (0 for none).
+    far: Vec<f32>,
+    /// The largest of `far`.
+    reach: f32,
+}
+
+impl Wanted {
+    /// Nothing wanted yet, from `eye`.
+    pub fn new(eye: Vec3) -> Wanted {
+        Wanted {
+            eye: plan(eye),
+            far: vec![0.0; BINS],
+            reach: 0.0,
+        }
+    }
+
+    /// Nothing wanted, from `eye`, keeping the memory.
+    pub fn reset(&mut self, eye: Vec3) {
+        self.eye = plan(eye);
+        self.far.fill(0.0);
+        self.reach = 0.0;
+    }
+
+    /// Asks for `b`; false (and nothing asked) when no horizon of the eye can hide it.
+    pub fn add(&mut self, b: &Aabb) -> bool {
+        let p = self.eye;
+        let Some(v) = BoxView::of(p, plan(b.min), plan(b.max)) else {
+            return false;
+        };
+        // The furthest point of a rectangle is a corner; a margin over rounding, so
+        // that every distance `hides` may ask about in a bin is below it.
+        let far = v
+            .corners
+            .iter()
+            .map(|c| (*c - p).length())
+            .fold(0.0f32, f32::max)
+            * (1.0 + 1e-4)
+            + 1e-3;
+        for k in v.first..=v.last {
+            let f = &mut self.far[bin_of(k)];
+            *f = f.max(far);
+        }
+        self.reach = self.reach.max(far);
+        true
+    }
+
+    /// A plan distance beyond every box added: occluders further from the eye cannot
+    /// hide any of them.
+    pub fn reach(&self) -> f32 {
+        self.reach
+    }
+}
+
+/// Bounds around a group of prisms: a plan box around their footprints, and their
+/// highest top.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Group {
+    pub lo: Vec2,
+    pub hi: Vec2,
+    pub top: f32,
+}
+
+impl Group {
+    /// The bounds of `prisms`; `None` for none.
+    pub fn around<'a>(prisms: impl IntoIterator<Item = &'a Prism>) -> Option<Group> {
+        prisms.into_iter().fold(None, |g, o| {
+            let (lo, hi) = o.bounds();
+            Some(match g {
+                None => Group { lo, hi, top: o.top },
+                Some(g) => Group {
+                    lo: g.lo.min(lo),
+                    hi: g.hi.max(hi),
+                    top: g.top.max(o.top),
+                },
+            })
+        })
+    }
+}
+
 /// One viewpoint's horizon.
 pub struct Horizon {
     eye: Vec3,
@@ -216,22 +348,62 @@ pub struct Horizon {
     /// far), distances ascending and rises strictly increasing.
     starts: Vec<u32>,
     fronts: Vec<(f32, f32)>,
+    /// Working memory of a build, kept for the next.
+    scratch: Scratch,
+}
+
+#[derive(Default)]
+struct Scratch {
+    steepest: Vec<(f32, f32)>,
+    entries: Vec<(u32, f32, f32)>,
+    first: Vec<u32>,
+    fill: Vec<u32>,
+    by_bin: Vec<(f32, f32)>,
 }
 
 impl Horizon {
+    /// A horizon that hides nothing, to be rebuilt ([`Horizon::rebuild`]).
+    pub fn empty() -> Horizon {
+        Horizon {
+            eye: Vec3::ZERO,
+            starts: vec![0; BINS + 1],
+            fronts: Vec::new(),
+            scratch: Scratch::default(),
+        }
+    }
+
     /// The horizon of `eye` over `prisms`, none of which may contain the eye's plan
     /// position (those are skipped).
     #[cfg(test)]
     pub fn new(eye: Vec3, prisms: impl IntoIterator<Item = Prism>) -> Horizon {
-        Horizon::build(eye, prisms, true, true)
+        let mut h = Horizon::empty();
+        let mut sorted: Vec<Prism> = prisms.into_iter().collect();
+        sorted.sort_by(|a, b| a.distance(plan(eye)).total_cmp(&b.distance(plan(eye))));
+        h.build(eye, [(None, sorted)], true, None);
+        h
     }
 
-    /// As [`Horizon::new`], with `prisms` taken in the order given, which should be
-    /// about nearest first (by distance from a point near the eye): the order only
-    /// decides how much pruning saves, never what the horizon hides, so the samples of
-    /// one cell share one sort.
-    pub fn nearly_ordered(eye: Vec3, prisms: impl IntoIterator<Item = Prism>) -> Horizon {
-        Horizon::build(eye, prisms, true, false)
+    /// This horizon made that of `eye` over the prisms of `groups`, reusing its memory.
+    /// Each group comes with bounds around all its prisms ([`Group`]); a group wholly
+    /// behind the horizon built so far is skipped. The groups are taken in the order
+    /// given, which should be about nearest first (by distance from a point near the
+    /// eye): the order only decides how much pruning saves, never what the horizon
+    /// hides, so the samples of one cell share one sort. With `wanted` (made from the
+    /// same eye), it answers only for the boxes added to it, as the whole horizon
+    /// would; what it says of any other box means nothing.
+    pub fn rebuild<P: IntoIterator<Item = Prism>>(
+        &mut self,
+        eye: Vec3,
+        groups: impl IntoIterator<Item = (Group, P)>,
+        wanted: Option<&Wanted>,
+    ) {
+        debug_assert!(wanted.is_none_or(|w| w.eye == plan(eye)));
+        self.build(
+            eye,
+            groups.into_iter().map(|(g, p)| (Some(g), p)),
+            true,
+            wanted,
+        );
     }
 
     /// `prune`: skip, bin by bin, what a nearer and steeper occluder already dominates.
@@ -239,139 +411,167 @@ impl Horizon {
     /// own walls, so taking the prisms nearest first and skipping those bins saves most
     /// of the entry computations. It never changes what the horizon hides (a test
     /// builds both ways): an entry (e, s) with e ≥ e′ and s ≤ s′ of one already in its
-    /// bin is never the steepest entered before any distance.
-    fn build(
+    /// bin is never the steepest entered before any distance. A group whose bounds are
+    /// so dominated in every bin they span is skipped whole: each of its prisms lies
+    /// within those bins, no nearer and no steeper. `wanted`: skip too, bin by bin, what
+    /// lies beyond every wanted box in that bin; `hides` only looks at entries nearer
+    /// than the box it is asked about.
+    fn build<P: IntoIterator<Item = Prism>>(
+        &mut self,
         eye: Vec3,
-        prisms: impl IntoIterator<Item = Prism>,
+        groups: impl IntoIterator<Item = (Option<Group>, P)>,
         prune: bool,
-        sort: bool,
-    ) -> Horizon {
+        wanted: Option<&Wanted>,
+    ) {
         let p = plan(eye);
         let edges = edges();
-        let mut near: Vec<(f32, Prism)> = prisms
-            .into_iter()
-            .filter(|o| o.top > eye.y && !o.covers(p))
-            .map(|o| (o.distance(p), o))
-            .collect();
-        if prune && sort {
-            near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        }
+        let reach = wanted.map_or(f32::INFINITY, |w| w.reach);
+        let Scratch {
+            steepest,
+            entries,
+            first,
+            fill,
+            by_bin,
+        } = &mut self.scratch;
         // Per bin, the steepest entry so far and its distance.
-        let mut steepest = vec![(f32::INFINITY, f32::NEG_INFINITY); BINS];
-        let mut entries: Vec<(u32, f32, f32)> = Vec::new();
-        for (nearest, o) in near {
-            let rise = o.top - eye.y;
-            // No entry of this prism is nearer or steeper than this.
-            let (least, most) = (nearest, rise / nearest);
-            let dominated = |steepest: &[(f32, f32)], b: usize| {
-                let (e, s) = steepest[b];
-                prune && e <= least && s >= most
-            };
-            let corners = o.corners();
-            let (lo, hi, angles) = span(p, &corners);
-            let first = ((lo + PAD) / BIN).ceil() as i64;
-            let last = ((hi - PAD) / BIN).floor() as i64 - 1;
-            if first > last {
-                continue;
-            }
-            let bin = |k: i64| k.rem_euclid(BINS as i64) as usize;
-            if (first..=last).all(|k| dominated(&steepest, bin(k))) {
-                continue;
-            }
-            // The eye in the footprint's frame once per prism; per bin edge only the
-            // edge's direction is turned into it.
-            let local_eye = o.local(p);
-            let at_edge =
-                |k: i64| entry(local_eye, o.local_direction(edges[bin(k)]), -o.half, o.half);
-            // Entry distances at the covered bins' edges, each edge shared by two bins.
-            let mut before: Option<(i64, Option<f32>)> = None;
-            for k in first..=last {
-                let b = bin(k);
-                if dominated(&steepest, b) {
+        steepest.clear();
+        steepest.resize(BINS, (f32::INFINITY, f32::NEG_INFINITY));
+        entries.clear();
+        // Beyond this, in bin b, no entry is ever looked at.
+        let far = |b: usize| wanted.map_or(f32::INFINITY, |w| w.far[b]);
+        // Whether no entry of `least` or further, `most` or less steep, counts in bin b.
+        let dominated = |steepest: &[(f32, f32)], b: usize, least: f32, most: f32| {
+            let (e, s) = steepest[b];
+            far(b) <= least || (prune && e <= least && s >= most)
+        };
+        for (group, prisms) in groups {
+            if let Some(g) = group {
+                let rise = g.top - eye.y;
+                if rise <= 0.0 {
                     continue;
                 }
-                let e0 = match before {
-                    Some((edge, e)) if edge == k => e,
-                    _ => at_edge(k),
-                };
-                let e1 = at_edge(k + 1);
-                before = Some((k + 1, e1));
-                let (Some(e0), Some(e1)) = (e0, e1) else {
-                    continue;
-                };
-                let (a0, a1) = (bin_start(k), bin_start(k + 1));
-                let mut e = e0.max(e1);
-                for (c, &a) in corners.iter().zip(&angles) {
-                    if a >= a0 && a <= a1 {
-                        e = e.max((*c - p).length());
+                if let Some(v) = BoxView::of(p, g.lo, g.hi) {
+                    let (least, most) = (v.d, rise / v.d);
+                    if least >= reach
+                        || (v.first..=v.last).all(|k| dominated(steepest, bin_of(k), least, most))
+                    {
+                        continue;
                     }
                 }
-                if e > 0.0 {
-                    let s = rise / e;
-                    entries.push((b as u32, e, s));
-                    if s > steepest[b].1 {
-                        steepest[b] = (e, s);
+            }
+            for o in prisms {
+                if !(o.top > eye.y) || o.covers(p) {
+                    continue;
+                }
+                let nearest = o.distance(p);
+                if !(nearest < reach) {
+                    continue;
+                }
+                let rise = o.top - eye.y;
+                // No entry of this prism is nearer or steeper than this.
+                let (least, most) = (nearest, rise / nearest);
+                let corners = o.corners();
+                let (lo, hi, angles) = span(p, &corners);
+                let first = ((lo + PAD) / BIN).ceil() as i64;
+                let last = ((hi - PAD) / BIN).floor() as i64 - 1;
+                if first > last {
+                    continue;
+                }
+                if (first..=last).all(|k| dominated(steepest, bin_of(k), least, most)) {
+                    continue;
+                }
+                // The eye in the footprint's frame once per prism; per bin edge only the
+                // edge's direction is turned into it.
+                let local_eye = o.local(p);
+                let at_edge = |k: i64| {
+                    entry(
+                        local_eye,
+                        o.local_direction(edges[bin_of(k)]),
+                        -o.half,
+                        o.half,
+                    )
+                };
+                // Entry distances at the covered bins' edges, each edge shared by two
+                // bins.
+                let mut before: Option<(i64, Option<f32>)> = None;
+                for k in first..=last {
+                    let b = bin_of(k);
+                    if dominated(steepest, b, least, most) {
+                        continue;
+                    }
+                    let e0 = match before {
+                        Some((edge, e)) if edge == k => e,
+                        _ => at_edge(k),
+                    };
+                    let e1 = at_edge(k + 1);
+                    before = Some((k + 1, e1));
+                    let (Some(e0), Some(e1)) = (e0, e1) else {
+                        continue;
+                    };
+                    let (a0, a1) = (bin_start(k), bin_start(k + 1));
+                    let mut e = e0.max(e1);
+                    for (c, &a) in corners.iter().zip(&angles) {
+                        if a >= a0 && a <= a1 {
+                            e = e.max((*c - p).length());
+                        }
+                    }
+                    if e > 0.0 && e < far(b) {
+                        let s = rise / e;
+                        entries.push((b as u32, e, s));
+                        if s > steepest[b].1 {
+                            steepest[b] = (e, s);
+                        }
                     }
                 }
             }
         }
         // Bucket by bin (a counting sort), then order each bin by distance.
-        let mut first = vec![0u32; BINS + 1];
-        for e in &entries {
+        first.clear();
+        first.resize(BINS + 1, 0);
+        for e in entries.iter() {
             first[e.0 as usize + 1] += 1;
         }
         for b in 0..BINS {
             first[b + 1] += first[b];
         }
-        let mut fill = first.clone();
-        let mut by_bin = vec![(0.0f32, 0.0f32); entries.len()];
-        for &(b, e, rise) in &entries {
+        fill.clear();
+        fill.extend_from_slice(first);
+        by_bin.clear();
+        by_bin.resize(entries.len(), (0.0, 0.0));
+        for &(b, e, rise) in entries.iter() {
             by_bin[fill[b as usize] as usize] = (e, rise);
             fill[b as usize] += 1;
         }
-        let mut starts = Vec::with_capacity(BINS + 1);
-        let mut fronts = Vec::with_capacity(entries.len() / 4);
+        self.eye = eye;
+        self.starts.clear();
+        self.fronts.clear();
         for b in 0..BINS {
-            starts.push(fronts.len() as u32);
+            self.starts.push(self.fronts.len() as u32);
             let bin = &mut by_bin[first[b] as usize..first[b + 1] as usize];
             bin.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
             let mut best = f32::NEG_INFINITY;
             for &(e, rise) in bin.iter() {
                 if rise > best {
                     best = rise;
-                    fronts.push((e, rise));
+                    self.fronts.push((e, rise));
                 }
             }
         }
-        starts.push(fronts.len() as u32);
-        Horizon {
-            eye,
-            starts,
-            fronts,
-        }
+        self.starts.push(self.fronts.len() as u32);
     }
 
     /// Whether every point of `b` is hidden from the eye.
     pub fn hides(&self, b: &Aabb) -> bool {
         let p = plan(self.eye);
         let (min, max) = (plan(b.min), plan(b.max));
-        let nearest = p.clamp(min, max);
-        let d = (nearest - p).length();
-        if d <= 0.0 {
+        let Some(v) = BoxView::of(p, min, max) else {
             return false;
-        }
+        };
+        let (nearest, d) = (v.nearest, v.d);
         let rise = (b.max.y - self.eye.y).max(0.0);
-        let corners = corners2(min, max);
-        let (lo, hi, angles) = span(p, &corners);
-        let first = ((lo - PAD) / BIN).floor() as i64;
-        let last = ((hi + PAD) / BIN).floor() as i64;
-        if last - first >= BINS as i64 {
-            return false;
-        }
         let edges = edges();
-        let reference = 0.5 * (lo + hi);
-        (first..=last).all(|k| {
-            let bin = k.rem_euclid(BINS as i64) as usize;
+        (v.first..=v.last).all(|k| {
+            let bin = bin_of(k);
             let front = &self.fronts[self.starts[bin] as usize..self.starts[bin + 1] as usize];
             // The steepest occluder entered before distance `d` rises above `rise / d`.
             let blocked = |d: f32| {
@@ -388,17 +588,16 @@ impl Horizon {
             // that a side grazing a corner loses nothing to rounding).
             let (a0, a1) = (bin_start(k) - PAD, bin_start(k + 1) + PAD);
             let inside = |a: f32| a >= a0 && a <= a1;
-            if inside(unwrapped(nearest - p, reference)) {
+            if inside(unwrapped(nearest - p, v.reference)) {
                 return false;
             }
             let mut least = f32::INFINITY;
             for edge in [k, k + 1] {
-                let dir = edges[edge.rem_euclid(BINS as i64) as usize];
-                if let Some(e) = entry(p, dir, min, max) {
+                if let Some(e) = entry(p, edges[bin_of(edge)], min, max) {
                     least = least.min(e);
                 }
             }
-            for (c, &a) in corners.iter().zip(&angles) {
+            for (c, &a) in v.corners.iter().zip(&v.angles) {
                 if inside(a) {
                     least = least.min((*c - p).length());
                 }
@@ -581,6 +780,43 @@ mod tests {
         o
     }
 
+    fn built(
+        eye: Vec3,
+        prisms: &[Prism],
+        prune: bool,
+        sort: bool,
+        wanted: Option<&Wanted>,
+    ) -> Horizon {
+        let mut h = Horizon::empty();
+        let mut given = prisms.to_vec();
+        if sort {
+            given.sort_by(|a, b| a.distance(plan(eye)).total_cmp(&b.distance(plan(eye))));
+        }
+        h.build(eye, [(None, given)], prune, wanted);
+        h
+    }
+
+    /// `prisms` in groups by the square of side `tile` their centres are in, nearest
+    /// `eye` first.
+    fn tiled(prisms: &[Prism], eye: Vec3, tile: f32) -> Vec<(Group, Vec<Prism>)> {
+        let mut by_tile: Vec<((i32, i32), Vec<Prism>)> = Vec::new();
+        for o in prisms {
+            let t = (o.centre / tile).floor();
+            let key = (t.x as i32, t.y as i32);
+            match by_tile.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, v)) => v.push(*o),
+                None => by_tile.push((key, vec![*o])),
+            }
+        }
+        let mut groups: Vec<(Group, Vec<Prism>)> = by_tile
+            .into_iter()
+            .map(|(_, v)| (Group::around(&v).unwrap(), v))
+            .collect();
+        let from = |g: &Group| (plan(eye).clamp(g.lo, g.hi) - plan(eye)).length();
+        groups.sort_by(|a, b| from(&a.0).total_cmp(&from(&b.0)));
+        groups
+    }
+
     /// A street of random blocks, where pruning skips most entries: the pruned horizon
     /// hides exactly what the full one hides.
     #[test]
@@ -603,16 +839,26 @@ mod tests {
                 rng.gen_range(1.2..2.0),
                 rng.gen_range(-100.0..100.0),
             );
-            let pruned = Horizon::build(eye, prisms.iter().copied(), true, true);
-            let full = Horizon::build(eye, prisms.iter().copied(), false, false);
+            let pruned = built(eye, &prisms, true, true, None);
+            let full = built(eye, &prisms, false, false, None);
             // Pruned in the order given (shuffled), not nearest first.
-            let unsorted = Horizon::build(eye, prisms.iter().copied(), true, false);
+            let unsorted = built(eye, &prisms, true, false, None);
+            // In groups, nearest first, then in groups in no order.
+            let mut grouped = Horizon::empty();
+            grouped.rebuild(eye, tiled(&prisms, eye, 40.0), None);
+            let mut shuffled = tiled(&prisms, eye, 40.0);
+            shuffled.reverse();
+            let mut reversed = Horizon::empty();
+            reversed.rebuild(eye, shuffled, None);
+            assert!(grouped.fronts.len() <= full.fronts.len());
             assert!(pruned.fronts.len() <= full.fronts.len());
             for _ in 0..500 {
                 let target = random_box(&mut rng, 400.0, 20.0, 80.0);
                 let hides = full.hides(&target);
                 assert_eq!(pruned.hides(&target), hides, "{target:?} from {eye}");
                 assert_eq!(unsorted.hides(&target), hides, "{target:?} from {eye}");
+                assert_eq!(grouped.hides(&target), hides, "{target:?} from {eye}");
+                assert_eq!(reversed.hides(&target), hides, "{target:?} from {eye}");
                 if hides {
                     hidden += 1;
                 } else {
@@ -624,6 +870,52 @@ mod tests {
             hidden > 1_000 && shown > 1_000,
             "{hidden} hidden, {shown} shown (turned: {turned})"
         );
+    }
+
+    /// A horizon built for a few boxes, one horizon rebuilt from eye to eye: it answers
+    /// for those boxes as the whole horizon does, though it holds far fewer entries.
+    #[test]
+    fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+        let (mut hidden, mut shown, mut kept, mut all) = (0, 0, 0, 0);
+        let mut reused = Horizon::empty();
+        let mut wanted = Wanted::new(Vec3::ZERO);
+        for round in 0..60 {
+            let turned = round % 2 == 1;
+            let prisms: Vec<Prism> = (0..150)
+                .map(|_| random_prism(&mut rng, 300.0, (2.0, 20.0), (3.0, 60.0), turned))
+                .collect();
+            let eye = Vec3::new(
+                rng.gen_range(-100.0..100.0),
+                rng.gen_range(1.2..2.0),
+                rng.gen_range(-100.0..100.0),
+            );
+            let full = built(eye, &prisms, false, false, None);
+            let targets: Vec<Aabb> = (0..rng.gen_range(1..12))
+                .map(|_| random_box(&mut rng, 400.0, 20.0, 80.0))
+                .collect();
+            wanted.reset(eye);
+            let asked: Vec<&Aabb> = targets.iter().filter(|t| wanted.add(t)).collect();
+            reused.rebuild(eye, tiled(&prisms, eye, 50.0), Some(&wanted));
+            kept += reused.fronts.len();
+            all += full.fronts.len();
+            for t in &targets {
+                let hides = full.hides(t);
+                if asked.contains(&t) {
+                    assert_eq!(reused.hides(t), hides, "{t:?} from {eye}");
+                } else {
+                    assert!(!hides, "{t:?} from {eye}: refused, yet hidden");
+                }
+                if hides {
+                    hidden += 1;
+                } else {
+                    shown += 1;
+                }
+            }
+        }
+        assert!(hidden > 50 && shown > 50, "{hidden} hidden, {shown} shown");
+        assert!(kept * 3 < all, "{kept} entries kept of {all}");
     }
 
     /// Random prisms and boxes: whenever the horizon hides a box, every sight line from
