@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::lods::{aggregate, error_between, internal_levels, Reference, DIRECT_TRIANGLES};
+use super::lods::{aggregate, error_above, internal_levels, Reference, DIRECT_TRIANGLES};
 use super::node::{capacity, ChildRef, HNode, HNodeKind};
 use super::scheme::{self, Scheme, Shape};
 use super::tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
@@ -313,7 +313,7 @@ fn make_node(
             let (mesh, stored) = &coarse[&o.id];
             if *stored && !mesh.indices.is_empty() {
                 let full = crate::catalog::read_mesh(store, o)?;
-                worst = worst.max(error_between(mesh, &full)?);
+                worst = error_above(mesh, &full, worst)?;
             }
         }
         Ok(worst)

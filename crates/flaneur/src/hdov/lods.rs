@@ -47,7 +47,7 @@ use glam::Vec3;
 use meshopt::VertexDataAdapter;
 
 use crate::error::{Error, Result};
-use crate::lod::{hausdorff, Level, ProgressiveMesh};
+use crate::lod::{hausdorff_above, Level, Measured, ProgressiveMesh};
 use crate::scene::Mesh;
 
 /// The share of its source's triangles each internal LOD keeps, finest first.
@@ -56,7 +56,7 @@ pub const LEVEL_SHARES: [f64; 3] = [0.5, 0.125, 1.0 / 32.0];
 pub const MIN_TRIANGLES: usize = 16;
 /// The most points sampled on each surface, each way, when a proxy's error is measured
 /// (every vertex of both meshes besides): two a triangle of the two meshes together, at
-/// least 1,000 ([`error_between`]).
+/// least 1,000 ([`error_above`]).
 pub const ERROR_SAMPLES: usize = 20_000;
 /// The most triangles of full geometry a node's proxies are measured against whole;
 /// above it, [`Reference::Source`]'s bound.
@@ -114,6 +114,13 @@ pub fn internal_levels(source: &Mesh, reference: Reference<'_>) -> Result<Vec<Le
     if full < 2 * MIN_TRIANGLES {
         return Ok(Vec::new());
     }
+    // What the proxies are measured against, made ready once for all of them.
+    let (against, parts_error) = match reference {
+        Reference::Full(f) => (Measured::new(f, "the node's full geometry")?, None),
+        Reference::Source { parts_error } => {
+            (Measured::new(source, "the source")?, Some(parts_error))
+        }
+    };
     let mut levels: Vec<Level> = Vec::new();
     let mut finer = (full, 0.0f32);
     for (k, share) in LEVEL_SHARES.into_iter().enumerate() {
@@ -134,9 +141,13 @@ pub fn internal_levels(source: &Mesh, reference: Reference<'_>) -> Result<Vec<Le
         if t == 0 || t >= finer.0 {
             continue;
         }
-        let error = match reference {
-            Reference::Full(f) => error_between(&mesh, f)?,
-            Reference::Source { parts_error } => error_between(&mesh, source)? + parts_error,
+        // Only a distance over the finer level's error changes what is stored: the
+        // measure is told so, and stops early on samples under it.
+        let proxy = Measured::new(&mesh, "a proxy")?;
+        let samples = samples_for(proxy.triangle_count(), against.triangle_count());
+        let error = match parts_error {
+            None => against.hausdorff_above(&proxy, samples, finer.1),
+            Some(e) => against.hausdorff_above(&proxy, samples, below_sum(finer.1, e)) + e,
         }
         .max(finer.1);
         finer = (t, error);
@@ -149,13 +160,32 @@ pub fn internal_levels(source: &Mesh, reference: Reference<'_>) -> Result<Vec<Le
     Ok(levels)
 }
 
-/// The sampled Hausdorff distance between `a` and `b` (`lod::hausdorff`), with samples
-/// in proportion to their triangles up to [`ERROR_SAMPLES`]: a small mesh's vertices
-/// already cover it, and a fixed 20,000 for each of a city's thousands of small
-/// scene-tree nodes cost minutes.
-pub(crate) fn error_between(a: &Mesh, b: &Mesh) -> Result<f32> {
-    let samples = (2 * (a.triangle_count() + b.triangle_count())).clamp(1_000, ERROR_SAMPLES);
-    hausdorff(a, b, samples)
+/// The larger of `floor` and the sampled Hausdorff distance between `a` and `b`
+/// (`lod::hausdorff`), with samples in proportion to their triangles up to
+/// [`ERROR_SAMPLES`]: a small mesh's vertices already cover it, and a fixed 20,000 for
+/// each of a city's thousands of small scene-tree nodes cost minutes. The measure stops
+/// early on the samples that lie within `floor` (`lod::hausdorff_above`), the figure
+/// the same: for the largest of several distances, pass the largest so far.
+pub(crate) fn error_above(a: &Mesh, b: &Mesh, floor: f32) -> Result<f32> {
+    let samples = samples_for(a.triangle_count(), b.triangle_count());
+    hausdorff_above(a, b, samples, floor)
+}
+
+/// The points sampled on each surface when meshes of `a` and `b` triangles are compared
+/// ([`error_above`]).
+fn samples_for(a: usize, b: usize) -> usize {
+    (2 * (a + b)).clamp(1_000, ERROR_SAMPLES)
+}
+
+/// The largest `x` (at least 0) whose rounded sum with `part` is at most `total`: a
+/// distance up to it, plus `part`, stores no more than `total`, so the measure of it
+/// may stop there and the figure stored is the same.
+fn below_sum(total: f32, part: f32) -> f32 {
+    let mut x = (total - part).max(0.0);
+    while x > 0.0 && x + part > total {
+        x = f32::from_bits(x.to_bits() - 1);
+    }
+    x
 }
 
 /// `source` simplified by the LOD core's edge collapses towards `target` triangles,
@@ -185,28 +215,44 @@ fn proxy(source: &Mesh, target: usize, below: usize) -> Option<Mesh> {
     .expect("tightly packed positions");
     let at = |grid: u32| {
         let error = 1.0 / (grid as f32 + 0.5);
-        let indices = meshopt::simplify_sloppy(&source.indices, &adapter, 0, error, None);
-        flat(&source.positions, &indices)
+        meshopt::simplify_sloppy(&source.indices, &adapter, 0, error, None)
     };
+    // Each grid's triangles counted as `flat` would keep them; only the two kept become
+    // meshes.
     let (mut lo, mut hi) = (2u32, 1024u32);
-    let (mut under, mut over): (Option<Mesh>, Option<Mesh>) = (None, None);
+    let (mut under, mut over): (Option<(usize, Vec<u32>)>, Option<(usize, Vec<u32>)>) =
+        (None, None);
     while lo <= hi {
         let grid = (lo + hi) / 2;
-        let mesh = at(grid);
-        let t = mesh.triangle_count();
+        let indices = at(grid);
+        let t = indices
+            .chunks_exact(3)
+            .filter(|t| face_normal(&source.positions, t).is_some())
+            .count();
         if t <= target {
             lo = grid + 1;
-            if t > 0 && t < below && under.as_ref().is_none_or(|u| t > u.triangle_count()) {
-                under = Some(mesh);
+            if t > 0 && t < below && under.as_ref().is_none_or(|u| t > u.0) {
+                under = Some((t, indices));
             }
         } else {
             hi = grid - 1;
-            if t < below && over.as_ref().is_none_or(|o| t < o.triangle_count()) {
-                over = Some(mesh);
+            if t < below && over.as_ref().is_none_or(|o| t < o.0) {
+                over = Some((t, indices));
             }
         }
     }
-    under.or(over)
+    under
+        .or(over)
+        .map(|(_, indices)| flat(&source.positions, &indices))
+}
+
+/// Triangle `t`'s corners in `positions` and its unit normal; `None` for a triangle of
+/// no area.
+fn face_normal(positions: &[[f32; 3]], t: &[u32]) -> Option<([[f32; 3]; 3], [f32; 3])> {
+    let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
+    let n = (Vec3::from(b) - Vec3::from(a)).cross(Vec3::from(c) - Vec3::from(a));
+    let len = n.length();
+    (len > 0.0 && len.is_finite()).then(|| ([a, b, c], (n / len).to_array()))
 }
 
 /// The triangles `indices` names in `positions` as a compact mesh with a normal per
@@ -216,14 +262,10 @@ fn flat(positions: &[[f32; 3]], indices: &[u32]) -> Mesh {
     let mut out = Mesh::default();
     let mut welded: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
     for t in indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
-        let n = (Vec3::from(b) - Vec3::from(a)).cross(Vec3::from(c) - Vec3::from(a));
-        let len = n.length();
-        if !(len > 0.0 && len.is_finite()) {
+        let Some((corners, n)) = face_normal(positions, t) else {
             continue;
-        }
-        let n = (n / len).to_array();
-        for p in [a, b, c] {
+        };
+        for p in corners {
             let key = (p.map(f32::to_bits), n.map(f32::to_bits));
             let next = out.positions.len() as u32;
             let v = *welded.entry(key).or_insert(next);
@@ -240,6 +282,7 @@ fn flat(positions: &[[f32; 3]], indices: &[u32]) -> Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lod::hausdorff;
 
     /// An axis-aligned box from `lo` to `hi`, 12 triangles, flat normals.
     fn cuboid(lo: [f32; 3], hi: [f32; 3]) -> Mesh {
@@ -391,6 +434,7 @@ mod tests {
 mod report {
     use super::*;
     use crate::hdov::node::HNodeKind;
+    use crate::lod::hausdorff;
     use crate::lod::stored::{chain_level, chain_levels};
     use crate::rtree::ObjectEntry;
 

@@ -50,6 +50,7 @@ mod torus;
 
 pub use dag::{Dag, DagConstruction, DagEdges, NodeAttrs};
 pub use hausdorff::hausdorff;
+pub(crate) use hausdorff::{hausdorff_above, Measured};
 pub use pm::{
     simplify_all, Level, LevelReport, ParallelOptions, ParallelReport, PmCursor, ProgressiveMesh,
     SelectiveMesh, SplitIds, VertexSplit, NO_TRIANGLE,

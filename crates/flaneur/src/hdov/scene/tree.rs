@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::super::lods::{aggregate, error_between, internal_levels, Reference};
+use super::super::lods::{aggregate, error_above, internal_levels, Reference};
 use super::super::vd::Vd;
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -170,18 +170,18 @@ impl SceneTree {
         let [a, b] = self.nodes[k as usize].children.expect("internal");
         let parts = [self.coarsest(a), self.coarsest(b)];
         let source = aggregate(parts.iter().map(|m| m.as_ref()));
-        // The largest distance of a child's coarsest geometry from its full geometry.
+        // The largest distance of a child's coarsest geometry from its full geometry
+        // (an object's measured only as far as it could be the larger).
         let mut parts_error = 0.0f32;
         for c in [a, b] {
             let n = &self.nodes[c as usize];
-            let e = match (errors[c as usize], n.object, &n.levels[..]) {
-                (Some(e), _, _) => e,
+            parts_error = match (errors[c as usize], n.object, &n.levels[..]) {
+                (Some(e), _, _) => parts_error.max(e),
                 (None, Some(_), [full, .., coarsest]) if !coarsest.indices.is_empty() => {
-                    error_between(coarsest, full)?
+                    error_above(coarsest, full, parts_error)?
                 }
-                _ => 0.0,
+                _ => parts_error,
             };
-            parts_error = parts_error.max(e);
         }
         // Always the bound: a binary tree has a dozen depths, each the whole city, and
         // measuring each against its full geometry made the 3,000-object city's tree
