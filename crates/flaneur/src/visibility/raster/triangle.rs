@@ -18,25 +18,56 @@ const SUB: i64 = 256;
 /// At most 3 + 5 vertices after clipping a triangle by five planes.
 const MAX_CLIPPED: usize = 9;
 
-/// Draws the triangle `q` (three points in the face's frame) for `object`; returns
-/// whether any pixel took it.
-pub(super) fn draw(face: &Face, buf: &mut ItemBuffer, q: [[f32; 3]; 3], object: u32) -> bool {
-    let g = face.guard;
-    // Each vertex's outcode: bit k set when it is outside plane k.
-    let code = |p: &[f32; 3]| {
-        ((p[0] > g * p[2]) as u8)
-            | (((-p[0] > g * p[2]) as u8) << 1)
-            | (((p[1] > g * p[2]) as u8) << 2)
-            | (((-p[1] > g * p[2]) as u8) << 3)
-            | (((p[2] < NEAR) as u8) << 4)
-    };
-    let codes = q.each_ref().map(code);
-    if codes[0] & codes[1] & codes[2] != 0 {
+/// A vertex of an object on a face, transformed once for all the triangles sharing it:
+/// its point in the face's frame, its outcode, and (inside the guard band) its snapped
+/// pixel coordinates and `w`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Vertex {
+    q: [f32; 3],
+    x: i32,
+    y: i32,
+    w: f32,
+    /// Bit k set when it is outside clipping plane k.
+    code: u8,
+}
+
+impl Vertex {
+    /// World point `p` on `face`.
+    #[inline(always)]
+    pub fn new(face: &Face, p: [f32; 3]) -> Vertex {
+        let q = face.frame(p);
+        let g = face.guard;
+        let code = ((q[0] > g * q[2]) as u8)
+            | (((-q[0] > g * q[2]) as u8) << 1)
+            | (((q[1] > g * q[2]) as u8) << 2)
+            | (((-q[1] > g * q[2]) as u8) << 3)
+            | (((q[2] < NEAR) as u8) << 4);
+        let (mut x, mut y, mut w) = (0, 0, 0.0);
+        if code == 0 {
+            let v = vertex(face, q);
+            (x, y, w) = (snap(v[0]) as i32, snap(v[1]) as i32, v[2]);
+        }
+        Vertex { q, x, y, w, code }
+    }
+}
+
+/// Draws the triangle of vertices `v` for `object`; returns whether any pixel took it.
+#[inline]
+pub(super) fn draw(face: &Face, buf: &mut ItemBuffer, v: [&Vertex; 3], object: u32) -> bool {
+    if v[0].code & v[1].code & v[2].code != 0 {
         return false;
     }
-    if codes[0] | codes[1] | codes[2] == 0 {
-        return fill(buf, q.map(|p| vertex(face, p)), object);
+    if v[0].code | v[1].code | v[2].code == 0 {
+        return fill(buf, v.map(|v| (v.x as i64, v.y as i64, v.w)), object);
     }
+    clipped(face, buf, v.map(|v| v.q), object)
+}
+
+/// Draws the triangle `q` (three points in the face's frame, some outside the guard
+/// band or the near plane) clipped to the frustum.
+#[cold]
+fn clipped(face: &Face, buf: &mut ItemBuffer, q: [[f32; 3]; 3], object: u32) -> bool {
+    let g = face.guard;
     let mut poly = [[0.0f32; 3]; MAX_CLIPPED];
     poly[..3].copy_from_slice(&q);
     let mut len = 3;
@@ -52,7 +83,10 @@ pub(super) fn draw(face: &Face, buf: &mut ItemBuffer, q: [[f32; 3]; 3], object: 
             return false;
         }
     }
-    let v = poly.map(|p| vertex(face, p));
+    let v = poly.map(|p| {
+        let v = vertex(face, p);
+        (snap(v[0]), snap(v[1]), v[2])
+    });
     let mut drew = false;
     for k in 1..len - 1 {
         drew |= fill(buf, [v[0], v[k], v[k + 1]], object);
@@ -65,6 +99,17 @@ pub(super) fn draw(face: &Face, buf: &mut ItemBuffer, q: [[f32; 3]; 3], object: 
 fn vertex(face: &Face, p: [f32; 3]) -> [f32; 3] {
     let [x, y] = face.project(p);
     [x, y, 1.0 / p[2]]
+}
+
+/// Pixel coordinate `c` in sub-pixel steps, rounded half away from zero as
+/// `(c·SUB).round()` does, without the libm call that `round` is on baseline x86-64:
+/// below 2²³ the fraction `y − trunc(y)` is exact, and above it `y` is whole.
+#[inline(always)]
+fn snap(c: f32) -> i64 {
+    let y = c * SUB as f32;
+    let t = y as i64;
+    let fraction = y - t as f32;
+    t + (fraction >= 0.5) as i64 - (fraction <= -0.5) as i64
 }
 
 /// Sutherland–Hodgman: the part of the polygon `poly[..len]` where `inside ≥ 0`, in place;
@@ -92,18 +137,9 @@ fn clip(
     out
 }
 
-/// Rasterises a triangle of pixel coordinates and `w`, all inside the guard band.
-fn fill(buf: &mut ItemBuffer, v: [[f32; 3]; 3], object: u32) -> bool {
-    let snap = |c: f32| (c * SUB as f32).round() as i64;
-    let mut p = v.map(|v| (snap(v[0]), snap(v[1]), v[2]));
-    let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
-    if area == 0 {
-        return false;
-    }
-    // No back-face culling: either winding is drawn, turned counter-clockwise.
-    if area < 0 {
-        p.swap(1, 2);
-    }
+/// Rasterises a triangle of snapped pixel coordinates and `w`, all inside the guard band.
+#[inline]
+fn fill(buf: &mut ItemBuffer, mut p: [(i64, i64, f32); 3], object: u32) -> bool {
     let n = buf.n as i64;
     // Pixel k's centre is at k·SUB + SUB/2: the first and last centres inside [lo, hi].
     let first_centre = |lo: i64| (lo - SUB / 2 + SUB - 1).div_euclid(SUB).max(0);
@@ -111,8 +147,18 @@ fn fill(buf: &mut ItemBuffer, v: [[f32; 3]; 3], object: u32) -> bool {
     let (xs, ys) = (p.map(|p| p.0), p.map(|p| p.1));
     let (col0, col1) = (first_centre(min3(xs)), last_centre(max3(xs)));
     let (row0, row1) = (first_centre(min3(ys)), last_centre(max3(ys)));
+    // Most triangles of a far object fall between pixel centres: rejected before the
+    // rest of the setup.
     if col0 > col1 || row0 > row1 {
         return false;
+    }
+    let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
+    if area == 0 {
+        return false;
+    }
+    // No back-face culling: either winding is drawn, turned counter-clockwise.
+    if area < 0 {
+        p.swap(1, 2);
     }
     // w is affine in pixel coordinates: its plane through the snapped vertices.
     let f = p.map(|(x, y, w)| (x as f64 / SUB as f64, y as f64 / SUB as f64, w as f64));
