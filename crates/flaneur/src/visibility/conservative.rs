@@ -46,7 +46,10 @@
 //!   3,000-object city (40 m cells, 3 m patches, ε 2.0 m): blocks of 2 × 2 patches
 //!   (ε 4.0 m) hide 93 % of what reaches them, blocks of 3 or 4 patches a side (ε 6 to
 //!   8 m) 2 %, the whole cell nothing: a shrinking of a few metres leaves nothing of
-//!   the narrow buildings that make most of a street's walls.
+//!   the narrow buildings that make most of a street's walls. With the two savings
+//!   below, the test of a cell there took 53 ms of one core instead of 89 (24 cells
+//!   spread over the city, no rays told, both in one run on busy cores), its PVS 847.7
+//!   objects instead of 847.9, none of them new.
 //! - A patch's horizon is built for its undecided objects only ([`Wanted`]): in the
 //!   bins none of them touches, and beyond the furthest of them in a bin, no occluder
 //!   is entered. It answers for them exactly as the whole horizon would.
