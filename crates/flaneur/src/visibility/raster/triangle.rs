@@ -15,6 +15,10 @@ use super::face::{Face, NEAR};
 /// coordinates stay under 2²¹ and the edge functions' products under 2⁴³.
 const SUB: i64 = 256;
 
+/// Triangles spanning fewer pixel columns than this are drawn by testing every pixel of
+/// their box (below it, three divisions a row cost more than the tests).
+const SCAN: i64 = 16;
+
 /// At most 3 + 5 vertices after clipping a triangle by five planes.
 const MAX_CLIPPED: usize = 9;
 
@@ -58,6 +62,15 @@ pub(super) fn draw(face: &Face, buf: &mut ItemBuffer, v: [&Vertex; 3], object: u
         return false;
     }
     if v[0].code | v[1].code | v[2].code == 0 {
+        // Most triangles of a far object lie between pixel centres: this is `fill`'s
+        // first test without its clamping to the face, which only narrows the range.
+        let (xs, ys) = (v.map(|v| v.x), v.map(|v| v.y));
+        let centres = |c: [i32; 3]| {
+            (min3(c) + (SUB / 2 - 1) as i32) >> 8 <= (max3(c) - (SUB / 2) as i32) >> 8
+        };
+        if !(centres(xs) && centres(ys)) {
+            return false;
+        }
         return fill(buf, v.map(|v| (v.x as i64, v.y as i64, v.w)), object);
     }
     clipped(face, buf, v.map(|v| v.q), object)
@@ -138,7 +151,7 @@ fn clip(
 }
 
 /// Rasterises a triangle of snapped pixel coordinates and `w`, all inside the guard band.
-#[inline]
+#[inline(never)]
 fn fill(buf: &mut ItemBuffer, mut p: [(i64, i64, f32); 3], object: u32) -> bool {
     let n = buf.n as i64;
     // Pixel k's centre is at k·SUB + SUB/2: the first and last centres inside [lo, hi].
@@ -178,6 +191,43 @@ fn fill(buf: &mut ItemBuffer, mut p: [(i64, i64, f32); 3], object: u32) -> bool 
     });
     let n = n as usize;
     let mut drew = false;
+    if col1 - col0 < SCAN {
+        // A narrow triangle: each pixel of its box tested against the three edges,
+        // stepped by additions, rather than each row's run solved by three divisions.
+        let (slopes, biases) = (edges.map(|e| -e.3 * SUB), edges.map(|e| e.4));
+        let mut row_start = edges.map(|(xa, ya, dx, dy, _)| {
+            dx * (row0 * SUB + SUB / 2 - ya) - dy * (col0 * SUB + SUB / 2 - xa)
+        });
+        for j in row0..=row1 {
+            let base = f[0].2 + wx * (0.5 - f[0].0) + wy * (j as f64 + 0.5 - f[0].1);
+            let (base, step) = (base as f32, wx as f32);
+            let row = j as usize * n;
+            let mut e = row_start;
+            let (mut lo, mut hi) = (i64::MAX, -1);
+            for i in col0..=col1 {
+                if e[0] >= biases[0] && e[1] >= biases[1] && e[2] >= biases[2] {
+                    let w = (base + step * i as i32 as f32).clamp(wmin, wmax);
+                    let k = row + i as usize;
+                    if w > buf.depth[k] {
+                        buf.depth[k] = w;
+                        buf.ids[k] = object;
+                    }
+                    (lo, hi) = (lo.min(i), i);
+                }
+                for (e, s) in e.iter_mut().zip(slopes) {
+                    *e += s;
+                }
+            }
+            if lo <= hi {
+                buf.touch(j as u32, lo as u32, hi as u32);
+                drew = true;
+            }
+            for (r, e) in row_start.iter_mut().zip(&edges) {
+                *r += e.2 * SUB;
+            }
+        }
+        return drew;
+    }
     for j in row0..=row1 {
         let py = j * SUB + SUB / 2;
         let (mut lo, mut hi) = (col0, col1);
@@ -203,7 +253,7 @@ fn fill(buf: &mut ItemBuffer, mut p: [(i64, i64, f32); 3], object: u32) -> bool 
         let depth = &mut buf.depth[row + lo..=row + hi];
         let ids = &mut buf.ids[row + lo..=row + hi];
         for (k, (d, id)) in depth.iter_mut().zip(ids.iter_mut()).enumerate() {
-            let w = (base + step * (lo + k) as f32).clamp(wmin, wmax);
+            let w = (base + step * (lo + k) as i32 as f32).clamp(wmin, wmax);
             let nearer = w > *d;
             *d = if nearer { w } else { *d };
             *id = if nearer { object } else { *id };
