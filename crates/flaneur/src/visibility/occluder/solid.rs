@@ -13,18 +13,23 @@
 //! - A face that ends behind the origin, along the ray's axis, by more than its
 //!   margin is skipped: it cannot be crossed ahead. Only rounding could make the
 //!   ray–triangle test see it crossed, and its error in where the ray meets the
-//!   face's plane and where in the face that is stays under some 2·10⁻⁶ of the
-//!   distance from the origin to the face's corner over the face's steepness to the
-//!   ray (its determinant over its two edges' lengths' product: the sine of the
-//!   angle the ray meets its plane at, times that between the edges). The margin is
-//!   1 cm plus ten times that bound for the farthest origin that takes the cut (the
-//!   bounds grown by [`NEAR`]); an origin farther out tests its whole column. A face
-//!   the ray meets at a grazing angle thus keeps a wide margin, and a degenerate
-//!   one is never skipped.
+//!   face's plane and where in the face that is stays under some c = 2·10⁻⁶ of the
+//!   distance |s| from the origin to the face's first corner over the face's
+//!   steepness k to the ray (its determinant over its two edges' lengths' product:
+//!   the sine of the angle the ray meets its plane at, times that between the
+//!   edges). The origin is in the face's column, so |s| ≤ δ + S, with δ how far
+//!   behind the face ends and S the diagonals of the face's bounds and of a column
+//!   and twice the column's drift. The margin, 1 cm + 10c·S / (k − 10c), makes δ
+//!   above it exceed ten times the error, 10c·(δ + S) / k. A face the ray meets at a
+//!   grazing angle thus keeps a wider margin, and one under 10c is never skipped.
 //! - The six rays' answers are all needed, in any order, and the first open one
-//!   ends the search: the direction that was open last time is tried first.
+//!   ends the search: the direction that was open last time is tried first. Any
+//!   face of a ray's column that it crosses will do: the one the direction's last
+//!   ray crossed is tried first.
 //!
 //! [`ray_triangle_distance`]: crate::visibility::intersect::ray_triangle_distance
+
+use std::cell::Cell;
 
 use glam::Vec3;
 
@@ -48,11 +53,9 @@ const DIRECTIONS: [Vec3; 6] = [
 /// the module's notes).
 const BEHIND: f32 = 0.01;
 /// The rounding error of the ray–triangle test, over the distance from the origin
-/// to the face and the face's steepness, with a tenfold safety.
+/// to the face and the face's steepness, with a tenfold safety (10c in the module's
+/// notes).
 const ROUNDING: f32 = 2e-5;
-/// How far outside the object's bounds an origin may be and still skip faces
-/// behind it, in metres.
-const NEAR: f32 = 1.0;
 
 /// An object's triangles, sorted into columns along each ray direction for the rays
 /// that tell enclosed points from open ones.
@@ -60,10 +63,8 @@ pub(super) struct Solid {
     pub(super) triangles: Vec<[Vec3; 3]>,
     /// Per direction of [`DIRECTIONS`]: the faces its rays may meet.
     rays: [Rays; 6],
-    /// The bounds grown by [`NEAR`]: an origin within them may skip faces behind it.
-    near: (Vec3, Vec3),
     /// The direction found open last: the first tried next.
-    open: std::cell::Cell<usize>,
+    open: Cell<usize>,
 }
 
 /// A face as one direction's ray test needs it: what [`ray_triangle_distance`]
@@ -186,15 +187,22 @@ struct Rays {
     starts: Vec<u32>,
     reach: Vec<f32>,
     faces: Vec<u32>,
+    /// Per triangle: the rows and columns it joins (first and last of each).
+    spans: Vec<[u8; 4]>,
+    /// The face the last ray that met one met: the next ray, from a point near the
+    /// last, likely meets it too, so it is tried first when it is in the ray's
+    /// column (whether any face of the column is met does not depend on the order).
+    last: Cell<usize>,
 }
 
 impl Rays {
     /// The faces that rays along direction `k` may cross, each in the columns of
-    /// `spans` (per triangle, its rows and columns) that it joins; `far` is the most
-    /// an origin that skips faces can be from a face's corner.
-    fn new(k: usize, grid: Grid, triangles: &[[Vec3; 3]], spans: &[Span], far: f32) -> Rays {
+    /// `spans` (per triangle, its rows and columns) that it joins, which a ray
+    /// drifting sideways by up to `drift` may meet it in.
+    fn new(k: usize, grid: Grid, triangles: &[[Vec3; 3]], spans: &[Span], drift: f32) -> Rays {
         let dir = DIRECTIONS[k];
         let (axis, forward) = (k / 2, k % 2 == 0);
+        let column = grid.cell[0].hypot(grid.cell[1]);
         let mut keyed: Vec<(f32, u32)> = Vec::with_capacity(triangles.len());
         let prepared = triangles
             .iter()
@@ -208,7 +216,17 @@ impl Rays {
                 } else {
                     -t[0][axis].min(t[1][axis]).min(t[2][axis])
                 };
-                keyed.push((end + BEHIND + ROUNDING * far / steepness, i as u32));
+                // The margin (see the module's notes); a face too grazing for one is
+                // never skipped.
+                let size = (t[0].max(t[1]).max(t[2]) - t[0].min(t[1]).min(t[2])).length()
+                    + column
+                    + 2.0 * drift;
+                let margin = if steepness > ROUNDING {
+                    BEHIND + ROUNDING * size / (steepness - ROUNDING)
+                } else {
+                    f32::INFINITY
+                };
+                keyed.push((end + margin, i as u32));
                 f
             })
             .collect();
@@ -249,28 +267,48 @@ impl Rays {
             starts,
             reach,
             faces,
+            // COLUMNS is under 256.
+            spans: spans
+                .iter()
+                .map(|[rows, cols]| {
+                    [*rows.start(), *rows.end(), *cols.start(), *cols.end()].map(|x| x as u8)
+                })
+                .collect(),
+            last: Cell::new(usize::MAX),
         }
     }
 
-    /// Whether the ray from `p` meets a face; `skip` when faces that end behind `p`
-    /// by more than their margins may be skipped.
+    /// Whether the ray from `p` meets a face.
     #[inline]
-    fn meets(&self, p: Vec3, skip: bool) -> bool {
+    fn meets(&self, p: Vec3) -> bool {
         let Some(c) = self.grid.column(p) else {
             return false;
         };
-        let (mut from, to) = (self.starts[c] as usize, self.starts[c + 1] as usize);
-        if skip {
-            let at = if self.forward {
-                p[self.axis]
-            } else {
-                -p[self.axis]
-            };
-            from += self.reach[from..to].partition_point(|&r| r < at);
+        let (row, col) = ((c / COLUMNS) as u8, (c % COLUMNS) as u8);
+        let last = self.last.get();
+        if let Some(&[r0, r1, c0, c1]) = self.spans.get(last) {
+            let joins = (r0..=r1).contains(&row) && (c0..=c1).contains(&col);
+            if joins && self.prepared[last].crossed(p, self.dir) {
+                return true;
+            }
         }
-        self.faces[from..to]
+        let (from, to) = (self.starts[c] as usize, self.starts[c + 1] as usize);
+        let at = if self.forward {
+            p[self.axis]
+        } else {
+            -p[self.axis]
+        };
+        let from = from + self.reach[from..to].partition_point(|&r| r < at);
+        match self.faces[from..to]
             .iter()
-            .any(|&i| self.prepared[i as usize].crossed(p, self.dir))
+            .find(|&&i| self.prepared[i as usize].crossed(p, self.dir))
+        {
+            Some(&i) => {
+                self.last.set(i as usize);
+                true
+            }
+            None => false,
+        }
     }
 }
 
@@ -283,22 +321,19 @@ impl Solid {
         // A tilted ray drifts sideways as it goes: a face joins every column the drift
         // can bring a ray into.
         let drift = (hi - lo).max_element() * 0.0025 + PROBE;
-        let near = (lo - Vec3::splat(NEAR), hi + Vec3::splat(NEAR));
-        // The farthest an origin within `near` is from a corner of a face.
-        let far = (near.1 - near.0).element_sum();
-        let rays = std::array::from_fn(|k| {
-            let grid = Grid::new(k / 2, lo, hi);
-            let spans: Vec<Span> = triangles
+        let grids = [0, 1, 2].map(|axis| Grid::new(axis, lo, hi));
+        let spans = grids.map(|g| {
+            triangles
                 .iter()
-                .map(|t| grid.columns_of(t, drift))
-                .collect();
-            Rays::new(k, grid, &triangles, &spans, far)
+                .map(|t| g.columns_of(t, drift))
+                .collect::<Vec<Span>>()
         });
+        let rays =
+            std::array::from_fn(|k| Rays::new(k, grids[k / 2], &triangles, &spans[k / 2], drift));
         Solid {
             triangles,
             rays,
-            near,
-            open: std::cell::Cell::new(0),
+            open: Cell::new(0),
         }
     }
 
@@ -310,9 +345,8 @@ impl Solid {
     /// [`Solid::encloses`], trying direction `first` first: the answer is the same
     /// whatever the order, but the first open direction ends the search.
     fn encloses_first(&self, p: Vec3, first: usize) -> bool {
-        let skip = p.cmpge(self.near.0).all() && p.cmple(self.near.1).all();
         for k in (first..6).chain(0..first) {
-            if !self.rays[k].meets(p, skip) {
+            if !self.rays[k].meets(p) {
                 self.open.set(k);
                 return false;
             }
@@ -413,8 +447,7 @@ mod tests {
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let solid = Solid::new(triangles.clone(), lo, hi);
         for p in probes(&triangles, lo, hi) {
-            let skip = p.cmpge(solid.near.0).all() && p.cmple(solid.near.1).all();
-            let got: [bool; 6] = std::array::from_fn(|k| solid.rays[k].meets(p, skip));
+            let got: [bool; 6] = std::array::from_fn(|k| solid.rays[k].meets(p));
             let want = every_face_of_the_column(&triangles, lo, hi, p);
             assert_eq!(got, want, "{name}: the rays from {p}");
             assert_eq!(solid.encloses(p), want.iter().all(|&m| m), "{name}: {p}");
