@@ -207,11 +207,14 @@ struct TriangleTree<'a> {
     mesh: &'a Mesh,
     /// Triangle numbers, grouped by leaf.
     triangles: Vec<u32>,
+    /// Their corners, in the same order: a search reads a leaf's in one run.
+    slots: Vec<[Vec3; 3]>,
     nodes: Vec<Node>,
 }
 
-/// A box of the tree: a leaf holds `triangles[first..first + count]`; an inner node's
-/// children are nodes `first` and `first + 1` (`count` = 0).
+/// A box of the tree: a leaf holds `triangles[first..first + count]` (their corners at
+/// the same places in `slots`); an inner node's children are nodes `first` and
+/// `first + 1` (`count` = 0).
 #[derive(Clone, Copy, Debug)]
 struct Node {
     lo: Vec3,
@@ -229,12 +232,35 @@ impl<'a> TriangleTree<'a> {
         let centroids: Vec<Vec3> = (0..n)
             .map(|t| corners(mesh, t).iter().sum::<Vec3>() / 3.0)
             .collect();
+        // Each triangle's bounds, once: a box is the union of its triangles'.
+        let bounds: Vec<(Vec3, Vec3)> = (0..n)
+            .map(|t| {
+                let [a, b, c] = corners(mesh, t);
+                (a.min(b).min(c), a.max(b).max(c))
+            })
+            .collect();
         let mut tree = TriangleTree {
             mesh,
             triangles: (0..n as u32).collect(),
+            slots: Vec::new(),
             nodes: Vec::with_capacity(2 * n / LEAF_SIZE + 1),
         };
-        tree.nodes.push(tree.leaf(0, n));
+        let leaf = |triangles: &[u32], first: usize, count: usize| {
+            let (lo, hi) = triangles[first..first + count].iter().fold(
+                (Vec3::INFINITY, Vec3::NEG_INFINITY),
+                |(lo, hi), &t| {
+                    let (l, h) = bounds[t as usize];
+                    (lo.min(l), hi.max(h))
+                },
+            );
+            Node {
+                lo,
+                hi,
+                first: first as u32,
+                count: count as u32,
+            }
+        };
+        tree.nodes.push(leaf(&tree.triangles, 0, n));
         // Split leaves until small; a stack of nodes to split instead of recursion.
         let mut pending = vec![0usize];
         while let Some(i) = pending.pop() {
@@ -258,8 +284,8 @@ impl<'a> TriangleTree<'a> {
             });
             let left = tree.nodes.len();
             let (l, r) = (
-                tree.leaf(first, half),
-                tree.leaf(first + half, count - half),
+                leaf(&tree.triangles, first, half),
+                leaf(&tree.triangles, first + half, count - half),
             );
             tree.nodes.extend([l, r]);
             tree.nodes[i] = Node {
@@ -270,23 +296,12 @@ impl<'a> TriangleTree<'a> {
             };
             pending.extend([left, left + 1]);
         }
-        tree
-    }
-
-    /// A leaf over `triangles[first..first + count]`, with their bounds.
-    fn leaf(&self, first: usize, count: usize) -> Node {
-        let (lo, hi) = self.triangles[first..first + count]
+        tree.slots = tree
+            .triangles
             .iter()
-            .flat_map(|&t| corners(self.mesh, t as usize))
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p), hi.max(p))
-            });
-        Node {
-            lo,
-            hi,
-            first: first as u32,
-            count: count as u32,
-        }
+            .map(|&t| corners(mesh, t as usize))
+            .collect();
+        tree
     }
 
     /// The distance from `p` to the nearest triangle.
@@ -296,19 +311,19 @@ impl<'a> TriangleTree<'a> {
     }
 
     /// The distance from `p` to the nearest triangle when it is more than `floor`; `None`
-    /// as soon as a triangle within `floor` is found. Triangle `near` (a number of the
-    /// mesh's) is tried first, and becomes the nearest found.
+    /// as soon as a triangle within `floor` is found. The triangle in slot `near` is
+    /// tried first, and the slot becomes the nearest found's.
     fn distance_beyond(&self, p: Vec3, floor: f32, near: &mut u32) -> Option<f32> {
         let box_distance2 = |n: &Node| (p.clamp(n.lo, n.hi) - p).length_squared();
-        let distance2 = |t: u32| {
-            let [a, b, c] = corners(self.mesh, t as usize);
+        let distance2 = |slot: u32| {
+            let [a, b, c] = self.slots[slot as usize];
             (closest_on_triangle(p, a, b, c) - p).length_squared()
         };
         // Compared squared first, then as the figure itself would be, rounding and all.
         let floor2 = if floor >= 0.0 { floor * floor } else { -1.0 };
         let within = |d2: f32| d2 <= floor2 && d2.sqrt() <= floor;
         // A triangle's own distance bounds the search; the minimum over all is the same.
-        if *near as usize >= self.mesh.triangle_count() {
+        if *near as usize >= self.slots.len() {
             *near = 0;
         }
         let mut best2 = distance2(*near);
@@ -326,10 +341,10 @@ impl<'a> TriangleTree<'a> {
                 continue;
             }
             if node.count > 0 {
-                for &t in &self.triangles[node.first as usize..(node.first + node.count) as usize] {
-                    let d2 = distance2(t);
+                for slot in node.first..node.first + node.count {
+                    let d2 = distance2(slot);
                     if d2 < best2 {
-                        (best2, *near) = (d2, t);
+                        (best2, *near) = (d2, slot);
                     }
                 }
                 if within(best2) {
