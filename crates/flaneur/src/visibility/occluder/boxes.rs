@@ -186,6 +186,7 @@ impl Outside {
     }
 
     /// Whether face `i`'s bounds meet the closed box `b`.
+    #[inline(always)]
     fn near(&self, i: usize, b: &Aabb) -> bool {
         let [lx, ly, lz, hx, hy, hz] = &self.bounds;
         (lx[i] <= b.max.x)

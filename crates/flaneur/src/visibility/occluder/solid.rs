@@ -232,7 +232,12 @@ impl Rays {
             .collect();
         // Sorted once, then dealt out to the columns in that order: each column's
         // faces come sorted.
-        keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // By key, then index: one integer each, the key's bits in the total order's.
+        keyed.sort_unstable_by_key(|&(key, i)| {
+            let bits = key.to_bits() as i32;
+            let ordered = (bits ^ (((bits >> 31) as u32) >> 1) as i32) as u32 ^ (1 << 31);
+            (u64::from(ordered) << 32) | u64::from(i)
+        });
         let mut starts = vec![0u32; COLUMNS * COLUMNS + 1];
         for &(_, i) in &keyed {
             let [rows, cols] = &spans[i as usize];
