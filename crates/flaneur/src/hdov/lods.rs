@@ -220,8 +220,9 @@ fn proxy(source: &Mesh, target: usize, below: usize) -> Option<Mesh> {
     // Each grid's triangles counted as `flat` would keep them; only the two kept become
     // meshes.
     let (mut lo, mut hi) = (2u32, 1024u32);
-    let (mut under, mut over): (Option<(usize, Vec<u32>)>, Option<(usize, Vec<u32>)>) =
-        (None, None);
+    // The best grid's clustering under the target and over it: (triangles, indices).
+    let mut under: Option<(usize, Vec<u32>)> = None;
+    let mut over: Option<(usize, Vec<u32>)> = None;
     while lo <= hi {
         let grid = (lo + hi) / 2;
         let indices = at(grid);
