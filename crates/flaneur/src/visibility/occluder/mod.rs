@@ -9,6 +9,14 @@
 //! rectangle agree) with its area; the heaviest direction, to a degree, refined by the
 //! votes around it, wins. A generated city's walls all run along the axes and keep the
 //! axes' frame exactly.
+//!
+//! Speed: every object's occluders are found before a visibility build's first cell.
+//! The example `occluder_setup` times that alone (`cargo run --release -p flaneur
+//! --example occluder_setup -- CITY.scene`). On two busy cores, the same run timing the
+//! search before and after its enclosure rays were sorted by column and reach (see
+//! [`solid`](self::solid)) with the same boxes: the 3,000-object city (`citygen
+//! --objects 3000 --seed 1`, 12,663 boxes) 7.8 s against 12.9 s, the 20,000-object
+//! demo city (83,371 boxes) 39 s against 91 s.
 
 mod boxes;
 mod solid;

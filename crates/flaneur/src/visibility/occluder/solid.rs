@@ -201,7 +201,7 @@ impl Rays {
     /// drifting sideways by up to `drift` may meet it in.
     fn new(k: usize, grid: Grid, triangles: &[[Vec3; 3]], spans: &[Span], drift: f32) -> Rays {
         let dir = DIRECTIONS[k];
-        let (axis, forward) = (k / 2, k % 2 == 0);
+        let (axis, forward) = (k / 2, k.is_multiple_of(2));
         let column = grid.cell[0].hypot(grid.cell[1]);
         let mut keyed: Vec<(f32, u32)> = Vec::with_capacity(triangles.len());
         let prepared = triangles
