@@ -92,23 +92,52 @@ fn no_object_seen_from_a_cell_is_missing_from_its_pvs() {
     }
 }
 
+/// `flaneur bench EXPERIMENT DB` on three cells at N = `resolution` into `out`: its
+/// printed summary, after it succeeded.
+fn three_cells(experiment: &str, db: &str, resolution: &str, out: &std::path::Path) -> String {
+    let out = out.to_str().unwrap();
+    let run = common::flaneur(&[
+        "bench",
+        experiment,
+        db,
+        "--cells",
+        "3",
+        "--resolution",
+        resolution,
+        "--out",
+        out,
+    ]);
+    common::succeeded(&run)
+}
+
+/// `flaneur bench EXPERIMENT DB ARGS` fails for each of `cases`, its error naming
+/// what it says; and a database built without visibility is refused by name.
+fn refuses(experiment: &str, db: &str, cases: &[(&[&str], &str)]) {
+    for (args, says) in cases {
+        let mut all = vec!["bench", experiment, db];
+        all.extend_from_slice(args);
+        let run = common::flaneur(&all);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            !run.status.success() && err.contains(says),
+            "{all:?}: {err}"
+        );
+    }
+    let plain = common::city(10, 1, &BuildOptions::default());
+    let run = common::flaneur(&["bench", experiment, plain.db.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && err.contains("--visibility"),
+        "{err}"
+    );
+}
+
 #[test]
 fn the_command_writes_its_report_and_refuses_what_it_cannot_measure() {
     let city = city();
     let out = city.dir.path().join("out");
     let db = city.db.to_str().unwrap();
-    let run = common::flaneur(&[
-        "bench",
-        "pvs-tightness",
-        db,
-        "--cells",
-        "3",
-        "--resolution",
-        "32",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let text = common::succeeded(&run);
+    let text = three_cells("pvs-tightness", db, "32", &out);
     assert!(text.contains("mean PVS / mean seen"), "{text}");
     let csv = common::Csv::read(&out.join("pvs-tightness.csv"));
     assert_eq!(csv.rows.len(), 3);
@@ -117,30 +146,17 @@ fn the_command_writes_its_report_and_refuses_what_it_cannot_measure() {
         assert_eq!(csv.get(row, "missing"), "");
     }
     assert!(out.join("pvs-tightness.md").exists());
-    for (args, says) in [
-        (vec!["--cells", "0"], "--cells"),
-        (vec!["--resolution", "0"], "--resolution"),
-        (
-            vec!["--recompute", "--sample-spacing", "-1"],
-            "--sample-spacing",
-        ),
-    ] {
-        let mut all = vec!["bench", "pvs-tightness", db];
-        all.extend(args);
-        let run = common::flaneur(&all);
-        let err = String::from_utf8_lossy(&run.stderr);
-        assert!(
-            !run.status.success() && err.contains(says),
-            "{all:?}: {err}"
-        );
-    }
-    // A database without visibility is refused by name.
-    let plain = common::city(10, 1, &BuildOptions::default());
-    let run = common::flaneur(&["bench", "pvs-tightness", plain.db.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&run.stderr);
-    assert!(
-        !run.status.success() && err.contains("--visibility"),
-        "{err}"
+    refuses(
+        "pvs-tightness",
+        db,
+        &[
+            (&["--cells", "0"], "--cells"),
+            (&["--resolution", "0"], "--resolution"),
+            (
+                &["--recompute", "--sample-spacing", "-1"],
+                "--sample-spacing",
+            ),
+        ],
     );
 }
 
@@ -151,18 +167,7 @@ fn the_dov_accuracy_command_compares_the_raster_with_the_rays() {
     let city = city();
     let out = city.dir.path().join("dov");
     let db = city.db.to_str().unwrap();
-    let run = common::flaneur(&[
-        "bench",
-        "dov-accuracy",
-        db,
-        "--cells",
-        "3",
-        "--resolution",
-        "64",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let text = common::succeeded(&run);
+    let text = three_cells("dov-accuracy", db, "64", &out);
     assert!(text.contains("a corner (all cores)"), "{text}");
     let csv = common::Csv::read(&out.join("dov-accuracy.csv"));
     assert_eq!(csv.rows.len(), 3);
@@ -170,25 +175,13 @@ fn the_dov_accuracy_command_compares_the_raster_with_the_rays() {
         assert!(csv.num(row, "raster_objects") > 0.0);
         assert!(csv.num(row, "difference") <= 0.01, "{:?}", row);
     }
-    for (args, says) in [
-        (vec!["--cells", "0"], "--cells"),
-        (vec!["--resolution", "0"], "--resolution"),
-        (vec!["--limit", "-1"], "--limit"),
-    ] {
-        let mut all = vec!["bench", "dov-accuracy", db];
-        all.extend(args);
-        let run = common::flaneur(&all);
-        let err = String::from_utf8_lossy(&run.stderr);
-        assert!(
-            !run.status.success() && err.contains(says),
-            "{all:?}: {err}"
-        );
-    }
-    let plain = common::city(10, 1, &BuildOptions::default());
-    let run = common::flaneur(&["bench", "dov-accuracy", plain.db.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&run.stderr);
-    assert!(
-        !run.status.success() && err.contains("--visibility"),
-        "{err}"
+    refuses(
+        "dov-accuracy",
+        db,
+        &[
+            (&["--cells", "0"], "--cells"),
+            (&["--resolution", "0"], "--resolution"),
+            (&["--limit", "-1"], "--limit"),
+        ],
     );
 }

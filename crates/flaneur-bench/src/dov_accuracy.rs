@@ -12,12 +12,11 @@
 
 use std::time::Instant;
 
-use crate::pvs_tightness::spread;
+use crate::pvs_tightness::{spread, visibility_and_meshes};
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
-use flaneur::scene::Mesh;
 use flaneur::visibility::{cell_dovs, CubicProjection, DovStats, RasterScene, RayScene};
 
 /// How the experiment samples.
@@ -77,12 +76,7 @@ pub fn run(db: &Database, cfg: &DovAccuracyConfig) -> Result<DovAccuracyReport> 
     }
     let projection = CubicProjection::new(cfg.resolution)
         .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
-    let head = db.visibility()?.ok_or_else(|| {
-        Error::Invalid(format!(
-            "{} has no visibility: build it with --visibility",
-            db.store().path().display()
-        ))
-    })?;
+    let (head, objects) = visibility_and_meshes(db)?;
     let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
     let chosen = spread(&walkable, cfg.cells);
     let bounds: Vec<Aabb> = chosen
@@ -92,11 +86,6 @@ pub fn run(db: &Database, cfg: &DovAccuracyConfig) -> Result<DovAccuracyReport> 
             head.grid.cell_bounds(r, c)
         })
         .collect();
-    let entries = db.range(&db.bounds())?.objects;
-    let objects: Vec<(u64, Mesh)> = entries
-        .iter()
-        .map(|e| Ok((e.id, db.mesh(e)?)))
-        .collect::<Result<_>>()?;
     let pairs = || objects.iter().map(|(id, m)| (*id, m));
 
     let t = Instant::now();

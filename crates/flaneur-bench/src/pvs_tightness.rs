@@ -26,7 +26,9 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
 use flaneur::scene::Mesh;
-use flaneur::visibility::{point_dov, ConservativeScene, CubicProjection, RayScene, SampleOptions};
+use flaneur::visibility::{
+    point_dov, ConservativeScene, CubicProjection, RayScene, SampleOptions, TableHead,
+};
 
 /// How the experiment samples.
 #[derive(Clone, Debug, PartialEq)]
@@ -216,13 +218,9 @@ pub fn run(db: &Database, cfg: &PvsTightnessConfig) -> Result<PvsTightnessReport
     measure(db, &sampling, &source)
 }
 
-/// Samples `db`'s cells densely, as `cfg` says.
-pub fn sample(db: &Database, cfg: &PvsTightnessConfig) -> Result<Sampling> {
-    if cfg.cells == 0 {
-        return Err(Error::Invalid("--cells must be at least 1".into()));
-    }
-    let projection = CubicProjection::new(cfg.resolution)
-        .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
+/// `db`'s visibility head (an error naming `--visibility` where it has none) and every
+/// object's full mesh, by id, in the index's order.
+pub fn visibility_and_meshes(db: &Database) -> Result<(TableHead, Vec<(u64, Mesh)>)> {
     let head = db.visibility()?.ok_or_else(|| {
         Error::Invalid(format!(
             "{} has no visibility: build it with --visibility",
@@ -230,12 +228,24 @@ pub fn sample(db: &Database, cfg: &PvsTightnessConfig) -> Result<Sampling> {
         ))
     })?;
     let head = head.clone();
-    let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
-    let entries = db.range(&db.bounds())?.objects;
-    let objects: Vec<(u64, Mesh)> = entries
+    let objects = db
+        .range(&db.bounds())?
+        .objects
         .iter()
         .map(|e| Ok((e.id, db.mesh(e)?)))
         .collect::<Result<_>>()?;
+    Ok((head, objects))
+}
+
+/// Samples `db`'s cells densely, as `cfg` says.
+pub fn sample(db: &Database, cfg: &PvsTightnessConfig) -> Result<Sampling> {
+    if cfg.cells == 0 {
+        return Err(Error::Invalid("--cells must be at least 1".into()));
+    }
+    let projection = CubicProjection::new(cfg.resolution)
+        .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
+    let (head, objects) = visibility_and_meshes(db)?;
+    let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let ids: Vec<u64> = (0..rays.object_count() as u32)
         .map(|i| rays.object_id(i).unwrap_or(u64::MAX))
