@@ -131,18 +131,15 @@ fn build_and_info_on_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_in(dir.path(), 40, 1);
     let db = dir.path().join("c.flaneur");
-    let out = build_cli(
-        &scene,
-        &db,
-        &[
-            "--no-lod",
-            "--visibility",
-            "--cell-size",
-            "15",
-            "--dov-resolution",
-            "16",
-        ],
-    );
+    let args = [
+        "--no-lod",
+        "--visibility",
+        "--cell-size",
+        "15",
+        "--dov-resolution",
+        "16",
+    ];
+    let out = build_cli(&scene, &db, &args);
     assert!(
         out.status.success(),
         "{}",
@@ -224,14 +221,6 @@ fn build_and_info_on_the_command_line() {
     // The ray-cast reference builds the same cells on request; a method it does not
     // know is refused by the option's name.
     let rays = dir.path().join("rays.flaneur");
-    let args = [
-        "--no-lod",
-        "--visibility",
-        "--cell-size",
-        "15",
-        "--dov-resolution",
-        "16",
-    ];
     let out = build_cli(
         &scene,
         &rays,

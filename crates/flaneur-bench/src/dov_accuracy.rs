@@ -12,12 +12,12 @@
 
 use std::time::Instant;
 
-use crate::pvs_tightness::{spread, visibility_and_meshes};
+use crate::pvs_tightness::{spread, stored_visibility, StoredVisibility};
 use crate::report::Report;
 use flaneur::database::Database;
-use flaneur::error::{Error, Result};
+use flaneur::error::Result;
 use flaneur::geom::Aabb;
-use flaneur::visibility::{cell_dovs, CubicProjection, DovStats, RasterScene, RayScene};
+use flaneur::visibility::{cell_dovs, DovStats, RasterScene, RayScene};
 
 /// How the experiment samples.
 #[derive(Clone, Debug, PartialEq)]
@@ -71,13 +71,12 @@ pub struct DovAccuracyReport {
 
 /// Measures `db` (built with --visibility) as `cfg` says.
 pub fn run(db: &Database, cfg: &DovAccuracyConfig) -> Result<DovAccuracyReport> {
-    if cfg.cells == 0 {
-        return Err(Error::Invalid("--cells must be at least 1".into()));
-    }
-    let projection = CubicProjection::new(cfg.resolution)
-        .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
-    let (head, objects) = visibility_and_meshes(db)?;
-    let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
+    let StoredVisibility {
+        projection,
+        head,
+        walkable,
+        objects,
+    } = stored_visibility(db, cfg.cells, cfg.resolution)?;
     let chosen = spread(&walkable, cfg.cells);
     let bounds: Vec<Aabb> = chosen
         .iter()

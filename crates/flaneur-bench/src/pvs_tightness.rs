@@ -218,9 +218,25 @@ pub fn run(db: &Database, cfg: &PvsTightnessConfig) -> Result<PvsTightnessReport
     measure(db, &sampling, &source)
 }
 
-/// `db`'s visibility head (an error naming `--visibility` where it has none) and every
+/// What an experiment on a database's stored visibility starts from: the cube it
+/// samples with, the visibility head, the walkable cells' ids (ascending) and every
 /// object's full mesh, by id, in the index's order.
-pub fn visibility_and_meshes(db: &Database) -> Result<(TableHead, Vec<(u64, Mesh)>)> {
+pub struct StoredVisibility {
+    pub projection: CubicProjection,
+    pub head: TableHead,
+    pub walkable: Vec<u32>,
+    pub objects: Vec<(u64, Mesh)>,
+}
+
+/// Reads `db`'s [`StoredVisibility`] for `cells` cells at N = `resolution`: an error
+/// naming `--cells` for none, `--resolution` for a bad N, and `--visibility` where the
+/// database has none.
+pub fn stored_visibility(db: &Database, cells: usize, resolution: u32) -> Result<StoredVisibility> {
+    if cells == 0 {
+        return Err(Error::Invalid("--cells must be at least 1".into()));
+    }
+    let projection = CubicProjection::new(resolution)
+        .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
     let head = db.visibility()?.ok_or_else(|| {
         Error::Invalid(format!(
             "{} has no visibility: build it with --visibility",
@@ -228,24 +244,29 @@ pub fn visibility_and_meshes(db: &Database) -> Result<(TableHead, Vec<(u64, Mesh
         ))
     })?;
     let head = head.clone();
+    let walkable = head.cells.iter().map(|c| c.id).collect();
     let objects = db
         .range(&db.bounds())?
         .objects
         .iter()
         .map(|e| Ok((e.id, db.mesh(e)?)))
         .collect::<Result<_>>()?;
-    Ok((head, objects))
+    Ok(StoredVisibility {
+        projection,
+        head,
+        walkable,
+        objects,
+    })
 }
 
 /// Samples `db`'s cells densely, as `cfg` says.
 pub fn sample(db: &Database, cfg: &PvsTightnessConfig) -> Result<Sampling> {
-    if cfg.cells == 0 {
-        return Err(Error::Invalid("--cells must be at least 1".into()));
-    }
-    let projection = CubicProjection::new(cfg.resolution)
-        .map_err(|e| Error::Invalid(format!("{e} (--resolution)")))?;
-    let (head, objects) = visibility_and_meshes(db)?;
-    let walkable: Vec<u32> = head.cells.iter().map(|c| c.id).collect();
+    let StoredVisibility {
+        projection,
+        head,
+        walkable,
+        objects,
+    } = stored_visibility(db, cfg.cells, cfg.resolution)?;
     let rays = RayScene::new(objects.iter().map(|(id, m)| (*id, m)))?;
     let ids: Vec<u64> = (0..rays.object_count() as u32)
         .map(|i| rays.object_id(i).unwrap_or(u64::MAX))
