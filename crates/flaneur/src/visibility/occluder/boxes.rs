@@ -145,27 +145,43 @@ pub(super) fn occluder_boxes(triangles: Vec<[Vec3; 3]>) -> Vec<Aabb> {
 
 /// The faces of a solid that are on the outside somewhere (see
 /// [`Solid::is_outside`]): a box is free when it meets none of them.
-struct Outside {
-    faces: Vec<[Vec3; 3]>,
+///
+/// Whether a face is on the outside costs up to 48 enclosure rays, and most faces of
+/// a building never need the answer: a box's test stops at the first outside face
+/// that meets it, and most faces meet none of the boxes tried. So a face is asked
+/// only when it meets the box being tested, and its answer is kept for the next box.
+/// Whether some outside face meets a box does not depend on which faces were asked
+/// before, nor in which order, so the boxes are the ones that asking every face first
+/// would give.
+struct Outside<'a> {
+    solid: &'a Solid,
     /// Each face's bounds, as the low x, y, z and high x, y, z of all the faces in
     /// turn: most faces are apart from a candidate box, and the bounds, compared for
     /// many faces at once, tell that before the face's separating-axis test.
     bounds: [Vec<f32>; 6],
+    /// The bounds of each run of [`CHUNK`] faces, in the same layout: a face is usually
+    /// beside the one before it in a mesh, so a run lies along a wall, and a box
+    /// apart from the run's bounds is apart from all its faces.
+    chunks: [Vec<f32>; 6],
+    /// Per face: whether it is on the outside, once asked ([`UNASKED`] before).
+    known: Vec<Cell<u8>>,
     /// The face that last met a box: the searches ask about boxes a little apart
     /// each time, and a face that met one likely meets the next, so it is tried
     /// first (whether any face meets a box does not depend on the order).
     last: Cell<usize>,
 }
 
-impl Outside {
-    fn new(solid: &Solid) -> Outside {
-        let faces: Vec<[Vec3; 3]> = solid
-            .triangles
-            .iter()
-            .filter(|t| solid.is_outside(t))
-            .copied()
-            .collect();
-        let bounds = std::array::from_fn(|k| {
+/// Faces whose bounds are compared at once, and the run that shares one bounds.
+const CHUNK: usize = 64;
+/// A face's answer in [`Outside::known`]: not asked yet, on the outside, or not.
+const UNASKED: u8 = 0;
+const OUTSIDE: u8 = 1;
+const INSIDE: u8 = 2;
+
+impl<'a> Outside<'a> {
+    fn new(solid: &'a Solid) -> Outside<'a> {
+        let faces = &solid.triangles;
+        let bounds: [Vec<f32>; 6] = std::array::from_fn(|k| {
             faces
                 .iter()
                 .map(|t| {
@@ -178,17 +194,32 @@ impl Outside {
                 })
                 .collect()
         });
+        let chunks = std::array::from_fn(|k| {
+            bounds[k]
+                .chunks(CHUNK)
+                .map(|run| {
+                    let (lo, hi) = (f32::INFINITY, f32::NEG_INFINITY);
+                    if k < 3 {
+                        run.iter().fold(lo, |a, &v| a.min(v))
+                    } else {
+                        run.iter().fold(hi, |a, &v| a.max(v))
+                    }
+                })
+                .collect()
+        });
         Outside {
-            faces,
+            solid,
             bounds,
+            chunks,
+            known: vec![Cell::new(UNASKED); faces.len()],
             last: Cell::new(usize::MAX),
         }
     }
 
-    /// Whether face `i`'s bounds meet the closed box `b`.
+    /// Whether the bounds `i` of `bounds` (faces' or runs') meet the closed box `b`.
     #[inline(always)]
-    fn near(&self, i: usize, b: &Aabb) -> bool {
-        let [lx, ly, lz, hx, hy, hz] = &self.bounds;
+    fn near(bounds: &[Vec<f32>; 6], i: usize, b: &Aabb) -> bool {
+        let [lx, ly, lz, hx, hy, hz] = bounds;
         (lx[i] <= b.max.x)
             & (ly[i] <= b.max.y)
             & (lz[i] <= b.max.z)
@@ -197,24 +228,42 @@ impl Outside {
             & (b.min.z <= hz[i])
     }
 
-    /// Whether the closed box `b` meets none of the faces.
-    fn free(&self, b: &Aabb) -> bool {
-        let last = self.last.get();
-        if last < self.faces.len() && self.near(last, b) && triangle_meets_box(&self.faces[last], b)
-        {
+    /// Whether face `i` is on the outside and meets the closed box `b`.
+    #[inline]
+    fn blocks(&self, i: usize, b: &Aabb) -> bool {
+        let known = &self.known[i];
+        if known.get() == INSIDE || !triangle_meets_box(&self.solid.triangles[i], b) {
             return false;
         }
-        // The faces whose bounds meet the box, 64 at a time, then their test.
-        for start in (0..self.faces.len()).step_by(64) {
-            let end = (start + 64).min(self.faces.len());
+        if known.get() == UNASKED {
+            let outside = self.solid.is_outside(&self.solid.triangles[i]);
+            known.set(if outside { OUTSIDE } else { INSIDE });
+        }
+        known.get() == OUTSIDE
+    }
+
+    /// Whether the closed box `b` meets none of the outside faces.
+    fn free(&self, b: &Aabb) -> bool {
+        let count = self.known.len();
+        let last = self.last.get();
+        if last < count && Self::near(&self.bounds, last, b) && self.blocks(last, b) {
+            return false;
+        }
+        // The runs whose bounds meet the box; their faces whose bounds do, a run at a
+        // time; then those faces' tests.
+        for (run, start) in (0..count).step_by(CHUNK).enumerate() {
+            if !Self::near(&self.chunks, run, b) {
+                continue;
+            }
+            let end = (start + CHUNK).min(count);
             let mut near = 0u64;
             for i in start..end {
-                near |= u64::from(self.near(i, b)) << (i - start);
+                near |= u64::from(Self::near(&self.bounds, i, b)) << (i - start);
             }
             while near != 0 {
                 let i = start + near.trailing_zeros() as usize;
                 near &= near - 1;
-                if triangle_meets_box(&self.faces[i], b) {
+                if self.blocks(i, b) {
                     self.last.set(i);
                     return false;
                 }
