@@ -81,16 +81,17 @@ struct Prepared {
 }
 
 impl Prepared {
-    /// `t` prepared for rays along `dir`; `None` when no such ray crosses it
-    /// (Möller–Trumbore's determinant is under its threshold).
-    fn new(dir: Vec3, t: &[Vec3; 3]) -> Option<(Prepared, f32)> {
+    /// `t` prepared for rays along `dir`, with its steepness to them (`lengths` is
+    /// its two edges' from `t[0]` lengths' product); `None` when no such ray crosses
+    /// it (Möller–Trumbore's determinant is under its threshold).
+    fn new(dir: Vec3, t: &[Vec3; 3], lengths: f32) -> Option<(Prepared, f32)> {
         let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
         let p = dir.cross(e2);
         let det = e1.dot(p);
         if det.abs() < 1e-12 {
             return None;
         }
-        let steepness = det.abs() / (e1.length() * e2.length());
+        let steepness = det.abs() / lengths;
         let inv = 1.0 / det;
         Some((
             Prepared {
@@ -157,17 +158,18 @@ impl Grid {
         Some(r as usize * COLUMNS + c as usize)
     }
 
-    /// The columns, as rows and columns, that the face `t` joins: every one that a
-    /// tilted ray drifting sideways by up to `drift` on its way can bring into it.
+    /// The rows and columns (first and last of each) that the face `t` joins: every
+    /// one that a tilted ray drifting sideways by up to `drift` on its way can bring
+    /// into it.
     fn columns_of(&self, t: &[Vec3; 3], drift: f32) -> Span {
         let tlo = t[0].min(t[1]).min(t[2]) - Vec3::splat(drift);
         let thi = t[0].max(t[1]).max(t[2]) + Vec3::splat(drift);
-        let range = |k: usize| {
-            // Truncation saturates a negative step to 0, as floor then max(0) did.
-            let f = |v: f32| (((v - self.lo[k]) / self.cell[k]) as usize).min(COLUMNS - 1);
-            f(tlo[self.across[k]])..=f(thi[self.across[k]])
-        };
-        [range(1), range(0)]
+        // Truncation saturates a negative step to 0, as floor then max(0) did;
+        // COLUMNS is under 256.
+        let f =
+            |v: f32, k: usize| (((v - self.lo[k]) / self.cell[k]) as usize).min(COLUMNS - 1) as u8;
+        let (a, b) = (self.across[0], self.across[1]);
+        [f(tlo[b], 1), f(thi[b], 1), f(tlo[a], 0), f(thi[a], 0)]
     }
 }
 
@@ -196,19 +198,31 @@ struct Rays {
 }
 
 impl Rays {
-    /// The faces that rays along direction `k` may cross, each in the columns of
-    /// `spans` (per triangle, its rows and columns) that it joins, which a ray
-    /// drifting sideways by up to `drift` may meet it in.
-    fn new(k: usize, grid: Grid, triangles: &[[Vec3; 3]], spans: &[Span], drift: f32) -> Rays {
+    /// The faces that rays along direction `k` may cross, each in the columns of its
+    /// axis's `columns` that it joins, which a ray drifting sideways by up to `drift`
+    /// may meet it in; `shapes` is what each triangle's preparing needs of it alone.
+    fn new(
+        k: usize,
+        columns: &Columns,
+        triangles: &[[Vec3; 3]],
+        shapes: &[Shape],
+        drift: f32,
+    ) -> Rays {
         let dir = DIRECTIONS[k];
         let (axis, forward) = (k / 2, k.is_multiple_of(2));
+        let grid = columns.grid;
         let column = grid.cell[0].hypot(grid.cell[1]);
-        let mut keyed: Vec<(f32, u32)> = Vec::with_capacity(triangles.len());
+        // Per face rays cross: its reach's bits in the total order's, then its index.
+        let mut keyed: Vec<(u32, u32)> = Vec::with_capacity(triangles.len());
+        let mut reach_of = vec![0.0f32; triangles.len()];
+        let mut skipped = false;
         let prepared = triangles
             .iter()
+            .zip(shapes)
             .enumerate()
-            .map(|(i, t)| {
-                let Some((f, steepness)) = Prepared::new(dir, t) else {
+            .map(|(i, (t, shape))| {
+                let Some((f, steepness)) = Prepared::new(dir, t, shape.lengths) else {
+                    skipped = true;
                     return Prepared::default();
                 };
                 let end = if forward {
@@ -218,32 +232,34 @@ impl Rays {
                 };
                 // The margin (see the module's notes); a face too grazing for one is
                 // never skipped.
-                let size = (t[0].max(t[1]).max(t[2]) - t[0].min(t[1]).min(t[2])).length()
-                    + column
-                    + 2.0 * drift;
+                let size = shape.diagonal + column + 2.0 * drift;
                 let margin = if steepness > ROUNDING {
                     BEHIND + ROUNDING * size / (steepness - ROUNDING)
                 } else {
                     f32::INFINITY
                 };
-                keyed.push((end + margin, i as u32));
+                let key = end + margin;
+                reach_of[i] = key;
+                let bits = key.to_bits() as i32;
+                let ordered = (bits ^ (((bits >> 31) as u32) >> 1) as i32) as u32 ^ (1 << 31);
+                keyed.push((ordered, i as u32));
                 f
             })
             .collect();
-        // Sorted once, then dealt out to the columns in that order: each column's
-        // faces come sorted.
-        // By key, then index: one integer each, the key's bits in the total order's.
-        keyed.sort_unstable_by_key(|&(key, i)| {
-            let bits = key.to_bits() as i32;
-            let ordered = (bits ^ (((bits >> 31) as u32) >> 1) as i32) as u32 ^ (1 << 31);
-            (u64::from(ordered) << 32) | u64::from(i)
-        });
-        let mut starts = vec![0u32; COLUMNS * COLUMNS + 1];
-        for &(_, i) in &keyed {
-            let [rows, cols] = &spans[i as usize];
-            for r in rows.clone() {
-                for c in cols.clone() {
-                    starts[r * COLUMNS + c + 1] += 1;
+        // Sorted once, by reach then index, then dealt out to the columns in that
+        // order: each column's faces come sorted.
+        sort_by_reach(&mut keyed);
+        // The axis's counts hold every face; one this direction's rays never cross
+        // (rare: a face along the ray, or a sliver) is taken out of them.
+        let mut starts = columns.counts.clone();
+        if skipped {
+            let mut crossed = vec![false; triangles.len()];
+            for &(_, i) in &keyed {
+                crossed[i as usize] = true;
+            }
+            for (span, _) in columns.spans.iter().zip(&crossed).filter(|(_, &c)| !c) {
+                for c in span_columns(span) {
+                    starts[c + 1] -= 1;
                 }
             }
         }
@@ -253,14 +269,12 @@ impl Rays {
         let mut next = starts.clone();
         let total = starts[COLUMNS * COLUMNS] as usize;
         let (mut reach, mut faces) = (vec![0.0f32; total], vec![0u32; total]);
-        for &(key, i) in &keyed {
-            let [rows, cols] = &spans[i as usize];
-            for r in rows.clone() {
-                for c in cols.clone() {
-                    let at = &mut next[r * COLUMNS + c];
-                    (reach[*at as usize], faces[*at as usize]) = (key, i);
-                    *at += 1;
-                }
+        for &(_, i) in &keyed {
+            let key = reach_of[i as usize];
+            for c in span_columns(&columns.spans[i as usize]) {
+                let at = &mut next[c];
+                (reach[*at as usize], faces[*at as usize]) = (key, i);
+                *at += 1;
             }
         }
         Rays {
@@ -272,13 +286,7 @@ impl Rays {
             starts,
             reach,
             faces,
-            // COLUMNS is under 256.
-            spans: spans
-                .iter()
-                .map(|[rows, cols]| {
-                    [*rows.start(), *rows.end(), *cols.start(), *cols.end()].map(|x| x as u8)
-                })
-                .collect(),
+            spans: columns.spans.clone(),
             last: Cell::new(usize::MAX),
         }
     }
@@ -317,8 +325,82 @@ impl Rays {
     }
 }
 
-/// The rows and columns of a grid that a face joins.
-type Span = [std::ops::RangeInclusive<usize>; 2];
+/// The rows and columns of a grid that a face joins, first and last of each.
+type Span = [u8; 4];
+
+/// The columns, by their index, of `span`.
+#[inline]
+fn span_columns(&[r0, r1, c0, c1]: &Span) -> impl Iterator<Item = usize> {
+    (usize::from(r0)..usize::from(r1) + 1)
+        .flat_map(move |r| (usize::from(c0)..usize::from(c1) + 1).map(move |c| r * COLUMNS + c))
+}
+
+/// What preparing a face needs of it alone, whichever the direction: its two edges'
+/// lengths' product and its bounds' diagonal.
+struct Shape {
+    lengths: f32,
+    diagonal: f32,
+}
+
+/// One axis's grid, the columns each face joins in it, and how many faces join each
+/// column: the same for the rays both ways along the axis.
+struct Columns {
+    grid: Grid,
+    spans: Vec<Span>,
+    /// Column `c`'s count is `counts[c + 1]` (`counts[0]` is 0), ready to be summed
+    /// into where each column starts.
+    counts: Vec<u32>,
+}
+
+impl Columns {
+    fn new(grid: Grid, triangles: &[[Vec3; 3]], drift: f32) -> Columns {
+        let spans: Vec<Span> = triangles
+            .iter()
+            .map(|t| grid.columns_of(t, drift))
+            .collect();
+        let mut counts = vec![0u32; COLUMNS * COLUMNS + 1];
+        for span in &spans {
+            for c in span_columns(span) {
+                counts[c + 1] += 1;
+            }
+        }
+        Columns {
+            grid,
+            spans,
+            counts,
+        }
+    }
+}
+
+/// `keyed` (reach bits in the total order's, face index), in ascending index order,
+/// sorted by reach and then index: a stable sort on the reach alone, by its bytes
+/// from the lowest (a radix sort; a byte all the keys share is passed over).
+fn sort_by_reach(keyed: &mut Vec<(u32, u32)>) {
+    let mut counts = [[0u32; 256]; 4];
+    for &(key, _) in keyed.iter() {
+        for (byte, count) in counts.iter_mut().enumerate() {
+            count[(key >> (8 * byte)) as usize & 255] += 1;
+        }
+    }
+    let mut out = vec![(0u32, 0u32); keyed.len()];
+    for (byte, count) in counts.iter().enumerate() {
+        if count.iter().any(|&n| n as usize == keyed.len()) {
+            continue;
+        }
+        let mut next = [0u32; 256];
+        let mut sum = 0;
+        for (n, c) in next.iter_mut().zip(count) {
+            *n = sum;
+            sum += c;
+        }
+        for &item in keyed.iter() {
+            let at = &mut next[(item.0 >> (8 * byte)) as usize & 255];
+            out[*at as usize] = item;
+            *at += 1;
+        }
+        std::mem::swap(keyed, &mut out);
+    }
+}
 
 impl Solid {
     /// The solid of `triangles`, all of them within `lo`..`hi`.
@@ -326,15 +408,17 @@ impl Solid {
         // A tilted ray drifts sideways as it goes: a face joins every column the drift
         // can bring a ray into.
         let drift = (hi - lo).max_element() * 0.0025 + PROBE;
-        let grids = [0, 1, 2].map(|axis| Grid::new(axis, lo, hi));
-        let spans = grids.map(|g| {
-            triangles
-                .iter()
-                .map(|t| g.columns_of(t, drift))
-                .collect::<Vec<Span>>()
-        });
+        let shapes: Vec<Shape> = triangles
+            .iter()
+            .map(|t| Shape {
+                lengths: (t[1] - t[0]).length() * (t[2] - t[0]).length(),
+                diagonal: (t[0].max(t[1]).max(t[2]) - t[0].min(t[1]).min(t[2])).length(),
+            })
+            .collect();
+        let columns =
+            [0, 1, 2].map(|axis| Columns::new(Grid::new(axis, lo, hi), &triangles, drift));
         let rays =
-            std::array::from_fn(|k| Rays::new(k, grids[k / 2], &triangles, &spans[k / 2], drift));
+            std::array::from_fn(|k| Rays::new(k, &columns[k / 2], &triangles, &shapes, drift));
         Solid {
             triangles,
             rays,
@@ -494,7 +578,8 @@ mod tests {
         ];
         for (k, &dir) in DIRECTIONS.iter().enumerate() {
             for t in &faces {
-                let prepared = Prepared::new(dir, t);
+                let lengths = (t[1] - t[0]).length() * (t[2] - t[0]).length();
+                let prepared = Prepared::new(dir, t, lengths);
                 for i in 0..11 * 11 * 11 {
                     let o = Vec3::new((i % 11) as f32, (i / 11 % 11) as f32, (i / 121) as f32)
                         / 5.0
