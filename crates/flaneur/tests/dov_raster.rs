@@ -129,3 +129,75 @@ fn item_buffers_differ_only_along_edges() {
         "{off_edge} of {pixels} pixels differ off every edge"
     );
 }
+
+/// Each object's coarse levels, made as a build makes them (ratio 1/2, down to 100
+/// triangles), with their errors.
+fn levels(objects: &[citygen::SceneObject]) -> Vec<Vec<(citygen::Mesh, f32)>> {
+    objects
+        .iter()
+        .map(|o| {
+            let pm = flaneur::lod::ProgressiveMesh::build(&o.mesh).unwrap();
+            let levels = pm.levels(0.5, 100).unwrap();
+            levels
+                .into_iter()
+                .skip(1)
+                .map(|l| (l.mesh, l.error))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn far_objects_drawn_coarse_keep_every_cell_within_one_percent() {
+    let (objects, cells) = city(80);
+    let coarse = levels(&objects);
+    assert!(
+        coarse.iter().any(|l| !l.is_empty()),
+        "no object has a coarse level"
+    );
+    let meshes = || objects.iter().map(|o| (o.id, &o.mesh));
+    let rays = RayScene::new(meshes()).unwrap();
+    let full = RasterScene::new(meshes()).unwrap();
+    let raster = RasterScene::with_levels(
+        objects
+            .iter()
+            .zip(&coarse)
+            .map(|(o, l)| (o.id, &o.mesh, &l[..])),
+    )
+    .unwrap();
+    assert_eq!(raster.triangle_count(), full.triangle_count());
+    let cube = CubicProjection::new(256).unwrap();
+    // Far objects are drawn coarse, with fewer triangles set up, from every corner.
+    let (mut coarse_drawn, mut fewer) = (0, 0);
+    for eye in cells.iter().step_by(4).flat_map(corners) {
+        let (a, b) = (
+            raster.draw_counts(&cube, eye).unwrap(),
+            full.draw_counts(&cube, eye).unwrap(),
+        );
+        assert_eq!(b.coarse_objects, 0);
+        coarse_drawn += a.coarse_objects;
+        fewer += (a.triangles < b.triangles) as u32;
+    }
+    assert!(
+        coarse_drawn > 0 && fewer > 0,
+        "{coarse_drawn} objects drawn coarse"
+    );
+    let reference = cell_dovs(&rays, &cube, &cells).unwrap();
+    let drawn = cell_dovs(&raster, &cube, &cells).unwrap();
+    for (k, (r, d)) in reference.cells.iter().zip(&drawn.cells).enumerate() {
+        let total: f64 = pairs(r, d).iter().map(|p| (p.1 - p.2).abs()).sum();
+        assert!(total <= 0.01, "cell {k}: the DoVs differ by {total} in all");
+    }
+}
+
+#[test]
+fn a_coarse_level_with_a_bad_error_is_refused_naming_its_object() {
+    let (objects, _) = city(2);
+    let m = &objects[1].mesh;
+    for bad in [f32::NAN, -1.0, f32::INFINITY] {
+        let levels = [(m.clone(), bad)];
+        let e = RasterScene::with_levels([(7, m, &levels[..])]).unwrap_err();
+        let said = e.to_string();
+        assert!(said.contains("coarse level 1 of object 7"), "{said}");
+    }
+}

@@ -467,8 +467,19 @@ fn build(
     let visibility = match &opts.visibility {
         Some(v) => {
             kept.sort_unstable_by_key(|(id, _)| *id);
-            let report =
-                store_visibility(&mut store, &kept, (v, shards), opts.reproducible, progress)?;
+            // The DoV draws far objects through the coarse levels just stored; shards
+            // make the same levels themselves (`shards::made_levels`).
+            let levels = match (&lod, shards) {
+                (Some(_), None) => stored_levels(&store, &kept)?,
+                _ => Vec::new(),
+            };
+            let report = store_visibility(
+                &mut store,
+                (&kept, &levels),
+                (v, shards),
+                opts.reproducible,
+                progress,
+            )?;
             kinds.visibility = report.pages;
             Some(report)
         }
@@ -529,14 +540,14 @@ fn build(
 /// table, telling `progress` the cells done; a reproducible build stores no seconds.
 fn store_visibility(
     store: &mut Store,
-    objects: &[(u64, Mesh)],
+    (objects, levels): (&[(u64, Mesh)], &[Vec<(Mesh, f32)>]),
     (opts, shards): (&VisibilityOptions, Option<&[ShardCells]>),
     reproducible: bool,
     progress: &dyn Progress,
 ) -> Result<VisibilityReport> {
     let made = match shards {
         Some(shards) => merge_shards(objects, shards)?,
-        None => precompute(objects, opts, &|done, total| {
+        None => precompute(objects, levels, opts, &|done, total| {
             progress.update(Step::Visibility, done as u64, Some(total as u64));
         })?,
     };
@@ -564,4 +575,24 @@ fn store_visibility(
         dov_seconds: made.stats.dov_seconds,
         pages: extent.page_count as u64,
     })
+}
+
+/// Each of `objects`' coarse levels with its error in metres, finest first, read back
+/// from the LODs `store` holds (none for an object it has none of).
+fn stored_levels(store: &Store, objects: &[(u64, Mesh)]) -> Result<Vec<Vec<(Mesh, f32)>>> {
+    use crate::lod::stored::{level_mesh, levels, LodTable};
+    let Some(table) = LodTable::open(store)? else {
+        return Ok(Vec::new());
+    };
+    objects
+        .iter()
+        .map(|(id, _)| match table.find(store, *id)? {
+            Some(e) => levels(store, &e)?
+                .iter()
+                .skip(1)
+                .map(|l| Ok((level_mesh(store, &e, l.level)?, l.error)))
+                .collect(),
+            None => Ok(Vec::new()),
+        })
+        .collect()
 }

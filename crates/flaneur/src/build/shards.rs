@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use super::check::{check_costs, Survey, Work};
 use super::{model_format, models_build, scene_build, BuildOptions, BuildSummary};
 use crate::error::{Error, Result};
+use crate::lod::stored::encode_chain;
+use crate::lod::{LodOptions, ProgressiveMesh};
 use crate::progress::{Progress, Step};
 use crate::scene::{Mesh, SceneReader};
 use crate::visibility::{precompute_shard, Shard, ShardCells};
@@ -56,7 +58,11 @@ pub fn build_visibility_shard(
     let mut survey = Survey::new(opts);
     objects.iter().for_each(|(_, m)| survey.add(m));
     check_costs(opts, &survey, Work::Shard)?;
-    let made = precompute_shard(&objects, v, shard, &|done, total| {
+    let levels = match &opts.lod {
+        Some(lod) => made_levels(&objects, lod),
+        None => Vec::new(),
+    };
+    let made = precompute_shard(&objects, &levels, v, shard, &|done, total| {
         progress.update(Step::Visibility, done as u64, Some(total as u64));
     })?;
     progress.finish(Step::Visibility);
@@ -121,6 +127,36 @@ fn input_objects(
             Ok(objects)
         }
     }
+}
+
+/// Each object's coarse levels with their errors, finest first, made as a whole build
+/// makes and stores them (`LodWriter`), so that a shard draws far objects as the whole
+/// build's DoV does: none for an object the simplifier refuses (or panics on), or whose
+/// chain would not encode. (A build also refuses an object over `pm_threshold` whose
+/// DAG fails; that DAG is not built here.)
+fn made_levels(objects: &[(u64, Mesh)], lod: &LodOptions) -> Vec<Vec<(Mesh, f32)>> {
+    use rayon::prelude::*;
+    objects
+        .par_iter()
+        .map(|(id, mesh)| {
+            let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let levels = ProgressiveMesh::build(mesh)?.levels(lod.ratio, lod.min_triangles)?;
+                let coarse = levels.get(1..).unwrap_or(&[]);
+                if !coarse.is_empty() {
+                    encode_chain(*id, mesh.triangle_count(), coarse)?;
+                }
+                Ok::<_, Error>(levels)
+            }));
+            match made {
+                Ok(Ok(levels)) => levels
+                    .into_iter()
+                    .skip(1)
+                    .map(|l| (l.mesh, l.error))
+                    .collect(),
+                _ => Vec::new(),
+            }
+        })
+        .collect()
 }
 
 /// What a build reads: one scene file, or model files (OBJ, glTF, OpenStreetMap).

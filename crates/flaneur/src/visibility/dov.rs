@@ -110,6 +110,34 @@ impl DovMethod {
             DovMethod::RayCast => Box::new(RayScene::new(objects)?),
         })
     }
+
+    /// [`scene`](Self::scene) with each object's coarser levels (`levels[k]` those of
+    /// the `k`-th object; an empty `levels`, none for any): the raster draws a far
+    /// object through them ([`RasterScene::with_levels`](super::RasterScene::with_levels)),
+    /// the ray-cast, the reference, ignores them. Refused when `levels` is neither empty
+    /// nor one entry per object.
+    pub fn scene_with_levels<'a, I>(
+        self,
+        objects: I,
+        levels: &'a [Vec<(crate::scene::Mesh, f32)>],
+    ) -> Result<Box<dyn DovSource + Send>>
+    where
+        I: ExactSizeIterator<Item = (u64, &'a crate::scene::Mesh)>,
+    {
+        if levels.is_empty() || self == DovMethod::RayCast {
+            return self.scene(objects);
+        }
+        if levels.len() != objects.len() {
+            return Err(Error::Invalid(format!(
+                "coarse levels for {} objects, given {}",
+                levels.len(),
+                objects.len()
+            )));
+        }
+        Ok(Box::new(super::RasterScene::with_levels(
+            objects.zip(levels).map(|((id, m), l)| (id, m, &l[..])),
+        )?))
+    }
 }
 
 /// The DoV of every object from `point` by cubic projection: 6N² rays, each pixel's

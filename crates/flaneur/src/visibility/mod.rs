@@ -17,7 +17,9 @@
 //!   ([`VisibilityCost`]: cells, sample points, memory), checked by every build.
 //! - `raster`: [`RasterScene`], the DoV by rasterised item buffers (the thesis's own
 //!   means, on the CPU): each cube face drawn front to back with a depth buffer and
-//!   hierarchical depth. What the precomputation uses by default.
+//!   hierarchical depth, far objects through coarse levels a build hands it
+//!   ([`RasterScene::with_levels`], [`LOD_PIXELS`]). What the precomputation uses by
+//!   default.
 //! - `raycast`: [`RayScene`], the scene's triangles in one BVH; the first hit of a ray as
 //!   an object ([`Hit`]). The reference the raster is tested against.
 //! - `cube`: [`CubicProjection`], the cube's faces, pixels and their ΔDoV; the identity
@@ -106,7 +108,7 @@ pub use dov::{
 };
 pub(crate) use precompute::precompute;
 pub use precompute::VisibilityOptions;
-pub use raster::RasterScene;
+pub use raster::{CoarseLevels, DrawCounts, RasterScene, LOD_PIXELS};
 pub use raycast::{Hit, RayScene};
 pub(crate) use shard::merge_shards;
 pub use shard::{fingerprint, precompute_shard, Shard, ShardCells};

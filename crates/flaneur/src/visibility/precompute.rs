@@ -77,15 +77,18 @@ pub struct Precomputed {
     pub occluders: usize,
 }
 
-/// Computes the visibility of `objects` (id and mesh). `progress` is told the cells
-/// done and the cells in all, after each band of rows.
+/// Computes the visibility of `objects` (id and mesh), the DoV drawing far objects
+/// through their coarser `levels` (one entry per object, or empty for none: see
+/// [`DovMethod::scene_with_levels`]). `progress` is told the cells done and the cells in
+/// all, after each band of rows.
 pub fn precompute(
     objects: &[(u64, Mesh)],
+    levels: &[Vec<(Mesh, f32)>],
     opts: &VisibilityOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Precomputed> {
     let started = Instant::now();
-    let prep = prepare(objects, opts)?;
+    let prep = prepare(objects, levels, opts)?;
     let bands = bands(&prep.walkable);
     let made = compute(&prep, objects, opts, &bands, progress)?;
     Ok(Precomputed {
@@ -157,14 +160,20 @@ pub(super) fn grid_and_walkable(
     Ok((grid, walkable))
 }
 
-/// Everything the cells' computation shares.
-pub(super) fn prepare(objects: &[(u64, Mesh)], opts: &VisibilityOptions) -> Result<Prepared> {
+/// Everything the cells' computation shares; `levels` as [`precompute`] takes them.
+pub(super) fn prepare(
+    objects: &[(u64, Mesh)],
+    levels: &[Vec<(Mesh, f32)>],
+    opts: &VisibilityOptions,
+) -> Result<Prepared> {
     opts.validate()?;
     let boxes = boxes(objects)?;
     // The grid first: what the options make of the city is refused before the slow steps.
     let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
     let scene = Scene::from_meshes(objects)?;
-    let dov = opts.dov.scene(objects.iter().map(|(id, m)| (*id, m)))?;
+    let dov = opts
+        .dov
+        .scene_with_levels(objects.iter().map(|(id, m)| (*id, m)), levels)?;
     let projection = CubicProjection::new(opts.resolution)?;
     Ok(Prepared {
         occluders: scene.occluding_objects(),

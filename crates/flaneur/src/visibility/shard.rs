@@ -164,17 +164,19 @@ fn my_cells<T>(walkable: &[T], shard: Shard) -> &[T] {
     &walkable[at(shard.index)..at(shard.index + 1)]
 }
 
-/// Computes shard `shard` of the visibility of `objects`; `progress` is told this
-/// shard's cells done and its cells in all.
+/// Computes shard `shard` of the visibility of `objects`, far objects drawn through
+/// their coarser `levels` as a whole build draws them (one entry per object, or empty
+/// for none); `progress` is told this shard's cells done and its cells in all.
 pub fn precompute_shard(
     objects: &[(u64, Mesh)],
+    levels: &[Vec<(Mesh, f32)>],
     opts: &VisibilityOptions,
     shard: Shard,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ShardCells> {
     shard.check().map_err(Error::Invalid)?;
     let started = Instant::now();
-    let prep = prepare(objects, opts)?;
+    let prep = prepare(objects, levels, opts)?;
     let bands = bands(my_cells(&prep.walkable, shard));
     let made = compute(&prep, objects, opts, &bands, progress)?;
     Ok(ShardCells {

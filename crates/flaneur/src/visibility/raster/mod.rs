@@ -23,6 +23,24 @@
 //!   nearest first through a hierarchy of their boxes, and a node or object whose box
 //!   lies behind every pixel of the tiles it covers is skipped with its triangles. The
 //!   city behind the first rows of buildings then costs a box test per group.
+//! - **Far objects through coarse levels.** A scene may hold, per object, coarser meshes
+//!   with their geometric errors (`RasterScene::with_levels`; a build hands it the LOD
+//!   chain it stores). From a viewpoint, an object is drawn through its coarsest level
+//!   whose error e is under c·d, d the distance to the nearest point of the object's box
+//!   (which holds every level) and c = `LOD_PIXELS`·(2/N)·√2/3 radians, a quarter of
+//!   the narrowest pixel (at a face's corner a pixel spans (2/N)·√2/3). Taking e as the
+//!   distance between the level's surface and the full mesh's, every point moves by at
+//!   most e at distance ≥ d, so its direction turns by at most e/d < c and its image by
+//!   less than `LOD_PIXELS` of a pixel. Hence the bound: a pixel changes owner only if
+//!   its centre lies within a quarter pixel of the outline of an object drawn coarse, so
+//!   a corner's DoVs move by at most the weight of those pixels (twice: one object's loss
+//!   is another's gain), a quarter of a pixel along each far object's outline; an object
+//!   whose box is within e/c is drawn in full. One exception: where two objects'
+//!   surfaces lie within e of each other along a ray (touching buildings), the nearer
+//!   may swap, as coincident walls already may. The LOD chain's error is a root mean
+//!   square of the collapses' quadric distances, not a maximum, so the bound is argued,
+//!   not proven; `flaneur bench dov-accuracy` (stored DoVs against the rays on full
+//!   meshes) measures what it costs.
 //! - **Edges.** Vertices are snapped to 1/256 of a pixel and the edge functions are exact,
 //!   so shared edges leave no cracks (the ray-cast's Möller–Trumbore test may rarely
 //!   slip through one); a pixel whose centre lies within about 1/512 of a pixel of a
@@ -40,7 +58,7 @@ mod scene;
 mod tree;
 mod triangle;
 
-pub use scene::RasterScene;
+pub use scene::{CoarseLevels, DrawCounts, RasterScene, LOD_PIXELS};
 
 #[cfg(test)]
 mod tests;

@@ -1,9 +1,9 @@
 //! The rasterised scene: every object's triangles, its box, and the hierarchy over the
 //! boxes; and the cube's six item buffers drawn from one viewpoint, front to back.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::time::{Duration, Instant};
+
+use rustc_hash::FxHashMap;
 
 use super::buffer::ItemBuffer;
 use super::face::{Face, NEAR};
@@ -36,18 +36,42 @@ use crate::visibility::raycast::{check_mesh, check_point, zero_area};
 /// ```
 pub struct RasterScene {
     ids: Vec<u64>,
-    /// Each object's distinct vertex positions, those of object `o` at
-    /// `vertex_first[o]..vertex_first[o + 1]`: a vertex is projected once on a face for
+    /// Each mesh's distinct vertex positions, those of mesh `m` at
+    /// `vertex_first[m]..vertex_first[m + 1]`: a vertex is projected once on a face for
     /// all the triangles sharing it (a generated building has about 0.6 a triangle).
     vertices: Vec<[f32; 3]>,
     vertex_first: Vec<u32>,
-    /// Triangles as indices into their object's run of `vertices`, those of object `o`
-    /// at `first[o]..first[o + 1]`, in the mesh's order (the first drawn wins a tie).
+    /// Triangles as indices into their mesh's run of `vertices`, those of mesh `m` at
+    /// `first[m]..first[m + 1]`, in the mesh's order (the first drawn wins a tie).
     triangles: Vec<[u32; 3]>,
     first: Vec<u32>,
+    /// Object `o`'s meshes are `level_first[o]..level_first[o + 1]`: its full mesh, then
+    /// its coarser levels, finest first.
+    level_first: Vec<u32>,
+    /// Each mesh's geometric error in metres (0 for a full mesh).
+    errors: Vec<f32>,
+    /// Each object's box, around all its meshes.
     boxes: Vec<([f32; 3], [f32; 3])>,
     tree: ObjectTree,
     build_time: Duration,
+}
+
+/// How far a coarse level's surface may move on a face when it is drawn for an object's
+/// full mesh, in pixels: a level is drawn from a viewpoint only if its error, seen from
+/// the nearest point of the object's box, is under this share of the narrowest pixel.
+pub const LOD_PIXELS: f32 = 0.25;
+
+/// What drawing one viewpoint's six faces cost ([`RasterScene::draw_counts`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DrawCounts {
+    /// Objects whose triangles were set up on a face (summed over the faces).
+    pub objects: u64,
+    /// Triangles set up (projected and tested against the pixel centres).
+    pub triangles: u64,
+    /// Of those, the triangles that won at least one pixel's depth test.
+    pub covering: u64,
+    /// Objects drawn through a coarse level rather than their full mesh.
+    pub coarse_objects: u64,
 }
 
 /// A triangle the viewpoint lies on: its object, unit normal and the viewpoint's signed
@@ -58,6 +82,10 @@ struct Through {
     h: f64,
 }
 
+/// An object's coarser meshes, finest first, each with its geometric error in metres:
+/// how far its surface lies from the full mesh's.
+pub type CoarseLevels = [(Mesh, f32)];
+
 impl RasterScene {
     /// The scene of `(id, mesh)` pairs, in world coordinates; objects are then named by
     /// their index in this sequence, as [`RayScene::new`](super::super::RayScene::new)
@@ -67,11 +95,25 @@ impl RasterScene {
     where
         I: IntoIterator<Item = (u64, &'a Mesh)>,
     {
+        Self::with_levels(objects.into_iter().map(|(id, m)| (id, m, &[][..])))
+    }
+
+    /// [`new`](Self::new), each object with its coarser levels (possibly none): a
+    /// viewpoint draws an object through the coarsest level whose error, seen from the
+    /// nearest point of the object's box, moves its surface by less than [`LOD_PIXELS`]
+    /// of a pixel on a face (the error bound in the module's docs). Refused, naming the
+    /// object, for a level the full mesh would be refused for, or an error that is not a
+    /// finite number of metres ≥ 0.
+    pub fn with_levels<'a, I>(objects: I) -> Result<RasterScene>
+    where
+        I: IntoIterator<Item = (u64, &'a Mesh, &'a CoarseLevels)>,
+    {
         let started = Instant::now();
         let (mut ids, mut triangles, mut first, mut boxes) = (vec![], vec![], vec![0], vec![]);
         let (mut vertices, mut vertex_first) = (vec![], vec![0]);
-        let mut welded = Weld::default();
-        for (id, mesh) in objects {
+        let (mut level_first, mut errors) = (vec![0], vec![]);
+        let mut welded = FxHashMap::default();
+        for (id, mesh, levels) in objects {
             check_mesh(id, mesh)?;
             if ids.len() >= u32::MAX as usize - 1 {
                 return Err(Error::Invalid(
@@ -79,29 +121,56 @@ impl RasterScene {
                 ));
             }
             ids.push(id);
-            // Positions equal bit for bit are one vertex: a generated mesh repeats each
-            // corner for every face meeting there, to give it that face's normal.
-            let base = vertices.len();
-            welded.clear();
-            let local: Vec<u32> = mesh
-                .positions
-                .iter()
-                .map(|p| {
-                    *welded.entry(p.map(f32::to_bits)).or_insert_with(|| {
-                        vertices.push(*p);
-                        (vertices.len() - base - 1) as u32
+            let (mut lo, mut hi) = mesh.bounds();
+            for (k, (level, error)) in levels.iter().enumerate() {
+                check_mesh(id, level).map_err(|e| {
+                    Error::Invalid(format!("coarse level {} of object {id}: {e}", k + 1))
+                })?;
+                if !(error.is_finite() && *error >= 0.0) {
+                    return Err(Error::Invalid(format!(
+                        "coarse level {} of object {id} has error {error}, not a finite \
+                         number of metres >= 0",
+                        k + 1
+                    )));
+                }
+                // The box holds every level, so that culling by it stays exact for
+                // whichever is drawn.
+                let (a, b) = level.bounds();
+                lo = std::array::from_fn(|c| lo[c].min(a[c]));
+                hi = std::array::from_fn(|c| hi[c].max(b[c]));
+            }
+            let all = std::iter::once((mesh, 0.0)).chain(levels.iter().map(|(m, e)| (m, *e)));
+            for (mesh, error) in all {
+                // Positions equal bit for bit are one vertex: a generated mesh repeats
+                // each corner for every face meeting there, to give it that face's normal.
+                let base = vertices.len();
+                welded.clear();
+                let local: Vec<u32> = mesh
+                    .positions
+                    .iter()
+                    .map(|p| {
+                        *welded.entry(p.map(f32::to_bits)).or_insert_with(|| {
+                            vertices.push(*p);
+                            (vertices.len() - base - 1) as u32
+                        })
                     })
-                })
-                .collect();
-            triangles.extend(mesh.indices.chunks_exact(3).filter_map(|t| {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-                (!zero_area(a, b, c)).then(|| [t[0], t[1], t[2]].map(|i| local[i as usize]))
-            }));
-            let too_many =
-                || Error::Invalid("a raster scene holds at most 2^32 - 1 triangles".into());
-            first.push(u32::try_from(triangles.len()).map_err(|_| too_many())?);
-            vertex_first.push(u32::try_from(vertices.len()).map_err(|_| too_many())?);
-            boxes.push(mesh.bounds());
+                    .collect();
+                triangles.extend(mesh.indices.chunks_exact(3).filter_map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+                    (!zero_area(a, b, c)).then(|| [t[0], t[1], t[2]].map(|i| local[i as usize]))
+                }));
+                first.push(u32::try_from(triangles.len()).map_err(|_| {
+                    Error::Invalid("a raster scene holds at most 2^32 - 1 triangles".into())
+                })?);
+                vertex_first.push(u32::try_from(vertices.len()).map_err(|_| {
+                    Error::Invalid("a raster scene holds at most 2^32 - 1 vertices".into())
+                })?);
+                errors.push(error);
+            }
+            level_first.push(u32::try_from(errors.len()).map_err(|_| {
+                Error::Invalid("a raster scene holds at most 2^32 - 1 meshes".into())
+            })?);
+            boxes.push((lo, hi));
         }
         Ok(RasterScene {
             tree: ObjectTree::new(&boxes),
@@ -110,6 +179,8 @@ impl RasterScene {
             vertex_first,
             triangles,
             first,
+            level_first,
+            errors,
             boxes,
             build_time: started.elapsed(),
         })
@@ -120,9 +191,23 @@ impl RasterScene {
         self.ids.len()
     }
 
-    /// The number of triangles drawn (zero-area ones dropped).
+    /// The number of the full meshes' triangles (zero-area ones dropped).
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        (0..self.ids.len())
+            .map(|o| {
+                let m = self.level_first[o] as usize;
+                (self.first[m + 1] - self.first[m]) as usize
+            })
+            .sum()
+    }
+
+    /// What drawing the six faces around `point` costs: the objects and triangles set
+    /// up, and the triangles that took a pixel.
+    pub fn draw_counts(&self, projection: &CubicProjection, point: [f32; 3]) -> Result<DrawCounts> {
+        check_point("viewpoint", point)?;
+        let mut counts = DrawCounts::default();
+        self.draw_counted(projection, point, &mut counts, |_, _| {});
+        Ok(counts)
     }
 
     /// The id of object `object` (an index), or `None` past the end.
@@ -174,9 +259,24 @@ impl RasterScene {
         &self,
         projection: &CubicProjection,
         eye: [f32; 3],
+        done: impl FnMut(usize, &ItemBuffer),
+    ) {
+        self.draw_counted(projection, eye, &mut DrawCounts::default(), done);
+    }
+
+    /// [`draw`](Self::draw), adding what it cost to `counts`.
+    fn draw_counted(
+        &self,
+        projection: &CubicProjection,
+        eye: [f32; 3],
+        counts: &mut DrawCounts,
         mut done: impl FnMut(usize, &ItemBuffer),
     ) {
         let n = projection.resolution();
+        // A surface moved by e metres at distance d turns by at most e/d radians, and
+        // an angle α moves a face's image by at most α·N/(2·√2/3) pixels (the narrowest
+        // pixel, at a face's corner, spans (2/N)·√2/3 radians).
+        let per_metre = LOD_PIXELS * 2.0 * std::f32::consts::SQRT_2 / (3.0 * n as f32);
         let through = self.through(eye);
         let mut buf = ItemBuffer::new(n);
         let mut projected = Vec::new();
@@ -188,14 +288,21 @@ impl RasterScene {
             for t in &through {
                 paint_through(&face, &mut buf, t);
             }
-            self.draw_face(&face, &mut buf, &mut projected);
+            self.draw_face(&face, &mut buf, &mut projected, per_metre, counts);
             done(f, &buf);
         }
     }
 
     /// Visits the hierarchy nearest first, skipping every node and object whose box is
     /// off the face or behind what is drawn, and draws the triangles of the rest.
-    fn draw_face(&self, face: &Face, buf: &mut ItemBuffer, projected: &mut Vec<Vertex>) {
+    fn draw_face(
+        &self,
+        face: &Face,
+        buf: &mut ItemBuffer,
+        projected: &mut Vec<Vertex>,
+        per_metre: f32,
+        counts: &mut DrawCounts,
+    ) {
         let nodes = &self.tree.nodes;
         let mut stack = if nodes.is_empty() { vec![] } else { vec![0u32] };
         while let Some(node) = stack.pop() {
@@ -216,36 +323,62 @@ impl RasterScene {
                 }
                 Kind::Leaf { first, count } => {
                     for &o in &self.tree.order[first as usize..(first + count) as usize] {
-                        self.draw_object(face, buf, o, projected);
+                        self.draw_object(face, buf, o, projected, per_metre, counts);
                     }
                 }
             }
         }
     }
 
-    /// Draws object `o` unless its box is off the face or hidden; `projected` is scratch
-    /// for its vertices on the face.
-    fn draw_object(&self, face: &Face, buf: &mut ItemBuffer, o: u32, projected: &mut Vec<Vertex>) {
+    /// Draws object `o` unless its box is off the face or hidden, through the coarsest
+    /// level whose error is under `per_metre` times the distance to its box; `projected`
+    /// is scratch for its vertices on the face.
+    fn draw_object(
+        &self,
+        face: &Face,
+        buf: &mut ItemBuffer,
+        o: u32,
+        projected: &mut Vec<Vertex>,
+        per_metre: f32,
+        counts: &mut DrawCounts,
+    ) {
         let (lo, hi) = self.boxes[o as usize];
-        match face.footprint(lo, hi) {
-            Some(f) if !buf.hides(&f) => {}
+        let distance2 = match face.footprint(lo, hi) {
+            Some(f) if !buf.hides(&f) => f.distance2,
             _ => return,
-        }
-        let k = o as usize;
+        };
+        let (full, end) = (
+            self.level_first[o as usize],
+            self.level_first[o as usize + 1],
+        );
+        let budget = per_metre * per_metre * distance2;
+        let m = (full + 1..end)
+            .rev()
+            .find(|&m| {
+                let e = self.errors[m as usize];
+                e * e < budget
+            })
+            .unwrap_or(full) as usize;
+        counts.objects += 1;
+        counts.coarse_objects += (m != full as usize) as u64;
         let vertices =
-            &self.vertices[self.vertex_first[k] as usize..self.vertex_first[k + 1] as usize];
+            &self.vertices[self.vertex_first[m] as usize..self.vertex_first[m + 1] as usize];
         projected.clear();
         projected.extend(vertices.iter().map(|&p| Vertex::new(face, p)));
         let projected = &projected[..];
-        for t in &self.triangles[self.first[k] as usize..self.first[k + 1] as usize] {
-            triangle::draw(face, buf, t.map(|k| &projected[k as usize]), o);
+        let triangles = &self.triangles[self.first[m] as usize..self.first[m + 1] as usize];
+        counts.triangles += triangles.len() as u64;
+        for t in triangles {
+            counts.covering +=
+                triangle::draw(face, buf, t.map(|k| &projected[k as usize]), o) as u64;
         }
     }
 
-    /// The world positions of object `o`'s triangles.
+    /// The world positions of object `o`'s full mesh's triangles.
     fn object_triangles(&self, o: usize) -> impl Iterator<Item = [[f32; 3]; 3]> + '_ {
-        let vertices = &self.vertices[self.vertex_first[o] as usize..];
-        self.triangles[self.first[o] as usize..self.first[o + 1] as usize]
+        let m = self.level_first[o] as usize;
+        let vertices = &self.vertices[self.vertex_first[m] as usize..];
+        self.triangles[self.first[m] as usize..self.first[m + 1] as usize]
             .iter()
             .map(move |t| t.map(|k| vertices[k as usize]))
     }
@@ -321,35 +454,6 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-/// Welding's map from a position's bits to its vertex: a multiplicative hash (the
-/// positions of one mesh, never an adversary's keys), several times faster than SipHash
-/// over the 2 million triangles of a 3,000-object city.
-type Weld = HashMap<[u32; 3], u32, BuildHasherDefault<WeldHasher>>;
-
-#[derive(Default)]
-struct WeldHasher(u64);
-
-impl Hasher for WeldHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        // A `[u32; 3]` hashes its elements' bytes in one call.
-        for c in bytes.chunks(4) {
-            let mut word = [0; 4];
-            word[..c.len()].copy_from_slice(c);
-            self.write_u32(u32::from_le_bytes(word));
-        }
-    }
-
-    fn write_u32(&mut self, x: u32) {
-        self.0 = (self.0.rotate_left(5) ^ x as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-
-    fn write_usize(&mut self, _: usize) {}
 }
 
 impl std::fmt::Debug for RasterScene {
