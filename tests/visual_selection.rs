@@ -3,8 +3,9 @@
 //! where its stored error projects under τ from the viewcell (VISUAL) or the eye (VSC),
 //! where the thesis's rule stops at it whatever the screen says; each object is drawn at
 //! the finer of eq. 5.6's level and the screen-space one, where the thesis's draws it
-//! at the coarser; PB's budget still bounds every frame; and a bad rule's name or τ is
-//! an error that says what to give.
+//! at the coarser, under τ stretched for an object whose DoV is at most η (ours); PB's
+//! budget still bounds every frame; and a bad rule's name or τ is an error that says
+//! what to give.
 
 mod common;
 
@@ -14,7 +15,7 @@ use flaneur::geom::{Camera, DEFAULT_FOV};
 use flaneur::hdov::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
 use flaneur::hdov::{search_cell, Found, HdovOptions, NodeErrors, ScreenRule, Selection};
 use flaneur::walk::path::cell_walk;
-use flaneur::walk::visual::{self, screen_test, VisualConfig};
+use flaneur::walk::visual::{self, screen_test, VisualConfig, FAINT_TAU_STRETCH};
 use flaneur::walk::{FrameSink, ObjectBuffer, GROUP_ID};
 use flaneur::{BuildOptions, Database};
 
@@ -140,6 +141,12 @@ struct Levels<'d> {
     checked: usize,
     /// Levels that break the rule: (id, drawn, eq. 5.6's, τ's).
     wrong: Vec<(u64, usize, usize, usize)>,
+    /// Objects drawn under a stretched τ, and of them those drawn coarser than τ's own
+    /// level; the ids drawn stretched and those drawn under τ.
+    stretched: usize,
+    coarser_than_tau: usize,
+    faint: HashSet<u64>,
+    bright: HashSet<u64>,
     /// Whether the rule is the finer of the two (ours) or the coarser (the thesis's).
     finer_of: bool,
 }
@@ -156,10 +163,23 @@ impl FrameSink for Levels<'_> {
             if o.entry.id & GROUP_ID != 0 || d.level == flaneur::walk::lod_select::REFINED {
                 continue;
             }
-            let by_tau = self
-                .db
-                .lod_level_for(&o.entry, camera.position, camera.fov_y, TAU)?
-                .level;
+            // The stretch the walk handed on, which `faint_dov_tau…` checks against
+            // the objects' DoVs.
+            let level_under = |tau: f32| {
+                self.db
+                    .lod_level_for(&o.entry, camera.position, camera.fov_y, tau)
+                    .map(|l| l.level)
+            };
+            let by_tau = level_under(TAU * o.tau_scale)?;
+            if o.tau_scale != 1.0 {
+                self.stretched += 1;
+                self.faint.insert(o.entry.id);
+                if d.level > level_under(TAU)? {
+                    self.coarser_than_tau += 1;
+                }
+            } else {
+                self.bright.insert(o.entry.id);
+            }
             let want = match self.finer_of {
                 true => by_tau.min(o.level),
                 false => by_tau.max(o.level),
@@ -191,13 +211,7 @@ fn an_object_near_the_eye_with_a_small_dov_is_drawn_at_its_tau_level_not_eq_5_6s
             selection,
             ..VisualConfig::default()
         };
-        let mut seen = Levels {
-            db: &db,
-            finer: 0,
-            checked: 0,
-            wrong: Vec::new(),
-            finer_of: selection == Selection::Screen,
-        };
+        let mut seen = Levels::new(&db, selection == Selection::Screen);
         visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
         seen
     };
@@ -221,6 +235,100 @@ fn an_object_near_the_eye_with_a_small_dov_is_drawn_at_its_tau_level_not_eq_5_6s
         &thesis.wrong[..thesis.wrong.len().min(5)]
     );
     assert_eq!(thesis.finer, 0);
+    // η 0 finds no object of DoV ≤ η: none is stretched.
+    assert_eq!(ours.stretched + thesis.stretched, 0);
+}
+
+impl<'d> Levels<'d> {
+    fn new(db: &'d Database, finer_of: bool) -> Levels<'d> {
+        Levels {
+            db,
+            finer: 0,
+            checked: 0,
+            wrong: Vec::new(),
+            finer_of,
+            stretched: 0,
+            coarser_than_tau: 0,
+            faint: HashSet::new(),
+            bright: HashSet::new(),
+        }
+    }
+}
+
+#[test]
+fn faint_dov_tau_an_object_of_dov_at_most_eta_is_drawn_under_a_stretched_tau() {
+    let db = Database::open(&city().db).unwrap();
+    let path = cell_walk(&db, 60, 1.5, 10.0, 2).unwrap();
+    let eta = 0.01;
+    let walk = |faint_tau: f32| {
+        let cfg = VisualConfig {
+            eta,
+            pace: None,
+            faint_tau,
+            ..VisualConfig::default()
+        };
+        let mut seen = Levels::new(&db, true);
+        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        seen
+    };
+    let ours = walk(FAINT_TAU_STRETCH);
+    // Every object at the finer of eq. 5.6's level and the screen-space one under the τ
+    // its DoV gives it.
+    assert!(
+        ours.wrong.is_empty(),
+        "{:?}",
+        &ours.wrong[..ours.wrong.len().min(5)]
+    );
+    assert!(ours.stretched > 0, "no object drawn under a stretched τ");
+    assert!(
+        ours.coarser_than_tau > 0,
+        "no faint object drawn coarser than τ's level ({} stretched)",
+        ours.stretched
+    );
+    // Stretched exactly where a cell found the object at a DoV of at most η.
+    let (mut faint, mut bright) = (HashSet::new(), HashSet::new());
+    for cell in cells(&db) {
+        let errors = NodeErrors::default();
+        let rule = ScreenRule {
+            test: screen_test(&db, cell, TAU, DEFAULT_FOV).unwrap(),
+            errors: &errors,
+            tolerant: false,
+        };
+        for f in search_cell(&db, cell, eta, None, None, Some(&rule))
+            .unwrap()
+            .found
+        {
+            if let Found::Object { entry, dov, .. } = f {
+                match dov <= eta {
+                    true => faint.insert(entry.id),
+                    false => bright.insert(entry.id),
+                };
+            }
+        }
+    }
+    assert!(
+        ours.faint.is_subset(&faint),
+        "{:?}",
+        ours.faint.difference(&faint)
+    );
+    assert!(
+        ours.bright.is_subset(&bright),
+        "{:?}",
+        ours.bright.difference(&bright)
+    );
+    // A stretch of 1 draws every object under τ itself.
+    let plain = walk(1.0);
+    assert!(plain.wrong.is_empty());
+    assert_eq!(plain.stretched, 0);
+    // A stretch under 1, or not a number, is refused with what to give.
+    for bad in [0.5, f32::NAN] {
+        let cfg = VisualConfig {
+            faint_tau: bad,
+            ..VisualConfig::default()
+        };
+        let e = visual::walk(&db, &path, &cfg, |_| {}).unwrap_err();
+        assert!(e.to_string().contains("≥ 1"), "{e}");
+    }
 }
 
 /// The screen rule from `eye` at the walks' field of view under τ.

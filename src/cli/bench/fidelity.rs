@@ -69,6 +69,10 @@ pub struct FidelityArgs {
     /// level and --lod-tau's. `thesis`: Shou 2002's rules, whatever the screen says.
     #[arg(long, default_value = "screen", value_parser = selection)]
     selection: flaneur::hdov::Selection,
+    /// With --mode visual --selection screen: the factor --lod-tau is stretched by for an
+    /// object whose DoV from the viewcell is at most η (ours; 1: none stretched).
+    #[arg(long, value_name = "X", default_value_t = flaneur::walk::visual::FAINT_TAU_STRETCH)]
+    faint_tau: f32,
     /// Folder for the CSVs, plots and summary.
     #[arg(long, value_name = "DIR", default_value = "bench-out")]
     out: PathBuf,
@@ -89,6 +93,7 @@ impl FidelityArgs {
             dov_tau,
             finer_by_tau,
             selection,
+            faint_tau,
             budget,
             out,
         } = self;
@@ -126,6 +131,7 @@ impl FidelityArgs {
             finer_by_tau,
             selection,
             tau: lod_tau,
+            faint_tau,
             pace: None,
             ..VisualConfig::default()
         };

@@ -44,6 +44,10 @@ pub struct Loaded {
     /// (VISUAL with `dov_tau`): an object refined view by view then takes a τ its DoV
     /// stretches ([`dov_tau`](super::lod_select::dov_tau)).
     pub dov: Option<f32>,
+    /// The factor LOD selection stretches its τ by for this object: 1, but for an
+    /// object VISUAL's screen rule found with a DoV of at most η
+    /// ([`faint_tau_scale`](crate::walk::visual::faint_tau_scale)).
+    pub tau_scale: f32,
 }
 
 /// The bit an id has when it names a group of objects drawn as one (an HDoV-tree node
@@ -66,6 +70,7 @@ impl Loaded {
             finest: level,
             finer_of: false,
             dov: None,
+            tau_scale: 1.0,
         }
     }
 
@@ -281,6 +286,7 @@ pub(crate) mod tests {
             finest: 0,
             finer_of: false,
             dov: None,
+            tau_scale: 1.0,
         }
     }
 

@@ -12,7 +12,8 @@
 //! coarser level the walk chose for it ([`Loaded::level`], VISUAL's), which selection
 //! never draws finer unless the walk allows it ([`Loaded::finest`]), nor, for VISUAL's
 //! screen rule ([`Loaded::finer_of`]), coarser: it is then drawn at the finer of the
-//! level the walk chose (eq. 5.6's) and the screen-space one, the finer level read like
+//! level the walk chose (eq. 5.6's) and the screen-space one (under τ stretched by
+//! [`Loaded::tau_scale`] for a faint object), the finer level read like
 //! a coarse one; the coarser ones are read from the database's LOD chains when
 //! first chosen (only the pages of that level), and kept while the object stays in the
 //! buffer. A group of objects drawn as one (an HDoV node) is drawn as loaded. A database without LODs, or an object
@@ -431,7 +432,8 @@ impl<'a> LodSelector<'a> {
                 // No levels to choose from (none stored, or unreadable): as loaded.
                 true => o.level,
                 false => {
-                    let by_tau = level_for(&levels.levels, d, camera.fov_y, self.tau);
+                    let tau = self.tau * o.tau_scale;
+                    let by_tau = level_for(&levels.levels, d, camera.fov_y, tau);
                     match o.finer_of {
                         true => by_tau.min(o.level),
                         false => by_tau.max(o.finest),
@@ -558,7 +560,7 @@ impl LodSelector<'_> {
             camera.fov_x.max(camera.fov_y),
         )?;
         let params = RefineParams {
-            tau: dov_tau(self.tau, o.dov),
+            tau: dov_tau(self.tau * o.tau_scale, o.dov),
             budget: Some(THESIS_BUDGET),
             ..RefineParams::thesis(Traversal::ConstantTime)
         };

@@ -144,6 +144,7 @@ impl Mode for Scene<'_> {
                 finest: a.level,
                 finer_of: false,
                 dov: None,
+                tau_scale: 1.0,
             });
         }
         let keep: HashSet<u64> = self.drawable.iter().copied().collect();

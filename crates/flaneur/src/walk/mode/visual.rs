@@ -26,7 +26,7 @@ use crate::walk::cells::{contains_ground, scaled_cell, viewcell_holding};
 use crate::walk::mode::receive::receive;
 use crate::walk::session::{self, Culled, Drawable, FrameAt, Mode};
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
-use crate::walk::visual::{screen_test, VisualConfig, VisualFrame};
+use crate::walk::visual::{faint_tau_scale, screen_test, VisualConfig, VisualFrame};
 use crate::walk::walk_lods::WalkLods;
 
 /// How long the viewer waits for a prefetch of the cell it enters before it searches
@@ -101,6 +101,7 @@ pub(crate) fn walk_live<'db>(
         finer_of: cfg.finer_of(),
         selection: cfg.selection,
         tau: cfg.tau,
+        faint_tau: cfg.faint_tau,
         errors: NodeErrors::default(),
     };
     let search = &search;
@@ -197,6 +198,8 @@ pub(super) struct Searcher<'a> {
     /// The rule that picks nodes' internal LODs, and the τ the screen rule holds them to.
     pub selection: Selection,
     pub tau: f32,
+    /// τ's stretch for an object of DoV at most η under the screen rule.
+    pub faint_tau: f32,
     /// The nodes' internal LODs' stored errors read so far (the screen rule's).
     pub errors: NodeErrors,
 }
@@ -357,6 +360,9 @@ pub(super) fn loaded(piece: &Piece, mesh: Mesh, level: usize, search: &Searcher<
         if search.finer_of {
             loaded.finest = 0;
             loaded.finer_of = true;
+        }
+        if search.selection == Selection::Screen {
+            loaded.tau_scale = faint_tau_scale(*dov, search.eta, search.faint_tau);
         }
     }
     loaded
