@@ -6,8 +6,9 @@
 //! and within a column by how far along the ray's way they reach, so that a ray
 //! tests only the faces in its column that reach past its origin; each face's part
 //! of the ray–triangle test that does not depend on the ray's origin is computed
-//! once per direction. Both give the same answers as testing every face of the
-//! column with [`ray_triangle_distance`]:
+//! once per direction (what does not depend on the direction either, once per face;
+//! the columns a face joins, once per axis). Both give the same answers as testing
+//! every face of the column with [`ray_triangle_distance`]:
 //! - A face the ray's test rejects whatever the origin (one the ray runs along, its
 //!   determinant under the test's threshold) is left out.
 //! - A face that ends behind the origin, along the ray's axis, by more than its
