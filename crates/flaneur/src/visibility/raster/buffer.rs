@@ -1,6 +1,6 @@
 //! A face's item buffer: each pixel's nearest object and its depth, and over them the
 //! coarse depth buffer of hierarchical depth (Greene et al. 1993's z-pyramid cut to one
-//! level): for each 8×8 tile, the farthest depth any of its pixels holds, so that a box
+//! level): for each 4×4 tile, the farthest depth any of its pixels holds, so that a box
 //! nearer than nothing it covers can be skipped without touching its triangles.
 //!
 //! Depth is stored as `w = 1/z` (z the distance along the face's axis): it is affine
@@ -11,7 +11,7 @@ use crate::visibility::cube::SKY;
 use super::face::Footprint;
 
 /// Pixels along a side of a coarse-depth tile.
-pub(super) const TILE: u32 = 8;
+pub(super) const TILE: u32 = 4;
 
 /// One face's buffers, cleared for each face drawn.
 pub(super) struct ItemBuffer {
@@ -83,6 +83,24 @@ impl ItemBuffer {
         true
     }
 
+    /// Whether every pixel of columns `cols` and rows `rows` (inclusive, on the face)
+    /// already holds a `w` of at least `w_max`: then a triangle nearer than that nowhere
+    /// can take none of them (a pixel takes only a strictly greater `w`). Tiles drawn
+    /// into since their farthest depth was taken count as not hidden: refreshing them
+    /// for every triangle would cost more than drawing it.
+    #[inline]
+    pub fn hides_rect(&self, cols: (u32, u32), rows: (u32, u32), w_max: f32) -> bool {
+        for ty in rows.0 / TILE..=rows.1 / TILE {
+            let row = (ty * self.tiles_per_side) as usize;
+            for t in row + (cols.0 / TILE) as usize..=row + (cols.1 / TILE) as usize {
+                if self.stale[t] || self.tile_far[t] < w_max {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     fn farthest_in(&self, tx: u32, ty: u32) -> f32 {
         let n = self.n as usize;
         let (x0, y0) = ((tx * TILE) as usize, (ty * TILE) as usize);
@@ -120,5 +138,28 @@ mod tests {
         b.depth[3 * 16 + 3] = 0.05;
         b.touch(3, 3, 3);
         assert!(!b.hides(&far_box), "one farther pixel lets it show");
+    }
+
+    #[test]
+    fn a_triangle_is_hidden_only_behind_fresh_tiles_at_least_as_near() {
+        let mut b = ItemBuffer::new(16);
+        b.depth[..16 * TILE as usize].fill(0.5);
+        b.touch_all();
+        assert!(
+            !b.hides_rect((0, 3), (0, 3), 0.1),
+            "a stale tile hides nothing"
+        );
+        assert!(b.hides(&Footprint {
+            cols: (0, 15),
+            rows: (0, TILE - 1),
+            near_w: 0.1,
+            distance2: 0.0,
+        }));
+        assert!(
+            b.hides_rect((0, 15), (0, TILE - 1), 0.5),
+            "w never above 0.5 takes none"
+        );
+        assert!(!b.hides_rect((0, 15), (0, TILE - 1), 0.6));
+        assert!(!b.hides_rect((0, 15), (0, TILE), 0.1), "row TILE is sky");
     }
 }

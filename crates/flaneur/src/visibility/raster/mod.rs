@@ -7,7 +7,7 @@
 //!   (pixel centres, `cube.rs`'s face and pixel convention), and a box's footprint.
 //! - `triangle`: clipping (the near plane and a guard band) and fixed-point half-space
 //!   edge functions with a top-left fill rule, a depth test per pixel.
-//! - `buffer`: the item and depth buffers of a face, and the coarse depth of 8×8 tiles.
+//! - `buffer`: the item and depth buffers of a face, and the coarse depth of 4×4 tiles.
 //! - `tree`: a hierarchy over the objects' boxes, visited front to back.
 //! - `scene`: [`RasterScene`], the six faces drawn for a viewpoint, summed into a
 //!   [`PointDov`](super::PointDov).
@@ -22,7 +22,12 @@
 //! - **Hierarchical depth** (Greene et al. 1993, one coarse level): objects are drawn
 //!   nearest first through a hierarchy of their boxes, and a node or object whose box
 //!   lies behind every pixel of the tiles it covers is skipped with its triangles. The
-//!   city behind the first rows of buildings then costs a box test per group.
+//!   city behind the first rows of buildings then costs a box test per group. A
+//!   triangle of a drawn object is rejected before its setup when its nearest vertex is
+//!   no nearer than every pixel of the (fresh) tiles its pixel box reaches: its clamped
+//!   `w` could take none of them, so the buffers stay the same bit for bit. Tiles of 4×4
+//!   rather than 8×8 took the 3,000-object city's `--no-lod` shard 0/10 from 3.9 and 3.7 s
+//!   of DoV to 3.0 and 2.6 s, and the triangle test to 2.8 and 2.2 s (busy cores).
 //! - **Far objects through coarse levels.** A scene may hold, per object, coarser meshes
 //!   with their geometric errors (`RasterScene::with_levels`; a build hands it the LOD
 //!   chain it stores). From a viewpoint, an object is drawn through its coarsest level

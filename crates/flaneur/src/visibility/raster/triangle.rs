@@ -165,6 +165,15 @@ fn fill(buf: &mut ItemBuffer, mut p: [(i64, i64, f32); 3], object: u32) -> bool 
     if col0 > col1 || row0 > row1 {
         return false;
     }
+    // A triangle behind every tile it reaches takes no pixel: rejected before its
+    // setup, which changes nothing in the buffers (its `w` is clamped to its vertices').
+    if buf.hides_rect(
+        (col0 as u32, col1 as u32),
+        (row0 as u32, row1 as u32),
+        max3(p.map(|p| p.2)),
+    ) {
+        return false;
+    }
     let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
     if area == 0 {
         return false;
