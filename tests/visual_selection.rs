@@ -413,6 +413,92 @@ fn vsc_and_pb_hold_internal_lods_and_levels_to_the_screen_rule() {
 }
 
 #[test]
+fn pb_under_ours_spends_its_budget_by_one_screen_error_for_every_visible_object() {
+    let db = Database::open(&city().db).unwrap();
+    let mut tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
+    let errors = SceneErrors::load(&db, &tree).unwrap();
+    // Each active leaf's level against the coarsest that passes τ′ from `eye`.
+    let at = |tree: &SceneTree, eye: glam::Vec3, tau: f32, k: u32| {
+        let test = flaneur::hdov::ScreenTest {
+            from: flaneur::geom::Aabb { min: eye, max: eye },
+            fov_y: DEFAULT_FOV,
+            tau,
+        };
+        let n = &tree.nodes[k as usize];
+        test.coarsest_fit(errors.of(k), &n.bounds).unwrap_or(0)
+    };
+    let (mut whole, mut spent) = (0, 0);
+    for cell in cells(&db).into_iter().step_by(3) {
+        tree.enter(&db, cell).unwrap();
+        let grid = &db.visibility().unwrap().unwrap().grid;
+        let (r, c) = grid.place(cell);
+        let eye = grid.cell_bounds(r, c).center();
+        for yaw in [0.0f32, 1.6, 3.2, 4.8] {
+            let frustum = Camera::new(eye, yaw, 0.0).unwrap().frustum();
+            // Every visible leaf under τ itself: what a budget that holds it draws.
+            let all =
+                traverse_screened(&tree, Traversal::Vsc { eta: 0.0 }, &frustum, None).unwrap();
+            let under_tau: u64 = all
+                .active
+                .iter()
+                .map(|a| tree.nodes[a.node as usize].triangles[at(&tree, eye, TAU, a.node)] as u64)
+                .sum();
+            let coarsest_total: u64 = all
+                .active
+                .iter()
+                .map(|a| *tree.nodes[a.node as usize].triangles.last().unwrap() as u64)
+                .sum();
+            if under_tau < 2 {
+                // Nothing visible in this view: no budget to spend.
+                continue;
+            }
+            for budget in [under_tau, under_tau / 2, 3_000] {
+                let pb = Traversal::Pb { budget };
+                let ours =
+                    traverse_screened(&tree, pb, &frustum, Some(&view(eye, &errors))).unwrap();
+                assert!(ours.triangles <= budget, "cell {cell}: {}", ours.triangles);
+                if coarsest_total > budget {
+                    // Even the coarsest levels overdraw: the thesis's traversal.
+                    continue;
+                }
+                // The visible leaves, each at the level one τ′ of the ladder gives it.
+                assert_eq!(ours.active.len(), all.active.len(), "cell {cell}");
+                let mut tau = TAU;
+                let fits = loop {
+                    if ours
+                        .active
+                        .iter()
+                        .all(|a| a.level == at(&tree, eye, tau, a.node))
+                    {
+                        break true;
+                    }
+                    if tau >= 1.0 {
+                        break false;
+                    }
+                    tau *= flaneur::hdov::scene::PB_TAU_STEP;
+                };
+                let coarsest = ours
+                    .active
+                    .iter()
+                    .all(|a| a.level + 1 == tree.nodes[a.node as usize].triangles.len());
+                assert!(fits || coarsest, "cell {cell}, budget {budget}");
+                if budget == under_tau {
+                    whole += 1;
+                    assert!(
+                        ours.active
+                            .iter()
+                            .all(|a| a.level == at(&tree, eye, TAU, a.node)),
+                        "cell {cell}: a budget that holds τ's levels draws them"
+                    );
+                }
+                spent += 1;
+            }
+        }
+    }
+    assert!(whole > 0 && spent > 0);
+}
+
+#[test]
 fn a_bad_rule_or_tau_is_an_error_that_says_what_to_give() {
     let db = city().db.to_str().unwrap().to_string();
     let out = common::flaneur(&["walk", &db, "--mode", "visual", "--selection", "eyeball"]);

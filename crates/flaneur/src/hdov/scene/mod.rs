@@ -39,6 +39,6 @@ mod tree;
 
 pub use traverse::{
     traverse, traverse_screened, Active, SceneErrors, ScreenView, Traversal, Traversed,
-    MAX_ATTEMPTS,
+    MAX_ATTEMPTS, PB_TAU_STEP,
 };
 pub use tree::{SceneNode, SceneTree};
