@@ -52,7 +52,10 @@
 //!   objects instead of 847.9, none of them new.
 //! - A patch's horizon is built for its undecided objects only ([`Wanted`]): in the
 //!   bins none of them touches, and beyond the furthest of them in a bin, no occluder
-//!   is entered. It answers for them exactly as the whole horizon would.
+//!   is entered. It answers for them exactly as the whole horizon would. It stops
+//!   once the occluders entered so far hide all of them: on the 3,000-object city (73
+//!   cells, every tenth, no rays told) a patch's horizon was asked about 262 objects on
+//!   average and hid all but 5; 45 % of them stopped so, after 228 of some 530 groups.
 //! - A sample's horizon takes the occluders within `radius` of it.
 //! - A sample inside a shrunk occluder is skipped: every point of its patch (or block)
 //!   is inside a building's solid, where no viewer stands.

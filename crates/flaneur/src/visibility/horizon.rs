@@ -21,8 +21,13 @@
 //! Two savings leave what it says unchanged: the prisms come in groups ([`Group`]), and
 //! a group whose bounds are behind the horizon built so far in every bin they span is
 //! passed over whole; and a horizon may be built for some boxes only ([`Wanted`]),
-//! leaving out the bins they do not touch and what lies beyond them.
+//! leaving out the bins they do not touch and what lies beyond them, and stopping once
+//! the occluders entered so far hide every one of them (more occluders only hide more).
+//! Such a build passes over a prism or group that touches none of those bins in O(1) (a
+//! count of the wanted bins before each). Nor does a build keep an entry that its
+//! bin's steepest so far dominates (nearer and no less steep): it is in no front.
 
+use std::ops::Range;
 use std::sync::OnceLock;
 
 use glam::{Vec2, Vec3};
@@ -266,6 +271,12 @@ fn bin_of(k: i64) -> usize {
 /// would.
 pub struct Wanted {
     eye: Vec2,
+    /// The eye's height.
+    height: f32,
+    /// Each box added, as bins `first..=last` (unwrapped), its least plan distance and
+    /// the rise of its top over the eye per metre there: what a horizon whose steepest
+    /// entries block it in each of those bins hides (see [`Horizon::rebuild`]).
+    asked: Vec<(i64, i64, f32, f32)>,
     /// Per bin, a plan distance beyond every point of every box added that touches it
     /// (0 for none).
     far: Vec<f32>,
@@ -278,6 +289,8 @@ impl Wanted {
     pub fn new(eye: Vec3) -> Wanted {
         Wanted {
             eye: plan(eye),
+            height: eye.y,
+            asked: Vec::new(),
             far: vec![0.0; BINS],
             reach: 0.0,
         }
@@ -286,6 +299,8 @@ impl Wanted {
     /// Nothing wanted, from `eye`, keeping the memory.
     pub fn reset(&mut self, eye: Vec3) {
         self.eye = plan(eye);
+        self.height = eye.y;
+        self.asked.clear();
         self.far.fill(0.0);
         self.reach = 0.0;
     }
@@ -310,6 +325,8 @@ impl Wanted {
             *f = f.max(far);
         }
         self.reach = self.reach.max(far);
+        let rise = (b.max.y - self.height).max(0.0);
+        self.asked.push((v.first, v.last, v.d, rise / v.d));
         true
     }
 
@@ -353,7 +370,8 @@ pub struct Horizon {
     /// far), distances ascending and rises strictly increasing.
     starts: Vec<u32>,
     fronts: Vec<(f32, f32)>,
-    /// Working memory of a build, kept for the next.
+    /// Working memory of a build, kept for the next; its per-bin steepest entries
+    /// also speed [`Horizon::hides`].
     scratch: Scratch,
 }
 
@@ -364,6 +382,10 @@ struct Scratch {
     first: Vec<u32>,
     fill: Vec<u32>,
     by_bin: Vec<(f32, f32)>,
+    /// Over two turns of bins, how many wanted bins lie before each (empty when every
+    /// bin is wanted).
+    wanted_before: Vec<u32>,
+    pending: Vec<(i64, i64, f32, f32)>,
 }
 
 impl Horizon {
@@ -395,7 +417,9 @@ impl Horizon {
     /// eye): the order only decides how much pruning saves, never what the horizon
     /// hides, so the samples of one cell share one sort. With `wanted` (made from the
     /// same eye), it answers only for the boxes added to it, as the whole horizon
-    /// would; what it says of any other box means nothing.
+    /// would; what it says of any other box means nothing. Such a build stops early
+    /// once the steepest entry so far of every bin of every box added is nearer than the
+    /// box and rises above its top: each is then hidden, by these entries as by all.
     pub fn rebuild<P: IntoIterator<Item = Prism>>(
         &mut self,
         eye: Vec3,
@@ -437,6 +461,8 @@ impl Horizon {
             first,
             fill,
             by_bin,
+            wanted_before,
+            pending,
         } = &mut self.scratch;
         // Per bin, the steepest entry so far and its distance.
         steepest.clear();
@@ -450,7 +476,52 @@ impl Horizon {
             let (e, s) = steepest[b];
             far[b] <= least || (prune && e <= least && s >= most)
         };
-        for (group, prisms) in groups {
+        // The same over the bins `first..=last` (unwrapped, at most a turn), a wanted
+        // bin among them found first in O(1): a horizon built for a few boxes is asked
+        // about a few bins, and most prisms and groups touch none of them.
+        wanted_before.clear();
+        if wanted.is_some() {
+            wanted_before.push(0);
+            for k in 0..2 * BINS {
+                let n = wanted_before[k] + u32::from(far[k % BINS] > 0.0);
+                wanted_before.push(n);
+            }
+        }
+        let all_dominated =
+            |steepest: &[(f32, f32)], first: i64, last: i64, least: f32, most: f32| {
+                let (f, n) = (bin_of(first), (last - first + 1) as usize);
+                if !wanted_before.is_empty() && wanted_before[f + n] == wanted_before[f] {
+                    return true;
+                }
+                let run = |r: Range<usize>| {
+                    steepest[r.clone()]
+                        .iter()
+                        .zip(&far[r])
+                        .all(|(&(e, s), &f)| f <= least || (prune && e <= least && s >= most))
+                };
+                run(f..(f + n).min(BINS)) && run(0..(f + n).saturating_sub(BINS))
+            };
+        // The boxes wanted that the entries so far may not hide yet, looked at again
+        // after every `CHECK` groups: once the steepest entry of each of their bins is
+        // nearer than the box and rises above its top, every one of them is hidden
+        // (the front keeps that entry or a nearer, steeper one), and the build stops.
+        const CHECK: usize = 16;
+        pending.clear();
+        if let Some(w) = wanted {
+            pending.extend_from_slice(&w.asked);
+        }
+        for (n, (group, prisms)) in groups.into_iter().enumerate() {
+            if wanted.is_some() && n % CHECK == CHECK - 1 {
+                pending.retain(|&(first, last, d, slope)| {
+                    !(first..=last).all(|k| {
+                        let (e, s) = steepest[bin_of(k)];
+                        e < d && s >= slope
+                    })
+                });
+                if pending.is_empty() {
+                    break;
+                }
+            }
             if let Some(g) = group {
                 let rise = g.top - eye.y;
                 if rise <= 0.0 {
@@ -461,9 +532,7 @@ impl Horizon {
                 }
                 if let Some(v) = BoxView::of(p, g.lo, g.hi) {
                     let (least, most) = (v.d, rise / v.d);
-                    if least >= reach
-                        || (v.first..=v.last).all(|k| dominated(steepest, bin_of(k), least, most))
-                    {
+                    if least >= reach || all_dominated(steepest, v.first, v.last, least, most) {
                         continue;
                     }
                 }
@@ -486,7 +555,7 @@ impl Horizon {
                 if first > last {
                     continue;
                 }
-                if (first..=last).all(|k| dominated(steepest, bin_of(k), least, most)) {
+                if all_dominated(steepest, first, last, least, most) {
                     continue;
                 }
                 // The eye in the footprint's frame once per prism; per bin edge only the
@@ -526,8 +595,14 @@ impl Horizon {
                     }
                     if e > 0.0 && e < far[b] {
                         let s = rise / e;
+                        // An entry the bin's steepest so far dominates (nearer and no
+                        // less steep) is never in its front.
+                        let (se, ss) = steepest[b];
+                        if prune && se <= e && ss >= s {
+                            continue;
+                        }
                         entries.push((b as u32, e, s));
-                        if s > steepest[b].1 {
+                        if s > ss {
                             steepest[b] = (e, s);
                         }
                     }
@@ -557,7 +632,8 @@ impl Horizon {
         for b in 0..BINS {
             self.starts.push(self.fronts.len() as u32);
             let bin = &mut by_bin[first[b] as usize..first[b + 1] as usize];
-            bin.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+            // Entry distances are positive and finite: their bits order as they do.
+            bin.sort_unstable_by_key(|x| x.0.to_bits());
             let mut best = f32::NEG_INFINITY;
             for &(e, rise) in bin.iter() {
                 if rise > best {
@@ -578,16 +654,27 @@ impl Horizon {
         };
         let (nearest, d) = (v.nearest, v.d);
         let rise = (b.max.y - self.eye.y).max(0.0);
+        let slope = rise / d;
         let edges = edges();
+        // Each bin's steepest entry, kept from the build: it is in the front, or a
+        // nearer entry no less steep is, so it blocks the box at its nearest point
+        // without a search of the front when it is nearer and steep enough.
+        let steepest = &self.scratch.steepest;
         (v.first..=v.last).all(|k| {
             let bin = bin_of(k);
+            if let Some(&(e, s)) = steepest.get(bin) {
+                if e < d && s >= slope {
+                    return true;
+                }
+            }
             let front = &self.fronts[self.starts[bin] as usize..self.starts[bin + 1] as usize];
             // The steepest occluder entered before distance `d` rises above `rise / d`.
             let blocked = |d: f32| {
                 let before = front.partition_point(|&(e, _)| e < d);
                 before > 0 && front[before - 1].1 >= rise / d
             };
-            if blocked(d) {
+            let before = front.partition_point(|&(e, _)| e < d);
+            if before > 0 && front[before - 1].1 >= slope {
                 return true;
             }
             // Within this bin the box may lie further than its nearest point: its least

@@ -167,6 +167,32 @@ fn random_prism(
     o
 }
 
+/// The random scenes of the tests below: `count` prisms within `spread` of the origin
+/// (see [`random_prism`]), then an eye at a walker's height, within `eye_spread` of the
+/// origin in plan (at it for 0).
+fn random_scene(
+    rng: &mut impl rand::Rng,
+    count: usize,
+    spread: f32,
+    half: (f32, f32),
+    top: (f32, f32),
+    turned: bool,
+    eye_spread: f32,
+) -> (Vec3, Vec<Prism>) {
+    let prisms = (0..count)
+        .map(|_| random_prism(rng, spread, half, top, turned))
+        .collect();
+    let mut across = || {
+        if eye_spread > 0.0 {
+            rng.gen_range(-eye_spread..eye_spread)
+        } else {
+            0.0
+        }
+    };
+    let (x, z) = (across(), across());
+    (Vec3::new(x, rng.gen_range(1.2..2.0), z), prisms)
+}
+
 fn built(eye: Vec3, prisms: &[Prism], prune: bool, sort: bool, wanted: Option<&Wanted>) -> Horizon {
     let mut h = Horizon::empty();
     let mut given = prisms.to_vec();
@@ -208,17 +234,18 @@ fn pruning_changes_nothing_it_hides() {
 }
 
 fn pruning_changes_nothing_it_hides_with(turned: bool) {
-    use rand::{Rng, SeedableRng};
+    use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let (mut hidden, mut shown) = (0, 0);
     for _ in 0..40 {
-        let prisms: Vec<Prism> = (0..120)
-            .map(|_| random_prism(&mut rng, 300.0, (2.0, 20.0), (3.0, 60.0), turned))
-            .collect();
-        let eye = Vec3::new(
-            rng.gen_range(-100.0..100.0),
-            rng.gen_range(1.2..2.0),
-            rng.gen_range(-100.0..100.0),
+        let (eye, prisms) = random_scene(
+            &mut rng,
+            120,
+            300.0,
+            (2.0, 20.0),
+            (3.0, 60.0),
+            turned,
+            100.0,
         );
         let pruned = built(eye, &prisms, true, true, None);
         let full = built(eye, &prisms, false, false, None);
@@ -264,13 +291,14 @@ fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
     let mut wanted = Wanted::new(Vec3::ZERO);
     for round in 0..60 {
         let turned = round % 2 == 1;
-        let prisms: Vec<Prism> = (0..150)
-            .map(|_| random_prism(&mut rng, 300.0, (2.0, 20.0), (3.0, 60.0), turned))
-            .collect();
-        let eye = Vec3::new(
-            rng.gen_range(-100.0..100.0),
-            rng.gen_range(1.2..2.0),
-            rng.gen_range(-100.0..100.0),
+        let (eye, prisms) = random_scene(
+            &mut rng,
+            150,
+            300.0,
+            (2.0, 20.0),
+            (3.0, 60.0),
+            turned,
+            100.0,
         );
         let full = built(eye, &prisms, false, false, None);
         let targets: Vec<Aabb> = (0..rng.gen_range(1..12))
@@ -315,11 +343,9 @@ fn what_it_hides_is_behind_a_prism_with(turned: bool) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let (mut hidden, mut lines) = (0, 0);
     for _ in 0..200 {
-        let eye = Vec3::new(0.0, rng.gen_range(1.2..2.0), 0.0);
-        let prisms: Vec<Prism> = (0..12)
-            .map(|_| random_prism(&mut rng, 60.0, (1.0, 15.0), (1.0, 30.0), turned))
-            .filter(|o| !o.contains(eye) && o.distance(plan(eye)) > 0.5)
-            .collect();
+        let (eye, mut prisms) =
+            random_scene(&mut rng, 12, 60.0, (1.0, 15.0), (1.0, 30.0), turned, 0.0);
+        prisms.retain(|o| !o.contains(eye) && o.distance(plan(eye)) > 0.5);
         let horizon = Horizon::new(eye, prisms.iter().copied());
         for _ in 0..50 {
             let target = random_box(&mut rng, 150.0, 10.0, 40.0);
