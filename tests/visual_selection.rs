@@ -341,6 +341,13 @@ fn view(eye: glam::Vec3, errors: &SceneErrors) -> ScreenView<'_> {
     }
 }
 
+/// The centre of viewcell `cell` of `db`'s grid.
+fn cell_centre(db: &Database, cell: u32) -> glam::Vec3 {
+    let grid = &db.visibility().unwrap().unwrap().grid;
+    let (r, c) = grid.place(cell);
+    grid.cell_bounds(r, c).center()
+}
+
 #[test]
 fn vsc_and_pb_hold_internal_lods_and_levels_to_the_screen_rule() {
     let db = Database::open(&city().db).unwrap();
@@ -352,9 +359,7 @@ fn vsc_and_pb_hold_internal_lods_and_levels_to_the_screen_rule() {
     let (mut thesis_internal, mut compared) = (0, 0);
     for cell in cells(&db).into_iter().step_by(3) {
         tree.enter(&db, cell).unwrap();
-        let grid = &db.visibility().unwrap().unwrap().grid;
-        let (r, c) = grid.place(cell);
-        let eye = grid.cell_bounds(r, c).center();
+        let eye = cell_centre(&db, cell);
         for yaw in [0.0f32, 1.6, 3.2, 4.8] {
             let camera = Camera::new(eye, yaw, 0.0).unwrap();
             let frustum = camera.frustum();
@@ -430,9 +435,7 @@ fn pb_under_ours_spends_its_budget_by_one_screen_error_for_every_visible_object(
     let (mut whole, mut spent) = (0, 0);
     for cell in cells(&db).into_iter().step_by(3) {
         tree.enter(&db, cell).unwrap();
-        let grid = &db.visibility().unwrap().unwrap().grid;
-        let (r, c) = grid.place(cell);
-        let eye = grid.cell_bounds(r, c).center();
+        let eye = cell_centre(&db, cell);
         for yaw in [0.0f32, 1.6, 3.2, 4.8] {
             let frustum = Camera::new(eye, yaw, 0.0).unwrap().frustum();
             // Every visible leaf under τ itself: what a budget that holds it draws.
