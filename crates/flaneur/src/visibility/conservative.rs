@@ -56,6 +56,10 @@
 //!   once the occluders entered so far hide all of them: on the 3,000-object city (73
 //!   cells, every tenth, no rays told) a patch's horizon was asked about 262 objects on
 //!   average and hid all but 5; 45 % of them stopped so, after 228 of some 530 groups.
+//!   How each object lies from the eye (its bins, nearest point, corners' angles),
+//!   worked out when it is asked, is kept for its answer rather than worked out again:
+//!   on the demo city (115 cells, every fortieth walkable, no rays told, one core) the
+//!   test took 118 and 112 ms a cell against 125 and 124, the same PVSs.
 //! - A sample's horizon takes the occluders within `radius` of it, 600 m by default:
 //!   on the 3,000-object city (73 cells, every tenth walkable, no rays told, one core
 //!   of a busy machine) radii of 200, 300, 400, 600 and 800 m left PVSs of 1,093.6,
@@ -636,12 +640,10 @@ impl Walk<'_> {
                 }
                 if !asked.is_empty() {
                     self.rebuild(eye, k, off, true);
-                    let horizon = &self.horizon;
-                    left.extend(
-                        asked
-                            .into_iter()
-                            .filter(|&i| !horizon.hides(&boxes[i as usize])),
-                    );
+                    let (horizon, wanted) = (&self.horizon, &self.wanted);
+                    left.extend(asked.into_iter().enumerate().filter_map(|(k, i)| {
+                        (!horizon.hides_wanted(wanted, k, &boxes[i as usize])).then_some(i)
+                    }));
                 }
                 left
             }

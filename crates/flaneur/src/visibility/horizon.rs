@@ -277,6 +277,8 @@ pub struct Wanted {
     /// the rise of its top over the eye per metre there: what a horizon whose steepest
     /// entries block it in each of those bins hides (see [`Horizon::rebuild`]).
     asked: Vec<(i64, i64, f32, f32)>,
+    /// How each box added lies from the eye, for [`Horizon::hides_wanted`].
+    views: Vec<BoxView>,
     /// Per bin, a plan distance beyond every point of every box added that touches it
     /// (0 for none).
     far: Vec<f32>,
@@ -291,6 +293,7 @@ impl Wanted {
             eye: plan(eye),
             height: eye.y,
             asked: Vec::new(),
+            views: Vec::new(),
             far: vec![0.0; BINS],
             reach: 0.0,
         }
@@ -301,6 +304,7 @@ impl Wanted {
         self.eye = plan(eye);
         self.height = eye.y;
         self.asked.clear();
+        self.views.clear();
         self.far.fill(0.0);
         self.reach = 0.0;
     }
@@ -327,6 +331,7 @@ impl Wanted {
         self.reach = self.reach.max(far);
         let rise = (b.max.y - self.height).max(0.0);
         self.asked.push((v.first, v.last, v.d, rise / v.d));
+        self.views.push(v);
         true
     }
 
@@ -647,11 +652,22 @@ impl Horizon {
 
     /// Whether every point of `b` is hidden from the eye.
     pub fn hides(&self, b: &Aabb) -> bool {
+        BoxView::of(plan(self.eye), plan(b.min), plan(b.max))
+            .is_some_and(|v| self.hides_view(b, &v))
+    }
+
+    /// [`Horizon::hides`] for `b`, the `k`th box `wanted` took ([`Wanted::add`] true),
+    /// `wanted` made from this horizon's eye: what the box's place from the eye took to
+    /// work out is not worked out again.
+    pub fn hides_wanted(&self, wanted: &Wanted, k: usize, b: &Aabb) -> bool {
+        debug_assert!(wanted.eye == plan(self.eye));
+        self.hides_view(b, &wanted.views[k])
+    }
+
+    /// Whether every point of `b`, which lies from the eye as `v` says, is hidden.
+    fn hides_view(&self, b: &Aabb, v: &BoxView) -> bool {
         let p = plan(self.eye);
         let (min, max) = (plan(b.min), plan(b.max));
-        let Some(v) = BoxView::of(p, min, max) else {
-            return false;
-        };
         let (nearest, d) = (v.nearest, v.d);
         let rise = (b.max.y - self.eye.y).max(0.0);
         let slope = rise / d;

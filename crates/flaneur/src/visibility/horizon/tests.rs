@@ -309,6 +309,14 @@ fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
         reused.rebuild(eye, tiled(&prisms, eye, 50.0), Some(&wanted));
         kept += reused.fronts.len();
         all += full.fronts.len();
+        // The answer from the place each box was asked at is the same.
+        for (k, t) in asked.iter().enumerate() {
+            assert_eq!(
+                reused.hides_wanted(&wanted, k, t),
+                reused.hides(t),
+                "{t:?} from {eye}"
+            );
+        }
         for t in &targets {
             let hides = full.hides(t);
             if asked.contains(&t) {
