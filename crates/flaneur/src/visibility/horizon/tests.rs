@@ -282,6 +282,30 @@ fn pruning_changes_nothing_it_hides_with(turned: bool) {
 
 /// A horizon built for a few boxes, one horizon rebuilt from eye to eye: it answers
 /// for those boxes as the whole horizon does, though it holds far fewer entries.
+/// A horizon built for some boxes takes no more groups once a near wall hides them all:
+/// of a wall and 200 groups beyond it, at most one round of checks' worth is taken.
+#[test]
+fn a_horizon_for_some_boxes_stops_once_they_are_all_hidden() {
+    let eye = Vec3::new(0.0, 1.5, 0.0);
+    let wall = prism([5.0, -20.0], [6.0, 20.0], 30.0);
+    let target = b([20.0, 0.0, -1.0], [22.0, 5.0, 1.0]);
+    let mut wanted = Wanted::new(eye);
+    assert!(wanted.add(&target));
+    let beyond = (0..200).map(|k| {
+        let x = 30.0 + k as f32;
+        prism([x, -1.0], [x + 0.5, 1.0], 2.0)
+    });
+    let taken = std::cell::Cell::new(0);
+    let groups = std::iter::once(wall).chain(beyond).map(|o| {
+        taken.set(taken.get() + 1);
+        (Group::around([&o]).unwrap(), [o])
+    });
+    let mut h = Horizon::empty();
+    h.rebuild(eye, groups, Some(&wanted));
+    assert!(h.hides(&target));
+    assert!(taken.get() <= 16, "{} of 201 groups taken", taken.get());
+}
+
 #[test]
 fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
     use rand::{Rng, SeedableRng};
