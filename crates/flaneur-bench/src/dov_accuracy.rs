@@ -146,14 +146,7 @@ pub fn run(db: &Database, cfg: &DovAccuracyConfig) -> Result<DovAccuracyReport> 
 fn coarse_levels(db: &Database, objects: &[(u64, Mesh)]) -> Result<Vec<Vec<(Mesh, f32)>>> {
     objects
         .iter()
-        .map(|(id, _)| match db.lod_levels(*id)? {
-            Some(levels) => levels
-                .iter()
-                .skip(1)
-                .map(|l| Ok((db.lod_mesh(*id, l.level)?, l.error)))
-                .collect(),
-            None => Ok(Vec::new()),
-        })
+        .map(|(id, _)| db.lod_coarse_levels(*id))
         .collect()
 }
 

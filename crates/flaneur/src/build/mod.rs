@@ -580,18 +580,14 @@ fn store_visibility(
 /// Each of `objects`' coarse levels with its error in metres, finest first, read back
 /// from the LODs `store` holds (none for an object it has none of).
 fn stored_levels(store: &Store, objects: &[(u64, Mesh)]) -> Result<Vec<Vec<(Mesh, f32)>>> {
-    use crate::lod::stored::{level_mesh, levels, LodTable};
+    use crate::lod::stored::{coarse_levels, LodTable};
     let Some(table) = LodTable::open(store)? else {
         return Ok(Vec::new());
     };
     objects
         .iter()
         .map(|(id, _)| match table.find(store, *id)? {
-            Some(e) => levels(store, &e)?
-                .iter()
-                .skip(1)
-                .map(|l| Ok((level_mesh(store, &e, l.level)?, l.error)))
-                .collect(),
+            Some(e) => coarse_levels(store, &e),
             None => Ok(Vec::new()),
         })
         .collect()

@@ -393,6 +393,31 @@ impl Database {
         }
     }
 
+    /// Every coarse level `id` has stored (all but its full mesh), finest first, each
+    /// with its error in metres: what a build hands the DoV's rasteriser for far
+    /// objects. Empty for an object with no LOD data or no coarse level.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+    /// # let city = citygen::CityConfig { objects: 40, landmarks: 0.0, ..Default::default() };
+    /// # citygen::write_city(&city, &scene)?;
+    /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
+    /// let db = flaneur::Database::open(&path)?;
+    /// let levels = db.lod_levels(0)?.unwrap();
+    /// let coarse = db.lod_coarse_levels(0)?;
+    /// assert_eq!(coarse.len(), levels.len() - 1);
+    /// assert_eq!(coarse[0].1, levels[1].error);
+    /// # Ok(()) }
+    /// ```
+    pub fn lod_coarse_levels(&self, id: u64) -> Result<Vec<(Mesh, f32)>> {
+        match self.lod_entry(id)? {
+            Some(e) => stored::coarse_levels(&self.store, &e),
+            None => Ok(Vec::new()),
+        }
+    }
+
     /// The stored level a viewer at `eye` should see `object` at: the coarsest whose
     /// error stays under `tau` of the viewport for a vertical field of view `fov_y`
     /// (radians), as a walk's LOD selection chooses it ([`crate::lod::level_for`], the

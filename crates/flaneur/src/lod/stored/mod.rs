@@ -14,8 +14,8 @@ pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
 pub(crate) use chain::encode_chain;
 pub use chain::{LevelInfo, CHAIN_MAGIC};
 pub(crate) use read::{
-    chain_level, chain_levels, chain_levels_at, coarsest_levels, level_mesh, levels, levels_at,
-    progressive, read_progressive, ProgressiveBytes,
+    chain_level, chain_levels, chain_levels_at, coarse_levels, coarsest_levels, level_mesh, levels,
+    levels_at, progressive, read_progressive, ProgressiveBytes,
 };
 pub use select::{distance_to, level_for};
 pub use table::LodStats;

@@ -195,6 +195,29 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
     chain_level_of(store, &ChainPlace::of(e), &head, level, &what)
 }
 
+/// Every coarse level of the object of `e` (all but its full mesh), finest first, each
+/// with its error in metres, its chain's head read once; none for an object with no
+/// chain.
+pub(crate) fn coarse_levels(store: &Store, e: &LodEntry) -> Result<Vec<(Mesh, f32)>> {
+    if e.chain.is_empty() {
+        return Ok(Vec::new());
+    }
+    let head = read_chain_head(store, e)?;
+    let place = ChainPlace::of(e);
+    head.dir
+        .levels()
+        .iter()
+        .skip(1)
+        .map(|l| {
+            let what = format!("LOD level {} of object {}", l.level, e.id);
+            Ok((
+                chain_level_of(store, &place, &head, l.level, &what)?,
+                l.error,
+            ))
+        })
+        .collect()
+}
+
 /// The coarsest stored level of each object of `entries`, with its number: the chains'
 /// heads asked for together (then any page a coarsest level needs beyond its head,
 /// which a build of this version never leaves), so that a remote store fetches them in
