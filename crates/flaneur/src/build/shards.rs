@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use super::check::{check_costs, Survey, Work};
 use super::{model_format, models_build, scene_build, BuildOptions, BuildSummary};
 use crate::error::{Error, Result};
-use crate::lod::stored::encode_chain;
-use crate::lod::{LodOptions, ProgressiveMesh};
+use crate::lod::stored::simplify;
+use crate::lod::LodOptions;
 use crate::progress::{Progress, Step};
 use crate::scene::{Mesh, SceneReader};
 use crate::visibility::{precompute_shard, Shard, ShardCells};
@@ -130,32 +130,15 @@ fn input_objects(
 }
 
 /// Each object's coarse levels with their errors, finest first, made as a whole build
-/// makes and stores them (`LodWriter`), so that a shard draws far objects as the whole
-/// build's DoV does: none for an object the simplifier refuses (or panics on), or whose
-/// chain would not encode. (A build also refuses an object over `pm_threshold` whose
-/// DAG fails; that DAG is not built here.)
+/// makes and stores them (`lod::stored::simplify`), so that a shard draws far objects as
+/// the whole build's DoV does: none for an object the simplifier refuses (or panics on),
+/// or whose chain would not encode. (A build also refuses an object over `pm_threshold`
+/// whose DAG fails; that DAG is not built here.)
 fn made_levels(objects: &[(u64, Mesh)], lod: &LodOptions) -> Vec<Vec<(Mesh, f32)>> {
     use rayon::prelude::*;
     objects
         .par_iter()
-        .map(|(id, mesh)| {
-            let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                let levels = ProgressiveMesh::build(mesh)?.levels(lod.ratio, lod.min_triangles)?;
-                let coarse = levels.get(1..).unwrap_or(&[]);
-                if !coarse.is_empty() {
-                    encode_chain(*id, mesh.triangle_count(), coarse)?;
-                }
-                Ok::<_, Error>(levels)
-            }));
-            match made {
-                Ok(Ok(levels)) => levels
-                    .into_iter()
-                    .skip(1)
-                    .map(|l| (l.mesh, l.error))
-                    .collect(),
-                _ => Vec::new(),
-            }
-        })
+        .map(|(id, mesh)| simplify(*id, mesh, lod).map_or_else(|_| Vec::new(), |s| s.levels))
         .collect()
 }
 

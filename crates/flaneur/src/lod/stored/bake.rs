@@ -110,34 +110,65 @@ struct Baked {
     pm_dag: Option<(Vec<u8>, Vec<u8>)>,
 }
 
+/// An object simplified as a build stores it: `flaneur build`'s chain and, split across
+/// machines, a visibility shard's far objects (`build::shards`) both come from here, so
+/// that a shard draws an object at the levels the whole build stores for it.
+pub(crate) struct Simplified {
+    /// Kept for the DAG of a large object.
+    pm: ProgressiveMesh,
+    /// Each coarse level's mesh and error (metres), finest first; level 0, the full
+    /// mesh, is the object's own mesh and not among them.
+    pub(crate) levels: Vec<(Mesh, f32)>,
+    /// The levels encoded as the store keeps them; `None` when there are none.
+    chain: Option<Vec<u8>>,
+}
+
+/// Simplifies object `id` into its coarse levels and encodes their chain: an `Err` when
+/// the simplifier refuses the object (or panics on it) or the chain would not encode,
+/// and the object then gets no LODs.
+pub(crate) fn simplify(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Simplified> {
+    caught(|| {
+        let pm = ProgressiveMesh::build(mesh)?;
+        let levels = pm.levels(opts.ratio, opts.min_triangles)?;
+        let coarse = levels.get(1..).unwrap_or(&[]);
+        let chain = if coarse.is_empty() {
+            None
+        } else {
+            Some(encode_chain(id, mesh.triangle_count(), coarse)?)
+        };
+        let levels = levels
+            .into_iter()
+            .skip(1)
+            .map(|l| (l.mesh, l.error))
+            .collect();
+        Ok(Simplified { pm, levels, chain })
+    })
+}
+
 /// Simplifies one object and encodes what it stores.
 fn bake(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Baked> {
-    let pm = ProgressiveMesh::build(mesh)?;
-    let levels = pm.levels(opts.ratio, opts.min_triangles)?;
-    // levels[0] is the full mesh, stored already as the object's mesh extent.
-    let coarse = levels.get(1..).unwrap_or(&[]);
-    let chain = if coarse.is_empty() {
-        None
-    } else {
-        Some(encode_chain(id, mesh.triangle_count(), coarse)?)
-    };
+    let Simplified { pm, levels, chain } = simplify(id, mesh, opts)?;
+    // The chain holds the levels: their meshes need not wait for the DAG.
+    let levels = levels.len() as u32;
     let pm_dag = if mesh.triangle_count() > opts.pm_threshold {
-        let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
-        Some((pm.to_bytes()?, dag.to_bytes()))
+        Some(caught(|| {
+            let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+            Ok((pm.to_bytes()?, dag.to_bytes()))
+        })?)
     } else {
         None
     };
     Ok(Baked {
         chain,
-        levels: coarse.len() as u32,
+        levels,
         pm_dag,
     })
 }
 
-/// [`bake`], with a panic turned into an error: a simplifier bug on one odd mesh
-/// should cost that object its LODs, not the build.
-fn bake_caught(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Baked> {
-    std::panic::catch_unwind(AssertUnwindSafe(|| bake(id, mesh, opts))).unwrap_or_else(|p| {
+/// `f`, with a panic turned into an error: a simplifier bug on one odd mesh should cost
+/// that object its LODs, not the build.
+fn caught<T>(f: impl FnOnce() -> Result<T>) -> Result<T> {
+    std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|p| {
         let why = p
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
@@ -219,7 +250,7 @@ impl LodWriter {
         self.sent += 1;
         rayon::spawn_fifo(move || {
             let start = Instant::now();
-            let baked = bake_caught(id, &mesh, &opts);
+            let baked = bake(id, &mesh, &opts);
             // The build stops listening only when it failed; nothing to do then.
             let _ = sender.send(Done {
                 seq,

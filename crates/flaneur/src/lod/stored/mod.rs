@@ -9,7 +9,7 @@ pub(crate) mod read;
 mod select;
 pub(crate) mod table;
 
-pub(crate) use bake::LodWriter;
+pub(crate) use bake::{simplify, LodWriter};
 pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
 pub(crate) use chain::encode_chain;
 pub use chain::{LevelInfo, CHAIN_MAGIC};
