@@ -3,7 +3,9 @@
 //! corners pixel by pixel.
 
 use flaneur::geom::Aabb;
-use flaneur::visibility::{cell_dovs, CubicProjection, RasterScene, RayScene, ViewcellGrid};
+use flaneur::visibility::{
+    cell_dovs, object_boxes, CubicProjection, RasterScene, RayScene, ViewcellGrid,
+};
 
 /// A city of `objects` generated objects, and its walkable cells (40 m, eye 1.2–2 m).
 fn city(objects: u64) -> (Vec<citygen::SceneObject>, Vec<Aabb>) {
@@ -15,14 +17,7 @@ fn city(objects: u64) -> (Vec<citygen::SceneObject>, Vec<Aabb>) {
     let objects: Vec<citygen::SceneObject> = (0..objects)
         .map(|id| citygen::object(&config, id).unwrap())
         .collect();
-    let boxes: Vec<Aabb> = objects
-        .iter()
-        .map(|o| {
-            let (lo, hi) = o.mesh.bounds();
-            Aabb::new(lo, hi).unwrap()
-        })
-        .collect();
-    let all = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+    let (boxes, all) = object_boxes(objects.iter().map(|o| (o.id, &o.mesh))).unwrap();
     let grid = ViewcellGrid::new(&all, 40.0, [1.2, 2.0]).unwrap();
     let cells = grid.walkable(&boxes).iter().map(|c| c.bounds).collect();
     (objects, cells)

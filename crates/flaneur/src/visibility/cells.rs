@@ -16,6 +16,7 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::scene::Mesh;
 
 /// Default side of a viewcell in metres.
 pub const DEFAULT_CELL_SIZE: f32 = 40.0;
@@ -204,6 +205,41 @@ impl ViewcellGrid {
             }
         }
     }
+}
+
+/// Each object's box (its mesh's bounds) and the bounds of them all: the obstacles a
+/// [`ViewcellGrid`] finds its walkable cells among, and the city it is laid over. An
+/// error names the object whose mesh has no valid box, or says there is no object.
+///
+/// ```
+/// use flaneur::visibility::{object_boxes, ViewcellGrid};
+/// let config = citygen::CityConfig { objects: 40, ..Default::default() };
+/// let objects = (0..40)
+///     .map(|id| citygen::object(&config, id))
+///     .collect::<Result<Vec<_>, _>>()?;
+/// let (boxes, city) = object_boxes(objects.iter().map(|o| (o.id, &o.mesh)))?;
+/// let grid = ViewcellGrid::new(&city, 20.0, [1.2, 2.0])?;
+/// let cells = grid.walkable(&boxes);
+/// assert!(!cells.is_empty() && cells.len() < grid.len());
+/// # Ok::<(), flaneur::Error>(())
+/// ```
+pub fn object_boxes<'a>(
+    objects: impl IntoIterator<Item = (u64, &'a Mesh)>,
+) -> Result<(Vec<Aabb>, Aabb)> {
+    let boxes = objects
+        .into_iter()
+        .map(|(id, m)| {
+            let (lo, hi) = m.bounds();
+            Aabb::new(lo, hi).map_err(|e| Error::Invalid(format!("object {id}: {e}")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    if boxes.is_empty() {
+        return Err(Error::Invalid(
+            "visibility of a city with no objects".into(),
+        ));
+    }
+    let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+    Ok((boxes, city))
 }
 
 impl Viewcell {

@@ -97,7 +97,7 @@ pub(crate) mod table;
 #[cfg(test)]
 mod tests;
 
-pub use cells::{Viewcell, ViewcellGrid};
+pub use cells::{object_boxes, Viewcell, ViewcellGrid};
 pub use conservative::{SampleOptions, Scene as ConservativeScene};
 pub(crate) use cost::{shown, walkable_cells};
 pub use cost::{VisibilityCost, MAX_SAMPLES_PER_CELL, MAX_VIEWCELLS};

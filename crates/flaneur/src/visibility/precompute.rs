@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::cells::{Viewcell, ViewcellGrid};
+use super::cells::{object_boxes, Viewcell, ViewcellGrid};
 use super::conservative::{SampleOptions, Scene};
 use super::dov::corner_keys;
 use super::table::{CellPvs, VisibilitySettings, VisibilityStats};
@@ -130,33 +130,17 @@ pub(super) fn settings(opts: &VisibilityOptions, dov_s: f32) -> VisibilitySettin
     }
 }
 
-/// The objects' boxes, each checked.
-pub(super) fn boxes(objects: &[(u64, Mesh)]) -> Result<Vec<Aabb>> {
-    if objects.is_empty() {
-        return Err(Error::Invalid(
-            "visibility of a city with no objects".into(),
-        ));
-    }
-    objects
-        .iter()
-        .map(|(id, m)| {
-            let (lo, hi) = m.bounds();
-            Aabb::new(lo, hi).map_err(|e| Error::Invalid(format!("object {id}: {e}")))
-        })
-        .collect()
-}
-
-/// The viewcell grid over `boxes` and its walkable cells: all a merge of shards needs.
+/// The viewcell grid over `objects` and its walkable cells: all a merge of shards needs.
 /// Options that would make more cells (or sample points) than a build takes are refused
 /// first, as a build refuses them before it starts (`VisibilityOptions::cost`).
 pub(super) fn grid_and_walkable(
-    boxes: &[Aabb],
+    objects: &[(u64, Mesh)],
     opts: &VisibilityOptions,
 ) -> Result<(ViewcellGrid, Vec<Viewcell>)> {
-    let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+    let (boxes, city) = object_boxes(objects.iter().map(|(id, m)| (*id, m)))?;
     opts.cost(&city, boxes.len() as u64, None)?;
     let grid = ViewcellGrid::new(&city, opts.cell_size, opts.eye)?;
-    let walkable = grid.walkable(boxes);
+    let walkable = grid.walkable(&boxes);
     Ok((grid, walkable))
 }
 
@@ -167,9 +151,8 @@ pub(super) fn prepare(
     opts: &VisibilityOptions,
 ) -> Result<Prepared> {
     opts.validate()?;
-    let boxes = boxes(objects)?;
     // The grid first: what the options make of the city is refused before the slow steps.
-    let (grid, walkable) = grid_and_walkable(&boxes, opts)?;
+    let (grid, walkable) = grid_and_walkable(objects, opts)?;
     let scene = Scene::from_meshes(objects)?;
     let dov = opts
         .dov

@@ -35,7 +35,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::precompute::{
-    bands, boxes, compute, grid_and_walkable, prepare, settings, whole_build_rays, Precomputed,
+    bands, compute, grid_and_walkable, prepare, settings, whole_build_rays, Precomputed,
 };
 use super::table::{decode_record, encode_record, CellPvs, VisibilityStats};
 use super::{CubicProjection, DovMethod, SampleOptions, VisibilityOptions};
@@ -232,8 +232,7 @@ pub(crate) fn merge_shards(objects: &[(u64, Mesh)], shards: &[ShardCells]) -> Re
     if let Some(k) = seen.iter().position(|s| !s) {
         return Err(Error::Invalid(format!("shard {k}/{n} is missing")));
     }
-    let boxes = boxes(objects)?;
-    let (grid, walkable) = grid_and_walkable(&boxes, &opts)?;
+    let (grid, walkable) = grid_and_walkable(objects, &opts)?;
     let mut cells: Vec<(u32, CellPvs)> = shards
         .iter()
         .flat_map(|s| s.cells.iter().cloned())

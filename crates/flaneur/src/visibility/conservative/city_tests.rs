@@ -2,7 +2,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::*;
-use crate::visibility::cells::{ViewcellGrid, DEFAULT_EYE_RANGE};
+use crate::visibility::cells::{object_boxes, ViewcellGrid, DEFAULT_EYE_RANGE};
 use crate::visibility::intersect::{ray_triangle_distance, triangles};
 use crate::visibility::occluder::occluders;
 
@@ -11,17 +11,10 @@ use crate::visibility::occluder::occluders;
 #[test]
 fn no_object_a_ray_from_inside_the_cell_meets_is_dropped() {
     let objects = crate::visibility::tests::city(64);
-    let boxes: Vec<Aabb> = objects
-        .iter()
-        .map(|o| {
-            let (lo, hi) = o.mesh.bounds();
-            Aabb::new(lo, hi).unwrap()
-        })
-        .collect();
+    let (boxes, city) = object_boxes(objects.iter().map(|o| (o.id, &o.mesh))).unwrap();
     let occluders: Vec<Occluders> = objects.iter().map(|o| occluders(&o.mesh)).collect();
     let triangles: Vec<Vec<[Vec3; 3]>> = objects.iter().map(|o| triangles(&o.mesh)).collect();
     let scene = Scene::new(&boxes, &occluders).unwrap();
-    let city = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
     let grid = ViewcellGrid::new(&city, 10.0, DEFAULT_EYE_RANGE).unwrap();
     let cells = grid.walkable(&boxes);
     assert!(cells.len() > 20);
