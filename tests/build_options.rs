@@ -194,8 +194,8 @@ fn a_merge_takes_its_shards_settings_through_the_same_checks() {
     }
     let db = dir.path().join("merged.flaneur");
     let steps = Steps::default();
-    let with_lods = BuildOptions::default();
-    let e = flaneur::merge_visibility_shards(&inputs, &parts, &db, &with_lods, &steps)
+    // No LODs, as the shards drew none (a merge refuses shards that disagree).
+    let e = flaneur::merge_visibility_shards(&inputs, &parts, &db, &opts, &steps)
         .unwrap_err()
         .to_string();
     assert!(e.contains("--cell-size") && e.contains("1e-9"), "{e}");

@@ -254,3 +254,38 @@ fn shards_that_do_not_belong_together_are_refused_by_name() {
     ]);
     assert!(String::from_utf8_lossy(&done.stderr).contains("K must be below N"));
 }
+
+/// Shards record whether their DoVs drew far objects through coarse LOD levels: shards
+/// of a `--no-lod` build merged into a build with LODs (or the other way round, or
+/// mixed) would give DoVs no whole build gives, so the merge refuses them, naming the
+/// shard and what differs.
+#[test]
+fn shards_and_a_merge_that_disagree_on_lods_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(dir.path());
+    let flat_dir = dir.path().join("flat");
+    std::fs::create_dir(&flat_dir).unwrap();
+    let mut no_lod = VISIBILITY.to_vec();
+    no_lod.push("--no-lod");
+    let flat = shards(&scene, &flat_dir, 2, &no_lod);
+    let coarse = shards(&scene, dir.path(), 2, &VISIBILITY);
+    let out = dir.path().join("m.flaneur");
+    let refused = |shards: &[PathBuf], extra: &[&str], says: &[&str]| {
+        let done = merge(&scene, shards, &out, extra);
+        assert!(!done.status.success(), "{shards:?} merged with {extra:?}");
+        let err = String::from_utf8_lossy(&done.stderr);
+        for s in says {
+            assert!(err.contains(s), "{s:?} not in: {err}");
+        }
+        assert!(!out.exists(), "a refused merge writes nothing");
+    };
+    refused(&flat, &[], &["shard 0/2", "full meshes", "--no-lod"]);
+    refused(&coarse, &["--no-lod"], &["shard 0/2", "coarse LOD levels"]);
+    refused(
+        &[coarse[0].clone(), flat[1].clone()],
+        &[],
+        &["shard 1/2", "full meshes"],
+    );
+    // Shards and a merge that agree merge, either way.
+    common::succeeded(&merge(&scene, &flat, &out, &["--no-lod"]));
+}

@@ -12,7 +12,7 @@ use crate::lod::stored::simplify;
 use crate::lod::LodOptions;
 use crate::progress::{Progress, Step};
 use crate::scene::{Mesh, SceneReader};
-use crate::visibility::{precompute_shard, Shard, ShardCells};
+use crate::visibility::{precompute_shard, Shard, ShardCells, ShardLod};
 
 /// Computes shard `shard` of the visibility `opts.visibility` asks for, over the objects
 /// of `inputs` (one scene file, or model files, as a build takes them), and writes it to
@@ -62,7 +62,8 @@ pub fn build_visibility_shard(
         Some(lod) => made_levels(&objects, lod),
         None => Vec::new(),
     };
-    let made = precompute_shard(&objects, &levels, v, shard, &|done, total| {
+    let lod = ShardLod::of(opts.lod.as_ref());
+    let made = precompute_shard(&objects, &levels, lod, v, shard, &|done, total| {
         progress.update(Step::Visibility, done as u64, Some(total as u64));
     })?;
     progress.finish(Step::Visibility);
@@ -74,7 +75,10 @@ pub fn build_visibility_shard(
 /// [`build_from_obj_with_progress`] would, its visibility merged from the shard files
 /// `shards` (every shard of one split, computed from these inputs) instead of computed:
 /// the visibility settings are the shards', `opts.visibility` is not read. With
-/// `opts.reproducible`, the file is byte for byte the one-machine build's.
+/// `opts.reproducible`, the file is byte for byte the one-machine build's. Shards whose
+/// DoVs drew far objects through other LOD levels than `opts.lod` makes (or through
+/// none where it makes some, `--no-lod`, or the other way round) are refused before any
+/// work, naming the shard: the merge could not give the one-machine build's DoVs.
 ///
 /// [`build_from_scene_with_progress`]: crate::build_from_scene_with_progress
 /// [`build_from_obj_with_progress`]: crate::build_from_obj_with_progress
@@ -89,6 +93,14 @@ pub fn merge_visibility_shards(
         .iter()
         .map(|p| ShardCells::read(p))
         .collect::<Result<Vec<_>>>()?;
+    for (path, shard) in shards.iter().zip(&cells) {
+        shard
+            .check_lod(opts.lod.as_ref())
+            .map_err(|what| Error::BadInput {
+                path: path.clone(),
+                what,
+            })?;
+    }
     let first = cells
         .first()
         .ok_or_else(|| Error::Invalid("no shard file to merge".into()))?;

@@ -111,7 +111,7 @@ pub use precompute::VisibilityOptions;
 pub use raster::{CoarseLevels, DrawCounts, RasterScene, LOD_PIXELS};
 pub use raycast::{Hit, RayScene};
 pub(crate) use shard::merge_shards;
-pub use shard::{fingerprint, precompute_shard, Shard, ShardCells};
+pub use shard::{fingerprint, precompute_shard, Shard, ShardCells, ShardLod};
 pub(crate) use stored::VisibilityTable;
 pub(crate) use table::encode_table;
 pub use table::{

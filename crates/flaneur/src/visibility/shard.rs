@@ -7,7 +7,11 @@
 //! as many cells each as can be, computed in bands of rows as a whole build computes
 //! them, so that neighbouring cells still share their corners' DoVs within a shard. A shard records what it was computed from: a fingerprint of the
 //! objects (ids and meshes) and the visibility settings, which the merge checks against
-//! its own input, so that shards of another city or other settings are refused.
+//! its own input, so that shards of another city or other settings are refused. It also
+//! records the coarse LOD levels its DoVs drew far objects through, or none (`--no-lod`),
+//! which the merge checks against the LODs it stores, as a whole build draws through
+//! those: shards of one kind merged into a build of the other would give DoVs no whole
+//! build gives. A shard of another version is refused (computing it again is the way).
 //!
 //! ```text
 //! offset  width  field
@@ -26,8 +30,11 @@
 //!     64      8  rays          u64, cast by this shard
 //!     72      8  seconds       f64, this shard's wall clock
 //!     80      8  DoV seconds   f64, of which casting rays
-//!     88      4  cells         u32, m: this shard's cells
-//!     92      …  m × (id u32, objects u32, bytes u32, the table's record of the cell)
+//!     88      4  LOD ratio     f32, of the coarse levels far objects' DoVs were drawn
+//!                              through; 0: none, full meshes only (`--no-lod`)
+//!     92      4  LOD floor     u32, the levels' fewest triangles; 0 with no levels
+//!     96      4  cells         u32, m: this shard's cells
+//!    100      …  m × (id u32, objects u32, bytes u32, the table's record of the cell)
 //!      …      4  crc32         of everything before it
 //! ```
 
@@ -40,12 +47,14 @@ use super::precompute::{
 use super::table::{decode_record, encode_record, CellPvs, VisibilityStats};
 use super::{CubicProjection, DovMethod, SampleOptions, VisibilityOptions};
 use crate::error::{Error, Result};
+use crate::lod::LodOptions;
 use crate::scene::Mesh;
 use crate::store::framing::{f32_at, f64_at, push_crc, u32_at, u64_at, CRC_LEN};
 
 const MAGIC: [u8; 4] = *b"FLVS";
-const SHARD_VERSION: u32 = 1;
-const HEAD_LEN: usize = 92;
+/// 2: the LOD levels the DoVs drew recorded (version 1 did not say).
+const SHARD_VERSION: u32 = 2;
+const HEAD_LEN: usize = 100;
 
 /// One shard of N: `index` in `0..count`, written `K/N` (`--shard 0/4` … `3/4`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,6 +102,26 @@ impl Shard {
     }
 }
 
+/// The coarse LOD levels a shard's DoVs drew far objects through: the settings of
+/// [`LodOptions`] that shape them, which a merge's must match.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShardLod {
+    /// Triangles of each level over the next finer one's (`LodOptions::ratio`).
+    pub ratio: f32,
+    /// A chain stops at this many triangles (`LodOptions::min_triangles`).
+    pub min_triangles: u32,
+}
+
+impl ShardLod {
+    /// What `lod` makes of far objects for the DoVs (`None`: full meshes, `--no-lod`).
+    pub fn of(lod: Option<&LodOptions>) -> Option<ShardLod> {
+        lod.map(|l| ShardLod {
+            ratio: l.ratio,
+            min_triangles: l.min_triangles as u32,
+        })
+    }
+}
+
 /// The cells one shard computed, and what they were computed from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShardCells {
@@ -102,6 +131,8 @@ pub struct ShardCells {
     pub fingerprint: u64,
     /// The settings it was computed with.
     pub options: VisibilityOptions,
+    /// The coarse levels its DoVs drew far objects through, `None` for full meshes.
+    pub lod: Option<ShardLod>,
     /// Walkable cells of the whole grid.
     pub walkable: u64,
     /// Objects with an occluder box (the whole city's).
@@ -166,15 +197,24 @@ fn my_cells<T>(walkable: &[T], shard: Shard) -> &[T] {
 
 /// Computes shard `shard` of the visibility of `objects`, far objects drawn through
 /// their coarser `levels` as a whole build draws them (one entry per object, or empty
-/// for none); `progress` is told this shard's cells done and its cells in all.
+/// for none), which `lod` made (recorded in the shard: `None` exactly when `levels` is
+/// empty); `progress` is told this shard's cells done and its cells in all.
 pub fn precompute_shard(
     objects: &[(u64, Mesh)],
     levels: &[Vec<(Mesh, f32)>],
+    lod: Option<ShardLod>,
     opts: &VisibilityOptions,
     shard: Shard,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ShardCells> {
     shard.check().map_err(Error::Invalid)?;
+    if !objects.is_empty() && levels.is_empty() != lod.is_none() {
+        return Err(Error::Invalid(format!(
+            "a shard's levels ({} objects' worth) and the LOD settings recorded for them \
+             ({lod:?}) disagree",
+            levels.len()
+        )));
+    }
     let started = Instant::now();
     let prep = prepare(objects, levels, opts)?;
     let bands = bands(my_cells(&prep.walkable, shard));
@@ -183,6 +223,7 @@ pub fn precompute_shard(
         shard,
         fingerprint: fingerprint(objects, opts),
         options: *opts,
+        lod,
         walkable: prep.walkable.len() as u64,
         occluders: prep.occluders as u64,
         rays: made.rays,
@@ -277,6 +318,9 @@ impl ShardCells {
         }
         b.extend(self.seconds.to_le_bytes());
         b.extend(self.dov_seconds.to_le_bytes());
+        let (ratio, floor) = self.lod.map_or((0.0, 0), |l| (l.ratio, l.min_triangles));
+        b.extend(ratio.to_le_bytes());
+        b.extend(floor.to_le_bytes());
         b.extend((self.cells.len() as u32).to_le_bytes());
         debug_assert_eq!(b.len(), HEAD_LEN);
         for (id, pvs) in &self.cells {
@@ -298,7 +342,9 @@ impl ShardCells {
         let version = u32_at(b, 4);
         if version != SHARD_VERSION {
             return Err(format!(
-                "shard version {version}, this build reads {SHARD_VERSION}"
+                "shard version {version}, this flaneur reads version {SHARD_VERSION} only \
+                 (version 1 did not record the LOD levels its DoVs drew): compute the shards \
+                 again with this flaneur"
             ));
         }
         let body = b.len() - CRC_LEN;
@@ -319,7 +365,19 @@ impl ShardCells {
             dov: DovMethod::default(),
         };
         options.validate().map_err(|e| e.to_string())?;
-        let count = u32_at(b, 88) as usize;
+        let lod = match (f32_at(b, 88), u32_at(b, 92)) {
+            (ratio, 0) if ratio == 0.0 => None,
+            (ratio, min_triangles) if ratio > 0.0 && ratio < 1.0 => Some(ShardLod {
+                ratio,
+                min_triangles,
+            }),
+            (ratio, floor) => {
+                return Err(format!(
+                    "LOD ratio {ratio} with a floor of {floor} triangles: not levels a build makes"
+                ))
+            }
+        };
+        let count = u32_at(b, 96) as usize;
         let mut cells = Vec::with_capacity(count.min(body / 12));
         let mut at = HEAD_LEN;
         for k in 0..count {
@@ -351,12 +409,48 @@ impl ShardCells {
             shard,
             fingerprint: u64_at(b, 16),
             options,
+            lod,
             walkable: u64_at(b, 48),
             occluders: u64_at(b, 56),
             rays: u64_at(b, 64),
             seconds: f64_at(b, 72),
             dov_seconds: f64_at(b, 80),
             cells,
+        })
+    }
+
+    /// Checks that this shard's DoVs drew far objects as a build storing the LODs `lod`
+    /// makes (`None`: none) draws them, so that a merge under `lod` gives the whole
+    /// build's DoVs; the error names the shard and what differs.
+    pub fn check_lod(&self, lod: Option<&LodOptions>) -> std::result::Result<(), String> {
+        let name = format!("shard {}", self.shard);
+        let levels = |l: ShardLod| {
+            format!(
+                "coarse LOD levels (ratio {}, down to {} triangles)",
+                l.ratio, l.min_triangles
+            )
+        };
+        let merge = ShardLod::of(lod);
+        if self.lod == merge {
+            return Ok(());
+        }
+        Err(match (self.lod, merge) {
+            (None, _) => format!(
+                "{name} drew its DoVs on full meshes (computed with --no-lod), but this merge \
+                 stores LODs, which a whole build draws far objects through: merge with \
+                 --no-lod, or compute the shards again without it"
+            ),
+            (Some(mine), None) => format!(
+                "{name} drew far objects' DoVs through {}, but this merge stores none \
+                 (--no-lod): merge without --no-lod, or compute the shards again with it",
+                levels(mine)
+            ),
+            (Some(mine), Some(merge)) => format!(
+                "{name} drew far objects' DoVs through {}, but this merge stores {}: merge \
+                 with the shards' LOD settings",
+                levels(mine),
+                levels(merge)
+            ),
         })
     }
 
