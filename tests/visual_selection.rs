@@ -329,6 +329,16 @@ fn faint_dov_tau_an_object_of_dov_at_most_eta_is_drawn_under_a_stretched_tau() {
         let e = visual::walk(&db, &path, &cfg, |_| {}).unwrap_err();
         assert!(e.to_string().contains("≥ 1"), "{e}");
     }
+    // `flaneur walk` takes the stretch too, and hands it to the walk's checks.
+    let db = city().db.to_str().unwrap();
+    let out = common::flaneur(&["walk", db, "--mode", "visual", "--faint-tau", "0.5", "-q"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("stretch of 0.5"),
+        "{err}"
+    );
+    let out = common::flaneur(&["walk", db, "--mode", "visual", "--faint-tau", "1", "-q"]);
+    common::succeeded(&out);
 }
 
 /// The screen rule from `eye` at the walks' field of view under τ.

@@ -22,10 +22,12 @@ use flaneur::Database;
 mod csv_rows;
 mod gaps;
 mod render;
+mod visual_args;
 
 use csv_rows::{write_row, CsvRows};
 
 use render::{print_render, rendered, RenderOpts};
+use visual_args::VisualArgs;
 
 /// `flaneur walk`'s arguments.
 #[derive(clap::Args)]
@@ -147,19 +149,8 @@ pub struct WalkArgs {
     /// With --mode visual or vsc: the DoV threshold η of the search, within [0, 1].
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
-    /// With --mode visual: the storage scheme searched (horizontal, vertical, indexed;
-    /// default the smallest built).
-    #[arg(long)]
-    scheme: Option<String>,
-    /// With --mode visual: objects refined view by view take a τ stretched by their DoV
-    /// (ours; default off).
-    #[arg(long)]
-    dov_tau: bool,
-    /// With --mode visual --selection thesis: each object at the finer of eq. 5.6's
-    /// level and --lod-tau's (ours: the object half of --selection screen, which implies
-    /// it; default off).
-    #[arg(long)]
-    finer_by_tau: bool,
+    #[command(flatten)]
+    visual: VisualArgs,
     /// With --mode visual, vsc or pb: the rule that picks internal LODs and levels.
     /// `screen` (ours, the default): a node's internal LOD only where its DoV ≤ η and
     /// eq. 5.4 allow it and its stored error projects under --lod-tau (from the viewcell
@@ -168,10 +159,6 @@ pub struct WalkArgs {
     /// Table 5.3 and 6.1 reproductions).
     #[arg(long, default_value = "screen", value_parser = selection)]
     selection: flaneur::hdov::Selection,
-    /// With --mode visual: prefetch, on a thread, the viewcell the eye will be in this
-    /// many seconds on, at most 60 (ours, not the thesis's; default off).
-    #[arg(long, value_name = "SECONDS", value_parser = seconds_ahead, allow_negative_numbers = true)]
-    next_cell_prefetch: Option<f32>,
     /// LOD selection's screen-space error, a fraction of the viewport: each object
     /// drawn at the coarsest stored level under it, within [0, 1) (0: full detail).
     #[arg(long, default_value_t = flaneur::walk::lod_select::DEFAULT_TAU, value_parser = lod_tau, allow_negative_numbers = true)]
@@ -220,11 +207,8 @@ impl WalkArgs {
             every,
             lod_tau,
             eta,
-            scheme,
-            next_cell_prefetch,
+            visual: visual_args,
             budget,
-            dov_tau,
-            finer_by_tau,
             selection,
             adapt_ahead,
             stream,
@@ -309,18 +293,13 @@ impl WalkArgs {
         if mode == "visual" && config.is_none() {
             let mut cfg = VisualConfig {
                 eta,
-                prefetch_k: next_cell_prefetch,
                 pace: pace(speed),
-                dov_tau,
-                finer_by_tau,
                 selection,
                 tau: lod_tau,
                 never_wait,
                 ..VisualConfig::default()
             };
-            if let Some(s) = scheme {
-                cfg.scheme = Some(s.parse().map_err(anyhow::Error::msg)?);
-            }
+            visual_args.apply(&mut cfg)?;
             if let Some(bytes) = cache_bytes {
                 cfg.node_cache = (bytes > 0)
                     .then(|| (policy.clone().unwrap_or_else(|| "dovtime".into()), bytes));
