@@ -22,7 +22,10 @@
 //! a group whose bounds are behind the horizon built so far in every bin they span is
 //! passed over whole; and a horizon may be built for some boxes only ([`Wanted`]),
 //! leaving out the bins they do not touch and what lies beyond them, and stopping once
-//! the occluders entered so far hide every one of them (more occluders only hide more).
+//! the occluders entered so far hide every one of them (more occluders only hide more);
+//! on the way, once half of the boxes still pending are hidden, the bins and distances
+//! it enters are narrowed to those of the rest (an entry only a hidden box could reach
+//! changes no answer).
 //! Such a build passes over a prism or group that touches none of those bins in O(1) (a
 //! count of the wanted bins before each). Nor does a build keep an entry that its
 //! bin's steepest so far dominates (nearer and no less steep): it is in no front.
@@ -215,6 +218,14 @@ fn entry(eye: Vec2, dir: Vec2, min: Vec2, max: Vec2) -> Option<f32> {
     (near <= far).then_some(near)
 }
 
+/// `x.floor() as i64` for the bins' pseudo-angles (finite, a few turns at most)
+/// without a call to the C library's `floorf`, which the baseline x86-64 target makes
+/// of `floor` and which was a visible share of the test.
+fn floor(x: f32) -> i64 {
+    let t = x as i64;
+    t - i64::from(t as f32 > x)
+}
+
 fn bin_start(k: i64) -> f32 {
     k as f32 * BIN
 }
@@ -243,8 +254,8 @@ impl BoxView {
         }
         let corners = corners2(min, max);
         let (lo, hi, angles) = span(p, &corners);
-        let first = ((lo - PAD) / BIN).floor() as i64;
-        let last = ((hi + PAD) / BIN).floor() as i64;
+        let first = floor((lo - PAD) / BIN);
+        let last = floor((hi + PAD) / BIN);
         if last - first >= BINS as i64 {
             return None;
         }
@@ -276,7 +287,7 @@ pub struct Wanted {
     /// Each box added, as bins `first..=last` (unwrapped), its least plan distance and
     /// the rise of its top over the eye per metre there: what a horizon whose steepest
     /// entries block it in each of those bins hides (see [`Horizon::rebuild`]).
-    asked: Vec<(i64, i64, f32, f32)>,
+    asked: Vec<Ask>,
     /// How each box added lies from the eye, for [`Horizon::hides_wanted`].
     views: Vec<BoxView>,
     /// Per bin, a plan distance beyond every point of every box added that touches it
@@ -330,7 +341,13 @@ impl Wanted {
         }
         self.reach = self.reach.max(far);
         let rise = (b.max.y - self.height).max(0.0);
-        self.asked.push((v.first, v.last, v.d, rise / v.d));
+        self.asked.push(Ask {
+            first: v.first,
+            last: v.last,
+            d: v.d,
+            slope: rise / v.d,
+            far,
+        });
         self.views.push(v);
         true
     }
@@ -340,6 +357,18 @@ impl Wanted {
     pub fn reach(&self) -> f32 {
         self.reach
     }
+}
+
+/// A box asked about, as a build for it sees it: bins `first..=last` (unwrapped), its
+/// least plan distance `d`, the rise of its top over the eye per metre there, and a
+/// plan distance beyond all of it.
+#[derive(Clone, Copy, Debug)]
+struct Ask {
+    first: i64,
+    last: i64,
+    d: f32,
+    slope: f32,
+    far: f32,
 }
 
 /// Bounds around a group of prisms: a plan box around their footprints, and their
@@ -390,7 +419,9 @@ struct Scratch {
     /// Over two turns of bins, how many wanted bins lie before each (empty when every
     /// bin is wanted).
     wanted_before: Vec<u32>,
-    pending: Vec<(i64, i64, f32, f32)>,
+    pending: Vec<Ask>,
+    /// The bins' `far` (see [`Wanted`]) over the boxes still pending.
+    far: Vec<f32>,
 }
 
 impl Horizon {
@@ -459,7 +490,7 @@ impl Horizon {
     ) {
         let p = plan(eye);
         let edges = edges();
-        let reach = wanted.map_or(f32::INFINITY, |w| w.reach);
+        let mut reach = wanted.map_or(f32::INFINITY, |w| w.reach);
         let Scratch {
             steepest,
             entries,
@@ -468,63 +499,93 @@ impl Horizon {
             by_bin,
             wanted_before,
             pending,
+            far,
         } = &mut self.scratch;
         // Per bin, the steepest entry so far and its distance.
         steepest.clear();
         steepest.resize(BINS, (f32::INFINITY, f32::NEG_INFINITY));
         entries.clear();
         // Beyond `far[b]`, in bin b, no entry is ever looked at.
-        static UNLIMITED: [f32; BINS] = [f32::INFINITY; BINS];
-        let far: &[f32] = wanted.map_or(&UNLIMITED, |w| &w.far);
+        far.clear();
+        match wanted {
+            Some(w) => far.extend_from_slice(&w.far),
+            None => far.resize(BINS, f32::INFINITY),
+        }
         // Whether no entry of `least` or further, `most` or less steep, counts in bin b.
-        let dominated = |steepest: &[(f32, f32)], b: usize, least: f32, most: f32| {
+        let dominated = |steepest: &[(f32, f32)], far: &[f32], b: usize, least: f32, most: f32| {
             let (e, s) = steepest[b];
             far[b] <= least || (prune && e <= least && s >= most)
         };
         // The same over the bins `first..=last` (unwrapped, at most a turn), a wanted
         // bin among them found first in O(1): a horizon built for a few boxes is asked
         // about a few bins, and most prisms and groups touch none of them.
-        wanted_before.clear();
-        if wanted.is_some() {
+        let count_wanted = |wanted_before: &mut Vec<u32>, far: &[f32]| {
+            wanted_before.clear();
             wanted_before.push(0);
             for k in 0..2 * BINS {
                 let n = wanted_before[k] + u32::from(far[k % BINS] > 0.0);
                 wanted_before.push(n);
             }
+        };
+        wanted_before.clear();
+        if wanted.is_some() {
+            count_wanted(wanted_before, far);
         }
-        let all_dominated =
-            |steepest: &[(f32, f32)], first: i64, last: i64, least: f32, most: f32| {
-                let (f, n) = (bin_of(first), (last - first + 1) as usize);
-                if !wanted_before.is_empty() && wanted_before[f + n] == wanted_before[f] {
-                    return true;
-                }
-                let run = |r: Range<usize>| {
-                    steepest[r.clone()]
-                        .iter()
-                        .zip(&far[r])
-                        .all(|(&(e, s), &f)| f <= least || (prune && e <= least && s >= most))
-                };
-                run(f..(f + n).min(BINS)) && run(0..(f + n).saturating_sub(BINS))
+        let all_dominated = |steepest: &[(f32, f32)],
+                             far: &[f32],
+                             wanted_before: &[u32],
+                             first: i64,
+                             last: i64,
+                             least: f32,
+                             most: f32| {
+            let (f, n) = (bin_of(first), (last - first + 1) as usize);
+            if !wanted_before.is_empty() && wanted_before[f + n] == wanted_before[f] {
+                return true;
+            }
+            let run = |r: Range<usize>| {
+                steepest[r.clone()]
+                    .iter()
+                    .zip(&far[r])
+                    .all(|(&(e, s), &f)| f <= least || (prune && e <= least && s >= most))
             };
+            run(f..(f + n).min(BINS)) && run(0..(f + n).saturating_sub(BINS))
+        };
         // The boxes wanted that the entries so far may not hide yet, looked at again
         // after every `CHECK` groups: once the steepest entry of each of their bins is
         // nearer than the box and rises above its top, every one of them is hidden
         // (the front keeps that entry or a nearer, steeper one), and the build stops.
+        // Until then, once they are half as many as when the bins were last counted,
+        // the bins and distances wanted are those of the boxes still pending only: an
+        // entry that only a hidden box could ask about changes no answer.
         const CHECK: usize = 16;
         pending.clear();
         if let Some(w) = wanted {
             pending.extend_from_slice(&w.asked);
         }
+        let mut counted = pending.len();
         for (n, (group, prisms)) in groups.into_iter().enumerate() {
             if wanted.is_some() && n % CHECK == CHECK - 1 {
-                pending.retain(|&(first, last, d, slope)| {
-                    !(first..=last).all(|k| {
+                pending.retain(|a| {
+                    !(a.first..=a.last).all(|k| {
                         let (e, s) = steepest[bin_of(k)];
-                        e < d && s >= slope
+                        e < a.d && s >= a.slope
                     })
                 });
                 if pending.is_empty() {
                     break;
+                }
+                if 2 * pending.len() <= counted {
+                    counted = pending.len();
+                    far.fill(0.0);
+                    reach = 0.0;
+                    for a in pending.iter() {
+                        for k in a.first..=a.last {
+                            let f = &mut far[bin_of(k)];
+                            *f = f.max(a.far);
+                        }
+                        reach = reach.max(a.far);
+                    }
+                    count_wanted(wanted_before, far);
                 }
             }
             if let Some(g) = group {
@@ -537,7 +598,9 @@ impl Horizon {
                 }
                 if let Some(v) = BoxView::of(p, g.lo, g.hi) {
                     let (least, most) = (v.d, rise / v.d);
-                    if least >= reach || all_dominated(steepest, v.first, v.last, least, most) {
+                    if least >= reach
+                        || all_dominated(steepest, far, wanted_before, v.first, v.last, least, most)
+                    {
                         continue;
                     }
                 }
@@ -555,12 +618,12 @@ impl Horizon {
                 let (least, most) = (nearest, rise / nearest);
                 let corners = o.corners();
                 let (lo, hi, angles) = span(p, &corners);
-                let first = ((lo + PAD) / BIN).ceil() as i64;
-                let last = ((hi - PAD) / BIN).floor() as i64 - 1;
+                let first = -floor(-(lo + PAD) / BIN);
+                let last = floor((hi - PAD) / BIN) - 1;
                 if first > last {
                     continue;
                 }
-                if all_dominated(steepest, first, last, least, most) {
+                if all_dominated(steepest, far, wanted_before, first, last, least, most) {
                     continue;
                 }
                 // The eye in the footprint's frame once per prism; per bin edge only the
@@ -579,7 +642,7 @@ impl Horizon {
                 let mut before: Option<(i64, Option<f32>)> = None;
                 for k in first..=last {
                     let b = bin_of(k);
-                    if dominated(steepest, b, least, most) {
+                    if dominated(steepest, far, b, least, most) {
                         continue;
                     }
                     let e0 = match before {
@@ -676,13 +739,12 @@ impl Horizon {
         // nearer entry no less steep is, so it blocks the box at its nearest point
         // without a search of the front when it is nearer and steep enough.
         let steepest = &self.scratch.steepest;
-        (v.first..=v.last).all(|k| {
+        let quick = |&(e, s): &(f32, f32)| e < d && s >= slope;
+        // Where the box's nearest point lies, worked out when a bin first needs it.
+        let mut near_angle = None;
+        // A bin its steepest entry does not block on its own.
+        let mut slow = |k: i64| {
             let bin = bin_of(k);
-            if let Some(&(e, s)) = steepest.get(bin) {
-                if e < d && s >= slope {
-                    return true;
-                }
-            }
             let front = &self.fronts[self.starts[bin] as usize..self.starts[bin + 1] as usize];
             // The steepest occluder entered before distance `d` rises above `rise / d`.
             let blocked = |d: f32| {
@@ -700,7 +762,7 @@ impl Horizon {
             // that a side grazing a corner loses nothing to rounding).
             let (a0, a1) = (bin_start(k) - PAD, bin_start(k + 1) + PAD);
             let inside = |a: f32| a >= a0 && a <= a1;
-            if inside(unwrapped(nearest - p, v.reference)) {
+            if inside(*near_angle.get_or_insert_with(|| unwrapped(nearest - p, v.reference))) {
                 return false;
             }
             let mut least = f32::INFINITY;
@@ -717,7 +779,23 @@ impl Horizon {
             // A hair nearer, for rounding; never nearer than the nearest point.
             let least = (least * (1.0 - 1e-5)).max(d);
             least.is_finite() && least > d && blocked(least)
-        })
+        };
+        if steepest.len() != BINS {
+            return (v.first..=v.last).all(slow);
+        }
+        // The bins as at most two runs of the array (the span may wrap past the last
+        // bin), each walked in a tight loop, the search only where the quick test fails.
+        let (f, n) = (bin_of(v.first), (v.last - v.first + 1) as usize);
+        let split = (f + n).min(BINS);
+        let mut k = v.first;
+        steepest[f..split]
+            .iter()
+            .chain(&steepest[..f + n - split])
+            .all(|st| {
+                let here = k;
+                k += 1;
+                quick(st) || slow(here)
+            })
     }
 }
 

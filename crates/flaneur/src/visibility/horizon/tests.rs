@@ -308,6 +308,17 @@ fn a_horizon_for_some_boxes_stops_once_they_are_all_hidden() {
 
 #[test]
 fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
+    // Few boxes over a few groups; then more boxes over many small groups, where a
+    // build narrows its bins to the boxes still pending several times over.
+    // A build for a few boxes keeps a small share of the whole horizon's entries.
+    let (kept, all) = some_boxes_answer_as_the_whole_one(50.0, 1..12);
+    assert!(kept * 3 < all, "{kept} entries kept of {all}");
+    some_boxes_answer_as_the_whole_one(15.0, 12..60);
+}
+
+/// Random scenes in groups of prisms `tile` metres a side, each asked about a number
+/// of random boxes in `boxes`: entries kept, and entries in the whole horizons.
+fn some_boxes_answer_as_the_whole_one(tile: f32, boxes: Range<usize>) -> (usize, usize) {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
     let (mut hidden, mut shown, mut kept, mut all) = (0, 0, 0, 0);
@@ -325,12 +336,12 @@ fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
             100.0,
         );
         let full = built(eye, &prisms, false, false, None);
-        let targets: Vec<Aabb> = (0..rng.gen_range(1..12))
+        let targets: Vec<Aabb> = (0..rng.gen_range(boxes.clone()))
             .map(|_| random_box(&mut rng, 400.0, 20.0, 80.0))
             .collect();
         wanted.reset(eye);
         let asked: Vec<&Aabb> = targets.iter().filter(|t| wanted.add(t)).collect();
-        reused.rebuild(eye, tiled(&prisms, eye, 50.0), Some(&wanted));
+        reused.rebuild(eye, tiled(&prisms, eye, tile), Some(&wanted));
         kept += reused.fronts.len();
         all += full.fronts.len();
         // The answer from the place each box was asked at is the same.
@@ -356,7 +367,7 @@ fn a_horizon_for_some_boxes_answers_for_them_as_the_whole_one() {
         }
     }
     assert!(hidden > 50 && shown > 50, "{hidden} hidden, {shown} shown");
-    assert!(kept * 3 < all, "{kept} entries kept of {all}");
+    (kept, all)
 }
 
 /// Random prisms and boxes: whenever the horizon hides a box, every sight line from
@@ -409,4 +420,19 @@ fn what_it_hides_is_behind_a_prism_with(turned: bool) {
         hidden > 500 && lines > 20_000,
         "{hidden} boxes hidden (turned: {turned})"
     );
+}
+
+#[test]
+fn the_bins_floor_is_the_floor() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let whole = (-3000..3000).map(|k| k as f32);
+    let near_whole = (-3000..3000).flat_map(|k| {
+        let x = k as f32;
+        [x.next_down(), x.next_up(), x - 0.5, x + 1e-3]
+    });
+    let random = (0..10_000).map(|_| rng.gen_range(-2100.0f32..2100.0));
+    for x in whole.chain(near_whole).chain(random.collect::<Vec<_>>()) {
+        assert_eq!(floor(x), x.floor() as i64, "floor of {x}");
+    }
 }
