@@ -463,22 +463,16 @@ pub(crate) fn build_hdov(
     // Each cell's VDs, then every scheme asked for.
     let cells: Vec<u32> = visibility.head(store)?.cells.iter().map(|c| c.id).collect();
     let mut vds: Vec<CellVd> = Vec::with_capacity(cells.len());
-    let reader: &Store = store;
-    let cell_vd = |&id: &u32| -> Result<CellVd> {
-        let pvs = visibility.pvs(reader, id)?.ok_or_else(|| {
+    for (i, &id) in cells.iter().enumerate() {
+        let pvs = visibility.pvs(store, id)?.ok_or_else(|| {
             Error::Invalid(format!("viewcell {id} is in the directory but has no PVS"))
         })?;
-        topology
-            .aggregate(&pvs.ids, &pvs.dov)
-            .map_err(|e| Error::Invalid(format!("viewcell {id}: {e}")))
-    };
-    // On all cores, a batch of cells at a time so that the progress moves.
-    for batch in cells.chunks(256) {
-        let made: Vec<Result<CellVd>> = batch.par_iter().map(cell_vd).collect();
-        for vd in made {
-            vds.push(vd?);
-        }
-        progress.update(Step::HdovCells, vds.len() as u64, Some(cells.len() as u64));
+        vds.push(
+            topology
+                .aggregate(&pvs.ids, &pvs.dov)
+                .map_err(|e| Error::Invalid(format!("viewcell {id}: {e}")))?,
+        );
+        progress.update(Step::HdovCells, i as u64 + 1, Some(cells.len() as u64));
     }
     progress.finish(Step::HdovCells);
     let shape = Shape {
