@@ -81,16 +81,16 @@
 //!   of 2 × 2 or 4 × 4 groups, each looked at whole when its first group comes. From a
 //!   40 m cell a group's bins widen several times over, so the wider check passes over
 //!   fewer and costs more; and what either saves is a small share of the test.
-//! - The object hierarchy is an R-tree: a subtree whose box a block's horizon hides is
-//!   dropped whole, as the thesis drops hidden nodes; objects already known visible (a
-//!   ray of the DoV met them, or an earlier patch's horizon left them) are not tested
-//!   again.
+//! - The object hierarchy is an R-tree, laid out flat in preorder ([`flat`]): a subtree
+//!   whose box a block's horizon hides is dropped whole, as the thesis drops hidden
+//!   nodes; objects already known visible (a ray of the DoV met them, or an earlier
+//!   patch's horizon left them) are not tested again.
 //!
 //! [`occluders`]: super::occluder::occluders
 
 use glam::{Vec2, Vec3};
 use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{RTree, SelectionFunction, AABB};
+use rstar::{RTree, AABB};
 
 use rayon::prelude::*;
 
@@ -101,8 +101,8 @@ use super::occluder::{occluders, Occluders};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::scene::Mesh;
+use flat::FlatTree;
 
-type Entry = GeomWithData<Rectangle<[f32; 3]>, u32>;
 type PlanEntry = GeomWithData<Rectangle<[f32; 2]>, u32>;
 
 /// The side of the squares of ground by which prisms are grouped, metres: about a city
@@ -334,7 +334,7 @@ pub fn prisms(occluders: &Occluders, ground: f32) -> Vec<Prism> {
 /// (see the module's notes).
 pub struct Scene {
     boxes: Vec<Aabb>,
-    objects: RTree<Entry>,
+    objects: FlatTree,
     /// The prisms, group by group.
     prisms: Vec<Prism>,
     /// Groups of prisms near one another, each with its prisms in `prisms`.
@@ -410,21 +410,9 @@ impl Scene {
                 })
                 .collect(),
         );
-        let objects_index = RTree::bulk_load(
-            objects
-                .iter()
-                .enumerate()
-                .map(|(i, b)| {
-                    GeomWithData::new(
-                        Rectangle::from_corners(b.min.to_array(), b.max.to_array()),
-                        i as u32,
-                    )
-                })
-                .collect(),
-        );
         Ok(Scene {
             boxes: objects.to_vec(),
-            objects: objects_index,
+            objects: FlatTree::new(objects),
             prisms,
             groups,
             group_index,
@@ -618,14 +606,11 @@ impl Walk<'_> {
                 // Every object: through the R-tree, a subtree the horizon hides dropped
                 // whole.
                 self.rebuild(eye, k, off, false);
-                self.scene
-                    .objects
-                    .locate_with_selection_function(Unhidden {
-                        horizon: &self.horizon,
-                        visible: &self.visible,
-                    })
-                    .map(|e| e.data)
-                    .collect()
+                let (horizon, visible) = (&self.horizon, &self.visible);
+                self.scene.objects.select(
+                    |b| !horizon.hides(b),
+                    |i, b| !visible[i as usize] && !horizon.hides(b),
+                )
             }
             Some(undecided) => {
                 self.wanted.reset(eye);
@@ -691,35 +676,12 @@ impl Walk<'_> {
     }
 }
 
-struct Unhidden<'a> {
-    horizon: &'a Horizon,
-    visible: &'a [bool],
-}
-
-fn aabb(e: &AABB<[f32; 3]>) -> Aabb {
-    Aabb {
-        min: Vec3::from(e.lower()),
-        max: Vec3::from(e.upper()),
-    }
-}
-
-impl SelectionFunction<Entry> for Unhidden<'_> {
-    fn should_unpack_parent(&self, envelope: &AABB<[f32; 3]>) -> bool {
-        !self.horizon.hides(&aabb(envelope))
-    }
-
-    fn should_unpack_leaf(&self, leaf: &Entry) -> bool {
-        !self.visible[leaf.data as usize]
-            && !self
-                .horizon
-                .hides(&aabb(&rstar::RTreeObject::envelope(leaf)))
-    }
-}
-
 /// A key that orders finite non-negative floats as they compare.
 fn ordered(x: f32) -> u32 {
     x.to_bits()
 }
+
+mod flat;
 
 #[cfg(test)]
 mod tests;
