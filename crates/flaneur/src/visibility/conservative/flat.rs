@@ -35,18 +35,7 @@ pub(super) struct FlatTree {
 impl FlatTree {
     /// The tree of `boxes`, object `i` being `boxes[i]`.
     pub(super) fn new(boxes: &[Aabb]) -> FlatTree {
-        let tree = RTree::bulk_load(
-            boxes
-                .iter()
-                .enumerate()
-                .map(|(i, b)| {
-                    GeomWithData::new(
-                        Rectangle::from_corners(b.min.to_array(), b.max.to_array()),
-                        i as u32,
-                    )
-                })
-                .collect(),
-        );
+        let tree = rtree(boxes);
         let mut nodes = Vec::with_capacity(2 * boxes.len() + 1);
         if !tree.root().children().is_empty() {
             push(tree.root(), &mut nodes);
@@ -80,6 +69,22 @@ impl FlatTree {
         }
         out
     }
+}
+
+/// `rstar`'s tree of `boxes`, object `i` being `boxes[i]`.
+fn rtree(boxes: &[Aabb]) -> RTree<Entry> {
+    RTree::bulk_load(
+        boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                GeomWithData::new(
+                    Rectangle::from_corners(b.min.to_array(), b.max.to_array()),
+                    i as u32,
+                )
+            })
+            .collect(),
+    )
 }
 
 fn bounds(e: &AABB<[f32; 3]>) -> Aabb {
@@ -141,18 +146,7 @@ mod tests {
             );
         }
         // Drop what lies under a plane, whole subtrees at a time.
-        let tree = RTree::bulk_load(
-            boxes
-                .iter()
-                .enumerate()
-                .map(|(i, b)| {
-                    GeomWithData::new(
-                        Rectangle::from_corners(b.min.to_array(), b.max.to_array()),
-                        i as u32,
-                    )
-                })
-                .collect(),
-        );
+        let tree = rtree(&boxes);
         struct Above(f32);
         impl rstar::SelectionFunction<Entry> for Above {
             fn should_unpack_parent(&self, e: &AABB<[f32; 3]>) -> bool {
