@@ -1,12 +1,19 @@
 //! Which structure each page belongs to: the page scan (every page's kind, or why it is
 //! damaged), the claims the structures make on pages as they are walked, and the
 //! problems found on the way.
+//!
+//! A page belongs either whole to one structure, or, when packed extents share it, to
+//! several by byte ranges that must not overlap: a page claimed both ways, or two
+//! packed blobs over the same bytes, is a problem, as two whole claims are.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use super::{problem_of, Problem};
 use crate::error::Error;
 use crate::store::{Extent, PageKind, Store};
+
+/// The owner of a page that packed extents share: its owners are in `Claims::shared`.
+const SHARED: u32 = u32::MAX;
 
 /// Pages the scan announces at once: as many as a remote store reads in one chunk, so
 /// that its page cache (two chunks at the least) keeps them until they are read.
@@ -16,9 +23,15 @@ const SCAN_AHEAD: u64 = 256;
 pub(super) struct Claims {
     /// Each page's kind; `None` for page 0 and for damaged pages.
     kinds: Vec<Option<PageKind>>,
-    /// Each page's owner: an index into `parts` plus one; 0 for none.
+    /// Each page's owner: an index into `parts` plus one; 0 for none; `SHARED` for a
+    /// page packed extents share.
     owners: Vec<u32>,
+    /// The byte ranges of each shared page that packed extents claim, sorted by start:
+    /// (start, end, owner as in `owners`).
+    shared: HashMap<u64, Vec<(usize, usize, u32)>>,
     parts: Vec<String>,
+    /// Payload bytes per page, to place packed extents' bytes in their pages.
+    payload_size: usize,
     /// Pages the scan found damaged, and why: reported once, with their owner.
     damaged: BTreeMap<u64, String>,
     /// Pages of each kind the header counts.
@@ -33,7 +46,9 @@ impl Claims {
         let mut c = Claims {
             kinds: vec![None; n],
             owners: vec![0; n],
+            shared: HashMap::new(),
             parts: Vec::new(),
+            payload_size: store.payload_size(),
             damaged: BTreeMap::new(),
             counted: Vec::new(),
             problems: Vec::new(),
@@ -77,43 +92,82 @@ impl Claims {
         });
     }
 
-    /// `part` claims `extent`'s pages, which must be of `kind`; false (with the problem
-    /// recorded) when the extent does not lie in the file.
+    /// `part` claims `extent`'s pages, which must be of `kind`: a whole extent its pages
+    /// whole, a packed one its bytes in them. False (with the problem recorded) when the
+    /// extent does not lie in the file, or a packed one's offset and page count do not
+    /// fit its length.
     pub(super) fn claim_extent(&mut self, extent: &Extent, kind: PageKind, part: &str) -> bool {
-        self.claim(extent.first_page, extent.page_count as u64, kind, part)
+        if !extent.packed {
+            return self.claim(extent.first_page, extent.page_count as u64, kind, part);
+        }
+        let payload = self.payload_size;
+        let (offset, len) = (extent.offset as usize, extent.byte_len as usize);
+        if let Some(what) = extent.shape_problem(payload) {
+            self.found(Some(extent.first_page), part, what);
+            return false;
+        }
+        let (first, count) = (extent.first_page, extent.page_count as u64);
+        let Some(owner) = self.claim_pages(first, count, kind, part) else {
+            return false;
+        };
+        let end_in_run = offset + len;
+        for (i, page) in (first..first + count).enumerate() {
+            let start = if i == 0 { offset } else { 0 };
+            let end = (end_in_run - i * payload).min(payload);
+            self.claim_bytes(page, start, end, owner, part);
+        }
+        true
+    }
+
+    /// Bytes `start..end` of `page` go to `owner`, a packed extent of `part`.
+    fn claim_bytes(&mut self, page: u64, start: usize, end: usize, owner: u32, part: &str) {
+        let i = page as usize;
+        let other = match self.owners[i] {
+            0 => {
+                self.owners[i] = SHARED;
+                self.shared.insert(page, vec![(start, end, owner)]);
+                return;
+            }
+            SHARED => {
+                let ranges = self.shared.entry(page).or_default();
+                let at = ranges.partition_point(|r| r.0 < start);
+                let before = at.checked_sub(1).map(|j| ranges[j]);
+                let clash = before
+                    .filter(|r| r.1 > start)
+                    .or_else(|| ranges.get(at).copied().filter(|r| r.0 < end));
+                match clash {
+                    None => {
+                        ranges.insert(at, (start, end, owner));
+                        return;
+                    }
+                    Some(r) => r.2,
+                }
+            }
+            whole => whole,
+        };
+        let first_owner = self.parts[other as usize - 1].clone();
+        self.found(
+            Some(page),
+            part,
+            format!("the page also belongs to {first_owner} (over bytes {start}..{end})"),
+        );
     }
 
     /// `part` claims pages `first..first + count`, which must be of `kind`; false (with
     /// the problem recorded) when they do not lie in the file.
     pub(super) fn claim(&mut self, first: u64, count: u64, kind: PageKind, part: &str) -> bool {
-        let n = self.kinds.len() as u64;
-        let end = first.saturating_add(count);
-        if first == 0 || end > n {
-            self.found(
-                Some(first),
-                part,
-                format!("pages {first}..{end} do not lie among the file's data pages 1..{n}"),
-            );
+        let Some(owner) = self.claim_pages(first, count, kind, part) else {
             return false;
-        }
-        self.parts.push(part.to_string());
-        let owner = self.parts.len() as u32;
-        for page in first..end {
+        };
+        for page in first..first + count {
             let i = page as usize;
-            if let Some(found) = self.kinds[i].filter(|&k| k != kind) {
-                self.found(
-                    Some(page),
-                    part,
-                    format!(
-                        "a {} page where a {} page belongs",
-                        found.name(),
-                        kind.name()
-                    ),
-                );
-            }
             match self.owners[i] {
                 0 => self.owners[i] = owner,
                 other => {
+                    let other = match other {
+                        SHARED => self.shared[&page][0].2,
+                        o => o,
+                    };
                     let first_owner = self.parts[other as usize - 1].clone();
                     self.found(
                         Some(page),
@@ -124,6 +178,37 @@ impl Claims {
             }
         }
         true
+    }
+
+    /// Checks that pages `first..first + count` lie in the file and are of `kind`, and
+    /// registers `part` as an owner: its number, or `None` (with the problem recorded)
+    /// when the pages do not lie in the file.
+    fn claim_pages(&mut self, first: u64, count: u64, kind: PageKind, part: &str) -> Option<u32> {
+        let n = self.kinds.len() as u64;
+        let end = first.saturating_add(count);
+        if first == 0 || end > n {
+            self.found(
+                Some(first),
+                part,
+                format!("pages {first}..{end} do not lie among the file's data pages 1..{n}"),
+            );
+            return None;
+        }
+        self.parts.push(part.to_string());
+        for page in first..end {
+            if let Some(found) = self.kinds[page as usize].filter(|&k| k != kind) {
+                self.found(
+                    Some(page),
+                    part,
+                    format!(
+                        "a {} page where a {} page belongs",
+                        found.name(),
+                        kind.name()
+                    ),
+                );
+            }
+        }
+        Some(self.parts.len() as u32)
     }
 
     /// The header counts `pages` pages of `kind`.
@@ -177,6 +262,11 @@ impl Claims {
                 page: Some(page),
                 part: match self.owners[page as usize] {
                     0 => "no structure (a page nothing claims)".to_string(),
+                    SHARED => self.shared[&page]
+                        .iter()
+                        .map(|r| self.parts[r.2 as usize - 1].as_str())
+                        .collect::<Vec<_>>()
+                        .join(", "),
                     o => self.parts[o as usize - 1].clone(),
                 },
                 what: what.clone(),

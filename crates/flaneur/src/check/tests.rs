@@ -291,3 +291,99 @@ fn an_imported_citys_names_are_checked_and_a_bad_offset_is_named() {
     assert!(found.what.contains("name 1 at bytes"), "{found:?}");
     assert_eq!(found.page, Some(extent.first_page));
 }
+
+#[test]
+fn packed_extents_share_pages_and_overlapping_claims_are_found() {
+    use super::claims::Claims;
+    use crate::store::Extent;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.db");
+    let mut s = Store::create(&path, 1024).unwrap();
+    let p = s.payload_size();
+    let m = PageKind::Mesh;
+    let a = s.append_packed(m, &[1; 100]).unwrap(); // page 1, bytes 0..100
+    let b = s.append_packed(m, &vec![2; 2 * p]).unwrap(); // pages 1..=3, to byte 100 of 3
+    let c = s.append_packed(m, &[3; 50]).unwrap(); // page 3, bytes 100..150
+    let whole = s.append_extent(m, &[4; 10]).unwrap(); // page 4
+    assert_eq!(
+        (b.first_page, b.page_count, c.first_page, c.offset),
+        (1, 3, 3, 100)
+    );
+    s.finish().unwrap();
+    let s = Store::open(&path, Backend::Mmap).unwrap();
+    let claimed = || {
+        let mut claims = Claims::scan(&s);
+        for (i, e) in [a, b, c, whole].iter().enumerate() {
+            assert!(claims.claim_extent(e, m, &format!("blob {i}")));
+        }
+        claims
+    };
+    let claims = claimed();
+    assert!(claims.unclaimed().is_empty());
+    assert!(claims.into_problems().is_empty());
+    let packed = |first_page, offset, byte_len| Extent {
+        first_page,
+        page_count: 1,
+        byte_len,
+        offset,
+        packed: true,
+    };
+    // The free bytes after the last blob of page 3 may be claimed.
+    let mut claims = claimed();
+    assert!(claims.claim_extent(&packed(3, 150, 10), m, "more"));
+    assert!(claims.into_problems().is_empty());
+    let cases = [
+        (
+            packed(1, 60, 100),
+            m,
+            "the page also belongs to blob 0 (over bytes 60..160)",
+        ),
+        (
+            packed(3, 110, 10),
+            m,
+            "the page also belongs to blob 2 (over bytes 110..120)",
+        ),
+        (
+            packed(3, 90, 5),
+            m,
+            "also belongs to blob 1 (over bytes 90..95)",
+        ),
+        (
+            packed(4, 20, 5),
+            m,
+            "also belongs to blob 3 (over bytes 20..25)",
+        ),
+        (
+            Extent {
+                packed: false,
+                offset: 0,
+                ..packed(3, 0, 10)
+            },
+            m,
+            "the page also belongs to blob 1",
+        ),
+        (packed(3, 150, 10), PageKind::Lod, "page where a"),
+        (
+            Extent {
+                offset: p as u32,
+                ..a
+            },
+            m,
+            "packed extent of 100 bytes starts at byte",
+        ),
+        (Extent { page_count: 2, ..a }, m, "needs 1 pages"),
+        (
+            packed(9, 0, 10),
+            m,
+            "do not lie among the file's data pages",
+        ),
+    ];
+    for (bad, kind, says) in cases {
+        let mut claims = claimed();
+        claims.claim_extent(&bad, kind, "bad");
+        let problems = claims.into_problems();
+        assert_eq!(problems.len(), 1, "{bad:?}: {problems:?}");
+        assert_eq!(problems[0].part, "bad");
+        assert!(problems[0].what.contains(says), "{bad:?}: {problems:?}");
+    }
+}

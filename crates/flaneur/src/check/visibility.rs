@@ -20,7 +20,7 @@ pub(super) fn check(store: &Store, table: &VisibilityTable, objects: &Objects, c
     for cell in by_offset {
         let end = cell.offset + cell.len as u64;
         // The page the record starts on, for the report.
-        let page = extent.first_page + cell.offset / store.payload_size() as u64;
+        let page = extent.page_of(cell.offset, store.payload_size());
         let record = format!("the PVS record of cell {}", cell.id);
         if end > extent.byte_len as u64 || cell.offset < end_of_last {
             c.found(

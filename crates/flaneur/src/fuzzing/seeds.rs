@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::hdov::{TreeHead, HDOV_SEGMENT};
 use crate::lod::stored::table::LodTable;
-use crate::store::{page, PageKind};
+use crate::store::{page, Extent, PageKind};
 use crate::visibility::VISIBILITY_SEGMENT;
 use crate::Database;
 
@@ -87,6 +87,8 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
         }
     }
 
+    add("db_page", "packed-extents".into(), packed_extents_seed());
+
     let objects = db.range(&db.bounds())?.objects;
     for o in objects.iter().take(6) {
         let mesh = store.read_extent(&o.mesh, PageKind::Mesh)?;
@@ -147,4 +149,23 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
         });
     }
     Ok(seeds)
+}
+
+/// A `db_page` input for its extents: a packed reference (2 pages from page 1, 1,200
+/// bytes at byte 100), then blobs of both kinds, small ones and one over a page, as the
+/// target cuts them (a length byte, times 8, then the bytes).
+fn packed_extents_seed() -> Vec<u8> {
+    let reference = Extent {
+        first_page: 1,
+        page_count: 2,
+        byte_len: 1200,
+        offset: 100,
+        packed: true,
+    };
+    let mut b = reference.to_le_bytes().to_vec();
+    for n in [12u8, 13, 200, 3, 126] {
+        b.push(n);
+        b.extend((0..n as usize * 8).map(|i| (i % 251) as u8));
+    }
+    b
 }

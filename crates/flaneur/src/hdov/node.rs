@@ -195,6 +195,7 @@ mod tests {
                 first_page: 3 + id,
                 page_count: 1,
                 byte_len: 100,
+                ..Extent::default()
             },
             triangles: 12,
             kind: 2,

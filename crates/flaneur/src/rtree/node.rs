@@ -273,6 +273,7 @@ mod tests {
                 first_page: 7 + id,
                 page_count: 2,
                 byte_len: 5000,
+                ..Extent::default()
             },
             triangles: 300,
             kind: 1,

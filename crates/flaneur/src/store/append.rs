@@ -1,5 +1,5 @@
 //! The store's writes as a build makes them: pages and extents appended, a page
-//! overwritten, each checked (a writable store, not the header's kind, a payload that
+//! overwritten, the pages of each kind counted, each checked (a writable store, not the header's kind, a payload that
 //! fits a page) before `writer.rs` buffers it.
 
 use std::io;
@@ -8,7 +8,7 @@ use super::{Extent, PageKind, Store};
 use crate::error::{Error, Result};
 
 impl Store {
-    fn check_write(&self, kind: PageKind, payload: usize, what: &str) -> Result<()> {
+    pub(super) fn check_write(&self, kind: PageKind, payload: usize, what: &str) -> Result<()> {
         if self.writer.is_none() {
             return Err(self.read_only(what));
         }
@@ -48,6 +48,7 @@ impl Store {
             }
         }
         self.header.page_count += 1;
+        self.pages_written[kind as usize] += 1;
         Ok(id)
     }
 
@@ -95,12 +96,22 @@ impl Store {
             }
             // Count as we go, so a failed write leaves page_count matching the buffer.
             self.header.page_count += 1;
+            self.pages_written[kind as usize] += 1;
             pages += 1;
         }
         Ok(Extent {
             first_page,
             page_count: pages,
             byte_len,
+            offset: 0,
+            packed: false,
         })
+    }
+
+    /// Pages of `kind` this handle has appended (`append_page`, `append_extent`,
+    /// `append_packed`; overwrites not counted): what a builder records as the pages
+    /// of each kind, since packed extents share pages and their page counts overlap.
+    pub fn pages_written(&self, kind: PageKind) -> u64 {
+        self.pages_written[kind as usize]
     }
 }

@@ -3,7 +3,9 @@
 //! Layered one idea per file:
 //! - `header.rs`: page 0, the file header with its segment table (layout drawn there);
 //! - `page.rs`: every other page's header (kind, length, checksum) and its codec;
-//! - `extent.rs`: blobs stored as runs of contiguous pages;
+//! - `extent.rs`: blobs stored as runs of contiguous pages, whole or packed at a byte
+//!   offset;
+//! - `packed.rs`: small blobs of one kind packed into shared pages;
 //! - `counters.rs`: the read counters, the papers' currency;
 //! - `backend_kind.rs`: [`Backend`], the choice of how a file is read;
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
@@ -37,6 +39,7 @@ mod counters;
 mod extent;
 pub(crate) mod framing;
 mod header;
+mod packed;
 pub(crate) mod page;
 mod remote;
 mod replace;
@@ -46,6 +49,8 @@ mod writer;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod packed_tests;
 #[cfg(test)]
 mod write_safety_tests;
 
@@ -115,6 +120,10 @@ pub struct Store {
     /// Bytes past the committed pages when opened read-only: what an interrupted
     /// writer left (or something appended); never read.
     uncommitted: u64,
+    /// Each kind's open page for packed extents (at most one a kind).
+    open_pages: Vec<packed::OpenPage>,
+    /// Pages this handle has appended, by kind byte.
+    pages_written: [u64; page::KIND_SLOTS],
 }
 
 const _: fn() = || {
@@ -288,6 +297,8 @@ impl Store {
             writer: None,
             counters: Counters::default(),
             uncommitted: 0,
+            open_pages: Vec::new(),
+            pages_written: [0; page::KIND_SLOTS],
         })
     }
 
@@ -341,6 +352,8 @@ impl Store {
             writer,
             counters: Counters::default(),
             uncommitted,
+            open_pages: Vec::new(),
+            pages_written: [0; page::KIND_SLOTS],
         })
     }
 
@@ -369,6 +382,8 @@ impl Store {
             writer: Some(writer),
             counters: Counters::default(),
             uncommitted: 0,
+            open_pages: Vec::new(),
+            pages_written: [0; page::KIND_SLOTS],
         })
     }
 
@@ -390,7 +405,9 @@ impl Store {
 
     /// Commits without closing: writes pending pages and the header, fsyncs. For a
     /// created store the file is still the temporary one. A read-only store: nothing to do.
+    /// Closes the open pages of packed extents: later packed blobs start fresh pages.
     pub fn flush(&mut self) -> Result<()> {
+        self.close_open_pages();
         let Some(w) = self.writer.as_mut() else {
             return Ok(());
         };
@@ -448,6 +465,8 @@ impl Store {
             first_page: seg.a,
             page_count: Extent::pages_for(byte_len as usize, self.payload_size()) as u32,
             byte_len,
+            offset: 0,
+            packed: false,
         };
         if extent.page_count == 0 || extent.first_page == 0 || extent.end_page() > self.page_count()
         {
@@ -609,10 +628,21 @@ impl Store {
     }
 
     /// Reads the blob `ext` (pages of `kind`). Each page is counted and verified; the
-    /// extent itself must be consistent: `byte_len` fills its pages exactly as
-    /// `append_extent` writes them (all full but the last), within the database.
+    /// extent itself must be consistent, within the database: a whole extent's
+    /// `byte_len` fills its pages exactly as `append_extent` writes them (all full but
+    /// the last); a packed one starts inside its first page's payload, spans the pages
+    /// `offset + byte_len` needs, all full but the last, which holds at least its end.
     pub fn read_extent(&self, ext: &Extent, kind: PageKind) -> Result<Vec<u8>> {
         self.read_extent_range(ext, kind, 0, ext.byte_len as usize)
+    }
+
+    /// Checks an extent's shape (offset, page count against byte length) before any
+    /// page of it is read.
+    fn check_extent_shape(&self, ext: &Extent) -> Result<()> {
+        match ext.shape_problem(self.payload_size()) {
+            Some(what) => Err(self.corrupt(ext.first_page, what)),
+            None => Ok(()),
+        }
     }
 
     /// Reads bytes `start..start + len` of the blob `ext`, reading (and counting) only
@@ -629,16 +659,7 @@ impl Store {
     ) -> Result<Vec<u8>> {
         let payload = self.payload_size();
         let byte_len = ext.byte_len as usize;
-        let need = Extent::pages_for(byte_len, payload);
-        if need != ext.page_count as usize {
-            return Err(self.corrupt(
-                ext.first_page,
-                format!(
-                    "extent of {byte_len} bytes needs {need} pages of {payload} payload bytes, it claims {}",
-                    ext.page_count
-                ),
-            ));
-        }
+        self.check_extent_shape(ext)?;
         let end = start
             .checked_add(len)
             .filter(|&e| e <= byte_len)
@@ -657,8 +678,11 @@ impl Store {
         self.check_range(ext.first_page)?;
         let last = ext.first_page.saturating_add(u64::from(ext.page_count) - 1);
         self.check_range(last)?;
-        let (first_index, last_index) = (start / payload, (end - 1) / payload);
-        let skip = start - first_index * payload;
+        // Byte positions within the run's payloads: a packed blob starts at its offset.
+        let offset = ext.offset as usize;
+        let (run_start, run_end) = (offset + start, offset + end);
+        let (first_index, last_index) = (run_start / payload, (run_end - 1) / payload);
+        let skip = run_start - first_index * payload;
         let mut out = Vec::with_capacity(len + skip);
         let mut scratch = Vec::new();
         for i in first_index..=last_index {
@@ -670,12 +694,20 @@ impl Store {
                     .will_read(&[(page, count)])
                     .map_err(|e| self.read_error(page, e))?;
             }
-            let expect = (byte_len - i * payload).min(payload);
             let got = self.read_append(page, kind, &mut scratch, &mut out)?;
-            if got != expect {
+            // What the page must hold: a whole extent's pages hold exactly its bytes; a
+            // packed one's last page may hold other blobs after it.
+            let through = (offset + byte_len - i * payload).min(payload);
+            let packed_last = ext.packed && i + 1 == ext.page_count as usize;
+            if got != through && !(packed_last && got > through) {
+                let what = match (ext.packed, packed_last) {
+                    (false, _) => format!("an extent of {byte_len} bytes"),
+                    (true, _) => format!("a packed extent of {byte_len} bytes at byte {offset}"),
+                };
+                let at_least = if packed_last { "at least " } else { "" };
                 return Err(self.corrupt(
                     page,
-                    format!("page {i} of an extent of {byte_len} bytes holds {got} bytes, expected {expect}"),
+                    format!("page {i} of {what} holds {got} bytes, expected {at_least}{through}"),
                 ));
             }
         }

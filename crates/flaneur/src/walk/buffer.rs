@@ -276,6 +276,7 @@ pub(crate) mod tests {
                     first_page: 1,
                     page_count: 1,
                     byte_len: 10,
+                    ..Extent::default()
                 },
                 triangles: 1,
                 kind: 0,

@@ -201,7 +201,7 @@ impl LodEntry {
             ("DAG", self.dag),
         ];
         for (name, e) in extents {
-            let fits = Extent::pages_for(e.byte_len as usize, payload) == e.page_count as usize
+            let fits = e.shape_problem(payload).is_none()
                 && (e.page_count == 0 || (e.first_page >= 1 && e.end_page() <= pages));
             if !fits {
                 return Some(format!("its {name} extent {e:?} is not inside the file"));
@@ -601,6 +601,7 @@ mod tests {
             first_page: page,
             page_count: len.div_ceil(1012),
             byte_len: len,
+            ..Extent::default()
         };
         LodEntry {
             id,
