@@ -10,6 +10,7 @@ use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 use flaneur::lod::{LodOptions, ProgressiveMesh};
+use flaneur::scene::MeshCodec;
 use flaneur::store::{PageKind, PAGE_HEADER_LEN};
 use flaneur::{BuildOptions, Database, Error, ObjectEntry};
 
@@ -23,6 +24,14 @@ fn with_lods(lod: LodOptions) -> BuildOptions {
 }
 
 /// Every object of the database, from a range query over its bounds.
+/// The default build but with format version 1's raw meshes, whole pages each.
+fn raw_codec() -> BuildOptions {
+    BuildOptions {
+        codec: MeshCodec::Raw,
+        ..Default::default()
+    }
+}
+
 fn all_objects(db: &Database) -> Vec<ObjectEntry> {
     let mut all = db.range(&db.bounds()).unwrap().objects;
     all.sort_by_key(|o| o.id);
@@ -81,7 +90,12 @@ fn every_stored_level_is_a_valid_mesh_of_its_stated_size() {
 
 #[test]
 fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
-    let city = common::city(60, 5, &BuildOptions::default());
+    // Format version 1: each level a mesh of its own in the chain, whole pages.
+    let raw = BuildOptions {
+        codec: MeshCodec::Raw,
+        ..Default::default()
+    };
+    let city = common::city(60, 5, &raw);
     let db = Database::open(&city.db).unwrap();
     let big = *all_objects(&db).iter().max_by_key(|o| o.triangles).unwrap();
     let levels = db.lod_levels(big.id).unwrap().unwrap();
@@ -121,6 +135,47 @@ fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
     assert!(finest.page_reads < full.page_reads + 2);
 }
 
+#[test]
+fn a_coarse_level_of_a_packed_file_reads_its_chain_alone() {
+    // Format version 2: chains packed several to a page, each level a mesh of its own.
+    let city = common::city(
+        60,
+        5,
+        &BuildOptions {
+            codec: MeshCodec::meshopt(),
+            ..Default::default()
+        },
+    );
+    let db = Database::open(&city.db).unwrap();
+    let big = *all_objects(&db).iter().max_by_key(|o| o.triangles).unwrap();
+    let levels = db.lod_levels(big.id).unwrap().unwrap();
+    db.lod_stats().unwrap();
+    let reads = |f: &dyn Fn()| {
+        db.reset_io();
+        f();
+        db.io()
+    };
+    let full = reads(&|| {
+        db.mesh(&big).unwrap();
+    });
+    let coarsest = reads(&|| {
+        db.lod_mesh(big.id, levels.len() - 1).unwrap();
+    });
+    let finest = reads(&|| {
+        db.lod_mesh(big.id, 1).unwrap();
+    });
+    assert_eq!(
+        coarsest.reads_of(PageKind::Lod),
+        coarsest.page_reads,
+        "{coarsest:?}"
+    );
+    assert!(
+        coarsest.page_reads <= finest.page_reads,
+        "{coarsest:?} {finest:?}"
+    );
+    assert_eq!(full.reads_of(PageKind::Mesh), full.page_reads, "{full:?}");
+}
+
 /// Object `id`'s mesh as the scene file holds it (what the build simplified).
 fn scene_mesh(city: &common::City, id: u64) -> flaneur::scene::Mesh {
     citygen::SceneReader::open(&city.scene)
@@ -133,14 +188,19 @@ fn scene_mesh(city: &common::City, id: u64) -> flaneur::scene::Mesh {
 
 #[test]
 fn objects_above_the_threshold_keep_a_progressive_mesh_that_refines_back_exactly() {
+    // Raw meshes: the stored mesh is the input's, vertex for vertex, as the progressive
+    // mesh refines back to it (format version 2 stores it quantised and reordered).
     let threshold = 800;
     let city = common::city(
         40,
         7,
-        &with_lods(LodOptions {
-            pm_threshold: threshold,
-            ..Default::default()
-        }),
+        &BuildOptions {
+            codec: MeshCodec::Raw,
+            ..with_lods(LodOptions {
+                pm_threshold: threshold,
+                ..Default::default()
+            })
+        },
     );
     let db = Database::open(&city.db).unwrap();
     let stats = db.lod_stats().unwrap().unwrap();
@@ -235,7 +295,9 @@ fn damage_chain(db: &Path, id: u64) -> u64 {
 
 #[test]
 fn a_damaged_lod_page_is_an_error_naming_the_page_and_the_object() {
-    let city = common::city(30, 4, &BuildOptions::default());
+    // One chain to a page (format version 1), so that the damage is one object's: a
+    // damaged page of packed meshes costs each of its objects (tests/bad_input.rs).
+    let city = common::city(30, 4, &raw_codec());
     let db = Database::open(&city.db).unwrap();
     let objects = all_objects(&db);
     let victim = objects[5];
@@ -340,6 +402,8 @@ fn the_cli_builds_lods_by_default_and_takes_its_options() {
         "-q",
         "--pm-threshold",
         "900",
+        "--codec",
+        "meshopt",
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -356,7 +420,29 @@ fn the_cli_builds_lods_by_default_and_takes_its_options() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["lod"]["objects"], 40);
     assert_eq!(v["lod"]["pm_threshold"], 900);
-    assert!(v["pages_by_kind"]["lod"].as_u64().unwrap() > 40);
+    // Chains packed several to a page (format version 2, the default), in fewer pages
+    // than raw floats take (below).
+    let lod_pages = v["pages_by_kind"]["lod"].as_u64().unwrap();
+    assert!(lod_pages > 0, "{lod_pages}");
+    assert!(v["bytes_per_triangle"]["lod"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["format_version"], 2);
+    assert!(
+        text.contains("codec       meshoptimizer's, zstd level 3 (format version 2)"),
+        "{text}"
+    );
+    // Format version 1's raw meshes, the default: a chain or more to a page.
+    let raw = city.dir.path().join("raw.flaneur");
+    let out = flaneur(&["build", scene, "--out", raw.to_str().unwrap(), "-q"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = flaneur(&["info", raw.to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["pages_by_kind"]["lod"].as_u64().unwrap() > 2 * lod_pages);
+    assert_eq!(v["format_version"], 1);
+    assert_eq!(v["codec"], "Raw");
 
     let without = city.dir.path().join("without.flaneur");
     let out = flaneur(&[
@@ -373,7 +459,7 @@ fn the_cli_builds_lods_by_default_and_takes_its_options() {
         "{text}"
     );
     let (a, b) = (
-        std::fs::metadata(&with).unwrap().len(),
+        std::fs::metadata(&raw).unwrap().len(),
         std::fs::metadata(&without).unwrap().len(),
     );
     assert!(a > b, "{a} vs {b}");
@@ -514,9 +600,10 @@ fn large_objects_are_drawn_at_their_levels_until_their_refiner_is_decoded() {
 /// tolerating damage, the object drawn at full detail from then on, told of once.
 #[test]
 fn lod_selection_meets_a_damaged_lod_page() {
+    // One chain to a page, as above.
     use flaneur::walk::lod_select::LodSelector;
     use flaneur::walk::Loaded;
-    let city = common::city(30, 4, &BuildOptions::default());
+    let city = common::city(30, 4, &raw_codec());
     let db = Database::open(&city.db).unwrap();
     let victim = all_objects(&db)[5];
     drop(db);

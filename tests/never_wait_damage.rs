@@ -114,7 +114,7 @@ fn fails_naming(db: &Path, args: &[&str], page: u64, id: u64) {
 #[test]
 fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
     // REVIEW and BOX from the first pose of the CLI's default path, a motion pattern.
-    let c = common::city_with_lods_and_visibility(41);
+    let c = common::city_with_lods_and_visibility_raw(41);
     let victim = {
         let db = Database::open(&c.db).unwrap();
         let path = motion::generate(&db.bounds(), Motion::Normal, 2, 30.0, 1).unwrap();
@@ -126,7 +126,7 @@ fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
     fails_naming(&c.db, &["--config", "box", "--frames", "60"], page, victim);
 
     // PVS from the first pose of its default path, a walk through the viewcells.
-    let c = common::city_with_lods_and_visibility(42);
+    let c = common::city_with_lods_and_visibility_raw(42);
     let victim = {
         let db = Database::open(&c.db).unwrap();
         let first = cell_poses(&db, 2, 1.4 / 30.0, 30.0, 1)
@@ -141,7 +141,7 @@ fn never_wait_walks_name_a_damaged_lod_page_and_fail_at_their_end() {
 
 #[test]
 fn a_never_wait_walk_tells_its_viewer_and_its_report_of_a_damaged_lod_page() {
-    let c = common::city_with_lods_and_visibility(43);
+    let c = common::city_with_lods_and_visibility_raw(43);
     let db = Database::open(&c.db).unwrap();
     let path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 1).unwrap();
     let victim = ahead_of(&db, &path.poses[0]);
@@ -174,7 +174,7 @@ fn a_never_wait_walk_tells_its_viewer_and_its_report_of_a_damaged_lod_page() {
 
 #[test]
 fn a_never_wait_walk_whose_server_resets_after_the_open_names_it_and_fails() {
-    let c = common::city_with_lods_and_visibility(44);
+    let c = common::city_with_lods_and_visibility_raw(44);
     let bytes = std::fs::read(&c.db).unwrap();
     // PVS reads the viewcells before its walk, on the viewer's thread: those requests
     // too are answered, counted on an honest server.

@@ -79,6 +79,16 @@ pub struct DatabaseArgs {
     /// options: two builds, or a build and a merge of shards, give the same bytes.
     #[arg(long)]
     reproducible: bool,
+    /// How meshes are stored: `raw`, f32 floats, whole pages per mesh (format version
+    /// 1); or `meshopt`, meshoptimizer's index and vertex codecs over 16-bit positions
+    /// and 8-bit normals, zstd around them, meshes and LOD chains packed several to a
+    /// page (format version 2).
+    #[arg(long, value_name = "raw|meshopt", default_value = "raw")]
+    codec: CodecName,
+    /// zstd's level (1..=22) around each meshoptimizer buffer (`--codec meshopt`); 0 for
+    /// none. Higher levels write slower and read as fast.
+    #[arg(long, value_name = "LEVEL", default_value_t = flaneur::scene::DEFAULT_ZSTD_LEVEL, value_parser = clap::value_parser!(i32).range(0..=22))]
+    zstd: i32,
     /// No progress bars: only the summary.
     #[arg(long, short)]
     quiet: bool,
@@ -243,8 +253,21 @@ impl DatabaseArgs {
                 max_height: a.max_height,
             },
             reproducible: a.reproducible,
+            codec: match a.codec {
+                CodecName::Raw => flaneur::scene::MeshCodec::Raw,
+                CodecName::Meshopt => flaneur::scene::MeshCodec::Meshopt {
+                    zstd: (a.zstd > 0).then_some(a.zstd),
+                },
+            },
         })
     }
+}
+
+/// `--codec`'s values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum CodecName {
+    Meshopt,
+    Raw,
 }
 
 /// A build's summary: what was written, how the inputs were placed or imported, the

@@ -54,6 +54,22 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
         "  by kind   header 1, r-tree {}, mesh {}, meta {}, lod {}, visibility {}",
         k.rtree, k.mesh, k.meta, k.lod, k.visibility
     );
+    let b = &info.bytes_per_triangle;
+    println!(
+        "bytes/tri   {:.2} in all: mesh {:.2}, lod {:.2}, r-tree {:.2}, visibility {:.2} (a page's bytes over the full-detail triangles)",
+        b.whole, b.mesh, b.lod, b.rtree, b.visibility
+    );
+    let codec = match info.codec {
+        flaneur::scene::MeshCodec::Raw => "raw floats".to_string(),
+        flaneur::scene::MeshCodec::Meshopt { zstd: None } => "meshoptimizer's, no zstd".to_string(),
+        flaneur::scene::MeshCodec::Meshopt { zstd: Some(l) } => {
+            format!("meshoptimizer's, zstd level {l}")
+        }
+    };
+    println!(
+        "codec       {codec} (format version {})",
+        info.format_version
+    );
     match &info.lod {
         None => println!("lods        none (built with --no-lod, or before LODs were stored)"),
         Some(l) => {

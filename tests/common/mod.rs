@@ -238,9 +238,25 @@ pub fn city_with_lods_and_visibility(seed: u64) -> City {
     )
 }
 
+/// [`city_with_lods_and_visibility`] with format version 1's raw meshes, one chain to a
+/// page or more: for tests that damage one object's LOD page (a page of packed chains
+/// is several objects').
+pub fn city_with_lods_and_visibility_raw(seed: u64) -> City {
+    city(
+        120,
+        seed,
+        &BuildOptions {
+            lod: BuildOptions::default().lod,
+            codec: flaneur::scene::MeshCodec::Raw,
+            ..with_visibility()
+        },
+    )
+}
+
 /// The first page of object `id`'s LOD chain in the database at `db`, found by the
-/// chain's documented layout: a `lod` page whose payload starts with the chain's magic,
-/// version and the object's id.
+/// chain's documented layout: a `lod` page whose payload holds the chain's magic, its
+/// version and the object's id (at the payload's start in a file of format version 1,
+/// anywhere in version 2, where chains are packed several to a page).
 pub fn lod_chain_page(db: &std::path::Path, id: u64) -> u64 {
     use flaneur::store::{PageKind, PAGE_HEADER_LEN};
     let page_size = flaneur::Database::open(db).unwrap().store().page_size();
@@ -252,8 +268,11 @@ pub fn lod_chain_page(db: &std::path::Path, id: u64) -> u64 {
         .find(|(_, p)| {
             let payload = &p[PAGE_HEADER_LEN..];
             p[0] == PageKind::Lod as u8
-                && payload[..4] == flaneur::lod::CHAIN_MAGIC
-                && payload[8..16] == id.to_le_bytes()
+                && payload.windows(16).any(|w| {
+                    w[..4] == flaneur::lod::CHAIN_MAGIC
+                        && (w[4..8] == 1u32.to_le_bytes() || w[4..8] == 2u32.to_le_bytes())
+                        && w[8..16] == id.to_le_bytes()
+                })
         })
         .expect("the object's chain")
         .0;

@@ -8,10 +8,15 @@
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
-use crate::scene::{decode_mesh, encode_mesh, Mesh};
+use crate::scene::{decode_mesh, Mesh, MeshCodec};
 use crate::store::{Extent, PageKind, Segment, Store};
 
 const OBJECTS_SEGMENT: &str = "objects";
+/// How the file's meshes are coded: `a` 1 raw (format version 1), 2 meshoptimizer's;
+/// `b` the zstd level around each buffer, 0 for none. Absent in files of version 1.
+const GEOMETRY_SEGMENT: &str = "geometry";
+const CODEC_RAW: u64 = 1;
+const CODEC_MESHOPT: u64 = 2;
 const BOUNDS_SEGMENT: &str = "bounds";
 const KINDS_SEGMENT: &str = "pagekinds";
 
@@ -43,25 +48,90 @@ pub(crate) struct Meta {
     pub kinds: KindCounts,
 }
 
-/// Writes one object's mesh and returns its index entry.
+/// Writes one object's mesh in `codec` and returns its index entry.
 pub(crate) fn write_object(
     store: &mut Store,
     id: u64,
     kind: u8,
     mesh: &Mesh,
+    codec: MeshCodec,
 ) -> Result<ObjectEntry> {
+    let mut entry = object_entry(id, kind, mesh)?;
+    let bytes = codec
+        .encode(mesh)
+        .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
+    entry.mesh = write_mesh(store, &bytes, codec)?;
+    Ok(entry)
+}
+
+/// The index entry of object `id` before its mesh is written (its extent empty): the
+/// mesh checked, its bounds and triangles counted.
+pub(crate) fn object_entry(id: u64, kind: u8, mesh: &Mesh) -> Result<ObjectEntry> {
     mesh.validate()
         .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
     let (min, max) = mesh.bounds();
     let bounds = Aabb::new(min, max).map_err(|e| Error::Invalid(format!("object {id}: {e}")))?;
-    let mesh_extent: Extent = store.append_extent(PageKind::Mesh, &encode_mesh(mesh))?;
     Ok(ObjectEntry {
         id,
         bounds,
-        mesh: mesh_extent,
+        mesh: Extent::default(),
         triangles: mesh.triangle_count() as u32,
         kind,
     })
+}
+
+/// Appends an encoded mesh: whole pages in format version 1, as it always was, packed
+/// beside its neighbours in version 2.
+pub(crate) fn write_mesh(store: &mut Store, bytes: &[u8], codec: MeshCodec) -> Result<Extent> {
+    match codec {
+        MeshCodec::Raw => store.append_extent(PageKind::Mesh, bytes),
+        MeshCodec::Meshopt { .. } => store.append_packed(PageKind::Mesh, bytes),
+    }
+}
+
+/// Appends encoded LOD data (a chain): whole pages in format version 1, packed in 2.
+pub(crate) fn write_lod(store: &mut Store, bytes: &[u8], codec: MeshCodec) -> Result<Extent> {
+    match codec {
+        MeshCodec::Raw => store.append_extent(PageKind::Lod, bytes),
+        MeshCodec::Meshopt { .. } => store.append_packed(PageKind::Lod, bytes),
+    }
+}
+
+/// Records `codec` in the header, and the format version its files need.
+pub(crate) fn save_codec(store: &mut Store, codec: MeshCodec) -> Result<()> {
+    let (a, b) = match codec {
+        MeshCodec::Raw => {
+            store.write_as_version(crate::store::OLDEST_FORMAT_VERSION)?;
+            return Ok(());
+        }
+        MeshCodec::Meshopt { zstd } => (CODEC_MESHOPT, zstd.unwrap_or(0) as u64),
+    };
+    store.set_segment(Segment {
+        name: GEOMETRY_SEGMENT.into(),
+        a,
+        b,
+        c: 0,
+    })
+}
+
+/// How the file's meshes are coded: raw when the header says nothing (every file of
+/// format version 1). A `NotADatabase` for a codec this build does not know.
+pub(crate) fn load_codec(store: &Store) -> Result<MeshCodec> {
+    let Some(seg) = store.header().segment(GEOMETRY_SEGMENT) else {
+        return Ok(MeshCodec::Raw);
+    };
+    match (seg.a, i32::try_from(seg.b)) {
+        (CODEC_RAW, _) => Ok(MeshCodec::Raw),
+        (CODEC_MESHOPT, Ok(0)) => Ok(MeshCodec::Meshopt { zstd: None }),
+        (CODEC_MESHOPT, Ok(level)) => Ok(MeshCodec::Meshopt { zstd: Some(level) }),
+        _ => Err(Error::NotADatabase {
+            path: store.path().to_path_buf(),
+            what: format!(
+                "its meshes are coded as {}/{}, which this build does not know",
+                seg.a, seg.b
+            ),
+        }),
+    }
 }
 
 /// Reads the counts from the header; a `NotADatabase` naming the first segment missing.

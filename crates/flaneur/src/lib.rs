@@ -59,7 +59,7 @@ pub use build::{
     build_from_obj, build_from_obj_with_progress, build_from_scene, build_from_scene_with_progress,
     build_visibility_shard, merge_visibility_shards, model_format, BuildOptions, BuildSummary,
 };
-pub use database::{Database, DatabaseInfo, HdovInfo};
+pub use database::{BytesPerTriangle, Database, DatabaseInfo, HdovInfo};
 pub use error::{Error, Result};
 /// The vector math crate of the engine's public types ([`geom::Aabb`], [`geom::Camera`],
 /// meshes), re-exported so that a program names the same version the engine was built

@@ -14,19 +14,20 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::catalog::{save_meta, write_object, KindCounts};
+use crate::catalog::{object_entry, save_codec, save_meta, write_object, KindCounts};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::hdov::{build_hdov, HdovOptions, HdovReport};
 use crate::lod::{LodOptions, LodReport, LodWriter};
 use crate::names::store_names;
 use crate::progress::{Progress, Silent, Step};
+use crate::rtree::ObjectEntry;
 use crate::rtree::{RTree, DEFAULT_FILL};
 use crate::scene::{
-    GltfObjects, Mesh, ObjAxes, OsmOptions, OsmReport, Placed, SceneObject, SceneReader,
+    GltfObjects, Mesh, MeshCodec, ObjAxes, OsmOptions, OsmReport, Placed, SceneObject, SceneReader,
     KIND_IMPORTED,
 };
-use crate::store::{PageKind, Segment, Store};
+use crate::store::{Extent, PageKind, Segment, Store};
 use crate::visibility::{
     encode_table, merge_shards, precompute, ShardCells, VisibilityOptions, VISIBILITY_SEGMENT,
 };
@@ -84,6 +85,10 @@ pub struct BuildOptions {
     /// builds, or a build and a merge of visibility shards, give the same bytes
     /// (`--reproducible`).
     pub reproducible: bool,
+    /// How meshes are stored (`--codec`): meshoptimizer's codecs over quantised
+    /// vertices with zstd around them by default (format version 2), or raw floats, a
+    /// file of format version 1 as earlier builds wrote it.
+    pub codec: MeshCodec,
 }
 
 impl BuildOptions {
@@ -145,6 +150,7 @@ impl Default for BuildOptions {
             obj_axes: ObjAxes::default(),
             osm: OsmOptions::default(),
             reproducible: false,
+            codec: MeshCodec::default(),
         }
     }
 }
@@ -410,6 +416,15 @@ fn models_build(
     Ok(summary)
 }
 
+/// Gives the entries after the first `filled` the mesh extents the LOD writer wrote,
+/// which come in the order the objects did.
+fn fill_meshes(entries: &mut [ObjectEntry], filled: &mut usize, meshes: Vec<Extent>) {
+    for (entry, mesh) in entries[*filled..].iter_mut().zip(&meshes) {
+        entry.mesh = *mesh;
+    }
+    *filled += meshes.len();
+}
+
 fn build(
     objects: impl Iterator<Item = Result<(u64, u8, Mesh)>>,
     total: Option<u64>,
@@ -421,8 +436,18 @@ fn build(
 ) -> Result<BuildSummary> {
     let start = Instant::now();
     opts.validate()?;
-    let mut lods = opts.lod.as_ref().map(LodWriter::new).transpose()?;
+    let codec = opts.codec;
     let mut store = Store::create(db, opts.page_size)?;
+    save_codec(&mut store, codec)?;
+    let mut lods = opts
+        .lod
+        .as_ref()
+        .map(|l| LodWriter::new(l, codec, &store))
+        .transpose()?;
+    // In format version 2 meshes are encoded on the thread pool with their levels, and
+    // the LOD writer writes them, a batch side by side.
+    let meshes_with_lods = lods.is_some() && codec != MeshCodec::Raw;
+    let mut meshes_filled = 0;
     // Objects count as built once their LODs are stored too, which may be a batch later.
     let mut built = 0u64;
     let mut advance = |n: u64| {
@@ -437,29 +462,43 @@ fn build(
     let mut kept: Vec<(u64, Mesh)> = Vec::new();
     for object in objects {
         let (id, kind, mesh) = object?;
-        let entry = write_object(&mut store, id, kind, &mesh)?;
+        let entry = if meshes_with_lods {
+            object_entry(id, kind, &mesh)?
+        } else {
+            write_object(&mut store, id, kind, &mesh, codec)?
+        };
         if opts.visibility.is_some() {
             kept.push((id, mesh.clone()));
         }
-        kinds.mesh += entry.mesh.page_count as u64;
         triangles += entry.triangles as u64;
         bounds = bounds.union(&entry.bounds);
         entries.push(entry);
         // An object counts as built once its LODs are stored too.
         match lods.as_mut() {
-            Some(l) => advance(l.push(&mut store, id, entry.mesh, mesh)? as u64),
+            Some(l) => {
+                advance(l.push(&mut store, id, entry.mesh, mesh)? as u64);
+                fill_meshes(&mut entries, &mut meshes_filled, l.take_meshes());
+            }
             None => advance(1),
         }
     }
     let lod = match lods {
         Some(l) => {
-            let (report, last) = l.finish(&mut store)?;
+            let (report, last, meshes) = l.finish(&mut store)?;
+            fill_meshes(&mut entries, &mut meshes_filled, meshes);
             advance(last as u64);
             kinds.lod = report.stats.pages;
             Some(report)
         }
         None => None,
     };
+    if meshes_with_lods && meshes_filled != entries.len() {
+        return Err(Error::Invalid(format!(
+            "the LOD writer wrote {meshes_filled} meshes of {} objects",
+            entries.len()
+        )));
+    }
+    kinds.mesh = store.pages_written(PageKind::Mesh);
     progress.finish(Step::Objects);
     if entries.is_empty() {
         return Err(Error::Invalid("the input holds no objects".into()));

@@ -8,10 +8,10 @@ use std::path::{Path, PathBuf};
 use super::check::{check_costs, Survey, Work};
 use super::{model_format, models_build, scene_build, BuildOptions, BuildSummary};
 use crate::error::{Error, Result};
-use crate::lod::stored::simplify;
+use crate::lod::stored::simplify_stored;
 use crate::lod::LodOptions;
 use crate::progress::{Progress, Step};
-use crate::scene::{Mesh, SceneReader};
+use crate::scene::{Mesh, MeshCodec, SceneReader};
 use crate::visibility::{precompute_shard, Shard, ShardCells, ShardLod};
 
 /// Computes shard `shard` of the visibility `opts.visibility` asks for, over the objects
@@ -59,7 +59,7 @@ pub fn build_visibility_shard(
     objects.iter().for_each(|(_, m)| survey.add(m));
     check_costs(opts, &survey, Work::Shard)?;
     let levels = match &opts.lod {
-        Some(lod) => made_levels(&objects, lod),
+        Some(lod) => made_levels(&objects, lod, opts.codec),
         None => Vec::new(),
     };
     let lod = ShardLod::of(opts.lod.as_ref());
@@ -142,15 +142,20 @@ fn input_objects(
 }
 
 /// Each object's coarse levels with their errors, finest first, made as a whole build
-/// makes and stores them (`lod::stored::simplify`), so that a shard draws far objects as
-/// the whole build's DoV does: none for an object the simplifier refuses (or panics on),
+/// makes and stores them and reads them back (`lod::stored::simplify_stored`: quantised
+/// by meshoptimizer's codec), so that a shard draws far objects as the whole build's DoV
+/// does: none for an object the simplifier refuses (or panics on),
 /// or whose chain would not encode. (A build also refuses an object over `pm_threshold`
 /// whose DAG fails; that DAG is not built here.)
-fn made_levels(objects: &[(u64, Mesh)], lod: &LodOptions) -> Vec<Vec<(Mesh, f32)>> {
+fn made_levels(
+    objects: &[(u64, Mesh)],
+    lod: &LodOptions,
+    codec: MeshCodec,
+) -> Vec<Vec<(Mesh, f32)>> {
     use rayon::prelude::*;
     objects
         .par_iter()
-        .map(|(id, mesh)| simplify(*id, mesh, lod).map_or_else(|_| Vec::new(), |s| s.levels))
+        .map(|(id, mesh)| simplify_stored(*id, mesh, lod, codec).unwrap_or_default())
         .collect()
 }
 

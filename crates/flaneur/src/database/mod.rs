@@ -8,7 +8,7 @@ mod visibility;
 
 use std::path::Path;
 
-use crate::catalog::{load_meta, save_meta, write_object};
+use crate::catalog::{load_codec, load_meta, save_meta, write_object};
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera};
 use crate::hdov::{self, HdovTree};
@@ -16,8 +16,8 @@ use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::names::NameTable;
 use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
-use crate::scene::Mesh;
-use crate::store::{Backend, HttpOptions, IoStats, RemoteStats, RequestTimes, Store};
+use crate::scene::{Mesh, MeshCodec};
+use crate::store::{Backend, HttpOptions, IoStats, PageKind, RemoteStats, RequestTimes, Store};
 use crate::visibility::VisibilityTable;
 
 pub use crate::catalog::KindCounts;
@@ -55,6 +55,13 @@ pub struct DatabaseInfo {
     pub uncommitted_bytes: u64,
     /// Pages written per kind.
     pub pages_by_kind: KindCounts,
+    /// The file's format version (1 or 2).
+    pub format_version: u32,
+    /// How its meshes are coded.
+    pub codec: MeshCodec,
+    /// Bytes of each kind's pages per full-detail triangle: the currency a walk pays
+    /// in.
+    pub bytes_per_triangle: BytesPerTriangle,
     /// The box around every object: its min x, y, z, then its max x, y, z.
     pub bounds: [f32; 6],
     /// The R-tree's shape: nodes and entries per level, and their fill.
@@ -74,6 +81,34 @@ pub struct DatabaseInfo {
     /// The HDoV-tree; absent (and left out of the JSON) when the build made none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hdov: Option<HdovInfo>,
+}
+
+/// Bytes of pages per full-detail triangle, the whole file and by kind (`flaneur info`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct BytesPerTriangle {
+    /// The whole file.
+    pub whole: f64,
+    /// The objects' meshes.
+    pub mesh: f64,
+    /// The LODs: chains, progressive meshes and DAGs, the LOD table.
+    pub lod: f64,
+    /// The R-tree's nodes.
+    pub rtree: f64,
+    /// The visibility table.
+    pub visibility: f64,
+}
+
+impl BytesPerTriangle {
+    fn of(kinds: &KindCounts, pages: u64, page_size: usize, triangles: u64) -> BytesPerTriangle {
+        let per = |p: u64| p as f64 * page_size as f64 / triangles.max(1) as f64;
+        BytesPerTriangle {
+            whole: per(pages),
+            mesh: per(kinds.mesh),
+            lod: per(kinds.lod),
+            rtree: per(kinds.rtree),
+            visibility: per(kinds.visibility),
+        }
+    }
 }
 
 /// What `flaneur info` reports of the HDoV-tree.
@@ -607,10 +642,18 @@ impl Database {
     /// this one. Each insert appends the tree's height in node pages; the pages it
     /// replaced stay in the file, unused.
     pub fn insert(&mut self, id: u64, mesh: &Mesh) -> Result<ObjectEntry> {
-        let entry = write_object(&mut self.store, id, crate::scene::KIND_IMPORTED, mesh)?;
+        let codec = load_codec(&self.store)?;
+        let meshes = self.store.pages_written(PageKind::Mesh);
+        let entry = write_object(
+            &mut self.store,
+            id,
+            crate::scene::KIND_IMPORTED,
+            mesh,
+            codec,
+        )?;
         let before = self.store.page_count();
         self.tree.insert(&mut self.store, entry)?;
-        self.kinds.mesh += entry.mesh.page_count as u64;
+        self.kinds.mesh += self.store.pages_written(PageKind::Mesh) - meshes;
         self.kinds.rtree += self.store.page_count() - before;
         self.objects += 1;
         self.triangles += entry.triangles as u64;
@@ -688,6 +731,14 @@ impl Database {
             file_bytes: self.store.page_count() * page_size as u64,
             uncommitted_bytes: self.store.uncommitted_bytes(),
             pages_by_kind: self.kinds,
+            format_version: self.store.header().version(),
+            codec: load_codec(&self.store)?,
+            bytes_per_triangle: BytesPerTriangle::of(
+                &self.kinds,
+                self.store.page_count(),
+                page_size,
+                self.triangles,
+            ),
             bounds: [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
             tree,
             fanout_leaf: self.tree.fanout.leaf,

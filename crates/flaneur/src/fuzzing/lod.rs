@@ -23,13 +23,10 @@ pub fn lod_chain(data: &[u8]) {
         };
         let _ = dir.levels();
         for level in 0..=dir.stored_levels() + 1 {
-            let Ok((offset, length)) = dir.level_range(level) else {
+            let Ok((start, end)) = dir.read_range(level) else {
                 continue;
             };
-            if let Some(bytes) = offset
-                .checked_add(length)
-                .and_then(|end| b.get(offset..end))
-            {
+            if let Some(bytes) = b.get(start..end) {
                 let _ = dir.decode_level(level, bytes);
             }
         }

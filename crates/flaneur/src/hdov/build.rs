@@ -23,7 +23,7 @@ use super::tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
 use super::vd::{CellVd, Topology, VENTRY_LEN};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-use crate::lod::stored::encode_chain;
+use crate::lod::stored::encode_chain_with;
 use crate::lod::stored::{level_mesh, LodTable};
 use crate::progress::{Progress, Step};
 use crate::rtree::{str_tile, ObjectEntry};
@@ -400,15 +400,17 @@ pub(crate) fn build_hdov(
 
     // The chains, then the nodes, whose entries point at them.
     let mut chains: Vec<Extent> = vec![Extent::default(); packed.len()];
-    let (mut lod_pages, mut nodes_with_lods, mut lod_levels, mut lod_triangles) = (0, 0, 0, 0);
+    let (mut nodes_with_lods, mut lod_levels, mut lod_triangles) = (0, 0, 0);
+    // The internal LODs are coded as the objects' meshes are; they share no vertices.
+    let codec = crate::catalog::load_codec(store)?;
+    let lod_pages_before = store.pages_written(PageKind::Lod);
     for &n in &order {
         let Some(m) = &made[n] else { continue };
         if m.levels.is_empty() {
             continue;
         }
-        let bytes = encode_chain(number[n] as u64, m.source_triangles, &m.levels)?;
-        let e = store.append_extent(PageKind::Lod, &bytes)?;
-        lod_pages += e.page_count as u64;
+        let bytes = encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec)?;
+        let e = crate::catalog::write_lod(store, &bytes, codec)?;
         nodes_with_lods += 1;
         lod_levels += m.levels.len() as u64;
         lod_triangles += m
@@ -418,6 +420,7 @@ pub(crate) fn build_hdov(
             .sum::<u64>();
         chains[n] = e;
     }
+    let lod_pages = store.pages_written(PageKind::Lod) - lod_pages_before;
     let log_m = (cap as f64).ln();
     let child_ref = |c: usize| {
         let m = made[c].as_ref().expect("every child is made");

@@ -15,7 +15,10 @@ pub use flaneur_scene::{
 };
 pub(crate) use gltf::gltf_from_bytes;
 pub use gltf::{load_gltf, GltfObjects};
-pub(crate) use mesh_codec::{decode_mesh, encode_mesh};
+pub(crate) use mesh_codec::{
+    decode_level_v2, decode_mesh, encode_levels_v2, encode_mesh, expand_frame, is_frame, squeeze,
+};
+pub use mesh_codec::{MeshCodec, DEFAULT_ZSTD_LEVEL};
 pub use obj::load_obj;
 #[cfg(test)]
 pub(crate) use osm::extruded;

@@ -6,7 +6,7 @@
 //! offset        width  field
 //! ------------  -----  ----------------------------------------------------------
 //!            0      8  magic           b"FLANEUR\0"
-//!            8      4  version         u32, FORMAT_VERSION
+//!            8      4  version         u32, OLDEST_FORMAT_VERSION..=FORMAT_VERSION
 //!           12      4  page size       u32, a power of two in 1 KiB..=64 KiB
 //!           16      8  page count      u64, pages in the file, page 0 included
 //!           24      4  segment count   u32, n
@@ -27,8 +27,13 @@ use std::fmt;
 
 /// The first eight bytes of every database file.
 pub const MAGIC: [u8; 8] = *b"FLANEUR\0";
-/// The format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes unless asked for version 1. Version 2 added
+/// packed extents (several blobs sharing a page, `extent.rs`) and meshoptimizer-coded
+/// meshes (`scene::MeshCodec`); a version-1 reader cannot read them, so a file that may
+/// hold them says 2.
+pub const FORMAT_VERSION: u32 = 2;
+/// The oldest format version this build reads: every file written before version 2.
+pub const OLDEST_FORMAT_VERSION: u32 = 1;
 /// Smallest page size a database may have.
 pub const MIN_PAGE_SIZE: usize = 1024;
 /// Largest page size a database may have.
@@ -170,6 +175,21 @@ fn header_crc(page: &[u8], crc_offset: usize) -> u32 {
     h.finalize()
 }
 
+impl super::Store {
+    /// Marks the file being written as format `version` (at least
+    /// [`OLDEST_FORMAT_VERSION`]): a build that writes nothing version 2 added (raw
+    /// meshes, whole-page extents) says 1, so that readers of version 1 read it too.
+    pub(crate) fn write_as_version(&mut self, version: u32) -> crate::Result<()> {
+        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
+            return Err(crate::Error::Invalid(format!(
+                "format version {version}: this build writes {OLDEST_FORMAT_VERSION}..={FORMAT_VERSION}"
+            )));
+        }
+        self.header.version = version;
+        Ok(())
+    }
+}
+
 impl Header {
     /// A fresh header: one page (itself), no segments.
     pub(crate) fn new(page_size: usize) -> Header {
@@ -272,9 +292,10 @@ impl Header {
             return Ok(None);
         }
         let version = u32_at(prefix, VERSION_OFFSET);
-        if version != FORMAT_VERSION {
+        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(HeaderError::NotADatabase(format!(
-                "format version {version}; this build reads version {FORMAT_VERSION}"
+                "format version {version}; this build reads versions \
+                 {OLDEST_FORMAT_VERSION}..={FORMAT_VERSION}"
             )));
         }
         let page_size = u32_at(prefix, PAGE_SIZE_OFFSET) as usize;
@@ -369,7 +390,7 @@ impl Header {
             segments.push(seg);
         }
         Ok(Header {
-            version: FORMAT_VERSION,
+            version: u32_at(page, VERSION_OFFSET),
             page_size: page_size as u32,
             page_count,
             segments,
@@ -468,9 +489,16 @@ mod tests {
         sample(1024).encode(&mut page);
         assert_eq!(Header::check_prefix(&page[..PREFIX_LEN]), Ok(Some(1024)));
         let mut q = page.clone();
-        q[VERSION_OFFSET..PAGE_SIZE_OFFSET].copy_from_slice(&2u32.to_le_bytes());
+        q[VERSION_OFFSET..PAGE_SIZE_OFFSET].copy_from_slice(&3u32.to_le_bytes());
         let e = Header::check_prefix(&q).unwrap_err().to_string();
-        assert!(e.contains("version 2") && e.contains("version 1"), "{e}");
+        assert!(
+            e.contains("version 3") && e.contains("versions 1..=2"),
+            "{e}"
+        );
+        for v in [1u32, 2] {
+            q[VERSION_OFFSET..PAGE_SIZE_OFFSET].copy_from_slice(&v.to_le_bytes());
+            assert_eq!(Header::check_prefix(&q), Ok(Some(1024)));
+        }
         let mut q = page.clone();
         q[PAGE_SIZE_OFFSET..PAGE_COUNT_OFFSET].copy_from_slice(&1000u32.to_le_bytes());
         assert!(Header::check_prefix(&q)

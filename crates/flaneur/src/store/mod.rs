@@ -48,9 +48,9 @@ mod source;
 mod writer;
 
 #[cfg(test)]
-mod tests;
-#[cfg(test)]
 mod packed_tests;
+#[cfg(test)]
+mod tests;
 #[cfg(test)]
 mod write_safety_tests;
 
@@ -66,7 +66,7 @@ pub use backend_kind::Backend;
 pub use counters::IoStats;
 pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
-pub use header::{Header, Segment, DEFAULT_PAGE_SIZE};
+pub use header::{Header, Segment, DEFAULT_PAGE_SIZE, FORMAT_VERSION, OLDEST_FORMAT_VERSION};
 pub use page::{PageKind, PAGE_HEADER_LEN};
 pub use remote::{is_url, HttpOptions, RemoteStats, RequestTimes};
 pub(crate) use replace::write_file_atomically;

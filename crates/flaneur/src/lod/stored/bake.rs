@@ -22,12 +22,12 @@ use std::time::{Duration, Instant};
 
 use rayon::Yield;
 
-use super::chain::{encode_chain, head_len};
+use super::chain::{encode_chain_with, head_len, ChainDirectory};
 use super::table::{encode_table, LodEntry, LodStats, LodTable};
 use crate::error::{Error, Result};
 use crate::lod::dag::{Dag, DagConstruction};
 use crate::lod::pm::ProgressiveMesh;
-use crate::scene::Mesh;
+use crate::scene::{squeeze, Mesh, MeshCodec, DEFAULT_ZSTD_LEVEL};
 use crate::store::{Extent, PageKind, Store};
 
 /// How a build makes and stores LODs.
@@ -110,6 +110,10 @@ struct Baked {
     pm_dag: Option<(Vec<u8>, Vec<u8>)>,
 }
 
+/// One object's mesh, encoded by the task that made its levels (format version 2):
+/// written with its LODs, a batch's meshes side by side.
+type MeshBytes = Option<Result<Vec<u8>>>;
+
 /// An object simplified as a build stores it: `flaneur build`'s chain and, split across
 /// machines, a visibility shard's far objects (`build::shards`) both come from here, so
 /// that a shard draws an object at the levels the whole build stores for it.
@@ -123,10 +127,44 @@ pub(crate) struct Simplified {
     chain: Option<Vec<u8>>,
 }
 
-/// Simplifies object `id` into its coarse levels and encodes their chain: an `Err` when
-/// the simplifier refuses the object (or panics on it) or the chain would not encode,
-/// and the object then gets no LODs.
-pub(crate) fn simplify(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Simplified> {
+/// The coarse levels of object `id` (finest first, with their errors) as a reader of a
+/// file built in `codec` gets them back: quantised by meshoptimizer's codec. A visibility
+/// shard draws far objects through these, so that its DoVs are the whole build's, which
+/// reads them from its file.
+pub(crate) fn simplify_stored(
+    id: u64,
+    mesh: &Mesh,
+    opts: &LodOptions,
+    codec: MeshCodec,
+) -> Result<Vec<(Mesh, f32)>> {
+    let (simplified, _) = simplify_as(id, mesh, opts, codec)?;
+    let Some(chain) = simplified
+        .chain
+        .as_deref()
+        .filter(|_| codec != MeshCodec::Raw)
+    else {
+        return Ok(simplified.levels);
+    };
+    let dir = ChainDirectory::decode(chain, chain.len())?;
+    let infos = dir.levels();
+    (1..=dir.stored_levels())
+        .map(|level| {
+            let (start, end) = dir.read_range(level)?;
+            let mesh = dir.decode_level(level, &chain[start..end])?;
+            Ok((mesh, infos[level].error))
+        })
+        .collect()
+}
+
+/// Simplifies object `id` into its coarse levels and encodes their chain in `codec`: for
+/// meshoptimizer's, the object's mesh too, returned beside (the LOD writer writes it). An `Err` when the simplifier refuses the object
+/// (or panics on it) or the chain would not encode, and the object then gets no LODs.
+fn simplify_as(
+    id: u64,
+    mesh: &Mesh,
+    opts: &LodOptions,
+    codec: MeshCodec,
+) -> Result<(Simplified, Option<Vec<u8>>)> {
     caught(|| {
         let pm = ProgressiveMesh::build(mesh)?;
         let levels = pm.levels(opts.ratio, opts.min_triangles)?;
@@ -134,26 +172,72 @@ pub(crate) fn simplify(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Simpli
         let chain = if coarse.is_empty() {
             None
         } else {
-            Some(encode_chain(id, mesh.triangle_count(), coarse)?)
+            Some(encode_chain_with(id, mesh.triangle_count(), coarse, codec)?)
+        };
+        // In format version 2 the LOD writer writes the mesh too, beside its chain.
+        let mesh_bytes = match codec {
+            MeshCodec::Raw => None,
+            MeshCodec::Meshopt { .. } => Some(
+                codec
+                    .encode(mesh)
+                    .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?,
+            ),
         };
         let levels = levels
             .into_iter()
             .skip(1)
             .map(|l| (l.mesh, l.error))
             .collect();
-        Ok(Simplified { pm, levels, chain })
+        Ok((Simplified { pm, levels, chain }, mesh_bytes))
     })
 }
 
-/// Simplifies one object and encodes what it stores.
-fn bake(id: u64, mesh: &Mesh, opts: &LodOptions) -> Result<Baked> {
-    let Simplified { pm, levels, chain } = simplify(id, mesh, opts)?;
+/// Simplifies one object and encodes what it stores: its LOD data, and for
+/// meshoptimizer's codec its mesh (encoded alone when the simplifier refused it).
+fn bake(id: u64, mesh: &Mesh, opts: &LodOptions, codec: MeshCodec) -> (Result<Baked>, MeshBytes) {
+    match simplify_as(id, mesh, opts, codec) {
+        Ok((simplified, mesh_bytes)) => {
+            let mesh_bytes = mesh_bytes.map(Ok);
+            (bake_dag(mesh, opts, simplified, codec), mesh_bytes)
+        }
+        Err(e) => {
+            let alone = match codec {
+                MeshCodec::Raw => None,
+                MeshCodec::Meshopt { .. } => Some(
+                    codec
+                        .encode(mesh)
+                        .map_err(|w| Error::Invalid(format!("object {id}: {w}"))),
+                ),
+            };
+            (Err(e), alone)
+        }
+    }
+}
+
+/// The progressive mesh and DAG of a large simplified object, and what it stores.
+/// In format version 2 each is a zstd frame around its own codec's bytes.
+fn bake_dag(
+    mesh: &Mesh,
+    opts: &LodOptions,
+    simplified: Simplified,
+    codec: MeshCodec,
+) -> Result<Baked> {
+    let Simplified { pm, levels, chain } = simplified;
     // The chain holds the levels: their meshes need not wait for the DAG.
     let levels = levels.len() as u32;
     let pm_dag = if mesh.triangle_count() > opts.pm_threshold {
         Some(caught(|| {
             let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
-            Ok((pm.to_bytes()?, dag.to_bytes()))
+            let (pm, dag) = (pm.to_bytes()?, dag.to_bytes());
+            match codec {
+                MeshCodec::Raw => Ok((pm, dag)),
+                MeshCodec::Meshopt { zstd } => {
+                    // Framed even at no zstd level: a reader tells the two apart by it.
+                    let level = zstd.unwrap_or(DEFAULT_ZSTD_LEVEL);
+                    let frame = |b: &[u8]| squeeze(b, Some(level)).map_err(Error::Invalid);
+                    Ok((frame(&pm)?, frame(&dag)?))
+                }
+            }
         })?)
     } else {
         None
@@ -185,6 +269,7 @@ struct Done {
     mesh_extent: Extent,
     triangles: u32,
     baked: Result<Baked>,
+    mesh_bytes: MeshBytes,
     task_seconds: f64,
 }
 
@@ -198,6 +283,12 @@ struct Done {
 /// lockstep.
 pub(crate) struct LodWriter {
     opts: Arc<LodOptions>,
+    codec: MeshCodec,
+    /// The extents of the meshes this writer wrote (format version 2), in the order the
+    /// objects came, not yet taken by the build.
+    meshes: Vec<Extent>,
+    /// `Lod` pages written by the store before this writer's first.
+    lod_pages_before: u64,
     sender: Sender<Done>,
     receiver: Receiver<Done>,
     /// Objects handed to the pool, and the next one to write.
@@ -213,11 +304,17 @@ pub(crate) struct LodWriter {
 }
 
 impl LodWriter {
-    pub(crate) fn new(opts: &LodOptions) -> Result<LodWriter> {
+    /// A writer of LODs in `codec`. For meshoptimizer's codec it writes the objects'
+    /// meshes too, encoded on the thread pool with their levels, and the build takes
+    /// their extents with [`LodWriter::take_meshes`].
+    pub(crate) fn new(opts: &LodOptions, codec: MeshCodec, store: &Store) -> Result<LodWriter> {
         opts.validate()?;
         let (sender, receiver) = channel();
         Ok(LodWriter {
             opts: Arc::new(opts.clone()),
+            codec,
+            meshes: Vec::new(),
+            lod_pages_before: store.pages_written(PageKind::Lod),
             sender,
             receiver,
             sent: 0,
@@ -247,10 +344,11 @@ impl LodWriter {
         mesh: Mesh,
     ) -> Result<usize> {
         let (seq, sender, opts) = (self.sent, self.sender.clone(), Arc::clone(&self.opts));
+        let codec = self.codec;
         self.sent += 1;
         rayon::spawn_fifo(move || {
             let start = Instant::now();
-            let baked = bake(id, &mesh, &opts);
+            let (baked, mesh_bytes) = bake(id, &mesh, &opts, codec);
             // The build stops listening only when it failed; nothing to do then.
             let _ = sender.send(Done {
                 seq,
@@ -258,6 +356,7 @@ impl LodWriter {
                 mesh_extent,
                 triangles: mesh.triangle_count() as u32,
                 baked,
+                mesh_bytes,
                 task_seconds: start.elapsed().as_secs_f64(),
             });
         });
@@ -278,20 +377,35 @@ impl LodWriter {
     /// in flight: first the heads of all their chains, side by side, then the rest of
     /// each object's data.
     fn write_up_to(&mut self, store: &mut Store, end: u64) -> Result<usize> {
-        let mut batch = Vec::new();
+        let mut dones = Vec::new();
         while self.next < end {
-            let done = match self.ready.remove(&self.next) {
-                Some(done) => done,
+            match self.ready.remove(&self.next) {
+                Some(done) => {
+                    self.next += 1;
+                    dones.push(done);
+                }
                 None => {
                     let done = self.receive()?;
                     self.ready.insert(done.seq, done);
-                    continue;
+                }
+            }
+        }
+        let written = dones.len();
+        // A batch's meshes (format version 2) come first, side by side, as the build
+        // would have written them one by one.
+        let mut batch = Vec::with_capacity(dones.len());
+        for done in dones {
+            self.task_seconds += done.task_seconds;
+            let mesh_extent = match done.mesh_bytes {
+                None => done.mesh_extent,
+                Some(bytes) => {
+                    let e = store.append_packed(PageKind::Mesh, &bytes?)?;
+                    self.meshes.push(e);
+                    e
                 }
             };
-            self.next += 1;
-            self.task_seconds += done.task_seconds;
             match done.baked {
-                Ok(baked) => batch.push((done.id, done.mesh_extent, done.triangles, baked)),
+                Ok(baked) => batch.push((done.id, mesh_extent, done.triangles, baked)),
                 Err(e) => {
                     self.stats.refused += 1;
                     self.first_refusal
@@ -299,9 +413,14 @@ impl LodWriter {
                 }
             }
         }
-        let written = batch.len();
         self.write_batch(store, batch)?;
         Ok(written)
+    }
+
+    /// The extents of the meshes written since the last call, in the order their
+    /// objects came (format version 2; none in version 1, where the build writes them).
+    pub(crate) fn take_meshes(&mut self) -> Vec<Extent> {
+        std::mem::take(&mut self.meshes)
     }
 
     /// The next object whose LODs are made, in whatever order they finish.
@@ -338,18 +457,22 @@ impl LodWriter {
         batch: Vec<(u64, Extent, u32, Baked)>,
     ) -> Result<()> {
         let payload = store.payload_size();
-        let mut pages = 0;
-        let mut append = |store: &mut Store, bytes: &[u8]| -> Result<Extent> {
+        // Format version 2 packs every chain whole: its head is beside its
+        // neighbours' without being cut at a page.
+        let packed = self.codec != MeshCodec::Raw;
+        let append = |store: &mut Store, bytes: &[u8]| -> Result<Extent> {
             if bytes.is_empty() {
-                return Ok(Extent::default());
+                Ok(Extent::default())
+            } else if packed {
+                store.append_packed(PageKind::Lod, bytes)
+            } else {
+                store.append_extent(PageKind::Lod, bytes)
             }
-            let e = store.append_extent(PageKind::Lod, bytes)?;
-            pages += e.page_count as u64;
-            Ok(e)
         };
         let mut heads = Vec::with_capacity(batch.len());
         for (_, _, _, b) in &batch {
             let split = match &b.chain {
+                Some(bytes) if packed => bytes.len(),
                 Some(bytes) => head_len(bytes, payload)?,
                 None => 0,
             };
@@ -377,20 +500,22 @@ impl LodWriter {
                 levels: b.levels,
             });
         }
-        self.stats.pages += pages;
         Ok(())
     }
 
     /// Writes the LODs of the objects still in flight and the table, and names the
-    /// table in the header. Returns what was stored and how many objects had their LODs
-    /// written by this call.
-    pub(crate) fn finish(mut self, store: &mut Store) -> Result<(LodReport, usize)> {
+    /// table in the header. Returns what was stored, how many objects had their LODs
+    /// written by this call, and the meshes it wrote (as [`LodWriter::take_meshes`]).
+    pub(crate) fn finish(mut self, store: &mut Store) -> Result<(LodReport, usize, Vec<Extent>)> {
         let start = Instant::now();
         let written = self.write_up_to(store, self.sent)?;
         self.entries.sort_unstable_by_key(|e| e.id);
+        // Packed extents share pages: the store counts the pages themselves.
+        let lod_pages = |store: &Store| store.pages_written(PageKind::Lod) - self.lod_pages_before;
+        self.stats.pages = lod_pages(store);
         let bytes = encode_table(&self.entries, &self.stats, store.payload_size())?;
         let table = store.append_extent(PageKind::Lod, &bytes)?;
-        self.stats.pages += table.page_count as u64;
+        self.stats.pages = lod_pages(store);
         LodTable::save(store, &table, self.stats.pages)?;
         self.seconds += start.elapsed().as_secs_f64();
         Ok((
@@ -403,6 +528,7 @@ impl LodWriter {
                 first_refusal: self.first_refusal,
             },
             written,
+            self.meshes,
         ))
     }
 }

@@ -9,9 +9,11 @@ pub(crate) mod read;
 mod select;
 pub(crate) mod table;
 
-pub(crate) use bake::{simplify, LodWriter};
+pub(crate) use bake::{simplify_stored, LodWriter};
 pub use bake::{LodOptions, LodReport, DEFAULT_PM_THRESHOLD};
+#[cfg(test)]
 pub(crate) use chain::encode_chain;
+pub(crate) use chain::encode_chain_with;
 pub use chain::{LevelInfo, CHAIN_MAGIC};
 pub(crate) use read::{
     chain_level, chain_levels, chain_levels_at, coarse_levels, coarsest_levels, level_mesh, levels,

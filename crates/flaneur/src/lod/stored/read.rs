@@ -16,7 +16,7 @@ use super::table::LodEntry;
 use crate::error::{Error, Result};
 use crate::lod::dag::Dag;
 use crate::lod::pm::ProgressiveMesh;
-use crate::scene::decode_mesh;
+use crate::scene::{decode_mesh, expand_frame, is_frame};
 use crate::store::{Extent, PageKind, Store};
 
 /// Puts `what` (which data of which object) in front of an error about `ext`'s bytes;
@@ -97,15 +97,33 @@ impl ChainPlace {
         Ok(b)
     }
 
-    /// The file's page that holds page `p` of the chain (the head is whole pages
-    /// whenever a rest follows it: the table checks it).
-    fn page(&self, p: u64) -> u64 {
-        let head_pages = u64::from(self.head.page_count);
-        if p < head_pages {
-            self.head.first_page + p
-        } else {
-            self.rest.first_page + (p - head_pages)
+    /// The file's pages that hold the chain's bytes `start..end` (`start < end`).
+    fn pages(&self, start: usize, end: usize, payload: usize) -> Vec<u64> {
+        let split = self.head.byte_len as usize;
+        let span = |ext: &Extent, from: usize, to: usize| {
+            ext.page_of(from as u64, payload)..=ext.page_of(to as u64 - 1, payload)
+        };
+        let mut pages = Vec::new();
+        if start < split {
+            pages.extend(span(&self.head, start, end.min(split)));
         }
+        if end > split {
+            pages.extend(span(&self.rest, start.max(split) - split, end - split));
+        }
+        pages
+    }
+
+    /// Where the page that holds the chain's byte `at` ends, as a chain offset: a packed
+    /// chain (format version 2) starts inside its first page.
+    fn page_end(&self, at: usize, payload: usize) -> usize {
+        let split = self.head.byte_len as usize;
+        let (ext, base) = if at < split || self.rest.is_empty() {
+            (&self.head, 0)
+        } else {
+            (&self.rest, split)
+        };
+        let abs = ext.offset as usize + (at - base);
+        (abs / payload + 1) * payload - ext.offset as usize + base
     }
 }
 
@@ -126,12 +144,15 @@ fn read_chain(store: &Store, place: &ChainPlace, what: &str) -> Result<ChainHead
             .map_err(|err| about(store, ext, what, err))
     };
     // The first page holds the header, usually the directory, often the coarsest level.
-    let mut prefix = read(0, total.min(payload))?;
+    // (A packed chain starts inside its page; a header cut by the page's end reads on
+    // into the next.)
+    let first = place.page_end(0, payload).max(ChainDirectory::HEADER_LEN);
+    let mut prefix = read(0, total.min(first))?;
     let dir_len =
         ChainDirectory::len_from_prefix(&prefix).map_err(|err| about(store, ext, what, err))?;
     if dir_len > prefix.len() && dir_len <= total {
         // A long directory: read up to the end of its last page.
-        let end = dir_len.div_ceil(payload).saturating_mul(payload).min(total);
+        let end = place.page_end(dir_len - 1, payload).min(total);
         prefix.extend(read(prefix.len(), end - prefix.len())?);
     }
     let dir = ChainDirectory::decode(&prefix, total).map_err(|err| about(store, ext, what, err))?;
@@ -291,15 +312,12 @@ fn pages_beyond_head(
     head: &ChainHead,
     level: usize,
 ) -> Result<Vec<u64>> {
-    let payload = store.payload_size();
-    let (offset, length) = head.dir.level_range(level)?;
+    let (start, end) = head.dir.read_range(level)?;
     let have = head.prefix.len();
-    if offset + length <= have {
+    if end <= have {
         return Ok(Vec::new());
     }
-    let first = offset.max(have) / payload;
-    let last = (offset + length - 1) / payload;
-    Ok((first..=last).map(|p| place.page(p as u64)).collect())
+    Ok(place.pages(start.max(have), end, store.payload_size()))
 }
 
 /// Level `level` of each group's chain of `wanted` (an HDoV node's internal LODs,
@@ -386,24 +404,36 @@ fn chain_level_of(
     what: &str,
 ) -> Result<Mesh> {
     let ext = &place.head;
-    let (offset, length) = head.dir.level_range(level)?;
-    let end = offset + length;
+    let (start, end) = head.dir.read_range(level)?;
     let have = head.prefix.len();
     let bytes = if end <= have {
-        head.prefix[offset..end].to_vec()
+        head.prefix[start..end].to_vec()
     } else {
         // Only the pages the prefix lacks: the finer levels before this one are skipped.
-        let from = offset.max(have);
+        let from = start.max(have);
         let rest = place
             .read(store, from, end - from)
             .map_err(|err| about(store, ext, what, err))?;
-        let mut b = head.prefix.get(offset..).unwrap_or(&[]).to_vec();
+        let mut b = head.prefix.get(start..).unwrap_or(&[]).to_vec();
         b.extend(rest);
         b
     };
     head.dir
         .decode_level(level, &bytes)
         .map_err(|err| about(store, ext, what, err))
+}
+
+/// The bytes of a progressive mesh or DAG as its codec reads them: a zstd frame (format
+/// version 2) expanded, to at most 64 times its length (far above what zstd makes of
+/// these codecs), else the bytes themselves (version 1).
+fn unframed(bytes: &[u8]) -> Result<std::borrow::Cow<'_, [u8]>> {
+    if !is_frame(bytes) {
+        return Ok(std::borrow::Cow::Borrowed(bytes));
+    }
+    let max = bytes.len().saturating_mul(64).saturating_add(1 << 16);
+    Ok(std::borrow::Cow::Owned(
+        expand_frame(bytes, max).map_err(Error::Invalid)?,
+    ))
 }
 
 /// The progressive mesh and DAG of the object of `e`, when it has them; checked against
@@ -465,7 +495,8 @@ impl ProgressiveBytes {
     pub(crate) fn decode(self) -> Result<(ProgressiveMesh, Dag)> {
         let (path, (pm_ext, pm_bytes), (dag_ext, dag_bytes)) = (&self.path, &self.pm, &self.dag);
         let what = format!("progressive mesh of object {}", self.id);
-        let pm = ProgressiveMesh::from_bytes(pm_bytes)
+        let pm_bytes = unframed(pm_bytes).map_err(|err| about_at(path, pm_ext, &what, err))?;
+        let pm = ProgressiveMesh::from_bytes(&pm_bytes)
             .map_err(|err| about_at(path, pm_ext, &what, err))?;
         if pm.triangle_map.len() != self.triangles as usize {
             return Err(about_at(
@@ -480,7 +511,9 @@ impl ProgressiveBytes {
             ));
         }
         let what = format!("LOD DAG of object {}", self.id);
-        let dag = Dag::from_bytes(dag_bytes).map_err(|err| about_at(path, dag_ext, &what, err))?;
+        let dag = unframed(dag_bytes)
+            .and_then(|b| Dag::from_bytes(&b))
+            .map_err(|err| about_at(path, dag_ext, &what, err))?;
         // The DAG's nodes are the PM's position splits, in order.
         let runs_match = dag.split_count() == pm.splits.len()
             && (0..dag.node_count() as u32).all(|k| {

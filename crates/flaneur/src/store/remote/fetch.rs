@@ -113,8 +113,17 @@ impl Fetcher {
             (first, last)
         });
         let (_, head) = first?;
-        let tail = last.transpose()?.unwrap_or_default();
         let len = self.version.get().map_or(0, |v| v.len);
+        let tail = match last.transpose() {
+            Ok(last) => last.unwrap_or_default(),
+            // A file shorter than the suffix asked for: RFC 9110 gives the whole file, but
+            // some servers (tower-http's) answer 416. Its length is known now: ask again.
+            Err(_) if len > 0 && len < tail => {
+                self.counters.round_trips.fetch_add(1, Ordering::Relaxed);
+                self.get(Span::Last(len), false)?
+            }
+            Err(e) => return Err(e),
+        };
         Ok(Ends { head, tail, len })
     }
 

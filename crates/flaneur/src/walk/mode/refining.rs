@@ -97,9 +97,12 @@ mod tests {
         };
         citygen::write_city(&config, &scene).unwrap();
         let path = dir.path().join("c.flaneur");
+        // One mesh to a page, so that damage to a page is damage to one object (packed
+        // meshes share pages, and a damaged page costs each of them).
         let opts = BuildOptions {
             page_size: 1024,
             lod: None,
+            codec: crate::scene::MeshCodec::Raw,
             ..Default::default()
         };
         crate::build_from_scene(&scene, &path, &opts).unwrap();

@@ -1,6 +1,6 @@
-//! How a mesh lies in a database extent. Normals are quantized to signed 8-bit
-//! (as the scene file does): a city of a million objects must fit on one disk, and
-//! shading does not see the difference.
+//! Format version 1's mesh: raw floats. Normals are quantized to signed 8-bit (as the
+//! scene file does); positions are stored as they came. Written by `--codec raw` and by
+//! every file of format version 1, read from both.
 //!
 //! ```text
 //!  0  vertex count  u32
@@ -21,7 +21,7 @@ const POSITION_LEN: usize = 12;
 const NORMAL_LEN: usize = 4;
 const FLAG_U16: u32 = 1;
 
-pub fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
+pub(crate) fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
     let v = mesh.positions.len();
     let small = v <= u16::MAX as usize + 1;
     let index_len = if small { 2 } else { 4 };
@@ -51,7 +51,7 @@ pub fn encode_mesh(mesh: &Mesh) -> Vec<u8> {
 }
 
 /// Decodes and checks a mesh: sizes agree with the bytes, every index names a vertex.
-pub fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
+pub(crate) fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     if bytes.len() < HEADER_LEN {
         return Err(format!(
             "mesh of {} bytes is shorter than its header",
