@@ -11,7 +11,7 @@ use std::path::Path;
 
 use flaneur::lod::{LodOptions, ProgressiveMesh};
 use flaneur::scene::MeshCodec;
-use flaneur::store::{PageKind, PAGE_HEADER_LEN};
+use flaneur::store::{IoStats, PageKind, PAGE_HEADER_LEN};
 use flaneur::{BuildOptions, Database, Error, ObjectEntry};
 
 const PAGE: usize = 4096;
@@ -88,14 +88,14 @@ fn every_stored_level_is_a_valid_mesh_of_its_stated_size() {
     );
 }
 
-#[test]
-fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
-    // Format version 1: each level a mesh of its own in the chain, whole pages.
-    let raw = BuildOptions {
-        codec: MeshCodec::Raw,
+/// What reading the largest object of a 60-object city built in `codec` costs: at full
+/// detail, at its coarsest level and at level 1. Also its entry and levels.
+fn level_reads(codec: MeshCodec) -> (ObjectEntry, Vec<flaneur::lod::LevelInfo>, [IoStats; 3]) {
+    let opts = BuildOptions {
+        codec,
         ..Default::default()
     };
-    let city = common::city(60, 5, &raw);
+    let city = common::city(60, 5, &opts);
     let db = Database::open(&city.db).unwrap();
     let big = *all_objects(&db).iter().max_by_key(|o| o.triangles).unwrap();
     let levels = db.lod_levels(big.id).unwrap().unwrap();
@@ -114,6 +114,13 @@ fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
     let finest = reads(&|| {
         db.lod_mesh(big.id, 1).unwrap();
     });
+    (big, levels, [full, coarsest, finest])
+}
+
+#[test]
+fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
+    // Format version 1: each level a mesh of its own in the chain, whole pages.
+    let (big, levels, [full, coarsest, finest]) = level_reads(MeshCodec::Raw);
     eprintln!(
         "object {} ({} triangles, {} levels): full mesh {} pages; coarsest level ({} triangles) {} pages ({} LOD); level 1 ({} triangles) {} pages",
         big.id,
@@ -137,33 +144,9 @@ fn a_coarse_level_reads_fewer_pages_than_the_full_mesh() {
 
 #[test]
 fn a_coarse_level_of_a_packed_file_reads_its_chain_alone() {
-    // Format version 2: chains packed several to a page, each level a mesh of its own.
-    let city = common::city(
-        60,
-        5,
-        &BuildOptions {
-            codec: MeshCodec::meshopt(),
-            ..Default::default()
-        },
-    );
-    let db = Database::open(&city.db).unwrap();
-    let big = *all_objects(&db).iter().max_by_key(|o| o.triangles).unwrap();
-    let levels = db.lod_levels(big.id).unwrap().unwrap();
-    db.lod_stats().unwrap();
-    let reads = |f: &dyn Fn()| {
-        db.reset_io();
-        f();
-        db.io()
-    };
-    let full = reads(&|| {
-        db.mesh(&big).unwrap();
-    });
-    let coarsest = reads(&|| {
-        db.lod_mesh(big.id, levels.len() - 1).unwrap();
-    });
-    let finest = reads(&|| {
-        db.lod_mesh(big.id, 1).unwrap();
-    });
+    // Format version 2: chains packed several to a page, the levels sharing one vertex
+    // buffer, coarsest first, so that a coarse level reads the chain's first bytes.
+    let (_, _, [full, coarsest, finest]) = level_reads(MeshCodec::meshopt());
     assert_eq!(
         coarsest.reads_of(PageKind::Lod),
         coarsest.page_reads,
