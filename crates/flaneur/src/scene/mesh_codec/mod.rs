@@ -58,6 +58,28 @@ impl MeshCodec {
             zstd: Some(DEFAULT_ZSTD_LEVEL),
         }
     }
+
+    /// `mesh` as a database's mesh extent holds it in this codec. meshoptimizer's reads
+    /// each position back within half a step of its box's 65,535 per axis, plus two
+    /// ulps (`quantize.rs`).
+    ///
+    /// ```
+    /// use flaneur::scene::{bunny, MeshCodec};
+    /// let mesh = bunny();
+    /// let bytes = MeshCodec::meshopt().to_bytes(&mesh)?;
+    /// assert!(bytes.len() * 2 < MeshCodec::Raw.to_bytes(&mesh)?.len());
+    /// assert_eq!(MeshCodec::from_bytes(&bytes)?.triangle_count(), mesh.triangle_count());
+    /// # Ok::<(), flaneur::Error>(())
+    /// ```
+    pub fn to_bytes(&self, mesh: &Mesh) -> crate::Result<Vec<u8>> {
+        self.encode(mesh).map_err(crate::Error::Invalid)
+    }
+
+    /// The mesh a mesh extent of either codec holds, checked (an `Error::Invalid`
+    /// naming what is wrong with bytes that are not one).
+    pub fn from_bytes(bytes: &[u8]) -> crate::Result<Mesh> {
+        decode_mesh(bytes).map_err(crate::Error::Invalid)
+    }
 }
 
 impl MeshCodec {

@@ -4,6 +4,9 @@
 //! may want alone — a chunk of vertices, an index buffer — is its own frame, so that a
 //! coarse level still reads only its own bytes.
 
+use std::borrow::Cow;
+use std::cell::RefCell;
+
 /// Compresses `raw` at `level` (zstd's 1..=22), or returns it as it is when `level` is
 /// `None`.
 pub(crate) fn squeeze(raw: &[u8], level: Option<i32>) -> Result<Vec<u8>, String> {
@@ -13,21 +16,34 @@ pub(crate) fn squeeze(raw: &[u8], level: Option<i32>) -> Result<Vec<u8>, String>
     }
 }
 
-/// The inverse of [`squeeze`]: `stored` holds exactly `raw_len` bytes once expanded.
-/// The caller bounds `raw_len` before it asks, so that a damaged length cannot ask for
-/// gigabytes.
-pub(crate) fn expand(stored: &[u8], raw_len: usize, zstd: bool) -> Result<Vec<u8>, String> {
+/// The inverse of [`squeeze`]: `stored` holds exactly `raw_len` bytes once expanded
+/// (borrowed as they are when not compressed). The caller bounds `raw_len` before it
+/// asks, so that a damaged length cannot ask for gigabytes.
+pub(crate) fn expand(stored: &[u8], raw_len: usize, zstd: bool) -> Result<Cow<'_, [u8]>, String> {
     if !zstd {
         if stored.len() != raw_len {
             return Err(format!("{} bytes stored, {raw_len} expected", stored.len()));
         }
-        return Ok(stored.to_vec());
+        return Ok(Cow::Borrowed(stored));
     }
-    let raw = zstd::bulk::decompress(stored, raw_len).map_err(|e| {
-        format!(
-            "a zstd frame of {} bytes does not expand: {e}",
-            stored.len()
-        )
+    // One decompression context a thread, kept: making one costs more than expanding a
+    // small mesh's buffer.
+    thread_local! {
+        static DECOMPRESSOR: RefCell<Option<zstd::bulk::Decompressor<'static>>> =
+            const { RefCell::new(None) };
+    }
+    let raw = DECOMPRESSOR.with(|d| {
+        let mut d = d.borrow_mut();
+        if d.is_none() {
+            *d = Some(zstd::bulk::Decompressor::new().map_err(|e| format!("zstd: {e}"))?);
+        }
+        let d = d.as_mut().expect("made above");
+        d.decompress(stored, raw_len).map_err(|e| {
+            format!(
+                "a zstd frame of {} bytes does not expand: {e}",
+                stored.len()
+            )
+        })
     })?;
     if raw.len() != raw_len {
         return Err(format!(
@@ -35,7 +51,7 @@ pub(crate) fn expand(stored: &[u8], raw_len: usize, zstd: bool) -> Result<Vec<u8
             raw.len()
         ));
     }
-    Ok(raw)
+    Ok(Cow::Owned(raw))
 }
 
 /// The first four bytes of every zstd frame.
@@ -57,7 +73,7 @@ pub(crate) fn expand_frame(stored: &[u8], max: usize) -> Result<Vec<u8>, String>
     if size > max as u64 {
         return Err(format!("a zstd frame expands to {size} bytes, over {max}"));
     }
-    expand(stored, size as usize, true)
+    expand(stored, size as usize, true).map(Cow::into_owned)
 }
 
 #[cfg(test)]
