@@ -60,7 +60,7 @@ pub(crate) fn write_object(
     let bytes = codec
         .encode(mesh)
         .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
-    entry.mesh = write_mesh(store, &bytes, codec)?;
+    entry.mesh = store.append_packed_or_whole(PageKind::Mesh, &bytes, codec.packs())?;
     Ok(entry)
 }
 
@@ -78,23 +78,6 @@ pub(crate) fn object_entry(id: u64, kind: u8, mesh: &Mesh) -> Result<ObjectEntry
         triangles: mesh.triangle_count() as u32,
         kind,
     })
-}
-
-/// Appends an encoded mesh: whole pages in format version 1, as it always was, packed
-/// beside its neighbours in version 2.
-pub(crate) fn write_mesh(store: &mut Store, bytes: &[u8], codec: MeshCodec) -> Result<Extent> {
-    match codec {
-        MeshCodec::Raw => store.append_extent(PageKind::Mesh, bytes),
-        MeshCodec::Meshopt { .. } => store.append_packed(PageKind::Mesh, bytes),
-    }
-}
-
-/// Appends encoded LOD data (a chain): whole pages in format version 1, packed in 2.
-pub(crate) fn write_lod(store: &mut Store, bytes: &[u8], codec: MeshCodec) -> Result<Extent> {
-    match codec {
-        MeshCodec::Raw => store.append_extent(PageKind::Lod, bytes),
-        MeshCodec::Meshopt { .. } => store.append_packed(PageKind::Lod, bytes),
-    }
 }
 
 /// Records `codec` in the header, and the format version its files need.

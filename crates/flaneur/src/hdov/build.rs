@@ -410,7 +410,7 @@ pub(crate) fn build_hdov(
             continue;
         }
         let bytes = encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec)?;
-        let e = crate::catalog::write_lod(store, &bytes, codec)?;
+        let e = store.append_packed_or_whole(PageKind::Lod, &bytes, codec.packs())?;
         nodes_with_lods += 1;
         lod_levels += m.levels.len() as u64;
         lod_triangles += m

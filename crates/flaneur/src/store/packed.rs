@@ -50,6 +50,20 @@ impl Store {
     /// # Ok(()) }
     /// ```
     pub fn append_packed(&mut self, kind: PageKind, bytes: &[u8]) -> Result<Extent> {
+        self.append_packed_or_whole(kind, bytes, true)
+    }
+
+    /// [`Store::append_packed`] when `packed`, else [`Store::append_extent`]: a writer
+    /// whose file format decides (`scene::MeshCodec::packs`).
+    pub fn append_packed_or_whole(
+        &mut self,
+        kind: PageKind,
+        bytes: &[u8],
+        packed: bool,
+    ) -> Result<Extent> {
+        if !packed {
+            return self.append_extent(kind, bytes);
+        }
         self.check_write(kind, 0, "append a packed extent")?;
         let Ok(byte_len) = u32::try_from(bytes.len()) else {
             return self.append_extent(kind, bytes);

@@ -137,7 +137,7 @@ pub(crate) fn simplify_stored(
     opts: &LodOptions,
     codec: MeshCodec,
 ) -> Result<Vec<(Mesh, f32)>> {
-    let (simplified, _) = simplify_as(id, mesh, opts, codec)?;
+    let simplified = simplify_as(id, mesh, opts, codec)?;
     let Some(chain) = simplified
         .chain
         .as_deref()
@@ -156,15 +156,10 @@ pub(crate) fn simplify_stored(
         .collect()
 }
 
-/// Simplifies object `id` into its coarse levels and encodes their chain in `codec`: for
-/// meshoptimizer's, the object's mesh too, returned beside (the LOD writer writes it). An `Err` when the simplifier refuses the object
-/// (or panics on it) or the chain would not encode, and the object then gets no LODs.
-fn simplify_as(
-    id: u64,
-    mesh: &Mesh,
-    opts: &LodOptions,
-    codec: MeshCodec,
-) -> Result<(Simplified, Option<Vec<u8>>)> {
+/// Simplifies object `id` into its coarse levels and encodes their chain in `codec`: an
+/// `Err` when the simplifier refuses the object (or panics on it) or the chain would not
+/// encode, and the object then gets no LODs.
+fn simplify_as(id: u64, mesh: &Mesh, opts: &LodOptions, codec: MeshCodec) -> Result<Simplified> {
     caught(|| {
         let pm = ProgressiveMesh::build(mesh)?;
         let levels = pm.levels(opts.ratio, opts.min_triangles)?;
@@ -174,44 +169,30 @@ fn simplify_as(
         } else {
             Some(encode_chain_with(id, mesh.triangle_count(), coarse, codec)?)
         };
-        // In format version 2 the LOD writer writes the mesh too, beside its chain.
-        let mesh_bytes = match codec {
-            MeshCodec::Raw => None,
-            MeshCodec::Meshopt { .. } => Some(
-                codec
-                    .encode(mesh)
-                    .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?,
-            ),
-        };
         let levels = levels
             .into_iter()
             .skip(1)
             .map(|l| (l.mesh, l.error))
             .collect();
-        Ok((Simplified { pm, levels, chain }, mesh_bytes))
+        Ok(Simplified { pm, levels, chain })
     })
 }
 
-/// Simplifies one object and encodes what it stores: its LOD data, and for
-/// meshoptimizer's codec its mesh (encoded alone when the simplifier refused it).
+/// Simplifies one object and encodes what it stores: its LOD data, and in format
+/// version 2 its mesh too (whether or not the simplifier took it), which the LOD writer
+/// writes beside its chain.
 fn bake(id: u64, mesh: &Mesh, opts: &LodOptions, codec: MeshCodec) -> (Result<Baked>, MeshBytes) {
-    match simplify_as(id, mesh, opts, codec) {
-        Ok((simplified, mesh_bytes)) => {
-            let mesh_bytes = mesh_bytes.map(Ok);
-            (bake_dag(mesh, opts, simplified, codec), mesh_bytes)
-        }
-        Err(e) => {
-            let alone = match codec {
-                MeshCodec::Raw => None,
-                MeshCodec::Meshopt { .. } => Some(
-                    codec
-                        .encode(mesh)
-                        .map_err(|w| Error::Invalid(format!("object {id}: {w}"))),
-                ),
-            };
-            (Err(e), alone)
-        }
-    }
+    let mesh_bytes = match codec {
+        MeshCodec::Raw => None,
+        MeshCodec::Meshopt { .. } => Some(
+            codec
+                .encode(mesh)
+                .map_err(|w| Error::Invalid(format!("object {id}: {w}"))),
+        ),
+    };
+    let baked = simplify_as(id, mesh, opts, codec)
+        .and_then(|simplified| bake_dag(mesh, opts, simplified, codec));
+    (baked, mesh_bytes)
 }
 
 /// The progressive mesh and DAG of a large simplified object, and what it stores.
@@ -459,14 +440,12 @@ impl LodWriter {
         let payload = store.payload_size();
         // Format version 2 packs every chain whole: its head is beside its
         // neighbours' without being cut at a page.
-        let packed = self.codec != MeshCodec::Raw;
+        let packed = self.codec.packs();
         let append = |store: &mut Store, bytes: &[u8]| -> Result<Extent> {
             if bytes.is_empty() {
                 Ok(Extent::default())
-            } else if packed {
-                store.append_packed(PageKind::Lod, bytes)
             } else {
-                store.append_extent(PageKind::Lod, bytes)
+                store.append_packed_or_whole(PageKind::Lod, bytes, packed)
             }
         };
         let mut heads = Vec::with_capacity(batch.len());

@@ -152,36 +152,60 @@ fn encode_shared(
 ) -> std::result::Result<Vec<u8>, String> {
     let coarsest_first: Vec<&Mesh> = levels.iter().rev().map(|l| &l.mesh).collect();
     let (blob, spans) = encode_levels_v2(&coarsest_first, zstd)?;
+    // The coarsest level's bytes take in the blob's header and level table, so that every
+    // byte after the directory is under some level's checksum.
+    let places: Vec<(usize, usize, usize)> = spans
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (if k == 0 { 0 } else { s.start }, s.end, s.vertices))
+        .collect();
+    write_chain(
+        object,
+        full_triangles,
+        CHAIN_VERSION_SHARED,
+        levels,
+        &places,
+        &blob,
+    )
+}
+
+/// A chain of `version`: its header, one directory entry per level of `levels` (finest
+/// first, stored coarsest first), where `places[k]` says where the k-th coarsest level's
+/// bytes lie in `body` (start, end) and how many vertices it reads, the directory's
+/// checksum, then `body`.
+fn write_chain(
+    object: u64,
+    full_triangles: usize,
+    version: u32,
+    levels: &[Level],
+    places: &[(usize, usize, usize)],
+    body: &[u8],
+) -> std::result::Result<Vec<u8>, String> {
     let head = directory_len(levels.len() as u64) as usize;
-    if (head + blob.len()) as u64 > u32::MAX as u64 {
-        return Err(format!(
-            "{} bytes are over the 4 GiB an extent holds",
-            head + blob.len()
-        ));
+    let total = (head + body.len()) as u64;
+    if total > u32::MAX as u64 {
+        return Err(format!("{total} bytes are over the 4 GiB an extent holds"));
     }
-    let mut b = Vec::with_capacity(head + blob.len());
+    let mut b = Vec::with_capacity(total as usize);
     b.extend_from_slice(&CHAIN_MAGIC);
-    b.extend_from_slice(&CHAIN_VERSION_SHARED.to_le_bytes());
+    b.extend_from_slice(&version.to_le_bytes());
     b.extend_from_slice(&object.to_le_bytes());
     b.extend_from_slice(&(full_triangles as u32).to_le_bytes());
     b.extend_from_slice(&(levels.len() as u32).to_le_bytes());
-    for (k, (l, span)) in levels.iter().rev().zip(&spans).enumerate() {
-        // The coarsest level's bytes take in the blob's header and level table, so that
-        // every byte after the directory is under some level's checksum.
-        let start = if k == 0 { 0 } else { span.start };
+    for (l, &(start, end, vertices)) in levels.iter().rev().zip(places) {
         for field in [
             l.mesh.triangle_count() as u32,
-            span.vertices as u32,
+            vertices as u32,
             l.error.to_bits(),
             (head + start) as u32,
-            (span.end - start) as u32,
-            crc32fast::hash(&blob[start..span.end]),
+            (end - start) as u32,
+            crc32fast::hash(&body[start..end]),
         ] {
             b.extend_from_slice(&field.to_le_bytes());
         }
     }
     push_crc(&mut b);
-    b.extend_from_slice(&blob);
+    b.extend_from_slice(body);
     Ok(b)
 }
 
@@ -216,40 +240,23 @@ pub(crate) fn encode_chain_with(
     if let MeshCodec::Meshopt { zstd } = codec {
         return encode_shared(object, full_triangles, levels, zstd).map_err(refuse);
     }
-    let full = full_triangles as u32;
-    let bodies: Vec<Vec<u8>> = levels.iter().rev().map(|l| encode_mesh(&l.mesh)).collect();
-    let head = directory_len(levels.len() as u64);
-    let total = head + bodies.iter().map(|b| b.len() as u64).sum::<u64>();
-    if total > u32::MAX as u64 {
-        return Err(refuse(format!(
-            "{total} bytes are over the 4 GiB an extent holds"
-        )));
+    // Version 1: each level a mesh of its own, back to back.
+    let mut body = Vec::new();
+    let mut places = Vec::with_capacity(levels.len());
+    for l in levels.iter().rev() {
+        let start = body.len();
+        body.extend_from_slice(&encode_mesh(&l.mesh));
+        places.push((start, body.len(), l.mesh.positions.len()));
     }
-    let mut b = Vec::with_capacity(total as usize);
-    b.extend_from_slice(&CHAIN_MAGIC);
-    b.extend_from_slice(&CHAIN_VERSION.to_le_bytes());
-    b.extend_from_slice(&object.to_le_bytes());
-    b.extend_from_slice(&full.to_le_bytes());
-    b.extend_from_slice(&(levels.len() as u32).to_le_bytes());
-    let mut offset = head as u32;
-    for (l, body) in levels.iter().rev().zip(&bodies) {
-        for field in [
-            l.mesh.triangle_count() as u32,
-            l.mesh.positions.len() as u32,
-            l.error.to_bits(),
-            offset,
-            body.len() as u32,
-            crc32fast::hash(body),
-        ] {
-            b.extend_from_slice(&field.to_le_bytes());
-        }
-        offset += body.len() as u32;
-    }
-    push_crc(&mut b);
-    for body in &bodies {
-        b.extend_from_slice(body);
-    }
-    Ok(b)
+    write_chain(
+        object,
+        full_triangles,
+        CHAIN_VERSION,
+        levels,
+        &places,
+        &body,
+    )
+    .map_err(refuse)
 }
 
 /// The encoding version of the chain that starts with `prefix`, after its magic.

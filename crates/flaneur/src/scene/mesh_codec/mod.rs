@@ -52,6 +52,12 @@ impl Default for MeshCodec {
 }
 
 impl MeshCodec {
+    /// Whether a file in this codec packs small blobs (meshes, LOD chains) several to a
+    /// page, as format version 2 does; version 1's raw floats take whole pages.
+    pub fn packs(&self) -> bool {
+        *self != MeshCodec::Raw
+    }
+
     /// meshoptimizer's codecs with zstd at its default level.
     pub fn meshopt() -> MeshCodec {
         MeshCodec::Meshopt {
