@@ -15,6 +15,12 @@
 //! groups it stopped at as their nodes' internal LODs: its pictures lose what those
 //! coarser shapes change. The scene tree's traversals (VSC, PB, CONV) draw what they
 //! chose, at the representation they chose.
+//!
+//! The full-detail pictures may come from another file holding the same city
+//! ([`run_against`]): a format-version-2 file's walk, its meshes quantised, is then
+//! judged against its version-1 twin's raw floats, so that what the codec changes shows
+//! beside what the mode's selection does. The two files are checked to hold the same
+//! objects first ([`same_city`]).
 
 use std::path::Path;
 
@@ -22,7 +28,7 @@ use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::geom::Camera;
+use flaneur::geom::{Aabb, Camera};
 use flaneur::hdov::scene::SceneTree;
 use flaneur::walk::lod_select::LodCounts;
 use flaneur::walk::path::CameraPath;
@@ -59,6 +65,21 @@ impl ModeWalk<'_> {
     }
 }
 
+/// The PSNR the quantised geometry of format version 2 is held to against version 1's
+/// (the codec issue's "pictures unchanged by quantisation": every frame identical or
+/// above it), dB; the summary counts the frames either side.
+pub const QUANTISATION_PSNR_DB: f64 = 50.0;
+
+/// The file the full-detail reference pictures are drawn from, when it is not the walked
+/// database: another file holding the same city.
+#[derive(Clone, Copy)]
+pub struct Reference<'a> {
+    /// The reference's database.
+    pub db: &'a Database,
+    /// How the report names it: the file or URL as given.
+    pub name: &'a str,
+}
+
 /// One frame's comparison.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FidelityRow {
@@ -92,6 +113,8 @@ pub struct FidelityReport {
     pub height: u32,
     pub adapter: String,
     pub lod_tau: Option<f32>,
+    /// The file the full-detail pictures came from, when not the walked database.
+    pub reference: Option<String>,
     /// What LOD selection read, when it ran.
     pub lod: Option<LodCounts>,
     pub rows: Vec<FidelityRow>,
@@ -138,9 +161,117 @@ pub fn compare(a: &[u8], b: &[u8]) -> Result<(f64, f64)> {
     Ok((psnr, differ as f64 / pixels as f64))
 }
 
+/// Checks that `reference` holds the city `db` holds, before any picture is drawn: the
+/// same object count, triangle count and bounds, and, read from both R-trees' leaves,
+/// the same ids, each with the same triangle count, kind and box. Boxes and bounds are
+/// compared within 1 mm plus 1e-4 of the object's (the city's) size along each axis:
+/// quantised positions move a vertex by at most half a 16-bit step of its object's box
+/// (1/131,070 of it), and a box built from them by as much, while another city's boxes
+/// differ by metres. The error names the first thing that differs.
+///
+/// ```
+/// # fn main() -> flaneur::error::Result<()> {
+/// let dir = tempfile::tempdir().unwrap();
+/// let build = |objects: u64, name: &str| -> flaneur::error::Result<flaneur::Database> {
+///     let scene = dir.path().join(format!("{name}.scene"));
+///     let config = citygen::CityConfig { objects, seed: 1, ..Default::default() };
+///     citygen::write_city(&config, &scene)?;
+///     let db = dir.path().join(format!("{name}.flaneur"));
+///     let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
+///     flaneur::build_from_scene(&scene, &db, &opts)?;
+///     flaneur::Database::open(&db)
+/// };
+/// let (a, b, c) = (build(20, "a")?, build(20, "b")?, build(30, "c")?);
+/// flaneur_bench::fidelity::same_city(&a, &b)?;
+/// let e = flaneur_bench::fidelity::same_city(&a, &c).unwrap_err();
+/// assert!(e.to_string().contains("objects: 20 in the database, 30 in the reference"), "{e}");
+/// # Ok(())
+/// # }
+/// ```
+pub fn same_city(db: &Database, reference: &Database) -> Result<()> {
+    let differ = |what: &str, mine: String, theirs: String| {
+        Err(Error::Invalid(format!(
+            "the reference holds another city than the walked database: {what} \
+             {mine} in the database, {theirs} in the reference"
+        )))
+    };
+    if db.objects() != reference.objects() {
+        let (a, b) = (db.objects(), reference.objects());
+        return differ("objects:", a.to_string(), b.to_string());
+    }
+    if db.triangles() != reference.triangles() {
+        let (a, b) = (db.triangles(), reference.triangles());
+        return differ("triangles:", a.to_string(), b.to_string());
+    }
+    if db.objects() == 0 {
+        return Ok(());
+    }
+    let (a, b) = (db.bounds(), reference.bounds());
+    if !boxes_agree(&a, &b) {
+        return differ("bounds:", show(&a), show(&b));
+    }
+    let leaves = |d: &Database| -> Result<Vec<flaneur::rtree::ObjectEntry>> {
+        let mut all = d.range(&d.bounds())?.objects;
+        all.sort_unstable_by_key(|o| o.id);
+        Ok(all)
+    };
+    let (mine, theirs) = (leaves(db)?, leaves(reference)?);
+    if mine.len() != theirs.len() {
+        let (a, b) = (mine.len(), theirs.len());
+        return differ("objects in the R-tree:", a.to_string(), b.to_string());
+    }
+    for (o, r) in mine.iter().zip(&theirs) {
+        if o.id != r.id {
+            // Sorted by id, the smaller of the two is missing from the other file.
+            let (id, only) = if o.id < r.id {
+                (o.id, "the database")
+            } else {
+                (r.id, "the reference")
+            };
+            return Err(Error::Invalid(format!(
+                "the reference holds another city than the walked database: object {id} is \
+                 in {only} only"
+            )));
+        }
+        if o.triangles != r.triangles || o.kind != r.kind {
+            return differ(
+                &format!("object {}'s triangles and kind:", o.id),
+                format!("{} of kind {}", o.triangles, o.kind),
+                format!("{} of kind {}", r.triangles, r.kind),
+            );
+        }
+        if !boxes_agree(&o.bounds, &r.bounds) {
+            return differ(
+                &format!("object {}'s box:", o.id),
+                show(&o.bounds),
+                show(&r.bounds),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether two boxes are the same but for quantisation: each corner's coordinates within
+/// 1 mm plus 1e-4 of the larger box's size along that axis (see [`same_city`]).
+fn boxes_agree(a: &Aabb, b: &Aabb) -> bool {
+    let size = a.extent().max(b.extent());
+    let tolerance = glam::Vec3::splat(1e-3) + 1e-4 * size;
+    let (lo, hi) = ((a.min - b.min).abs(), (a.max - b.max).abs());
+    lo.cmple(tolerance).all() && hi.cmple(tolerance).all()
+}
+
+/// A box as its two corners, in metres to the millimetre.
+fn show(b: &Aabb) -> String {
+    format!(
+        "({:.3}, {:.3}, {:.3})–({:.3}, {:.3}, {:.3})",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+    )
+}
+
 /// The sink that draws each frame twice and compares.
 struct Twice<'a> {
-    db: &'a Database,
+    /// Where the full-detail pictures' objects are read.
+    source: &'a Database,
     gpu: &'a Gpu,
     mode: FrameWriter<'a>,
     reference: Offscreen,
@@ -152,13 +283,13 @@ impl Twice<'_> {
     /// The full-detail picture: every object whose box meets the frustum, read from the
     /// database; the GPU keeps only the current frame's.
     fn reference(&mut self, camera: &Camera) -> Result<(Frame, u64)> {
-        let inside = self.db.in_view(camera)?;
+        let inside = self.source.in_view(camera)?;
         let keep: std::collections::HashSet<u64> = inside.iter().map(|o| o.id).collect();
         self.resident.retain(|(id, _)| keep.contains(&id));
         for o in &inside {
             if self.resident.get((o.id, 0)).is_none() {
                 self.resident
-                    .upload(self.gpu, (o.id, 0), &self.db.mesh(o)?)?;
+                    .upload(self.gpu, (o.id, 0), &self.source.mesh(o)?)?;
             }
         }
         let ids: Vec<_> = inside.iter().map(|o| (o.id, 0)).collect();
@@ -205,7 +336,7 @@ impl FrameSink for Twice<'_> {
 }
 
 /// Walks `path` through `db` with `walk` (`mode` names it in the report), drawing each
-/// frame twice on `gpu` as `drawing` says.
+/// frame twice on `gpu` as `drawing` says, the full-detail pictures from `db` too.
 pub fn run(
     db: &Database,
     gpu: &Gpu,
@@ -215,13 +346,54 @@ pub fn run(
     drawing: &Drawing,
     progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
+    draw_twice(db, None, gpu, path, (walk, mode), drawing, progress)
+}
+
+/// [`run`] with the full-detail pictures drawn from `reference`, which must hold the
+/// same city ([`same_city`], checked before anything is drawn): the mode's pictures
+/// from `db`, each frame's reference from the other file.
+pub fn run_against(
+    db: &Database,
+    reference: Reference<'_>,
+    gpu: &Gpu,
+    path: &CameraPath,
+    (walk, mode): (ModeWalk<'_>, &str),
+    drawing: &Drawing,
+    progress: impl FnMut(usize),
+) -> Result<FidelityReport> {
+    same_city(db, reference.db).map_err(|e| match e {
+        Error::Invalid(m) => Error::Invalid(format!("{}: {m}", reference.name)),
+        e => e,
+    })?;
+    draw_twice(
+        db,
+        Some(reference),
+        gpu,
+        path,
+        (walk, mode),
+        drawing,
+        progress,
+    )
+}
+
+fn draw_twice(
+    db: &Database,
+    reference: Option<Reference<'_>>,
+    gpu: &Gpu,
+    path: &CameraPath,
+    (walk, mode): (ModeWalk<'_>, &str),
+    drawing: &Drawing,
+    progress: impl FnMut(usize),
+) -> Result<FidelityReport> {
     let (width, height) = (drawing.width, drawing.height);
+    // Both pictures' ground and height colours from the walked database's bounds, so
+    // that a reference file's pictures differ only in the objects drawn.
     let bounds = db.bounds();
     let far = walk.far();
-    let mut reference = Offscreen::new(gpu, width, height)?;
-    reference.set_ground(gpu, &bounds, far);
+    let mut full = Offscreen::new(gpu, width, height)?;
+    full.set_ground(gpu, &bounds, far);
     let mut sink = Twice {
-        db,
+        source: reference.map_or(db, |r| r.db),
         gpu,
         mode: match drawing.lod_tau {
             Some(tau) => {
@@ -229,7 +401,7 @@ pub fn run(
             }
             None => FrameWriter::drawing(gpu, (width, height), (&bounds, far))?,
         },
-        reference,
+        reference: full,
         resident: GpuMeshes::default(),
         rows: Vec::with_capacity(path.poses.len()),
     };
@@ -254,6 +426,7 @@ pub fn run(
         height,
         adapter: format!("{} ({:?})", gpu.adapter.name, gpu.adapter.backend),
         lod_tau: drawing.lod_tau,
+        reference: reference.map(|r| r.name.to_string()),
         lod: sink.mode.times.lod,
         rows: sink.rows,
     })
@@ -264,6 +437,24 @@ impl FidelityReport {
     /// when there are none).
     pub fn mean_differ(&self) -> f64 {
         self.rows.iter().map(|r| r.differ).sum::<f64>() / self.rows.len().max(1) as f64
+    }
+
+    /// The frame of lowest PSNR and its PSNR, dB (infinite: identical); `None` without
+    /// frames.
+    pub fn worst(&self) -> Option<(usize, f64)> {
+        self.rows
+            .iter()
+            .map(|r| (r.frame, r.psnr))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// Frames identical to the reference, the others at `db` dB or more, and those below.
+    pub fn frames_by_psnr(&self, db: f64) -> (usize, usize, usize) {
+        let same = self.rows.iter().filter(|r| r.psnr.is_infinite()).count();
+        let above = (self.rows.iter())
+            .filter(|r| r.psnr.is_finite() && r.psnr >= db)
+            .count();
+        (same, above, self.rows.len() - same - above)
     }
 }
 
@@ -313,10 +504,21 @@ impl Report for FidelityReport {
             .map(|r| r.reference_triangles as f64)
             .sum::<f64>()
             / n;
+        let (walked, source) = match &self.reference {
+            Some(r) => (
+                " from the walked file",
+                format!(" from {r}, checked to hold the same city"),
+            ),
+            None => ("", String::new()),
+        };
         let mut s = format!(
-            "# fidelity — {} against full detail\n\n{} frames of {} × {} on {}; each drawn with the \
-             mode's selection and with every object in the frustum at full detail.\n\n",
+            "# fidelity — {} against full detail{}\n\n{} frames of {} × {} on {}; each drawn with \
+             the mode's selection{walked} and with every object in the frustum at full \
+             detail{source}.\n\n",
             self.mode,
+            self.reference
+                .as_ref()
+                .map_or(String::new(), |r| format!(" from {r}")),
             self.rows.len(),
             self.width,
             self.height,
@@ -341,11 +543,16 @@ impl Report for FidelityReport {
             s.push_str("| PSNR of the others, mean / worst | — |\n");
         } else {
             s.push_str(&format!(
-                "| PSNR of the others, mean / worst | {:.1} / {:.1} dB |\n",
+                "| PSNR of the others, mean / worst | {:.1} / {:.1} dB (frame {}) |\n",
                 finite.iter().sum::<f64>() / finite.len() as f64,
-                worst
+                worst,
+                self.worst().map_or(0, |w| w.0)
             ));
         }
+        let (_, above, below) = self.frames_by_psnr(QUANTISATION_PSNR_DB);
+        s.push_str(&format!(
+            "| the others at {QUANTISATION_PSNR_DB} dB or more / below | {above} / {below} |\n"
+        ));
         s.push_str(&format!(
             "| pixels that differ, mean / most | {:.3} % / {:.3} % |\n",
             100.0 * mean_differ,
@@ -419,5 +626,21 @@ impl Report for FidelityReport {
                 ],
             },
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boxes_agree_within_quantisation_not_beyond() {
+        let b = Aabb::new([100.0, 0.0, -50.0], [112.5, 40.0, -37.0]).unwrap();
+        // Half a 16-bit step of a 40 m tall box: 0.3 mm.
+        let q = Aabb::new([100.0, 0.0, -50.0], [112.5, 40.0003, -37.0]).unwrap();
+        assert!(boxes_agree(&b, &q) && boxes_agree(&q, &b));
+        // Another building's box is metres away; a centimetre is already too much.
+        let moved = Aabb::new([100.0, 0.0, -50.0], [112.51, 40.0, -37.0]).unwrap();
+        assert!(!boxes_agree(&b, &moved));
     }
 }

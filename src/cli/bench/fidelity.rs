@@ -1,10 +1,12 @@
 //! `flaneur bench fidelity`: each frame of a walk drawn with the mode's selection and
-//! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers).
+//! at full detail, and compared (the thesis's Figs. 5.26 and 6.6 as numbers); with
+//! `--reference`, the full-detail pictures drawn from another file holding the same city
+//! (a format-version-2 file against its version-1 twin).
 
 use crate::cli::args::{eta, lod_tau, selection};
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 
 use super::report::write_report;
 use crate::cli::args::parse_size;
@@ -22,6 +24,11 @@ use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 pub struct FidelityArgs {
     /// The database: a file, or a URL (http://… or https://…) on any HTTP server.
     db: PathBuf,
+    /// The file (or URL) the full-detail pictures are drawn from: the same city, e.g. the
+    /// version-1 twin of a version-2 database, checked to hold the same objects before
+    /// anything is drawn [default: the database itself].
+    #[arg(long, value_name = "REF")]
+    reference: Option<PathBuf>,
     /// A motion pattern (normal, fast, slow, turning, backward, random), a path
     /// CSV file, or (pvs mode) cells: a walk along the walkable viewcells [default:
     /// normal; cells in pvs mode].
@@ -83,6 +90,7 @@ impl FidelityArgs {
     pub fn run(self) -> Result<()> {
         let FidelityArgs {
             db,
+            reference,
             path,
             mode,
             frames,
@@ -105,7 +113,18 @@ impl FidelityArgs {
                 "fidelity draws the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'"
             ),
         };
+        let db_name = db.display().to_string();
         let db = crate::cli::source::open(&db)?;
+        let reference = match reference {
+            Some(r) => {
+                let (r, name) = (crate::cli::source::open(&r)?, r.display().to_string());
+                // Before the GPU is asked for: another city is the first thing to hear of.
+                flaneur_bench::fidelity::same_city(&db, &r)
+                    .with_context(|| format!("{name} against {db_name}"))?;
+                Some((r, name))
+            }
+            None => None,
+        };
         if preset.is_none() && !db.has_visibility() {
             bail!(
                 "{} has no precomputed visibility for the {mode} mode (build it with --visibility)",
@@ -156,11 +175,16 @@ impl FidelityArgs {
         };
         let gpu = flaneur_render::Gpu::headless()?;
         println!(
-            "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice",
+            "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice{}",
             poses.poses.len(),
             path,
             size.0,
-            size.1
+            size.1,
+            reference
+                .as_ref()
+                .map_or(String::new(), |(_, name)| format!(
+                    ", the full-detail pictures from {name}"
+                ))
         );
         let bar = indicatif::ProgressBar::new(poses.poses.len() as u64);
         let drawing = flaneur_bench::fidelity::Drawing {
@@ -183,9 +207,15 @@ impl FidelityArgs {
             "conv" => scene.traversal.label(),
             _ => mode.clone(),
         };
-        let r = flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, |_| {
-            bar.inc(1)
-        })?;
+        let tick = |_| bar.inc(1);
+        let r = match &reference {
+            Some((r, name)) => {
+                let r = flaneur_bench::fidelity::Reference { db: r, name };
+                let walk = (walk, label.as_str());
+                flaneur_bench::fidelity::run_against(&db, r, &gpu, &poses, walk, &drawing, tick)?
+            }
+            None => flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, tick)?,
+        };
         bar.finish_and_clear();
         write_report(&out, &r)
     }
