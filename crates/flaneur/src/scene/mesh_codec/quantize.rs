@@ -48,10 +48,14 @@ impl Grid {
         g
     }
 
-    /// Whether the box is one a reader may trust: finite corners, min <= max.
+    /// Whether the box is one a reader may trust: finite corners, min <= max, a finite
+    /// span (else a step is infinite and a position reads back as NaN).
     pub(crate) fn is_valid(&self) -> bool {
         (0..3).all(|k| {
-            self.min[k].is_finite() && self.max[k].is_finite() && self.min[k] <= self.max[k]
+            self.min[k].is_finite()
+                && self.max[k].is_finite()
+                && self.min[k] <= self.max[k]
+                && (self.max[k] - self.min[k]).is_finite()
         })
     }
 
@@ -149,6 +153,22 @@ mod tests {
             "sub-millimetre on a 12.5 m box: {}",
             bound[0]
         );
+    }
+
+    #[test]
+    fn a_box_whose_span_overflows_is_refused() {
+        // Finite corners whose difference overflows: a step of infinity would read every
+        // position back as NaN (0 × inf), which no mesh may hold.
+        let wide = Grid {
+            min: [-3e38, 0.0, 0.0],
+            max: [3e38, 1.0, 1.0],
+        };
+        assert!(!wide.is_valid());
+        assert!(Grid {
+            min: [-1e38, 0.0, 0.0],
+            max: [1e38, 1.0, 1.0],
+        }
+        .is_valid());
     }
 
     #[test]
