@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use flaneur::fuzzing::{corpus_dir, corpus_inputs, cut_seeds, TARGETS};
 use flaneur::hdov::HdovOptions;
 use flaneur::lod::{LodOptions, ProgressiveMesh};
-use flaneur::scene::{SceneObject, SceneWriter};
+use flaneur::scene::{MeshCodec, SceneObject, SceneWriter};
 use flaneur::visibility::VisibilityOptions;
 use flaneur::{BuildOptions, Database};
 
@@ -53,14 +53,30 @@ fn small_city(path: &Path, objects: u64, triangles: usize) {
 }
 
 /// The city the seeds are cut from: a dozen small buildings with every kind of data a
-/// build stores, in 1 KiB pages.
-fn build_city(dir: &Path) -> (PathBuf, PathBuf) {
-    let (scene, db) = (dir.join("city.scene"), dir.join("city.flaneur"));
-    small_city(&scene, 12, 24);
+/// build stores, in 1 KiB pages, its meshes in `codec` (format version 1 or 2), a
+/// progressive mesh for each object over `pm_threshold` triangles, a chain of levels for
+/// the rest. `larger` makes them half as many buildings of eight times the triangles.
+fn build_city(
+    dir: &Path,
+    codec: MeshCodec,
+    pm_threshold: usize,
+    larger: bool,
+) -> (PathBuf, PathBuf) {
+    let name = format!("city-{pm_threshold}-{}-{larger}", codec.packs());
+    let (scene, db) = (
+        dir.join(format!("{name}.scene")),
+        dir.join(format!("{name}.flaneur")),
+    );
+    if larger {
+        small_city(&scene, 6, 192);
+    } else {
+        small_city(&scene, 12, 24);
+    }
     let options = BuildOptions {
         page_size: 1024,
+        codec,
         lod: Some(LodOptions {
-            pm_threshold: 16,
+            pm_threshold,
             min_triangles: 8,
             ..Default::default()
         }),
@@ -75,20 +91,38 @@ fn build_city(dir: &Path) -> (PathBuf, PathBuf) {
     (scene, db)
 }
 
-/// Writes the seeds: the database's pieces (`cut_seeds`), scene files of one and of
-/// three objects and the city's, one cut short, and OBJ files of the city's meshes and
-/// their coarsest levels. Run once (and again when a format's version changes), then
-/// fuzz and minimise (README, "Fuzzing").
+/// Writes the seeds: the database's pieces (`cut_seeds`) in format versions 1 and 2 (the
+/// latter's names start `v2-`; a second version-2 city of larger buildings, without zstd
+/// and with a chain of levels for every object, gives the chains and level blobs
+/// `v2-plain-`), scene files
+/// of one and of three objects and the city's, one cut short, and OBJ files of the
+/// city's meshes and their coarsest levels. Run once (and again when a format's version
+/// changes), then fuzz and minimise (README, "Fuzzing").
 #[test]
 #[ignore = "writes the fuzz corpora's seeds"]
 fn write_decoder_seeds() {
     let dir = tempfile::tempdir().unwrap();
-    let (scene, db_path) = build_city(dir.path());
+    let (scene, db_path) = build_city(dir.path(), MeshCodec::Raw, 16, false);
     let mut seeds: Vec<(&str, String, Vec<u8>)> = cut_seeds(&db_path)
         .unwrap()
         .into_iter()
         .map(|s| (s.target, s.name, s.bytes))
         .collect();
+    let (_, v2) = build_city(dir.path(), MeshCodec::meshopt(), 16, false);
+    seeds.extend(
+        cut_seeds(&v2)
+            .unwrap()
+            .into_iter()
+            .map(|s| (s.target, format!("v2-{}", s.name), s.bytes)),
+    );
+    let (_, plain) = build_city(dir.path(), MeshCodec::Meshopt { zstd: None }, 1 << 20, true);
+    seeds.extend(
+        cut_seeds(&plain)
+            .unwrap()
+            .into_iter()
+            .filter(|s| s.target == "lod_chain" || s.name.starts_with("levels-"))
+            .map(|s| (s.target, format!("v2-plain-{}", s.name), s.bytes)),
+    );
 
     for objects in [1, 3] {
         let path = dir.path().join(format!("{objects}.scene"));

@@ -6,12 +6,16 @@ use crate::lod::stored::chain::{head_len, ChainDirectory};
 use crate::lod::stored::read::ProgressiveBytes;
 use crate::lod::stored::table::{decode_head, reseal_head};
 use crate::lod::{Dag, ProgressiveMesh, SelectiveSource};
+use crate::scene::{expand_frame, is_frame, squeeze};
 
 /// The payload of a page of each page size the LOD table's target may choose.
 const PAYLOADS: [usize; 3] = [1012, 4084, 65524];
 
-/// An LOD chain (directory and levels), as it is and with its checksums rewritten: its
-/// directory from the whole chain and from its first page, then every level.
+/// An LOD chain (directory and levels) of either version (1: each level a mesh of its
+/// own; 2: one blob of meshoptimizer's buffers whose levels share a vertex buffer, a
+/// level read with every coarser one), as it is and with its checksums rewritten: its
+/// directory from the whole chain and from its first page, then every level from the
+/// bytes the directory says a reader of it takes.
 pub fn lod_chain(data: &[u8]) {
     let mut sealed = data.to_vec();
     ChainDirectory::reseal(&mut sealed);
@@ -34,9 +38,11 @@ pub fn lod_chain(data: &[u8]) {
 }
 
 /// A progressive mesh and its DAG: a u32 (the PM's share of the rest, modulo its
-/// length), the PM's bytes, the DAG's. Each decoded as it is and with its checksum
-/// rewritten, then the two checked against each other as a database's are; a pair that
-/// passes is walked split by split to the full mesh and back, and served selectively.
+/// length), the PM's bytes, the DAG's, each its own codec's bytes (format version 1) or a
+/// zstd frame around them (version 2). Each decoded as it is and with its checksum
+/// rewritten (inside the frame, framed again), then the two checked against each other
+/// as a database's are; a pair that passes is walked split by split to the full mesh and
+/// back, and served selectively.
 pub fn lod_pm_dag(data: &[u8]) {
     let Some((split, rest)) = data.split_first_chunk::<4>() else {
         return;
@@ -45,13 +51,15 @@ pub fn lod_pm_dag(data: &[u8]) {
     let (pm, dag) = rest.split_at(at);
     for (pm, dag) in [
         (pm.to_vec(), dag.to_vec()),
-        (super::resealed_tail(pm), super::resealed_tail(dag)),
+        (resealed_inside(pm), resealed_inside(dag)),
     ] {
-        let triangles = match ProgressiveMesh::from_bytes(&pm) {
-            Ok(p) => p.triangle_map.len() as u32,
-            Err(_) => 0,
+        let triangles = match unframed(&pm).map(|b| ProgressiveMesh::from_bytes(&b)) {
+            Some(Ok(p)) => p.triangle_map.len() as u32,
+            _ => 0,
         };
-        let _ = Dag::from_bytes(&dag);
+        if let Some(b) = unframed(&dag) {
+            let _ = Dag::from_bytes(&b);
+        }
         let Ok((pm, dag)) = ProgressiveBytes::from_parts(0, triangles, pm, dag).decode() else {
             continue;
         };
@@ -60,6 +68,35 @@ pub fn lod_pm_dag(data: &[u8]) {
             while let Ok(true) = cursor.coarsen() {}
         }
         let _ = SelectiveSource::new(&pm, &dag);
+    }
+}
+
+/// The most a PM's or DAG's zstd frame expands to here: the reader's bound
+/// (`lod::stored::read`), 64 times the frame and 64 KiB.
+fn frame_bound(frame: &[u8]) -> usize {
+    frame.len().saturating_mul(64).saturating_add(1 << 16)
+}
+
+/// The codec's bytes of a PM or DAG: a zstd frame's contents, or the bytes themselves;
+/// `None` for a frame that does not expand.
+fn unframed(b: &[u8]) -> Option<Vec<u8>> {
+    if is_frame(b) {
+        expand_frame(b, frame_bound(b)).ok()
+    } else {
+        Some(b.to_vec())
+    }
+}
+
+/// `b` with its checksum (its last four bytes) rewritten, inside its zstd frame when it
+/// is one (framed again as a build frames it), so that mutated contents reach the
+/// codec's checks.
+fn resealed_inside(b: &[u8]) -> Vec<u8> {
+    if !is_frame(b) {
+        return super::resealed_tail(b);
+    }
+    match expand_frame(b, frame_bound(b)) {
+        Ok(inner) => squeeze(&super::resealed_tail(&inner), Some(1)).unwrap_or_else(|_| b.to_vec()),
+        Err(_) => b.to_vec(),
     }
 }
 

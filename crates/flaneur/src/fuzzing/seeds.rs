@@ -7,7 +7,9 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::hdov::{TreeHead, HDOV_SEGMENT};
+use crate::lod::stored::chain::ChainDirectory;
 use crate::lod::stored::table::LodTable;
+use crate::scene::MeshCodec;
 use crate::store::{page, Extent, PageKind};
 use crate::visibility::VISIBILITY_SEGMENT;
 use crate::Database;
@@ -29,7 +31,8 @@ pub struct Seed {
 
 /// The seeds of every target but `scene_file` and `obj`, cut from the database at
 /// `path`: its header page; a page of each kind; its R-tree nodes' payloads; objects'
-/// mesh extents; their LOD chains, progressive meshes with DAGs, the LOD table; the
+/// mesh extents (in format version 2 also without zstd, and each chain's blob of
+/// levels); their LOD chains, progressive meshes with DAGs, the LOD table; the
 /// visibility table; the HDoV-tree's head, nodes and V-pages; and the whole file.
 pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
     let file = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -92,6 +95,13 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
     let objects = db.range(&db.bounds())?.objects;
     for o in objects.iter().take(6) {
         let mesh = store.read_extent(&o.mesh, PageKind::Mesh)?;
+        if mesh.starts_with(b"FLG2") {
+            // The same mesh in version 2 without zstd: the codec's own buffers, which
+            // the fuzzer mutates more usefully than a frame.
+            let plain =
+                MeshCodec::Meshopt { zstd: None }.to_bytes(&MeshCodec::from_bytes(&mesh)?)?;
+            add("mesh_codec", format!("object-{}-no-zstd", o.id), plain);
+        }
         add("mesh_codec", format!("object-{}", o.id), mesh);
     }
     if let Some(table) = LodTable::open(store)? {
@@ -113,6 +123,19 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
             if !e.chain.is_empty() {
                 let mut chain = store.read_extent(&e.chain, PageKind::Lod)?;
                 chain.extend(store.read_extent(&e.chain_rest, PageKind::Lod)?);
+                // A version-2 chain's levels are one blob after its directory: a mesh
+                // blob of several levels, for the mesh codec's target too.
+                let blob = ChainDirectory::len_from_prefix(&chain)
+                    .ok()
+                    .and_then(|head| chain.get(head..))
+                    .filter(|b| b.starts_with(b"FLG2"));
+                if let Some(blob) = blob {
+                    add(
+                        "mesh_codec",
+                        format!("levels-object-{}", o.id),
+                        blob.to_vec(),
+                    );
+                }
                 add("lod_chain", format!("object-{}", o.id), chain);
             }
             if !e.pm.is_empty() {
