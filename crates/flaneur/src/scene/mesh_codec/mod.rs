@@ -5,6 +5,7 @@
 //! with, so a reader tells them apart by their bytes: one file never mixes them, but
 //! every reader reads both.
 
+mod faces;
 mod geometry;
 mod quantize;
 mod raw;

@@ -1,13 +1,17 @@
 use super::*;
 
-/// The triangles of `m` as corner positions, each triangle's corners rotated so that the
-/// smallest comes first, sorted: equal for two meshes that draw the same triangles.
-fn triangles(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
-    let mut t: Vec<[[u32; 3]; 3]> = m
+/// The triangles of `m` as corner positions and normals, each triangle's corners rotated
+/// so that the smallest comes first, sorted: equal for two meshes that draw the same
+/// triangles, shaded the same.
+fn triangles(m: &Mesh) -> Vec<[[u32; 6]; 3]> {
+    let mut t: Vec<[[u32; 6]; 3]> = m
         .indices
         .chunks(3)
         .map(|c| {
-            let mut corners = [0, 1, 2].map(|k| m.positions[c[k] as usize].map(f32::to_bits));
+            let mut corners = [0, 1, 2].map(|k| {
+                let (p, n) = (m.positions[c[k] as usize], m.normals[c[k] as usize]);
+                [p[0], p[1], p[2], n[0], n[1], n[2]].map(f32::to_bits)
+            });
             let r = (0..3).min_by_key(|&k| corners[k]).unwrap();
             corners.rotate_left(r);
             corners
@@ -161,12 +165,26 @@ fn levels_of(mesh: &Mesh) -> Vec<Mesh> {
 
 #[test]
 fn levels_share_one_vertex_buffer_and_each_reads_a_prefix() {
-    for zstd in [None, Some(3)] {
+    // A smooth mesh takes the vertex layout; a building's flat faces, the face layout,
+    // whose coarse levels carry normals that are not their faces'.
+    for (mesh, by_faces) in [
+        (crate::scene::bunny(), false),
+        (crate::lod::fixtures::building(), true),
+    ] {
+        for zstd in [None, Some(3)] {
+            levels_round_trip(&mesh, zstd, by_faces);
+        }
+    }
+}
+
+fn levels_round_trip(mesh: &Mesh, zstd: Option<i32>, by_faces: bool) {
+    {
         // Finest first, as the simplifier gives them; stored coarsest first.
-        let finest_first = levels_of(&crate::scene::bunny());
-        assert!(finest_first.len() >= 5);
+        let finest_first = levels_of(mesh);
+        assert!(finest_first.len() >= 3, "{} levels", finest_first.len());
         let levels: Vec<&Mesh> = finest_first.iter().rev().collect();
         let (blob, spans) = geometry::encode_levels(&levels, zstd).unwrap();
+        assert_eq!(geometry::by_faces(&blob), by_faces);
         let grid = Grid::around(levels.iter().copied());
         let mut previous = (0, 0);
         for (j, (mesh, span)) in levels.iter().zip(&spans).enumerate() {
@@ -175,7 +193,8 @@ fn levels_share_one_vertex_buffer_and_each_reads_a_prefix() {
             assert_eq!(
                 triangles(&back),
                 triangles(&quantised(mesh, &grid)),
-                "level {j}"
+                "level {j} of {} (faces {by_faces}, zstd {zstd:?})",
+                levels.len()
             );
             assert_eq!(
                 (back.positions.len(), back.indices.len()),
@@ -183,7 +202,9 @@ fn levels_share_one_vertex_buffer_and_each_reads_a_prefix() {
             );
             assert!(geometry::decode_level(&blob[..span.end - 1], j).is_err());
             assert!(span.start == previous.0.max(geometry::head_len(levels.len())));
-            assert!(span.vertices >= previous.1);
+            // The vertex layout reads every coarser level's vertices; the face layout
+            // builds only those its triangles use.
+            assert!(by_faces || span.vertices >= previous.1);
             previous = (span.end, span.vertices);
         }
         assert_eq!(previous.0, blob.len());
