@@ -122,6 +122,12 @@ pub(crate) fn encode_levels(
         m.validate()?;
     }
     let grid = Grid::around(levels.iter().copied());
+    if !grid.is_valid() {
+        return Err(format!(
+            "its box {:?}..{:?} spans more than an f32 holds: no 16-bit grid covers it",
+            grid.min, grid.max
+        ));
+    }
     let corners: Vec<Vec<Corner>> = levels.iter().map(|m| cached_corners(m, &grid)).collect();
     let (exceptions, all): (usize, usize) = corners
         .iter()

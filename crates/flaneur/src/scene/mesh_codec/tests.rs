@@ -231,3 +231,17 @@ fn levels_round_trip(mesh: &Mesh, zstd: Option<i32>, by_faces: bool) {
         }
     }
 }
+
+#[test]
+fn a_mesh_wider_than_an_f32_spans_is_refused_when_written() {
+    // Finite positions whose box's span overflows: the reader refuses such a box, so
+    // the writer must not write one.
+    let mesh = Mesh {
+        positions: vec![[-3e38, 0.0, 0.0], [3e38, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        normals: vec![[0.0, 0.0, 1.0]; 3],
+        indices: vec![0, 1, 2],
+    };
+    mesh.validate().unwrap();
+    let err = MeshCodec::meshopt().encode(&mesh).unwrap_err();
+    assert!(err.contains("spans more than an f32"), "{err}");
+}
