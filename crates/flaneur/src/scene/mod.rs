@@ -4,7 +4,7 @@
 
 mod axes;
 mod gltf;
-mod mesh_codec;
+pub(crate) mod mesh_codec;
 mod obj;
 mod osm;
 

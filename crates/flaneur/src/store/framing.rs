@@ -108,6 +108,99 @@ pub(crate) fn crc_matches(stored: u32, bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Appends `v` as a LEB128 varint: seven bits a byte, low first, the top bit set on
+/// every byte but the last.
+pub(crate) fn push_varint(b: &mut Vec<u8>, mut v: u64) {
+    while v >= 0x80 {
+        b.push(v as u8 | 0x80);
+        v >>= 7;
+    }
+    b.push(v as u8);
+}
+
+/// The varint at `*at`, moving `*at` past it; `None` when the bytes end inside it or it
+/// holds more than 64 bits.
+pub(crate) fn read_varint(b: &[u8], at: &mut usize) -> Option<u64> {
+    let mut v = 0u64;
+    for shift in (0..64).step_by(7) {
+        let byte = *b.get(*at)?;
+        *at += 1;
+        // The tenth byte holds bit 63 alone: more would be dropped, not read.
+        if shift == 63 && byte & 0x7f > 1 {
+            return None;
+        }
+        v |= ((byte & 0x7f) as u64) << shift;
+        if byte & 0x80 == 0 {
+            return Some(v);
+        }
+    }
+    None
+}
+
+/// A signed value as an unsigned one whose small magnitudes stay small (0, -1, 1, -2 …
+/// as 0, 1, 2, 3 …), for a varint.
+pub(crate) fn zigzag(v: i64) -> u64 {
+    ((v << 1) ^ (v >> 63)) as u64
+}
+
+/// The inverse of [`zigzag`].
+pub(crate) fn unzigzag(v: u64) -> i64 {
+    (v >> 1) as i64 ^ -((v & 1) as i64)
+}
+
+/// Reads a body of varints and fixed-width fields front to back. Each read names the
+/// section it is for, so that bytes that end early, or a varint too large for its
+/// field, are named where they fail.
+pub(crate) struct Cursor<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Cursor<'a> {
+    pub(crate) fn new(b: &'a [u8]) -> Cursor<'a> {
+        Cursor { b, at: 0 }
+    }
+
+    /// The next varint, at most `max`.
+    pub(crate) fn varint(&mut self, max: u64, what: &str) -> Result<u64, String> {
+        let v = read_varint(self.b, &mut self.at)
+            .ok_or_else(|| format!("{what}: the bytes end inside a varint, or it overflows"))?;
+        if v > max {
+            return Err(format!("{what}: {v} is past {max}"));
+        }
+        Ok(v)
+    }
+
+    /// The next varint as a u32.
+    pub(crate) fn u32(&mut self, what: &str) -> Result<u32, String> {
+        self.varint(u32::MAX as u64, what).map(|v| v as u32)
+    }
+
+    /// The next zigzag varint as an i32.
+    pub(crate) fn i32(&mut self, what: &str) -> Result<i32, String> {
+        let v = unzigzag(self.varint(u64::MAX, what)?);
+        i32::try_from(v).map_err(|_| format!("{what}: {v} is past 32 bits"))
+    }
+
+    /// The next `n` bytes.
+    pub(crate) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| {
+            format!(
+                "{what}: truncated, {} bytes left where {n} are due",
+                self.b.len() - self.at
+            )
+        })?;
+        let s = &self.b[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+
+    /// Bytes not read yet: none, once a body is read through.
+    pub(crate) fn left(&self) -> usize {
+        self.b.len() - self.at
+    }
+}
+
 /// Rewrites the crc32 in the last four bytes of `b` to that of the bytes before it:
 /// damaged bytes that pass the checksum, to reach the content checks (nothing when
 /// `b` is shorter than a crc32).

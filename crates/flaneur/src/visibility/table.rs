@@ -41,7 +41,9 @@
 //! many), and every object in a PVS keeps a non-zero DoV.
 
 use crate::error::{Error, Result};
-use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, u64_at, CRC_LEN};
+use crate::store::framing::{
+    self as bytes, f32_at, push_crc, push_varint, read_varint, u32_at, u64_at, CRC_LEN,
+};
 
 use super::cells::ViewcellGrid;
 use super::conservative::SampleOptions;
@@ -138,31 +140,6 @@ pub struct CellPvs {
 
 fn corrupt(what: impl std::fmt::Display) -> Error {
     Error::Invalid(format!("visibility table: {what}"))
-}
-
-fn push_varint(b: &mut Vec<u8>, mut v: u64) {
-    while v >= 0x80 {
-        b.push(v as u8 | 0x80);
-        v >>= 7;
-    }
-    b.push(v as u8);
-}
-
-fn read_varint(b: &[u8], at: &mut usize) -> Option<u64> {
-    let mut v = 0u64;
-    for shift in (0..64).step_by(7) {
-        let byte = *b.get(*at)?;
-        *at += 1;
-        // The tenth byte holds bit 63 alone: more would be dropped, not read.
-        if shift == 63 && byte & 0x7f > 1 {
-            return None;
-        }
-        v |= ((byte & 0x7f) as u64) << shift;
-        if byte & 0x80 == 0 {
-            return Some(v);
-        }
-    }
-    None
 }
 
 /// A cell's record. The ids must ascend and pair with DoVs in (0, 1].

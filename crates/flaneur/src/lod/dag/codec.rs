@@ -115,10 +115,14 @@ impl Dag {
         b
     }
 
-    /// Reads a DAG written by [`to_bytes`](Dag::to_bytes). An `Error::Invalid` that
+    /// Reads a DAG written by [`to_bytes`](Dag::to_bytes) or
+    /// [`to_packed_bytes`](Dag::to_packed_bytes). An `Error::Invalid` that
     /// says what is wrong — too short, not a DAG, another version, a checksum mismatch,
     /// or content no DAG can have — never a panic, whatever the bytes.
     pub fn from_bytes(b: &[u8]) -> Result<Dag> {
+        if b.len() >= 8 && b[..4] == DAG_MAGIC && u32_at(b, 4) == super::DAG_VERSION_PACKED {
+            return super::compact::decode(b);
+        }
         bytes::header(b, HEADER_LEN, "a DAG", DAG_MAGIC, DAG_VERSION).map_err(corrupt)?;
         let n = u32_at(b, NODES_OFFSET) as usize;
         let s = u32_at(b, SPLITS_OFFSET);
@@ -144,12 +148,6 @@ impl Dag {
             }
             run_starts.push(end);
         }
-        if run_starts[n] != s {
-            return Err(corrupt(format!(
-                "the runs cover {} splits, the header says {s}",
-                run_starts[n]
-            )));
-        }
         let mut starts = Vec::with_capacity(n + 1);
         starts.push(0u32);
         for (k, end) in ends(sec.parent_ends).enumerate() {
@@ -158,54 +156,74 @@ impl Dag {
             }
             starts.push(end);
         }
-        if starts[n] as usize != e {
-            return Err(corrupt(format!(
-                "the parent lists hold {} edges, the header says {e}",
-                starts[n]
-            )));
-        }
         let items: Vec<u32> = (0..e)
             .map(|i| u32_at(b, sec.parents as usize + 4 * i))
             .collect();
+        let attrs = (0..n)
+            .map(|k| {
+                let at = sec.attrs as usize + ATTR_LEN * k;
+                NodeAttrs {
+                    radius: f32_at(b, at),
+                    cone_sin: f32_at(b, at + 4),
+                    error: f32_at(b, at + 8),
+                }
+            })
+            .collect();
         let parents = Csr { starts, items };
-        for k in 0..n {
-            let row = parents.row(k);
-            // Below the node and ascending: acyclic, no duplicate, node order topological.
-            if row.iter().any(|&p| p as usize >= k) || row.windows(2).any(|w| w[0] >= w[1]) {
-                return Err(corrupt(format!(
-                    "node {k}'s parents {row:?} are not ascending below {k}"
-                )));
-            }
-        }
-        let mut attrs = Vec::with_capacity(n);
-        for k in 0..n {
-            let at = sec.attrs as usize + ATTR_LEN * k;
-            let a = NodeAttrs {
-                radius: f32_at(b, at),
-                cone_sin: f32_at(b, at + 4),
-                error: f32_at(b, at + 8),
-            };
-            let ok = a.radius >= 0.0
-                && a.radius.is_finite()
-                && (0.0..=1.0).contains(&a.cone_sin)
-                && a.error >= 0.0
-                && a.error.is_finite();
-            if !ok {
-                return Err(corrupt(format!(
-                    "node {k}'s attributes {a:?} are out of range"
-                )));
-            }
-            attrs.push(a);
-        }
-        let children = parents.transpose();
-        let edges = DagEdges {
-            construction,
-            run_starts,
-            parents,
-            children,
-        };
-        Dag::assemble(edges, attrs)
+        checked(construction, run_starts, parents, attrs, s).map_err(corrupt)
     }
+}
+
+/// A DAG from its decoded parts, whatever their encoding, once its content is checked:
+/// the runs cover the `s` splits, every node's parents ascend below it (acyclic, no
+/// duplicate, node order topological), every attribute is in range.
+pub(super) fn checked(
+    construction: DagConstruction,
+    run_starts: Vec<u32>,
+    parents: Csr,
+    attrs: Vec<NodeAttrs>,
+    s: u32,
+) -> std::result::Result<Dag, String> {
+    let n = run_starts.len() - 1;
+    if run_starts[n] != s {
+        return Err(format!(
+            "the runs cover {} splits, the header says {s}",
+            run_starts[n]
+        ));
+    }
+    let e = parents.items.len();
+    if parents.starts[n] as usize != e {
+        return Err(format!(
+            "the parent lists hold {} edges, the header says {e}",
+            parents.starts[n]
+        ));
+    }
+    for k in 0..n {
+        let row = parents.row(k);
+        if row.iter().any(|&p| p as usize >= k) || row.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(format!(
+                "node {k}'s parents {row:?} are not ascending below {k}"
+            ));
+        }
+    }
+    for (k, a) in attrs.iter().enumerate() {
+        let ok = a.radius >= 0.0
+            && a.radius.is_finite()
+            && (0.0..=1.0).contains(&a.cone_sin)
+            && a.error >= 0.0
+            && a.error.is_finite();
+        if !ok {
+            return Err(format!("node {k}'s attributes {a:?} are out of range"));
+        }
+    }
+    let children = parents.transpose();
+    let edges = DagEdges {
+        construction,
+        run_starts,
+        parents,
+        children,
+    };
+    Dag::assemble(edges, attrs).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
@@ -263,7 +281,7 @@ mod tests {
             Dag::from_bytes(&b).unwrap_err().to_string()
         };
         assert!(with(MAGIC_OFFSET, 0).contains("magic"));
-        assert!(with(VERSION_OFFSET, 2).contains("version 2"));
+        assert!(with(VERSION_OFFSET, 3).contains("version 3"));
         assert!(with(NODES_OFFSET, u32::MAX).contains("truncated"));
         assert!(with(EDGES_OFFSET, u32::MAX).contains("truncated"));
         assert!(with(SPLITS_OFFSET, 7).contains("checksum"));

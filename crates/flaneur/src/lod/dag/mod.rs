@@ -5,15 +5,18 @@
 //!
 //! The modules depend one way: `build` makes the edges ([`DagEdges`]), `attrs` computes
 //! the attributes over finished edges, `graph` puts the two together as the [`Dag`] that
-//! traversals walk, and `codec` reads and writes it.
+//! traversals walk, and `codec` reads and writes it (`compact` packs it for format
+//! version 2).
 
 mod attrs;
 mod build;
 mod codec;
+mod compact;
 mod graph;
 #[cfg(test)]
 mod tests;
 
 pub use attrs::NodeAttrs;
+use compact::DAG_VERSION_PACKED;
 pub use build::{DagConstruction, DagEdges};
 pub use graph::Dag;

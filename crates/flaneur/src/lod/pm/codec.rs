@@ -144,6 +144,54 @@ fn put_vec3(b: &mut Vec<u8>, v: &[f32; 3]) {
     }
 }
 
+/// What split `i` of a progressive mesh of `nv` base vertices and `nt` base triangles
+/// must be, whatever its encoding: it names only vertices and triangle slots that exist
+/// before it, its corners are below 3, its numbers finite, and the first split joins
+/// none before it. The fault, for the caller to prefix with the split.
+pub(super) fn check_split(
+    split: &VertexSplit,
+    i: usize,
+    nv: usize,
+    nt: usize,
+) -> std::result::Result<(), String> {
+    let (vertices_before, slots_before) = (nv + i, nt + 2 * i);
+    let v_p = split.v_p;
+    if v_p as usize >= vertices_before {
+        return Err(format!(
+            "v_p {v_p} does not exist before it ({vertices_before} vertices)"
+        ));
+    }
+    for p in [split.v_l, split.v_r].into_iter().flatten() {
+        if p as usize >= vertices_before || p == v_p {
+            return Err(format!(
+                "pivot {p} is v_p or does not exist before it ({vertices_before} vertices)"
+            ));
+        }
+    }
+    if split.corners.iter().any(|&c| c > 2) {
+        return Err(format!("corners {:?} (each 0, 1 or 2)", split.corners));
+    }
+    if split.joins_previous && i == 0 {
+        return Err("the first split joins no split before it".into());
+    }
+    let (position, normal, error) = (split.position, split.normal, split.error);
+    let finite = position.iter().chain(&normal).all(|c| c.is_finite());
+    if !(finite && error >= 0.0 && error.is_finite()) {
+        return Err(format!(
+            "position {position:?}, normal {normal:?} or error {error} is not finite"
+        ));
+    }
+    let adjusted = &split.adjusted;
+    if adjusted.iter().any(|&f| f as usize >= slots_before)
+        || adjusted.windows(2).any(|w| w[0] >= w[1])
+    {
+        return Err(format!(
+            "adjusted triangles {adjusted:?} are not ascending below {slots_before}"
+        ));
+    }
+    Ok(())
+}
+
 impl ProgressiveMesh {
     /// The number of bytes [`to_bytes`](ProgressiveMesh::to_bytes) writes.
     pub fn encoded_len(&self) -> usize {
@@ -224,11 +272,15 @@ impl ProgressiveMesh {
         Ok(b)
     }
 
-    /// Reads a progressive mesh written by [`to_bytes`](ProgressiveMesh::to_bytes). An
+    /// Reads a progressive mesh written by [`to_bytes`](ProgressiveMesh::to_bytes) or
+    /// [`to_quantised_bytes`](ProgressiveMesh::to_quantised_bytes). An
     /// `Error::Invalid` that says what is wrong — too short, not a progressive mesh,
     /// another version, a checksum mismatch, or content no progressive mesh can have —
     /// never a panic, whatever the bytes.
     pub fn from_bytes(b: &[u8]) -> Result<ProgressiveMesh> {
+        if b.len() >= 8 && b[..4] == PM_MAGIC && u32_at(b, 4) == super::PM_VERSION_QUANTISED {
+            return super::compact::decode(b);
+        }
         bytes::header(b, HEADER_LEN, "a progressive mesh", PM_MAGIC, PM_VERSION)
             .map_err(corrupt)?;
         let count = |at: usize| u32_at(b, at) as usize;
@@ -271,43 +323,13 @@ impl ProgressiveMesh {
         for i in 0..s {
             let o = at(sec.splits, i, SPLIT_LEN);
             let bad = |what: String| corrupt(format!("split {i}: {what}"));
-            let (vertices_before, slots_before) = (nv + i, nt + 2 * i);
-            let v_p = u32_at(b, o + SPLIT_V_P);
-            if v_p as usize >= vertices_before {
-                return Err(bad(format!(
-                    "v_p {v_p} does not exist before it ({vertices_before} vertices)"
-                )));
-            }
-            let pivot = |at: usize| -> Result<Option<u32>> {
-                match u32_at(b, o + at) {
-                    NO_PIVOT => Ok(None),
-                    p if (p as usize) < vertices_before && p != v_p => Ok(Some(p)),
-                    p => Err(bad(format!(
-                        "pivot {p} is v_p or does not exist before it ({vertices_before} vertices)"
-                    ))),
-                }
+            let pivot = |at: usize| match u32_at(b, o + at) {
+                NO_PIVOT => None,
+                p => Some(p),
             };
-            let (v_l, v_r) = (pivot(SPLIT_V_L)?, pivot(SPLIT_V_R)?);
-            let corners = [b[o + SPLIT_CORNERS], b[o + SPLIT_CORNERS + 1]];
-            if corners.iter().any(|&c| c > 2) {
-                return Err(bad(format!("corners {corners:?} (each 0, 1 or 2)")));
-            }
             let flags = b[o + SPLIT_FLAGS];
             if flags & !FLAG_JOINS_PREVIOUS != 0 || b[o + SPLIT_RESERVED] != 0 {
                 return Err(bad(format!("unknown flags {flags:#04x}")));
-            }
-            let joins_previous = flags & FLAG_JOINS_PREVIOUS != 0;
-            if joins_previous && i == 0 {
-                return Err(bad("the first split joins no split before it".into()));
-            }
-            let position = vec3_at(b, o + SPLIT_POSITION);
-            let normal = vec3_at(b, o + SPLIT_NORMAL);
-            let error = f32_at(b, o + SPLIT_ERROR);
-            let finite = position.iter().chain(&normal).all(|c| c.is_finite());
-            if !(finite && error >= 0.0 && error.is_finite()) {
-                return Err(bad(format!(
-                    "position {position:?}, normal {normal:?} or error {error} is not finite"
-                )));
             }
             let adjusted_end = u32_at(b, o + SPLIT_ADJUSTED_END) as usize;
             if adjusted_end < adjusted_start || adjusted_end > a {
@@ -316,28 +338,21 @@ impl ProgressiveMesh {
                      at most {a})"
                 )));
             }
-            let adjusted: Vec<u32> = (adjusted_start..adjusted_end)
-                .map(|k| u32_at(b, at(sec.adjusted, k, 4)))
-                .collect();
-            if adjusted.iter().any(|&f| f as usize >= slots_before)
-                || adjusted.windows(2).any(|w| w[0] >= w[1])
-            {
-                return Err(bad(format!(
-                    "adjusted triangles {adjusted:?} are not ascending below {slots_before}"
-                )));
-            }
-            adjusted_start = adjusted_end;
             let split = VertexSplit {
-                v_p,
-                position,
-                normal,
-                v_l,
-                v_r,
-                adjusted,
-                corners,
-                error,
-                joins_previous,
+                v_p: u32_at(b, o + SPLIT_V_P),
+                position: vec3_at(b, o + SPLIT_POSITION),
+                normal: vec3_at(b, o + SPLIT_NORMAL),
+                v_l: pivot(SPLIT_V_L),
+                v_r: pivot(SPLIT_V_R),
+                adjusted: (adjusted_start..adjusted_end)
+                    .map(|k| u32_at(b, at(sec.adjusted, k, 4)))
+                    .collect(),
+                corners: [b[o + SPLIT_CORNERS], b[o + SPLIT_CORNERS + 1]],
+                error: f32_at(b, o + SPLIT_ERROR),
+                joins_previous: flags & FLAG_JOINS_PREVIOUS != 0,
             };
+            check_split(&split, i, nv, nt).map_err(bad)?;
+            adjusted_start = adjusted_end;
             filled += split.added_triangles();
             splits.push(split);
         }

@@ -8,6 +8,7 @@
 //! error's unit — are named in `simplify`'s top comment.
 
 mod codec;
+mod compact;
 mod levels;
 mod parallel;
 mod progressive;
@@ -16,6 +17,7 @@ mod simplify;
 mod topology;
 mod vsplit;
 
+use compact::PM_VERSION_QUANTISED;
 pub use levels::{Level, PmCursor};
 pub use parallel::{LevelReport, ParallelOptions, ParallelReport};
 pub use progressive::{simplify_all, ProgressiveMesh};

@@ -196,7 +196,9 @@ fn bake(id: u64, mesh: &Mesh, opts: &LodOptions, codec: MeshCodec) -> (Result<Ba
 }
 
 /// The progressive mesh and DAG of a large simplified object, and what it stores.
-/// In format version 2 each is a zstd frame around its own codec's bytes.
+/// In format version 2 each is a zstd frame around its packed encoding (the progressive
+/// mesh on the object's 16-bit grid, `lod::pm::compact`; the DAG as varints and byte
+/// planes, `lod::dag::compact`).
 fn bake_dag(
     mesh: &Mesh,
     opts: &LodOptions,
@@ -207,17 +209,21 @@ fn bake_dag(
     // The chain holds the levels: their meshes need not wait for the DAG.
     let levels = levels.len() as u32;
     let pm_dag = if mesh.triangle_count() > opts.pm_threshold {
-        Some(caught(|| {
-            let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
-            let (pm, dag) = (pm.to_bytes()?, dag.to_bytes());
-            match codec {
-                MeshCodec::Raw => Ok((pm, dag)),
-                MeshCodec::Meshopt { zstd } => {
-                    // Framed even at no zstd level: a reader tells the two apart by it.
-                    let level = zstd.unwrap_or(DEFAULT_ZSTD_LEVEL);
-                    let frame = |b: &[u8]| squeeze(b, Some(level)).map_err(Error::Invalid);
-                    Ok((frame(&pm)?, frame(&dag)?))
-                }
+        Some(caught(|| match codec {
+            MeshCodec::Raw => {
+                let dag = Dag::build(&pm, DagConstruction::MiniRedundant)?;
+                Ok((pm.to_bytes()?, dag.to_bytes()))
+            }
+            MeshCodec::Meshopt { zstd } => {
+                // The DAG's spheres, cones and errors are those of the quantised mesh
+                // a reader decodes, not of the floats it was simplified from.
+                let pm_bytes = pm.to_quantised_bytes()?;
+                let stored = ProgressiveMesh::from_bytes(&pm_bytes)?;
+                let dag = Dag::build(&stored, DagConstruction::MiniRedundant)?;
+                // Framed even at no zstd level: a reader tells the two apart by it.
+                let level = zstd.unwrap_or(DEFAULT_ZSTD_LEVEL);
+                let frame = |b: &[u8]| squeeze(b, Some(level)).map_err(Error::Invalid);
+                Ok((frame(&pm_bytes)?, frame(&dag.to_packed_bytes())?))
             }
         })?)
     } else {

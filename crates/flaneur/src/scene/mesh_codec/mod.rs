@@ -16,8 +16,7 @@ use geometry::grid_of;
 pub(crate) use geometry::{
     decode_level as decode_level_v2, encode_levels as encode_levels_v2, is_geometry,
 };
-#[cfg(test)]
-use quantize::Grid;
+pub(crate) use quantize::{dequantize_normal, quantize_normal, Grid};
 pub(crate) use raw::encode_mesh;
 pub(crate) use squeeze::{expand_frame, is_frame, squeeze};
 
