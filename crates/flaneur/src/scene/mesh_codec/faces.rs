@@ -15,7 +15,9 @@
 //! Both sides compute a face's normal with [`face_normal`] from the same dequantised
 //! positions, so the bits agree wherever the file does.
 
-use super::quantize::{quantize_normal, Grid, QNormal, QPosition};
+use super::quantize::{
+    dequantize_repeating, normal_word, quantize_normal, snorm8_lanes, Grid, QNormal, QPosition,
+};
 use rustc_hash::{FxHashMap, FxHashSet};
 
 /// The normal a reader gives a triangle's corners unless told otherwise: the quantised
@@ -205,70 +207,205 @@ pub(crate) fn exception_count(bits: &[u8]) -> usize {
 }
 
 /// The mesh a level's positions, indices, bits and exceptions describe: corners that
-/// share a position and a normal become one vertex. The caller has checked every index
-/// against `positions` and the exceptions' count against the bits.
-#[inline]
+/// share a position and a normal become one vertex, numbered in the order their first
+/// corner comes. The caller has checked every index against `positions` and the
+/// exceptions' count against the bits. `indices` become the mesh's own.
 pub(crate) fn assemble(
     positions: &[[f32; 3]],
-    indices: &[u32],
+    mut indices: Vec<u32>,
     bits: &[u8],
     exceptions: &[QNormal],
-) -> (Vec<[f32; 3]>, Vec<QNormal>, Vec<u32>) {
-    // Every corner its face's normal, then the exceptions over theirs: two plain passes
-    // rather than a bit test in the join below (which it made twice as slow).
-    let mut normals: Vec<u32> = Vec::with_capacity(indices.len());
-    for tri in indices.chunks_exact(3) {
-        let face = word(face_normal([0, 1, 2].map(|k| positions[tri[k] as usize])));
-        normals.extend_from_slice(&[face; 3]);
-    }
-    let mut exceptions = exceptions.iter();
-    for (at, &byte) in bits.iter().enumerate() {
-        let mut b = byte;
-        while b != 0 {
-            let c = 8 * at + b.trailing_zeros() as usize;
-            b &= b - 1;
-            if let (Some(slot), Some(&n)) = (normals.get_mut(c), exceptions.next()) {
-                *slot = word(n);
+) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+    let faces = face_words(positions, &indices);
+    let mut join = Join::new(positions.len(), indices.len());
+    if exceptions.is_empty() {
+        // Every corner its face's normal: the bits are all clear.
+        for (tri, &face) in indices.chunks_exact_mut(3).zip(&faces) {
+            for c in tri {
+                *c = join.vertex(*c, face);
             }
         }
-    }
-    // Each position's vertices as a chain: a position meets few normals (three at a
-    // box's corner), so a walk along it beats hashing every corner.
-    const NONE: u32 = u32::MAX;
-    let mut head = vec![NONE; positions.len()];
-    let mut next: Vec<u32> = Vec::with_capacity(positions.len() * 2);
-    let mut out_p = Vec::with_capacity(positions.len() * 2);
-    let mut out_n: Vec<u32> = Vec::with_capacity(positions.len() * 2);
-    let mut out_i = Vec::with_capacity(indices.len());
-    for (&p, &n) in indices.iter().zip(&normals) {
-        let mut v = head[p as usize];
-        while v != NONE && out_n[v as usize] != n {
-            v = next[v as usize];
+    } else {
+        // Every corner its face's normal, then the exceptions over theirs: two plain
+        // passes rather than a bit test in the join.
+        let mut normals: Vec<u32> = Vec::with_capacity(indices.len());
+        for &face in &faces {
+            normals.extend_from_slice(&[face; 3]);
         }
-        if v == NONE {
-            v = out_p.len() as u32;
-            out_p.push(positions[p as usize]);
-            out_n.push(n);
-            next.push(head[p as usize]);
-            head[p as usize] = v;
+        let mut exceptions = exceptions.iter();
+        for (at, &byte) in bits.iter().enumerate() {
+            let mut b = byte;
+            while b != 0 {
+                let c = 8 * at + b.trailing_zeros() as usize;
+                b &= b - 1;
+                if let (Some(slot), Some(&n)) = (normals.get_mut(c), exceptions.next()) {
+                    *slot = normal_word(n);
+                }
+            }
         }
-        out_i.push(v);
+        for (c, &n) in indices.iter_mut().zip(&normals) {
+            *c = join.vertex(*c, n);
+        }
     }
-    let out_n = out_n
-        .into_iter()
-        .map(|w| w.to_ne_bytes().map(|c| c as i8))
-        .collect();
-    (out_p, out_n, out_i)
+    let (at, words) = join.vertices();
+    let out_p = at.iter().map(|&p| positions[p as usize]).collect();
+    (out_p, dequantize_repeating(words), indices)
 }
 
-#[inline]
-fn word(n: QNormal) -> u32 {
-    u32::from_ne_bytes(n.map(|c| c as u8))
+/// Normals a position keeps beside it; a position meets few (three at a box's corner,
+/// four at a hipped roof's ridge), and the rest go to a map.
+const SLOTS: usize = 4;
+
+/// Corners joined into vertices as they come. Each position holds its first vertices'
+/// normals side by side, so that finding a corner's vertex compares four words at once
+/// and takes no branch on what it finds: half the corners of citygen's buildings make a
+/// new vertex, which no branch predictor guesses.
+struct Join {
+    /// Per position: how many of its slots hold a vertex.
+    filled: Vec<u8>,
+    /// Per position: its first vertices' normals (as words), then those vertices.
+    slots: Vec<[u32; 2 * SLOTS]>,
+    /// Vertices beyond a position's slots, by (position, normal word).
+    more: FxHashMap<(u32, u32), u32>,
+    /// Each vertex's position and normal word: one a corner reserved, the first `made`
+    /// in use.
+    at: Vec<u32>,
+    words: Vec<u32>,
+    made: usize,
+}
+
+impl Join {
+    /// A join over `positions` positions of at most `corners` vertices.
+    fn new(positions: usize, corners: usize) -> Join {
+        Join {
+            filled: vec![0; positions],
+            slots: vec![[0; 2 * SLOTS]; positions],
+            more: FxHashMap::default(),
+            at: vec![0; corners],
+            words: vec![0; corners],
+            made: 0,
+        }
+    }
+
+    /// The vertex of position `p` with normal `n`, made if it is the first. Each corner
+    /// is joined once, so a join never makes more vertices than it reserved.
+    #[inline(always)]
+    fn vertex(&mut self, p: u32, n: u32) -> u32 {
+        let pi = p as usize;
+        let filled = u32::from(self.filled[pi]);
+        let s = &mut self.slots[pi];
+        let mut hits = 0u32;
+        for (k, &w) in s[..SLOTS].iter().enumerate() {
+            hits |= u32::from(w == n) << k;
+        }
+        hits &= (1 << filled) - 1;
+        let found = hits != 0;
+        let k = if found { hits.trailing_zeros() } else { filled } as usize;
+        if k >= SLOTS {
+            return self.beyond(p, n);
+        }
+        let v = if found {
+            s[SLOTS + k]
+        } else {
+            self.made as u32
+        };
+        // Written whether found or not: the same word again when found.
+        s[k] = n;
+        s[SLOTS + k] = v;
+        self.filled[pi] = (filled + u32::from(!found)) as u8;
+        let m = self.made;
+        self.at[m] = p;
+        self.words[m] = n;
+        self.made += usize::from(!found);
+        v
+    }
+
+    /// The vertex of a position whose slots are full.
+    #[cold]
+    fn beyond(&mut self, p: u32, n: u32) -> u32 {
+        let made = self.made as u32;
+        let v = *self.more.entry((p, n)).or_insert(made);
+        if v == made {
+            self.at[self.made] = p;
+            self.words[self.made] = n;
+            self.made += 1;
+        }
+        v
+    }
+
+    /// Each vertex's position and normal word, in the order they were made.
+    fn vertices(&self) -> (&[u32], &[u32]) {
+        (&self.at[..self.made], &self.words[..self.made])
+    }
+}
+
+/// Triangles whose face normals are worked out side by side.
+const LANES: usize = 8;
+
+/// Each triangle's [`face_normal`], as a word: eight triangles at a time, their corners
+/// gathered axis by axis so that the arithmetic runs on vectors (the square root and
+/// division of a face normal were most of a reader's time, one triangle after another).
+fn face_words(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(indices.len() / 3);
+    let mut batches = indices.chunks_exact(3 * LANES);
+    for batch in &mut batches {
+        out.extend_from_slice(&face_lanes(&gather(positions, batch)));
+    }
+    let rest = batches.remainder();
+    if !rest.is_empty() {
+        // The missing lanes hold triangles at the origin, whose normals go unused.
+        out.extend_from_slice(&face_lanes(&gather(positions, rest))[..rest.len() / 3]);
+    }
+    out
+}
+
+/// Corners of up to [`LANES`] triangles: `g[3 * corner + axis][lane]`.
+#[inline(always)]
+fn gather(positions: &[[f32; 3]], indices: &[u32]) -> [[f32; LANES]; 9] {
+    let mut g = [[0f32; LANES]; 9];
+    for (lane, tri) in indices.chunks_exact(3).take(LANES).enumerate() {
+        for (k, &i) in tri.iter().enumerate() {
+            let p = positions[i as usize];
+            g[3 * k][lane] = p[0];
+            g[3 * k + 1][lane] = p[1];
+            g[3 * k + 2][lane] = p[2];
+        }
+    }
+    g
+}
+
+/// [`face_normal`] of each lane's triangle, bit for bit: glam's cross product, length and
+/// `normalize_or_zero`, then [`quantize_normal`]'s rounding, operation for operation in
+/// the same order (IEEE's square root and division round the same in a vector lane).
+#[inline(always)]
+fn face_lanes(g: &[[f32; LANES]; 9]) -> [u32; LANES] {
+    let mut n = [[0f32; LANES]; 3];
+    for l in 0..LANES {
+        let (ax, ay, az) = (g[0][l], g[1][l], g[2][l]);
+        let (ex, ey, ez) = (g[3][l] - ax, g[4][l] - ay, g[5][l] - az);
+        let (fx, fy, fz) = (g[6][l] - ax, g[7][l] - ay, g[8][l] - az);
+        let x = ey * fz - fy * ez;
+        let y = ez * fx - fz * ex;
+        let z = ex * fy - fx * ey;
+        let rcp = 1.0 / (x * x + y * y + z * z).sqrt();
+        // `rcp.is_finite() && rcp > 0.0`, glam's test.
+        let unit = rcp > 0.0 && rcp < f32::INFINITY;
+        n[0][l] = if unit { x * rcp } else { 0.0 };
+        n[1][l] = if unit { y * rcp } else { 0.0 };
+        n[2][l] = if unit { z * rcp } else { 0.0 };
+    }
+    let q = [snorm8_lanes(n[0]), snorm8_lanes(n[1]), snorm8_lanes(n[2])];
+    let mut out = [0u32; LANES];
+    for l in 0..LANES {
+        out[l] = (q[0][l] & 0xff) | (q[1][l] & 0xff) << 8 | (q[2][l] & 0xff) << 16;
+    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::mesh_codec::quantize::dequantize_normal;
 
     #[test]
     fn a_flat_box_needs_no_exception_and_comes_back_vertex_for_vertex() {
@@ -295,12 +432,41 @@ mod tests {
             "positions are welded"
         );
         let positions: Vec<_> = level.added.iter().map(|&q| grid.dequantize(q)).collect();
-        let (p, n, i) = assemble(&positions, &level.indices, &e.bits, &e.normals);
+        let (p, n, i) = assemble(&positions, level.indices.clone(), &e.bits, &e.normals);
         assert_eq!(p.len(), level.vertices);
         // Every corner reads back its own position and normal.
         for (c, &v) in i.iter().enumerate() {
             assert_eq!(grid.quantize(p[v as usize]), corners[c].0);
-            assert_eq!(n[v as usize], corners[c].1);
+            assert_eq!(n[v as usize], dequantize_normal(corners[c].1));
+        }
+    }
+
+    #[test]
+    fn face_normals_side_by_side_are_face_normals_one_at_a_time() {
+        // Triangles of every size and turn, slivers, points and huge ones: the reader's
+        // batch must give each the bits the writer's `face_normal` gave it.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut positions = Vec::new();
+        for k in 0..3000 {
+            let scale = [1e-30f32, 1e-3, 1.0, 100.0, 3e3, 1e18, 1e36][k % 7];
+            positions.push([0, 1, 2].map(|_| ((next() % 20001) as f32 - 10000.0) / 1e4 * scale));
+        }
+        positions.extend([[0.0; 3], [0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
+        let n = positions.len() as u64;
+        let mut indices: Vec<u32> = (0..3 * 4001).map(|_| (next() % n) as u32).collect();
+        indices.extend([3000, 3001, 3002, 3000, 3002, 3003, 7, 7, 7]);
+        for len in [indices.len(), 3, 24, 27, 48 + 15] {
+            let got = face_words(&positions, &indices[..len]);
+            for (t, tri) in indices[..len].chunks_exact(3).enumerate() {
+                let want = face_normal([0, 1, 2].map(|k| positions[tri[k] as usize]));
+                assert_eq!(got[t], normal_word(want), "triangle {t} {tri:?}");
+            }
         }
     }
 

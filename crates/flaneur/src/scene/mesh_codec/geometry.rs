@@ -57,7 +57,7 @@ use std::borrow::Cow;
 use rustc_hash::FxHashMap;
 
 use super::faces;
-use super::quantize::{dequantize_normal, quantize_normal, Grid, QNormal, QPosition};
+use super::quantize::{dequantize_normals, quantize_normal, Grid, QNormal, QPosition};
 use super::squeeze::{expand, squeeze};
 use crate::scene::Mesh;
 
@@ -497,8 +497,8 @@ impl Head {
                 .map_err(|e| format!("level {k}'s positions: {e:?}"))?;
             let n: Vec<QNormal> = meshopt::decode_vertex_buffer(&raw[l.positions..], l.vertices)
                 .map_err(|e| format!("level {k}'s normals: {e:?}"))?;
-            positions.extend(p.into_iter().map(|q| self.grid.dequantize(q)));
-            normals.extend(n.into_iter().map(dequantize_normal));
+            self.grid.dequantize_into(&p, &mut positions);
+            normals.extend_from_slice(&dequantize_normals(&n, |q| [q[0], q[1], q[2]]));
         }
         let indices = self.indices(bytes, j, positions.len())?;
         Ok(Mesh {
@@ -519,7 +519,7 @@ impl Head {
                 let p: Vec<QPosition> =
                     meshopt::decode_vertex_buffer(&raw[..l.positions], l.vertices)
                         .map_err(|e| format!("level {k}'s positions: {e:?}"))?;
-                positions.extend(p.into_iter().map(|q| self.grid.dequantize(q)));
+                self.grid.dequantize_into(&p, &mut positions);
             }
             if k == j {
                 own = raw;
@@ -549,11 +549,10 @@ impl Head {
                 .map_err(|e| format!("level {j}'s exceptions: {e:?}"))?
         };
         let indices = self.indices(bytes, j, positions.len())?;
-        let (positions, normals, indices) =
-            faces::assemble(&positions, &indices, bits, &exceptions);
+        let (positions, normals, indices) = faces::assemble(&positions, indices, bits, &exceptions);
         Ok(Mesh {
             positions,
-            normals: normals.into_iter().map(dequantize_normal).collect(),
+            normals,
             indices,
         })
     }

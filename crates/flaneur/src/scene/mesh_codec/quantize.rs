@@ -84,10 +84,59 @@ impl Grid {
 
     #[inline]
     pub(crate) fn dequantize(&self, q: QPosition) -> [f32; 3] {
-        std::array::from_fn(|k| {
-            let step = (self.max[k] - self.min[k]) / STEPS;
-            (self.min[k] + f32::from(q[k]) * step).clamp(self.min[k], self.max[k])
-        })
+        Dequantizer::of(self).position(q)
+    }
+
+    /// Every position of `qs`, dequantised onto the end of `out`.
+    pub(crate) fn dequantize_into(&self, qs: &[QPosition], out: &mut Vec<[f32; 3]>) {
+        let d = Dequantizer::of(self);
+        out.reserve(qs.len());
+        out.extend(qs.iter().map(|&q| d.position(q)));
+    }
+}
+
+/// A grid's steps worked out once: a reader dequantises every position of a mesh, and
+/// the division a step costs dominated its loop.
+#[derive(Clone, Copy)]
+struct Dequantizer {
+    min: [f32; 3],
+    max: [f32; 3],
+    step: [f32; 3],
+}
+
+impl Dequantizer {
+    #[inline]
+    fn of(g: &Grid) -> Dequantizer {
+        Dequantizer {
+            min: g.min,
+            max: g.max,
+            step: [0, 1, 2].map(|k| (g.max[k] - g.min[k]) / STEPS),
+        }
+    }
+
+    /// `min + q · step` clamped to the box, written out per axis (an array's `map` does
+    /// not always inline in a hot loop). The comparisons are `f32::clamp`'s, so that a
+    /// signed zero comes out as it did, without its check that `min <= max` (a grid
+    /// that is read is valid).
+    #[inline(always)]
+    fn position(&self, q: QPosition) -> [f32; 3] {
+        #[inline(always)]
+        fn axis(min: f32, max: f32, step: f32, q: u16) -> f32 {
+            let mut x = min + f32::from(q) * step;
+            if x < min {
+                x = min;
+            }
+            if x > max {
+                x = max;
+            }
+            x
+        }
+        let (lo, hi, s) = (&self.min, &self.max, &self.step);
+        [
+            axis(lo[0], hi[0], s[0], q[0]),
+            axis(lo[1], hi[1], s[1], q[1]),
+            axis(lo[2], hi[2], s[2], q[2]),
+        ]
     }
 }
 
@@ -113,6 +162,111 @@ fn snorm8(c: f32) -> i8 {
 
 pub(crate) fn dequantize_normal(q: QNormal) -> [f32; 3] {
     flaneur_scene::dequantize_normal([q[0], q[1], q[2]])
+}
+
+/// Normals worked out side by side.
+const LANES: usize = 8;
+
+/// [`dequantize_normal`] of each of `qs` (whose bytes `bytes` gives), bit for bit: eight
+/// at a time, so that the divisions and square root run on vectors (one normal after
+/// another they were a reader's largest cost after the codecs').
+pub(crate) fn dequantize_normals<T: Copy>(
+    qs: &[T],
+    bytes: impl Fn(T) -> [i8; 3] + Copy,
+) -> Vec<[f32; 3]> {
+    let mut out = Vec::with_capacity(qs.len());
+    let mut chunks = qs.chunks_exact(LANES);
+    for c in &mut chunks {
+        out.extend_from_slice(&normal_lanes(c, bytes));
+    }
+    let rest = chunks.remainder();
+    if !rest.is_empty() {
+        out.extend_from_slice(&normal_lanes(rest, bytes)[..rest.len()]);
+    }
+    out
+}
+
+/// `flaneur_scene::dequantize_normal` of up to [`LANES`] normals, operation for operation:
+/// glam's `Vec3 / 127.0`, `length_recip` and `try_normalize`, else +Y (IEEE's square root
+/// and division round the same in a vector lane). Missing lanes are zero, and unused.
+#[inline(always)]
+fn normal_lanes<T: Copy>(qs: &[T], bytes: impl Fn(T) -> [i8; 3]) -> [[f32; 3]; LANES] {
+    let mut c = [[0f32; LANES]; 3];
+    for (l, &q) in qs.iter().take(LANES).enumerate() {
+        let [x, y, z] = bytes(q);
+        c[0][l] = f32::from(x);
+        c[1][l] = f32::from(y);
+        c[2][l] = f32::from(z);
+    }
+    let mut out = [[0f32; 3]; LANES];
+    for l in 0..LANES {
+        let (x, y, z) = (c[0][l] / 127.0, c[1][l] / 127.0, c[2][l] / 127.0);
+        let rcp = 1.0 / (x * x + y * y + z * z).sqrt();
+        out[l] = if rcp > 0.0 && rcp < f32::INFINITY {
+            [x * rcp, y * rcp, z * rcp]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+    }
+    out
+}
+
+/// [`dequantize_normal`] of each [`normal_word`], for normals that repeat: a flat-shaded
+/// mesh's vertices turn the few ways its faces do, so each normal is worked out once
+/// and remembered (direct-mapped on its three bytes) where [`dequantize_normals`] would
+/// work out every vertex's.
+pub(crate) fn dequantize_repeating(words: &[u32]) -> Vec<[f32; 3]> {
+    const SLOTS: usize = 256;
+    // No key is this: a key keeps three bytes.
+    let mut keys = [u32::MAX; SLOTS];
+    let mut values = [[0f32; 3]; SLOTS];
+    words
+        .iter()
+        .map(|&w| {
+            let key = w & 0x00ff_ffff;
+            let slot = (key.wrapping_mul(0x9e37_79b1) >> 24) as usize % SLOTS;
+            if keys[slot] != key {
+                let [x, y, z] = word_bytes(key);
+                keys[slot] = key;
+                values[slot] = dequantize_normal([x, y, z, 0]);
+            }
+            values[slot]
+        })
+        .collect()
+}
+
+/// [`snorm8`] of each lane, sign-extended (its low byte is the stored byte), for finite
+/// `c`: the same rounding in float arithmetic that runs on vectors, where `as i32`
+/// converted one lane at a time. Adding 1.5 · 2^23 rounds a float of magnitude under 2^22
+/// to an integer, exactly, and leaves that integer in its low mantissa bits.
+#[inline(always)]
+pub(crate) fn snorm8_lanes<const N: usize>(c: [f32; N]) -> [u32; N] {
+    const MAGIC: f32 = 12_582_912.0;
+    let mut out = [0u32; N];
+    for l in 0..N {
+        let v = c[l].clamp(-1.0, 1.0) * 127.0;
+        let a = v.abs();
+        // `a as f32` truncated: the nearest integer, less one where that is above.
+        let near = (a + MAGIC) - MAGIC;
+        let whole = if near > a { near - 1.0 } else { near };
+        let r = if a - whole >= 0.5 { whole + 1.0 } else { whole };
+        let signed = if v < 0.0 { -r } else { r };
+        out[l] = (signed + MAGIC).to_bits().wrapping_sub(MAGIC.to_bits());
+    }
+    out
+}
+
+/// A normal's four bytes as one word, the first the lowest: what a reader compares.
+#[inline(always)]
+pub(crate) fn normal_word(n: QNormal) -> u32 {
+    u32::from_le_bytes([n[0] as u8, n[1] as u8, n[2] as u8, n[3] as u8])
+}
+
+/// The bytes [`dequantize_normal`] reads of a [`normal_word`].
+#[inline(always)]
+pub(crate) fn word_bytes(w: u32) -> [i8; 3] {
+    let [x, y, z, _] = w.to_le_bytes();
+    [x as i8, y as i8, z as i8]
 }
 
 #[cfg(test)]
@@ -186,6 +340,52 @@ mod tests {
             max: [1e38, 1.0, 1.0],
         }
         .is_valid());
+    }
+
+    #[test]
+    fn normals_side_by_side_are_normals_one_at_a_time() {
+        let mut qs = Vec::new();
+        for x in i8::MIN..=i8::MAX {
+            for y in i8::MIN..=i8::MAX {
+                for z in [-128, -127, -90, -1, 0, 1, 5, 90, 127] {
+                    qs.push([x, y, z, 0]);
+                }
+            }
+        }
+        for len in [qs.len(), qs.len() - 3, 5, 0] {
+            let batch = dequantize_normals(&qs[..len], |q| [q[0], q[1], q[2]]);
+            let words: Vec<u32> = qs[..len].iter().map(|&q| normal_word(q)).collect();
+            let repeating = dequantize_repeating(&words);
+            assert_eq!(batch.len(), len);
+            for (k, &q) in qs[..len].iter().enumerate() {
+                let want = dequantize_normal(q).map(f32::to_bits);
+                assert_eq!(batch[k].map(f32::to_bits), want, "{q:?}");
+                assert_eq!(repeating[k].map(f32::to_bits), want, "{q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn rounding_side_by_side_is_rounding_one_at_a_time() {
+        let mut xs = Vec::new();
+        let mut c = -1.1f32;
+        while c < 1.1 {
+            xs.extend([c, c.next_up(), c.next_down()]);
+            c += 1.0 / 4096.0;
+        }
+        for k in -127..127 {
+            let half = (k as f32 + 0.5) / 127.0;
+            xs.extend([half, half.next_up(), half.next_down()]);
+        }
+        xs.extend([0.0, -0.0, 1.0, -1.0, f32::MAX, f32::MIN, f32::MIN_POSITIVE]);
+        for chunk in xs.chunks(8) {
+            let mut lanes = [0f32; 8];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            let got = snorm8_lanes(lanes);
+            for (l, &x) in chunk.iter().enumerate() {
+                assert_eq!(got[l] as u8, snorm8(x) as u8, "{x}");
+            }
+        }
     }
 
     #[test]
