@@ -171,7 +171,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
                 f.frame, f.objects_loaded, f.index_pages, f.mesh_pages, f.frame_ms
             );
         }
-        print_walk(&report);
+        print_walk(&report, db.store().page_size());
     }
     let gpu = flaneur_render::Gpu::headless();
     super::demo_modes::walk_modes(&db, frames, gpu.as_ref().ok())?;

@@ -403,7 +403,7 @@ fn walk_cmd(
     if let Some(rows) = rows {
         rows.finish()?;
     }
-    print_walk(&report);
+    print_walk(&report, db.store().page_size());
     print_remote(&db);
     print_render(drawn, render)?;
     let s = &report.summary;
@@ -714,9 +714,9 @@ pub fn print_visual(r: &VisualReport) {
     }
 }
 
-/// A walk's summary: its settings, then its frames, queries, pages, misses and index
-/// cache.
-pub fn print_walk(r: &WalkReport) {
+/// A walk's summary: its settings, then its frames, queries, pages and their bytes
+/// (pages of `page_size` bytes), misses and index cache.
+pub fn print_walk(r: &WalkReport, page_size: usize) {
     let s = &r.summary;
     let c = &r.config;
     let cache = c
@@ -748,6 +748,14 @@ pub fn print_walk(r: &WalkReport) {
     println!(
         "  pages read: {} index + {} mesh, {:.1} per query ({:.1} index)",
         s.index_pages, s.mesh_pages, s.io_per_query, s.index_pages_per_query
+    );
+    // Pages are the exact count; their bytes are what a disk or a link moved for them.
+    let bytes = (s.index_pages + s.mesh_pages + s.lod_pages) as f64 * page_size as f64;
+    println!(
+        "  bytes read: {:.1} MiB (index, mesh and LOD pages of {page_size} B), {:.1} KiB a frame, {:.1} KiB a query",
+        bytes / (1 << 20) as f64,
+        bytes / 1024.0 / s.frames.max(1) as f64,
+        bytes / 1024.0 / s.queries.max(1) as f64
     );
     println!(
         "  visual misses {}   peak buffer {:.1} MiB   frames over budget {}",
