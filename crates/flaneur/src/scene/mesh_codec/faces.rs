@@ -257,9 +257,8 @@ pub(crate) fn assemble(
 const SLOTS: usize = 4;
 
 /// Corners joined into vertices as they come. Each position holds its first vertices'
-/// normals side by side, so that finding a corner's vertex compares four words at once
-/// and takes no branch on what it finds: half the corners of citygen's buildings make a
-/// new vertex, which no branch predictor guesses.
+/// normals side by side, so that finding a corner's vertex reads one place and compares
+/// four words at once.
 struct Join {
     /// Per position: how many of its slots hold a vertex.
     filled: Vec<u8>,
@@ -267,11 +266,9 @@ struct Join {
     slots: Vec<[u32; 2 * SLOTS]>,
     /// Vertices beyond a position's slots, by (position, normal word).
     more: FxHashMap<(u32, u32), u32>,
-    /// Each vertex's position and normal word: one a corner reserved, the first `made`
-    /// in use.
+    /// Each vertex's position and normal word, in the order they were made.
     at: Vec<u32>,
     words: Vec<u32>,
-    made: usize,
 }
 
 impl Join {
@@ -281,61 +278,52 @@ impl Join {
             filled: vec![0; positions],
             slots: vec![[0; 2 * SLOTS]; positions],
             more: FxHashMap::default(),
-            at: vec![0; corners],
-            words: vec![0; corners],
-            made: 0,
+            at: Vec::with_capacity(corners),
+            words: Vec::with_capacity(corners),
         }
     }
 
-    /// The vertex of position `p` with normal `n`, made if it is the first. Each corner
-    /// is joined once, so a join never makes more vertices than it reserved.
+    /// The vertex of position `p` with normal `n`, made if it is the first.
     #[inline(always)]
     fn vertex(&mut self, p: u32, n: u32) -> u32 {
         let pi = p as usize;
-        let filled = u32::from(self.filled[pi]);
+        let filled = usize::from(self.filled[pi]);
         let s = &mut self.slots[pi];
         let mut hits = 0u32;
         for (k, &w) in s[..SLOTS].iter().enumerate() {
             hits |= u32::from(w == n) << k;
         }
         hits &= (1 << filled) - 1;
-        let found = hits != 0;
-        let k = if found { hits.trailing_zeros() } else { filled } as usize;
-        if k >= SLOTS {
+        if hits != 0 {
+            return s[SLOTS + hits.trailing_zeros() as usize];
+        }
+        if filled == SLOTS {
             return self.beyond(p, n);
         }
-        let v = if found {
-            s[SLOTS + k]
-        } else {
-            self.made as u32
-        };
-        // Written whether found or not: the same word again when found.
-        s[k] = n;
-        s[SLOTS + k] = v;
-        self.filled[pi] = (filled + u32::from(!found)) as u8;
-        let m = self.made;
-        self.at[m] = p;
-        self.words[m] = n;
-        self.made += usize::from(!found);
+        let v = self.at.len() as u32;
+        s[filled] = n;
+        s[SLOTS + filled] = v;
+        self.filled[pi] += 1;
+        self.at.push(p);
+        self.words.push(n);
         v
     }
 
     /// The vertex of a position whose slots are full.
     #[cold]
     fn beyond(&mut self, p: u32, n: u32) -> u32 {
-        let made = self.made as u32;
+        let made = self.at.len() as u32;
         let v = *self.more.entry((p, n)).or_insert(made);
         if v == made {
-            self.at[self.made] = p;
-            self.words[self.made] = n;
-            self.made += 1;
+            self.at.push(p);
+            self.words.push(n);
         }
         v
     }
 
     /// Each vertex's position and normal word, in the order they were made.
     fn vertices(&self) -> (&[u32], &[u32]) {
-        (&self.at[..self.made], &self.words[..self.made])
+        (&self.at, &self.words)
     }
 }
 
@@ -467,6 +455,64 @@ mod tests {
                 let want = face_normal([0, 1, 2].map(|k| positions[tri[k] as usize]));
                 assert_eq!(got[t], normal_word(want), "triangle {t} {tri:?}");
             }
+        }
+    }
+
+    /// `assemble` as plainly as it can be written: one map from (position, normal) to
+    /// vertex, corner after corner.
+    fn assemble_plainly(
+        positions: &[[f32; 3]],
+        indices: &[u32],
+        bits: &[u8],
+        exceptions: &[QNormal],
+    ) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+        let mut exceptions = exceptions.iter();
+        let mut ids: FxHashMap<(u32, QNormal), u32> = FxHashMap::default();
+        let (mut p, mut n, mut i) = (Vec::new(), Vec::new(), Vec::new());
+        for (c, &at) in indices.iter().enumerate() {
+            let tri = &indices[c - c % 3..][..3];
+            let face = face_normal([0, 1, 2].map(|k| positions[tri[k] as usize]));
+            let normal = if bits[c / 8] & (1 << (c % 8)) != 0 {
+                *exceptions.next().unwrap()
+            } else {
+                face
+            };
+            let next = p.len() as u32;
+            let v = *ids.entry((at, normal)).or_insert_with(|| {
+                p.push(positions[at as usize]);
+                n.push(dequantize_normal(normal));
+                next
+            });
+            i.push(v);
+        }
+        (p, n, i)
+    }
+
+    #[test]
+    fn a_position_of_many_normals_and_exceptions_join_as_plainly() {
+        // A cone of 12 facets whose apex meets 12 normals (past the slots a position
+        // keeps), then its base as a fan, each corner of some triangles an exception.
+        let mut positions = vec![[0.0, 2.0, 0.0], [0.0, 0.0, 0.0]];
+        for k in 0..12 {
+            let a = k as f32 * std::f32::consts::TAU / 12.0;
+            positions.push([a.cos(), 0.0, a.sin()]);
+        }
+        let mut indices = Vec::new();
+        for k in 0..12u32 {
+            let (r, s) = (2 + k, 2 + (k + 1) % 12);
+            indices.extend([0, s, r, 1, r, s]);
+        }
+        let corners = indices.len();
+        let mut bits = vec![0u8; bits_len(corners)];
+        let mut exceptions = Vec::new();
+        for c in (0..corners).filter(|c| c % 5 == 0 || c % 7 == 3) {
+            bits[c / 8] |= 1 << (c % 8);
+            exceptions.push([(c % 3) as i8 * 40, 90, -(c as i8), (c % 2) as i8]);
+        }
+        for (bits, exceptions) in [(vec![0u8; bits.len()], vec![]), (bits, exceptions)] {
+            let want = assemble_plainly(&positions, &indices, &bits, &exceptions);
+            let got = assemble(&positions, indices.clone(), &bits, &exceptions);
+            assert_eq!(got, want);
         }
     }
 
