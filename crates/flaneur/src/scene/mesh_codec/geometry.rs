@@ -498,7 +498,12 @@ impl Head {
             let n: Vec<QNormal> = meshopt::decode_vertex_buffer(&raw[l.positions..], l.vertices)
                 .map_err(|e| format!("level {k}'s normals: {e:?}"))?;
             self.grid.dequantize_into(&p, &mut positions);
-            normals.extend_from_slice(&dequantize_normals(&n, |q| [q[0], q[1], q[2]]));
+            let n = dequantize_normals(&n, |q| [q[0], q[1], q[2]]);
+            if normals.is_empty() {
+                normals = n;
+            } else {
+                normals.extend_from_slice(&n);
+            }
         }
         let indices = self.indices(bytes, j, positions.len())?;
         Ok(Mesh {
