@@ -12,8 +12,9 @@
 //! share a position and a normal into one vertex, so it builds the same mesh as the
 //! vertex layout would, vertex for vertex (in another order).
 //!
-//! Both sides compute a face's normal with [`face_normal`] from the same dequantised
-//! positions, so the bits agree wherever the file does.
+//! Both sides compute a face's normal from the same dequantised positions, the writer with
+//! [`face_normal`] and the reader eight triangles at a time with the same operations in
+//! the same order (`face_lanes`), so the bits agree wherever the file does.
 
 use super::quantize::{
     dequantize_repeating, normal_word, quantize_normal, snorm8_lanes, Grid, QNormal, QPosition,
@@ -332,7 +333,8 @@ const LANES: usize = 8;
 
 /// Each triangle's [`face_normal`], as a word: eight triangles at a time, their corners
 /// gathered axis by axis so that the arithmetic runs on vectors (the square root and
-/// division of a face normal were most of a reader's time, one triangle after another).
+/// division of a face normal were the largest part of a reader's time, one triangle
+/// after another).
 fn face_words(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u32> {
     let mut out = Vec::with_capacity(indices.len() / 3);
     let mut batches = indices.chunks_exact(3 * LANES);
