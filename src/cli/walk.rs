@@ -374,6 +374,13 @@ fn walk_cmd(
     render: Option<&RenderOpts>,
 ) -> Result<()> {
     let db = source.open(path)?;
+    if cfg.never_wait {
+        // A packed file (format version 2) puts neighbours' small extents on one page,
+        // and a never-wait walk loads neighbours a batch apart: the last 1 MiB of pages
+        // read is kept rather than read again for each of them.
+        db.store()
+            .keep_recent_pages((1 << 20) / db.store().page_size());
+    }
     // A motion pattern's poses are made as the walk asks for them, and each frame's
     // figures go to the CSV as the frame ends: a walk of any length in constant memory.
     let (poses, count): (Box<dyn Iterator<Item = Pose>>, usize) = match camera.parse::<Motion>() {

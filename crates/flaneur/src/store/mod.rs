@@ -41,6 +41,7 @@ mod extent_reads;
 pub(crate) mod framing;
 mod header;
 mod packed;
+mod recent_pages;
 pub(crate) mod page;
 mod remote;
 mod replace;
@@ -125,6 +126,8 @@ pub struct Store {
     open_pages: Vec<packed::OpenPage>,
     /// Pages this handle has appended, by kind byte.
     pages_written: [u64; page::KIND_SLOTS],
+    /// The last mesh and LOD pages read, when asked to keep them.
+    recent: recent_pages::RecentPages,
 }
 
 const _: fn() = || {
@@ -297,6 +300,7 @@ impl Store {
             backend: Backend::Http,
             writer: None,
             counters: Counters::default(),
+            recent: Default::default(),
             uncommitted: 0,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],
@@ -352,6 +356,7 @@ impl Store {
             source,
             writer,
             counters: Counters::default(),
+            recent: Default::default(),
             uncommitted,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],
@@ -382,6 +387,7 @@ impl Store {
             source: Box::new(PreadSource::buffered(reader, page_size)),
             writer: Some(writer),
             counters: Counters::default(),
+            recent: Default::default(),
             uncommitted: 0,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],
@@ -583,6 +589,9 @@ impl Store {
         out: &mut Vec<u8>,
     ) -> Result<usize> {
         self.check_range(page)?;
+        if let Some(len) = self.recent.append(page, kind, out) {
+            return Ok(len);
+        }
         self.counters.record(kind);
         let payload = match self.in_memory(page) {
             Some(bytes) => self.verify(page, bytes, kind)?,
@@ -594,6 +603,7 @@ impl Store {
                 self.verify(page, scratch, kind)?
             }
         };
+        self.recent.put(page, kind, payload);
         out.extend_from_slice(payload);
         Ok(payload.len())
     }
@@ -647,6 +657,31 @@ impl Store {
         buf.copy_within(PAGE_HEADER_LEN..PAGE_HEADER_LEN + len, 0);
         buf.truncate(len);
         true
+    }
+
+    /// From now on, keeps the last `pages` mesh and LOD pages read (0: none, the
+    /// default), so that a page several packed extents share is read once while they are
+    /// wanted (format version 2 packs small extents several to a page). A kept page is
+    /// not read again, so not counted. A store being written keeps none: its pages may
+    /// still change.
+    ///
+    /// ```
+    /// # fn main() -> flaneur::Result<()> {
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let path = dir.path().join("p.db");
+    /// use flaneur::store::{PageKind, Store};
+    /// let mut store = Store::create(&path, 4096)?;
+    /// let ext = store.append_extent(PageKind::Mesh, &[1; 9000])?;
+    /// store.finish()?;
+    /// let store = Store::open(&path, Default::default())?;
+    /// store.keep_recent_pages(64);
+    /// store.read_extent(&ext, PageKind::Mesh)?;
+    /// store.read_extent(&ext, PageKind::Mesh)?;
+    /// assert_eq!(store.stats().page_reads, 3);
+    /// # Ok(()) }
+    /// ```
+    pub fn keep_recent_pages(&self, pages: usize) {
+        self.recent.keep(if self.is_writable() { 0 } else { pages });
     }
 
     /// What reading over HTTP has cost so far; `None` for a local file.
