@@ -184,12 +184,16 @@ impl<'a> Cursor<'a> {
 
     /// The next `n` bytes.
     pub(crate) fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let end = self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| {
-            format!(
-                "{what}: truncated, {} bytes left where {n} are due",
-                self.b.len() - self.at
-            )
-        })?;
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.b.len())
+            .ok_or_else(|| {
+                format!(
+                    "{what}: truncated, {} bytes left where {n} are due",
+                    self.b.len() - self.at
+                )
+            })?;
         let s = &self.b[self.at..end];
         self.at = end;
         Ok(s)
@@ -201,6 +205,19 @@ impl<'a> Cursor<'a> {
     }
 }
 
+/// The body of a format whose length its content fixes (varints): the bytes between a
+/// fixed header of `header_len` bytes and the crc32 in the last four, once there is room
+/// for both and the checksum matches.
+pub(crate) fn checked_body(b: &[u8], header_len: usize) -> Result<&[u8], String> {
+    at_least(
+        b.len(),
+        (header_len + CRC_LEN) as u64,
+        "the header alone takes",
+    )?;
+    checksum(b, b.len() - CRC_LEN)?;
+    Ok(&b[header_len..b.len() - CRC_LEN])
+}
+
 /// Rewrites the crc32 in the last four bytes of `b` to that of the bytes before it:
 /// damaged bytes that pass the checksum, to reach the content checks (nothing when
 /// `b` is shorter than a crc32).
@@ -210,6 +227,31 @@ pub(crate) fn reseal(b: &mut [u8]) {
     };
     let crc = crc32fast::hash(&b[..at]);
     b[at..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// Checks that `decode` refuses every truncation of `good` and `good` with any one byte
+/// flipped, and names a byte slipped in before the checksum (resealed) as trailing: what
+/// a format whose body is read through exactly must do.
+#[cfg(test)]
+pub(crate) fn refuses_every_damage<T, E: Display>(
+    good: &[u8],
+    decode: impl Fn(&[u8]) -> Result<T, E>,
+) {
+    for len in 0..good.len() {
+        assert!(decode(&good[..len]).is_err(), "cut to {len} bytes");
+    }
+    for at in 0..good.len() {
+        let mut b = good.to_vec();
+        b[at] ^= 0x5a;
+        assert!(decode(&b).is_err(), "byte {at} flipped");
+    }
+    let mut longer = good.to_vec();
+    longer.insert(good.len() - CRC_LEN, 0);
+    reseal(&mut longer);
+    match decode(&longer) {
+        Ok(_) => panic!("a byte slipped in passed"),
+        Err(e) => assert!(e.to_string().contains("trailing"), "{e}"),
+    }
 }
 
 /// Hands `decode` `rounds` mangled inputs, which it must survive without a panic: even

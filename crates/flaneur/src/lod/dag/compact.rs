@@ -33,7 +33,7 @@ use super::build::{Csr, DagConstruction};
 use super::codec::{checked, DAG_MAGIC};
 use super::graph::Dag;
 use crate::error::{Error, Result};
-use crate::store::framing::{self as bytes, push_crc, push_varint, u32_at, Cursor, CRC_LEN};
+use crate::store::framing::{self as bytes, push_crc, push_varint, u32_at, Cursor};
 
 /// The encoding version of a DAG packed as varints and byte planes (format version 2).
 pub(crate) const DAG_VERSION_PACKED: u32 = 2;
@@ -125,13 +125,7 @@ impl Dag {
 /// Reads the bytes [`Dag::to_packed_bytes`] writes (magic and version already seen by
 /// `from_bytes`).
 pub(super) fn decode(b: &[u8]) -> Result<Dag> {
-    bytes::at_least(
-        b.len(),
-        (BODY_OFFSET + CRC_LEN) as u64,
-        "the header alone takes",
-    )
-    .map_err(corrupt)?;
-    bytes::checksum(b, b.len() - CRC_LEN).map_err(corrupt)?;
+    let body = bytes::checked_body(b, BODY_OFFSET).map_err(corrupt)?;
     let code = u32_at(b, CONSTRUCTION_OFFSET);
     let construction = DagConstruction::from_code(code)
         .ok_or_else(|| corrupt(format!("unknown construction {code}")))?;
@@ -140,7 +134,6 @@ pub(super) fn decode(b: &[u8]) -> Result<Dag> {
         u32_at(b, SPLITS_OFFSET),
         u32_at(b, EDGES_OFFSET) as usize,
     );
-    let body = &b[BODY_OFFSET..b.len() - CRC_LEN];
     // A node takes 8 bytes at least, an edge 1: counts that promise more than the
     // body holds are refused before anything is allocated for them.
     bytes::at_least(
@@ -219,7 +212,7 @@ mod tests {
     use super::*;
     use crate::lod::fixtures::{building, grid};
     use crate::lod::ProgressiveMesh;
-    use crate::store::framing::{mangled, reseal};
+    use crate::store::framing::{mangled, refuses_every_damage, reseal};
 
     fn dag_of(mesh: &crate::scene::Mesh) -> Dag {
         let pm = ProgressiveMesh::build(mesh).unwrap();
@@ -270,20 +263,7 @@ mod tests {
 
     #[test]
     fn every_truncation_and_every_flipped_byte_is_an_error() {
-        let bytes = dag_of(&building()).to_packed_bytes();
-        for len in 0..bytes.len() {
-            assert!(Dag::from_bytes(&bytes[..len]).is_err(), "{len}");
-        }
-        for at in 0..bytes.len() {
-            let mut b = bytes.clone();
-            b[at] ^= 0x5a;
-            assert!(Dag::from_bytes(&b).is_err(), "byte {at}");
-        }
-        let mut longer = bytes.clone();
-        longer.insert(bytes.len() - CRC_LEN, 0);
-        reseal(&mut longer);
-        let err = Dag::from_bytes(&longer).unwrap_err().to_string();
-        assert!(err.contains("trailing"), "{err}");
+        refuses_every_damage(&dag_of(&building()).to_packed_bytes(), Dag::from_bytes);
     }
 
     #[test]

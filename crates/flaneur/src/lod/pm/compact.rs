@@ -49,9 +49,7 @@ use super::vsplit::VertexSplit;
 use crate::error::{Error, Result};
 use crate::scene::mesh_codec::{dequantize_normal, quantize_normal, Grid};
 use crate::scene::Mesh;
-use crate::store::framing::{
-    self as bytes, f32_at, push_crc, push_varint, u32_at, zigzag, Cursor, CRC_LEN,
-};
+use crate::store::framing::{self as bytes, f32_at, push_crc, push_varint, u32_at, zigzag, Cursor};
 
 /// The encoding version of a progressive mesh on the 16-bit grid (format version 2).
 pub(crate) const PM_VERSION_QUANTISED: u32 = 2;
@@ -220,13 +218,7 @@ impl ProgressiveMesh {
 /// Reads the bytes [`ProgressiveMesh::to_quantised_bytes`] writes (magic and version
 /// already seen by `from_bytes`).
 pub(super) fn decode(b: &[u8]) -> Result<ProgressiveMesh> {
-    bytes::at_least(
-        b.len(),
-        (BODY_OFFSET + CRC_LEN) as u64,
-        "the header alone takes",
-    )
-    .map_err(corrupt)?;
-    bytes::checksum(b, b.len() - CRC_LEN).map_err(corrupt)?;
+    let body = bytes::checked_body(b, BODY_OFFSET).map_err(corrupt)?;
     let count = |at: usize| u32_at(b, at) as usize;
     let (nv, nt, s) = (count(NV_OFFSET), count(NT_OFFSET), count(SPLITS_OFFSET));
     if (nv + s) as u64 >= u32::MAX as u64 || (nt + 2 * s) as u64 >= u32::MAX as u64 {
@@ -234,7 +226,6 @@ pub(super) fn decode(b: &[u8]) -> Result<ProgressiveMesh> {
             "{nv} base vertices, {nt} base triangles and {s} splits pass 32-bit indices"
         )));
     }
-    let body = &b[BODY_OFFSET..b.len() - CRC_LEN];
     // Each base vertex takes 9 bytes, each base triangle 3 and each split 12 at least:
     // counts that promise more than the body holds are refused before anything is
     // allocated for them.
@@ -404,7 +395,7 @@ fn read_body(
 mod tests {
     use super::*;
     use crate::lod::fixtures::{building, check_full_mesh, grid};
-    use crate::store::framing::{mangled, reseal};
+    use crate::store::framing::{mangled, refuses_every_damage, reseal};
 
     /// `mesh` as version 2 draws it: each position on its box's grid, each normal i8.
     fn quantised(mesh: &Mesh) -> Mesh {
@@ -456,25 +447,11 @@ mod tests {
 
     #[test]
     fn every_truncation_and_every_flipped_byte_is_an_error() {
-        let bytes = ProgressiveMesh::build(&building())
-            .unwrap()
-            .to_quantised_bytes()
-            .unwrap();
-        for len in 0..bytes.len() {
-            assert!(ProgressiveMesh::from_bytes(&bytes[..len]).is_err(), "{len}");
-        }
-        for at in 0..bytes.len() {
-            let mut b = bytes.clone();
-            b[at] ^= 0x5a;
-            assert!(ProgressiveMesh::from_bytes(&b).is_err(), "byte {at}");
-        }
-        let mut longer = bytes.clone();
-        longer.insert(bytes.len() - CRC_LEN, 0);
-        reseal(&mut longer);
-        let err = ProgressiveMesh::from_bytes(&longer)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("trailing"), "{err}");
+        let pm = ProgressiveMesh::build(&building()).unwrap();
+        refuses_every_damage(
+            &pm.to_quantised_bytes().unwrap(),
+            ProgressiveMesh::from_bytes,
+        );
     }
 
     #[test]
