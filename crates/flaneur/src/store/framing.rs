@@ -199,6 +199,22 @@ impl<'a> Cursor<'a> {
         Ok(s)
     }
 
+    /// The next `n` records of `N` bytes stored as `N` byte planes (every record's
+    /// first byte, then every second byte, …), each record put back together.
+    pub(crate) fn planes<const N: usize>(
+        &mut self,
+        n: usize,
+        what: &str,
+    ) -> Result<Vec<[u8; N]>, String> {
+        let mut out = vec![[0u8; N]; n];
+        for k in 0..N {
+            for (o, &v) in out.iter_mut().zip(self.take(n, what)?) {
+                o[k] = v;
+            }
+        }
+        Ok(out)
+    }
+
     /// Bytes not read yet: none, once a body is read through.
     pub(crate) fn left(&self) -> usize {
         self.b.len() - self.at

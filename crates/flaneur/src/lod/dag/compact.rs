@@ -1,6 +1,7 @@
 //! The DAG's encoding in format version 2: the same content as version 1 (`codec`),
 //! every count and index as a varint of what is small about it, the attributes as byte
-//! planes of bfloat16s rounded up (bounds stay bounds, at most 1/128 looser), so that zstd (the layer outside, `lod::stored`) meets like bytes together. A
+//! planes of bfloat16s rounded up (bounds stay bounds, at most 1/128 looser), so that
+//! zstd (the layer outside, `lod::stored`) meets like bytes together. A
 //! node's parents lie just below it in the topological order, so they are stored as
 //! distances down from it.
 //!
@@ -186,13 +187,8 @@ fn read_body(
     }
     let mut planes = [const { Vec::new() }; 3];
     for plane in &mut planes {
-        let mut halves = vec![[0u8; 2]; n];
-        for k in 0..2 {
-            for (w, &v) in halves.iter_mut().zip(c.take(n, "attributes")?) {
-                w[k] = v;
-            }
-        }
-        *plane = halves
+        *plane = c
+            .planes::<2>(n, "attributes")?
             .into_iter()
             .map(|h| f32::from_bits((u16::from_le_bytes(h) as u32) << 16))
             .collect::<Vec<f32>>();

@@ -65,32 +65,6 @@ fn corrupt(what: String) -> Error {
     Error::Invalid(format!("progressive mesh bytes (quantised): {what}"))
 }
 
-/// The box around every position the progressive mesh holds: the full mesh's box.
-fn grid_of(pm: &ProgressiveMesh) -> Grid {
-    let mut g = Grid {
-        min: [f32::INFINITY; 3],
-        max: [f32::NEG_INFINITY; 3],
-    };
-    for p in pm
-        .base
-        .positions
-        .iter()
-        .chain(pm.splits.iter().map(|s| &s.position))
-    {
-        for k in 0..3 {
-            g.min[k] = g.min[k].min(p[k]);
-            g.max[k] = g.max[k].max(p[k]);
-        }
-    }
-    if g.min[0] > g.max[0] {
-        g = Grid {
-            min: [0.0; 3],
-            max: [0.0; 3],
-        };
-    }
-    g
-}
-
 impl ProgressiveMesh {
     /// The progressive mesh in format version 2's encoding (layout in this module's
     /// source), for [`from_bytes`](ProgressiveMesh::from_bytes): positions on the
@@ -119,7 +93,13 @@ impl ProgressiveMesh {
                  do not fit 32 bits"
             )));
         }
-        let grid = grid_of(self);
+        // Every position the mesh ever holds: the full mesh's box.
+        let positions = self
+            .base
+            .positions
+            .iter()
+            .chain(self.splits.iter().map(|s| &s.position));
+        let grid = Grid::around_points(positions.copied());
         if !grid.is_valid() {
             return Err(Error::Invalid(format!(
                 "progressive mesh: its box {:?}..{:?} spans more than an f32 holds",
@@ -244,20 +224,6 @@ pub(super) fn decode(b: &[u8]) -> Result<ProgressiveMesh> {
     read_body(&mut Cursor::new(body), &grid, nv, nt, s).map_err(corrupt)
 }
 
-fn planes<const N: usize>(
-    c: &mut Cursor,
-    n: usize,
-    what: &str,
-) -> std::result::Result<Vec<[u8; N]>, String> {
-    let mut out = vec![[0u8; N]; n];
-    for k in 0..N {
-        for (o, &v) in out.iter_mut().zip(c.take(n, what)?) {
-            o[k] = v;
-        }
-    }
-    Ok(out)
-}
-
 fn read_body(
     c: &mut Cursor,
     grid: &Grid,
@@ -266,14 +232,14 @@ fn read_body(
     s: usize,
 ) -> std::result::Result<ProgressiveMesh, String> {
     let mut steps: Vec<[u16; 4]> = Vec::with_capacity(nv + s);
-    let xyz = planes::<3>(c, 2 * nv, "base positions")?;
+    let xyz = c.planes::<3>(2 * nv, "base positions")?;
     for v in 0..nv {
         // Plane k holds nv u16s: its bytes are rows 2v and 2v + 1 of the byte planes.
         let at = |k: usize| u16::from_le_bytes([xyz[2 * v][k], xyz[2 * v + 1][k]]);
         steps.push([at(0), at(1), at(2), 0]);
     }
     let normal_of = |n: [u8; 3]| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8, 0]);
-    let mut stored_normals = planes::<3>(c, nv, "base normals")?;
+    let mut stored_normals = c.planes::<3>(nv, "base normals")?;
     let base_normals: Vec<[f32; 3]> = stored_normals.iter().map(|&n| normal_of(n)).collect();
     let mut indices = Vec::with_capacity(3 * nt);
     for _ in 0..3 * nt {
@@ -330,11 +296,11 @@ fn read_body(
         steps.push(q);
         positions.push(grid.dequantize(q));
     }
-    for (i, turn) in planes::<3>(c, s, "normals")?.into_iter().enumerate() {
+    for (i, turn) in c.planes::<3>(s, "normals")?.into_iter().enumerate() {
         let from = stored_normals[v_p[i] as usize];
         stored_normals.push(std::array::from_fn(|k| turn[k].wrapping_add(from[k])));
     }
-    let errors = planes::<4>(c, s, "errors")?;
+    let errors = c.planes::<4>(s, "errors")?;
     let mut counts = Vec::with_capacity(s);
     for _ in 0..s {
         counts.push(c.varint(u32::MAX as u64, "adjusted counts")? as usize);

@@ -29,15 +29,22 @@ pub(crate) type QNormal = [i8; 4];
 impl Grid {
     /// The box around every position of `meshes` (all of one object's levels).
     pub(crate) fn around<'a>(meshes: impl IntoIterator<Item = &'a Mesh>) -> Grid {
+        Grid::around_points(meshes.into_iter().flat_map(|m| {
+            let (lo, hi) = m.bounds();
+            [lo, hi]
+        }))
+    }
+
+    /// The box around `points` (a progressive mesh's, every vertex it ever has).
+    pub(crate) fn around_points(points: impl IntoIterator<Item = [f32; 3]>) -> Grid {
         let mut g = Grid {
             min: [f32::INFINITY; 3],
             max: [f32::NEG_INFINITY; 3],
         };
-        for m in meshes {
-            let (lo, hi) = m.bounds();
+        for p in points {
             for k in 0..3 {
-                g.min[k] = g.min[k].min(lo[k]);
-                g.max[k] = g.max[k].max(hi[k]);
+                g.min[k] = g.min[k].min(p[k]);
+                g.max[k] = g.max[k].max(p[k]);
             }
         }
         if g.min.iter().chain(&g.max).any(|c| !c.is_finite()) {
