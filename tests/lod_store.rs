@@ -100,6 +100,7 @@ fn level_reads(codec: MeshCodec) -> (ObjectEntry, Vec<flaneur::lod::LevelInfo>, 
     let big = *all_objects(&db).iter().max_by_key(|o| o.triangles).unwrap();
     let levels = db.lod_levels(big.id).unwrap().unwrap();
     db.lod_stats().unwrap(); // the table's head is read once per open database
+    db.store().dictionaries().unwrap(); // as are the zstd dictionaries (version 2)
     let reads = |f: &dyn Fn()| {
         db.reset_io();
         f();
@@ -410,7 +411,9 @@ fn the_cli_builds_lods_by_default_and_takes_its_options() {
     assert!(v["bytes_per_triangle"]["lod"].as_f64().unwrap() > 0.0);
     assert_eq!(v["format_version"], 2);
     assert!(
-        text.contains("codec       meshoptimizer's, zstd level 3 (format version 2)"),
+        text.contains(
+            "codec       meshoptimizer's, zstd level 3, with dictionaries trained on the city ("
+        ) && text.contains(" KiB) (format version 2)"),
         "{text}"
     );
     // Format version 1's raw meshes, the default: a chain or more to a page.

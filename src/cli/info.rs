@@ -66,8 +66,15 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
             format!("meshoptimizer's, zstd level {l}")
         }
     };
+    let dictionaries = match info.dictionary_bytes {
+        0 => String::new(),
+        n => format!(
+            ", with dictionaries trained on the city ({} KiB)",
+            n.div_ceil(1024)
+        ),
+    };
     println!(
-        "codec       {codec} (format version {})",
+        "codec       {codec}{dictionaries} (format version {})",
         info.format_version
     );
     match &info.lod {

@@ -57,8 +57,9 @@ pub(crate) fn write_object(
     codec: MeshCodec,
 ) -> Result<ObjectEntry> {
     let mut entry = object_entry(id, kind, mesh)?;
+    let dict = store.dictionaries()?;
     let bytes = codec
-        .encode(mesh)
+        .encode_with(mesh, dict.as_ref())
         .map_err(|w| Error::Invalid(format!("object {id}: {w}")))?;
     entry.mesh = store.append_packed_or_whole(PageKind::Mesh, &bytes, codec.packs())?;
     Ok(entry)
@@ -180,7 +181,7 @@ pub(crate) fn save_meta(
 /// not decode is a [`Error::CorruptPage`] naming its first page and the object.
 pub(crate) fn read_mesh(store: &Store, object: &ObjectEntry) -> Result<Mesh> {
     let bytes = store.read_extent(&object.mesh, PageKind::Mesh)?;
-    decode_mesh(&bytes).map_err(|what| Error::CorruptPage {
+    decode_mesh(&bytes, store.dictionaries()?.as_ref()).map_err(|what| Error::CorruptPage {
         path: store.path().to_path_buf(),
         page: object.mesh.first_page,
         what: format!("mesh of object {}: {what}", object.id),

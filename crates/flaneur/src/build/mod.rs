@@ -499,6 +499,8 @@ fn build(
         )));
     }
     kinds.mesh = store.pages_written(PageKind::Mesh);
+    // The zstd dictionaries the LOD writer trained, if any.
+    kinds.meta += store.pages_written(PageKind::Meta);
     progress.finish(Step::Objects);
     if entries.is_empty() {
         return Err(Error::Invalid("the input holds no objects".into()));

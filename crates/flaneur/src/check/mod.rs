@@ -40,6 +40,7 @@ use crate::hdov::HdovTree;
 use crate::lod::stored::LodTable;
 use crate::names::NameTable;
 use crate::rtree::RTree;
+use crate::store::DICTIONARIES_SEGMENT;
 use crate::store::{Backend, HttpOptions, PageKind, Store};
 use crate::visibility::VisibilityTable;
 
@@ -114,9 +115,7 @@ pub fn check(path: &Path) -> Result<CheckReport> {
 pub fn check_url(url: &str, opts: &HttpOptions) -> Result<CheckReport> {
     match Store::open_url(url, opts) {
         Ok(store) => Ok(check_store(&store)),
-        Err(e @ (Error::Io { .. } | Error::Remote { .. } | Error::RemoteChanged { .. })) => {
-            Err(e)
-        }
+        Err(e @ (Error::Io { .. } | Error::Remote { .. } | Error::RemoteChanged { .. })) => Err(e),
         Err(e) => Ok(header_unreadable(&e)),
     }
 }
@@ -148,6 +147,7 @@ fn check_store(store: &Store) -> CheckReport {
 /// Walks the structures the header names; each records its own problems and goes on.
 fn structures(store: &Store, c: &mut Claims, report: &mut CheckReport) {
     let header = "the file header";
+    dictionaries(store, c);
     let tree = match RTree::load(store) {
         Ok(t) => Some(t),
         Err(e) => {
@@ -192,6 +192,23 @@ fn structures(store: &Store, c: &mut Claims, report: &mut CheckReport) {
         Err(e) => c.problem(&e, header),
     }
     c.check_kind_counts();
+}
+
+/// The zstd dictionaries of the geometry frames, when the header names them: their
+/// pages, and their bytes as the format and zstd read them.
+fn dictionaries(store: &Store, c: &mut Claims) {
+    let part = "the zstd dictionaries";
+    match store.segment_extent(DICTIONARIES_SEGMENT, |_, _| Ok(())) {
+        Ok(Some((extent, _))) => {
+            if c.claim_extent(&extent, PageKind::Meta, part) {
+                if let Err(e) = store.dictionaries() {
+                    c.problem(&e, part);
+                }
+            }
+        }
+        Ok(None) => {}
+        Err(e) => c.problem(&e, part),
+    }
 }
 
 /// The names table: its pages, a name for no more objects than there are, and every

@@ -59,6 +59,9 @@ pub struct DatabaseInfo {
     pub format_version: u32,
     /// How its meshes are coded.
     pub codec: MeshCodec,
+    /// Bytes of the zstd dictionaries its meshes and levels are compressed with (0 when
+    /// it has none).
+    pub dictionary_bytes: u64,
     /// Bytes of each kind's pages per full-detail triangle: the currency a walk pays
     /// in.
     pub bytes_per_triangle: BytesPerTriangle,
@@ -733,6 +736,11 @@ impl Database {
             pages_by_kind: self.kinds,
             format_version: self.store.header().version(),
             codec: load_codec(&self.store)?,
+            dictionary_bytes: self
+                .store
+                .header()
+                .segment(crate::store::DICTIONARIES_SEGMENT)
+                .map_or(0, |s| s.b),
             bytes_per_triangle: BytesPerTriangle::of(
                 &self.kinds,
                 self.store.page_count(),

@@ -44,7 +44,7 @@ pub fn mesh_codec(data: &[u8]) {
     if v2 && data.len() >= 8 {
         let levels = u16::from_le_bytes([data[6], data[7]]) as usize;
         for j in 0..levels.min(MAX_ITEMS) {
-            if let Ok(level) = decode_level_v2(data, j) {
+            if let Ok(level) = decode_level_v2(data, j, None) {
                 valid(&level);
             }
         }
@@ -53,7 +53,7 @@ pub fn mesh_codec(data: &[u8]) {
         return;
     };
     valid(&mesh);
-    let again = decode_mesh(&encode_mesh(&mesh)).expect("a decoded mesh encodes to a mesh");
+    let again = decode_mesh(&encode_mesh(&mesh), None).expect("a decoded mesh encodes to a mesh");
     assert_eq!(
         (&again.positions, &again.indices),
         (&mesh.positions, &mesh.indices),

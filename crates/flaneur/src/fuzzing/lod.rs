@@ -31,7 +31,7 @@ pub fn lod_chain(data: &[u8]) {
                 continue;
             };
             if let Some(bytes) = b.get(start..end) {
-                let _ = dir.decode_level(level, bytes);
+                let _ = dir.decode_level(level, bytes, None);
             }
         }
     }

@@ -98,8 +98,10 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
         if mesh.starts_with(b"FLG2") {
             // The same mesh in version 2 without zstd: the codec's own buffers, which
             // the fuzzer mutates more usefully than a frame.
-            let plain =
-                MeshCodec::Meshopt { zstd: None }.to_bytes(&MeshCodec::from_bytes(&mesh)?)?;
+            let dict = store.dictionaries()?;
+            let decoded =
+                crate::scene::decode_mesh(&mesh, dict.as_ref()).map_err(Error::Invalid)?;
+            let plain = MeshCodec::Meshopt { zstd: None }.to_bytes(&decoded)?;
             add("mesh_codec", format!("object-{}-no-zstd", o.id), plain);
         }
         add("mesh_codec", format!("object-{}", o.id), mesh);

@@ -409,7 +409,7 @@ pub(crate) fn build_hdov(
         if m.levels.is_empty() {
             continue;
         }
-        let bytes = encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec)?;
+        let bytes = encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec, None)?;
         let e = store.append_packed_or_whole(PageKind::Lod, &bytes, codec.packs())?;
         nodes_with_lods += 1;
         lod_levels += m.levels.len() as u64;

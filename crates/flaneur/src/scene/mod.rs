@@ -17,8 +17,9 @@ pub(crate) use gltf::gltf_from_bytes;
 pub use gltf::{load_gltf, GltfObjects};
 pub(crate) use mesh_codec::{
     decode_level_v2, decode_mesh, encode_levels_v2, encode_mesh, expand_frame, is_frame, squeeze,
+    DictionaryUse, Framing,
 };
-pub use mesh_codec::{MeshCodec, DEFAULT_ZSTD_LEVEL};
+pub use mesh_codec::{Dictionaries, MeshCodec, DEFAULT_ZSTD_LEVEL};
 pub use obj::load_obj;
 #[cfg(test)]
 pub(crate) use osm::extruded;

@@ -36,6 +36,7 @@ mod append;
 mod backend;
 mod backend_kind;
 mod counters;
+mod dictionaries;
 mod extent;
 mod extent_reads;
 pub(crate) mod framing;
@@ -66,6 +67,7 @@ use crate::error::{Error, Result};
 
 pub use backend_kind::Backend;
 pub use counters::IoStats;
+pub use dictionaries::DICTIONARIES_SEGMENT;
 pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
 pub use header::{Header, Segment, DEFAULT_PAGE_SIZE, FORMAT_VERSION, OLDEST_FORMAT_VERSION};
@@ -128,6 +130,8 @@ pub struct Store {
     pages_written: [u64; page::KIND_SLOTS],
     /// The last mesh and LOD pages read, when asked to keep them.
     recent: recent_pages::RecentPages,
+    /// The zstd dictionaries of the geometry frames, once read (`dictionaries`).
+    dictionaries: std::sync::OnceLock<Option<crate::scene::Dictionaries>>,
 }
 
 const _: fn() = || {
@@ -301,6 +305,7 @@ impl Store {
             writer: None,
             counters: Counters::default(),
             recent: Default::default(),
+            dictionaries: Default::default(),
             uncommitted: 0,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],
@@ -357,6 +362,7 @@ impl Store {
             writer,
             counters: Counters::default(),
             recent: Default::default(),
+            dictionaries: Default::default(),
             uncommitted,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],
@@ -388,6 +394,7 @@ impl Store {
             writer: Some(writer),
             counters: Counters::default(),
             recent: Default::default(),
+            dictionaries: Default::default(),
             uncommitted: 0,
             open_pages: Vec::new(),
             pages_written: [0; page::KIND_SLOTS],

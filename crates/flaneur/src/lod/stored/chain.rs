@@ -49,7 +49,10 @@
 
 use crate::error::{Error, Result};
 use crate::lod::pm::Level;
-use crate::scene::{decode_level_v2, decode_mesh, encode_levels_v2, encode_mesh, Mesh, MeshCodec};
+use crate::scene::{
+    decode_level_v2, decode_mesh, encode_levels_v2, encode_mesh, Dictionaries, DictionaryUse,
+    Framing, Mesh, MeshCodec,
+};
 use crate::store::framing::{
     self as bytes, crc_matches, f32_at, push_crc, u32_at, u64_at, CRC_LEN,
 };
@@ -148,10 +151,10 @@ fn encode_shared(
     object: u64,
     full_triangles: usize,
     levels: &[Level],
-    zstd: Option<i32>,
+    framing: Framing,
 ) -> std::result::Result<Vec<u8>, String> {
     let coarsest_first: Vec<&Mesh> = levels.iter().rev().map(|l| &l.mesh).collect();
-    let (blob, spans) = encode_levels_v2(&coarsest_first, zstd)?;
+    let (blob, spans) = encode_levels_v2(&coarsest_first, framing)?;
     // The coarsest level's bytes take in the blob's header and level table, so that every
     // byte after the directory is under some level's checksum.
     let places: Vec<(usize, usize, usize)> = spans
@@ -222,15 +225,17 @@ fn directory_len(levels: u64) -> u64 {
 /// decrease coarse-ward, or when the chain would pass 4 GiB.
 #[cfg(test)]
 pub fn encode_chain(object: u64, full_triangles: usize, levels: &[Level]) -> Result<Vec<u8>> {
-    encode_chain_with(object, full_triangles, levels, MeshCodec::Raw)
+    encode_chain_with(object, full_triangles, levels, MeshCodec::Raw, None)
 }
 
-/// [`encode_chain`] with each level in `codec`.
+/// [`encode_chain`] with each level in `codec`, its zstd frames compressed with `dict`'s
+/// dictionary for coarse levels when there is one.
 pub(crate) fn encode_chain_with(
     object: u64,
     full_triangles: usize,
     levels: &[Level],
     codec: MeshCodec,
+    dict: Option<&Dictionaries>,
 ) -> Result<Vec<u8>> {
     let refuse = |what: String| Error::Invalid(format!("LOD chain of object {object}: {what}"));
     if levels.is_empty() {
@@ -238,7 +243,8 @@ pub(crate) fn encode_chain_with(
     }
     check_coarser(full_triangles, levels).map_err(refuse)?;
     if let MeshCodec::Meshopt { zstd } = codec {
-        return encode_shared(object, full_triangles, levels, zstd).map_err(refuse);
+        let framing = Framing::of(zstd, dict, DictionaryUse::Levels);
+        return encode_shared(object, full_triangles, levels, framing).map_err(refuse);
     }
     // Version 1: each level a mesh of its own, back to back.
     let mut body = Vec::new();
@@ -470,7 +476,14 @@ impl ChainDirectory {
     /// them against the directory: checksums, triangles and vertices.
     ///
     /// [`read_range`]: ChainDirectory::read_range
-    pub fn decode_level(&self, level: usize, bytes: &[u8]) -> Result<Mesh> {
+    ///
+    /// A chain compressed with its database's dictionary needs `dict`.
+    pub fn decode_level(
+        &self,
+        level: usize,
+        bytes: &[u8],
+        dict: Option<&Dictionaries>,
+    ) -> Result<Mesh> {
         let (start, end) = self.read_range(level)?;
         let e = self.entry(level);
         if bytes.len() != end - start {
@@ -487,8 +500,8 @@ impl ChainDirectory {
             crc_matches(self.entry(l).crc, own).map_err(|w| corrupt(format!("level {l} {w}")))?;
         }
         let mesh = match self.version {
-            CHAIN_VERSION => decode_mesh(bytes),
-            _ => decode_level_v2(bytes, self.entries.len() - level),
+            CHAIN_VERSION => decode_mesh(bytes, None),
+            _ => decode_level_v2(bytes, self.entries.len() - level, dict),
         }
         .map_err(|w| corrupt(format!("level {level}: {w}")))?;
         if mesh.triangle_count() != e.triangles as usize
@@ -521,12 +534,15 @@ pub(crate) fn head_len(bytes: &[u8], payload: usize) -> Result<usize> {
 
 /// Decodes a whole chain: its directory and every stored level, level 1 first.
 #[cfg(test)]
-pub fn decode_chain(bytes: &[u8]) -> Result<(ChainDirectory, Vec<Mesh>)> {
+pub fn decode_chain(
+    bytes: &[u8],
+    dict: Option<&Dictionaries>,
+) -> Result<(ChainDirectory, Vec<Mesh>)> {
     let dir = ChainDirectory::decode(bytes, bytes.len())?;
     let meshes = (1..=dir.stored_levels())
         .map(|level| {
             let (start, end) = dir.read_range(level)?;
-            dir.decode_level(level, &bytes[start..end])
+            dir.decode_level(level, &bytes[start..end], dict)
         })
         .collect::<Result<Vec<_>>>()?;
     Ok((dir, meshes))
@@ -551,7 +567,7 @@ mod tests {
         let bunny = crate::scene::bunny();
         let (levels, bytes) = chain_of(&bunny);
         assert!(levels.len() >= 5);
-        let (dir, meshes) = decode_chain(&bytes).unwrap();
+        let (dir, meshes) = decode_chain(&bytes, None).unwrap();
         assert_eq!((dir.object, dir.full_triangles), (7, 3674));
         assert_eq!(dir.stored_levels(), levels.len() - 1);
         let infos = dir.levels();
@@ -609,16 +625,16 @@ mod tests {
     fn every_truncation_and_every_flipped_byte_is_an_error() {
         let (_, bytes) = chain_of(&building());
         for len in 0..bytes.len() {
-            assert!(decode_chain(&bytes[..len]).is_err(), "{len}");
+            assert!(decode_chain(&bytes[..len], None).is_err(), "{len}");
         }
         for at in 0..bytes.len() {
             let mut b = bytes.clone();
             b[at] ^= 0x5a;
-            assert!(decode_chain(&b).is_err(), "byte {at}");
+            assert!(decode_chain(&b, None).is_err(), "byte {at}");
         }
         let mut longer = bytes.clone();
         longer.push(0);
-        let e = decode_chain(&longer).unwrap_err().to_string();
+        let e = decode_chain(&longer, None).unwrap_err().to_string();
         assert!(e.contains("end at byte"), "{e}");
     }
 
@@ -633,7 +649,7 @@ mod tests {
             if seal {
                 reseal(&mut b[..head]);
             }
-            decode_chain(&b).unwrap_err().to_string()
+            decode_chain(&b, None).unwrap_err().to_string()
         };
         assert!(with(MAGIC_OFFSET, 0, false).contains("magic"));
         assert!(with(VERSION_OFFSET, 3, false).contains("version 3"));
@@ -650,7 +666,7 @@ mod tests {
         // A level whose bytes rotted, or whose entry lies about its mesh.
         let mut b = bytes.clone();
         b[head + 20] ^= 1;
-        let e = decode_chain(&b).unwrap_err().to_string();
+        let e = decode_chain(&b, None).unwrap_err().to_string();
         assert!(e.contains(&format!("level {n} checksum")), "{e}");
         let e = with(first + ENTRY_VERTICES, 1, true);
         assert!(e.contains("the directory says"), "{e}");
@@ -662,7 +678,7 @@ mod tests {
         let pm = ProgressiveMesh::build(&bunny).unwrap();
         let levels = pm.levels(0.5, 20).unwrap();
         let codec = MeshCodec::Meshopt { zstd: Some(3) };
-        let bytes = encode_chain_with(7, 3674, &levels[1..], codec).unwrap();
+        let bytes = encode_chain_with(7, 3674, &levels[1..], codec, None).unwrap();
         let raw = encode_chain(7, 3674, &levels[1..]).unwrap();
         assert!(
             bytes.len() * 3 < raw.len(),
@@ -670,7 +686,7 @@ mod tests {
             bytes.len(),
             raw.len()
         );
-        let (dir, meshes) = decode_chain(&bytes).unwrap();
+        let (dir, meshes) = decode_chain(&bytes, None).unwrap();
         assert_eq!(
             dir.levels(),
             ChainDirectory::decode(&raw, raw.len()).unwrap().levels()
@@ -689,12 +705,12 @@ mod tests {
             }
         }
         for len in 0..bytes.len() {
-            assert!(decode_chain(&bytes[..len]).is_err(), "{len}");
+            assert!(decode_chain(&bytes[..len], None).is_err(), "{len}");
         }
         for at in (0..bytes.len()).step_by(7) {
             let mut b = bytes.clone();
             b[at] ^= 0x5a;
-            assert!(decode_chain(&b).is_err(), "byte {at}");
+            assert!(decode_chain(&b, None).is_err(), "byte {at}");
         }
     }
 
@@ -712,7 +728,7 @@ mod tests {
             }
         };
         mangled(9, 2000, 300, &good, restore, |b| {
-            let _ = decode_chain(b);
+            let _ = decode_chain(b, None);
         });
     }
 }

@@ -208,7 +208,9 @@ pub(crate) fn level_mesh(store: &Store, e: &LodEntry, level: usize) -> Result<Me
         let bytes = store
             .read_extent(&e.mesh, PageKind::Mesh)
             .map_err(|err| about(store, &e.mesh, &what, err))?;
-        return decode_mesh(&bytes).map_err(|w| about(store, &e.mesh, &what, Error::Invalid(w)));
+        let dict = store.dictionaries()?;
+        return decode_mesh(&bytes, dict.as_ref())
+            .map_err(|w| about(store, &e.mesh, &what, Error::Invalid(w)));
     }
     check_level(e, level)?;
     let head = read_chain_head(store, e)?;
@@ -419,7 +421,7 @@ fn chain_level_of(
         b
     };
     head.dir
-        .decode_level(level, &bytes)
+        .decode_level(level, &bytes, store.dictionaries()?.as_ref())
         .map_err(|err| about(store, ext, what, err))
 }
 

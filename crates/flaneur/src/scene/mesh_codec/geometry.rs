@@ -27,7 +27,9 @@
 //!         0      4  magic          b"FLG2" (a version-1 mesh starts with its vertex
 //!                                  count, which can never be these bytes: 843 M vertices)
 //!         4      1  flags          bit 0: every buffer is a zstd frame; bit 1: the
-//!                                  face layout (below)
+//!                                  face layout (below); bit 2 (with bit 0): the
+//!                                  frames use the database's dictionary for full
+//!                                  meshes or for coarse levels (`dictionary`)
 //!         5      1  reserved       zero
 //!         6      2  levels c       u16, >= 1, coarsest first
 //!         8     24  box            f32 x 3 min, f32 x 3 max: the quantisation grid
@@ -56,15 +58,19 @@ use std::borrow::Cow;
 
 use rustc_hash::FxHashMap;
 
+use super::dictionary::{Dictionaries, Use};
 use super::faces;
 use super::quantize::{dequantize_normals, quantize_normal, Grid, QNormal, QPosition};
-use super::squeeze::{expand, squeeze};
+use super::squeeze::Framing;
 use crate::scene::Mesh;
 
 /// The first four bytes of a version-2 mesh.
 pub(crate) const MAGIC: [u8; 4] = *b"FLG2";
 const FLAG_ZSTD: u8 = 1;
 const FLAG_FACES: u8 = 2;
+/// Set beside `FLAG_ZSTD`: the frames were compressed with the database's dictionary
+/// (`dictionary`) for the blob's use, full mesh or coarse levels.
+const FLAG_DICTIONARY: u8 = 4;
 const FLAGS_OFFSET: usize = 4;
 const LEVELS_OFFSET: usize = 6;
 const BOX_OFFSET: usize = 8;
@@ -106,14 +112,14 @@ pub(crate) struct LevelSpan {
 
 /// Encodes `levels` (coarsest first, each a subset of the next finer's vertices, as the
 /// simplifier's are; a vertex that is not simply joins the chunk of the first level that
-/// uses it) as one blob, zstd at `zstd` when asked. Returns the blob and where each level
+/// uses it) as one blob, its buffers stored as `framing` says. Returns the blob and where each level
 /// lies in it.
 ///
 /// Flat-shaded levels (at most one corner in two whose normal is not its face's) take the
 /// face layout (`faces`), the rest the vertex layout.
 pub(crate) fn encode_levels(
     levels: &[&Mesh],
-    zstd: Option<i32>,
+    framing: Framing,
 ) -> Result<(Vec<u8>, Vec<LevelSpan>), String> {
     if levels.is_empty() || levels.len() > u16::MAX as usize {
         return Err(format!("{} levels in one blob", levels.len()));
@@ -135,9 +141,9 @@ pub(crate) fn encode_levels(
         .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     let by_faces = faces::suits(exceptions, all);
     let encoded = if by_faces {
-        encode_by_faces(&grid, &corners, zstd)?
+        encode_by_faces(&grid, &corners, framing)?
     } else {
-        encode_by_vertices(&corners, zstd)?
+        encode_by_vertices(&corners, framing)?
     };
     let head = head_len(levels.len());
     let mut table = Vec::with_capacity(levels.len() * LEVEL_ENTRY_LEN);
@@ -167,10 +173,11 @@ pub(crate) fn encode_levels(
     }
     let mut out = Vec::with_capacity(head + body.len());
     out.extend_from_slice(&MAGIC);
-    let mut flags = 0;
-    if zstd.is_some() {
-        flags |= FLAG_ZSTD;
-    }
+    let mut flags = match framing {
+        Framing::Plain => 0,
+        Framing::Zstd(_) => FLAG_ZSTD,
+        Framing::Dictionary(..) => FLAG_ZSTD | FLAG_DICTIONARY,
+    };
     if by_faces {
         flags |= FLAG_FACES;
     }
@@ -227,7 +234,7 @@ impl EncodedLevel {
 /// The vertex layout: each distinct (position, normal) a vertex, in first-use order.
 fn encode_by_vertices(
     levels: &[Vec<Corner>],
-    zstd: Option<i32>,
+    framing: Framing,
 ) -> Result<Vec<EncodedLevel>, String> {
     let mut ids: FxHashMap<Corner, u32> = FxHashMap::default();
     let (mut positions, mut normals) = (Vec::new(), Vec::new());
@@ -254,10 +261,10 @@ fn encode_by_vertices(
             added: positions.len() - first_new,
             positions: positions_len,
             normals: normals_len,
-            chunk: squeeze(&raw, zstd)?,
+            chunk: framing.squeeze(&raw)?,
             index_count: indices.len(),
             index_bytes: index_buffer.len(),
-            indices: squeeze(&index_buffer, zstd)?,
+            indices: framing.squeeze(&index_buffer)?,
             vertices: positions.len(),
         });
     }
@@ -272,7 +279,7 @@ fn encode_by_vertices(
 fn encode_by_faces(
     grid: &Grid,
     levels: &[Vec<Corner>],
-    zstd: Option<i32>,
+    framing: Framing,
 ) -> Result<Vec<EncodedLevel>, String> {
     let mut shared = faces::SharedPositions::default();
     let mut out: Vec<EncodedLevel> = Vec::with_capacity(levels.len());
@@ -282,7 +289,7 @@ fn encode_by_faces(
         let mut best: Option<(EncodedLevel, bool)> = None;
         for (second, order) in [(false, corners), (true, &by_positions)] {
             shared.truncate(mark);
-            let e = encode_face_level(&shared.lay_out(grid, order), shared.len(), zstd)?;
+            let e = encode_face_level(&shared.lay_out(grid, order), shared.len(), framing)?;
             if best.as_ref().is_none_or(|(b, _)| e.stored() < b.stored()) {
                 best = Some((e, second));
             }
@@ -300,7 +307,7 @@ fn encode_by_faces(
 fn encode_face_level(
     level: &faces::FaceLevel,
     positions: usize,
-    zstd: Option<i32>,
+    framing: Framing,
 ) -> Result<EncodedLevel, String> {
     let index_buffer = encode_indices(&level.indices, positions)?;
     let stored_order = meshopt::decode_index_buffer(&index_buffer, level.indices.len())
@@ -316,10 +323,10 @@ fn encode_face_level(
         added: level.added.len(),
         positions: positions_len,
         normals: normals_len,
-        chunk: squeeze(&raw, zstd)?,
+        chunk: framing.squeeze(&raw)?,
         index_count: level.indices.len(),
         index_bytes: index_buffer.len(),
-        indices: squeeze(&index_buffer, zstd)?,
+        indices: framing.squeeze(&index_buffer)?,
         vertices: level.vertices,
     })
 }
@@ -330,8 +337,8 @@ fn encode_indices(indices: &[u32], vertices: usize) -> Result<Vec<u8>, String> {
 }
 
 /// Encodes one mesh as a blob of one level.
-pub(crate) fn encode(mesh: &Mesh, zstd: Option<i32>) -> Result<Vec<u8>, String> {
-    Ok(encode_levels(&[mesh], zstd)?.0)
+pub(crate) fn encode(mesh: &Mesh, framing: Framing) -> Result<Vec<u8>, String> {
+    Ok(encode_levels(&[mesh], framing)?.0)
 }
 
 fn u32_of(n: usize) -> Result<u32, String> {
@@ -347,8 +354,9 @@ fn encode_stream<T>(vertices: &[T]) -> Result<Vec<u8>, String> {
 }
 
 /// A blob's header and level table, checked against each other.
-struct Head {
-    zstd: bool,
+struct Head<'d> {
+    /// How its buffers are stored.
+    framing: Framing<'d>,
     /// The face layout (`faces`): positions once, normals from faces.
     by_faces: bool,
     grid: Grid,
@@ -388,9 +396,10 @@ fn u32_at(b: &[u8], at: usize) -> usize {
     u32::from_le_bytes(b[at..at + 4].try_into().expect("four bytes")) as usize
 }
 
-impl Head {
-    /// Reads the header from the blob's first bytes (at least its header and table).
-    fn read(bytes: &[u8]) -> Result<Head, String> {
+impl<'d> Head<'d> {
+    /// Reads the header from the blob's first bytes (at least its header and table); a
+    /// blob compressed with a dictionary is read with `dict`'s for `which`.
+    fn read(bytes: &[u8], dict: Option<&'d Dictionaries>, which: Use) -> Result<Head<'d>, String> {
         if bytes.len() < TABLE_OFFSET || !is_geometry(bytes) {
             return Err(format!(
                 "{} bytes do not start a version-2 mesh (magic FLG2 and a {TABLE_OFFSET}-byte header)",
@@ -398,9 +407,29 @@ impl Head {
             ));
         }
         let flags = bytes[FLAGS_OFFSET];
-        if flags & !(FLAG_ZSTD | FLAG_FACES) != 0 || bytes[FLAGS_OFFSET + 1] != 0 {
+        if flags & !(FLAG_ZSTD | FLAG_FACES | FLAG_DICTIONARY) != 0
+            || flags & (FLAG_ZSTD | FLAG_DICTIONARY) == FLAG_DICTIONARY
+            || bytes[FLAGS_OFFSET + 1] != 0
+        {
             return Err(format!("unknown flags {flags:#04x}"));
         }
+        let framing = match (flags & FLAG_ZSTD != 0, flags & FLAG_DICTIONARY != 0) {
+            (false, _) => Framing::Plain,
+            (true, false) => Framing::Zstd(0),
+            (true, true) => match dict.filter(|d| d.has(which)) {
+                Some(d) => Framing::Dictionary(d, which),
+                None => {
+                    return Err(format!(
+                        "compressed with its database's zstd dictionary for {}, which the \
+                         reader was not given",
+                        match which {
+                            Use::Meshes => "full meshes",
+                            Use::Levels => "coarse levels",
+                        }
+                    ))
+                }
+            },
+        };
         let c = u16::from_le_bytes([bytes[LEVELS_OFFSET], bytes[LEVELS_OFFSET + 1]]) as usize;
         if c == 0 {
             return Err("a mesh of no level".into());
@@ -465,7 +494,7 @@ impl Head {
             return Err(format!("{vertices} vertices"));
         }
         Ok(Head {
-            zstd: flags & FLAG_ZSTD != 0,
+            framing,
             by_faces,
             grid,
             levels,
@@ -565,24 +594,19 @@ impl Head {
     /// Level `k`'s chunk, expanded.
     fn chunk<'a>(&self, bytes: &'a [u8], k: usize) -> Result<Cow<'a, [u8]>, String> {
         let l = &self.levels[k];
-        expand(
-            &bytes[l.at..l.at + l.stored],
-            l.raw(self.by_faces),
-            self.zstd,
-        )
-        .map_err(|w| format!("level {k}'s vertices: {w}"))
+        self.framing
+            .expand(&bytes[l.at..l.at + l.stored], l.raw(self.by_faces))
+            .map_err(|w| format!("level {k}'s vertices: {w}"))
     }
 
     /// Level `j`'s index buffer, each index checked against the `vertices` before it.
     fn indices(&self, bytes: &[u8], j: usize, vertices: usize) -> Result<Vec<u32>, String> {
         let level = &self.levels[j];
         let at = level.at + level.stored;
-        let raw = expand(
-            &bytes[at..at + level.index_stored],
-            level.index_bytes,
-            self.zstd,
-        )
-        .map_err(|w| format!("level {j}'s index buffer: {w}"))?;
+        let raw = self
+            .framing
+            .expand(&bytes[at..at + level.index_stored], level.index_bytes)
+            .map_err(|w| format!("level {j}'s index buffer: {w}"))?;
         decode_indices(&raw, level.index_count, vertices)
     }
 }
@@ -620,9 +644,10 @@ fn decode_indices(buffer: &[u8], count: usize, vertices: usize) -> Result<Vec<u3
     Ok(indices)
 }
 
-/// Decodes a whole blob's finest level: an object's full mesh.
-pub(crate) fn decode(bytes: &[u8]) -> Result<Mesh, String> {
-    let head = Head::read(bytes)?;
+/// Decodes a whole blob's finest level: an object's full mesh (with `dict`'s
+/// dictionary for full meshes, when it was compressed with one).
+pub(crate) fn decode(bytes: &[u8], dict: Option<&Dictionaries>) -> Result<Mesh, String> {
+    let head = Head::read(bytes, dict, Use::Meshes)?;
     let last = head.levels.len() - 1;
     if head.levels[last].end() != bytes.len() {
         return Err(format!(
@@ -635,20 +660,25 @@ pub(crate) fn decode(bytes: &[u8]) -> Result<Mesh, String> {
 }
 
 /// Decodes level `j` (0 the coarsest) of a blob from its first bytes, which hold that
-/// level and every coarser one.
-pub(crate) fn decode_level(prefix: &[u8], j: usize) -> Result<Mesh, String> {
-    Head::read(prefix)?.level(prefix, j)
+/// level and every coarser one (with `dict`'s dictionary for coarse levels, when it was
+/// compressed with one).
+pub(crate) fn decode_level(
+    prefix: &[u8],
+    j: usize,
+    dict: Option<&Dictionaries>,
+) -> Result<Mesh, String> {
+    Head::read(prefix, dict, Use::Levels)?.level(prefix, j)
 }
 
 /// Whether a version-2 mesh takes the face layout.
 #[cfg(test)]
 pub(crate) fn by_faces(bytes: &[u8]) -> bool {
-    Head::read(bytes).is_ok_and(|h| h.by_faces)
+    is_geometry(bytes) && bytes.get(FLAGS_OFFSET).is_some_and(|f| f & FLAG_FACES != 0)
 }
 
 /// The quantisation grid of a version-2 mesh, from its first bytes: where every vertex it
 /// reads back lies.
 #[cfg(test)]
 pub(crate) fn grid_of(bytes: &[u8]) -> Result<Grid, String> {
-    Ok(Head::read(bytes)?.grid)
+    Ok(Head::read(bytes, None, Use::Meshes)?.grid)
 }

@@ -1,10 +1,11 @@
 //! How a mesh lies in a database extent. Format version 1 stores raw floats (`raw`);
 //! version 2 stores meshoptimizer's buffers over quantised vertices, levels of detail
 //! sharing one vertex buffer (`geometry`, `quantize`), each buffer optionally a zstd
-//! frame (`squeeze`). A version-2 mesh starts with a magic no version-1 mesh can start
+//! frame (`squeeze`), with a dictionary trained on the city (`dictionary`). A version-2 mesh starts with a magic no version-1 mesh can start
 //! with, so a reader tells them apart by their bytes: one file never mixes them, but
 //! every reader reads both.
 
+mod dictionary;
 mod faces;
 mod geometry;
 mod quantize;
@@ -13,6 +14,10 @@ mod squeeze;
 
 #[cfg(test)]
 use geometry::grid_of;
+pub use dictionary::Dictionaries;
+pub(crate) use dictionary::Use as DictionaryUse;
+use dictionary::Use;
+pub(crate) use squeeze::Framing;
 pub(crate) use geometry::{
     decode_level as decode_level_v2, encode_levels as encode_levels_v2, is_geometry,
 };
@@ -84,25 +89,38 @@ impl MeshCodec {
     /// The mesh a mesh extent of either codec holds, checked (an `Error::Invalid`
     /// naming what is wrong with bytes that are not one).
     pub fn from_bytes(bytes: &[u8]) -> crate::Result<Mesh> {
-        decode_mesh(bytes).map_err(crate::Error::Invalid)
+        decode_mesh(bytes, None).map_err(crate::Error::Invalid)
     }
 }
 
 impl MeshCodec {
     /// Encodes a mesh that has no coarse levels of its own.
     pub(crate) fn encode(&self, mesh: &Mesh) -> Result<Vec<u8>, String> {
+        self.encode_with(mesh, None)
+    }
+
+    /// [`MeshCodec::encode`], its zstd frames compressed with `dict`'s dictionary for
+    /// full meshes when there is one.
+    pub(crate) fn encode_with(
+        &self,
+        mesh: &Mesh,
+        dict: Option<&Dictionaries>,
+    ) -> Result<Vec<u8>, String> {
         match self {
             MeshCodec::Raw => Ok(encode_mesh(mesh)),
-            MeshCodec::Meshopt { zstd } => geometry::encode(mesh, *zstd),
+            MeshCodec::Meshopt { zstd } => {
+                geometry::encode(mesh, Framing::of(*zstd, dict, Use::Meshes))
+            }
         }
     }
 }
 
 /// Decodes and checks a mesh extent of either version: sizes agree with the bytes,
-/// every index names a vertex, every position is finite.
-pub(crate) fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
+/// every index names a vertex, every position is finite. A version-2 mesh compressed
+/// with its database's dictionary needs `dict`.
+pub(crate) fn decode_mesh(bytes: &[u8], dict: Option<&Dictionaries>) -> Result<Mesh, String> {
     if is_geometry(bytes) {
-        geometry::decode(bytes)
+        geometry::decode(bytes, dict)
     } else {
         raw::decode_mesh(bytes)
     }

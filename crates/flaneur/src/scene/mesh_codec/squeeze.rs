@@ -7,6 +7,51 @@
 use std::borrow::Cow;
 use std::cell::RefCell;
 
+use super::dictionary::{Dictionaries, Use};
+
+/// How a blob's buffers are stored.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Framing<'a> {
+    /// As meshoptimizer wrote them.
+    Plain,
+    /// Each a zstd frame of its own, at this level.
+    Zstd(i32),
+    /// Each a zstd frame compressed with one of the database's dictionaries.
+    Dictionary(&'a Dictionaries, Use),
+}
+
+impl<'a> Framing<'a> {
+    /// zstd at `zstd` when asked, with the dictionary of `which` when `dict` has it.
+    pub(crate) fn of(zstd: Option<i32>, dict: Option<&'a Dictionaries>, which: Use) -> Framing<'a> {
+        match (zstd, dict) {
+            (None, _) => Framing::Plain,
+            (Some(_), Some(d)) if d.has(which) => Framing::Dictionary(d, which),
+            (Some(level), _) => Framing::Zstd(level),
+        }
+    }
+
+    pub(crate) fn squeeze(&self, raw: &[u8]) -> Result<Vec<u8>, String> {
+        match self {
+            Framing::Plain => Ok(raw.to_vec()),
+            Framing::Zstd(level) => squeeze(raw, Some(*level)),
+            Framing::Dictionary(d, which) => d.compress(*which, raw),
+        }
+    }
+
+    /// The inverse of [`Framing::squeeze`], to exactly `raw_len` bytes.
+    pub(crate) fn expand<'b>(
+        &self,
+        stored: &'b [u8],
+        raw_len: usize,
+    ) -> Result<Cow<'b, [u8]>, String> {
+        match self {
+            Framing::Plain => expand(stored, raw_len, false),
+            Framing::Zstd(_) => expand(stored, raw_len, true),
+            Framing::Dictionary(d, which) => d.expand(*which, stored, raw_len).map(Cow::Owned),
+        }
+    }
+}
+
 /// Compresses `raw` at `level` (zstd's 1..=22), or returns it as it is when `level` is
 /// `None`.
 pub(crate) fn squeeze(raw: &[u8], level: Option<i32>) -> Result<Vec<u8>, String> {

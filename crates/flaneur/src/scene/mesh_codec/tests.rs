@@ -48,7 +48,7 @@ fn meshes_come_back_quantised() {
         for mesh in [crate::scene::bunny(), crate::lod::fixtures::building()] {
             let bytes = encode_v2(&mesh, zstd);
             let grid = Grid::around([&mesh]);
-            let back = decode_mesh(&bytes).unwrap();
+            let back = decode_mesh(&bytes, None).unwrap();
             assert_eq!(triangles(&back), triangles(&quantised(&mesh, &grid)));
             // Welded where quantising made two vertices one, never more.
             assert!(back.positions.len() <= mesh.positions.len());
@@ -79,14 +79,14 @@ fn empty_and_tiny_meshes() {
         normals: vec![],
         indices: vec![],
     };
-    let back = decode_mesh(&encode_v2(&empty, Some(3))).unwrap();
+    let back = decode_mesh(&encode_v2(&empty, Some(3)), None).unwrap();
     assert!(back.positions.is_empty() && back.indices.is_empty());
     let one = Mesh {
         positions: vec![[1.0, 2.0, 3.0], [2.0, 2.0, 3.0], [1.0, 3.0, 3.0]],
         normals: vec![[0.0, 0.0, 1.0]; 3],
         indices: vec![0, 1, 2],
     };
-    let back = decode_mesh(&MeshCodec::default().encode(&one).unwrap()).unwrap();
+    let back = decode_mesh(&MeshCodec::default().encode(&one).unwrap(), None).unwrap();
     assert_eq!(
         triangles(&back),
         triangles(&one),
@@ -97,7 +97,7 @@ fn empty_and_tiny_meshes() {
 #[test]
 fn raw_meshes_still_read() {
     let bunny = crate::scene::bunny();
-    let back = decode_mesh(&MeshCodec::Raw.encode(&bunny).unwrap()).unwrap();
+    let back = decode_mesh(&MeshCodec::Raw.encode(&bunny).unwrap(), None).unwrap();
     assert_eq!(
         (&back.positions, &back.indices),
         (&bunny.positions, &bunny.indices)
@@ -122,7 +122,7 @@ fn damage_is_an_error_never_a_panic() {
             bytes.len() / 2,
             bytes.len() - 1,
         ] {
-            assert!(decode_mesh(&bytes[..cut]).is_err(), "cut at {cut}");
+            assert!(decode_mesh(&bytes[..cut], None).is_err(), "cut at {cut}");
         }
         let mut rng = 0x2545_f491_4f6c_dd1du64;
         for _ in 0..2000 {
@@ -134,7 +134,7 @@ fn damage_is_an_error_never_a_panic() {
                 let at = 4 + (rng as usize) % (bad.len() - 4);
                 bad[at] ^= 1 << (rng >> 60 & 7);
             }
-            if let Ok(m) = decode_mesh(&bad) {
+            if let Ok(m) = decode_mesh(&bad, None) {
                 // What decodes is still a mesh: indices in range, positions in its box.
                 m.validate().unwrap();
                 let grid = grid_of(&bad).unwrap();
@@ -149,7 +149,7 @@ fn damage_is_an_error_never_a_panic() {
         for at in [32, 48] {
             let mut huge = bytes.clone();
             huge[at..at + 4].copy_from_slice(&(u32::MAX - 2).to_le_bytes());
-            assert!(decode_mesh(&huge).is_err(), "{at}");
+            assert!(decode_mesh(&huge, None).is_err(), "{at}");
         }
     }
 }
@@ -172,35 +172,79 @@ fn levels_share_one_vertex_buffer_and_each_reads_a_prefix() {
         (crate::lod::fixtures::building(), true),
     ] {
         for zstd in [None, Some(3)] {
-            levels_round_trip(&mesh, zstd, by_faces);
+            levels_round_trip(&mesh, Framing::of(zstd, None, Use::Levels), by_faces);
         }
     }
 }
 
-fn levels_round_trip(mesh: &Mesh, zstd: Option<i32>, by_faces: bool) {
+/// Dictionaries trained on the levels of the two test meshes, each level alone.
+fn test_dictionaries() -> Dictionaries {
+    let samples: Vec<Vec<u8>> = [crate::scene::bunny(), crate::lod::fixtures::building()]
+        .iter()
+        .flat_map(levels_of)
+        .map(|l| geometry::encode(&l, Framing::Plain).unwrap())
+        .collect();
+    Dictionaries::train(&samples, &samples, 3)
+}
+
+#[test]
+fn levels_compressed_with_a_dictionary_round_trip_and_need_it() {
+    let dict = test_dictionaries();
+    assert!(dict.has(Use::Levels) && dict.has(Use::Meshes), "{dict:?}");
+    for (mesh, by_faces) in [
+        (crate::scene::bunny(), false),
+        (crate::lod::fixtures::building(), true),
+    ] {
+        levels_round_trip(&mesh, Framing::Dictionary(&dict, Use::Levels), by_faces);
+        // Refused without the dictionary. (What it saves is a city's figure: a
+        // dictionary trained on two meshes' levels saves nothing worth a test.)
+        let levels = levels_of(&mesh);
+        let coarsest_first: Vec<&Mesh> = levels.iter().rev().collect();
+        let with =
+            geometry::encode_levels(&coarsest_first, Framing::Dictionary(&dict, Use::Levels))
+                .unwrap()
+                .0;
+        let e = geometry::decode_level(&with, 0, None).unwrap_err();
+        assert!(e.contains("dictionary"), "{e}");
+        let full = MeshCodec::meshopt()
+            .encode_with(&mesh, Some(&dict))
+            .unwrap();
+        assert_eq!(
+            decode_mesh(&full, Some(&dict)).unwrap(),
+            decode_mesh(&MeshCodec::meshopt().encode(&mesh).unwrap(), None).unwrap()
+        );
+        assert!(MeshCodec::from_bytes(&full).is_err());
+    }
+}
+
+fn levels_round_trip(mesh: &Mesh, framing: Framing, by_faces: bool) {
+    let dict = match framing {
+        Framing::Dictionary(d, _) => Some(d),
+        _ => None,
+    };
     {
         // Finest first, as the simplifier gives them; stored coarsest first.
         let finest_first = levels_of(mesh);
         assert!(finest_first.len() >= 3, "{} levels", finest_first.len());
         let levels: Vec<&Mesh> = finest_first.iter().rev().collect();
-        let (blob, spans) = geometry::encode_levels(&levels, zstd).unwrap();
+        let (blob, spans) = geometry::encode_levels(&levels, framing).unwrap();
         assert_eq!(geometry::by_faces(&blob), by_faces);
         let grid = Grid::around(levels.iter().copied());
         let mut previous = (0, 0);
         for (j, (mesh, span)) in levels.iter().zip(&spans).enumerate() {
             // The level's bytes and every coarser level's, and no more.
-            let back = geometry::decode_level(&blob[..span.end], j).unwrap();
+            let back = geometry::decode_level(&blob[..span.end], j, dict).unwrap();
             assert_eq!(
                 triangles(&back),
                 triangles(&quantised(mesh, &grid)),
-                "level {j} of {} (faces {by_faces}, zstd {zstd:?})",
+                "level {j} of {} (faces {by_faces}, {framing:?})",
                 levels.len()
             );
             assert_eq!(
                 (back.positions.len(), back.indices.len()),
                 (span.vertices, span.indices)
             );
-            assert!(geometry::decode_level(&blob[..span.end - 1], j).is_err());
+            assert!(geometry::decode_level(&blob[..span.end - 1], j, dict).is_err());
             assert!(span.start == previous.0.max(geometry::head_len(levels.len())));
             // The vertex layout reads every coarser level's vertices; the face layout
             // builds only those its triangles use.
@@ -210,10 +254,12 @@ fn levels_round_trip(mesh: &Mesh, zstd: Option<i32>, by_faces: bool) {
         assert_eq!(previous.0, blob.len());
         // The finest level's vertices are the full mesh's: none added by the coarser.
         assert!(spans.last().unwrap().vertices <= finest_first[0].positions.len());
-        assert_eq!(
-            decode_mesh(&blob).unwrap(),
-            geometry::decode_level(&blob, levels.len() - 1).unwrap()
-        );
+        if dict.is_none() {
+            assert_eq!(
+                decode_mesh(&blob, None).unwrap(),
+                geometry::decode_level(&blob, levels.len() - 1, None).unwrap()
+            );
+        }
         // Damaged bytes are an error or a mesh, never a panic.
         let mut rng = 0x9e37_79b9_7f4a_7c15u64;
         for _ in 0..500 {
@@ -224,7 +270,7 @@ fn levels_round_trip(mesh: &Mesh, zstd: Option<i32>, by_faces: bool) {
             let at = 4 + (rng as usize) % (bad.len() - 4);
             bad[at] ^= 1 << (rng >> 60 & 7);
             for j in 0..levels.len() {
-                if let Ok(m) = geometry::decode_level(&bad, j) {
+                if let Ok(m) = geometry::decode_level(&bad, j, dict) {
                     m.validate().unwrap();
                 }
             }
