@@ -412,7 +412,7 @@ fn the_cli_builds_lods_by_default_and_takes_its_options() {
     assert_eq!(v["format_version"], 2);
     assert!(
         text.contains(
-            "codec       meshoptimizer's, zstd level 3, with dictionaries trained on the city ("
+            "codec       meshoptimizer's, zstd level 9, with dictionaries trained on the city ("
         ) && text.contains(" KiB) (format version 2)"),
         "{text}"
     );

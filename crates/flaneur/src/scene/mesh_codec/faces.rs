@@ -142,13 +142,6 @@ impl SharedPositions {
         level.vertices = vertices.len();
         level
     }
-
-    /// Forgets the positions added since there were `len`: a layout tried and not kept.
-    pub(crate) fn truncate(&mut self, len: usize) {
-        for q in self.all.drain(len..) {
-            self.ids.remove(&q);
-        }
-    }
 }
 
 /// How many of `corners` (three a triangle) a reader would not give their face's normal.
@@ -516,22 +509,5 @@ mod tests {
             let got = assemble(&positions, indices.clone(), &bits, &exceptions);
             assert_eq!(got, want);
         }
-    }
-
-    #[test]
-    fn a_tried_layout_is_forgotten() {
-        let grid = Grid {
-            min: [0.0; 3],
-            max: [1.0; 3],
-        };
-        let q = |x: u16| ([x, 0, 0, 0], [0, 127, 0, 0]);
-        let mut shared = SharedPositions::default();
-        shared.lay_out(&grid, &[q(1), q(2), q(3)]);
-        shared.lay_out(&grid, &[q(4), q(2), q(5)]);
-        assert_eq!(shared.len(), 5);
-        shared.truncate(3);
-        let again = shared.lay_out(&grid, &[q(5), q(4), q(1)]);
-        assert_eq!(again.added, vec![q(5).0, q(4).0]);
-        assert_eq!(again.indices, vec![3, 4, 0]);
     }
 }

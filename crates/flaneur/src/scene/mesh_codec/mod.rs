@@ -42,9 +42,10 @@ pub enum MeshCodec {
     },
 }
 
-/// The zstd level a build uses unless told: zstd's own default, fast to write, and
-/// most of what higher levels gain on meshoptimizer's output.
-pub const DEFAULT_ZSTD_LEVEL: i32 = 3;
+/// The zstd level a build uses unless told. With the dictionaries, level 9 finds what
+/// level 3 misses: the 3,000-object city falls from 6.06 to 5.81 bytes a triangle, its
+/// build no slower within the noise (11.5 against 11.6 s); reading is as fast.
+pub const DEFAULT_ZSTD_LEVEL: i32 = 9;
 
 /// Raw floats until the levels of detail share their vertices: with each level a mesh
 /// of its own, meshoptimizer's codecs make the full meshes 5.6 times smaller on the
@@ -90,6 +91,12 @@ impl MeshCodec {
     /// naming what is wrong with bytes that are not one).
     pub fn from_bytes(bytes: &[u8]) -> crate::Result<Mesh> {
         decode_mesh(bytes, None).map_err(crate::Error::Invalid)
+    }
+
+    /// [`MeshCodec::from_bytes`] for a mesh extent compressed with its database's
+    /// dictionaries ([`Store::dictionaries`](crate::store::Store::dictionaries)).
+    pub fn from_bytes_with(bytes: &[u8], dict: Option<&Dictionaries>) -> crate::Result<Mesh> {
+        decode_mesh(bytes, dict).map_err(crate::Error::Invalid)
     }
 }
 
