@@ -324,3 +324,17 @@ fn flaneur_build_refuses_each_dangerous_value_naming_it_and_leaves_nothing() {
         );
     }
 }
+
+#[test]
+fn a_packed_build_with_visibility_reads_its_levels_through_the_dictionaries_it_trained() {
+    // The visibility step reads back the coarse levels the LOD writer just stored,
+    // compressed with the dictionaries it trained after the store had first been asked
+    // for them (and had none).
+    let opts = BuildOptions {
+        codec: flaneur::scene::MeshCodec::meshopt(),
+        ..visibility(40.0, 20.0)
+    };
+    let city = common::city(60, 5, &opts);
+    let db = flaneur::Database::open(&city.db).unwrap();
+    assert!(db.store().dictionaries().unwrap().is_some());
+}

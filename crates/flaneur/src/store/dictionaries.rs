@@ -116,8 +116,9 @@ impl Store {
             extent.byte_len as u64,
             level as u64,
         ))?;
-        // Set at most once: no reader could have cached a set before this one.
-        let _ = self.dictionaries.set(Some(d.clone()));
+        // Replaced, not set: a reader of this handle (the LOD writer, at its start) may
+        // have cached that there were none.
+        self.dictionaries = std::sync::OnceLock::from(Some(d.clone()));
         Ok(())
     }
 }
