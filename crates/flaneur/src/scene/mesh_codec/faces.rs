@@ -12,8 +12,8 @@
 //! share a position and a normal into one vertex, so it builds the same mesh as the
 //! vertex layout would, vertex for vertex (in another order).
 //!
-//! Both sides compute a face's normal from the same dequantised positions, the writer with
-//! [`face_normal`] and the reader eight triangles at a time with the same operations in
+//! Both sides compute a face's normal from the same dequantised positions in the same turn
+//! (the one stored), the writer with [`face_normal`] and the reader eight triangles at a time with the same operations in
 //! the same order (`face_lanes`), so the bits agree wherever the file does.
 
 use super::quantize::{
@@ -43,8 +43,10 @@ pub(crate) struct FaceLevel {
     pub indices: Vec<u32>,
     /// Each corner's normal.
     normals: Vec<QNormal>,
-    /// Each triangle's face normal.
-    faces: Vec<QNormal>,
+    /// Each triangle's dequantised corners, from which its face normal is worked out in
+    /// whichever turn the index codec gives it back (a cross product's bits depend on
+    /// the corner it starts from).
+    at: Vec<[[f32; 3]; 3]>,
     /// The vertices a reader builds: distinct (position, normal) pairs.
     pub vertices: usize,
 }
@@ -60,9 +62,10 @@ pub(crate) struct Exceptions {
 impl FaceLevel {
     /// The exceptions as a reader meets them in `stored`, the index buffer as the index
     /// codec gives it back: the codec may turn a triangle (its winding kept), and a
-    /// corner's bit goes with the corner. A triangle whose three corners are one position
-    /// has no turn to find; its corners' normals stay in their slots, which draws the
-    /// same nothing.
+    /// corner's bit goes with the corner, and the face normal is the reader's: worked out
+    /// from the corners in their stored turn. A triangle whose three corners are one
+    /// position has no turn to find; its corners' normals stay in their slots, which
+    /// draws the same nothing and makes the same vertices.
     pub(crate) fn exceptions(&self, stored: &[u32]) -> Result<Exceptions, String> {
         if stored.len() != self.indices.len() {
             return Err(format!(
@@ -86,9 +89,10 @@ impl FaceLevel {
                 .ok_or_else(|| {
                     format!("the index codec gave back triangle {t} as {now:?}, not {was:?}")
                 })?;
+            let face = face_normal([0, 1, 2].map(|k| self.at[t][(k + turn) % 3]));
             for k in 0..3 {
                 let n = self.normals[3 * t + (k + turn) % 3];
-                if n != self.faces[t] {
+                if n != face {
                     let c = 3 * t + k;
                     out.bits[c / 8] |= 1 << (c % 8);
                     out.normals.push(n);
@@ -119,7 +123,7 @@ impl SharedPositions {
             added: Vec::new(),
             indices: Vec::with_capacity(corners.len()),
             normals: corners.iter().map(|(_, n)| *n).collect(),
-            faces: Vec::with_capacity(corners.len() / 3),
+            at: Vec::with_capacity(corners.len() / 3),
             vertices: 0,
         };
         let mut vertices: FxHashSet<(u32, QNormal)> = FxHashSet::default();
@@ -133,7 +137,7 @@ impl SharedPositions {
                 level.indices.push(id);
                 at[k] = grid.dequantize(*q);
             }
-            level.faces.push(face_normal(at));
+            level.at.push(at);
             for (k, (_, n)) in tri.iter().enumerate() {
                 vertices.insert((level.indices[3 * t + k], *n));
             }
@@ -421,6 +425,47 @@ mod tests {
         for (c, &v) in i.iter().enumerate() {
             assert_eq!(grid.quantize(p[v as usize]), corners[c].0);
             assert_eq!(n[v as usize], dequantize_normal(corners[c].1));
+        }
+    }
+
+    #[test]
+    fn a_triangle_the_index_codec_turns_keeps_its_corners_normals() {
+        // A cross product's bits depend on the corner it starts from: find triangles whose
+        // face normal changes when turned, give each corner its face normal in the
+        // writer's turn, and let the codec hand every one back turned. The reader, which
+        // works the normal out in the stored turn, must still read each corner's own
+        // normal and make the vertices the writer counted.
+        let grid = Grid::around_points([[0.0; 3], [50.0, 50.0, 50.0]]);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 50_000) as f32 / 1000.0
+        };
+        let mut corners = Vec::new();
+        while corners.len() < 3 * 20 {
+            let q = [0, 1, 2].map(|_| grid.quantize([next(), next(), next()]));
+            let at = q.map(|q| grid.dequantize(q));
+            let face = face_normal(at);
+            if face_normal([at[1], at[2], at[0]]) != face {
+                corners.extend(q.map(|q| (q, face)));
+            }
+        }
+        let level = SharedPositions::default().lay_out(&grid, &corners);
+        let turned: Vec<u32> = level
+            .indices
+            .chunks_exact(3)
+            .flat_map(|t| [t[1], t[2], t[0]])
+            .collect();
+        let e = level.exceptions(&turned).unwrap();
+        let positions: Vec<_> = level.added.iter().map(|&q| grid.dequantize(q)).collect();
+        let (p, n, i) = assemble(&positions, turned, &e.bits, &e.normals);
+        assert_eq!(p.len(), level.vertices);
+        for (c, &v) in i.iter().enumerate() {
+            let written = corners[c - c % 3 + (c + 1) % 3];
+            assert_eq!(grid.quantize(p[v as usize]), written.0);
+            assert_eq!(n[v as usize], dequantize_normal(written.1), "corner {c}");
         }
     }
 
