@@ -9,6 +9,7 @@
 
 mod codec;
 mod compact;
+mod incidence;
 mod levels;
 mod parallel;
 mod progressive;
