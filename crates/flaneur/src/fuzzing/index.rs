@@ -7,7 +7,7 @@ use crate::hdov::TreeHead;
 use crate::rtree::node::{Node, NodeView};
 use crate::scene::{decode_level_v2, decode_mesh, encode_mesh, Mesh, MeshCodec};
 
-use super::MAX_ITEMS;
+use super::{dictionaries, MAX_ITEMS};
 
 /// An R-tree node's payload, through the query path's checked view (every entry read)
 /// and the whole-node decoder; a node that decodes encodes back to the same node.
@@ -34,7 +34,8 @@ pub fn rtree_node(data: &[u8]) {
 
 /// An object's mesh as its extent holds it, in either codec `MeshCodec::from_bytes`
 /// reads (format version 1's raw floats, version 2's meshoptimizer buffers with or
-/// without zstd, in either of its layouts). A version-2 blob's levels are each decoded
+/// without zstd, with or without a dictionary, the target's own (`dictionaries`), in
+/// either of its layouts). A version-2 blob's levels are each decoded
 /// from its bytes too. A mesh that decodes must be one (`Mesh::validate`: indices name
 /// vertices, positions and normals finite) and must round-trip: through version 1 to
 /// the same positions and triangles, and through version 2 (zstd as the input had it)
@@ -44,12 +45,12 @@ pub fn mesh_codec(data: &[u8]) {
     if v2 && data.len() >= 8 {
         let levels = u16::from_le_bytes([data[6], data[7]]) as usize;
         for j in 0..levels.min(MAX_ITEMS) {
-            if let Ok(level) = decode_level_v2(data, j, None) {
+            if let Ok(level) = decode_level_v2(data, j, Some(dictionaries())) {
                 valid(&level);
             }
         }
     }
-    let Ok(mesh) = MeshCodec::from_bytes(data) else {
+    let Ok(mesh) = MeshCodec::from_bytes_with(data, Some(dictionaries())) else {
         return;
     };
     valid(&mesh);
@@ -60,8 +61,10 @@ pub fn mesh_codec(data: &[u8]) {
         "a mesh changed in its round trip"
     );
     let (lo, hi) = mesh.bounds();
-    let zstd = (v2 && data.get(4).is_some_and(|f| f & 1 != 0)).then_some(1);
-    let written = MeshCodec::Meshopt { zstd }.to_bytes(&mesh);
+    let flags = data.get(4).copied().filter(|_| v2).unwrap_or(0);
+    let zstd = (flags & 1 != 0).then_some(1);
+    let dict = (flags & 4 != 0).then(dictionaries);
+    let written = MeshCodec::Meshopt { zstd }.encode_with(&mesh, dict);
     if (0..3).any(|k| !(hi[k] - lo[k]).is_finite()) && !mesh.positions.is_empty() {
         // Version 2 cannot hold a box wider than an f32 spans (its step would be
         // infinite): its writer must refuse the mesh, as its reader refuses the box.
@@ -72,7 +75,8 @@ pub fn mesh_codec(data: &[u8]) {
         return;
     }
     let bytes = written.expect("a decoded mesh encodes in format version 2");
-    let again = MeshCodec::from_bytes(&bytes).expect("a mesh encoded in version 2 decodes");
+    let again =
+        MeshCodec::from_bytes_with(&bytes, dict).expect("a mesh encoded in version 2 decodes");
     valid(&again);
     let quantised = triangles(&mesh, |p| on_grid(lo, hi, p));
     assert!(

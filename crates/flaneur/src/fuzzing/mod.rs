@@ -22,6 +22,9 @@ mod visibility;
 
 use std::cell::RefCell;
 use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use crate::scene::{Dictionaries, MeshCodec};
 
 pub use corpus::{corpus_dir, corpus_inputs};
 pub use files::{database, gltf, obj, osm_pbf, scene_file};
@@ -89,4 +92,29 @@ fn resealed_tail(b: &[u8]) -> Vec<u8> {
     let mut b = b.to_vec();
     crate::store::framing::reseal(&mut b);
     b
+}
+
+/// The zstd dictionaries `mesh_codec` decodes with, and its seeds were compressed with:
+/// a database's are trained on its own city, which a fuzz input does not carry. Both
+/// are trained on the bunny's meshoptimizer buffers at 48 levels of detail, the same in
+/// every build.
+pub(crate) fn dictionaries() -> &'static Dictionaries {
+    static DICTIONARIES: OnceLock<Dictionaries> = OnceLock::new();
+    DICTIONARIES.get_or_init(|| {
+        let pm = crate::lod::ProgressiveMesh::build(&crate::scene::bunny()).expect("the bunny");
+        let samples: Vec<Vec<u8>> = (1..=48)
+            .map(|k| {
+                let mesh = pm.mesh_at_triangles(k * 40).expect("a level of the bunny");
+                MeshCodec::Meshopt { zstd: None }
+                    .to_bytes(&mesh)
+                    .expect("the bunny encodes")
+            })
+            .collect();
+        let trained = Dictionaries::train(&samples, &samples, crate::scene::DEFAULT_ZSTD_LEVEL);
+        assert!(
+            !trained.is_empty(),
+            "the bunny's buffers train a dictionary"
+        );
+        trained
+    })
 }

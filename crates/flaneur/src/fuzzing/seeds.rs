@@ -7,9 +7,9 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::hdov::{TreeHead, HDOV_SEGMENT};
-use crate::lod::stored::chain::ChainDirectory;
+use crate::lod::stored::chain::{decode_chain, ChainDirectory};
 use crate::lod::stored::table::LodTable;
-use crate::scene::MeshCodec;
+use crate::scene::{encode_levels_v2, DictionaryUse, Framing, Mesh, MeshCodec};
 use crate::store::{page, Extent, PageKind};
 use crate::visibility::VISIBILITY_SEGMENT;
 use crate::Database;
@@ -103,6 +103,12 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
                 crate::scene::decode_mesh(&mesh, dict.as_ref()).map_err(Error::Invalid)?;
             let plain = MeshCodec::Meshopt { zstd: None }.to_bytes(&decoded)?;
             add("mesh_codec", format!("object-{}-no-zstd", o.id), plain);
+            // And compressed with the target's dictionary, which it decodes with: the
+            // city's is not in the input.
+            let framed = MeshCodec::meshopt()
+                .encode_with(&decoded, Some(super::dictionaries()))
+                .map_err(Error::Invalid)?;
+            add("mesh_codec", format!("object-{}-dictionary", o.id), framed);
         }
         add("mesh_codec", format!("object-{}", o.id), mesh);
     }
@@ -118,6 +124,7 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
                 [&[which as u8][..], &bytes].concat(),
             );
         }
+        let dict = store.dictionaries()?;
         for o in &objects {
             let Some(e) = table.find(store, o.id)? else {
                 continue;
@@ -137,6 +144,21 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
                         format!("levels-object-{}", o.id),
                         blob.to_vec(),
                     );
+                    if blob.get(4).is_some_and(|f| f & 1 != 0) {
+                        // Its levels compressed with the target's dictionary, as the
+                        // meshes above (a small city may train no levels' dictionary).
+                        let (_, finest_first) = decode_chain(&chain, dict.as_ref())?;
+                        let coarse_first: Vec<&Mesh> = finest_first.iter().rev().collect();
+                        let framing =
+                            Framing::Dictionary(super::dictionaries(), DictionaryUse::Levels);
+                        let (bytes, _) =
+                            encode_levels_v2(&coarse_first, framing).map_err(Error::Invalid)?;
+                        add(
+                            "mesh_codec",
+                            format!("levels-object-{}-dictionary", o.id),
+                            bytes,
+                        );
+                    }
                 }
                 add("lod_chain", format!("object-{}", o.id), chain);
             }

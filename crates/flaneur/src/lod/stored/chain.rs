@@ -533,7 +533,6 @@ pub(crate) fn head_len(bytes: &[u8], payload: usize) -> Result<usize> {
 }
 
 /// Decodes a whole chain: its directory and every stored level, level 1 first.
-#[cfg(test)]
 pub fn decode_chain(
     bytes: &[u8],
     dict: Option<&Dictionaries>,
