@@ -4,6 +4,7 @@
 
 mod common;
 
+use flaneur::scene::MeshCodec;
 use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::path::{CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
@@ -11,11 +12,16 @@ use flaneur::{BuildOptions, Database};
 use glam::Vec3;
 
 fn city() -> common::City {
+    city_in(MeshCodec::default())
+}
+
+fn city_in(codec: MeshCodec) -> common::City {
     common::city(
         2500,
         6,
         &BuildOptions {
             page_size: 1024,
+            codec,
             ..Default::default()
         },
     )
@@ -127,7 +133,10 @@ fn a_turn_on_the_spot_is_prefetched() {
 
 #[test]
 fn the_memory_budget_holds_every_frame() {
-    let c = city();
+    // Format version 1's meshes, on which the 6 MiB budget was sized to be outgrown:
+    // on version 2's file of this city the Optimal walk never filled it. What is tested
+    // is the buffer's eviction, not the codec.
+    let c = city_in(MeshCodec::Raw);
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Fast, 300);
     for preset in Preset::ALL {

@@ -79,11 +79,11 @@ pub struct DatabaseArgs {
     /// options: two builds, or a build and a merge of shards, give the same bytes.
     #[arg(long)]
     reproducible: bool,
-    /// How meshes are stored: `raw`, f32 floats, whole pages per mesh (format version
-    /// 1); or `meshopt`, meshoptimizer's index and vertex codecs over 16-bit positions
-    /// and 8-bit normals, zstd around them, meshes and LOD chains packed several to a
-    /// page (format version 2).
-    #[arg(long, value_name = "raw|meshopt", default_value = "raw")]
+    /// How meshes are stored: `meshopt`, meshoptimizer's index and vertex codecs over
+    /// 16-bit positions and 8-bit normals, zstd around them, meshes and LOD chains packed
+    /// several to a page (format version 2); or `raw`, f32 floats, whole pages per mesh
+    /// (format version 1).
+    #[arg(long, value_name = "meshopt|raw", default_value = "meshopt")]
     codec: CodecName,
     /// zstd's level (1..=22) around each meshoptimizer buffer (`--codec meshopt`); 0 for
     /// none. Higher levels write slower and read as fast.

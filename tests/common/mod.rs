@@ -240,7 +240,8 @@ pub fn city_with_lods_and_visibility(seed: u64) -> City {
 
 /// [`city_with_lods_and_visibility`] with format version 1's raw meshes, one chain to a
 /// page or more: for tests that damage one object's LOD page (a page of packed chains
-/// is several objects').
+/// is several objects'), and for those that read it over HTTP and need a file larger
+/// than the first round trip's two ends (format version 2's comes whole with them).
 pub fn city_with_lods_and_visibility_raw(seed: u64) -> City {
     city(
         120,

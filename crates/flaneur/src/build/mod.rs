@@ -85,9 +85,9 @@ pub struct BuildOptions {
     /// builds, or a build and a merge of visibility shards, give the same bytes
     /// (`--reproducible`).
     pub reproducible: bool,
-    /// How meshes are stored (`--codec`): raw floats by default, a file of format
-    /// version 1 as earlier builds wrote it, or meshoptimizer's codecs over quantised
-    /// vertices with zstd around them (format version 2).
+    /// How meshes are stored (`--codec`): by default meshoptimizer's codecs over
+    /// quantised vertices with zstd around them (format version 2), or raw floats, a
+    /// file of format version 1 as earlier builds wrote it.
     pub codec: MeshCodec,
 }
 

@@ -324,7 +324,9 @@ fn a_batch_of_finds_reads_the_same_meshes_and_pages_as_one_at_a_time() {
     let cells = db.hdov().unwrap().unwrap().cells.clone();
     for &cell in cells.iter().step_by(11) {
         let found = db.hdov_search(cell, 0.05).unwrap().found;
-        // What the database keeps once read (the LOD table's head) read before either.
+        // What the database keeps once read (the LOD table's head, a version-2 file's
+        // zstd dictionaries) read before either.
+        db.store().dictionaries().unwrap();
         let mut warm = db.hdov_loader();
         for f in &found {
             warm.level(f).unwrap();

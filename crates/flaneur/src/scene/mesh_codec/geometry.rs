@@ -121,6 +121,27 @@ pub(crate) fn encode_levels(
     levels: &[&Mesh],
     framing: Framing,
 ) -> Result<(Vec<u8>, Vec<LevelSpan>), String> {
+    let encoded = encode_levels_as(levels, framing)?;
+    // zstd can shrink a very regular buffer (a fine grid's index buffer, with a
+    // dictionary) further than the reader lets any buffer claim to expand
+    // (`MAX_EXPANSION`, its guard against damaged lengths). Such a blob is stored
+    // unframed, a little larger, rather than written for no reader to read.
+    let (dict, which) = match framing {
+        Framing::Plain => return Ok(encoded),
+        Framing::Zstd(_) => (None, Use::Meshes),
+        Framing::Dictionary(d, which) => (Some(d), which),
+    };
+    match Head::read(&encoded.0, dict, which) {
+        Ok(_) => Ok(encoded),
+        Err(_) => encode_levels_as(levels, Framing::Plain),
+    }
+}
+
+/// [`encode_levels`] in `framing`, whatever the reader makes of it.
+fn encode_levels_as(
+    levels: &[&Mesh],
+    framing: Framing,
+) -> Result<(Vec<u8>, Vec<LevelSpan>), String> {
     if levels.is_empty() || levels.len() > u16::MAX as usize {
         return Err(format!("{} levels in one blob", levels.len()));
     }

@@ -12,17 +12,17 @@ mod quantize;
 mod raw;
 mod squeeze;
 
-#[cfg(test)]
-use geometry::grid_of;
 pub use dictionary::Dictionaries;
 pub(crate) use dictionary::Use as DictionaryUse;
 use dictionary::Use;
-pub(crate) use squeeze::Framing;
+#[cfg(test)]
+use geometry::grid_of;
 pub(crate) use geometry::{
     decode_level as decode_level_v2, encode_levels as encode_levels_v2, is_geometry,
 };
 pub(crate) use quantize::{dequantize_normal, quantize_normal, Grid};
 pub(crate) use raw::encode_mesh;
+pub(crate) use squeeze::Framing;
 pub(crate) use squeeze::{expand_frame, is_frame, squeeze};
 
 use crate::scene::Mesh;
@@ -47,13 +47,13 @@ pub enum MeshCodec {
 /// build no slower within the noise (11.5 against 11.6 s); reading is as fast.
 pub const DEFAULT_ZSTD_LEVEL: i32 = 9;
 
-/// Raw floats until the levels of detail share their vertices: with each level a mesh
-/// of its own, meshoptimizer's codecs make the full meshes 5.6 times smaller on the
-/// 3,000-object city but a coarse level dearer than the full mesh it stands for (the
-/// HDoV-tree's bench reads more pages at its coarse levels than at full detail).
+/// Format version 2 with zstd at [`DEFAULT_ZSTD_LEVEL`]: now that the levels of detail
+/// share one vertex buffer, a coarse level costs less than the full mesh it stands for,
+/// and the 3,000-object city is 11.2 MiB against version 1's 137.2. Version 1 stays
+/// readable and writable (`MeshCodec::Raw`).
 impl Default for MeshCodec {
     fn default() -> MeshCodec {
-        MeshCodec::Raw
+        MeshCodec::meshopt()
     }
 }
 

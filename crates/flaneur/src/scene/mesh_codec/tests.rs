@@ -291,3 +291,30 @@ fn a_mesh_wider_than_an_f32_spans_is_refused_when_written() {
     let err = MeshCodec::meshopt().encode(&mesh).unwrap_err();
     assert!(err.contains("spans more than an f32"), "{err}");
 }
+
+#[test]
+fn a_buffer_zstd_shrinks_past_what_a_reader_allows_is_written_unframed() {
+    // The demo's city of 150 objects: one landmark's index buffer, 200,917 bytes, went
+    // into a 131-byte frame with the city's dictionary, past the 1,024 times a reader
+    // lets a buffer claim to expand, and the database could not read its own mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("c.scene");
+    let config = citygen::CityConfig {
+        objects: 150,
+        ..Default::default()
+    };
+    citygen::write_city(&config, &scene).unwrap();
+    let path = dir.path().join("c.flaneur");
+    let opts = crate::BuildOptions {
+        codec: MeshCodec::meshopt(),
+        ..Default::default()
+    };
+    crate::build_from_scene(&scene, &path, &opts).unwrap();
+    let db = crate::Database::open(&path).unwrap();
+    for o in db.range(&db.bounds()).unwrap().objects {
+        let mesh = db
+            .mesh(&o)
+            .unwrap_or_else(|e| panic!("object {}: {e}", o.id));
+        assert_eq!(mesh.triangle_count() as u32, o.triangles, "object {}", o.id);
+    }
+}
