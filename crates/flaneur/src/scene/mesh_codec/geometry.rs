@@ -289,8 +289,9 @@ fn encode_by_vertices(
 /// The face layout: positions once, normals from faces. A blob of one level (a full
 /// mesh, or a chain of one coarse level) keeps its triangles in the vertex cache's order
 /// over its vertices, where a full mesh's faces stay together; the levels of a longer
-/// chain are laid out in the cache's order over their positions (on the 3,000-object city, 1.92 against 2.10 bytes a triangle of
-/// full meshes, 3.59 against 3.97 at the first level). Laying out each level both ways
+/// chain are laid out in the cache's order over their positions (on the 3,000-object
+/// city, 1.92 against 2.10 bytes a triangle of full meshes, 3.59 against 3.97 at the
+/// first level). Laying out each level both ways
 /// and keeping the smaller cost 12 % more build time and made the full meshes larger
 /// (1.77 bytes a triangle against 1.61): the dictionaries, trained on a mix of the two
 /// layouts, then suit neither.
