@@ -9,7 +9,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use flaneur::geom::Aabb;
 use flaneur::rtree::{History, RTree as PagedTree};
 use flaneur::store::Store;
-use flaneur::walk::{disk_cell, path::street_walk};
+use flaneur::{path::street_walk, walk::disk_cell};
 use flaneur::{BuildOptions, Database};
 use rstar::{primitives::GeomWithData, primitives::Rectangle, RTree, AABB};
 

@@ -152,14 +152,14 @@ fn a_scene_file_cut_short_fails_the_build_and_leaves_no_database() {
 /// Plays a path, walking on past damaged objects when `skip` says so, and keeps what
 /// the figures told of them and the ids the walk held.
 struct Walker<'p> {
-    path: &'p flaneur::walk::path::CameraPath,
+    path: &'p flaneur::path::CameraPath,
     skip: bool,
     damaged: Vec<String>,
     held: std::collections::HashSet<u64>,
 }
 
 impl<'p> Walker<'p> {
-    fn new(path: &'p flaneur::walk::path::CameraPath, skip: bool) -> Walker<'p> {
+    fn new(path: &'p flaneur::path::CameraPath, skip: bool) -> Walker<'p> {
         Walker {
             path,
             skip,
@@ -183,7 +183,7 @@ impl flaneur::walk::FrameSink for Walker<'_> {
 }
 
 impl flaneur::walk::Viewer for Walker<'_> {
-    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::path::Pose>> {
         Ok(self.path.poses.get(frame).copied())
     }
 
@@ -255,7 +255,7 @@ fn damaged_mesh_met_by<'p>(
 /// A mesh page damaged in the middle of a REVIEW walk.
 #[test]
 fn a_walk_meets_a_damaged_mesh() {
-    use flaneur::walk::path::motion::{self, Motion};
+    use flaneur::path::motion::{self, Motion};
     use flaneur::walk::review::{self, Preset, ReviewConfig};
     let c = city();
     let bounds = c.bounds();
@@ -274,7 +274,7 @@ fn a_walk_meets_a_damaged_mesh() {
 /// The PVS walk meeting a damaged mesh when it draws, as the REVIEW walk does.
 #[test]
 fn a_pvs_walk_meets_a_damaged_mesh() {
-    use flaneur::walk::path::cell_walk;
+    use flaneur::path::cell_walk;
     use flaneur::walk::pvs_walk::{self, PvsPrefetch};
     let c = common::city(60, 3, &common::with_visibility());
     let path = cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();

@@ -6,7 +6,7 @@ mod common;
 
 use common::flaneur;
 
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::Preset;
 use flaneur::{BuildOptions, Database, Error};
 use flaneur_bench::cell_size::{self, CellSizeConfig};

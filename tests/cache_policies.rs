@@ -9,7 +9,7 @@ use flaneur::cache::{belady_replay, policy_by_name, BufferPool, CacheStats, Trac
 use flaneur::geom::Aabb;
 use flaneur::rtree::{Coverlap, History, QueryResult};
 use flaneur::store::PageSource;
-use flaneur::walk::{disk_cell, path::street_walk};
+use flaneur::{path::street_walk, walk::disk_cell};
 use flaneur::{BuildOptions, Database};
 
 const PAGE: usize = 1024;

@@ -5,7 +5,7 @@
 mod common;
 
 use flaneur::rtree::History;
-use flaneur::walk::{disk_cell, path::street_walk};
+use flaneur::{path::street_walk, walk::disk_cell};
 use flaneur::{BuildOptions, Database};
 use flaneur_bench::csearch::{self, CsearchConfig};
 

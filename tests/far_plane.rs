@@ -12,8 +12,8 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
+use flaneur::path::{CameraPath, Pose};
 use flaneur::scene::{Mesh, ObjectKind, SceneObject};
-use flaneur::walk::path::{CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use flaneur_render::{ViewMode, ViewOptions, WalkWindow};

@@ -11,9 +11,9 @@ use std::time::{Duration, SystemTime};
 
 use common::recorder::Recorder;
 use flaneur::geom::Aabb;
+use flaneur::path::motion::{self, Motion};
 use flaneur::scene::MeshCodec;
 use flaneur::store::HttpOptions;
-use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database, Error};
 use glam::Vec3;
@@ -733,7 +733,7 @@ fn bench_crowd_serves_the_file_with_nginx_and_writes_its_report() {
 /// A person at a window: walks a path, and would rather walk on past what cannot be read
 /// than stop (`Viewer::skips_damaged`); keeps what it was told was left out.
 struct AtAWindow<'p> {
-    path: &'p flaneur::walk::path::CameraPath,
+    path: &'p flaneur::path::CameraPath,
     damaged: Vec<String>,
 }
 
@@ -750,7 +750,7 @@ impl flaneur::walk::FrameSink for AtAWindow<'_> {
 }
 
 impl flaneur::walk::Viewer for AtAWindow<'_> {
-    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::walk::path::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<flaneur::path::Pose>> {
         Ok(self.path.poses.get(frame).copied())
     }
 
@@ -796,11 +796,10 @@ fn a_never_wait_walk_asks_again_for_what_an_outage_kept_from_it() {
     let mut path = motion::generate(&db.bounds(), Motion::Normal, 60, 30.0, 2).unwrap();
     // Then the viewer stands, long enough for what it lacks to come.
     let last = *path.poses.last().unwrap();
-    path.poses
-        .extend((1..=120).map(|i| flaneur::walk::path::Pose {
-            time: last.time + f64::from(i) / 30.0,
-            ..last
-        }));
+    path.poses.extend((1..=120).map(|i| flaneur::path::Pose {
+        time: last.time + f64::from(i) / 30.0,
+        ..last
+    }));
     let cfg = ReviewConfig {
         far: 150.0,
         pace: Some(2.0),

@@ -1,26 +1,22 @@
 //! The engine's layering, checked from its sources and its dependency tree.
 //!
-//! The storage, geometry, scene, cache and index modules are the bottom of the engine:
-//! the walks, the prefetchers, the database, the build and the experiments are built on
-//! them, so none of those may be reached from below. And the engine itself draws no
+//! ARCHITECTURE.md draws the engine's modules as rows, each of which may use the rows
+//! below it and never those above; the rows are read from that file, so that the drawing
+//! and the check cannot drift apart. Every module of the engine sits in exactly one row,
+//! and modules of one row do not use each other both ways. And the engine itself draws no
 //! window, talks to no GPU or terminal, plots nothing and generates no city: those
 //! crates belong to `flaneur-render`, `flaneur-bench` and the command. The renderer,
 //! in turn, reads no database: it draws what the walk hands it.
 //!
 //! The source check reads paths, not types: a `crate::…` or `super::…` path (in a `use`
-//! or anywhere in the code) whose first module is a forbidden one. Comments, strings
-//! and `#[cfg(test)]` items are left out, since unit tests may build on anything.
+//! or anywhere in the code) whose first module is a forbidden one, the root's re-exports
+//! (`crate::Database`) counted as the module they come from. Comments, strings and
+//! `#[cfg(test)]` items are left out, since unit tests may build on anything.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-/// The engine's bottom layers, as directories of `crates/flaneur/src`.
-const LOWER: [&str; 5] = ["store", "geom", "scene", "cache", "rtree"];
-
-/// Engine modules the bottom layers must not reach; `catalog` is the database's and
-/// the build's shared piece.
-const UPPER: [&str; 6] = ["walk", "prefetch", "database", "build", "catalog", "hdov"];
 
 /// Crates of the experiments and the renderer, which the engine never names.
 const UPPER_CRATES: [&str; 2] = ["flaneur_bench", "flaneur_render"];
@@ -216,16 +212,19 @@ fn blank_test_items(code: &mut [u8]) -> Vec<String> {
     test_modules
 }
 
-/// One path that reaches a forbidden module: its line (1-based) and what it names.
+/// One path that reaches another module: its line (1-based), what it names and the
+/// engine's top module it reaches (or the crate, for one of [`UPPER_CRATES`]).
 #[derive(Debug, PartialEq)]
 struct Reach {
     line: usize,
     path: String,
+    top: String,
 }
 
-/// The forbidden reaches in the code of the module at `module` (its path below the
-/// crate root, e.g. `["cache", "policy"]`).
-fn forbidden_reaches(code: &[u8], module: &[String]) -> Vec<Reach> {
+/// The paths in the code of the module at `module` (its path below the crate root,
+/// e.g. `["cache", "policy"]`) that reach a top module other than its own, or a crate
+/// of [`UPPER_CRATES`]; `root` maps the root's re-exported items to their modules.
+fn reaches(code: &[u8], module: &[String], root: &BTreeMap<String, String>) -> Vec<Reach> {
     let line_of = |at: usize| 1 + code[..at].iter().filter(|&&c| c == b'\n').count();
     let word_at = |at: usize| -> (String, usize) {
         let end = at + code[at..].iter().take_while(|&&c| is_ident(c)).count();
@@ -251,7 +250,8 @@ fn forbidden_reaches(code: &[u8], module: &[String]) -> Vec<Reach> {
         if UPPER_CRATES.contains(&word.as_str()) {
             found.push(Reach {
                 line: line_of(start),
-                path: word,
+                path: word.clone(),
+                top: word,
             });
             continue;
         }
@@ -295,11 +295,15 @@ fn forbidden_reaches(code: &[u8], module: &[String]) -> Vec<Reach> {
         }
         for h in heads {
             let (name, _) = word_at(h);
-            let top = base.first().unwrap_or(&name);
-            if UPPER.contains(&top.as_str()) {
+            let top = match base.first() {
+                Some(m) => m.clone(),
+                None => root.get(&name).cloned().unwrap_or_else(|| name.clone()),
+            };
+            if module.first() != Some(&top) {
                 found.push(Reach {
                     line: line_of(h),
                     path: format!("{prefix}::{name}"),
+                    top,
                 });
             }
         }
@@ -339,47 +343,228 @@ fn module_of(src: &Path, file: &Path) -> Vec<String> {
     parts
 }
 
-#[test]
-fn lower_layers_do_not_reach_up() {
-    let src = engine_src();
-    let mut test_only: Vec<Vec<String>> = Vec::new();
-    let mut scanned = Vec::new();
-    let mut violations = Vec::new();
-    for layer in LOWER {
-        let files = rust_files(&src.join(layer));
-        assert!(!files.is_empty(), "no source files under {layer}/");
-        for file in files {
-            let module = module_of(&src, &file);
-            if test_only.iter().any(|t| module.starts_with(t)) {
-                continue;
+/// The rows of ARCHITECTURE.md's drawing of the engine's layers, top first: the
+/// modules each row names before its description.
+fn rows() -> Vec<Vec<String>> {
+    let text = fs::read_to_string(workspace().join("ARCHITECTURE.md")).unwrap();
+    let section = text
+        .split("## The engine's layers")
+        .nth(1)
+        .expect("ARCHITECTURE.md has no section \"The engine's layers\"");
+    let drawing = section
+        .split("```text")
+        .nth(1)
+        .and_then(|d| d.split("```").next())
+        .expect("the layers' section of ARCHITECTURE.md has no drawing");
+    drawing
+        .lines()
+        .filter(|l| l.chars().next().is_some_and(|c| !c.is_whitespace()))
+        .map(|l| {
+            let names = l.split("  ").next().unwrap_or_default();
+            names
+                .split(',')
+                .map(|n| n.trim().to_string())
+                .filter(|n| !n.is_empty())
+                .collect()
+        })
+        .collect()
+}
+
+/// The engine's top modules: the files and folders beside `lib.rs`.
+fn engine_modules(src: &Path) -> BTreeSet<String> {
+    fs::read_dir(src)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir() || p.extension().is_some_and(|x| x == "rs"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .filter(|m| m != "lib")
+        .collect()
+}
+
+/// The root's re-exports (`pub use database::{Database, …}`), each item to its module.
+fn root_items(src: &Path) -> BTreeMap<String, String> {
+    let lib = fs::read_to_string(src.join("lib.rs")).unwrap();
+    let code = String::from_utf8(blank_non_code(&lib)).unwrap();
+    let mut items = BTreeMap::new();
+    for statement in code.split(';') {
+        let Some(rest) = statement.trim().strip_prefix("pub use ") else {
+            continue;
+        };
+        let Some((module, names)) = rest.split_once("::") else {
+            continue;
+        };
+        for name in names.split(|c: char| c == ',' || c == '{' || c == '}') {
+            if !name.trim().is_empty() {
+                items.insert(name.trim().to_string(), module.trim().to_string());
             }
-            let text = fs::read_to_string(&file).unwrap();
-            let mut code = blank_non_code(&text);
-            for name in blank_test_items(&mut code) {
-                let mut m = module.clone();
-                m.push(name);
-                test_only.push(m);
-            }
-            for r in forbidden_reaches(&code, &module) {
-                violations.push(format!(
-                    "{}:{}: `{}` reaches up from `{}`",
-                    file.strip_prefix(workspace()).unwrap().display(),
-                    r.line,
-                    r.path,
-                    module.join("::")
-                ));
-            }
-            scanned.push(file);
         }
     }
-    assert!(scanned.len() >= 20, "only {} files scanned", scanned.len());
+    items
+}
+
+/// The row `module` sits in, 0 the top.
+fn row_of(rows: &[Vec<String>], module: &str) -> Option<usize> {
+    rows.iter().position(|r| r.iter().any(|m| m == module))
+}
+
+/// The paths in `code`, of the engine's module `module`, that reach a row above its
+/// own, or a crate of the experiments or the renderer.
+fn upward(
+    code: &[u8],
+    module: &[String],
+    rows: &[Vec<String>],
+    root: &BTreeMap<String, String>,
+) -> Vec<Reach> {
+    let mine = row_of(rows, &module[0])
+        .unwrap_or_else(|| panic!("`{}` sits in no row of ARCHITECTURE.md", module[0]));
+    reaches(code, module, root)
+        .into_iter()
+        .filter(|r| {
+            UPPER_CRATES.contains(&r.top.as_str())
+                || row_of(rows, &r.top).is_some_and(|row| row < mine)
+        })
+        .collect()
+}
+
+/// Modules of one row that use each other, round a circle: each circle once, as the
+/// modules in it.
+fn circles(uses: &BTreeSet<(String, String)>) -> Vec<Vec<String>> {
+    // Peel off, again and again, the modules that use none of those left or that none
+    // of those left uses: what stays lies on a circle.
+    let mut left: BTreeSet<&String> = uses.iter().flat_map(|(a, b)| [a, b]).collect();
+    loop {
+        let leaves: Vec<&String> = left
+            .iter()
+            .copied()
+            .filter(|m| {
+                let uses_one = uses.iter().any(|(a, b)| a == *m && left.contains(b));
+                let used = uses.iter().any(|(a, b)| b == *m && left.contains(a));
+                !(uses_one && used)
+            })
+            .collect();
+        if leaves.is_empty() {
+            break;
+        }
+        for m in leaves {
+            left.remove(m);
+        }
+    }
+    if left.is_empty() {
+        Vec::new()
+    } else {
+        vec![left.into_iter().cloned().collect()]
+    }
+}
+
+/// Every module of the engine sits in one row of ARCHITECTURE.md's drawing and uses only
+/// its own row and those below; inside a row, no modules use each other round a circle.
+#[test]
+fn every_module_uses_only_its_row_and_those_below() {
+    let src = engine_src();
+    let (rows, root) = (rows(), root_items(&src));
+    assert!(
+        rows.len() >= 8,
+        "ARCHITECTURE.md draws {} rows: {rows:?}",
+        rows.len()
+    );
+    let modules = engine_modules(&src);
+    for m in &modules {
+        let n = rows.iter().flatten().filter(|d| *d == m).count();
+        assert_eq!(
+            n, 1,
+            "`{m}` sits in {n} rows of ARCHITECTURE.md's layers, not one"
+        );
+    }
+    for d in rows.iter().flatten() {
+        assert!(
+            modules.contains(d),
+            "ARCHITECTURE.md's layers draw `{d}`, which is no module of the engine"
+        );
+    }
+    let mut test_only: Vec<Vec<String>> = Vec::new();
+    let (mut scanned, mut violations) = (0, Vec::new());
+    let mut same_row = BTreeSet::new();
+    for file in rust_files(&src) {
+        let module = module_of(&src, &file);
+        if module == ["lib"] || test_only.iter().any(|t| module.starts_with(t)) {
+            continue;
+        }
+        let text = fs::read_to_string(&file).unwrap();
+        let mut code = blank_non_code(&text);
+        for name in blank_test_items(&mut code) {
+            let mut m = module.clone();
+            m.push(name);
+            test_only.push(m);
+        }
+        for r in upward(&code, &module, &rows, &root) {
+            violations.push(format!(
+                "{}:{}: `{}` reaches up from `{}` to `{}`",
+                file.strip_prefix(workspace()).unwrap().display(),
+                r.line,
+                r.path,
+                module.join("::"),
+                r.top
+            ));
+        }
+        for r in reaches(&code, &module, &root) {
+            if row_of(&rows, &r.top) == row_of(&rows, &module[0]) {
+                same_row.insert((module[0].clone(), r.top));
+            }
+        }
+        scanned += 1;
+    }
+    assert!(scanned >= 200, "only {scanned} files scanned");
+    for circle in circles(&same_row) {
+        violations.push(format!(
+            "{} use each other round a circle, in one row",
+            circle.join(", ")
+        ));
+    }
     assert!(
         violations.is_empty(),
-        "the engine's bottom layers ({}) must not use {}:\n{}",
-        LOWER.join(", "),
-        UPPER.join(", "),
+        "the engine's modules must use only their own row of ARCHITECTURE.md's layers \
+         and those below it:\n{}",
         violations.join("\n")
     );
+}
+
+/// The check fails where a module reaches up: a use of the walk, and of the database
+/// through the root's re-export, planted in the store's header.
+#[test]
+fn a_planted_upward_import_is_found() {
+    let src = engine_src();
+    let (rows, root) = (rows(), root_items(&src));
+    let file = src.join("store/header.rs");
+    let module = module_of(&src, &file);
+    let text = fs::read_to_string(&file).unwrap();
+    assert!(upward(&blank_non_code(&text), &module, &rows, &root).is_empty());
+    let planted =
+        format!("{text}\nuse crate::walk::ObjectBuffer;\nfn planted(_: &crate::Database) {{}}\n");
+    let found = upward(&blank_non_code(&planted), &module, &rows, &root);
+    let tops: Vec<(&str, &str)> = found
+        .iter()
+        .map(|r| (r.path.as_str(), r.top.as_str()))
+        .collect();
+    assert_eq!(
+        tops,
+        [("crate::walk", "walk"), ("crate::Database", "database")]
+    );
+}
+
+/// Two modules of one row that use each other are a circle; a chain is not.
+#[test]
+fn circles_are_found() {
+    let pair = |a: &str, b: &str| (a.to_string(), b.to_string());
+    let chain: BTreeSet<_> = [pair("a", "b"), pair("b", "c")].into();
+    assert!(circles(&chain).is_empty());
+    let round: BTreeSet<_> = [
+        pair("a", "b"),
+        pair("b", "c"),
+        pair("c", "a"),
+        pair("d", "a"),
+    ]
+    .into();
+    assert_eq!(circles(&round), [["a", "b", "c"]]);
 }
 
 /// The renderer draws what the walk selected and never reads the database: its code
@@ -450,7 +635,7 @@ mod more_tests;
     let test_modules = blank_test_items(&mut blanked);
     assert_eq!(test_modules, ["more_tests"]);
     let module = ["cache".to_string(), "pool".to_string()];
-    let found = forbidden_reaches(&blanked, &module);
+    let found = upward(&blanked, &module, &rows(), &root_items(&engine_src()));
     let got: Vec<(usize, &str)> = found.iter().map(|r| (r.line, r.path.as_str())).collect();
     assert_eq!(
         got,

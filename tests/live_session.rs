@@ -6,8 +6,8 @@
 mod common;
 
 use flaneur::geom::Camera;
+use flaneur::path::{street_walk, CameraPath, Pose};
 use flaneur::walk::live::{self, Change, LiveViewer, ViewMode};
-use flaneur::walk::path::{street_walk, CameraPath, Pose};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection, Viewer};
 use flaneur::{BuildOptions, Database, Error, Result};
 
@@ -191,7 +191,7 @@ fn visual_and_the_scene_tree_walk_live_and_visual_falls_back_to_pvs_without_the_
         },
     );
     let db = Database::open(&with_tree.db).unwrap();
-    let path = flaneur::walk::path::cell_walk(&db, 60, 1.0, 10.0, 2).unwrap();
+    let path = flaneur::path::cell_walk(&db, 60, 1.0, 10.0, 2).unwrap();
     let mut viewer = Scripted::new(
         path.clone(),
         vec![
@@ -220,7 +220,7 @@ fn visual_and_the_scene_tree_walk_live_and_visual_falls_back_to_pvs_without_the_
     // Without the tree: PVS, said so.
     let without = common::city(60, 5, &common::with_visibility());
     let db = Database::open(&without.db).unwrap();
-    let path = flaneur::walk::path::cell_walk(&db, 20, 1.0, 10.0, 2).unwrap();
+    let path = flaneur::path::cell_walk(&db, 20, 1.0, 10.0, 2).unwrap();
     let mut viewer = Scripted::new(path, vec![(10, None)]);
     live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
     assert_eq!(viewer.modes, [ViewMode::Visual, ViewMode::Pvs]);

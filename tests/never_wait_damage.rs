@@ -14,9 +14,9 @@ use std::path::Path;
 
 use common::recorder::Recorder;
 use flaneur::geom::Aabb;
+use flaneur::path::motion::{self, Motion};
+use flaneur::path::{cell_poses, Pose};
 use flaneur::store::PAGE_HEADER_LEN;
-use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::{cell_poses, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::Database;
 use glam::Vec3;

@@ -203,7 +203,7 @@ fn a_walk_starts_on_a_street_says_which_building_is_ahead_and_draws_them() {
 
     // Turning round there, the HUD's line names the building ahead by its OSM element.
     let poses = (0..36)
-        .map(|i| flaneur::walk::path::Pose {
+        .map(|i| flaneur::path::Pose {
             time: i as f64 / 30.0,
             yaw: start.yaw + (i as f32).to_radians() * 10.0,
             ..start

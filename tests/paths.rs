@@ -2,8 +2,8 @@
 //! view frustum's ViewCulling (§4.3, Fig. 4.15) against a brute-force reference.
 
 use flaneur::geom::{Aabb, Camera, Frustum};
-use flaneur::walk::path::motion::{generate, Motion};
-use flaneur::walk::path::{CameraPath, Pose};
+use flaneur::path::motion::{generate, Motion};
+use flaneur::path::{CameraPath, Pose};
 use flaneur::Error;
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};

@@ -8,9 +8,9 @@ mod servers;
 
 use std::time::Duration;
 
+use flaneur::path::{cell_walk, CameraPath};
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::HttpOptions;
-use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::pvs_walk::{walk_pvs, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
 use flaneur::{BuildOptions, Database};
 use servers::Nginx;

@@ -10,8 +10,8 @@ use std::collections::HashMap;
 
 use flaneur::geom::fov_x_for;
 use flaneur::geom::Camera;
+use flaneur::path::motion::{self, Motion};
 use flaneur::visibility::RayScene;
-use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer};
 use flaneur::{BuildOptions, Database};
@@ -75,7 +75,7 @@ fn full_detail(db: &Database, gpu: &Gpu, camera: &Camera) -> Shot {
 fn fidelity(
     db: &Database,
     gpu: &Gpu,
-    path: &flaneur::walk::path::CameraPath,
+    path: &flaneur::path::CameraPath,
     walk: ModeWalk<'_>,
     mode: &str,
     (size, lod_tau): (u32, Option<f32>),
@@ -347,9 +347,9 @@ fn a_viewer_standing_still_allocates_nothing_after_the_first_frame() {
         ..ReviewConfig::preset(Preset::Optimal)
     };
     let walked = motion::generate(&db.bounds(), Motion::Normal, 30, 30.0, 2).unwrap();
-    let standing = |frames: usize| flaneur::walk::path::CameraPath {
+    let standing = |frames: usize| flaneur::path::CameraPath {
         poses: (0..frames)
-            .map(|i| flaneur::walk::path::Pose {
+            .map(|i| flaneur::path::Pose {
                 time: i as f64 / 30.0,
                 ..walked.poses[15]
             })
@@ -413,7 +413,7 @@ fn with_visibility(dir: &std::path::Path) -> Database {
 fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
-    let path = flaneur::walk::path::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
+    let path = flaneur::path::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
     let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
     let plain = flaneur::walk::pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
     let gpu = gpu();
@@ -443,7 +443,7 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
 fn fidelity_of_the_pvs_walk() {
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
-    let path = flaneur::walk::path::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
+    let path = flaneur::path::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
     let r = fidelity(&db, &gpu, &path, ModeWalk::Pvs(rule), "pvs", (96, None));
@@ -758,7 +758,7 @@ fn fidelity_of_the_visual_walk() {
             ..common::with_visibility()
         },
     );
-    let path = flaneur::walk::path::cell_walk(&db, 60, 0.5, 30.0, 2).unwrap();
+    let path = flaneur::path::cell_walk(&db, 60, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let at = |eta: f32| flaneur::walk::visual::VisualConfig {
         eta,
@@ -798,11 +798,11 @@ fn fidelity_of_the_visual_walk() {
 /// the level their DoV deserves, never more triangles, and PB(n) within its budget.
 #[test]
 fn fidelity_of_the_scene_tree_traversals() {
-    use flaneur::hdov::scene::Traversal;
+    use flaneur::walk::scene::Traversal;
     use flaneur::walk::scene_walk::SceneConfig;
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
-    let path = flaneur::walk::path::cell_walk(&db, 40, 0.5, 30.0, 2).unwrap();
+    let path = flaneur::path::cell_walk(&db, 40, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let conv = SceneConfig::new(Traversal::Conv);
     let r = fidelity(&db, &gpu, &path, ModeWalk::Scene(&conv), "conv", (96, None));

@@ -4,9 +4,9 @@
 
 mod common;
 
+use flaneur::path::motion::{self, Motion};
+use flaneur::path::{CameraPath, Pose};
 use flaneur::scene::MeshCodec;
-use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::{CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use glam::Vec3;

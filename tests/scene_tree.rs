@@ -10,9 +10,9 @@ use std::collections::HashSet;
 
 use glam::Vec3;
 
-use flaneur::hdov::scene::{traverse, SceneTree, Traversal};
+use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::path::{cell_walk, CameraPath, Pose};
+use flaneur::walk::scene::{traverse, SceneTree, Traversal};
 use flaneur::walk::scene_walk::{self, SceneConfig};
 use flaneur::{BuildOptions, Database};
 

@@ -5,11 +5,11 @@
 
 mod common;
 
-use flaneur::hdov::scene::{SceneTree, Traversal};
 use flaneur::hdov::HdovOptions;
+use flaneur::path::{cell_poses, cell_walk};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::path::{cell_poses, cell_walk};
 use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch};
+use flaneur::walk::scene::{SceneTree, Traversal};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame};
 use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
 use flaneur::walk::NoSink;

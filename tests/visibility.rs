@@ -84,7 +84,7 @@ fn every_walkable_cell_has_a_pvs_with_dovs() {
     }
     assert!(db.pvs(u32::MAX).unwrap().is_none());
     // A walk through the cells stays in them; bad settings are errors.
-    use flaneur::walk::path::cell_walk;
+    use flaneur::path::cell_walk;
     let walk = cell_walk(&db, 600, 0.5, 30.0, 3).unwrap();
     assert_eq!(walk.poses.len(), 600);
     for p in &walk.poses {

@@ -9,8 +9,8 @@ mod servers;
 
 use flaneur::geom::Camera;
 use flaneur::hdov::HdovOptions;
+use flaneur::path::{cell_walk, CameraPath};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::visual::{self, VisualConfig, VisualReport};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur::{BuildOptions, Database};

@@ -12,9 +12,9 @@ mod common;
 use std::collections::HashSet;
 
 use flaneur::geom::{Camera, DEFAULT_FOV};
-use flaneur::hdov::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
-use flaneur::hdov::{search_cell, Found, HdovOptions, NodeErrors, ScreenRule, Selection};
-use flaneur::walk::path::cell_walk;
+use flaneur::hdov::{Found, HdovOptions, NodeErrors, ScreenRule, Selection};
+use flaneur::path::cell_walk;
+use flaneur::walk::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
 use flaneur::walk::visual::{self, screen_test, VisualConfig, FAINT_TAU_STRETCH};
 use flaneur::walk::{FrameSink, ObjectBuffer, GROUP_ID};
 use flaneur::{BuildOptions, Database};
@@ -68,14 +68,18 @@ fn the_screen_rule_refuses_a_proxy_whose_error_projects_over_tau_where_the_thesi
     let eta = 0.05;
     let (mut thesis_stops, mut refused, mut kept) = (0, 0, 0);
     for cell in cells(&db) {
-        let thesis = search_cell(&db, cell, eta, None, None, None).unwrap();
+        let thesis = db
+            .hdov_search_screened(cell, eta, None, None, None)
+            .unwrap();
         let errors = NodeErrors::default();
         let rule = ScreenRule {
             test: screen_test(&db, cell, TAU, DEFAULT_FOV).unwrap(),
             errors: &errors,
             tolerant: false,
         };
-        let screen = search_cell(&db, cell, eta, None, None, Some(&rule)).unwrap();
+        let screen = db
+            .hdov_search_screened(cell, eta, None, None, Some(&rule))
+            .unwrap();
         let ours = nodes(&screen.found);
         // Every internal LOD ours draws passes the test from anywhere in the cell.
         for f in &screen.found {
@@ -119,7 +123,9 @@ fn the_screen_rule_refuses_a_proxy_whose_error_projects_over_tau_where_the_thesi
             errors: &errors,
             tolerant: false,
         };
-        let none = search_cell(&db, cell, eta, None, None, Some(&strict)).unwrap();
+        let none = db
+            .hdov_search_screened(cell, eta, None, None, Some(&strict))
+            .unwrap();
         assert!(nodes(&none.found).is_empty(), "cell {cell}");
     }
     assert!(
@@ -294,7 +300,8 @@ fn faint_dov_tau_an_object_of_dov_at_most_eta_is_drawn_under_a_stretched_tau() {
             errors: &errors,
             tolerant: false,
         };
-        for f in search_cell(&db, cell, eta, None, None, Some(&rule))
+        for f in db
+            .hdov_search_screened(cell, eta, None, None, Some(&rule))
             .unwrap()
             .found
         {
@@ -375,7 +382,7 @@ fn vsc_and_pb_hold_internal_lods_and_levels_to_the_screen_rule() {
             let frustum = camera.frustum();
             let how = Traversal::Vsc { eta: 0.05 };
             let thesis = traverse_screened(&tree, how, &frustum, None).unwrap();
-            let drawn_internal = |t: &flaneur::hdov::scene::Traversed| -> HashSet<u32> {
+            let drawn_internal = |t: &flaneur::walk::scene::Traversed| -> HashSet<u32> {
                 t.active
                     .iter()
                     .filter(|a| tree.nodes[a.node as usize].object.is_none())
@@ -488,7 +495,7 @@ fn pb_under_ours_spends_its_budget_by_one_screen_error_for_every_visible_object(
                     if tau >= 1.0 {
                         break false;
                     }
-                    tau *= flaneur::hdov::scene::PB_TAU_STEP;
+                    tau *= flaneur::walk::scene::PB_TAU_STEP;
                 };
                 let coarsest = ours
                     .active

@@ -12,8 +12,8 @@ use glam::Vec3;
 
 use flaneur::geom::Camera;
 use flaneur::hdov::{Found, HdovOptions};
+use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::path::{cell_walk, CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection, Viewer, GROUP_ID};

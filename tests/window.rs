@@ -6,7 +6,7 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur::walk::path::motion::{self, Motion};
+use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use flaneur_render::{ViewMode, WalkWindow};
@@ -55,6 +55,6 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
     // What it recorded reads back as a path.
     let rec = city.dir.path().join("rec.csv");
     flaneur_render::save_recording(&window.recorded, &rec).unwrap();
-    let back = flaneur::walk::path::CameraPath::load_csv(&rec).unwrap();
+    let back = flaneur::path::CameraPath::load_csv(&rec).unwrap();
     assert_eq!(back.poses.len(), 40);
 }

@@ -7,7 +7,7 @@ mod common;
 #[path = "common/window.rs"]
 mod window;
 
-use flaneur::walk::path::motion::{self, Motion};
+use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use flaneur_render::{ViewMode, WalkWindow};

@@ -9,7 +9,7 @@ mod window;
 
 use std::process::Command;
 
-use flaneur::walk::path::Pose;
+use flaneur::path::Pose;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::{FrameSink, Viewer};
 use flaneur::{BuildOptions, Database};
@@ -78,7 +78,7 @@ fn keys_and_the_mouse_steer_the_window() {
     let db = Database::open(&city.db).unwrap();
     let opts = flaneur_render::ViewOptions {
         play: None,
-        ..options(&db, &flaneur::walk::path::CameraPath { poses: Vec::new() })
+        ..options(&db, &flaneur::path::CameraPath { poses: Vec::new() })
     };
     let start = opts.start;
     let mut window = WalkWindow::open(opts, ViewMode::Review).unwrap();

@@ -6,8 +6,8 @@
 mod common;
 
 use flaneur::geom::Aabb;
+use flaneur::path::motion::{self, Motion};
 use flaneur::scene::MeshCodec;
-use flaneur::walk::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database, ObjectEntry, WriteOrder};
 

@@ -10,8 +10,8 @@ use super::bars::Bars;
 use super::build::print_lod_report;
 use super::view::{view, window_options};
 use super::walk::print_walk;
-use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::CameraPath;
+use flaneur::path::motion::{self, Motion};
+use flaneur::path::CameraPath;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::{BuildOptions, Database};
 use flaneur_render::ViewMode;
@@ -192,7 +192,12 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
             Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }
     }
-    demo_flight(gpu, &db, &cache.join("demo-frames"), frames.min(FLIGHT_FRAMES))?;
+    demo_flight(
+        gpu,
+        &db,
+        &cache.join("demo-frames"),
+        frames.min(FLIGHT_FRAMES),
+    )?;
     print_next_steps(&db_path);
     Ok(())
 }
@@ -281,7 +286,7 @@ fn demo_flight(
     let poses = (0..frames)
         .map(|i| {
             let t = i as f32 / (frames - 1) as f32;
-            flaneur::walk::path::Pose {
+            flaneur::path::Pose {
                 time: i as f64 / 30.0,
                 position: from.lerp(to, t),
                 yaw,

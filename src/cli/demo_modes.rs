@@ -6,8 +6,8 @@
 //! every object in view at full detail) for its PSNR.
 
 use anyhow::Result;
+use flaneur::path::{cell_walk, CameraPath};
 use flaneur::walk::lod_select::DEFAULT_TAU;
-use flaneur::walk::path::{cell_walk, CameraPath};
 use flaneur::walk::pvs_walk::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::visual::{self, VisualConfig};
@@ -54,7 +54,11 @@ impl FrameSink for Counting {
         selection: &mut Selection<'_>,
     ) -> flaneur::Result<()> {
         self.frames += 1;
-        self.triangles += selection.drawn.iter().map(|d| d.triangles as u64).sum::<u64>();
+        self.triangles += selection
+            .drawn
+            .iter()
+            .map(|d| d.triangles as u64)
+            .sum::<u64>();
         Ok(())
     }
 
@@ -97,10 +101,7 @@ pub fn walk_modes(db: &Database, frames: usize, gpu: Option<&Gpu>) -> Result<()>
         ("REVIEW", ModeWalk::Review(&review_cfg)),
         ("BOX", ModeWalk::Review(&box_cfg)),
         ("PVS", ModeWalk::Pvs(prefetch)),
-        (
-            "VISUAL (η 0.001)",
-            ModeWalk::Visual(&visual_cfg),
-        ),
+        ("VISUAL (η 0.001)", ModeWalk::Visual(&visual_cfg)),
     ] {
         let bar = indicatif::ProgressBar::new(frames as u64);
         let mut row = walk_one(db, &path, name, walk, |_| bar.inc(1))?;

@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{parse_look, parse_size, parse_vec3};
 use super::source::SourceArgs;
-use flaneur::walk::path::CameraPath;
+use flaneur::path::CameraPath;
 use flaneur::Database;
 use flaneur_render::{ViewMode, WalkWindow};
 
@@ -124,7 +124,7 @@ impl ViewArgs {
         };
         let db = source.open(&db)?;
         let start = match at {
-            Some(p) => flaneur::walk::path::Pose {
+            Some(p) => flaneur::path::Pose {
                 time: 0.0,
                 position: p,
                 yaw: look.0.to_radians(),
@@ -174,10 +174,7 @@ impl ViewArgs {
 
 /// How the window opens on `db` from `start` by default: titled with the database's
 /// path.
-pub fn window_options(
-    db: &Database,
-    start: flaneur::walk::path::Pose,
-) -> flaneur_render::ViewOptions {
+pub fn window_options(db: &Database, start: flaneur::path::Pose) -> flaneur_render::ViewOptions {
     flaneur_render::ViewOptions {
         title: format!("flaneur — {}", db.store().path().display()),
         ..flaneur_render::ViewOptions::new(db.bounds(), start)

@@ -10,11 +10,11 @@ use anyhow::{bail, Context, Result};
 
 use super::args::{pace, parse_size};
 use super::source::SourceArgs;
-use flaneur::hdov::scene::{SceneTree, Traversal};
-use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::{cell_poses, CameraPath, Pose};
+use flaneur::path::motion::{self, Motion};
+use flaneur::path::{cell_poses, CameraPath, Pose};
 use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::scene::{SceneTree, Traversal};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame};
 use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
 use flaneur::Database;

@@ -191,11 +191,11 @@ impl City {
 
 /// A walk through the viewcells that then stands still for two seconds at its end, so
 /// that a loader that never waits has time to bring all it needs there.
-pub fn walk_then_stand(db: &flaneur::Database) -> flaneur::walk::path::CameraPath {
-    let mut path = flaneur::walk::path::cell_walk(db, 90, 1.0, 30.0, 3).unwrap();
+pub fn walk_then_stand(db: &flaneur::Database) -> flaneur::path::CameraPath {
+    let mut path = flaneur::path::cell_walk(db, 90, 1.0, 30.0, 3).unwrap();
     let last = *path.poses.last().unwrap();
     for i in 1..=60 {
-        path.poses.push(flaneur::walk::path::Pose {
+        path.poses.push(flaneur::path::Pose {
             time: last.time + f64::from(i) / 30.0,
             ..last
         });

@@ -1,7 +1,7 @@
 //! A viewer that plays poses and keeps every frame's figures, as the window's HUD gets
 //! them; it claims to draw (so that walks select what a window would) but draws nothing.
 
-use flaneur::walk::path::Pose;
+use flaneur::path::Pose;
 use flaneur::walk::{FrameFigures, FrameSink, ObjectBuffer, Selection, Viewer};
 
 pub struct Recorder {

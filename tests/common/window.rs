@@ -5,7 +5,7 @@
 
 use std::process::{Child, Command};
 
-use flaneur::walk::path::Pose;
+use flaneur::path::Pose;
 use flaneur::walk::{FrameSink, Viewer};
 use flaneur::Database;
 use flaneur_render::{ViewOptions, WalkWindow};
@@ -121,7 +121,7 @@ impl Viewer for Player<'_> {
 
 /// A small window over `db` playing `poses` from its busiest street, with LODs and a
 /// GPU budget of 4 MiB.
-pub fn options(db: &Database, poses: &flaneur::walk::path::CameraPath) -> ViewOptions {
+pub fn options(db: &Database, poses: &flaneur::path::CameraPath) -> ViewOptions {
     ViewOptions {
         size: (256, 192),
         lod_tau: Some(0.001),

@@ -20,7 +20,7 @@ use crate::walk_setup::{
 };
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 
 /// The settings of the experiment.

@@ -19,8 +19,8 @@ use crate::report::Report;
 use crate::walk_setup::WalkSetup;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
+use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RequestTimes};
-use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 
 /// Walkers by default: the 32.
@@ -279,7 +279,7 @@ fn walker(
     cfg: &CrowdConfig,
     url: &str,
     opts: &HttpOptions,
-    path: &flaneur::walk::path::CameraPath,
+    path: &flaneur::path::CameraPath,
     walk_cfg: &ReviewConfig,
 ) -> WalkerRow {
     let t = Instant::now();

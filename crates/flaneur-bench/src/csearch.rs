@@ -17,7 +17,7 @@ use flaneur::error::Result;
 use flaneur::geom::Aabb;
 use flaneur::rtree::{Coverlap, History, RTree, DEFAULT_HISTORY_LEN};
 use flaneur::store::Store;
-use flaneur::walk::{disk_cell, path::street_walk};
+use flaneur::{path::street_walk, walk::disk_cell};
 
 /// The walk and the cells of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]

@@ -25,7 +25,7 @@ use crate::walk_setup::{
 use flaneur::build::BuildOptions;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset};
 
 /// The settings of the experiment.

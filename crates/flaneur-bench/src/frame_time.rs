@@ -14,7 +14,7 @@ use crate::report::Report;
 use crate::walk_setup::{describe_review, label, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport, WalkSummary};
 
 /// The settings of the experiment.

@@ -29,8 +29,8 @@ use crate::through_link::{check_link, open_through};
 use crate::walk_setup::{num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
+use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 
 /// The settings of the experiment.

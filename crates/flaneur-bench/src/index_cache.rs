@@ -17,7 +17,7 @@ use crate::walk_setup::{check_sweep, num, WalkSetup};
 use flaneur::cache::{belady_replay, policy_by_name, CacheStats, Trace};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 
 /// The walks and the cache sizes.

@@ -3,7 +3,7 @@
 //! against plain BOX, on one walk per motion pattern.
 //!
 //! Each of the five patterns of the thesis (normal, fast, slow, turning, backward) is a
-//! generated camera path (`walk::path::motion`, the same seed for every pattern); both
+//! generated camera path (`path::motion`, the same seed for every pattern); both
 //! configurations walk the same path with the REVIEW frame loop (`walk::review`). A disk
 //! I/O is a physical page read counted by the store, on either thread of the walk: index
 //! (R-tree node) pages and mesh pages, reported apart and summed. Page counts are exact
@@ -21,7 +21,7 @@ use crate::report::Report;
 use crate::walk_setup::{check_k, num, per_query, WalkSetup, PATTERN_FRAMES};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 
 /// The settings of the experiment.

@@ -2,7 +2,7 @@
 //! query time and disk pages read against the prefetch factor k (F' = F + k·velocity, §4.2.5),
 //! one curve per motion pattern.
 //!
-//! Each pattern is one generated camera path (`walk::path::motion`, the same seed for every
+//! Each pattern is one generated camera path (`path::motion`, the same seed for every
 //! pattern and every k); the Optimal configuration (CSearch + distance-priority index
 //! cache + prefetching) walks it once per k with the REVIEW frame loop (`walk::review`).
 //! k is in seconds: the predicted cell is the disk cell of the frusta the viewer will
@@ -24,7 +24,7 @@ use crate::report::Report;
 use crate::walk_setup::{check_k, check_sweep, mean_query_ms, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
 
 /// The settings of the experiment.

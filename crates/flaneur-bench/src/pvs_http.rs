@@ -24,9 +24,9 @@ use crate::through_link::{check_link, open_through, timed};
 use crate::walk_setup::WalkSetup;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
+use flaneur::path::motion::Motion;
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::path::motion::Motion;
 use flaneur::walk::pvs_walk::{self, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
 
 /// The settings of the experiment.

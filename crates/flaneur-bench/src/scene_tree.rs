@@ -16,8 +16,8 @@ use std::time::Instant;
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::hdov::scene::{SceneTree, Traversal};
-use flaneur::walk::path::cell_walk;
+use flaneur::path::cell_walk;
+use flaneur::walk::scene::{SceneTree, Traversal};
 use flaneur::walk::scene_walk::{self, SceneConfig};
 
 /// The settings of the experiment.

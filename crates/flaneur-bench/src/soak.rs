@@ -19,7 +19,7 @@ use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::{self, Motion};
+use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkSummary};
 use flaneur::walk::NoSink;
 

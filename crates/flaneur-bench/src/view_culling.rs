@@ -34,8 +34,8 @@ use crate::walk_setup::{check_sf, check_sweep, num, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
+use flaneur::path::motion::Motion;
 use flaneur::scene::Mesh;
-use flaneur::walk::path::motion::Motion;
 use flaneur::walk::{contains_ground, scaled_cell, Loaded, ObjectBuffer};
 
 /// The settings of the experiment.
@@ -193,7 +193,7 @@ struct Sums {
 
 fn one_sf(
     db: &Database,
-    poses: &[flaneur::walk::path::Pose],
+    poses: &[flaneur::path::Pose],
     cfg: &ViewCullingConfig,
     sf: f32,
 ) -> Result<ViewCullingRow> {

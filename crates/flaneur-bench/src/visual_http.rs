@@ -22,8 +22,8 @@ use crate::through_link::{check_link, open_through, timed};
 use crate::walk_setup::WalkSetup;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
+use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::path::motion::Motion;
 use flaneur::walk::review::DEFAULT_K;
 use flaneur::walk::visual::{self, VisualConfig, VisualReport, DEFAULT_ETA};
 

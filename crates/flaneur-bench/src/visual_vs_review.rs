@@ -30,7 +30,7 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
-use flaneur::walk::path::{cell_walk, CameraPath, Pose};
+use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};

@@ -1,5 +1,5 @@
 //! The walk every walking experiment takes (Shou 2002 §4.4): a generated camera path —
-//! frames, frame rate, seed, motion patterns (`walk::path::motion`) — walked with the REVIEW
+//! frames, frame rate, seed, motion patterns (`path::motion`) — walked with the REVIEW
 //! settings the thesis fixes for its runs — frustum depth, scale factor SF, memory
 //! budget (`walk::review`). Each experiment's config embeds one [`WalkSetup`] and adds
 //! only what it sweeps, so the settings are defined, defaulted and checked once.
@@ -12,8 +12,8 @@ use std::fmt::Display;
 
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
-use flaneur::walk::path::motion::{self, Motion};
-use flaneur::walk::path::CameraPath;
+use flaneur::path::motion::{self, Motion};
+use flaneur::path::CameraPath;
 use flaneur::walk::review::{
     self, check_budget, check_far, check_pace, FrameStats, Preset, Retrieval, ReviewConfig,
     WalkReport,

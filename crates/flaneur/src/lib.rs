@@ -46,6 +46,7 @@ pub mod hdov;
 pub mod lod;
 mod memory;
 mod names;
+pub mod path;
 pub mod prefetch;
 pub mod progress;
 pub mod rtree;

@@ -7,7 +7,7 @@ use anyhow::Result;
 
 use super::report::write_report;
 use crate::cli::args::or_default;
-use flaneur::walk::path::routes::RouteConfig;
+use flaneur::prefetch::pvs::routes::RouteConfig;
 use flaneur_bench::pvs_prefetch::{self, PvsPrefetchConfig, SyntheticConfig};
 
 /// `flaneur bench pvs-prefetch`'s arguments.

@@ -1,7 +1,7 @@
 //! The walk settings every walking experiment takes, as arguments.
 
 use crate::cli::args::{finite_f32, frame_rate, pace_factor};
-use flaneur::walk::path::motion::Motion;
+use flaneur::path::motion::Motion;
 use flaneur::walk::review;
 use flaneur_bench::walk_setup::{self, WalkSetup};
 

@@ -1,8 +1,8 @@
 //! What a walk prints when it ends: the summary of each mode's report, and what the
 //! network cost when the database was read over HTTP.
 
-use flaneur::hdov::scene::Traversal;
 use flaneur::walk::review::WalkReport;
+use flaneur::walk::scene::Traversal;
 use flaneur::walk::scene_walk::SceneReport;
 use flaneur::walk::visual::VisualReport;
 use flaneur::Database;

@@ -4,10 +4,10 @@
 use std::collections::HashSet;
 use std::sync::OnceLock;
 
+use flaneur::prefetch::pvs::routes::{random_route, straight_route, RouteConfig};
 use flaneur::prefetch::pvs::{
     ObjectId, Pbnp, Position, PrefetchArea, PvsClient, PvsSource, Snp, THESIS_CAPACITY,
 };
-use flaneur::walk::path::routes::{random_route, straight_route, RouteConfig};
 
 use super::{simulate, StepRecord, SyntheticCity, SyntheticConfig};
 

@@ -7,7 +7,7 @@
 //! with transactions answered 0 to 8 steps after they are asked (`simulate_with_latency`).
 //!
 //! It runs on the synthetic PVS table (`synthetic`, how it is drawn is named there,
-//! held in a `PvsTable`) and the two routes (`flaneur::walk::path::routes`); one seed
+//! held in a `PvsTable`) and the two routes (`flaneur::prefetch::pvs::routes`); one seed
 //! draws both, and `simulate` walks a route (§7.5); `report` writes the CSVs, the summary
 //! and the plots. No database: the table and the
 //! walks take well under a second. [`run_on_database`]
@@ -19,11 +19,11 @@ use std::path::Path;
 
 use crate::report::Report;
 use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::routes::{axis_route, random_route, straight_route, RouteConfig};
 use flaneur::prefetch::pvs::{
     check_border, Lanp, Pbnp, Position, PrefetchArea, PvsSource, Snp, StoredPvs, DEFAULT_BORDER,
     THESIS_CAPACITY,
 };
-use flaneur::walk::path::routes::{axis_route, random_route, straight_route, RouteConfig};
 
 use crate::pvs_stats::{measure, TableStats};
 

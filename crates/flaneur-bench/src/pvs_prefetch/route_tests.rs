@@ -1,11 +1,11 @@
 //! The thesis's two routes over its synthetic city: they keep to its walkways, and
 //! route 2 is seven lines with six right angles. Here rather than beside the routes in
-//! `flaneur::walk::path::routes`, because the city is the experiment's.
+//! `flaneur::prefetch::pvs::routes`, because the city is the experiment's.
 
-use flaneur::prefetch::pvs::Position;
-use flaneur::walk::path::routes::{
+use flaneur::prefetch::pvs::routes::{
     random_route, straight_route, RouteConfig, THESIS_STEP, THESIS_STEPS,
 };
+use flaneur::prefetch::pvs::Position;
 
 use super::{SyntheticCity, SyntheticConfig};
 

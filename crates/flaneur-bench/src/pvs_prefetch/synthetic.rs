@@ -25,8 +25,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use flaneur::error::{Error, Result};
+use flaneur::prefetch::pvs::routes::StreetGrid;
 use flaneur::prefetch::pvs::{Cell, ObjectId, Position, PvsSource, ViewcellGrid};
-use flaneur::walk::path::routes::StreetGrid;
 
 use super::table::PvsTable;
 

@@ -4,7 +4,7 @@
 //! the tests make and read without touching winit or wgpu.
 
 use flaneur::geom::Aabb;
-use flaneur::walk::path::{CameraPath, Pose};
+use flaneur::path::{CameraPath, Pose};
 
 /// How the window opens.
 #[derive(Clone, Debug)]

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use super::WalkWindow;
 use flaneur::error::Result;
-use flaneur::walk::path::{CameraPath, Pose};
+use flaneur::path::{CameraPath, Pose};
 
 impl WalkWindow {
     /// Holds the played pose `p` back until its time, counted from the first pose

@@ -62,7 +62,7 @@ pub fn build_visibility_shard(
         Some(lod) => made_levels(&objects, lod, opts.codec),
         None => Vec::new(),
     };
-    let lod = ShardLod::of(opts.lod.as_ref());
+    let lod = shard_lod(opts.lod.as_ref());
     let made = precompute_shard(&objects, &levels, lod, v, shard, &|done, total| {
         progress.update(Step::Visibility, done as u64, Some(total as u64));
     })?;
@@ -95,7 +95,7 @@ pub fn merge_visibility_shards(
         .collect::<Result<Vec<_>>>()?;
     for (path, shard) in shards.iter().zip(&cells) {
         shard
-            .check_lod(opts.lod.as_ref())
+            .check_lod(shard_lod(opts.lod.as_ref()))
             .map_err(|what| Error::BadInput {
                 path: path.clone(),
                 what,
@@ -177,4 +177,12 @@ impl Inputs<'_> {
             )),
         }
     }
+}
+
+/// What `lod` makes of far objects for a shard's DoVs (`None`: full meshes, `--no-lod`).
+fn shard_lod(lod: Option<&LodOptions>) -> Option<ShardLod> {
+    lod.map(|l| ShardLod {
+        ratio: l.ratio,
+        min_triangles: l.min_triangles as u32,
+    })
 }

@@ -10,8 +10,7 @@
 //! against the held cells H enters a node when the part of its MBR inside C is not
 //! covered by the union of H, and every predicted cell before C counts as held by then.
 
-use crate::geom::Aabb;
-use crate::rtree::covered;
+use crate::geom::{covered, Aabb};
 
 /// The searches a walk expects next, as it knows them now.
 ///

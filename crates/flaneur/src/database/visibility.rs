@@ -3,7 +3,7 @@
 
 use super::{Database, VisibilityInfo};
 use crate::error::{Error, Result};
-use crate::hdov::{self, HdovTree, Scheme, SearchResult, TreeHead};
+use crate::hdov::{self, HdovTree, Scheme, ScreenRule, SearchResult, TreeHead};
 use crate::visibility::{CellPvs, TableHead};
 
 impl Database {
@@ -147,14 +147,33 @@ impl Database {
         scheme: Scheme,
         cache: Option<&crate::cache::BufferPool<'_>>,
     ) -> Result<SearchResult> {
+        self.hdov_search_screened(cell, eta, Some(scheme), cache, None)
+    }
+
+    /// [`Database::hdov_search_cached`] with the selection rule: under `screen` (ours) a
+    /// node's internal LOD is used only where its stored error also passes the rule's
+    /// test; `None` is the thesis's search. `scheme` `None`: the smallest one built.
+    pub fn hdov_search_screened(
+        &self,
+        cell: u32,
+        eta: f32,
+        scheme: Option<Scheme>,
+        cache: Option<&crate::cache::BufferPool<'_>>,
+        screen: Option<&ScreenRule<'_>>,
+    ) -> Result<SearchResult> {
         let tree = self.hdov_tree()?;
-        let slot = tree.head(&self.store)?.slot(cell).ok_or_else(|| {
+        let head = tree.head(&self.store)?;
+        let slot = head.slot(cell).ok_or_else(|| {
             Error::Invalid(format!(
                 "viewcell {cell} is not a walkable cell of the HDoV-tree"
             ))
         })?;
+        let scheme = match scheme {
+            Some(s) => s,
+            None => head.smallest_scheme()?,
+        };
         let stored = tree.scheme(&self.store, scheme)?;
-        hdov::search(&self.store, tree, stored, slot, eta, cache)
+        hdov::search(&self.store, (tree, stored), slot, eta, cache, screen)
     }
 
     /// What an HDoV search found, read at the detail it deserves: an object at the

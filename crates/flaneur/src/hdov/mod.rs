@@ -11,8 +11,9 @@
 //!   NVO) summed bottom-up from the visibility table (`vd`), in V-pages stored under
 //!   the horizontal, vertical or indexed-vertical scheme (§5.4, [`Scheme`]).
 //! - The **search** (§5.3, Fig. 5.4): `search` under a DoV threshold η, reached through [`Database::hdov_search`](crate::Database::hdov_search).
-//! - The **memory scene tree** of ch. 6 ([`scene`]): the city in memory as a k-D tree
-//!   with internal LODs and one VD a node, traversed by VSC(η), PB(n) or CONV.
+//! - The **memory scene tree** of ch. 6 lives with its walk ([`crate::walk::scene`]): the
+//!   city in memory as a k-D tree with this module's internal LODs and VDs, traversed by
+//!   VSC(η), PB(n) or CONV.
 //!
 //! `flaneur build --visibility --hdov …` writes it ([`HdovOptions`]); an open database
 //! searches it with [`Database::hdov_search`](crate::Database::hdov_search).
@@ -27,7 +28,6 @@ mod build;
 mod load;
 mod lods;
 pub(crate) mod node;
-pub mod scene;
 mod scheme;
 mod search;
 mod sizing;
@@ -38,16 +38,17 @@ pub(crate) use build::build_hdov;
 pub use build::{HdovOptions, HdovReport, SchemeReport};
 pub use load::Representation;
 pub(crate) use load::{load, Loader};
+pub(crate) use lods::{aggregate, error_above, internal_levels, Reference};
 pub use lods::{DIRECT_TRIANGLES, ERROR_SAMPLES, LEVEL_SHARES, MIN_TRIANGLES};
 pub(crate) use node::HNodeKind;
 pub use scheme::{Scheme, POINTER_LEN};
 pub(crate) use search::search;
+pub use search::{
+    box_distance, level_for_detail, stops, Found, NodeErrors, ScreenRule, ScreenTest, SearchResult,
+    Selection, MAXDOV,
+};
 pub(crate) use sizing::sizes_at;
 pub use sizing::FanoutSizes;
-pub use search::{
-    box_distance, level_for_detail, search_cell, stops, Found, NodeErrors, ScreenRule,
-    ScreenTest, SearchResult, Selection, MAXDOV,
-};
 pub(crate) use tree::HdovTree;
 pub use tree::{ProxyErrors, TreeHead, HDOV_SEGMENT};
 pub use vd::Vd;

@@ -34,11 +34,10 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 
 use super::node::HNodeKind;
-use super::scheme::{Entered, Scheme, StoredScheme};
+use super::scheme::{Entered, StoredScheme};
 use super::tree::{HdovTree, ProxyErrors};
 use super::vd::Vd;
 use crate::cache::{BufferPool, Hint};
-use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::rtree::ObjectEntry;
@@ -214,37 +213,6 @@ pub struct ScreenRule<'e> {
     pub tolerant: bool,
 }
 
-/// [`Database::hdov_search_cached`] with the selection rule: under `screen` (ours) a
-/// node's internal LOD is used only where its stored error also passes the rule's test;
-/// `None` is the thesis's search. `scheme` `None`: the smallest one built.
-pub fn search_cell(
-    db: &Database,
-    cell: u32,
-    eta: f32,
-    scheme: Option<Scheme>,
-    cache: Option<&BufferPool<'_>>,
-    screen: Option<&ScreenRule<'_>>,
-) -> Result<SearchResult> {
-    let tree = db.hdov_tree()?;
-    let store = db.store();
-    let head = tree.head(store)?;
-    let slot = head.slot(cell).ok_or_else(|| {
-        Error::Invalid(format!(
-            "viewcell {cell} is not a walkable cell of the HDoV-tree"
-        ))
-    })?;
-    let scheme = match scheme {
-        Some(s) => s,
-        None => head.smallest_scheme()?,
-    };
-    let stored = tree.scheme(store, scheme)?;
-    let found = search_in(store, tree, stored, slot, eta, cache, screen);
-    if let Some(c) = cache {
-        c.end_search();
-    }
-    found
-}
-
 /// What the search found: an object, or a node drawn at one of its internal LODs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Found {
@@ -339,17 +307,19 @@ pub fn level_for_detail(triangles: &[u32], detail: f32) -> usize {
 
 /// Searches the tree in the cell at `slot` under `eta`, reading V-pages through
 /// `scheme` and nodes through `cache` when there is one (ending one of its searches
-/// when done, so that DoV-Time's clock counts searches). An error names a damaged node
-/// or V-page, or a tree whose V-pages disagree with themselves.
+/// when done, so that DoV-Time's clock counts searches). Under `screen` (ours) a node's
+/// internal LOD is used only where its stored error also passes the rule's test; `None`
+/// is the thesis's search. An error names a damaged node or V-page, or a tree whose
+/// V-pages disagree with themselves.
 pub fn search(
     store: &Store,
-    tree: &HdovTree,
-    scheme: &StoredScheme,
+    (tree, scheme): (&HdovTree, &StoredScheme),
     slot: usize,
     eta: f32,
     cache: Option<&BufferPool<'_>>,
+    screen: Option<&ScreenRule<'_>>,
 ) -> Result<SearchResult> {
-    let found = search_in(store, tree, scheme, slot, eta, cache, None);
+    let found = search_in(store, tree, scheme, slot, eta, cache, screen);
     if let Some(c) = cache {
         c.end_search();
     }

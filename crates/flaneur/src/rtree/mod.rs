@@ -17,7 +17,6 @@ mod stats;
 
 pub(crate) use bulk::tile as str_tile;
 pub use bulk::DEFAULT_FILL;
-pub(crate) use complement::covered;
 use complement::Complement;
 pub use complement::Coverlap;
 pub use history::{History, DEFAULT_HISTORY_LEN};

@@ -47,7 +47,6 @@ use super::precompute::{
 use super::table::{decode_record, encode_record, CellPvs, VisibilityStats};
 use super::{CubicProjection, DovMethod, SampleOptions, VisibilityOptions};
 use crate::error::{Error, Result};
-use crate::lod::LodOptions;
 use crate::scene::Mesh;
 use crate::store::framing::{f32_at, f64_at, push_crc, u32_at, u64_at, CRC_LEN};
 
@@ -102,24 +101,14 @@ impl Shard {
     }
 }
 
-/// The coarse LOD levels a shard's DoVs drew far objects through: the settings of
-/// [`LodOptions`] that shape them, which a merge's must match.
+/// The coarse LOD levels a shard's DoVs drew far objects through: the settings of the
+/// build's LOD options that shape them, which a merge's must match.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShardLod {
-    /// Triangles of each level over the next finer one's (`LodOptions::ratio`).
+    /// Triangles of each level over the next finer one's (the LOD options' `ratio`).
     pub ratio: f32,
-    /// A chain stops at this many triangles (`LodOptions::min_triangles`).
+    /// A chain stops at this many triangles (their `min_triangles`).
     pub min_triangles: u32,
-}
-
-impl ShardLod {
-    /// What `lod` makes of far objects for the DoVs (`None`: full meshes, `--no-lod`).
-    pub fn of(lod: Option<&LodOptions>) -> Option<ShardLod> {
-        lod.map(|l| ShardLod {
-            ratio: l.ratio,
-            min_triangles: l.min_triangles as u32,
-        })
-    }
 }
 
 /// The cells one shard computed, and what they were computed from.
@@ -419,10 +408,10 @@ impl ShardCells {
         })
     }
 
-    /// Checks that this shard's DoVs drew far objects as a build storing the LODs `lod`
-    /// makes (`None`: none) draws them, so that a merge under `lod` gives the whole
-    /// build's DoVs; the error names the shard and what differs.
-    pub fn check_lod(&self, lod: Option<&LodOptions>) -> std::result::Result<(), String> {
+    /// Checks that this shard's DoVs drew far objects as a build storing the levels
+    /// `merge` describes (`None`: none) draws them, so that a merge storing them gives the
+    /// whole build's DoVs; the error names the shard and what differs.
+    pub fn check_lod(&self, merge: Option<ShardLod>) -> std::result::Result<(), String> {
         let name = format!("shard {}", self.shard);
         let levels = |l: ShardLod| {
             format!(
@@ -430,7 +419,6 @@ impl ShardCells {
                 l.ratio, l.min_triangles
             )
         };
-        let merge = ShardLod::of(lod);
         if self.lod == merge {
             return Ok(());
         }

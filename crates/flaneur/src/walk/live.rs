@@ -14,9 +14,9 @@ use super::walk_lods::WalkLods;
 use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::hdov::scene::{SceneTree, Traversal};
 use crate::hdov::Selection;
 use crate::prefetch::pvs::DEFAULT_BORDER;
+use crate::walk::scene::{SceneTree, Traversal};
 
 /// Failed walks in a row that end the session: the walk is then not getting over it.
 const FAILURES: usize = 5;

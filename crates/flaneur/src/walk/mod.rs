@@ -19,7 +19,7 @@
 //! # citygen::write_city(&citygen::CityConfig { objects: 60, ..Default::default() }, &scene)?;
 //! # let opts = flaneur::BuildOptions { lod: None, ..Default::default() };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::walk::{path, review};
+//! use flaneur::{path, walk::review};
 //! let db = flaneur::Database::open(&file)?;
 //! let poses = path::street_walk(&db.bounds(), 30, 5.0, 10, 7)?;
 //! // CSearch through the index cache, without prefetching (so unpaced).
@@ -46,10 +46,11 @@
 //!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
 //! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
 //!   [`lod_select::REFINED`]) and its selector, counts and threshold;
-//! - [`path`]: camera paths ([`path::CameraPath`], a timed sequence of [`path::Pose`]s,
-//!   read and written as CSV) and their generators: street walks, viewcell walks, the
-//!   motion patterns of Shou 2002 §4.4.1 ([`path::motion`]) and the routes of Zheng
-//!   2007 §7.5 ([`path::routes`]).
+//! - [`scene`]: the memory scene tree of Shou 2002 ch. 6 that the scene-tree walks
+//!   traverse ([`scene::SceneTree`], [`scene::traverse`]).
+//!
+//! Camera paths, the poses a walk is given, are a module below the walk and the
+//! prefetchers that predict from them: [`crate::path`].
 //!
 //! Re-exported here, flat, one idea per file:
 //! - `sink.rs`: what a walk hands whoever draws it: [`FrameSink`] (a frame's
@@ -80,12 +81,12 @@ pub mod live;
 pub mod lod_select;
 mod looked_at;
 mod mode;
-pub mod path;
 mod pvs_tally;
 pub mod pvs_walk;
 mod remote;
 pub mod review;
 mod review_tally;
+pub mod scene;
 mod scene_tally;
 pub mod scene_walk;
 mod session;

@@ -28,8 +28,8 @@ use serde::Serialize;
 
 use crate::database::Database;
 use crate::error::{Error, Result};
+use crate::path::{CameraPath, Pose};
 use crate::prefetch::pvs::{Lanp, Pbnp, PrefetchArea, Snp};
-use crate::walk::path::{CameraPath, Pose};
 use crate::walk::pvs_tally::PvsTally;
 use crate::walk::sink::Played;
 use crate::walk::walk_lods::WalkLods;
@@ -286,7 +286,7 @@ pub fn walk_pvs_live(
 /// # let mut opts = flaneur::BuildOptions::default();
 /// # opts.visibility = Some(flaneur::visibility::VisibilityOptions { cell_size: 40.0, ..Default::default() });
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
-/// use flaneur::walk::{path::cell_poses, pvs_walk, NoSink};
+/// use flaneur::{path::cell_poses, walk::{pvs_walk, NoSink}};
 /// let db = flaneur::Database::open(&path)?;
 /// let poses = cell_poses(&db, 200, 0.05, 30.0, 1)?;
 /// let mut rows = 0;

@@ -37,12 +37,12 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
-use super::path::{CameraPath, Pose};
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::walk_lods::WalkLods;
 use crate::cache::{CacheStats, Trace};
 use crate::database::Database;
 use crate::error::{Error, Result};
+use crate::path::{CameraPath, Pose};
 
 /// How a walk retrieves objects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -488,7 +488,7 @@ pub fn walk_into(
 /// # let (scene, path) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
 /// # citygen::write_city(&citygen::CityConfig { objects: 60, ..Default::default() }, &scene)?;
 /// # flaneur::build_from_scene(&scene, &path, &flaneur::BuildOptions::default())?;
-/// use flaneur::walk::{path::motion, review, NoSink};
+/// use flaneur::{path::motion, walk::{review, NoSink}};
 /// let db = flaneur::Database::open(&path)?;
 /// let poses = motion::poses(&db.bounds(), motion::Motion::Normal, 300, 30.0, 1)?;
 /// let mut rows = 0;

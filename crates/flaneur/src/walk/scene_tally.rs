@@ -4,7 +4,7 @@
 use super::cells_entered::CellsEntered;
 use super::frame_times::FrameTimesTally;
 use super::scene_walk::{SceneFrame, SceneSummary};
-use crate::hdov::scene::Traversal;
+use crate::walk::scene::Traversal;
 
 /// What the summary needs of the frames seen so far.
 #[derive(Clone, Debug, Default)]

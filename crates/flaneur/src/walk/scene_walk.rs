@@ -21,8 +21,8 @@
 //! #     ..Default::default()
 //! # };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::hdov::scene::{SceneTree, Traversal};
-//! use flaneur::walk::{path, scene_walk};
+//! use flaneur::walk::scene::{SceneTree, Traversal};
+//! use flaneur::{path, walk::scene_walk};
 //! let db = flaneur::Database::open(&file)?;
 //! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
 //! let poses = path::cell_walk(&db, 30, 0.5, 10.0, 3)?;
@@ -34,14 +34,14 @@
 
 use serde::Serialize;
 
-use super::path::{CameraPath, Pose};
 use super::scene_tally::SceneTally;
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::walk_lods::WalkLods;
 use crate::database::Database;
 use crate::error::{Error, Result};
-use crate::hdov::scene::{SceneTree, Traversal};
 use crate::hdov::Selection;
+use crate::path::{CameraPath, Pose};
+use crate::walk::scene::{SceneTree, Traversal};
 
 /// What a scene-tree walk can vary.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -52,7 +52,7 @@ pub struct SceneConfig {
     pub far: f32,
     /// Which rule picks VSC's and PB's representations: ours ([`Selection::Screen`], the
     /// default) holds each to its stored error projecting under [`SceneConfig::tau`]
-    /// from the eye (`hdov::scene::traverse_screened`); the thesis's
+    /// from the eye (`walk::scene::traverse_screened`); the thesis's
     /// ([`Selection::Thesis`]) for the Table 6.1 reproduction.
     pub selection: Selection,
     /// The screen rule's threshold, a fraction of the viewport within [0, 1): the

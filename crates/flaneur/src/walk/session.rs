@@ -20,11 +20,11 @@ use std::time::Instant;
 
 use super::buffer::{Loaded, ObjectBuffer};
 use super::looked_at::looked_at;
-use super::path::Pose;
 use super::sink::{FrameFigures, Viewer};
 use super::walk_lods::{LodWanted, WalkLods};
 use crate::error::Result;
 use crate::geom::Camera;
+use crate::path::Pose;
 
 /// A walk's retrieval strategy: what it does per frame, given the pose.
 pub(crate) trait Mode {
@@ -213,8 +213,8 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+    use crate::path::CameraPath;
     use crate::walk::buffer::tests::loaded;
-    use crate::walk::path::CameraPath;
     use crate::walk::sink::Played;
     use crate::walk::FrameSink;
 

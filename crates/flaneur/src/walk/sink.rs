@@ -146,7 +146,7 @@ impl FrameSink for NoSink {
 /// recorded path), and what draws the frame the walk selects for it.
 pub trait Viewer: FrameSink {
     /// The pose of frame `frame`, or `None` when the walk ends.
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>>;
+    fn next_pose(&mut self, frame: usize) -> Result<Option<crate::path::Pose>>;
 
     /// What the frame just drawn cost the walk, for a display beside the picture.
     fn figures(&mut self, _figures: &FrameFigures) {}
@@ -202,9 +202,9 @@ pub struct FrameFigures {
 
 /// Poses played to a sink in order: the viewer of a walk along a fixed path, or along
 /// poses an iterator makes as the walk asks for them (a walk too long to hold its path),
-/// each checked as a [`CameraPath`](super::path::CameraPath)'s are.
+/// each checked as a [`CameraPath`](crate::path::CameraPath)'s are.
 pub(crate) struct Played<'a> {
-    poses: Box<dyn Iterator<Item = super::path::Pose> + 'a>,
+    poses: Box<dyn Iterator<Item = crate::path::Pose> + 'a>,
     checks: PoseChecks,
     sink: &'a mut dyn FrameSink,
 }
@@ -212,7 +212,7 @@ pub(crate) struct Played<'a> {
 /// Whether [`Played`] checks its poses as they come, and the last one's time if so.
 #[derive(Clone, Copy, Debug)]
 enum PoseChecks {
-    /// A [`CameraPath`](super::path::CameraPath)'s, checked when it was made.
+    /// A [`CameraPath`](crate::path::CameraPath)'s, checked when it was made.
     Made,
     /// An iterator's, each checked against the pose before (none yet: `None`).
     AsTheyCome { last_time: Option<f64> },
@@ -220,7 +220,7 @@ enum PoseChecks {
 
 impl<'a> Played<'a> {
     /// The poses of `path` (checked when it was made).
-    pub(crate) fn path(path: &'a super::path::CameraPath, sink: &'a mut dyn FrameSink) -> Self {
+    pub(crate) fn path(path: &'a crate::path::CameraPath, sink: &'a mut dyn FrameSink) -> Self {
         Played {
             poses: Box::new(path.poses.iter().copied()),
             checks: PoseChecks::Made,
@@ -230,7 +230,7 @@ impl<'a> Played<'a> {
 
     /// The poses `poses` gives, checked one by one.
     pub(crate) fn streamed(
-        poses: impl Iterator<Item = super::path::Pose> + 'a,
+        poses: impl Iterator<Item = crate::path::Pose> + 'a,
         sink: &'a mut dyn FrameSink,
     ) -> Self {
         Played {
@@ -282,12 +282,12 @@ impl FrameSink for Played<'_> {
 }
 
 impl Viewer for Played<'_> {
-    fn next_pose(&mut self, frame: usize) -> Result<Option<super::path::Pose>> {
+    fn next_pose(&mut self, frame: usize) -> Result<Option<crate::path::Pose>> {
         let Some(pose) = self.poses.next() else {
             return Ok(None);
         };
         if let PoseChecks::AsTheyCome { last_time } = &mut self.checks {
-            super::path::check_pose(&pose, *last_time).map_err(|what| {
+            crate::path::check_pose(&pose, *last_time).map_err(|what| {
                 crate::error::Error::Invalid(format!("camera path, pose {frame}: {what}"))
             })?;
             *last_time = Some(pose.time);

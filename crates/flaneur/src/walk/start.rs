@@ -10,11 +10,11 @@
 
 use glam::Vec3;
 
-use super::path::Pose;
-use super::path::EYE_HEIGHT;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::path::Pose;
+use crate::path::EYE_HEIGHT;
 
 /// The half-side of the box around a point whose objects count as its neighbours, metres.
 const NEIGHBOURHOOD: f32 = 60.0;

@@ -6,10 +6,10 @@
 
 use glam::Vec3;
 
-use super::path::Pose;
-use super::path::EYE_HEIGHT;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::path::Pose;
+use crate::path::EYE_HEIGHT;
 
 /// How far from a wall a walker's eye stays, metres.
 const BODY_RADIUS: f32 = 0.4;
@@ -46,14 +46,14 @@ pub enum Move {
 
 /// A person steering the camera: held movement keys ([`Move`]) and mouse motion in, a
 /// pose per frame out ([`Steer::step`]). Walking keeps the eye at street height
-/// ([`EYE_HEIGHT`](crate::walk::path::EYE_HEIGHT) above the ground) and stops it at the boxes
+/// ([`EYE_HEIGHT`](crate::path::EYE_HEIGHT) above the ground) and stops it at the boxes
 /// it is given (the objects the walk has loaded around it, grown by a body radius of
 /// 0.4 m, so that it slides along a wall rather than entering it); flying goes anywhere
 /// half a metre or more above the ground. A mouse pixel turns the view by 0.0025 rad. No
 /// window here: the window turns its events into these calls.
 ///
 /// ```
-/// use flaneur::walk::path::Pose;
+/// use flaneur::path::Pose;
 /// use flaneur::walk::{Move, Steer};
 /// let start = Pose { time: 0.0, position: glam::Vec3::new(0.0, 1.7, 0.0), yaw: 0.0, pitch: 0.0 };
 /// let mut steer = Steer::new(start, 0.0)?;

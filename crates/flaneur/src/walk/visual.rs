@@ -51,7 +51,7 @@
 //! #     ..Default::default()
 //! # };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::walk::{path, visual};
+//! use flaneur::{path, walk::visual};
 //! let db = flaneur::Database::open(&file)?;
 //! let poses = path::cell_walk(&db, 40, 0.5, 10.0, 3)?;
 //! let report = visual::walk(&db, &poses, &visual::VisualConfig::default(), |_| {})?;
@@ -62,7 +62,6 @@
 
 use serde::Serialize;
 
-use super::path::{CameraPath, Pose};
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::visual_tally::VisualTally;
 use super::walk_lods::WalkLods;
@@ -71,6 +70,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::hdov::{Scheme, ScreenTest, Selection};
+use crate::path::{CameraPath, Pose};
 
 /// The thesis's threshold for VISUAL's walks (Table 5.3, Figs. 5.24–5.26).
 pub const DEFAULT_ETA: f32 = 0.001;
@@ -428,7 +428,7 @@ pub fn walk_live(
 /// # opts.visibility = Some(flaneur::visibility::VisibilityOptions { cell_size: 40.0, ..Default::default() });
 /// # opts.hdov = Some(flaneur::hdov::HdovOptions::default());
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
-/// use flaneur::walk::{path::cell_poses, visual, NoSink};
+/// use flaneur::{path::cell_poses, walk::{visual, NoSink}};
 /// let db = flaneur::Database::open(&path)?;
 /// let poses = cell_poses(&db, 100, 0.5, 30.0, 1)?;
 /// let mut rows = 0;

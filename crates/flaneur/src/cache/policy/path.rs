@@ -24,8 +24,7 @@ use std::collections::HashMap;
 
 use super::{Hint, Policy};
 use crate::cache::Lookahead;
-use crate::geom::Aabb;
-use crate::rtree::covered;
+use crate::geom::{covered, Aabb};
 
 /// Evicts the node the walk's predicted searches need last.
 ///

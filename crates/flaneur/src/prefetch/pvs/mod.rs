@@ -10,7 +10,7 @@
 //! take it, and lets the cache grow to hold them. All send only what the client lacks
 //! (`delta`, §7.3) and share one cache and replacement rule (`cache`, §7.4); `client`
 //! runs one position's transaction. `stored` reads a database's precomputed visibility as the server's
-//! table; `walk::path::routes` draws the thesis's two routes. The simulation of §7.5
+//! table; `prefetch::pvs::routes` draws the thesis's two routes. The simulation of §7.5
 //! (a whole route's counts), the thesis's synthetic city and its in-memory PVS table
 //! are the `pvs-prefetch` experiment's, in `flaneur-bench`.
 //!
@@ -51,7 +51,7 @@
 //!   area when that is larger (`PrefetchArea::grows_cache`).
 //! - **Orientation**: columns grow east (+x), rows south (+z); (a − 1, b + 1) is
 //!   north-east of (a, b), as in Fig. 7.1.
-//! - **The routes**: see [`routes`](crate::walk::path::routes); the synthetic table is
+//! - **The routes**: see [`routes`](crate::prefetch::pvs::routes); the synthetic table is
 //!   described with the experiment that draws it.
 
 mod area;
@@ -61,6 +61,7 @@ mod delta;
 mod grid;
 mod lanp;
 mod pbnp;
+pub mod routes;
 mod snp;
 mod source;
 mod stored;

@@ -16,7 +16,7 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::DEFAULT_FOV;
 use crate::geom::{Aabb, Camera};
-use crate::hdov::{search_cell, Found, Loader, NodeErrors, Scheme, ScreenRule, Selection};
+use crate::hdov::{Found, Loader, NodeErrors, Scheme, ScreenRule, Selection};
 use crate::prefetch::motion::MotionTrack;
 use crate::rtree::ObjectEntry;
 use crate::scene::Mesh;
@@ -210,8 +210,7 @@ impl Searcher<'_> {
     pub(super) fn finds(&self, loader: &mut Loader<'_>, cell: u32) -> Result<Finds> {
         let t = Instant::now();
         let screen = self.screen_rule(cell)?;
-        let result = search_cell(
-            self.db,
+        let result = self.db.hdov_search_screened(
             cell,
             self.eta,
             Some(self.scheme),
@@ -274,8 +273,7 @@ impl Searcher<'_> {
     /// How many finds `cell` has, searched apart from the walk's figures (no node cache).
     pub(super) fn count(&self, cell: u32) -> Result<usize> {
         let screen = self.screen_rule(cell)?;
-        let found = search_cell(
-            self.db,
+        let found = self.db.hdov_search_screened(
             cell,
             self.eta,
             Some(self.scheme),

@@ -1,14 +1,14 @@
 //! Camera paths: poses over time, from wherever they come. The generators, one file
 //! each: `motion`, the motion patterns of Shou 2002 §4.4.1 plus a random walk;
 //! `street`, a walker on straight streets; `viewcells`, a walk through a database's
-//! walkable viewcells; `routes`, the two walking routes of Zheng 2007 §7.5. A path is
-//! read and written as a CSV file (a recorded session): [`CameraPath::load_csv`],
-//! [`CameraPath::save_csv`] (the file's layout opens `csv.rs`).
+//! walkable viewcells. A path is read and written as a CSV file (a recorded session):
+//! [`CameraPath::load_csv`], [`CameraPath::save_csv`] (the file's layout opens
+//! `csv.rs`). The viewer's velocity and turning rate at a pose (`rates.rs`) are
+//! estimated here, below the prefetchers that predict from them.
 //!
-//! Every generator gives a [`CameraPath`] but the routes, whose grid positions stay in
-//! the prefetcher's double precision (a position exactly on a cell border must fall on
-//! the same side as the simulation of §7.5 decides it); [`routes::to_path`] makes them
-//! poses.
+//! The two walking routes of Zheng 2007 §7.5 are the PVS prefetcher's
+//! ([`crate::prefetch::pvs::routes`]): their grid positions stay in its double
+//! precision, and `routes::to_path` makes them a [`CameraPath`].
 
 use std::f32::consts::FRAC_PI_2;
 
@@ -19,10 +19,11 @@ use crate::geom::Camera;
 
 mod csv;
 pub mod motion;
-pub mod routes;
+mod rates;
 mod street;
 mod viewcells;
 
+pub use rates::{velocity, yaw_rate};
 pub use street::street_walk;
 pub use viewcells::{cell_poses, cell_walk, CellPoses};
 
@@ -106,18 +107,18 @@ impl CameraPath {
     /// The viewer's turning rate at pose `i` (radians per second, positive as yaw
     /// grows), by the same causal finite difference as [`CameraPath::velocity_at`], the
     /// yaw step taken the short way round. Zero where that is zero. The estimate is
-    /// prefetching's: see [`crate::prefetch::motion::yaw_rate`].
+    /// prefetching's: see [`yaw_rate`].
     pub fn yaw_rate_at(&self, i: usize) -> f32 {
-        crate::prefetch::motion::yaw_rate(&self.poses, i)
+        yaw_rate(&self.poses, i)
     }
 
     /// The viewer's velocity at pose `i` (m/s), by finite difference: from pose `i − 1`
     /// to `i` (causal: what a prefetcher knows at frame `i`), and from pose 0 to 1 for
     /// `i = 0`. Zero for a path of one pose or none, or where two times do not increase;
     /// an `i` past the end is taken as the last pose. The estimate is prefetching's: see
-    /// [`crate::prefetch::motion::velocity`].
+    /// [`velocity`].
     pub fn velocity_at(&self, i: usize) -> Vec3 {
-        crate::prefetch::motion::velocity(&self.poses, i)
+        velocity(&self.poses, i)
     }
 }
 

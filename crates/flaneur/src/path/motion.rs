@@ -192,7 +192,7 @@ impl FromStr for Motion {
 ///
 /// ```
 /// use flaneur::geom::Aabb;
-/// use flaneur::walk::path::motion::{generate, Motion};
+/// use flaneur::path::motion::{generate, Motion};
 /// # fn main() -> flaneur::Result<()> {
 /// let city: Aabb = "0,0,0,2000,80,2000".parse()?;
 /// let path = generate(&city, Motion::Fast, 300, 30.0, 7)?;
@@ -221,7 +221,7 @@ pub fn generate(
 ///
 /// ```
 /// use flaneur::geom::Aabb;
-/// use flaneur::walk::path::motion::{generate, poses, Motion};
+/// use flaneur::path::motion::{generate, poses, Motion};
 /// # fn main() -> flaneur::Result<()> {
 /// let city: Aabb = "0,0,0,2000,80,2000".parse()?;
 /// let lazy: Vec<_> = poses(&city, Motion::Turning, 500, 30.0, 3)?.collect();

@@ -38,9 +38,9 @@ use std::f64::consts::{PI, TAU};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::{CameraPath, Pose};
+use super::Position;
 use crate::error::{Error, Result};
-use crate::prefetch::pvs::Position;
+use crate::path::{CameraPath, Pose};
 
 /// The thesis's routes: 3000 steps of [`THESIS_STEP`].
 pub const THESIS_STEPS: usize = 3000;
@@ -114,7 +114,7 @@ fn check_start(
 ///
 /// ```
 /// use flaneur::prefetch::pvs::Position;
-/// use flaneur::walk::path::routes::{random_route, RouteConfig};
+/// use flaneur::prefetch::pvs::routes::{random_route, RouteConfig};
 /// // A square 100 m across round the origin.
 /// let square = |p: Position| Ok(p.x.abs() < 50.0 && p.z.abs() < 50.0);
 /// let cfg = RouteConfig { steps: 100, ..Default::default() };
@@ -198,7 +198,7 @@ pub struct StreetGrid {
 /// turns, `cfg.steps` steps long.
 ///
 /// ```
-/// use flaneur::walk::path::routes::{straight_route, RouteConfig, StreetGrid};
+/// use flaneur::prefetch::pvs::routes::{straight_route, RouteConfig, StreetGrid};
 /// // 12 × 12 blocks of 100 m with 60 m streets.
 /// let streets = StreetGrid { blocks: 12, pitch: 160.0, street: 60.0, side: 1980.0 };
 /// let route = straight_route(&streets, &RouteConfig { steps: 1000, ..Default::default() })?;
@@ -309,7 +309,7 @@ pub fn straight_route(streets: &StreetGrid, cfg: &RouteConfig) -> Result<Straigh
 ///
 /// ```
 /// use flaneur::prefetch::pvs::Position;
-/// use flaneur::walk::path::routes::{axis_route, RouteConfig};
+/// use flaneur::prefetch::pvs::routes::{axis_route, RouteConfig};
 /// // Two streets 8 m wide and 200 m long, crossing at the origin.
 /// let plus = |p: Position| {
 ///     Ok((p.x.abs() < 4.0 || p.z.abs() < 4.0) && p.x.abs().max(p.z.abs()) < 100.0)

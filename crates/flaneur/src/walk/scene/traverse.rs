@@ -47,11 +47,11 @@
 
 use glam::Vec3;
 
-use super::super::search::{level_for_detail, stops, ScreenTest, MAXDOV};
 use super::tree::{SceneNode, SceneTree};
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Frustum};
+use crate::hdov::{level_for_detail, stops, ScreenTest, MAXDOV};
 
 /// Retreats to a parent's representation that do not fit, in a row, before PB ends its
 /// traversal (the thesis's MAX_ATTEMPTS, whose value it does not give).

@@ -20,15 +20,15 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::super::lods::{aggregate, error_above, internal_levels, Reference};
-use super::super::vd::Vd;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
+use crate::hdov::{aggregate, error_above, internal_levels, Reference, Vd};
 use crate::lod::stored;
 use crate::progress::{Progress, Step};
 use crate::rtree::ObjectEntry;
 use crate::scene::Mesh;
+use crate::walk::GROUP_ID;
 
 /// One node of the scene tree.
 #[derive(Clone, Debug)]
@@ -281,9 +281,7 @@ impl SceneTree {
     /// Node `k`'s id in an object buffer: its object's, or the node's with
     /// [`GROUP_ID`](crate::walk::GROUP_ID).
     pub fn key(&self, k: u32) -> u64 {
-        self.nodes[k as usize]
-            .object
-            .unwrap_or(crate::walk::GROUP_ID | k as u64)
+        self.nodes[k as usize].object.unwrap_or(GROUP_ID | k as u64)
     }
 }
 

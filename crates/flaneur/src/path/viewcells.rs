@@ -36,7 +36,7 @@ pub fn cell_walk(
 /// # let mut opts = flaneur::BuildOptions::default();
 /// # opts.visibility = Some(flaneur::visibility::VisibilityOptions { cell_size: 40.0, ..Default::default() });
 /// # flaneur::build_from_scene(&scene, &path, &opts)?;
-/// use flaneur::walk::path::{cell_poses, cell_walk};
+/// use flaneur::path::{cell_poses, cell_walk};
 /// let db = flaneur::Database::open(&path)?;
 /// let lazy: Vec<_> = cell_poses(&db, 300, 0.5, 30.0, 4)?.collect();
 /// assert_eq!(lazy, cell_walk(&db, 300, 0.5, 30.0, 4)?.poses);

@@ -1,7 +1,9 @@
 //! The memory HDoV scene tree (Shou 2002 ch. 6): the whole city in memory as a k-D tree
 //! whose nodes carry internal LODs and one VD each ([`SceneTree`], `tree.rs`), and its
 //! three traversals, CONV, VSC(η) and PB(n) ([`traverse`], `traverse.rs`). The walk
-//! modes `vsc`, `pb` and `conv` draw with it (`flaneur::walk::scene_walk`).
+//! modes `vsc`, `pb` and `conv` draw with it (`flaneur::walk::scene_walk`), which is why
+//! it lives with the walk: it loads the whole city from a [`Database`](crate::Database),
+//! above the HDoV-tree's pages, whose internal LODs and VDs it shares (`crate::hdov`).
 //!
 //! ```
 //! # fn main() -> flaneur::Result<()> {
@@ -14,14 +16,14 @@
 //! #     ..Default::default()
 //! # };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::hdov::scene::{traverse, SceneTree, Traversal};
+//! use flaneur::walk::scene::{traverse, SceneTree, Traversal};
 //! let db = flaneur::Database::open(&file)?;
 //! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
 //! let cells = db.visibility()?.unwrap();
 //! let cell = cells.cells[0].id;
 //! tree.enter(&db, cell)?;
 //! let (row, column) = cells.grid.place(cell);
-//! let eye = flaneur::walk::path::Pose {
+//! let eye = flaneur::path::Pose {
 //!     time: 0.0,
 //!     position: cells.grid.cell_bounds(row, column).center(),
 //!     yaw: 0.0,
