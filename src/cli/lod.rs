@@ -76,11 +76,11 @@ fn lod(
     min_triangles: usize,
     refine: Option<RefineArgs>,
 ) -> Result<()> {
-    let m = flaneur_bench::lod_inspect::load_merged(mesh)?;
+    let m = super::lod_inspect::load_merged(mesh)?;
     match (refine, out) {
         (Some((Some(eye), Some(look), tau, fov)), _) => {
             let t = Instant::now();
-            let r = flaneur_bench::lod_inspect::refine_view(&m, eye, look, fov.to_radians(), tau)?;
+            let r = super::lod_inspect::refine_view(&m, eye, look, fov.to_radians(), tau)?;
             println!(
                 "{}: {} of {} triangles ({} vertices) for the view from {eye} towards {look}, tau {tau}; \
                  Hausdorff distance to the original {:.4} m; settled in {} frames, {:.2} s with the build",
@@ -100,7 +100,7 @@ fn lod(
         .into()),
         (None, Some(out)) => {
             let t = Instant::now();
-            let levels = flaneur_bench::lod_inspect::write_levels(&m, out, ratio, min_triangles)?;
+            let levels = super::lod_inspect::write_levels(&m, out, ratio, min_triangles)?;
             for l in &levels {
                 println!(
                     "{}: {} triangles, error {:.5} m",

@@ -10,6 +10,7 @@ mod demo_modes;
 pub mod info;
 pub mod insert;
 pub mod lod;
+mod lod_inspect;
 pub mod merge;
 pub mod query;
 pub mod serve;

@@ -7,8 +7,7 @@
 //! `lod_dag`, `lod_parallel` and `lod_refine` measure the LOD core (`flaneur::lod`) on
 //! procedural models, no database needed, with `lod_dag_stats` (the three DAG
 //! constructions compared) and `lod_orbit` (a scripted orbit refined frame by frame)
-//! beneath them; `lod_inspect` is what `flaneur lod` runs on a mesh file (its levels
-//! written as OBJ, one view's refinement measured). `pvs_prefetch` runs the neighbour
+//! beneath them. `pvs_prefetch` runs the neighbour
 //! PVS prefetchers (`flaneur::prefetch::pvs`) on the thesis's synthetic city and PVS
 //! table, which it draws itself, no database either, and
 //! `pvs_stats` measures the PVS tables it runs on. `link` is a network you can set: a
@@ -38,7 +37,6 @@ pub mod layout;
 pub mod link;
 pub mod lod_dag;
 pub mod lod_dag_stats;
-pub mod lod_inspect;
 pub mod lod_orbit;
 pub mod lod_parallel;
 pub mod lod_refine;

@@ -1,5 +1,7 @@
 //! What `flaneur lod` does: a mesh file's levels written out as OBJ for inspection, and
-//! one view's selective mesh measured — the LOD core run on a user's own model.
+//! one view's selective mesh measured — the LOD core run on a user's own model. The
+//! command's own work, beside the arguments and the printing (`lod.rs`): it measures
+//! no experiment, so it lives with the command rather than among the benches.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -23,7 +25,7 @@ pub fn load_merged(path: &Path) -> Result<Mesh> {
 }
 
 /// One level written by [`write_levels`].
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
 pub struct LevelFile {
     pub path: PathBuf,
     pub triangles: usize,
@@ -34,17 +36,6 @@ pub struct LevelFile {
 /// Builds `mesh`'s progressive mesh and writes its chain of levels (each about `ratio`
 /// times the triangles of the one before, down to `min_triangles`) as `level-N.obj` in
 /// `out`, level 0 the original.
-///
-/// ```
-/// # fn main() -> flaneur::Result<()> {
-/// let dir = tempfile::tempdir().unwrap();
-/// let levels =
-///     flaneur_bench::lod_inspect::write_levels(&flaneur::scene::bunny(), dir.path(), 0.25, 50)?;
-/// assert_eq!(levels[0].triangles, 3674);
-/// assert!(levels.windows(2).all(|w| w[1].triangles < w[0].triangles));
-/// assert!(levels.iter().all(|l| l.path.exists()));
-/// # Ok(()) }
-/// ```
 pub fn write_levels(
     mesh: &Mesh,
     out: &Path,
@@ -89,7 +80,7 @@ pub fn write_obj(path: &Path, mesh: &Mesh, comment: &str) -> Result<()> {
 }
 
 /// The selective mesh of one view, as [`refine_view`] measures it.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
 pub struct ViewRefinement {
     pub original_triangles: usize,
     pub triangles: usize,
@@ -178,6 +169,15 @@ mod tests {
         assert!(refine_view(&bunny, Vec3::Z * 20.0, Vec3::ZERO, 1.0, 0.0).is_err());
         assert!(refine_view(&bunny, Vec3::NAN, Vec3::ZERO, 1.0, 0.001).is_err());
         assert!(write_levels(&bunny, Path::new("."), 1.5, 10).is_err());
+    }
+
+    #[test]
+    fn each_level_is_coarser_than_the_one_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let levels = write_levels(&flaneur::scene::bunny(), dir.path(), 0.25, 50).unwrap();
+        assert_eq!(levels[0].triangles, 3674);
+        assert!(levels.windows(2).all(|w| w[1].triangles < w[0].triangles));
+        assert!(levels.iter().all(|l| l.path.exists()));
     }
 
     #[test]
