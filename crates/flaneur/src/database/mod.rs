@@ -15,7 +15,7 @@ use crate::hdov::{self, HdovTree};
 use crate::lod::stored::LodTable;
 use crate::lod::{stored, Dag, LevelInfo, LodStats, ProgressiveMesh};
 use crate::names::NameTable;
-use crate::rtree::{Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
+use crate::rtree::{BoxIndex, Coverlap, History, ObjectEntry, QueryResult, RTree, TreeStats};
 use crate::scene::{Mesh, MeshCodec};
 use crate::store::{Backend, HttpOptions, IoStats, PageKind, RemoteStats, RequestTimes, Store};
 use crate::visibility::VisibilityTable;
@@ -214,6 +214,8 @@ pub struct Database {
     visibility: Option<VisibilityTable>,
     hdov: Option<HdovTree>,
     names: Option<NameTable>,
+    /// Every object's box in memory, read the first time a walk asks for its misses.
+    boxes: std::sync::OnceLock<BoxIndex>,
 }
 
 impl Database {
@@ -321,6 +323,7 @@ impl Database {
             hdov,
             names,
             store,
+            boxes: std::sync::OnceLock::new(),
         })
     }
 
@@ -354,6 +357,18 @@ impl Database {
     /// BOX: every object whose box overlaps `query`.
     pub fn range(&self, query: &Aabb) -> Result<QueryResult> {
         self.tree.range(&self.store, query)
+    }
+
+    /// Every object's box in memory: the ground truth of a walk's visual misses, apart
+    /// from the pages a walk counts. Built the first time it is asked for, from a range
+    /// query over the whole city (read then, before the walk resets its counters), and
+    /// kept by the handle, so that walks one after another read the R-tree once.
+    pub(crate) fn box_index(&self) -> Result<&BoxIndex> {
+        if let Some(index) = self.boxes.get() {
+            return Ok(index);
+        }
+        let index = BoxIndex::new(&self.range(&self.bounds)?.objects);
+        Ok(self.boxes.get_or_init(|| index))
     }
 
     /// The objects whose boxes meet `camera`'s view frustum: a range query over the
@@ -656,6 +671,7 @@ impl Database {
         )?;
         let before = self.store.page_count();
         self.tree.insert(&mut self.store, entry)?;
+        self.boxes = std::sync::OnceLock::new();
         self.kinds.mesh += self.store.pages_written(PageKind::Mesh) - meshes;
         self.kinds.rtree += self.store.page_count() - before;
         self.objects += 1;

@@ -5,6 +5,7 @@
 //! `bulk`) and can grow by one-by-one insertion with the Ang–Tan linear split
 //! (`insert`, `split`), as the thesis built its trees.
 
+mod box_index;
 mod bulk;
 mod complement;
 mod history;
@@ -15,6 +16,7 @@ mod search;
 mod split;
 mod stats;
 
+pub(crate) use box_index::BoxIndex;
 pub(crate) use bulk::tile as str_tile;
 pub use bulk::DEFAULT_FILL;
 use complement::Complement;

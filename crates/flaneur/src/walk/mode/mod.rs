@@ -6,8 +6,8 @@
 //! CONV over the memory scene tree (Shou 2002 ch. 6). `receive` takes a prefetch thread's
 //! answer for REVIEW and VISUAL; `refining` is a never-wait REVIEW walk's lane that reads
 //! the full meshes of the objects it drew coarse, `loader` what its loader threads are asked and
-//! hand back, `load_order` the order their loads come in, and `oracle` the ground truth
-//! of its visual misses; `pace` plays a paced walk's poses at their times; `damage` what
+//! hand back, and `load_order` the order their loads come in (the ground truth of its
+//! visual misses is the database's, `rtree::BoxIndex`, read once a handle); `pace` plays a paced walk's poses at their times; `damage` what
 //! a never-wait walk's loaders could not read for damage, named for its summary.
 
 mod damage;
@@ -16,7 +16,6 @@ mod load_order;
 mod loader;
 mod mailbox;
 mod mesh_batch;
-mod oracle;
 mod pace;
 pub(crate) mod pvs;
 mod pvs_loader;

@@ -32,13 +32,12 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::geom::{Aabb, Camera, Frustum};
 use crate::prefetch::motion::{MotionTrack, ViewerMotion};
-use crate::rtree::{History, ObjectEntry};
+use crate::rtree::{BoxIndex, History, ObjectEntry};
 use crate::store::{IoStats, PageKind, PageSource};
 use crate::walk::buffer::{Loaded, ObjectBuffer};
 use crate::walk::cells::{contains_ground, scaled_cell};
 use crate::walk::mode::load_order::take_part;
 use crate::walk::mode::loader::{fetch, Answer, Fetched, Request};
-use crate::walk::mode::oracle::Oracle;
 use crate::walk::mode::receive::receive;
 use crate::walk::mode::refining::{refine, Refined};
 use crate::walk::review::{Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K};
@@ -83,7 +82,8 @@ pub(crate) fn walk_each<'db>(
     each: &mut dyn FnMut(&FrameStats) -> Result<()>,
 ) -> Result<WalkReport> {
     cfg.validate()?;
-    let oracle = Oracle::new(db)?;
+    // The misses' ground truth, read (once a handle) before the walk's counters start.
+    let boxes = db.box_index()?;
     db.reset_io();
     let pool = match &cfg.index_cache {
         Some((policy, bytes)) => Some(BufferPool::new(
@@ -179,7 +179,7 @@ pub(crate) fn walk_each<'db>(
             db,
             source,
             cfg,
-            oracle: &oracle,
+            boxes,
             pool: pool.as_ref(),
             history: History::default(),
             disk_cell: None,
@@ -241,7 +241,8 @@ struct Review<'a> {
     db: &'a Database,
     source: &'a (dyn PageSource + Sync),
     cfg: &'a ReviewConfig,
-    oracle: &'a Oracle,
+    /// Every object's box: the ground truth of the visual misses.
+    boxes: &'a BoxIndex,
     /// The index cache, when the walk has one (for its hit rate).
     pool: Option<&'a BufferPool<'a>>,
     /// Every cell whose objects are all in the buffer (the CSearch history).
@@ -414,7 +415,9 @@ impl Mode for Review<'_> {
             .sum();
         stats.prep_ms = t.elapsed().as_secs_f64() * 1e3;
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        stats.visual_misses = self.oracle.misses(&frustum, &fcell, buffer);
+        stats.visual_misses = self
+            .boxes
+            .missing(&frustum, &fcell, |id| buffer.contains(id));
         let io = self.db.io().since(&io_before);
         stats.index_pages = io.reads_of(PageKind::RtreeNode);
         stats.mesh_pages = io.reads_of(PageKind::Mesh);
