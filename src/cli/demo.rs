@@ -13,6 +13,7 @@ use super::walk::print_walk;
 use flaneur::path::motion::{self, Motion};
 use flaneur::path::CameraPath;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::settings;
 use flaneur::{BuildOptions, Database};
 use flaneur_render::ViewMode;
 
@@ -140,7 +141,7 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     println!(
         "walking {frames} frames ({:.0} s of path, played {}x faster) of the 'normal' pattern in REVIEW mode, then with plain BOX queries",
         frames as f64 / 30.0,
-        review::DEFAULT_PACE
+        settings::DEFAULT_PACE
     );
     print_legend();
     for preset in [Preset::Optimal, Preset::Box] {

@@ -16,6 +16,7 @@ use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::scene::{SceneTree, Traversal};
 use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame};
+use flaneur::walk::settings;
 use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
 use flaneur::Database;
 
@@ -92,27 +93,27 @@ pub struct WalkArgs {
     cache_bytes: Option<usize>,
     #[arg(long, value_name = "SECONDS", value_parser = seconds_ahead, allow_negative_numbers = true, help = format!(
         "Prefetch factor k: prefetch the cell of the frustum k seconds of motion ahead, at most 60 (negative: no prefetching) [default: {} for --mode review, --config optimal and nc; none for np and box]",
-        review::DEFAULT_K,
+        settings::DEFAULT_K,
     ))]
     k: Option<f32>,
     #[arg(long, value_parser = finite_f32, allow_negative_numbers = true, help = format!(
         "Scale factor SF of the disk cell over the frustum cell, at least 1 [default: {}]",
-        review::DEFAULT_SF,
+        settings::DEFAULT_SF,
     ))]
     sf: Option<f32>,
     #[arg(long, value_name = "METRES", value_parser = finite_f32, allow_negative_numbers = true, help = format!(
         "Frustum depth, metres: how far ahead the walk sees [default: {}]",
-        review::DEFAULT_FAR,
+        settings::DEFAULT_FAR,
     ))]
     far: Option<f32>,
     #[arg(long, value_name = "MIB", help = format!(
         "Object buffer budget, MiB (--mode review and box) [default: {}]",
-        review::DEFAULT_MEMORY_BUDGET >> 20,
+        settings::DEFAULT_MEMORY_BUDGET >> 20,
     ))]
     budget_mb: Option<usize>,
     /// Playback speed of walks that prefetch, times real time, within [0.01, 1000] (0:
     /// unpaced, frames back to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = settings::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
     speed: f32,
     /// REVIEW, BOX, PVS and VISUAL: the viewer's thread never waits on a read (ours): a
     /// search the viewer needs (PVS: the client and its rows; VISUAL: the HDoV-tree's)
@@ -277,7 +278,7 @@ impl WalkArgs {
         };
         if let (Some(how), None) = (traversal, config) {
             let cfg = SceneConfig {
-                far: far.unwrap_or(review::DEFAULT_FAR),
+                far: far.unwrap_or(settings::DEFAULT_FAR),
                 selection,
                 tau: lod_tau,
                 ..SceneConfig::new(how)

@@ -23,6 +23,7 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::settings;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -40,7 +41,7 @@ impl Default for PatternsConfig {
                 frames: PATTERN_FRAMES,
                 ..WalkSetup::default()
             },
-            prefetch_k: review::DEFAULT_K,
+            prefetch_k: settings::DEFAULT_K,
         }
     }
 }

@@ -24,7 +24,7 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::review::DEFAULT_K;
+use flaneur::walk::settings::DEFAULT_K;
 use flaneur::walk::visual::{self, VisualConfig, VisualReport, DEFAULT_ETA};
 
 /// The settings of the experiment.

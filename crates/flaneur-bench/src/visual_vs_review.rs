@@ -32,6 +32,7 @@ use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::settings;
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 
@@ -70,7 +71,7 @@ impl Default for VisualVsReviewConfig {
             ],
             boxes: vec![400.0, 200.0],
             sessions: SESSIONS.iter().map(|s| s.to_string()).collect(),
-            pace: review::DEFAULT_PACE,
+            pace: settings::DEFAULT_PACE,
             seed: 1,
             selection: flaneur::hdov::Selection::Screen,
         }
@@ -114,7 +115,7 @@ impl VisualVsReviewConfig {
                 SESSIONS.join(", ")
             )));
         }
-        review::check_pace(self.pace)
+        settings::check_pace(self.pace)
     }
 }
 
@@ -228,7 +229,7 @@ pub fn run(
             "visual+prefetch".into(),
             VisualConfig {
                 eta: COMPARED_ETA,
-                prefetch_k: Some(review::DEFAULT_K),
+                prefetch_k: Some(settings::DEFAULT_K),
                 pace: Some(cfg.pace),
                 selection: cfg.selection,
                 ..VisualConfig::default()

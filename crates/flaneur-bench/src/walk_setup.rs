@@ -14,11 +14,9 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::{self, Motion};
 use flaneur::path::CameraPath;
-use flaneur::walk::review::{
-    self, check_budget, check_far, check_pace, FrameStats, Preset, Retrieval, ReviewConfig,
-    WalkReport,
-};
-pub(super) use flaneur::walk::review::{check_k, check_sf};
+use flaneur::walk::review::{FrameStats, Preset, Retrieval, ReviewConfig, WalkReport};
+use flaneur::walk::settings::{self, check_budget, check_far, check_pace};
+pub(super) use flaneur::walk::settings::{check_k, check_sf};
 
 /// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
 /// order; `Motion::ALL` also has a random walk, which the thesis did not use.
@@ -78,11 +76,11 @@ impl Default for WalkSetup {
             frames: DEFAULT_FRAMES,
             fps: DEFAULT_FPS,
             seed: DEFAULT_SEED,
-            far: review::DEFAULT_FAR,
-            sf: review::DEFAULT_SF,
-            memory_budget: review::DEFAULT_MEMORY_BUDGET,
+            far: settings::DEFAULT_FAR,
+            sf: settings::DEFAULT_SF,
+            memory_budget: settings::DEFAULT_MEMORY_BUDGET,
             patterns: THESIS_PATTERNS.to_vec(),
-            pace: Some(review::DEFAULT_PACE),
+            pace: Some(settings::DEFAULT_PACE),
         }
     }
 }

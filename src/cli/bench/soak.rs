@@ -46,7 +46,7 @@ impl SoakArgs {
             ..d
         };
         if let Some(mb) = self.budget_mb {
-            flaneur::walk::review::check_budget(mb << 20)?;
+            flaneur::walk::settings::check_budget(mb << 20)?;
             cfg.review.memory_budget = mb << 20;
         }
         let db = crate::cli::source::open(&self.db)?;

@@ -25,7 +25,7 @@ pub struct VisualHttpArgs {
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
     /// The next-cell prefetch, seconds ahead, at most 60 (ours; negative: off).
-    #[arg(long, value_name = "SECONDS", default_value_t = flaneur::walk::review::DEFAULT_K, value_parser = seconds_ahead, allow_negative_numbers = true)]
+    #[arg(long, value_name = "SECONDS", default_value_t = flaneur::walk::settings::DEFAULT_K, value_parser = seconds_ahead, allow_negative_numbers = true)]
     k: f32,
     /// Round trips of the link, ms, comma-separated (default 0, 20, 50, 100, 200).
     #[arg(long, value_name = "MS", value_delimiter = ',', value_parser = round_trip_ms)]

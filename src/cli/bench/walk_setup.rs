@@ -2,7 +2,7 @@
 
 use crate::cli::args::{finite_f32, frame_rate, pace_factor};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review;
+use flaneur::walk::settings;
 use flaneur_bench::walk_setup::{self, WalkSetup};
 
 use crate::cli::args::{or_default, pace};
@@ -20,13 +20,13 @@ pub struct WalkSetupArgs {
     #[arg(long, default_value_t = walk_setup::DEFAULT_SEED)]
     pub(super) seed: u64,
     /// Frustum depth, metres.
-    #[arg(long, default_value_t = review::DEFAULT_FAR, value_parser = finite_f32, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = settings::DEFAULT_FAR, value_parser = finite_f32, allow_negative_numbers = true)]
     far: f32,
     /// Scale factor SF of the disk cell (not used where SF is swept).
-    #[arg(long, default_value_t = review::DEFAULT_SF, value_parser = finite_f32, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = settings::DEFAULT_SF, value_parser = finite_f32, allow_negative_numbers = true)]
     sf: f32,
     /// Object buffer budget, MiB.
-    #[arg(long, default_value_t = review::DEFAULT_MEMORY_BUDGET >> 20)]
+    #[arg(long, default_value_t = settings::DEFAULT_MEMORY_BUDGET >> 20)]
     budget_mb: usize,
     /// Motion patterns, comma-separated (default: the thesis's five; normal where one
     /// path is walked).
@@ -34,7 +34,7 @@ pub struct WalkSetupArgs {
     patterns: Vec<Motion>,
     /// Playback speed of walks that prefetch, times real time, within [0.01, 1000] (0:
     /// unpaced, frames back to back; the prefetch thread then rarely finishes in time).
-    #[arg(long, default_value_t = review::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = settings::DEFAULT_PACE, value_parser = pace_factor, allow_negative_numbers = true)]
     speed: f32,
 }
 

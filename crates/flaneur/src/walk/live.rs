@@ -131,7 +131,7 @@ fn visual_config(eta: f32, remote: bool) -> VisualConfig {
         eta,
         pace: None,
         never_wait: remote,
-        prefetch_k: remote.then_some(review::DEFAULT_K),
+        prefetch_k: remote.then_some(crate::walk::settings::DEFAULT_K),
         ..VisualConfig::default()
     }
 }

@@ -46,6 +46,8 @@
 //!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
 //! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
 //!   [`lod_select::REFINED`]) and its selector, counts and threshold;
+//! - [`settings`]: the defaults and checks every walk mode shares (the frustum's depth,
+//!   SF, k, the playback speed, the buffer's budget);
 //! - [`scene`]: the memory scene tree of Shou 2002 ch. 6 that the scene-tree walks
 //!   traverse ([`scene::SceneTree`], [`scene::traverse`]).
 //!
@@ -90,6 +92,7 @@ pub mod scene;
 mod scene_tally;
 pub mod scene_walk;
 mod session;
+pub mod settings;
 mod sink;
 mod start;
 mod steer;

@@ -111,12 +111,12 @@ impl From<PvsPrefetch> for PvsWalkConfig {
 
 impl PvsWalkConfig {
     /// A never-wait walk with `prefetch`, played at
-    /// [`DEFAULT_PACE`](crate::walk::review::DEFAULT_PACE) times real time.
+    /// [`DEFAULT_PACE`](crate::walk::settings::DEFAULT_PACE) times real time.
     pub fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
         PvsWalkConfig {
             prefetch,
             never_wait: true,
-            pace: Some(crate::walk::review::DEFAULT_PACE),
+            pace: Some(crate::walk::settings::DEFAULT_PACE),
         }
     }
 

@@ -12,7 +12,8 @@
 //! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
-//! Here: the settings, their checks, the entry points and the figures a walk reports.
+//! Here: REVIEW's settings, the entry points and the figures a walk reports; the
+//! defaults and checks every walk shares are `walk::settings`'.
 //! The frame loop is the walk session's (`walk/session.rs`), the retrieval the REVIEW
 //! mode's (`walk/mode/review.rs`), the motion prediction `prefetch::motion`'s.
 //!
@@ -37,6 +38,10 @@
 //! the prefetch thread never gets the time a viewer would give it. Frame 0 loads the
 //! first cell from nothing and is reported apart from the walk's frame times.
 
+use super::settings::{
+    check_budget, check_far, check_k, check_pace, check_sf, DEFAULT_FAR, DEFAULT_K,
+    DEFAULT_MEMORY_BUDGET, DEFAULT_PACE, DEFAULT_SF,
+};
 use super::sink::{FrameSink, NoSink, Played, Viewer};
 use super::walk_lods::WalkLods;
 use crate::cache::{CacheStats, Trace};
@@ -129,26 +134,8 @@ pub struct ReviewConfig {
 
 /// The thesis's index cache (§4.4): 1 MB, with distance-priority LRU.
 pub const DEFAULT_INDEX_CACHE: usize = 1 << 20;
-/// The thesis's prefetch factor k (§4.4), seconds.
-pub const DEFAULT_K: f32 = 0.8;
-/// SF: the thesis does not give its default. 1.2 is one of the sizes of its Table 4.2;
-/// on the demo city's pattern table (`flaneur bench patterns`) it gives Optimal 10-25 %
-/// of BOX's disk I/Os per query (the thesis: 9-21 %; measured again once a frame's count
-/// included what the prefetch thread reads while the viewer waits for the clock, where an
-/// earlier measure gave 4-14 %), while a cell still holds the frustum for 100 m of
-/// forward motion. 1.5 gave a slow walk no query after the first in a minute.
-pub const DEFAULT_SF: f32 = 1.2;
-/// The thesis's frustum depth (§4.4), metres.
-pub const DEFAULT_FAR: f32 = 1000.0;
-/// Walks with prefetching play four times faster than real time by default: a
-/// minute's path in 15 s, the prefetch thread getting a quarter of a viewer's time.
-pub const DEFAULT_PACE: f32 = 4.0;
-/// The thesis capped memory at 20 MB for objects of a few hundred bytes on disk; our
-/// objects are 20 KB, so the default budget is scaled to hold a disk cell of the demo city.
-pub const DEFAULT_MEMORY_BUDGET: usize = 256 << 20;
-
 impl ReviewConfig {
-    /// The configuration `p` of §4.4 at this module's defaults (`DEFAULT_*`): CSearch
+    /// The configuration `p` of §4.4 at the walks' defaults (`walk::settings`): CSearch
     /// with the index cache and prefetching for `Optimal`, less the cache (`Nc`) or
     /// prefetching (`Np`), and plain BOX with neither (`Box`).
     pub fn preset(p: Preset) -> ReviewConfig {
@@ -199,58 +186,6 @@ impl ReviewConfig {
         }
         check_budget(self.memory_budget)
     }
-}
-
-/// A playback speed must be a positive factor of real time.
-pub fn check_pace(pace: f32) -> Result<()> {
-    if !(pace.is_finite() && pace > 0.0) {
-        return Err(Error::Invalid(format!(
-            "playback speed {pace} must be a positive factor of real time"
-        )));
-    }
-    Ok(())
-}
-
-// The checks of a walk's settings, shared with the experiments that sweep them.
-
-/// A disk cell's scale factor SF must be at least 1.
-pub fn check_sf(sf: f32) -> Result<()> {
-    if !(sf.is_finite() && sf >= 1.0) {
-        return Err(Error::Invalid(format!(
-            "scale factor SF {sf} must be a number of at least 1"
-        )));
-    }
-    Ok(())
-}
-
-/// A prefetch factor k must be a non-negative number of seconds.
-pub fn check_k(k: f32) -> Result<()> {
-    if !(k.is_finite() && k >= 0.0) {
-        return Err(Error::Invalid(format!(
-            "prefetch factor k {k} must be a non-negative number"
-        )));
-    }
-    Ok(())
-}
-
-/// A frustum's depth must be more than a metre.
-pub fn check_far(far: f32) -> Result<()> {
-    if !(far.is_finite() && far > 1.0) {
-        return Err(Error::Invalid(format!(
-            "frustum depth {far} must be more than a metre"
-        )));
-    }
-    Ok(())
-}
-
-/// A memory budget must be more than 0 bytes.
-pub fn check_budget(bytes: usize) -> Result<()> {
-    if bytes == 0 {
-        return Err(Error::Invalid(
-            "the memory budget must be more than 0 bytes".into(),
-        ));
-    }
-    Ok(())
 }
 
 /// One frame's figures. Times in milliseconds.

@@ -66,7 +66,7 @@ impl SceneConfig {
     pub fn new(traversal: Traversal) -> SceneConfig {
         SceneConfig {
             traversal,
-            far: super::review::DEFAULT_FAR,
+            far: super::settings::DEFAULT_FAR,
             selection: Selection::Screen,
             tau: super::lod_select::DEFAULT_TAU,
         }
@@ -298,7 +298,7 @@ fn walk_each<'db>(
     each: &mut dyn FnMut(&SceneFrame) -> Result<()>,
 ) -> Result<SceneReport> {
     cfg.traversal.validate()?;
-    super::review::check_far(cfg.far)?;
+    super::settings::check_far(cfg.far)?;
     super::visual::check_screen_tau(cfg.tau)?;
     let mut tally = SceneTally::default();
     super::mode::scene::walk_live(db, tree, cfg, lods, progress, viewer, |f| {

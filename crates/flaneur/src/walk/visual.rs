@@ -153,14 +153,14 @@ impl Default for VisualConfig {
             scheme: None,
             node_cache: Some(("dovtime".into(), DEFAULT_NODE_CACHE)),
             prefetch_k: None,
-            far: super::review::DEFAULT_FAR,
-            fallback_sf: super::review::DEFAULT_SF,
+            far: super::settings::DEFAULT_FAR,
+            fallback_sf: super::settings::DEFAULT_SF,
             dov_tau: false,
             selection: Selection::Screen,
             tau: super::lod_select::DEFAULT_TAU,
             finer_by_tau: false,
             faint_tau: FAINT_TAU_STRETCH,
-            pace: Some(super::review::DEFAULT_PACE),
+            pace: Some(super::settings::DEFAULT_PACE),
             never_wait: false,
         }
     }
@@ -188,12 +188,12 @@ impl VisualConfig {
             )));
         }
         if let Some(k) = self.prefetch_k {
-            super::review::check_k(k)?;
+            super::settings::check_k(k)?;
         }
-        super::review::check_far(self.far)?;
-        super::review::check_sf(self.fallback_sf)?;
+        super::settings::check_far(self.far)?;
+        super::settings::check_sf(self.fallback_sf)?;
         if let Some(p) = self.pace {
-            super::review::check_pace(p)?;
+            super::settings::check_pace(p)?;
         }
         Ok(())
     }

@@ -40,9 +40,10 @@ use crate::walk::mode::load_order::take_part;
 use crate::walk::mode::loader::{fetch, Answer, Fetched, Request};
 use crate::walk::mode::receive::receive;
 use crate::walk::mode::refining::{refine, Refined};
-use crate::walk::review::{Counts, FrameStats, Retrieval, ReviewConfig, WalkReport, DEFAULT_K};
+use crate::walk::review::{Counts, FrameStats, Retrieval, ReviewConfig, WalkReport};
 use crate::walk::review_tally::ReviewTally;
 use crate::walk::session::{self, Culled, FrameAt, Mode};
+use crate::walk::settings::DEFAULT_K;
 use crate::walk::sink::{FrameFigures, LeftOut, Viewer};
 use crate::walk::walk_lods::WalkLods;
 
