@@ -153,6 +153,17 @@ impl Database {
     /// [`Database::hdov_search_cached`] with the selection rule: under `screen` (ours) a
     /// node's internal LOD is used only where its stored error also passes the rule's
     /// test; `None` is the thesis's search. `scheme` `None`: the smallest one built.
+    ///
+    /// ```no_run
+    /// # fn main() -> flaneur::Result<()> {
+    /// let db = flaneur::Database::open("city.flaneur".as_ref())?;
+    /// let cell = db.hdov()?.expect("built with --hdov").cells[0];
+    /// // The thesis's search through the smallest scheme built, without a node cache;
+    /// // a VISUAL walk passes its screen rule (`hdov::ScreenRule`) instead of `None`.
+    /// let result = db.hdov_search_screened(cell, 0.001, None, None, None)?;
+    /// println!("{} finds", result.found.len());
+    /// # Ok(()) }
+    /// ```
     pub fn hdov_search_screened(
         &self,
         cell: u32,
