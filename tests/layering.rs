@@ -415,15 +415,28 @@ fn upward(
     rows: &[Vec<String>],
     root: &BTreeMap<String, String>,
 ) -> Vec<Reach> {
+    sorted_reaches(code, module, rows, root).0
+}
+
+/// [`upward`]'s paths, and beside them the modules of `module`'s own row that it uses.
+fn sorted_reaches(
+    code: &[u8],
+    module: &[String],
+    rows: &[Vec<String>],
+    root: &BTreeMap<String, String>,
+) -> (Vec<Reach>, Vec<String>) {
     let mine = row_of(rows, &module[0])
         .unwrap_or_else(|| panic!("`{}` sits in no row of ARCHITECTURE.md", module[0]));
-    reaches(code, module, root)
-        .into_iter()
-        .filter(|r| {
-            UPPER_CRATES.contains(&r.top.as_str())
-                || row_of(rows, &r.top).is_some_and(|row| row < mine)
-        })
-        .collect()
+    let (mut up, mut beside) = (Vec::new(), Vec::new());
+    for r in reaches(code, module, root) {
+        let row = row_of(rows, &r.top);
+        if UPPER_CRATES.contains(&r.top.as_str()) || row.is_some_and(|row| row < mine) {
+            up.push(r);
+        } else if row == Some(mine) {
+            beside.push(r.top);
+        }
+    }
+    (up, beside)
 }
 
 /// Modules of one row that use each other, round a circle: each circle once, as the
@@ -496,7 +509,8 @@ fn every_module_uses_only_its_row_and_those_below() {
             m.push(name);
             test_only.push(m);
         }
-        for r in upward(&code, &module, &rows, &root) {
+        let (up, beside) = sorted_reaches(&code, &module, &rows, &root);
+        for r in up {
             violations.push(format!(
                 "{}:{}: `{}` reaches up from `{}` to `{}`",
                 file.strip_prefix(workspace()).unwrap().display(),
@@ -506,10 +520,8 @@ fn every_module_uses_only_its_row_and_those_below() {
                 r.top
             ));
         }
-        for r in reaches(&code, &module, &root) {
-            if row_of(&rows, &r.top) == row_of(&rows, &module[0]) {
-                same_row.insert((module[0].clone(), r.top));
-            }
+        for top in beside {
+            same_row.insert((module[0].clone(), top));
         }
         scanned += 1;
     }
