@@ -275,13 +275,13 @@ fn a_walk_meets_a_damaged_mesh() {
 #[test]
 fn a_pvs_walk_meets_a_damaged_mesh() {
     use flaneur::path::cell_walk;
-    use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+    use flaneur::walk::pvs::{self, PvsPrefetch};
     let c = common::city(60, 3, &common::with_visibility());
     let path = cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();
     let rule = PvsPrefetch::Pbnp { border: 0.25 };
     damaged_mesh_met_by(&c, 120, |db, skip| {
         let mut w = Walker::new(&path, skip);
-        let r = pvs_walk::walk_pvs_live(db, rule, |_| {}, &mut w).map(|r| r.frames.len());
+        let r = pvs::walk_pvs_live(db, rule, |_| {}, &mut w).map(|r| r.frames.len());
         (r, w)
     });
 }

@@ -11,7 +11,7 @@ use std::time::Duration;
 use flaneur::path::{cell_walk, CameraPath};
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::HttpOptions;
-use flaneur::walk::pvs_walk::{walk_pvs, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::pvs::{walk_pvs, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
 use flaneur::{BuildOptions, Database};
 use servers::Nginx;
 

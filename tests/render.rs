@@ -414,14 +414,14 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
     let path = flaneur::path::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
-    let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
-    let plain = flaneur::walk::pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
+    let rule = flaneur::walk::pvs::PvsPrefetch::Pbnp { border: 0.25 };
+    let plain = flaneur::walk::pvs::walk_pvs(&db, &path, rule, |_| {}).unwrap();
     let gpu = gpu();
     let frames = dir.path().join("frames");
     let mut writer =
         FrameWriter::new(&gpu, (48, 48), (&db.bounds(), 1000.0), &frames, 100).unwrap();
     let drawn =
-        flaneur::walk::pvs_walk::walk_pvs_into(&db, &path, rule, |_| {}, &mut writer).unwrap();
+        flaneur::walk::pvs::walk_pvs_into(&db, &path, rule, |_| {}, &mut writer).unwrap();
     assert_eq!(
         drawn.frames, plain.frames,
         "drawing changed the walk's figures"
@@ -445,7 +445,7 @@ fn fidelity_of_the_pvs_walk() {
     let db = with_visibility(dir.path());
     let path = flaneur::path::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
-    let rule = flaneur::walk::pvs_walk::PvsPrefetch::Pbnp { border: 0.25 };
+    let rule = flaneur::walk::pvs::PvsPrefetch::Pbnp { border: 0.25 };
     let r = fidelity(&db, &gpu, &path, ModeWalk::Pvs(rule), "pvs", (96, None));
     assert_eq!(r.rows.len(), 120);
     for row in &r.rows {
@@ -799,7 +799,7 @@ fn fidelity_of_the_visual_walk() {
 #[test]
 fn fidelity_of_the_scene_tree_traversals() {
     use flaneur::walk::scene::Traversal;
-    use flaneur::walk::scene_walk::SceneConfig;
+    use flaneur::walk::scene::SceneConfig;
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
     let path = flaneur::path::cell_walk(&db, 40, 0.5, 30.0, 2).unwrap();

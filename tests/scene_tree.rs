@@ -13,7 +13,7 @@ use glam::Vec3;
 use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::visibility::VisibilityOptions;
 use flaneur::walk::scene::{traverse, SceneTree, Traversal};
-use flaneur::walk::scene_walk::{self, SceneConfig};
+use flaneur::walk::scene::{self, SceneConfig};
 use flaneur::{BuildOptions, Database};
 
 fn city() -> &'static common::City {
@@ -134,7 +134,7 @@ fn pb_keeps_its_budget_and_names_what_is_too_big_for_a_tiny_one() {
     let db = Database::open(&city().db).unwrap();
     let mut t = tree(&db);
     let path = cell_walk(&db, 120, 1.5, 10.0, 3).unwrap();
-    let conv = scene_walk::walk(
+    let conv = scene::walk(
         &db,
         &mut t,
         &path,
@@ -143,7 +143,7 @@ fn pb_keeps_its_budget_and_names_what_is_too_big_for_a_tiny_one() {
     )
     .unwrap();
     let budget = (conv.summary.mean_triangles / 4.0) as u64;
-    let pb = scene_walk::walk(
+    let pb = scene::walk(
         &db,
         &mut t,
         &path,
@@ -155,7 +155,7 @@ fn pb_keeps_its_budget_and_names_what_is_too_big_for_a_tiny_one() {
     assert!(pb.summary.mean_triangles > 0.0);
     assert!(pb.summary.mean_triangles < conv.summary.mean_triangles);
     // A budget below every object's coarsest level: said so, naming one.
-    let tiny = scene_walk::walk(
+    let tiny = scene::walk(
         &db,
         &mut t,
         &path,
@@ -190,7 +190,7 @@ fn a_walk_counts_conv_frames_before_any_cell_and_frames_outside() {
     }));
     poses.extend((0..5).map(|i| above(16 + i, inside.poses.last().unwrap())));
     let path = CameraPath::new(poses).unwrap();
-    let r = scene_walk::walk(
+    let r = scene::walk(
         &db,
         &mut t,
         &path,

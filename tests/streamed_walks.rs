@@ -1,5 +1,5 @@
 //! A walk that hands each frame on and keeps none (`walk_pvs_streamed`,
-//! `visual::walk_streamed`, `scene_walk::walk_streamed`) reports what the same walk
+//! `visual::walk_streamed`, `scene::walk_streamed`) reports what the same walk
 //! keeping its frames reports: every frame, in order, and figures that are the sums,
 //! counts and extremes of those frames, tallied a frame at a time.
 
@@ -8,9 +8,9 @@ mod common;
 use flaneur::hdov::HdovOptions;
 use flaneur::path::{cell_poses, cell_walk};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch};
+use flaneur::walk::pvs::{self, PvsFrame, PvsPrefetch};
 use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame};
+use flaneur::walk::scene::{self, SceneConfig, SceneFrame};
 use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
 use flaneur::walk::NoSink;
 use flaneur::{BuildOptions, Database};
@@ -58,11 +58,11 @@ fn a_streamed_pvs_walk_reports_its_frames_sums() {
     let db = Database::open(&c.db).unwrap();
     let path = cell_walk(&db, FRAMES, STEP, 30.0, 5).unwrap();
     let rule = PvsPrefetch::Pbnp { border: 0.25 };
-    let kept = pvs_walk::walk_pvs(&db, &path, rule, |_| {}).unwrap();
+    let kept = pvs::walk_pvs(&db, &path, rule, |_| {}).unwrap();
     let db = Database::open(&c.db).unwrap();
     let mut handed: Vec<(usize, PvsFrame)> = Vec::new();
     let poses = cell_poses(&db, FRAMES, STEP, 30.0, 5).unwrap();
-    let r = pvs_walk::walk_pvs_streamed(&db, poses, rule, |_| {}, &mut NoSink, &mut |i, f| {
+    let r = pvs::walk_pvs_streamed(&db, poses, rule, |_| {}, &mut NoSink, &mut |i, f| {
         handed.push((i, *f));
         Ok(())
     })
@@ -180,12 +180,12 @@ fn a_streamed_scene_walk_reports_its_frames_sums() {
     let budget = 4000;
     let cfg = SceneConfig::new(Traversal::Pb { budget });
     let path = cell_walk(&db, FRAMES, STEP, 30.0, 7).unwrap();
-    let kept = scene_walk::walk(&db, &mut tree, &path, &cfg, |_| {}).unwrap();
+    let kept = scene::walk(&db, &mut tree, &path, &cfg, |_| {}).unwrap();
     let db = Database::open(&c.db).unwrap();
     let mut tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
     let mut frames: Vec<SceneFrame> = Vec::new();
     let poses = cell_poses(&db, FRAMES, STEP, 30.0, 7).unwrap();
-    let r = scene_walk::walk_streamed(&db, &mut tree, poses, &cfg, |_| {}, &mut NoSink, &mut |f| {
+    let r = scene::walk_streamed(&db, &mut tree, poses, &cfg, |_| {}, &mut NoSink, &mut |f| {
         frames.push(f.clone());
         Ok(())
     })

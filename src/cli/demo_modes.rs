@@ -8,7 +8,7 @@
 use anyhow::Result;
 use flaneur::path::{cell_walk, CameraPath};
 use flaneur::walk::lod_select::DEFAULT_TAU;
-use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::pvs::{self, PvsPrefetch};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
@@ -138,7 +138,7 @@ fn walk_one(
             (s.frames, s.frames_over_50ms, s.visual_misses)
         }
         ModeWalk::Pvs(prefetch) => {
-            let r = pvs_walk::walk_pvs_into(db, path, prefetch, tick, &mut sink)?;
+            let r = pvs::walk_pvs_into(db, path, prefetch, tick, &mut sink)?;
             (r.walked, r.frames_over_50ms, r.visual_misses as u64)
         }
         ModeWalk::Visual(cfg) => {

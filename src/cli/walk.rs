@@ -12,10 +12,10 @@ use super::args::{pace, parse_size};
 use super::source::SourceArgs;
 use flaneur::path::motion::{self, Motion};
 use flaneur::path::{cell_poses, CameraPath, Pose};
-use flaneur::walk::pvs_walk::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
+use flaneur::walk::pvs::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
 use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene_walk::{self, SceneConfig, SceneFrame};
+use flaneur::walk::scene::{self, SceneConfig, SceneFrame};
 use flaneur::walk::settings;
 use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
 use flaneur::Database;
@@ -501,7 +501,7 @@ fn pvs_walk_cmd(
         render,
         flaneur::geom::DEFAULT_FAR,
         |sink, tick| {
-            pvs_walk::walk_pvs_streamed(&db, poses, rule, tick, sink, &mut |i, f| {
+            pvs::walk_pvs_streamed(&db, poses, rule, tick, sink, &mut |i, f| {
                 write_row(&mut rows, || f.csv_row(i))
             })
         },
@@ -619,7 +619,7 @@ fn scene_walk_cmd(
         .map(|p| CsvRows::create(p, SceneFrame::CSV_HEADER))
         .transpose()?;
     let (r, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
-        scene_walk::walk_streamed(&db, &mut tree, poses, cfg, tick, sink, &mut |f| {
+        scene::walk_streamed(&db, &mut tree, poses, cfg, tick, sink, &mut |f| {
             write_row(&mut rows, || f.csv_row())
         })
     })?;

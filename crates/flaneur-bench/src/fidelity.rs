@@ -31,10 +31,10 @@ use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::path::CameraPath;
 use flaneur::walk::lod_select::LodCounts;
-use flaneur::walk::pvs_walk::{self, PvsPrefetch};
+use flaneur::walk::pvs::{self, PvsPrefetch};
 use flaneur::walk::review::{self, ReviewConfig};
 use flaneur::walk::scene::SceneTree;
-use flaneur::walk::scene_walk::{self, SceneConfig};
+use flaneur::walk::scene::{self, SceneConfig};
 use flaneur::walk::visual::{self, VisualConfig};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
@@ -410,14 +410,14 @@ fn draw_twice(
             review::walk_into(db, path, cfg, progress, &mut sink)?;
         }
         ModeWalk::Pvs(prefetch) => {
-            pvs_walk::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
+            pvs::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
         }
         ModeWalk::Visual(cfg) => {
             visual::walk_into(db, path, cfg, progress, &mut sink)?;
         }
         ModeWalk::Scene(cfg) => {
             let mut tree = SceneTree::load(db, &flaneur::progress::Silent)?;
-            scene_walk::walk_into(db, &mut tree, path, cfg, progress, &mut sink)?;
+            scene::walk_into(db, &mut tree, path, cfg, progress, &mut sink)?;
         }
     }
     Ok(FidelityReport {

@@ -27,7 +27,7 @@ use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::pvs_walk::{self, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::pvs::{self, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -182,7 +182,7 @@ pub fn run(
                 walk_cfg.prefetch.name(),
                 source.describe()
             ));
-            let (r, took, net) = timed(db, || pvs_walk::walk_pvs(db, &path, walk_cfg, |_| {}))?;
+            let (r, took, net) = timed(db, || pvs::walk_pvs(db, &path, walk_cfg, |_| {}))?;
             let speed = walk_cfg.pace.map_or(1.0, f64::from);
             let first = |i: usize| (path.poses[i].time - path.poses[0].time) / speed;
             rows.push(row(pattern, source, &r, took, net, first));

@@ -18,7 +18,7 @@ use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::cell_walk;
 use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene_walk::{self, SceneConfig};
+use flaneur::walk::scene::{self, SceneConfig};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -130,7 +130,7 @@ pub fn run(
             selection: cfg.selection,
             ..SceneConfig::new(how)
         };
-        let r = scene_walk::walk(db, &mut tree, &path, &sc, |_| {})?;
+        let r = scene::walk(db, &mut tree, &path, &sc, |_| {})?;
         let s = &r.summary;
         series.push((
             how.label(),

@@ -12,10 +12,10 @@ use super::report::write_report;
 use crate::cli::args::parse_size;
 use crate::cli::walk::camera_path;
 use flaneur::path::cell_walk;
-use flaneur::walk::pvs_walk::PvsPrefetch;
+use flaneur::walk::pvs::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
 use flaneur::walk::scene::Traversal;
-use flaneur::walk::scene_walk::SceneConfig;
+use flaneur::walk::scene::SceneConfig;
 use flaneur::walk::visual::VisualConfig;
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 

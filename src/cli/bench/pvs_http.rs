@@ -9,7 +9,7 @@ use anyhow::{bail, Context, Result};
 use super::report::write_report;
 use super::walk_setup::WalkSetupArgs;
 use crate::cli::args::or_default;
-use flaneur::walk::pvs_walk::PvsPrefetch;
+use flaneur::walk::pvs::PvsPrefetch;
 use flaneur::Database;
 use flaneur_bench::pvs_http::{self, PvsHttpConfig};
 

@@ -3,7 +3,7 @@
 
 use flaneur::walk::review::WalkReport;
 use flaneur::walk::scene::Traversal;
-use flaneur::walk::scene_walk::SceneReport;
+use flaneur::walk::scene::SceneReport;
 use flaneur::walk::visual::VisualReport;
 use flaneur::Database;
 

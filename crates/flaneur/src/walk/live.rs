@@ -6,9 +6,7 @@
 //! in the window because it is the walk engine's side of the window: which walk runs,
 //! and with what; the window only supplies poses and draws frames.
 
-use super::pvs_walk::{self, PvsPrefetch, PvsWalkConfig};
 use super::review::{self, Preset, ReviewConfig};
-use super::scene_walk::{self, SceneConfig};
 use super::visual::{self, VisualConfig, DEFAULT_ETA};
 use super::walk_lods::WalkLods;
 use super::Viewer;
@@ -16,6 +14,8 @@ use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::hdov::Selection;
 use crate::prefetch::pvs::DEFAULT_BORDER;
+use crate::walk::pvs::{self, PvsPrefetch, PvsWalkConfig};
+use crate::walk::scene::{self, SceneConfig};
 use crate::walk::scene::{SceneTree, Traversal};
 
 /// Failed walks in a row that end the session: the walk is then not getting over it.
@@ -151,10 +151,10 @@ fn shown(mode: ViewMode) -> String {
 /// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
 /// as [`review::walk_live`] walks them (unpaced: a person sets the pace; over HTTP never
 /// waiting on a read, [`ReviewConfig::never_wait`]), PVS as
-/// [`pvs_walk::walk_pvs_live`] does with PBNP prefetching (over HTTP LANP, never
+/// [`pvs::walk_pvs_live`] does with PBNP prefetching (over HTTP LANP, never
 /// waiting; REVIEW instead, said so, on a database without visibility), VISUAL as [`visual::walk_live`] does under the
 /// viewer's [η](LiveViewer::eta) (over HTTP never waiting, the next viewcell prefetched; PVS instead, said so, on a database without the
-/// HDoV-tree), VSC, PB and CONV as [`scene_walk::walk_live`] does over the memory scene
+/// HDoV-tree), VSC, PB and CONV as [`scene::walk_live`] does over the memory scene
 /// tree, loaded when first shown (REVIEW instead, said so, without visibility).
 /// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
 /// read and the objects refined. An error when the walk failed five times running.
@@ -175,23 +175,7 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
     let mut tree: Option<SceneTree> = None;
     let mut failures = 0;
     loop {
-        // A mode the database cannot show: the one it falls back to, said so.
-        let lacking = match mode {
-            ViewMode::Pvs | ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv
-                if !db.has_visibility() =>
-            {
-                Some((
-                    "no visibility data (build it with --visibility)",
-                    ViewMode::Review,
-                ))
-            }
-            ViewMode::Visual if db.hdov()?.is_none() => Some((
-                "no HDoV-tree (build it with --visibility --hdov)",
-                ViewMode::Pvs,
-            )),
-            _ => None,
-        };
-        if let Some((what, to)) = lacking {
+        if let Some((what, to)) = lacking(db, mode)? {
             let path = db.store().path().display();
             mode = fall_back(
                 viewer,
@@ -229,7 +213,7 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                     tau: viewer.lod_tau().unwrap_or(0.0),
                     ..SceneConfig::new(how)
                 };
-                scene_walk::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
+                scene::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             ViewMode::Visual => {
                 let cfg = VisualConfig {
@@ -252,7 +236,7 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
                     never_wait: remote,
                     pace: None,
                 };
-                pvs_walk::walk_pvs_live_with(db, cfg, &mut lods, |_| {}, viewer).map(|_| ())
+                pvs::walk_pvs_live_with(db, cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
             _ => review::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ()),
         };
@@ -293,6 +277,23 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
         }
         viewer.resume();
     }
+}
+
+/// What `db` lacks to show `mode`, and the mode it falls back to; `None` when it can.
+fn lacking(db: &Database, mode: ViewMode) -> Result<Option<(&'static str, ViewMode)>> {
+    Ok(match mode {
+        ViewMode::Pvs | ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv if !db.has_visibility() => {
+            Some((
+                "no visibility data (build it with --visibility)",
+                ViewMode::Review,
+            ))
+        }
+        ViewMode::Visual if db.hdov()?.is_none() => Some((
+            "no HDoV-tree (build it with --visibility --hdov)",
+            ViewMode::Pvs,
+        )),
+        _ => None,
+    })
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 //! mode holds: loads, drops, evicts); the objects it offers are culled against the
 //! frustum; the mode finishes its figures; [`lod_select`] picks each object's level
 //! under the τ the viewer wants; the viewer is handed the frame, then its figures. The
-//! modes (`mode/`) are the session's retrieval strategies: REVIEW and BOX over disk
+//! modes (a folder each) are the session's retrieval strategies: REVIEW and BOX over disk
 //! cells (Shou 2002 §4.1–4.4), the PVS client (Zheng 2007 ch. 7), VISUAL over the
 //! HDoV-tree (Shou 2002 §5.8.5) and VSC, PB and CONV over the memory scene tree (ch. 6). The loop and the
 //! modes are crate-private: a user walks a mode through its namespace's entry points.
@@ -30,26 +30,36 @@
 //! # Ok(()) }
 //! ```
 //!
-//! The public namespaces, each one idea a user reaches for by name:
+//! One folder per walk mode, each with the same parts: `config.rs` (what the walk can
+//! vary), `report.rs` (a frame's figures and the walk's), `walks.rs` (the entry
+//! points), `mode.rs` (the retrieval strategy the session plays), `tally.rs` (the
+//! summary tallied a frame at a time, so that a walk that hands its frames on reports
+//! what one that keeps them does) and, where the mode has them, `run.rs` (the walk's
+//! setup: a waiting walk or a never-wait one), `never_wait.rs` and `loader.rs`:
 //! - [`review`]: REVIEW and BOX walks ([`review::walk`], [`review::walk_into`] with a
 //!   sink, [`review::walk_live`] with a viewer, [`review::walk_streamed`] handing each
 //!   frame on and keeping none, for walks of any length), their settings ([`review::ReviewConfig`],
-//!   the presets of §4.4, the defaults and checks) and figures ([`review::WalkReport`]);
-//! - [`pvs_walk`]: the PVS walk the same way ([`pvs_walk::walk_pvs`],
-//!   [`pvs_walk::walk_pvs_streamed`] and the rest), its
-//!   prefetching rule ([`pvs_walk::PvsPrefetch`]) and figures;
+//!   the presets of §4.4) and figures ([`review::WalkReport`]);
+//! - [`pvs`]: the PVS walk the same way ([`pvs::walk_pvs`],
+//!   [`pvs::walk_pvs_streamed`] and the rest), its
+//!   prefetching rule ([`pvs::PvsPrefetch`]) and figures;
 //! - [`visual`]: the VISUAL walk over the HDoV-tree ([`visual::walk`] and the rest),
 //!   its settings ([`visual::VisualConfig`]) and figures ([`visual::VisualReport`]);
-//! - [`scene_walk`]: VSC, PB and CONV walks over the memory scene tree
-//!   ([`scene_walk::walk`], [`scene_walk::SceneConfig`], [`scene_walk::SceneReport`]);
+//! - [`scene`]: the memory scene tree of Shou 2002 ch. 6 ([`scene::SceneTree`],
+//!   [`scene::traverse`]) and the VSC, PB and CONV walks over it ([`scene::walk`],
+//!   [`scene::SceneConfig`], [`scene::SceneReport`]).
+//!
+//! Beside the modes:
 //! - [`live`]: walks one after another at a live viewer (a window) as its person changes
 //!   the mode or the budget ([`live::run`], [`live::LiveViewer`]);
 //! - [`lod_select`]: LOD selection, what each object is drawn at ([`lod_select::Drawn`],
 //!   [`lod_select::REFINED`]) and its selector, counts and threshold;
 //! - [`settings`]: the defaults and checks every walk mode shares (the frustum's depth,
-//!   SF, k, the playback speed, the buffer's budget);
-//! - [`scene`]: the memory scene tree of Shou 2002 ch. 6 that the scene-tree walks
-//!   traverse ([`scene::SceneTree`], [`scene::traverse`]).
+//!   SF, k, the playback speed, the buffer's budget, the screen rule's τ);
+//! - `threads/`: what the modes' loader threads share: the viewer's latest position
+//!   handed over (a mailbox), a paced walk's clock, the order loads come in, batches of
+//!   meshes read together, a prefetch's answer taken in time, coarse objects refined,
+//!   and what loaders could not read.
 //!
 //! Camera paths, the poses a walk is given, are a module below the walk and the
 //! prefetchers that predict from them: [`crate::path`].
@@ -67,13 +77,10 @@
 //! - `steer.rs`: [`Steer`], a person steering the camera with [`Move`] keys and the
 //!   mouse, at [`WALK_SPEED`].
 //!
-//! Private beside them: each mode's summary tallied a frame at a time, so that a walk
-//! that hands its frames on reports what one that keeps them does (`review_tally.rs`,
-//! `pvs_tally.rs`, `visual_tally.rs`, `scene_tally.rs`, over `frame_times.rs` and
-//! `cells_entered.rs`), and
-//! `frame_csv.rs`, the frames of a report that keeps them as one CSV text.
+//! Private beside them: the frame-time and cells-entered tallies every mode's
+//! summary is made of (`frame_times.rs`, `cells_entered.rs`), and `frame_csv.rs`, the
+//! frames of a report that keeps them as one CSV text.
 
-mod adapt_ahead;
 mod buffer;
 mod cells;
 mod cells_entered;
@@ -82,22 +89,17 @@ mod frame_times;
 pub mod live;
 pub mod lod_select;
 mod looked_at;
-mod mode;
-mod pvs_tally;
-pub mod pvs_walk;
+pub mod pvs;
 mod remote;
 pub mod review;
-mod review_tally;
 pub mod scene;
-mod scene_tally;
-pub mod scene_walk;
 mod session;
 pub mod settings;
 mod sink;
 mod start;
 mod steer;
+mod threads;
 pub mod visual;
-mod visual_tally;
 mod walk_lods;
 
 pub use buffer::{mesh_bytes, Eviction, Loaded, ObjectBuffer, GROUP_ID};

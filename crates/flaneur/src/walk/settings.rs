@@ -72,3 +72,14 @@ pub fn check_budget(bytes: usize) -> Result<()> {
     }
     Ok(())
 }
+
+/// Whether `tau` can be the screen rule's threshold: a fraction of the viewport within
+/// [0, 1), 0 letting no internal LOD pass.
+pub(crate) fn check_screen_tau(tau: f32) -> Result<()> {
+    if !(0.0..1.0).contains(&tau) {
+        return Err(Error::Invalid(format!(
+            "the screen rule's τ = {tau}: give a fraction of the viewport within [0, 1) (0: no internal LOD passes)"
+        )));
+    }
+    Ok(())
+}

@@ -1,7 +1,7 @@
 //! The memory HDoV scene tree (Shou 2002 ch. 6): the whole city in memory as a k-D tree
 //! whose nodes carry internal LODs and one VD each ([`SceneTree`], `tree.rs`), and its
 //! three traversals, CONV, VSC(η) and PB(n) ([`traverse`], `traverse.rs`). The walk
-//! modes `vsc`, `pb` and `conv` draw with it (`flaneur::walk::scene_walk`), which is why
+//! modes `vsc`, `pb` and `conv` draw with it (`flaneur::walk::scene`), which is why
 //! it lives with the walk: it loads the whole city from a [`Database`](crate::Database),
 //! above the HDoV-tree's pages, whose internal LODs and VDs it shares (`crate::hdov`).
 //!
@@ -35,12 +35,55 @@
 //! assert!(vsc.triangles <= conv.triangles);
 //! # Ok(()) }
 //! ```
+//!
+//! Walks over the memory HDoV scene tree (Shou 2002 ch. 6, `flaneur walk DB --mode
+//! vsc|pb|conv`): the whole city loaded into a [`SceneTree`] once, then each frame the
+//! eye's viewcell found (its VDs brought in through the tree's hash table on a change
+//! of cell) and the tree traversed by VSC(η), PB(n) or CONV, view frustum culling in
+//! all three; what the traversal chose is what the frame draws.
+//!
+//! A viewpoint outside every viewcell keeps the VDs of the last cell it was in (the
+//! thesis's run-time phase is for viewpoints within the cells); one before any cell
+//! is drawn by CONV. Both are counted ([`SceneSummary::frames_outside`],
+//! [`SceneSummary::frames_conv`]). Frame time is the walk's own: the VD update, the
+//! traversal, bringing the object buffer to what it chose, and culling.
+//!
+//! ```
+//! # fn main() -> flaneur::Result<()> {
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let (scene, file) = (dir.path().join("c.scene"), dir.path().join("c.flaneur"));
+//! # citygen::write_city(&citygen::CityConfig { objects: 40, ..Default::default() }, &scene)?;
+//! # let opts = flaneur::BuildOptions {
+//! #     visibility: Some(flaneur::visibility::VisibilityOptions {
+//! #         resolution: 8, ..Default::default() }),
+//! #     ..Default::default()
+//! # };
+//! # flaneur::build_from_scene(&scene, &file, &opts)?;
+//! use flaneur::walk::scene::{SceneTree, Traversal};
+//! use flaneur::{path, walk::scene};
+//! let db = flaneur::Database::open(&file)?;
+//! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
+//! let poses = path::cell_walk(&db, 30, 0.5, 10.0, 3)?;
+//! let cfg = scene::SceneConfig::new(Traversal::Vsc { eta: 0.001 });
+//! let report = scene::walk(&db, &mut tree, &poses, &cfg, |_| {})?;
+//! assert_eq!(report.frames.len(), 30);
+//! # Ok(()) }
+//! ```
 
+mod config;
+mod mode;
+mod report;
+mod tally;
 mod traverse;
 mod tree;
+mod walks;
 
+pub use config::SceneConfig;
+pub use report::{SceneFrame, SceneReport, SceneSummary};
 pub use traverse::{
     traverse, traverse_screened, Active, SceneErrors, ScreenView, Traversal, Traversed,
     MAX_ATTEMPTS, PB_TAU_STEP,
 };
 pub use tree::{SceneNode, SceneTree};
+pub(crate) use walks::walk_live_with;
+pub use walks::{walk, walk_into, walk_live, walk_streamed};
