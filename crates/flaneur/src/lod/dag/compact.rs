@@ -26,12 +26,12 @@
 //! ```
 //!
 //! Reading checks the header, the checksum, that the body is read through exactly and
-//! every value fits, then the content as version 1 does (`codec::checked`), naming the
+//! every value fits, then the content as version 1 does (`checked`), naming the
 //! first failure as an `Error::Invalid`, never a panic, whatever the bytes.
 
 use super::attrs::NodeAttrs;
 use super::build::{Csr, DagConstruction};
-use super::codec::{checked, DAG_MAGIC};
+use super::checked::{checked, DAG_MAGIC};
 use super::graph::Dag;
 use crate::error::{Error, Result};
 use crate::store::framing::{self as bytes, push_crc, push_varint, u32_at, Cursor};

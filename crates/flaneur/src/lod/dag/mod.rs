@@ -6,10 +6,11 @@
 //! The modules depend one way: `build` makes the edges ([`DagEdges`]), `attrs` computes
 //! the attributes over finished edges, `graph` puts the two together as the [`Dag`] that
 //! traversals walk, and `codec` reads and writes it (`compact` packs it for format
-//! version 2).
+//! version 2; both check what they read with `checked`).
 
 mod attrs;
 mod build;
+mod checked;
 mod codec;
 mod compact;
 mod graph;

@@ -46,14 +46,13 @@
 //! that pass are a progressive mesh that `PmCursor` and `SelectiveMesh` walk without an
 //! index check failing (those check every operator anyway; this names the damage early).
 
+use super::checked::{check_split, PM_MAGIC};
 use super::progressive::ProgressiveMesh;
 use super::vsplit::VertexSplit;
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use crate::store::framing::{self as bytes, f32_at, push_crc, u32_at, CRC_LEN};
 
-/// The first four bytes of an encoded progressive mesh.
-pub const PM_MAGIC: [u8; 4] = *b"FLPM";
 /// The encoding version this build writes and reads.
 pub const PM_VERSION: u32 = 1;
 
@@ -142,54 +141,6 @@ fn put_vec3(b: &mut Vec<u8>, v: &[f32; 3]) {
     for c in v {
         b.extend_from_slice(&c.to_le_bytes());
     }
-}
-
-/// What split `i` of a progressive mesh of `nv` base vertices and `nt` base triangles
-/// must be, whatever its encoding: it names only vertices and triangle slots that exist
-/// before it, its corners are below 3, its numbers finite, and the first split joins
-/// none before it. The fault, for the caller to prefix with the split.
-pub(super) fn check_split(
-    split: &VertexSplit,
-    i: usize,
-    nv: usize,
-    nt: usize,
-) -> std::result::Result<(), String> {
-    let (vertices_before, slots_before) = (nv + i, nt + 2 * i);
-    let v_p = split.v_p;
-    if v_p as usize >= vertices_before {
-        return Err(format!(
-            "v_p {v_p} does not exist before it ({vertices_before} vertices)"
-        ));
-    }
-    for p in [split.v_l, split.v_r].into_iter().flatten() {
-        if p as usize >= vertices_before || p == v_p {
-            return Err(format!(
-                "pivot {p} is v_p or does not exist before it ({vertices_before} vertices)"
-            ));
-        }
-    }
-    if split.corners.iter().any(|&c| c > 2) {
-        return Err(format!("corners {:?} (each 0, 1 or 2)", split.corners));
-    }
-    if split.joins_previous && i == 0 {
-        return Err("the first split joins no split before it".into());
-    }
-    let (position, normal, error) = (split.position, split.normal, split.error);
-    let finite = position.iter().chain(&normal).all(|c| c.is_finite());
-    if !(finite && error >= 0.0 && error.is_finite()) {
-        return Err(format!(
-            "position {position:?}, normal {normal:?} or error {error} is not finite"
-        ));
-    }
-    let adjusted = &split.adjusted;
-    if adjusted.iter().any(|&f| f as usize >= slots_before)
-        || adjusted.windows(2).any(|w| w[0] >= w[1])
-    {
-        return Err(format!(
-            "adjusted triangles {adjusted:?} are not ascending below {slots_before}"
-        ));
-    }
-    Ok(())
 }
 
 impl ProgressiveMesh {

@@ -46,10 +46,11 @@
 //! ```
 //!
 //! Reading checks the header, the checksum, that the body is read through exactly and
-//! every value fits its field, then each split as version 1 does (`codec::check_split`),
-//! naming the first failure as an `Error::Invalid`, never a panic, whatever the bytes.
+//! every value fits its field, then each split as version 1 does
+//! (`checked::check_split`), naming the first failure as an `Error::Invalid`, never a
+//! panic, whatever the bytes.
 
-use super::codec::check_split;
+use super::checked::{check_split, PM_MAGIC};
 use super::incidence::Incidence;
 use super::progressive::ProgressiveMesh;
 use super::vsplit::VertexSplit;
@@ -115,7 +116,7 @@ impl ProgressiveMesh {
             )));
         }
         let mut b = Vec::with_capacity(BODY_OFFSET + 16 * s + 8 * nv + 6 * nt);
-        b.extend_from_slice(&super::codec::PM_MAGIC);
+        b.extend_from_slice(&PM_MAGIC);
         for v in [PM_VERSION_QUANTISED, nv as u32, nt as u32, s as u32] {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -597,7 +598,7 @@ mod tests {
             .to_quantised_bytes()
             .unwrap();
         let restore = |b: &mut [u8]| {
-            b[..4].copy_from_slice(&super::super::codec::PM_MAGIC);
+            b[..4].copy_from_slice(&PM_MAGIC);
             b[4..8].copy_from_slice(&PM_VERSION_QUANTISED.to_le_bytes());
             reseal(b);
         };

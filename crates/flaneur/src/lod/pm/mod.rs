@@ -7,6 +7,7 @@
 //! The choices the thesis leaves open — creases and seams, boundaries, normals, the
 //! error's unit — are named in `simplify`'s top comment.
 
+mod checked;
 mod codec;
 mod compact;
 mod incidence;
