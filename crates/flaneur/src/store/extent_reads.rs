@@ -2,9 +2,12 @@
 //! that hold it, counted and verified), and telling a remote source which extents and
 //! pages come next, so that it fetches them together.
 
-use super::{remote, PageKind, Store};
+use super::{PageKind, Store};
 use crate::error::Result;
 use crate::store::Extent;
+
+/// The most pages the store announces at once when it reads a long extent.
+pub(crate) const CHUNK_PAGES: u64 = 256;
 
 impl Store {
     /// Reads the blob `ext` (pages of `kind`). Each page is counted and verified; the
@@ -67,9 +70,9 @@ impl Store {
         let mut scratch = Vec::new();
         for i in first_index..=last_index {
             let page = ext.first_page + i as u64;
-            if ((i - first_index) as u64).is_multiple_of(remote::CHUNK_PAGES) {
+            if ((i - first_index) as u64).is_multiple_of(CHUNK_PAGES) {
                 // A remote source fetches the next chunk in one request.
-                let count = (last_index + 1 - i).min(remote::CHUNK_PAGES as usize) as u64;
+                let count = (last_index + 1 - i).min(CHUNK_PAGES as usize) as u64;
                 self.source
                     .will_read(&[(page, count)])
                     .map_err(|e| self.read_error(page, e))?;

@@ -11,6 +11,9 @@
 //! - `backend/`: where page bytes come from (`mmap`, `pread`, optionally O_DIRECT);
 //! - `remote/`: a database on any HTTP server, read by byte ranges through a client
 //!   page cache;
+//! - `remote_stats.rs`, `request_times.rs`: what reading over HTTP has cost, and how
+//!   long each request took: counted by `remote/`, handed on by `backend/`'s trait,
+//!   so kept beside both;
 //! - `scan.rs`: a page read whatever its kind, for an integrity check;
 //! - `source.rs`: [`PageSource`], how a traversal reads node pages (from the store or
 //!   through a cache over it), with the [`NodeHint`] a cache weighs them by;
@@ -45,7 +48,9 @@ mod packed;
 mod recent_pages;
 pub(crate) mod page;
 mod remote;
+mod remote_stats;
 mod replace;
+mod request_times;
 mod scan;
 mod source;
 mod writer;
@@ -72,9 +77,11 @@ pub use extent::Extent;
 pub(crate) use header::{valid_page_size, MAX_PAGE_SIZE, MIN_PAGE_SIZE};
 pub use header::{Header, Segment, DEFAULT_PAGE_SIZE, FORMAT_VERSION, OLDEST_FORMAT_VERSION};
 pub use page::{PageKind, PAGE_HEADER_LEN};
-pub use remote::{is_url, HttpOptions, RemoteStats, RequestTimes};
+pub use remote::{is_url, HttpOptions};
+pub use remote_stats::RemoteStats;
 pub(crate) use replace::write_file_atomically;
 use replace::{persist, temp_file};
+pub use request_times::RequestTimes;
 pub use source::{NodeHint, PageSource};
 
 use backend::{MmapSource, PreadSource, RawPageSource};

@@ -19,7 +19,8 @@ use std::time::{Duration, Instant};
 
 use ureq::http::{HeaderMap, StatusCode};
 
-use super::{HttpOptions, RemoteError, RemoteStats, RequestTimes};
+use super::{HttpOptions, RemoteError};
+use crate::store::{RemoteStats, RequestTimes};
 
 /// The version of the file the first answer came from.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -13,9 +13,11 @@ use std::sync::Mutex;
 
 use lru::LruCache;
 
+use crate::store::extent_reads::CHUNK_PAGES;
+
 /// The fewest pages the cache holds, whatever its byte bound: two of the store's read
 /// chunks, so a chunk fetched ahead is still there when it is read.
-pub(crate) const MIN_PAGES: usize = 2 * super::source::CHUNK_PAGES as usize;
+pub(crate) const MIN_PAGES: usize = 2 * CHUNK_PAGES as usize;
 
 /// The page cache's bound in effect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

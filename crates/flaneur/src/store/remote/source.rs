@@ -9,11 +9,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::disk_cache::DiskCache;
 use super::fetch::{Ends, Fetcher};
 use super::page_cache::{self, Bound, PageCache};
-use super::{HttpOptions, RemoteError, RemoteStats, RequestTimes};
+use super::{HttpOptions, RemoteError};
 use crate::store::backend::RawPageSource;
-
-/// The most pages the store announces at once when it reads a long extent.
-pub(crate) const CHUNK_PAGES: u64 = 256;
+use crate::store::{RemoteStats, RequestTimes};
 
 /// Missing runs this many pages apart or closer are fetched as one request: a few
 /// pages more cost less than another request's round trip.
