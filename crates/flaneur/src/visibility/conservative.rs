@@ -98,6 +98,7 @@ use std::ops::Range;
 
 use super::horizon::{Group, Horizon, Prism, Wanted};
 use super::occluder::{occluders, Occluders};
+use super::shown::shown;
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
 use crate::scene::Mesh;
@@ -112,6 +113,11 @@ const GROUP_TILE: f32 = 40.0;
 /// The blocks of patches tested first, patches across and along (see the module's
 /// notes).
 const TOP_BLOCK: u32 = 2;
+
+/// The most sample points the conservative test may take in one viewcell (2²⁰, a
+/// 1024 × 1024 grid of patches): each builds an occlusion horizon, about a millisecond,
+/// so a cell at this limit takes a quarter of an hour.
+pub const MAX_SAMPLES_PER_CELL: u64 = 1 << 20;
 
 /// How a cell is sampled.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -154,8 +160,6 @@ impl SampleOptions {
     /// most `spacing` apart, each within ε in plan of every point of its patch. An error, before anything is
     /// allocated, when they would be more than [`MAX_SAMPLES_PER_CELL`] (a build checks
     /// that before it starts: see `VisibilityOptions::cost`) or do not fit in memory.
-    ///
-    /// [`MAX_SAMPLES_PER_CELL`]: super::MAX_SAMPLES_PER_CELL
     pub fn samples(&self, cell: &Aabb) -> Result<(Vec<Vec3>, f32)> {
         let patches = self.patches(cell)?;
         let count = patches.nx as usize * patches.nz as usize;
@@ -163,7 +167,7 @@ impl SampleOptions {
         points.try_reserve_exact(count).map_err(|_| {
             Error::Invalid(format!(
                 "{count} sample points of a viewcell do not fit in memory (--sample-spacing {})",
-                super::cost::shown(self.spacing)
+                shown(self.spacing)
             ))
         })?;
         points.extend((0..patches.nz).flat_map(|j| {
@@ -186,20 +190,20 @@ impl SampleOptions {
     }
 
     /// How `cell` is cut into patches; an error when they would be more than
-    /// [`MAX_SAMPLES_PER_CELL`](super::MAX_SAMPLES_PER_CELL).
+    /// [`MAX_SAMPLES_PER_CELL`].
     fn patches(&self, cell: &Aabb) -> Result<Patches> {
         let e = cell.extent();
         // In f32, as the patches are laid out, so that the count is theirs.
         let across = |len: f32| (len / self.spacing).ceil().max(1.0);
         let count = across(e.x) as f64 * across(e.z) as f64;
-        if !(count <= super::MAX_SAMPLES_PER_CELL as f64) {
+        if !(count <= MAX_SAMPLES_PER_CELL as f64) {
             return Err(Error::Invalid(format!(
                 "sample spacing {} m (--sample-spacing) makes {count:.3e} sample points in a \
                  {} × {} m viewcell: more than the {} a cell takes",
-                super::cost::shown(self.spacing),
+                shown(self.spacing),
                 e.x,
                 e.z,
-                super::MAX_SAMPLES_PER_CELL
+                MAX_SAMPLES_PER_CELL
             )));
         }
         let (nx, nz) = (across(e.x) as u32, across(e.z) as u32);

@@ -15,8 +15,10 @@ use std::mem::size_of;
 use glam::Vec3;
 
 use super::cells::{Viewcell, ViewcellGrid};
-use super::dov::PointDov;
+use super::conservative::MAX_SAMPLES_PER_CELL;
+use super::dov_sums::PointDov;
 use super::precompute::BAND_ROWS;
+use super::shown::shown;
 use super::table::CellPvs;
 use super::VisibilityOptions;
 use crate::error::{Error, Result};
@@ -26,11 +28,6 @@ use crate::geom::Aabb;
 /// PVS in memory until the table is written, and at the measured 0.06–0.6 s a cell a
 /// grid this large is already months of one machine's work.
 pub const MAX_VIEWCELLS: u64 = 1 << 24;
-
-/// The most sample points the conservative test may take in one viewcell (2²⁰, a
-/// 1024 × 1024 grid of patches): each builds an occlusion horizon, about a millisecond,
-/// so a cell at this limit takes a quarter of an hour.
-pub const MAX_SAMPLES_PER_CELL: u64 = 1 << 20;
 
 /// What a precomputation implies over one city ([`VisibilityOptions::cost`]).
 ///
@@ -147,15 +144,6 @@ impl VisibilityOptions {
             dov_bytes,
             sample_bytes: threads * samples_per_cell * size_of::<Vec3>() as u64,
         })
-    }
-}
-
-/// An option's value as a person would have typed it: `1e-9`, not `0.000000001`.
-pub(crate) fn shown(v: f32) -> String {
-    if v != 0.0 && !(1e-3..1e7).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        v.to_string()
     }
 }
 

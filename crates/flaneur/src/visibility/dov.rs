@@ -23,19 +23,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::cube::{CubicProjection, SKY};
+use super::dov_sums::{DovSums, PointDov};
 use super::raycast::{check_point, RayScene};
 use crate::error::{Error, Result};
 use crate::geom::Aabb;
-
-/// What one viewpoint sees.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PointDov {
-    /// `(object index, DoV)` for every object that at least one pixel shows, by index.
-    /// The DoVs and [`sky`](Self::sky) sum to 1, to float rounding.
-    pub objects: Vec<(u32, f32)>,
-    /// The share of directions that meet nothing.
-    pub sky: f32,
-}
 
 /// A source of point DoVs: a scene that can say, for a viewpoint, which object each
 /// pixel of the cubic projection shows, summed by object. The ray-cast [`RayScene`] is
@@ -210,53 +201,6 @@ fn point_dov_checked(scene: &RayScene, projection: &CubicProjection, point: [f32
         }
     }
     sums.finish()
-}
-
-/// Pixels' weights summed by the object they show, as a viewpoint's pixels are credited:
-/// in f64, because at N = 256 a DoV adds up to 393,216 terms near 10⁻⁶. What the ray-cast
-/// and the rasteriser both sum their pixels into.
-pub(super) struct DovSums {
-    sums: Vec<f64>,
-    seen: Vec<u32>,
-    sky: f64,
-}
-
-impl DovSums {
-    /// Sums for `objects` objects, all zero.
-    pub(super) fn new(objects: usize) -> DovSums {
-        DovSums {
-            sums: vec![0.0; objects],
-            seen: Vec::new(),
-            sky: 0.0,
-        }
-    }
-
-    /// Credits weight `w` to object `id`, or to the sky for [`SKY`].
-    pub(super) fn credit(&mut self, id: u32, w: f64) {
-        if id == SKY {
-            self.sky += w;
-            return;
-        }
-        let sum = &mut self.sums[id as usize];
-        // Every weight is positive, so a zero sum is an object not yet seen.
-        if *sum == 0.0 {
-            self.seen.push(id);
-        }
-        *sum += w;
-    }
-
-    /// The DoVs of the objects credited, by index, and the sky's.
-    pub(super) fn finish(mut self) -> PointDov {
-        self.seen.sort_unstable();
-        PointDov {
-            objects: self
-                .seen
-                .iter()
-                .map(|&o| (o, self.sums[o as usize] as f32))
-                .collect(),
-            sky: self.sky as f32,
-        }
-    }
 }
 
 /// The DoVs of a batch of viewcells.

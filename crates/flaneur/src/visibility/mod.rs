@@ -84,6 +84,7 @@ mod conservative;
 mod cost;
 mod cube;
 mod dov;
+mod dov_sums;
 mod horizon;
 mod intersect;
 mod occluder;
@@ -91,6 +92,7 @@ mod precompute;
 mod raster;
 mod raycast;
 mod shard;
+mod shown;
 mod stored;
 pub(crate) mod table;
 
@@ -98,20 +100,21 @@ pub(crate) mod table;
 mod tests;
 
 pub use cells::{object_boxes, Viewcell, ViewcellGrid};
-pub use conservative::{SampleOptions, Scene as ConservativeScene};
-pub(crate) use cost::{shown, walkable_cells};
-pub use cost::{VisibilityCost, MAX_SAMPLES_PER_CELL, MAX_VIEWCELLS};
+pub use conservative::{SampleOptions, Scene as ConservativeScene, MAX_SAMPLES_PER_CELL};
+pub(crate) use cost::walkable_cells;
+pub use cost::{VisibilityCost, MAX_VIEWCELLS};
 pub use cube::{CubicProjection, SKY};
 pub use dov::{
     cell_dovs, cell_dovs_after, point_dov, CellDovs, CornerMemo, DovMethod, DovSource, DovStats,
-    PointDov,
 };
+pub use dov_sums::PointDov;
 pub(crate) use precompute::precompute;
 pub use precompute::VisibilityOptions;
 pub use raster::{CoarseLevels, DrawCounts, RasterScene, LOD_PIXELS};
 pub use raycast::{Hit, RayScene};
 pub(crate) use shard::merge_shards;
 pub use shard::{fingerprint, precompute_shard, Shard, ShardCells, ShardLod};
+pub(crate) use shown::shown;
 pub(crate) use stored::VisibilityTable;
 pub(crate) use table::encode_table;
 pub use table::{

@@ -12,7 +12,7 @@ use super::triangle::{self, Vertex};
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use crate::visibility::cube::{CubicProjection, SKY};
-use crate::visibility::dov::{DovSums, PointDov};
+use crate::visibility::dov_sums::{DovSums, PointDov};
 use crate::visibility::raycast::{check_mesh, check_point, zero_area};
 
 /// Objects' triangle meshes, drawn by a CPU rasteriser into the cubic projection's item
