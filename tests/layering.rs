@@ -212,18 +212,21 @@ fn blank_test_items(code: &mut [u8]) -> Vec<String> {
     test_modules
 }
 
-/// One path that reaches another module: its line (1-based), what it names and the
-/// engine's top module it reaches (or the crate, for one of [`UPPER_CRATES`]).
+/// One path to a module: its line (1-based), what it names, the engine's top module it
+/// reaches (or the crate, for one of [`UPPER_CRATES`]) and the whole path it names
+/// below the crate root, as far as it goes before a group or an item's use.
 #[derive(Debug, PartialEq)]
 struct Reach {
     line: usize,
     path: String,
     top: String,
+    full: Vec<String>,
 }
 
-/// The paths in the code of the module at `module` (its path below the crate root,
-/// e.g. `["cache", "policy"]`) that reach a top module other than its own, or a crate
-/// of [`UPPER_CRATES`]; `root` maps the root's re-exported items to their modules.
+/// The `crate::…` and `super::…` paths in the code of the module at `module` (its path
+/// below the crate root, e.g. `["cache", "policy"]`), and the crates of
+/// [`UPPER_CRATES`] it names; `root` maps the root's re-exported items to their
+/// modules.
 fn reaches(code: &[u8], module: &[String], root: &BTreeMap<String, String>) -> Vec<Reach> {
     let line_of = |at: usize| 1 + code[..at].iter().filter(|&&c| c == b'\n').count();
     let word_at = |at: usize| -> (String, usize) {
@@ -252,6 +255,7 @@ fn reaches(code: &[u8], module: &[String], root: &BTreeMap<String, String>) -> V
                 line: line_of(start),
                 path: word.clone(),
                 top: word,
+                full: Vec::new(),
             });
             continue;
         }
@@ -294,18 +298,25 @@ fn reaches(code: &[u8], module: &[String], root: &BTreeMap<String, String>) -> V
             heads.push(j);
         }
         for h in heads {
-            let (name, _) = word_at(h);
-            let top = match base.first() {
-                Some(m) => m.clone(),
-                None => root.get(&name).cloned().unwrap_or_else(|| name.clone()),
-            };
-            if module.first() != Some(&top) {
-                found.push(Reach {
-                    line: line_of(h),
-                    path: format!("{prefix}::{name}"),
-                    top,
-                });
+            let (name, mut end) = word_at(h);
+            let mut full = base.clone();
+            if base.is_empty() {
+                full.extend(root.get(&name).cloned());
             }
+            full.push(name.clone());
+            while let Some(k) =
+                after_colons(end).filter(|&k| code.get(k).is_some_and(|&c| is_ident(c)))
+            {
+                let (segment, next) = word_at(k);
+                full.push(segment);
+                end = next;
+            }
+            found.push(Reach {
+                line: line_of(h),
+                path: format!("{prefix}::{name}"),
+                top: full[0].clone(),
+                full,
+            });
         }
         i = i.max(j);
     }
@@ -383,23 +394,53 @@ fn engine_modules(src: &Path) -> BTreeSet<String> {
 
 /// The root's re-exports (`pub use database::{Database, …}`), each item to its module.
 fn root_items(src: &Path) -> BTreeMap<String, String> {
-    let lib = fs::read_to_string(src.join("lib.rs")).unwrap();
-    let code = String::from_utf8(blank_non_code(&lib)).unwrap();
+    reexported(&src.join("lib.rs"))
+}
+
+/// The items a module's file re-exports (`pub use buffer::{ObjectBuffer, …}`,
+/// `pub(crate) use …` too), each to the child module it comes from.
+fn reexported(file: &Path) -> BTreeMap<String, String> {
+    let text = fs::read_to_string(file).unwrap();
+    let code = String::from_utf8(blank_non_code(&text)).unwrap();
     let mut items = BTreeMap::new();
     for statement in code.split(';') {
-        let Some(rest) = statement.trim().strip_prefix("pub use ") else {
+        let statement = statement.trim().replace("pub(crate) use ", "pub use ");
+        let Some(rest) = statement.strip_prefix("pub use ") else {
             continue;
         };
         let Some((module, names)) = rest.split_once("::") else {
             continue;
         };
         for name in names.split(|c: char| c == ',' || c == '{' || c == '}') {
-            if !name.trim().is_empty() {
-                items.insert(name.trim().to_string(), module.trim().to_string());
+            let name = name.trim().rsplit("::").next().unwrap_or_default();
+            if !name.is_empty() {
+                items.insert(name.to_string(), module.trim().to_string());
             }
         }
     }
     items
+}
+
+/// The engine's source files outside the root and its unit tests, each with its module
+/// and its code (comments, strings and test items blanked).
+fn engine_files(src: &Path) -> Vec<(PathBuf, Vec<String>, Vec<u8>)> {
+    let mut test_only: Vec<Vec<String>> = Vec::new();
+    let mut files = Vec::new();
+    for file in rust_files(src) {
+        let module = module_of(src, &file);
+        if module == ["lib"] || test_only.iter().any(|t| module.starts_with(t)) {
+            continue;
+        }
+        let text = fs::read_to_string(&file).unwrap();
+        let mut code = blank_non_code(&text);
+        for name in blank_test_items(&mut code) {
+            let mut m = module.clone();
+            m.push(name);
+            test_only.push(m);
+        }
+        files.push((file, module, code));
+    }
+    files
 }
 
 /// The row `module` sits in, 0 the top.
@@ -429,6 +470,9 @@ fn sorted_reaches(
         .unwrap_or_else(|| panic!("`{}` sits in no row of ARCHITECTURE.md", module[0]));
     let (mut up, mut beside) = (Vec::new(), Vec::new());
     for r in reaches(code, module, root) {
+        if module.first() == Some(&r.top) {
+            continue;
+        }
         let row = row_of(rows, &r.top);
         if UPPER_CRATES.contains(&r.top.as_str()) || row.is_some_and(|row| row < mine) {
             up.push(r);
@@ -494,21 +538,9 @@ fn every_module_uses_only_its_row_and_those_below() {
             "ARCHITECTURE.md's layers draw `{d}`, which is no module of the engine"
         );
     }
-    let mut test_only: Vec<Vec<String>> = Vec::new();
     let (mut scanned, mut violations) = (0, Vec::new());
     let mut same_row = BTreeSet::new();
-    for file in rust_files(&src) {
-        let module = module_of(&src, &file);
-        if module == ["lib"] || test_only.iter().any(|t| module.starts_with(t)) {
-            continue;
-        }
-        let text = fs::read_to_string(&file).unwrap();
-        let mut code = blank_non_code(&text);
-        for name in blank_test_items(&mut code) {
-            let mut m = module.clone();
-            m.push(name);
-            test_only.push(m);
-        }
+    for (file, module, code) in engine_files(&src) {
         let (up, beside) = sorted_reaches(&code, &module, &rows, &root);
         for r in up {
             violations.push(format!(
@@ -537,6 +569,84 @@ fn every_module_uses_only_its_row_and_those_below() {
         "the engine's modules must use only their own row of ARCHITECTURE.md's layers \
          and those below it:\n{}",
         violations.join("\n")
+    );
+}
+
+/// Where the module `from` names the path `to` inside its own top module: the two
+/// children of their deepest common module that they lie under, when they differ (an
+/// item re-exported by that module counted as the child it comes from).
+fn sibling_use(
+    from: &[String],
+    to: &[String],
+    modules: &BTreeSet<Vec<String>>,
+    exports: &BTreeMap<Vec<String>, BTreeMap<String, String>>,
+) -> Option<(Vec<String>, Vec<String>)> {
+    let d = from.iter().zip(to).take_while(|(a, b)| a == b).count();
+    if d >= from.len() || d >= to.len() {
+        return None;
+    }
+    let parent = &from[..d];
+    let mut target = to[..=d].to_vec();
+    if !modules.contains(&target) {
+        target[d] = exports.get(parent)?.get(&to[d])?.clone();
+    }
+    (modules.contains(&target) && target[d] != from[d]).then(|| (from[..=d].to_vec(), target))
+}
+
+/// Inside every module of the engine, its files and folders use each other one way,
+/// never round a circle: `walk::review` may use `walk::buffer`, but then not be used by
+/// it, directly or through others.
+#[test]
+fn no_module_s_parts_use_each_other_round_a_circle() {
+    let src = engine_src();
+    let root = root_items(&src);
+    let files = engine_files(&src);
+    let modules: BTreeSet<Vec<String>> = files
+        .iter()
+        .flat_map(|(_, m, _)| (1..=m.len()).map(|n| m[..n].to_vec()))
+        .collect();
+    let exports: BTreeMap<Vec<String>, BTreeMap<String, String>> = files
+        .iter()
+        .filter(|(f, _, _)| f.ends_with("mod.rs"))
+        .map(|(f, m, _)| (m.clone(), reexported(f)))
+        .collect();
+    let mut uses: BTreeMap<Vec<String>, BTreeSet<(String, String)>> = BTreeMap::new();
+    let mut where_used = BTreeMap::new();
+    for (file, module, code) in &files {
+        for r in reaches(code, module, &root) {
+            if let Some((a, b)) = sibling_use(module, &r.full, &modules, &exports) {
+                let parent = a[..a.len() - 1].to_vec();
+                let pair = (a.join("::"), b.join("::"));
+                let at = format!("{}:{}", file.strip_prefix(&src).unwrap().display(), r.line);
+                where_used.entry(pair.clone()).or_insert(at);
+                uses.entry(parent).or_default().insert(pair);
+            }
+        }
+    }
+    assert!(
+        uses.len() >= 10,
+        "only {} modules' parts use each other",
+        uses.len()
+    );
+    // Each circle with the uses that close it, where each is first written.
+    let found: Vec<String> = uses
+        .values()
+        .flat_map(circles)
+        .map(|c| {
+            let inside = where_used
+                .iter()
+                .filter(|((a, b), _)| c.contains(a) && c.contains(b))
+                .map(|((a, b), at)| format!("  {a} uses {b} ({at})"));
+            std::iter::once(c.join(", "))
+                .chain(inside)
+                .collect::<Vec<_>>()
+                .join("\n")
+        })
+        .collect();
+    assert!(
+        found.is_empty(),
+        "these parts of one module use each other round a circle:\n{}",
+        found.join("\n")
     );
 }
 
