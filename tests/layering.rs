@@ -18,6 +18,10 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "layering/scan.rs"]
+mod scan;
+use scan::{blank_non_code, blank_test_items, is_ident, matching, skip_space};
+
 /// Crates of the experiments and the renderer, which the engine never names.
 const UPPER_CRATES: [&str; 2] = ["flaneur_bench", "flaneur_render"];
 
@@ -38,178 +42,6 @@ fn workspace() -> PathBuf {
 
 fn engine_src() -> PathBuf {
     workspace().join("crates/flaneur/src")
-}
-
-/// `code` with comments, string and char literals replaced by spaces, newlines kept,
-/// so that offsets still give the source's line numbers.
-fn blank_non_code(src: &str) -> Vec<u8> {
-    let b = src.as_bytes();
-    let mut out = b.to_vec();
-    let blank = |out: &mut Vec<u8>, from: usize, to: usize| {
-        for c in &mut out[from..to.min(b.len())] {
-            if *c != b'\n' {
-                *c = b' ';
-            }
-        }
-    };
-    let mut i = 0;
-    while i < b.len() {
-        let rest = &b[i..];
-        if rest.starts_with(b"//") {
-            let end = rest
-                .iter()
-                .position(|&c| c == b'\n')
-                .map_or(b.len(), |p| i + p);
-            blank(&mut out, i, end);
-            i = end;
-        } else if rest.starts_with(b"/*") {
-            let (mut depth, mut j) = (0usize, i);
-            while j < b.len() {
-                if b[j..].starts_with(b"/*") {
-                    depth += 1;
-                    j += 2;
-                } else if b[j..].starts_with(b"*/") {
-                    depth -= 1;
-                    j += 2;
-                    if depth == 0 {
-                        break;
-                    }
-                } else {
-                    j += 1;
-                }
-            }
-            blank(&mut out, i, j);
-            i = j;
-        } else if let Some(end) = raw_string_end(b, i) {
-            blank(&mut out, i, end);
-            i = end;
-        } else if b[i] == b'"' {
-            let mut j = i + 1;
-            while j < b.len() && b[j] != b'"' {
-                j += if b[j] == b'\\' { 2 } else { 1 };
-            }
-            blank(&mut out, i, j + 1);
-            i = j + 1;
-        } else if b[i] == b'\'' {
-            // A char literal ('x', '\n', '\u{..}'), or else a lifetime, left as it is.
-            let close = if rest.get(1) == Some(&b'\\') {
-                rest.iter().skip(3).position(|&c| c == b'\'').map(|p| p + 3)
-            } else {
-                let width = src[i + 1..].chars().next().map_or(1, char::len_utf8);
-                (rest.get(1 + width) == Some(&b'\'')).then_some(1 + width)
-            };
-            match close {
-                Some(p) => {
-                    blank(&mut out, i, i + p + 1);
-                    i += p + 1;
-                }
-                None => i += 1,
-            }
-        } else {
-            i += 1;
-        }
-    }
-    out
-}
-
-/// Where a raw string literal (`r"…"`, `r#"…"#`, `br"…"`) starting at `i` ends.
-fn raw_string_end(b: &[u8], i: usize) -> Option<usize> {
-    if i > 0 && is_ident(b[i - 1]) {
-        return None;
-    }
-    let mut j = i;
-    if b.get(j) == Some(&b'b') {
-        j += 1;
-    }
-    if b.get(j) != Some(&b'r') {
-        return None;
-    }
-    j += 1;
-    let hashes = b[j..].iter().take_while(|&&c| c == b'#').count();
-    j += hashes;
-    if b.get(j) != Some(&b'"') {
-        return None;
-    }
-    let mut close = vec![b'"'];
-    close.extend(std::iter::repeat_n(b'#', hashes));
-    let body = j + 1;
-    let end = b[body..]
-        .windows(close.len())
-        .position(|w| w == close.as_slice())
-        .map_or(b.len(), |p| body + p + close.len());
-    Some(end)
-}
-
-fn is_ident(c: u8) -> bool {
-    c.is_ascii_alphanumeric() || c == b'_'
-}
-
-fn skip_space(code: &[u8], mut i: usize) -> usize {
-    while i < code.len() && code[i].is_ascii_whitespace() {
-        i += 1;
-    }
-    i
-}
-
-/// The matching close of the bracket at `open`.
-fn matching(code: &[u8], open: usize) -> usize {
-    let (o, c) = (code[open], if code[open] == b'{' { b'}' } else { b']' });
-    let mut depth = 0usize;
-    for (j, &x) in code.iter().enumerate().skip(open) {
-        if x == o {
-            depth += 1;
-        } else if x == c {
-            depth -= 1;
-            if depth == 0 {
-                return j;
-            }
-        }
-    }
-    code.len()
-}
-
-/// Blanks every `#[cfg(test)]` item of `code`; returns the names of the test-only
-/// modules declared without a body (`#[cfg(test)] mod tests;`), whose files are left
-/// out too.
-fn blank_test_items(code: &mut [u8]) -> Vec<String> {
-    const ATTR: &[u8] = b"#[cfg(test)]";
-    let mut test_modules = Vec::new();
-    let mut from = 0;
-    while let Some(p) = code[from..].windows(ATTR.len()).position(|w| w == ATTR) {
-        let start = from + p;
-        let mut j = start + ATTR.len();
-        // Further attributes, then the item up to its `;` or its braced body.
-        loop {
-            j = skip_space(code, j);
-            if code[j..].starts_with(b"#[") {
-                j = matching(code, j + 1) + 1;
-            } else {
-                break;
-            }
-        }
-        let item = j;
-        while j < code.len() && code[j] != b';' && code[j] != b'{' {
-            j += 1;
-        }
-        let end = if j < code.len() && code[j] == b'{' {
-            matching(code, j) + 1
-        } else {
-            let head = String::from_utf8_lossy(&code[item..j]).into_owned();
-            let words: Vec<&str> = head.split_whitespace().collect();
-            if let [.., "mod", name] = words.as_slice() {
-                test_modules.push(name.to_string());
-            }
-            j + 1
-        };
-        let end = end.min(code.len());
-        for c in &mut code[start..end] {
-            if *c != b'\n' {
-                *c = b' ';
-            }
-        }
-        from = end;
-    }
-    test_modules
 }
 
 /// One path to a module: its line (1-based), what it names, the engine's top module it
@@ -572,6 +404,25 @@ fn every_module_uses_only_its_row_and_those_below() {
     );
 }
 
+/// Every module of the engine's `files`, and what each module's file re-exports.
+type ModuleMap = (
+    BTreeSet<Vec<String>>,
+    BTreeMap<Vec<String>, BTreeMap<String, String>>,
+);
+
+fn module_map(files: &[(PathBuf, Vec<String>, Vec<u8>)]) -> ModuleMap {
+    let modules: BTreeSet<Vec<String>> = files
+        .iter()
+        .flat_map(|(_, m, _)| (1..=m.len()).map(|n| m[..n].to_vec()))
+        .collect();
+    let exports: BTreeMap<Vec<String>, BTreeMap<String, String>> = files
+        .iter()
+        .filter(|(f, _, _)| f.ends_with("mod.rs"))
+        .map(|(f, m, _)| (m.clone(), reexported(f)))
+        .collect();
+    (modules, exports)
+}
+
 /// Where the module `from` names the path `to` inside its own top module: the two
 /// children of their deepest common module that they lie under, when they differ (an
 /// item re-exported by that module counted as the child it comes from).
@@ -601,15 +452,7 @@ fn no_module_s_parts_use_each_other_round_a_circle() {
     let src = engine_src();
     let root = root_items(&src);
     let files = engine_files(&src);
-    let modules: BTreeSet<Vec<String>> = files
-        .iter()
-        .flat_map(|(_, m, _)| (1..=m.len()).map(|n| m[..n].to_vec()))
-        .collect();
-    let exports: BTreeMap<Vec<String>, BTreeMap<String, String>> = files
-        .iter()
-        .filter(|(f, _, _)| f.ends_with("mod.rs"))
-        .map(|(f, m, _)| (m.clone(), reexported(f)))
-        .collect();
+    let (modules, exports) = module_map(&files);
     let mut uses: BTreeMap<Vec<String>, BTreeSet<(String, String)>> = BTreeMap::new();
     let mut where_used = BTreeMap::new();
     for (file, module, code) in &files {
@@ -648,6 +491,31 @@ fn no_module_s_parts_use_each_other_round_a_circle() {
         "these parts of one module use each other round a circle:\n{}",
         found.join("\n")
     );
+}
+
+/// A use between two parts of one module is found at the depth where they part, a
+/// re-exported item counted as the file it comes from; a use of a parent is none.
+#[test]
+fn uses_between_parts_are_found_where_they_part() {
+    let src = engine_src();
+    let files = engine_files(&src);
+    let (modules, exports) = module_map(&files);
+    let path = |p: &str| p.split("::").map(String::from).collect::<Vec<_>>();
+    let found = |from: &str, to: &str| {
+        sibling_use(&path(from), &path(to), &modules, &exports)
+            .map(|(a, b)| (a.join("::"), b.join("::")))
+    };
+    let pair = |a: &str, b: &str| Some((a.to_string(), b.to_string()));
+    // A planted use of REVIEW's mode in its config, the reverse of the one it has.
+    assert_eq!(
+        found("walk::review::config", "walk::review::mode::Review"),
+        pair("walk::review::config", "walk::review::mode")
+    );
+    assert_eq!(
+        found("walk::review::mode", "walk::ObjectBuffer"),
+        pair("walk::review", "walk::buffer")
+    );
+    assert_eq!(found("walk::review::mode", "walk::review::Counts"), None);
 }
 
 /// The check fails where a module reaches up: a use of the walk, and of the database
