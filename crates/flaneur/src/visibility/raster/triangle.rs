@@ -116,13 +116,16 @@ fn vertex(face: &Face, p: [f32; 3]) -> [f32; 3] {
 
 /// Pixel coordinate `c` in sub-pixel steps, rounded half away from zero as
 /// `(c·SUB).round()` does, without the libm call that `round` is on baseline x86-64:
-/// below 2²³ the fraction `y − trunc(y)` is exact, and above it `y` is whole.
+/// below 2²³ the fraction `y − trunc(y)` is exact, and above it `y` is whole. A
+/// coordinate past the range of `i64` (a point projected from almost on the eye's
+/// plane) saturates, as `as` does, rather than wrapping round to the other side.
 #[inline(always)]
 fn snap(c: f32) -> i64 {
     let y = c * SUB as f32;
     let t = y as i64;
     let fraction = y - t as f32;
-    t + (fraction >= 0.5) as i64 - (fraction <= -0.5) as i64
+    t.saturating_add((fraction >= 0.5) as i64)
+        .saturating_sub((fraction <= -0.5) as i64)
 }
 
 /// Sutherland–Hodgman: the part of the polygon `poly[..len]` where `inside ≥ 0`, in place;
@@ -288,5 +291,25 @@ fn max3<T: PartialOrd + Copy>(v: [T; 3]) -> T {
         v[2]
     } else {
         m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rounding half away from zero in sub-pixel steps, and a coordinate beyond `i64`
+    /// held at its end rather than wrapped to the other side of the face.
+    #[test]
+    fn snap_rounds_and_saturates() {
+        let step = 1.0 / SUB as f32;
+        assert_eq!(snap(3.0), 3 * SUB as i64);
+        assert_eq!(snap(2.5 * step), 3);
+        assert_eq!(snap(-2.5 * step), -3);
+        assert_eq!(snap(2.4 * step), 2);
+        assert_eq!(snap(f32::INFINITY), i64::MAX);
+        assert_eq!(snap(1e30), i64::MAX);
+        assert_eq!(snap(f32::NEG_INFINITY), i64::MIN);
+        assert_eq!(snap(-1e30), i64::MIN);
     }
 }
