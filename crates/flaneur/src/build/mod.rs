@@ -425,24 +425,32 @@ fn fill_meshes(entries: &mut [ObjectEntry], filled: &mut usize, meshes: Vec<Exte
     *filled += meshes.len();
 }
 
-fn build(
+/// The objects as [`write_objects`] wrote them: their index entries, in the order they
+/// came, and what the rest of the build needs of them.
+struct Written {
+    entries: Vec<ObjectEntry>,
+    /// Every mesh, when the visibility is precomputed (its rays are cast at them all).
+    kept: Vec<(u64, Mesh)>,
+    triangles: u64,
+    bounds: Aabb,
+    lod: Option<LodReport>,
+    kinds: KindCounts,
+}
+
+/// Writes every object's mesh, and its levels of detail when the build makes them; an
+/// error for an input with no object.
+fn write_objects(
+    store: &mut Store,
     objects: impl Iterator<Item = Result<(u64, u8, Mesh)>>,
     total: Option<u64>,
-    names: Option<&[String]>,
-    db: &Path,
     opts: &BuildOptions,
     progress: &dyn Progress,
-    shards: Option<&[ShardCells]>,
-) -> Result<BuildSummary> {
-    let start = Instant::now();
-    opts.validate()?;
+) -> Result<Written> {
     let codec = opts.codec;
-    let mut store = Store::create(db, opts.page_size)?;
-    save_codec(&mut store, codec)?;
     let mut lods = opts
         .lod
         .as_ref()
-        .map(|l| LodWriter::new(l, codec, &store))
+        .map(|l| LodWriter::new(l, codec, store))
         .transpose()?;
     // In format version 2 meshes are encoded on the thread pool with their levels, and
     // the LOD writer writes them, a batch side by side.
@@ -465,7 +473,7 @@ fn build(
         let entry = if meshes_with_lods {
             object_entry(id, kind, &mesh)?
         } else {
-            write_object(&mut store, id, kind, &mesh, codec)?
+            write_object(store, id, kind, &mesh, codec)?
         };
         if opts.visibility.is_some() {
             kept.push((id, mesh.clone()));
@@ -476,7 +484,7 @@ fn build(
         // An object counts as built once its LODs are stored too.
         match lods.as_mut() {
             Some(l) => {
-                advance(l.push(&mut store, id, entry.mesh, mesh)? as u64);
+                advance(l.push(store, id, entry.mesh, mesh)? as u64);
                 fill_meshes(&mut entries, &mut meshes_filled, l.take_meshes());
             }
             None => advance(1),
@@ -484,7 +492,7 @@ fn build(
     }
     let lod = match lods {
         Some(l) => {
-            let (report, last, meshes) = l.finish(&mut store)?;
+            let (report, last, meshes) = l.finish(store)?;
             fill_meshes(&mut entries, &mut meshes_filled, meshes);
             advance(last as u64);
             kinds.lod = report.stats.pages;
@@ -505,6 +513,37 @@ fn build(
     if entries.is_empty() {
         return Err(Error::Invalid("the input holds no objects".into()));
     }
+    Ok(Written {
+        entries,
+        kept,
+        triangles,
+        bounds,
+        lod,
+        kinds,
+    })
+}
+
+fn build(
+    objects: impl Iterator<Item = Result<(u64, u8, Mesh)>>,
+    total: Option<u64>,
+    names: Option<&[String]>,
+    db: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+    shards: Option<&[ShardCells]>,
+) -> Result<BuildSummary> {
+    let start = Instant::now();
+    opts.validate()?;
+    let mut store = Store::create(db, opts.page_size)?;
+    save_codec(&mut store, opts.codec)?;
+    let Written {
+        mut entries,
+        mut kept,
+        triangles,
+        bounds,
+        lod,
+        mut kinds,
+    } = write_objects(&mut store, objects, total, opts, progress)?;
     let visibility = match &opts.visibility {
         Some(v) => {
             kept.sort_unstable_by_key(|(id, _)| *id);

@@ -9,8 +9,9 @@ use crate::error::{Error, Result};
 use crate::hdov::{TreeHead, HDOV_SEGMENT};
 use crate::lod::stored::chain::{decode_chain, ChainDirectory};
 use crate::lod::stored::table::LodTable;
+use crate::rtree::ObjectEntry;
 use crate::scene::{encode_levels_v2, DictionaryUse, Framing, Mesh, MeshCodec};
-use crate::store::{page, Extent, PageKind};
+use crate::store::{page, Extent, PageKind, Store};
 use crate::visibility::VISIBILITY_SEGMENT;
 use crate::Database;
 
@@ -56,6 +57,42 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
     );
     add("database", "whole-file".into(), file.clone());
 
+    page_seeds(path, &file, page_size, &mut add)?;
+    add("db_page", "packed-extents".into(), packed_extents_seed());
+
+    let objects = db.range(&db.bounds())?.objects;
+    mesh_seeds(store, &objects, &mut add)?;
+    lod_seeds(store, &objects, &mut add)?;
+    if let Some((extent, _)) = store.segment_extent(VISIBILITY_SEGMENT, |_, _| Ok(()))? {
+        let bytes = store.read_extent(&extent, PageKind::Visibility)?;
+        add("visibility_table", "table".into(), bytes);
+    }
+    if let Some((extent, _)) = store.segment_extent(HDOV_SEGMENT, |_, _| Ok(()))? {
+        let bytes = store.read_extent(&extent, PageKind::HdovNode)?;
+        if let Ok(head) = TreeHead::decode(&bytes) {
+            // Node seeds with the tree's real node count.
+            for s in seeds
+                .iter_mut()
+                .filter(|s| s.target == "hdov" && s.bytes[0] == 1)
+            {
+                s.bytes[1..5].copy_from_slice(&head.nodes.to_le_bytes());
+            }
+        }
+        seeds.push(Seed {
+            target: "hdov",
+            name: "tree-head".into(),
+            bytes: [&[0u8][..], &bytes].concat(),
+        });
+    }
+    Ok(seeds)
+}
+
+/// Where a seed goes: its target, its name and its bytes.
+type Add<'a> = dyn FnMut(&'static str, String, Vec<u8>) + 'a;
+
+/// Seeds from the file's pages: a page or two of each kind, every R-tree node's payload,
+/// and the HDoV-tree's first nodes and V-pages.
+fn page_seeds(path: &Path, file: &[u8], page_size: usize, add: &mut Add<'_>) -> Result<()> {
     let mut kinds_seen = [0usize; 16];
     for (p, raw) in file.chunks_exact(page_size).enumerate().skip(1) {
         let Some(kind) = PageKind::from_u8(raw[0]) else {
@@ -89,10 +126,12 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
             _ => {}
         }
     }
+    Ok(())
+}
 
-    add("db_page", "packed-extents".into(), packed_extents_seed());
-
-    let objects = db.range(&db.bounds())?.objects;
+/// Seeds from the first objects' mesh extents: as stored, and in format version 2 also
+/// without zstd and with the target's own dictionary.
+fn mesh_seeds(store: &Store, objects: &[ObjectEntry], add: &mut Add<'_>) -> Result<()> {
     for o in objects.iter().take(6) {
         let mesh = store.read_extent(&o.mesh, PageKind::Mesh)?;
         if mesh.starts_with(b"FLG2") {
@@ -112,6 +151,12 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
         }
         add("mesh_codec", format!("object-{}", o.id), mesh);
     }
+    Ok(())
+}
+
+/// Seeds from the LOD table: the table itself, each object's chain (and its blob of
+/// levels in format version 2), and its progressive mesh with its DAG.
+fn lod_seeds(store: &Store, objects: &[ObjectEntry], add: &mut Add<'_>) -> Result<()> {
     if let Some(table) = LodTable::open(store)? {
         let bytes = store.read_extent(&table.extent(), PageKind::Lod)?;
         let which = [1012, 4084, 65524]
@@ -125,7 +170,7 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
             );
         }
         let dict = store.dictionaries()?;
-        for o in &objects {
+        for o in objects {
             let Some(e) = table.find(store, o.id)? else {
                 continue;
             };
@@ -174,28 +219,7 @@ pub fn cut_seeds(path: &Path) -> Result<Vec<Seed>> {
             }
         }
     }
-    if let Some((extent, _)) = store.segment_extent(VISIBILITY_SEGMENT, |_, _| Ok(()))? {
-        let bytes = store.read_extent(&extent, PageKind::Visibility)?;
-        add("visibility_table", "table".into(), bytes);
-    }
-    if let Some((extent, _)) = store.segment_extent(HDOV_SEGMENT, |_, _| Ok(()))? {
-        let bytes = store.read_extent(&extent, PageKind::HdovNode)?;
-        if let Ok(head) = TreeHead::decode(&bytes) {
-            // Node seeds with the tree's real node count.
-            for s in seeds
-                .iter_mut()
-                .filter(|s| s.target == "hdov" && s.bytes[0] == 1)
-            {
-                s.bytes[1..5].copy_from_slice(&head.nodes.to_le_bytes());
-            }
-        }
-        seeds.push(Seed {
-            target: "hdov",
-            name: "tree-head".into(),
-            bytes: [&[0u8][..], &bytes].concat(),
-        });
-    }
-    Ok(seeds)
+    Ok(())
 }
 
 /// A `db_page` input for its extents: a packed reference (2 pages from page 1, 1,200

@@ -374,137 +374,28 @@ pub(crate) fn build_hdov(
         number[n] = k as u32;
     }
 
-    // Internal LODs, a level at a time from the leaves up, each level's nodes at once.
     let lod_start = Instant::now();
-    let root = packed.len() - 1;
-    let mut made: Vec<Option<Made>> = (0..packed.len()).map(|_| None).collect();
-    let top = packed[root].level;
-    let mut done = 0u64;
-    for level in 0..=top {
-        let at: Vec<usize> = (0..packed.len())
-            .filter(|&n| packed[n].level == level && n != root)
-            .collect();
-        let reader: &Store = store;
-        let results: Vec<Result<Made>> = at
-            .par_iter()
-            .map(|&n| make_node(reader, &packed, n, &coarse, &made))
-            .collect();
-        for (&n, r) in at.iter().zip(results) {
-            made[n] = Some(r?);
-        }
-        done += at.len() as u64;
-        progress.update(Step::HdovLods, done, Some(packed.len() as u64 - 1));
-    }
-    progress.finish(Step::HdovLods);
+    let made = make_internal_lods(store, &packed, &coarse, progress)?;
     let lod_seconds = lod_start.elapsed().as_secs_f64();
+    let top = packed[packed.len() - 1].level;
 
     // The chains, then the nodes, whose entries point at them.
-    let mut chains: Vec<Extent> = vec![Extent::default(); packed.len()];
-    let (mut nodes_with_lods, mut lod_levels, mut lod_triangles) = (0, 0, 0);
-    // The internal LODs are coded as the objects' meshes are; they share no vertices.
-    let codec = crate::catalog::load_codec(store)?;
     let lod_pages_before = store.pages_written(PageKind::Lod);
-    for &n in &order {
-        let Some(m) = &made[n] else { continue };
-        if m.levels.is_empty() {
-            continue;
-        }
-        let bytes = encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec, None)?;
-        let e = store.append_packed_or_whole(PageKind::Lod, &bytes, codec.packs())?;
-        nodes_with_lods += 1;
-        lod_levels += m.levels.len() as u64;
-        lod_triangles += m
-            .levels
-            .iter()
-            .map(|l| l.mesh.triangle_count() as u64)
-            .sum::<u64>();
-        chains[n] = e;
-    }
+    let (chains, written) = write_chains(store, &order, &number, &made)?;
     let lod_pages = store.pages_written(PageKind::Lod) - lod_pages_before;
-    let log_m = (cap as f64).ln();
-    let child_ref = |c: usize| {
-        let m = made[c].as_ref().expect("every child is made");
-        let p = &packed[c];
-        let below: usize = if p.level == 0 {
-            p.objects.iter().map(|o| o.triangles as usize).sum()
-        } else {
-            p.children
-                .iter()
-                .map(|&g| made[g].as_ref().expect("made").faces())
-                .sum()
-        };
-        ChildRef {
-            mbr: p.mbr,
-            node: number[c],
-            objects: p.objects_below,
-            h: ((p.objects_below as f64).ln() / log_m) as f32,
-            s: (m.faces() as f64 / below.max(1) as f64).max(f64::MIN_POSITIVE) as f32,
-            lods: chains[c],
-        }
-    };
-    let first_node = store.page_count();
     let topology = topology(&packed, &number);
-    for &n in &order {
-        let p = &packed[n];
-        let kind = if p.level == 0 {
-            HNodeKind::Leaf(p.objects.clone())
-        } else {
-            HNodeKind::Internal {
-                level: p.level,
-                children: p.children.iter().map(|&c| child_ref(c)).collect(),
-            }
-        };
-        let node = HNode {
-            number: number[n],
-            kind,
-        };
-        let page = store.append_page(PageKind::HdovNode, &node.encode())?;
-        debug_assert_eq!(page, first_node + number[n] as u64);
-    }
+    let first_node = write_nodes(store, &packed, &order, &number, (&made, &chains), cap)?;
     let node_pages = packed.len() as u64;
 
     // Each cell's VDs, then every scheme asked for.
-    let cells: Vec<u32> = visibility.head(store)?.cells.iter().map(|c| c.id).collect();
-    let mut vds: Vec<CellVd> = Vec::with_capacity(cells.len());
-    for (i, &id) in cells.iter().enumerate() {
-        let pvs = visibility.pvs(store, id)?.ok_or_else(|| {
-            Error::Invalid(format!("viewcell {id} is in the directory but has no PVS"))
-        })?;
-        vds.push(
-            topology
-                .aggregate(&pvs.ids, &pvs.dov)
-                .map_err(|e| Error::Invalid(format!("viewcell {id}: {e}")))?,
-        );
-        progress.update(Step::HdovCells, i as u64 + 1, Some(cells.len() as u64));
-    }
-    progress.finish(Step::HdovCells);
+    let (cells, vds) = cell_vds(store, &visibility, &topology, progress)?;
     let shape = Shape {
         cells: cells.len(),
         nodes: packed.len(),
         vpage_len: cap * VENTRY_LEN,
     };
     let visible_nodes: u64 = vds.iter().map(|v| v.len() as u64).sum();
-    let mut schemes = Vec::new();
-    let mut stored = Vec::new();
-    let mut asked = opts.schemes.clone();
-    asked.sort();
-    asked.dedup();
-    for s in asked {
-        let bytes = scheme::encode(s, shape, &vds);
-        let e = store.append_extent(PageKind::VPage, &bytes)?;
-        let vpages = match s {
-            Scheme::Horizontal => (shape.cells * shape.nodes) as u64,
-            _ => visible_nodes,
-        };
-        schemes.push(SchemeReport {
-            scheme: s,
-            bytes: bytes.len() as u64,
-            pages: e.page_count as u64,
-            vpages,
-            estimate_bytes: scheme::estimate(s, shape, visible_nodes),
-        });
-        stored.push((s, e));
-    }
+    let (schemes, stored) = write_schemes(store, &opts.schemes, shape, &vds)?;
     let head = TreeHead {
         first_node,
         nodes: packed.len() as u32,
@@ -535,9 +426,9 @@ pub(crate) fn build_hdov(
         nodes: head.nodes,
         height: head.height,
         fanout: head.fanout,
-        nodes_with_lods,
-        lod_levels,
-        lod_triangles,
+        nodes_with_lods: written.nodes,
+        lod_levels: written.levels,
+        lod_triangles: written.triangles,
         lod_pages,
         node_pages,
         head_pages: e.page_count as u64,
@@ -547,4 +438,183 @@ pub(crate) fn build_hdov(
         seconds: start.elapsed().as_secs_f64(),
         lod_seconds,
     })
+}
+
+/// Every node's page, in preorder from `first_node` (returned), each internal node's
+/// entries pointing at its children's pages and internal LODs: h and s (§5.4) from
+/// what each child holds and was made of.
+fn write_nodes(
+    store: &mut Store,
+    packed: &[Packed],
+    order: &[usize],
+    number: &[u32],
+    (made, chains): (&[Option<Made>], &[Extent]),
+    cap: usize,
+) -> Result<u64> {
+    let log_m = (cap as f64).ln();
+    let child_ref = |c: usize| {
+        let m = made[c].as_ref().expect("every child is made");
+        let p = &packed[c];
+        let below: usize = if p.level == 0 {
+            p.objects.iter().map(|o| o.triangles as usize).sum()
+        } else {
+            p.children
+                .iter()
+                .map(|&g| made[g].as_ref().expect("made").faces())
+                .sum()
+        };
+        ChildRef {
+            mbr: p.mbr,
+            node: number[c],
+            objects: p.objects_below,
+            h: ((p.objects_below as f64).ln() / log_m) as f32,
+            s: (m.faces() as f64 / below.max(1) as f64).max(f64::MIN_POSITIVE) as f32,
+            lods: chains[c],
+        }
+    };
+    let first_node = store.page_count();
+    for &n in order {
+        let p = &packed[n];
+        let kind = if p.level == 0 {
+            HNodeKind::Leaf(p.objects.clone())
+        } else {
+            HNodeKind::Internal {
+                level: p.level,
+                children: p.children.iter().map(|&c| child_ref(c)).collect(),
+            }
+        };
+        let node = HNode {
+            number: number[n],
+            kind,
+        };
+        let page = store.append_page(PageKind::HdovNode, &node.encode())?;
+        debug_assert_eq!(page, first_node + number[n] as u64);
+    }
+    Ok(first_node)
+}
+
+/// Every scheme asked for, once each in order, its V-pages written from the cells'
+/// VDs; returns each scheme's figures and its extent.
+fn write_schemes(
+    store: &mut Store,
+    asked: &[Scheme],
+    shape: Shape,
+    vds: &[CellVd],
+) -> Result<(Vec<SchemeReport>, Vec<(Scheme, Extent)>)> {
+    let visible_nodes: u64 = vds.iter().map(|v| v.len() as u64).sum();
+    let mut schemes = Vec::new();
+    let mut stored = Vec::new();
+    let mut asked = asked.to_vec();
+    asked.sort();
+    asked.dedup();
+    for s in asked {
+        let bytes = scheme::encode(s, shape, vds);
+        let e = store.append_extent(PageKind::VPage, &bytes)?;
+        let vpages = match s {
+            Scheme::Horizontal => (shape.cells * shape.nodes) as u64,
+            _ => visible_nodes,
+        };
+        schemes.push(SchemeReport {
+            scheme: s,
+            bytes: bytes.len() as u64,
+            pages: e.page_count as u64,
+            vpages,
+            estimate_bytes: scheme::estimate(s, shape, visible_nodes),
+        });
+        stored.push((s, e));
+    }
+    Ok((schemes, stored))
+}
+
+/// Every node's internal LODs but the root's, a level at a time from the leaves up,
+/// each level's nodes at once.
+fn make_internal_lods(
+    store: &Store,
+    packed: &[Packed],
+    coarse: &HashMap<u64, (Mesh, bool)>,
+    progress: &dyn Progress,
+) -> Result<Vec<Option<Made>>> {
+    let root = packed.len() - 1;
+    let mut made: Vec<Option<Made>> = (0..packed.len()).map(|_| None).collect();
+    let top = packed[root].level;
+    let mut done = 0u64;
+    for level in 0..=top {
+        let at: Vec<usize> = (0..packed.len())
+            .filter(|&n| packed[n].level == level && n != root)
+            .collect();
+        let results: Vec<Result<Made>> = at
+            .par_iter()
+            .map(|&n| make_node(store, packed, n, coarse, &made))
+            .collect();
+        for (&n, r) in at.iter().zip(results) {
+            made[n] = Some(r?);
+        }
+        done += at.len() as u64;
+        progress.update(Step::HdovLods, done, Some(packed.len() as u64 - 1));
+    }
+    progress.finish(Step::HdovLods);
+    Ok(made)
+}
+
+/// What [`write_chains`] wrote: the nodes with internal LODs, their levels and
+/// triangles.
+#[derive(Default)]
+struct Written {
+    nodes: u32,
+    levels: u64,
+    triangles: u64,
+}
+
+/// Each node's chain of internal LODs, in preorder, coded as the objects' meshes are
+/// (they share no vertices); returns each node's extent (empty for a node without).
+fn write_chains(
+    store: &mut Store,
+    order: &[usize],
+    number: &[u32],
+    made: &[Option<Made>],
+) -> Result<(Vec<Extent>, Written)> {
+    let mut chains: Vec<Extent> = vec![Extent::default(); made.len()];
+    let mut written = Written::default();
+    let codec = crate::catalog::load_codec(store)?;
+    for &n in order {
+        let Some(m) = &made[n] else { continue };
+        if m.levels.is_empty() {
+            continue;
+        }
+        let bytes =
+            encode_chain_with(number[n] as u64, m.source_triangles, &m.levels, codec, None)?;
+        chains[n] = store.append_packed_or_whole(PageKind::Lod, &bytes, codec.packs())?;
+        written.nodes += 1;
+        written.levels += m.levels.len() as u64;
+        written.triangles += m
+            .levels
+            .iter()
+            .map(|l| l.mesh.triangle_count() as u64)
+            .sum::<u64>();
+    }
+    Ok((chains, written))
+}
+
+/// Each viewcell's id and its VDs: its PVS aggregated up the tree.
+fn cell_vds(
+    store: &Store,
+    visibility: &VisibilityTable,
+    topology: &Topology,
+    progress: &dyn Progress,
+) -> Result<(Vec<u32>, Vec<CellVd>)> {
+    let cells: Vec<u32> = visibility.head(store)?.cells.iter().map(|c| c.id).collect();
+    let mut vds: Vec<CellVd> = Vec::with_capacity(cells.len());
+    for (i, &id) in cells.iter().enumerate() {
+        let pvs = visibility.pvs(store, id)?.ok_or_else(|| {
+            Error::Invalid(format!("viewcell {id} is in the directory but has no PVS"))
+        })?;
+        vds.push(
+            topology
+                .aggregate(&pvs.ids, &pvs.dov)
+                .map_err(|e| Error::Invalid(format!("viewcell {id}: {e}")))?,
+        );
+        progress.update(Step::HdovCells, i as u64 + 1, Some(cells.len() as u64));
+    }
+    progress.finish(Step::HdovCells);
+    Ok((cells, vds))
 }
