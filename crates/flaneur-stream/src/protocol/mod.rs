@@ -419,33 +419,12 @@ impl Message {
                 w.u8(WELCOME);
                 w.raw(&MAGIC);
                 w.u16(VERSION);
-                w.count(objects.len());
-                for o in objects {
-                    w.u64(o.id);
-                    w.u32(o.splits);
-                    w.count(o.base.positions.len());
-                    o.base.positions.iter().for_each(|p| w.vec3(*p));
-                    o.base.normals.iter().for_each(|n| w.vec3(*n));
-                    w.count(o.base.indices.len() / 3);
-                    o.base.indices.iter().for_each(|&i| w.u32(i));
-                }
+                write_welcome_objects(&mut w, objects);
             }
             Message::Batch { frame, objects } => {
                 w.u8(BATCH);
                 w.u32(*frame);
-                w.count(objects.len());
-                for o in objects {
-                    w.u32(o.index);
-                    w.count(o.collapses.len());
-                    o.collapses.iter().for_each(|&n| w.u32(n));
-                    w.count(o.splits.len());
-                    for s in &o.splits {
-                        w.u32(s.node);
-                        w.u32(s.first);
-                        w.count(s.run.len());
-                        s.run.iter().for_each(|v| write_split(&mut w, v));
-                    }
-                }
+                write_batch_objects(&mut w, objects);
             }
             Message::Refused(why) => {
                 w.u8(REFUSED);
@@ -595,6 +574,37 @@ fn magic_and_version(r: &mut Reader) -> Result<(), StreamError> {
     match r.u16()? {
         VERSION => Ok(()),
         v => Err(r.bad(format!("protocol version {v}; this side speaks {VERSION}"))),
+    }
+}
+
+/// A WELCOME's objects: each one's id, split count and base mesh.
+fn write_welcome_objects(w: &mut Writer, objects: &[WelcomeObject]) {
+    w.count(objects.len());
+    for o in objects {
+        w.u64(o.id);
+        w.u32(o.splits);
+        w.count(o.base.positions.len());
+        o.base.positions.iter().for_each(|p| w.vec3(*p));
+        o.base.normals.iter().for_each(|n| w.vec3(*n));
+        w.count(o.base.indices.len() / 3);
+        o.base.indices.iter().for_each(|&i| w.u32(i));
+    }
+}
+
+/// A BATCH's objects: each one's collapses, then its runs of splits.
+fn write_batch_objects(w: &mut Writer, objects: &[ObjectUpdates]) {
+    w.count(objects.len());
+    for o in objects {
+        w.u32(o.index);
+        w.count(o.collapses.len());
+        o.collapses.iter().for_each(|&n| w.u32(n));
+        w.count(o.splits.len());
+        for s in &o.splits {
+            w.u32(s.node);
+            w.u32(s.first);
+            w.count(s.run.len());
+            s.run.iter().for_each(|v| write_split(w, v));
+        }
     }
 }
 

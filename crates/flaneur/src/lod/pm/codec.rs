@@ -253,7 +253,6 @@ impl ProgressiveMesh {
             )));
         }
 
-        let at = |section: u64, i: usize, width: usize| section as usize + i * width;
         let base = Mesh {
             positions: (0..nv)
                 .map(|i| vec3_at(b, at(sec.positions, i, 12)))
@@ -268,99 +267,9 @@ impl ProgressiveMesh {
         base.validate()
             .map_err(|w| corrupt(format!("base mesh: {w}")))?;
 
-        let mut splits = Vec::with_capacity(s);
-        let mut adjusted_start = 0usize;
-        let mut filled = nt; // triangle slots filled with every split applied
-        for i in 0..s {
-            let o = at(sec.splits, i, SPLIT_LEN);
-            let bad = |what: String| corrupt(format!("split {i}: {what}"));
-            let pivot = |at: usize| match u32_at(b, o + at) {
-                NO_PIVOT => None,
-                p => Some(p),
-            };
-            let flags = b[o + SPLIT_FLAGS];
-            if flags & !FLAG_JOINS_PREVIOUS != 0 || b[o + SPLIT_RESERVED] != 0 {
-                return Err(bad(format!("unknown flags {flags:#04x}")));
-            }
-            let adjusted_end = u32_at(b, o + SPLIT_ADJUSTED_END) as usize;
-            if adjusted_end < adjusted_start || adjusted_end > a {
-                return Err(bad(format!(
-                    "its adjusted triangles end at {adjusted_end} (after {adjusted_start}, \
-                     at most {a})"
-                )));
-            }
-            let split = VertexSplit {
-                v_p: u32_at(b, o + SPLIT_V_P),
-                position: vec3_at(b, o + SPLIT_POSITION),
-                normal: vec3_at(b, o + SPLIT_NORMAL),
-                v_l: pivot(SPLIT_V_L),
-                v_r: pivot(SPLIT_V_R),
-                adjusted: (adjusted_start..adjusted_end)
-                    .map(|k| u32_at(b, at(sec.adjusted, k, 4)))
-                    .collect(),
-                corners: [b[o + SPLIT_CORNERS], b[o + SPLIT_CORNERS + 1]],
-                error: f32_at(b, o + SPLIT_ERROR),
-                joins_previous: flags & FLAG_JOINS_PREVIOUS != 0,
-            };
-            check_split(&split, i, nv, nt).map_err(bad)?;
-            adjusted_start = adjusted_end;
-            filled += split.added_triangles();
-            splits.push(split);
-        }
-        if adjusted_start != a {
-            return Err(corrupt(format!(
-                "the splits' adjusted triangles end at {adjusted_start}, the header says {a}"
-            )));
-        }
-
-        if v != nv + s {
-            return Err(corrupt(format!(
-                "the vertex map has {v} entries, the base and splits make {}",
-                nv + s
-            )));
-        }
-        let vertex_map: Vec<u32> = (0..v)
-            .map(|i| u32_at(b, at(sec.vertex_map, i, 4)))
-            .collect();
-        let mut seen = vec![false; v];
-        for (i, &n) in vertex_map.iter().enumerate() {
-            match seen.get_mut(n as usize) {
-                Some(s) if !*s => *s = true,
-                _ => {
-                    return Err(corrupt(format!(
-                        "vertex map: original vertex {i} maps to {n}, out of range or taken"
-                    )))
-                }
-            }
-        }
-        if t != filled {
-            return Err(corrupt(format!(
-                "the triangle map has {t} entries, the base and splits fill {filled} slots"
-            )));
-        }
-        let triangle_map: Vec<u32> = (0..t)
-            .map(|i| u32_at(b, at(sec.triangle_map, i, 4)))
-            .collect();
-        let mut seen = vec![false; nt + 2 * s];
-        for (i, &slot) in triangle_map.iter().enumerate() {
-            let slot = slot as usize;
-            let exists = slot < nt || {
-                let k = slot.wrapping_sub(nt);
-                splits.get(k / 2).is_some_and(|sp: &VertexSplit| {
-                    if k % 2 == 0 {
-                        sp.v_l.is_some()
-                    } else {
-                        sp.v_r.is_some()
-                    }
-                })
-            };
-            if !exists || std::mem::replace(&mut seen[slot], true) {
-                return Err(corrupt(format!(
-                    "triangle map: original triangle {i} maps to slot {slot}, which is \
-                     never filled or taken"
-                )));
-            }
-        }
+        let (splits, filled) = read_splits(b, &sec, (nv, nt, s, a))?;
+        let vertex_map = read_vertex_map(b, &sec, v, nv + s)?;
+        let triangle_map = read_triangle_map(b, &sec, t, filled, nt, &splits)?;
         Ok(ProgressiveMesh {
             base,
             splits,
@@ -368,6 +277,133 @@ impl ProgressiveMesh {
             triangle_map,
         })
     }
+}
+
+/// Where item `i` of `width` bytes lies in the section starting at `section`.
+fn at(section: u64, i: usize, width: usize) -> usize {
+    section as usize + i * width
+}
+
+/// The vertex splits, each checked against the base mesh of `nv` vertices and `nt`
+/// triangles, their `a` adjusted triangles run through in order; returns them and the
+/// triangle slots they fill with the base's.
+fn read_splits(
+    b: &[u8],
+    sec: &Sections,
+    (nv, nt, s, a): (usize, usize, usize, usize),
+) -> Result<(Vec<VertexSplit>, usize)> {
+    let mut splits = Vec::with_capacity(s);
+    let mut adjusted_start = 0usize;
+    let mut filled = nt; // triangle slots filled with every split applied
+    for i in 0..s {
+        let o = at(sec.splits, i, SPLIT_LEN);
+        let bad = |what: String| corrupt(format!("split {i}: {what}"));
+        let pivot = |at: usize| match u32_at(b, o + at) {
+            NO_PIVOT => None,
+            p => Some(p),
+        };
+        let flags = b[o + SPLIT_FLAGS];
+        if flags & !FLAG_JOINS_PREVIOUS != 0 || b[o + SPLIT_RESERVED] != 0 {
+            return Err(bad(format!("unknown flags {flags:#04x}")));
+        }
+        let adjusted_end = u32_at(b, o + SPLIT_ADJUSTED_END) as usize;
+        if adjusted_end < adjusted_start || adjusted_end > a {
+            return Err(bad(format!(
+                "its adjusted triangles end at {adjusted_end} (after {adjusted_start}, \
+                 at most {a})"
+            )));
+        }
+        let split = VertexSplit {
+            v_p: u32_at(b, o + SPLIT_V_P),
+            position: vec3_at(b, o + SPLIT_POSITION),
+            normal: vec3_at(b, o + SPLIT_NORMAL),
+            v_l: pivot(SPLIT_V_L),
+            v_r: pivot(SPLIT_V_R),
+            adjusted: (adjusted_start..adjusted_end)
+                .map(|k| u32_at(b, at(sec.adjusted, k, 4)))
+                .collect(),
+            corners: [b[o + SPLIT_CORNERS], b[o + SPLIT_CORNERS + 1]],
+            error: f32_at(b, o + SPLIT_ERROR),
+            joins_previous: flags & FLAG_JOINS_PREVIOUS != 0,
+        };
+        check_split(&split, i, nv, nt).map_err(bad)?;
+        adjusted_start = adjusted_end;
+        filled += split.added_triangles();
+        splits.push(split);
+    }
+    if adjusted_start != a {
+        return Err(corrupt(format!(
+            "the splits' adjusted triangles end at {adjusted_start}, the header says {a}"
+        )));
+    }
+    Ok((splits, filled))
+}
+
+/// The vertex map of `v` entries, which must be `expected` (the base's vertices and the
+/// splits'), each original vertex to a slot of its own.
+fn read_vertex_map(b: &[u8], sec: &Sections, v: usize, expected: usize) -> Result<Vec<u32>> {
+    if v != expected {
+        return Err(corrupt(format!(
+            "the vertex map has {v} entries, the base and splits make {expected}"
+        )));
+    }
+    let vertex_map: Vec<u32> = (0..v)
+        .map(|i| u32_at(b, at(sec.vertex_map, i, 4)))
+        .collect();
+    let mut seen = vec![false; v];
+    for (i, &n) in vertex_map.iter().enumerate() {
+        match seen.get_mut(n as usize) {
+            Some(s) if !*s => *s = true,
+            _ => {
+                return Err(corrupt(format!(
+                    "vertex map: original vertex {i} maps to {n}, out of range or taken"
+                )))
+            }
+        }
+    }
+    Ok(vertex_map)
+}
+
+/// The triangle map of `t` entries, which must be the `filled` slots, each original
+/// triangle to a slot the base or a split fills, and no slot twice.
+fn read_triangle_map(
+    b: &[u8],
+    sec: &Sections,
+    t: usize,
+    filled: usize,
+    nt: usize,
+    splits: &[VertexSplit],
+) -> Result<Vec<u32>> {
+    let s = splits.len();
+    if t != filled {
+        return Err(corrupt(format!(
+            "the triangle map has {t} entries, the base and splits fill {filled} slots"
+        )));
+    }
+    let triangle_map: Vec<u32> = (0..t)
+        .map(|i| u32_at(b, at(sec.triangle_map, i, 4)))
+        .collect();
+    let mut seen = vec![false; nt + 2 * s];
+    for (i, &slot) in triangle_map.iter().enumerate() {
+        let slot = slot as usize;
+        let exists = slot < nt || {
+            let k = slot.wrapping_sub(nt);
+            splits.get(k / 2).is_some_and(|sp: &VertexSplit| {
+                if k % 2 == 0 {
+                    sp.v_l.is_some()
+                } else {
+                    sp.v_r.is_some()
+                }
+            })
+        };
+        if !exists || std::mem::replace(&mut seen[slot], true) {
+            return Err(corrupt(format!(
+                "triangle map: original triangle {i} maps to slot {slot}, which is \
+                 never filled or taken"
+            )));
+        }
+    }
+    Ok(triangle_map)
 }
 
 #[cfg(test)]

@@ -264,13 +264,19 @@ pub(super) fn decode(b: &[u8]) -> Result<ProgressiveMesh> {
     read_body(&mut Cursor::new(body), &grid, nv, nt, s).map_err(corrupt)
 }
 
-fn read_body(
+/// A progressive mesh's base as its bytes give it: the mesh, and its positions on the
+/// grid and normals as stored, which the splits' deltas start from.
+type Base = (Mesh, Vec<[u16; 4]>, Vec<[u8; 3]>);
+
+/// The base mesh of `nv` vertices and `nt` triangles from `c`, its positions with room
+/// for the `s` splits' to follow.
+fn read_base(
     c: &mut Cursor,
     grid: &Grid,
     nv: usize,
     nt: usize,
     s: usize,
-) -> std::result::Result<ProgressiveMesh, String> {
+) -> std::result::Result<Base, String> {
     let mut steps: Vec<[u16; 4]> = Vec::with_capacity(nv + s);
     let xyz = c.planes::<3>(2 * nv, "base positions")?;
     for v in 0..nv {
@@ -278,9 +284,11 @@ fn read_body(
         let at = |k: usize| u16::from_le_bytes([xyz[2 * v][k], xyz[2 * v + 1][k]]);
         steps.push([at(0), at(1), at(2), 0]);
     }
-    let normal_of = |n: [u8; 3]| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8, 0]);
-    let mut stored_normals = c.planes::<3>(nv, "base normals")?;
-    let base_normals: Vec<[f32; 3]> = stored_normals.iter().map(|&n| normal_of(n)).collect();
+    let stored_normals = c.planes::<3>(nv, "base normals")?;
+    let base_normals: Vec<[f32; 3]> = stored_normals
+        .iter()
+        .map(|&n| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8, 0]))
+        .collect();
     let mut indices = Vec::with_capacity(3 * nt);
     for _ in 0..3 * nt {
         indices.push(c.u32("base indices")?);
@@ -291,6 +299,20 @@ fn read_body(
         indices,
     };
     base.validate().map_err(|w| format!("base mesh: {w}"))?;
+    Ok((base, steps, stored_normals))
+}
+
+/// The body after the header: the base mesh, then the splits, each checked and applied
+/// as it is read, and nothing after them.
+fn read_body(
+    c: &mut Cursor,
+    grid: &Grid,
+    nv: usize,
+    nt: usize,
+    s: usize,
+) -> std::result::Result<ProgressiveMesh, String> {
+    let (base, mut steps, mut stored_normals) = read_base(c, grid, nv, nt, s)?;
+    let normal_of = |n: [u8; 3]| dequantize_normal([n[0] as i8, n[1] as i8, n[2] as i8, 0]);
 
     let back = |i: usize, d: u64| -> std::result::Result<u32, String> {
         (nv + i)
