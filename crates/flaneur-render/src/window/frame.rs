@@ -5,6 +5,7 @@
 
 use std::time::{Duration, Instant};
 
+use super::device::Surfaced;
 use super::hud_lines::{hud_content, GRAPH_FRAMES};
 use super::{WalkWindow, MESSAGE_FOR};
 use crate::boxes::lines;
@@ -43,28 +44,17 @@ impl WalkWindow {
         self.summary.peak_gpu_bytes = self.summary.peak_gpu_bytes.max(s.meshes.bytes());
         let cpu = started.elapsed();
         let (w, h) = (s.config.width, s.config.height);
-        let texture = match s.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) => t,
-            wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
-                drop(t);
-                s.configure();
-                return Ok(None);
-            }
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(None)
-            }
-            wgpu::CurrentSurfaceTexture::Outdated => {
-                s.configure();
-                return Ok(None);
-            }
-            wgpu::CurrentSurfaceTexture::Lost => {
+        let texture = match acquire(s) {
+            Acquired::Texture(t) => t,
+            Acquired::NotNow => return Ok(None),
+            Acquired::Lost => {
                 // The surface, not the device: make the surface again.
                 self.surfaced = None;
                 self.last_try = Instant::now() - Duration::from_secs(1);
                 self.report("the window's surface was lost; making it again".into());
                 return Ok(None);
             }
-            wgpu::CurrentSurfaceTexture::Validation => {
+            Acquired::Refused => {
                 self.report("the window's surface refused a frame".into());
                 return Ok(None);
             }
@@ -146,6 +136,39 @@ impl WalkWindow {
             cpu.as_secs_f64() * 1e3,
             started.elapsed().as_secs_f64() * 1e3,
         )))
+    }
+}
+
+/// What the surface gave for this frame.
+enum Acquired {
+    Texture(wgpu::SurfaceTexture),
+    /// No frame this time (the window hidden, or its surface configured again).
+    NotNow,
+    /// The surface is gone and must be made again.
+    Lost,
+    /// The surface refused a frame (a validation error).
+    Refused,
+}
+
+/// This frame's texture of `s`'s surface; a suboptimal or outdated surface is
+/// configured again and draws nothing this time.
+fn acquire(s: &mut Surfaced) -> Acquired {
+    match s.surface.get_current_texture() {
+        wgpu::CurrentSurfaceTexture::Success(t) => Acquired::Texture(t),
+        wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+            drop(t);
+            s.configure();
+            Acquired::NotNow
+        }
+        wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+            Acquired::NotNow
+        }
+        wgpu::CurrentSurfaceTexture::Outdated => {
+            s.configure();
+            Acquired::NotNow
+        }
+        wgpu::CurrentSurfaceTexture::Lost => Acquired::Lost,
+        wgpu::CurrentSurfaceTexture::Validation => Acquired::Refused,
     }
 }
 
