@@ -61,6 +61,14 @@ pub(super) enum Answer {
     Done(Result<Fetched>),
 }
 
+/// What the viewer's thread shares with the loaders: the ids in the object buffer, the
+/// objects left out (a viewer that walks on past them), the coarse levels found damaged.
+pub(super) type SharedSets<'a> = (
+    &'a Mutex<HashSet<u64>>,
+    Option<&'a Mutex<LeftOut>>,
+    &'a Mutex<Damaged>,
+);
+
 /// Runs one query and loads the meshes of what it returned (those it had time for, when
 /// `ended` says the walk is over and no one will take them). Coarse levels that cannot
 /// be read for damage are named in `damaged`, their objects read at full detail.
@@ -69,11 +77,7 @@ pub(super) fn fetch(
     source: &(dyn PageSource + Sync),
     retrieval: Retrieval,
     req: &Request,
-    (resident, left_out, damaged): (
-        &Mutex<HashSet<u64>>,
-        Option<&Mutex<LeftOut>>,
-        &Mutex<Damaged>,
-    ),
+    (resident, left_out, damaged): SharedSets<'_>,
     ended: &AtomicBool,
     part: &mut dyn FnMut(&[Loaded]),
 ) -> Result<Fetched> {

@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::counts::Counts;
-use super::loader::{fetch, Answer, Fetched, Request};
+use super::loader::{fetch, Answer, Fetched, Request, SharedSets};
 use crate::cache::{BufferPool, Lookahead};
 use crate::database::Database;
 use crate::error::{Error, Result};
@@ -110,14 +110,6 @@ pub(super) struct Channels {
     pub(super) fine_tx: Option<mpsc::Sender<Vec<ObjectEntry>>>,
     pub(super) refined_rx: mpsc::Receiver<Refined>,
 }
-
-/// What the viewer's thread shares with the loaders: the ids in the object buffer, the
-/// objects left out (a viewer that walks on past them), the coarse levels found damaged.
-pub(super) type SharedSets<'a> = (
-    &'a Mutex<HashSet<u64>>,
-    Option<&'a Mutex<LeftOut>>,
-    &'a Mutex<Damaged>,
-);
 
 impl<'a> Review<'a> {
     /// The mode at the walk's start, its index read through `source` (`pool`, when the

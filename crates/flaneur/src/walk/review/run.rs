@@ -3,7 +3,7 @@
 //! session with the REVIEW mode.
 
 use super::counts::Counts;
-use super::loader::{fetch, Answer, Request};
+use super::loader::{fetch, Answer, Request, SharedSets};
 use super::mode::Lane;
 use super::mode::{Channels, Review};
 use crate::cache::{policy_by_name, BufferPool};
@@ -24,25 +24,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Mutex};
 
 /// A REVIEW walk under `cfg` with the poses coming from `viewer`: the walk session with
-/// the REVIEW mode, its index cache and its prefetch thread.
-pub(crate) fn walk_live<'db>(
-    db: &'db Database,
-    cfg: &ReviewConfig,
-    lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
-    viewer: &mut dyn Viewer,
-) -> Result<WalkReport> {
-    let mut frames = Vec::new();
-    let mut report = walk_each(db, cfg, lods, progress, viewer, &mut |f: &FrameStats| {
-        frames.push(f.clone());
-        Ok(())
-    })?;
-    report.frames = frames;
-    Ok(report)
-}
-
-/// [`walk_live`] handing each frame's figures to `each` as the frame ends, keeping
-/// none: the report's `frames` is empty, its summary whole.
+/// the REVIEW mode, its index cache and its loader threads, each frame's figures handed
+/// to `each` as the frame ends and none kept (the report's `frames` is empty, its
+/// summary whole).
 pub(crate) fn walk_each<'db>(
     db: &'db Database,
     cfg: &ReviewConfig,
@@ -83,10 +67,9 @@ pub(crate) fn walk_each<'db>(
     let now_busy = &now_busy;
     let (tally, counts) = std::thread::scope(|scope| -> Result<(ReviewTally, Counts)> {
         let (res_tx, res_rx) = mpsc::channel::<(Lane, Answer)>();
+        let sets = (resident, left_out, damaged);
         let shared = Shared {
-            resident,
-            left_out,
-            damaged,
+            sets,
             ended,
             now_busy,
         };
@@ -126,8 +109,7 @@ pub(crate) fn walk_each<'db>(
             fine_tx: refining.then_some(fine_tx),
             refined_rx,
         };
-        let shared = (resident, left_out, damaged);
-        let mut mode = Review::new((db, source, cfg), boxes, pool.as_ref(), shared, channels);
+        let mut mode = Review::new((db, source, cfg), boxes, pool.as_ref(), sets, channels);
         let mut tally = ReviewTally::default();
         let walked = session::run_each(&mut mode, viewer, lods, progress, |f| {
             tally.add(&f);
@@ -164,14 +146,11 @@ fn index_cache<'db>(db: &'db Database, cfg: &ReviewConfig) -> Result<Option<Buff
     Ok(Some(pool))
 }
 
-/// What the loader threads share with the viewer's: the ids in the object buffer, the
-/// objects left out, the coarse levels found damaged, whether the walk has ended and
-/// whether the viewer's own lane is loading.
+/// What the loader threads share with the viewer's: the sets the mode keeps too,
+/// whether the walk has ended and whether the viewer's own lane is loading.
 #[derive(Clone, Copy)]
 struct Shared<'a> {
-    resident: &'a Mutex<HashSet<u64>>,
-    left_out: Option<&'a Mutex<LeftOut>>,
-    damaged: &'a Mutex<Damaged>,
+    sets: SharedSets<'a>,
     ended: &'a AtomicBool,
     now_busy: &'a AtomicBool,
 }
@@ -204,7 +183,7 @@ fn spawn_lane<'scope, 'a: 'scope>(
                 source,
                 retrieval,
                 &req,
-                (shared.resident, shared.left_out, shared.damaged),
+                shared.sets,
                 shared.ended,
                 &mut part,
             );

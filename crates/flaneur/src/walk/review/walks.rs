@@ -97,5 +97,11 @@ pub(crate) fn walk_live_with<'db>(
     progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
 ) -> Result<WalkReport> {
-    super::run::walk_live(db, cfg, lods, progress, viewer)
+    let mut frames = Vec::new();
+    let mut report = super::run::walk_each(db, cfg, lods, progress, viewer, &mut |f| {
+        frames.push(f.clone());
+        Ok(())
+    })?;
+    report.frames = frames;
+    Ok(report)
 }

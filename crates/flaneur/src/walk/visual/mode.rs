@@ -47,7 +47,6 @@ pub(super) fn walk_waiting<'db>(
     viewer: &mut dyn Viewer,
     counted: &mut dyn FnMut(VisualFrame) -> Result<()>,
 ) -> Result<()> {
-    let tolerant = viewer.skips_damaged();
     std::thread::scope(|scope| -> Result<()> {
         let (req_tx, req_rx) = mpsc::channel::<Request>();
         let (res_tx, res_rx) = mpsc::channel::<Result<Prefetched>>();
@@ -79,7 +78,7 @@ pub(super) fn walk_waiting<'db>(
             asked: None,
             req_tx: cfg.prefetch_k.map(|_| req_tx),
             res_rx,
-            left_out: tolerant.then(LeftOut::default),
+            left_out: search.tolerant.then(LeftOut::default),
             track: MotionTrack::default(),
             clock: Instant::now(),
             pending: None,

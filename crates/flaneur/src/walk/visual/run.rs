@@ -65,20 +65,14 @@ pub(crate) fn walk_live<'db>(
         walked += 1;
         each(f)
     };
-    if cfg.never_wait {
-        let run =
-            super::never_wait::walk_live(db, cfg, search, lods, progress, viewer, &mut counted)?;
-        if walked == 0 {
-            return Err(Error::Invalid("the walk had no poses".into()));
-        }
-        return Ok((pool.as_ref().map(BufferPool::stats), run));
-    }
-    super::mode::walk_waiting(db, cfg, search, lods, progress, viewer, &mut counted)?;
+    let run = if cfg.never_wait {
+        super::never_wait::walk_live(db, cfg, search, lods, progress, viewer, &mut counted)?
+    } else {
+        super::mode::walk_waiting(db, cfg, search, lods, progress, viewer, &mut counted)?;
+        NeverWaitRun::default()
+    };
     if walked == 0 {
         return Err(Error::Invalid("the walk had no poses".into()));
     }
-    Ok((
-        pool.as_ref().map(BufferPool::stats),
-        NeverWaitRun::default(),
-    ))
+    Ok((pool.as_ref().map(BufferPool::stats), run))
 }
