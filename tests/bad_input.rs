@@ -256,7 +256,8 @@ fn damaged_mesh_met_by<'p>(
 #[test]
 fn a_walk_meets_a_damaged_mesh() {
     use flaneur::path::motion::{self, Motion};
-    use flaneur::walk::review::{self, Preset, ReviewConfig};
+    use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+    use flaneur::walk::{self, Frames, WalkConfig};
     let c = city();
     let bounds = c.bounds();
     let path = motion::generate(&bounds, Motion::Normal, 90, 30.0, 1).unwrap();
@@ -266,7 +267,9 @@ fn a_walk_meets_a_damaged_mesh() {
     };
     damaged_mesh_met_by(&c, 90, |db, skip| {
         let mut w = Walker::new(&path, skip);
-        let r = review::walk_live(db, &cfg, |_| {}, &mut w).map(|r| r.frames.len());
+        let r = walk::run(db, &WalkConfig::Review(cfg.clone()), &mut w, Frames::Keep)
+            .and_then(WalkReport::try_from)
+            .map(|r| r.frames.len());
         (r, w)
     });
 }
@@ -275,13 +278,16 @@ fn a_walk_meets_a_damaged_mesh() {
 #[test]
 fn a_pvs_walk_meets_a_damaged_mesh() {
     use flaneur::path::cell_walk;
-    use flaneur::walk::pvs::{self, PvsPrefetch};
+    use flaneur::walk::pvs::{PvsPrefetch, PvsWalkReport};
+    use flaneur::walk::{self, Frames};
     let c = common::city(60, 3, &common::with_visibility());
     let path = cell_walk(&Database::open(&c.db).unwrap(), 120, 0.5, 30.0, 1).unwrap();
     let rule = PvsPrefetch::Pbnp { border: 0.25 };
     damaged_mesh_met_by(&c, 120, |db, skip| {
         let mut w = Walker::new(&path, skip);
-        let r = pvs::walk_pvs_live(db, rule, |_| {}, &mut w).map(|r| r.frames.len());
+        let r = walk::run(db, &rule.into(), &mut w, Frames::Keep)
+            .and_then(PvsWalkReport::try_from)
+            .map(|r| r.frames.len());
         (r, w)
     });
 }

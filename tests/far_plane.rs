@@ -14,9 +14,10 @@ mod window;
 
 use flaneur::path::{CameraPath, Pose};
 use flaneur::scene::{Mesh, ObjectKind, SceneObject};
-use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::{ViewMode, ViewOptions, WalkWindow};
+use flaneur_render::{ViewOptions, WalkMode, WalkWindow};
 use glam::Vec3;
 
 /// How high the eye is, and how far down it looks (radians).
@@ -230,7 +231,7 @@ fn the_window_fits_the_screen_and_draws_nothing_above_sky() {
         lod_tau: None,
         ..ViewOptions::new(db.bounds(), pose)
     };
-    let mut window = WalkWindow::open(opts, ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(opts, WalkMode::Box).unwrap();
     window.show_hud = false;
     let cfg = ReviewConfig {
         pace: None,
@@ -238,17 +239,12 @@ fn the_window_fits_the_screen_and_draws_nothing_above_sky() {
     };
     let screen = dir.path().join("Xvfb_screen0");
     let mut shot = None;
-    review::walk_live(
-        &db,
-        &cfg,
-        |frame| {
-            if frame == 8 {
-                shot = Some(window::Screen::read(&screen));
-            }
-        },
-        &mut window,
-    )
-    .unwrap();
+    let mut viewer = window::Ticking::new(&mut window, |frame| {
+        if frame == 8 {
+            shot = Some(window::Screen::read(&screen));
+        }
+    });
+    walk::run(&db, &WalkConfig::Review(cfg), &mut viewer, Frames::Keep).unwrap();
     let shot = shot.expect("a frame 8");
     let (w, h) = window.drawn_size().expect("a window drawn");
     // The window sits at the screen's corner (no window manager); what of it is on

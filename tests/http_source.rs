@@ -15,6 +15,7 @@ use flaneur::path::motion::{self, Motion};
 use flaneur::scene::MeshCodec;
 use flaneur::store::HttpOptions;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, Playback, Viewer};
 use flaneur::{BuildOptions, Database, Error};
 use glam::Vec3;
 use servers::{impatient, Fault, Misbehaving, Nginx, NginxConfig};
@@ -29,6 +30,24 @@ fn city(objects: u64, seed: u64) -> common::City {
             ..Default::default()
         },
     )
+}
+
+/// Walks `path` through `db` under `cfg`, drawing nothing, its frames kept.
+fn review_walk(
+    db: &Database,
+    path: &flaneur::path::CameraPath,
+    cfg: &ReviewConfig,
+) -> flaneur::Result<review::WalkReport> {
+    review_walk_at(db, cfg, &mut Playback::path(path))
+}
+
+/// Walks `db` under `cfg` with the poses `viewer` gives, its frames kept.
+fn review_walk_at(
+    db: &Database,
+    cfg: &ReviewConfig,
+    viewer: &mut dyn Viewer,
+) -> flaneur::Result<review::WalkReport> {
+    walk::run(db, &cfg.clone().into(), viewer, Frames::Keep)?.try_into()
 }
 
 fn boxes(db: &Database, n: usize) -> Vec<Aabb> {
@@ -108,8 +127,8 @@ fn a_walk_over_http_reads_what_the_local_walk_reads() {
         far: 150.0,
         ..ReviewConfig::preset(Preset::Box)
     };
-    let a = review::walk(&local, &path, &cfg, |_| {}).unwrap();
-    let b = review::walk(&remote, &path, &cfg, |_| {}).unwrap();
+    let a = review_walk(&local, &path, &cfg).unwrap();
+    let b = review_walk(&remote, &path, &cfg).unwrap();
     let figures = |r: &review::WalkReport| -> Vec<_> {
         r.frames
             .iter()
@@ -141,14 +160,14 @@ fn each_frame_over_http_reports_the_client_cache() {
         ..ReviewConfig::preset(Preset::Box)
     };
     let mut here = Recorder::new(path.poses.clone());
-    review::walk_live(&local, &cfg, |_| {}, &mut here).unwrap();
+    review_walk_at(&local, &cfg, &mut here).unwrap();
     assert_eq!(here.figures.len(), 60);
     assert!(
         here.figures.iter().all(|f| f.remote.is_none()),
         "a local file has no network figures"
     );
     let mut there = Recorder::new(path.poses.clone());
-    review::walk_live(&remote, &cfg, |_| {}, &mut there).unwrap();
+    review_walk_at(&remote, &cfg, &mut there).unwrap();
     let seen: Vec<_> = there
         .figures
         .iter()
@@ -475,7 +494,7 @@ fn a_never_wait_walk_goes_on_without_its_server_and_says_so() {
         never_wait: true,
         ..ReviewConfig::preset(Preset::Optimal)
     };
-    let report = review::walk(&db, &path, &cfg, |_| {}).expect("the walk stopped");
+    let report = review_walk(&db, &path, &cfg).expect("the walk stopped");
     let s = &report.summary;
     assert_eq!(report.frames.len(), 60);
     assert!(s.failed_loads >= 1, "{s:?}");
@@ -487,7 +506,7 @@ fn a_never_wait_walk_goes_on_without_its_server_and_says_so() {
         never_wait: false,
         ..cfg
     };
-    match review::walk(&db, &path, &waits, |_| {}) {
+    match review_walk(&db, &path, &waits) {
         Err(Error::Remote { url: u, .. }) => assert_eq!(u, url),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("a walk read meshes from a stopped server"),
@@ -810,7 +829,7 @@ fn a_never_wait_walk_asks_again_for_what_an_outage_kept_from_it() {
         path: &path,
         damaged: Vec::new(),
     };
-    let report = review::walk_live(&db, &cfg, |_| {}, &mut viewer).expect("the walk stopped");
+    let report = review_walk_at(&db, &cfg, &mut viewer).expect("the walk stopped");
     let s = &report.summary;
     assert!(s.failed_loads >= 1, "the outage missed the walk: {s:?}");
     let said = s.last_load_error.as_deref().unwrap();
@@ -848,7 +867,7 @@ fn a_file_swapped_under_a_walk_at_a_window_stops_it_though_damage_would_not() {
         path: &path,
         damaged: Vec::new(),
     };
-    match review::walk_live(&db, &cfg, |_| {}, &mut viewer) {
+    match review_walk_at(&db, &cfg, &mut viewer) {
         Err(Error::RemoteChanged { url, .. }) => assert!(url.ends_with("/city.flaneur")),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("walked on across a swap of its file: {:?}", viewer.damaged),

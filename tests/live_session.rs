@@ -7,7 +7,8 @@ mod common;
 
 use flaneur::geom::Camera;
 use flaneur::path::{street_walk, CameraPath, Pose};
-use flaneur::walk::live::{self, Change, LiveViewer, ViewMode};
+use flaneur::walk::live::{self, Change, LiveViewer};
+use flaneur::walk::WalkMode;
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection, Viewer};
 use flaneur::{BuildOptions, Database, Error, Result};
 
@@ -20,7 +21,7 @@ struct Scripted {
     fail_from: Option<usize>,
     walk: usize,
     played: usize,
-    modes: Vec<ViewMode>,
+    modes: Vec<WalkMode>,
     reports: Vec<String>,
     /// Frames drawn in each walk, and the pages each walk's figures counted.
     frames: Vec<usize>,
@@ -94,7 +95,7 @@ impl LiveViewer for Scripted {
         self.script[self.walk].1
     }
 
-    fn show_mode(&mut self, mode: ViewMode) {
+    fn show_mode(&mut self, mode: WalkMode) {
         self.modes.push(mode);
     }
 
@@ -122,21 +123,21 @@ fn a_change_restarts_the_walk_with_it_and_a_mode_the_database_lacks_falls_back()
     let mut viewer = Scripted::new(
         path,
         vec![
-            (20, Some(Change::Mode(ViewMode::Box))),
+            (20, Some(Change::Mode(WalkMode::Box))),
             (20, Some(Change::Budget(0.5))),
-            (20, Some(Change::Mode(ViewMode::Pvs))),
+            (20, Some(Change::Mode(WalkMode::Pvs))),
             (20, None),
         ],
     );
-    live::run(&db, ViewMode::Review, &mut viewer).unwrap();
+    live::run(&db, WalkMode::Review, &mut viewer).unwrap();
     // Review, then Box; Pvs asked of a database without visibility shows Review.
     assert_eq!(
         viewer.modes,
         [
-            ViewMode::Review,
-            ViewMode::Box,
-            ViewMode::Pvs,
-            ViewMode::Review
+            WalkMode::Review,
+            WalkMode::Box,
+            WalkMode::Pvs,
+            WalkMode::Review
         ]
     );
     // The budget the walk started with, kept across the change of mode, then halved
@@ -167,7 +168,7 @@ fn failing_walks_restart_until_the_fifth_in_a_row_ends_the_session() {
     let (_city, db, path) = city();
     let mut viewer = Scripted::new(path, vec![(10, None); 8]);
     viewer.fail_from = Some(1);
-    let e = live::run(&db, ViewMode::Review, &mut viewer).unwrap_err();
+    let e = live::run(&db, WalkMode::Review, &mut viewer).unwrap_err();
     assert!(e.to_string().contains("failed five times running"), "{e}");
     // One good walk, then five failed ones, each told of.
     assert_eq!(viewer.walk, 5, "{:?}", viewer.reports);
@@ -195,20 +196,20 @@ fn visual_and_the_scene_tree_walk_live_and_visual_falls_back_to_pvs_without_the_
     let mut viewer = Scripted::new(
         path.clone(),
         vec![
-            (30, Some(Change::Mode(ViewMode::Pvs))),
-            (30, Some(Change::Mode(ViewMode::Vsc))),
-            (30, Some(Change::Mode(ViewMode::Pb))),
-            (30, Some(Change::Mode(ViewMode::Conv))),
+            (30, Some(Change::Mode(WalkMode::Pvs))),
+            (30, Some(Change::Mode(WalkMode::Vsc))),
+            (30, Some(Change::Mode(WalkMode::Pb))),
+            (30, Some(Change::Mode(WalkMode::Conv))),
             (30, None),
         ],
     );
-    live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
+    live::run(&db, WalkMode::Visual, &mut viewer).unwrap();
     let modes = [
-        ViewMode::Visual,
-        ViewMode::Pvs,
-        ViewMode::Vsc,
-        ViewMode::Pb,
-        ViewMode::Conv,
+        WalkMode::Visual,
+        WalkMode::Pvs,
+        WalkMode::Vsc,
+        WalkMode::Pb,
+        WalkMode::Conv,
     ];
     assert_eq!(viewer.modes, modes);
     // The scene tree is loaded once, when VSC is first shown, and said so.
@@ -222,8 +223,8 @@ fn visual_and_the_scene_tree_walk_live_and_visual_falls_back_to_pvs_without_the_
     let db = Database::open(&without.db).unwrap();
     let path = flaneur::path::cell_walk(&db, 20, 1.0, 10.0, 2).unwrap();
     let mut viewer = Scripted::new(path, vec![(10, None)]);
-    live::run(&db, ViewMode::Visual, &mut viewer).unwrap();
-    assert_eq!(viewer.modes, [ViewMode::Visual, ViewMode::Pvs]);
+    live::run(&db, WalkMode::Visual, &mut viewer).unwrap();
+    assert_eq!(viewer.modes, [WalkMode::Visual, WalkMode::Pvs]);
     assert!(
         viewer.reports[0].contains("no HDoV-tree"),
         "{:?}",

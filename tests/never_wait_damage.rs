@@ -18,6 +18,7 @@ use flaneur::path::motion::{self, Motion};
 use flaneur::path::{cell_poses, Pose};
 use flaneur::store::PAGE_HEADER_LEN;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, WalkConfig};
 use flaneur::Database;
 use glam::Vec3;
 use servers::{Fault, Misbehaving};
@@ -153,7 +154,11 @@ fn a_never_wait_walk_tells_its_viewer_and_its_report_of_a_damaged_lod_page() {
         ..ReviewConfig::preset(Preset::Optimal)
     };
     let mut viewer = Recorder::new(path.poses.clone());
-    let report = review::walk_live(&db, &cfg, |_| {}, &mut viewer).expect("the walk went on");
+    let report: review::WalkReport =
+        walk::run(&db, &WalkConfig::Review(cfg), &mut viewer, Frames::Keep)
+            .expect("the walk went on")
+            .try_into()
+            .unwrap();
     // Named once, beside the frame that learnt of it (a window shows it there).
     let told: Vec<&String> = viewer.figures.iter().flat_map(|f| &f.damaged).collect();
     assert_eq!(told.len(), 1, "{told:?}");

@@ -211,7 +211,7 @@ fn a_walk_starts_on_a_street_says_which_building_is_ahead_and_draws_them() {
         .collect();
     let mut viewer = common::recorder::Recorder::new(poses);
     let cfg = flaneur::walk::review::ReviewConfig::preset(flaneur::walk::review::Preset::Box);
-    flaneur::walk::review::walk_live(&db, &cfg, |_| {}, &mut viewer).unwrap();
+    flaneur::walk::run(&db, &cfg.into(), &mut viewer, flaneur::walk::Frames::Keep).unwrap();
     let looked_at: Vec<Option<String>> = viewer
         .figures
         .iter()

@@ -11,7 +11,8 @@ use std::time::Duration;
 use flaneur::path::{cell_walk, CameraPath};
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::HttpOptions;
-use flaneur::walk::pvs::{walk_pvs, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::pvs::{PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::{self, Frames, Playback, WalkConfig};
 use flaneur::{BuildOptions, Database};
 use servers::Nginx;
 
@@ -23,6 +24,22 @@ fn rules() -> [PvsPrefetch; 3] {
         PvsPrefetch::Pbnp { border: BORDER },
         PvsPrefetch::Lanp { border: BORDER },
     ]
+}
+
+/// Walks `path` over `db`'s visibility as `cfg` says (a [`PvsPrefetch`] alone: waiting,
+/// as the thesis), its frames kept.
+fn pvs_walk(
+    db: &Database,
+    path: &CameraPath,
+    cfg: impl Into<PvsWalkConfig>,
+) -> flaneur::Result<PvsWalkReport> {
+    walk::run(
+        db,
+        &WalkConfig::Pvs(cfg.into()),
+        &mut Playback::path(path),
+        Frames::Keep,
+    )?
+    .try_into()
 }
 
 fn never_waiting(prefetch: PvsPrefetch) -> PvsWalkConfig {
@@ -63,8 +80,8 @@ fn a_never_wait_pvs_walk_draws_what_arrives_and_ends_with_its_whole_pvs() {
     let db = Database::open(&c.db).unwrap();
     let path = common::walk_then_stand(&db);
     for prefetch in rules() {
-        let waits = walk_pvs(&db, &path, prefetch, |_| {}).unwrap();
-        let r = walk_pvs(&db, &path, never_waiting(prefetch), |_| {}).unwrap();
+        let waits = pvs_walk(&db, &path, prefetch).unwrap();
+        let r = pvs_walk(&db, &path, never_waiting(prefetch)).unwrap();
         check_against_waiting(&path, &r, &waits);
         // The loader's reads are the walk's: every object's coarse level and mesh.
         assert!(r.pages > waits.pages, "{} against {}", r.pages, waits.pages);
@@ -78,9 +95,9 @@ fn a_never_wait_pvs_walk_over_http_ends_as_the_local_one() {
     let local = Database::open(&c.db).unwrap();
     let path = common::walk_then_stand(&local);
     for prefetch in rules() {
-        let waits = walk_pvs(&local, &path, prefetch, |_| {}).unwrap();
+        let waits = pvs_walk(&local, &path, prefetch).unwrap();
         let db = Database::open_url(&server.url("city.flaneur")).unwrap();
-        let r = walk_pvs(&db, &path, never_waiting(prefetch), |_| {}).unwrap();
+        let r = pvs_walk(&db, &path, never_waiting(prefetch)).unwrap();
         check_against_waiting(&path, &r, &waits);
         assert!(db.remote_stats().unwrap().requests > 2);
     }
@@ -102,7 +119,7 @@ fn a_never_wait_pvs_walk_goes_on_without_its_server_and_says_so() {
         pace: Some(4.0),
         ..PvsWalkConfig::never_waiting(PvsPrefetch::Lanp { border: BORDER })
     };
-    let r = walk_pvs(&db, &path, cfg, |_| {}).expect("the walk stopped");
+    let r = pvs_walk(&db, &path, cfg).expect("the walk stopped");
     assert_eq!(r.frames.len(), 30);
     assert!(r.failed_loads >= 1);
     let said = r.last_load_error.as_deref().unwrap();
@@ -120,7 +137,7 @@ fn a_bad_pace_is_refused_before_the_walk() {
             pace: Some(pace),
             ..PvsWalkConfig::never_waiting(PvsPrefetch::Snp)
         };
-        let e = walk_pvs(&db, &path, cfg, |_| {}).unwrap_err();
+        let e = pvs_walk(&db, &path, cfg).unwrap_err();
         assert!(e.to_string().contains("pace"), "{e}");
     }
 }
@@ -283,7 +300,7 @@ fn a_file_swapped_under_a_never_wait_pvs_walk_stops_it_by_name() {
         .unwrap();
     std::fs::rename(&staged, &c.db).unwrap();
     let cfg = never_waiting(PvsPrefetch::Lanp { border: BORDER });
-    match walk_pvs(&db, &path, cfg, |_| {}) {
+    match pvs_walk(&db, &path, cfg) {
         Err(flaneur::Error::RemoteChanged { url, .. }) => assert!(url.ends_with("/city.flaneur")),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("walked a city across a swap of its file"),

@@ -13,9 +13,8 @@ use flaneur::geom::Camera;
 use flaneur::path::motion::{self, Motion};
 use flaneur::visibility::RayScene;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::{FrameSink, ObjectBuffer};
+use flaneur::walk::{self, FrameSink, Frames, NoSink, ObjectBuffer, Playback, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_bench::fidelity::ModeWalk;
 use flaneur_bench::report::Report;
 use flaneur_render::{shot, FrameWriter, Gpu, Shot};
 use glam::Vec3;
@@ -76,7 +75,7 @@ fn fidelity(
     db: &Database,
     gpu: &Gpu,
     path: &flaneur::path::CameraPath,
-    walk: ModeWalk<'_>,
+    walk: impl Into<WalkConfig>,
     mode: &str,
     (size, lod_tau): (u32, Option<f32>),
 ) -> flaneur_bench::fidelity::FidelityReport {
@@ -85,7 +84,40 @@ fn fidelity(
         height: size,
         lod_tau,
     };
-    flaneur_bench::fidelity::run(db, gpu, path, walk, mode, &drawing, |_| {}).unwrap()
+    flaneur_bench::fidelity::run(db, gpu, path, &walk.into(), mode, &drawing, |_| {}).unwrap()
+}
+
+/// Walks `path` through `db` under `cfg`, handing each frame to `sink`, its frames kept.
+fn review_walk_sink(
+    db: &Database,
+    path: &flaneur::path::CameraPath,
+    cfg: &ReviewConfig,
+    sink: &mut dyn FrameSink,
+) -> flaneur::Result<review::WalkReport> {
+    walk::run(
+        db,
+        &cfg.clone().into(),
+        &mut Playback::path(path).drawn_by(sink),
+        Frames::Keep,
+    )?
+    .try_into()
+}
+
+/// Walks `path` over `db`'s visibility with the PVS client prefetching by `rule`, handing
+/// each frame to `sink`, its frames kept.
+fn pvs_walk_sink(
+    db: &Database,
+    path: &flaneur::path::CameraPath,
+    rule: flaneur::walk::pvs::PvsPrefetch,
+    sink: &mut dyn FrameSink,
+) -> flaneur::Result<flaneur::walk::pvs::PvsWalkReport> {
+    walk::run(
+        db,
+        &rule.into(),
+        &mut Playback::path(path).drawn_by(sink),
+        Frames::Keep,
+    )?
+    .try_into()
 }
 
 fn gpu() -> Gpu {
@@ -308,7 +340,7 @@ fn a_walk_is_drawn_as_it_selects_and_the_gpu_follows_its_buffer() {
     let frames = dir.path().join("frames");
     let writer = FrameWriter::new(&gpu, (64, 64), (&db.bounds(), cfg.far), &frames, 200).unwrap();
     let mut sink = Checked { writer, frames: 0 };
-    let report = review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    let report = review_walk_sink(&db, &path, &cfg, &mut sink).unwrap();
     assert_eq!(sink.frames, path.poses.len());
     let t = &sink.writer.times;
     assert_eq!((t.frames, t.written), (600, 3));
@@ -360,7 +392,7 @@ fn a_viewer_standing_still_allocates_nothing_after_the_first_frame() {
             .unwrap()
             .with_lod_tau(0.001)
             .unwrap();
-        review::walk_into(&db, &standing(frames), &cfg, |_| {}, &mut writer).unwrap();
+        review_walk_sink(&db, &standing(frames), &cfg, &mut writer).unwrap();
         let t = writer.times;
         assert!(t.triangles.iter().all(|&n| n == t.triangles[0]));
         (
@@ -388,7 +420,7 @@ fn fidelity_of_a_full_detail_walk_is_exact() {
         ..ReviewConfig::preset(Preset::Box)
     };
     let path = motion::generate(&db.bounds(), Motion::Turning, 60, 30.0, 4).unwrap();
-    let r = fidelity(&db, &gpu, &path, ModeWalk::Review(&cfg), "box", (96, None));
+    let r = fidelity(&db, &gpu, &path, cfg.clone(), "box", (96, None));
     assert_eq!(r.rows.len(), 60);
     assert!(r.rows.iter().any(|row| row.triangles > 0));
     for row in &r.rows {
@@ -415,13 +447,12 @@ fn a_pvs_walk_is_drawn_without_changing_what_it_measures() {
     let db = with_visibility(dir.path());
     let path = flaneur::path::cell_walk(&db, 240, 0.5, 30.0, 1).unwrap();
     let rule = flaneur::walk::pvs::PvsPrefetch::Pbnp { border: 0.25 };
-    let plain = flaneur::walk::pvs::walk_pvs(&db, &path, rule, |_| {}).unwrap();
+    let plain = pvs_walk_sink(&db, &path, rule, &mut NoSink).unwrap();
     let gpu = gpu();
     let frames = dir.path().join("frames");
     let mut writer =
         FrameWriter::new(&gpu, (48, 48), (&db.bounds(), 1000.0), &frames, 100).unwrap();
-    let drawn =
-        flaneur::walk::pvs::walk_pvs_into(&db, &path, rule, |_| {}, &mut writer).unwrap();
+    let drawn = pvs_walk_sink(&db, &path, rule, &mut writer).unwrap();
     assert_eq!(
         drawn.frames, plain.frames,
         "drawing changed the walk's figures"
@@ -446,7 +477,7 @@ fn fidelity_of_the_pvs_walk() {
     let path = flaneur::path::cell_walk(&db, 120, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let rule = flaneur::walk::pvs::PvsPrefetch::Pbnp { border: 0.25 };
-    let r = fidelity(&db, &gpu, &path, ModeWalk::Pvs(rule), "pvs", (96, None));
+    let r = fidelity(&db, &gpu, &path, rule, "pvs", (96, None));
     assert_eq!(r.rows.len(), 120);
     for row in &r.rows {
         assert!(row.triangles <= row.reference_triangles, "{row:?}");
@@ -554,7 +585,7 @@ fn a_walk_drawn_at_its_levels_of_detail() {
         full: Vec::new(),
         refined: HashMap::new(),
     };
-    review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    review_walk_sink(&db, &path, &cfg, &mut sink).unwrap();
     let t = &sink.writer.times;
     let lod = t.lod.unwrap();
     assert!(
@@ -575,14 +606,7 @@ fn a_walk_drawn_at_its_levels_of_detail() {
         }
     }
     // The same walk through the fidelity experiment: coarse, yet close to full detail.
-    let r = fidelity(
-        &db,
-        &gpu,
-        &path,
-        ModeWalk::Review(&cfg),
-        "box",
-        (64, Some(tau)),
-    );
+    let r = fidelity(&db, &gpu, &path, cfg.clone(), "box", (64, Some(tau)));
     assert!(r.rows.iter().any(|row| row.coarse > 0));
     assert!(r
         .rows
@@ -705,7 +729,7 @@ fn large_objects_are_refined_view_by_view() {
         full: Vec::new(),
         refined: HashMap::new(),
     };
-    review::walk_into(&db, &path, &cfg, |_| {}, &mut sink).unwrap();
+    review_walk_sink(&db, &path, &cfg, &mut sink).unwrap();
     let lod = sink.writer.times.lod.unwrap();
     assert!(lod.refined_draws > 0 && lod.refine_ops > 0, "{lod:?}");
     assert_eq!(lod.drawn_while_decoding, 0, "{lod:?}");
@@ -729,14 +753,7 @@ fn large_objects_are_refined_view_by_view() {
         }
     }
     // The same walk against full detail.
-    let r = fidelity(
-        &db,
-        &gpu,
-        &path,
-        ModeWalk::Review(&cfg),
-        "box",
-        (64, Some(0.001)),
-    );
+    let r = fidelity(&db, &gpu, &path, cfg.clone(), "box", (64, Some(0.001)));
     let mean_differ = r.mean_differ();
     assert!(
         mean_differ < 0.05,
@@ -766,14 +783,7 @@ fn fidelity_of_the_visual_walk() {
         ..Default::default()
     };
     let exact = at(0.0);
-    let r = fidelity(
-        &db,
-        &gpu,
-        &path,
-        ModeWalk::Visual(&exact),
-        "visual",
-        (96, None),
-    );
+    let r = fidelity(&db, &gpu, &path, exact.clone(), "visual", (96, None));
     assert_eq!(r.rows.len(), 60);
     assert!(r
         .rows
@@ -781,14 +791,7 @@ fn fidelity_of_the_visual_walk() {
         .all(|row| row.triangles <= row.reference_triangles));
     assert!(r.mean_differ() < 0.05, "{:.3}", r.mean_differ());
     let coarse = at(0.05);
-    let c = fidelity(
-        &db,
-        &gpu,
-        &path,
-        ModeWalk::Visual(&coarse),
-        "visual",
-        (96, None),
-    );
+    let c = fidelity(&db, &gpu, &path, coarse.clone(), "visual", (96, None));
     assert_eq!(c.rows.len(), 60);
     assert!(c.mean_differ() < 0.2, "{:.3}", c.mean_differ());
 }
@@ -798,27 +801,27 @@ fn fidelity_of_the_visual_walk() {
 /// the level their DoV deserves, never more triangles, and PB(n) within its budget.
 #[test]
 fn fidelity_of_the_scene_tree_traversals() {
-    use flaneur::walk::scene::Traversal;
     use flaneur::walk::scene::SceneConfig;
+    use flaneur::walk::scene::Traversal;
     let dir = tempfile::tempdir().unwrap();
     let db = with_visibility(dir.path());
     let path = flaneur::path::cell_walk(&db, 40, 0.5, 30.0, 2).unwrap();
     let gpu = gpu();
     let conv = SceneConfig::new(Traversal::Conv);
-    let r = fidelity(&db, &gpu, &path, ModeWalk::Scene(&conv), "conv", (96, None));
+    let r = fidelity(&db, &gpu, &path, conv, "conv", (96, None));
     assert_eq!(r.rows.len(), 40);
     for row in &r.rows {
         assert_eq!(row.triangles, row.reference_triangles, "{row:?}");
         assert!(row.psnr.is_infinite() && row.differ == 0.0, "{row:?}");
     }
     let vsc = SceneConfig::new(Traversal::Vsc { eta: 0.0 });
-    let v = fidelity(&db, &gpu, &path, ModeWalk::Scene(&vsc), "vsc", (96, None));
+    let v = fidelity(&db, &gpu, &path, vsc, "vsc", (96, None));
     assert!(v
         .rows
         .iter()
         .all(|row| row.triangles <= row.reference_triangles));
     let pb = SceneConfig::new(Traversal::Pb { budget: 5_000 });
-    let p = fidelity(&db, &gpu, &path, ModeWalk::Scene(&pb), "pb", (96, None));
+    let p = fidelity(&db, &gpu, &path, pb, "pb", (96, None));
     assert!(
         p.rows.iter().all(|row| row.triangles <= 5_000),
         "{:?}",
@@ -928,7 +931,7 @@ fn landmarks_streamed_into_a_walk_reach_the_gpu_as_the_batches_made_them() {
         .with_lod_tau(0.001)
         .unwrap()
         .with_remote(Box::new(recorded));
-    review::walk_into(&db, &path, &cfg, |_| {}, &mut writer).unwrap();
+    review_walk_sink(&db, &path, &cfg, &mut writer).unwrap();
     let lod = writer.times.lod.unwrap();
     assert!(lod.streamed_draws > 0, "{lod:?}");
     let f = figures.lock().unwrap().clone();

@@ -8,6 +8,7 @@ use flaneur::path::motion::{self, Motion};
 use flaneur::path::{CameraPath, Pose};
 use flaneur::scene::MeshCodec;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, FrameSink, Frames, Playback, Viewer};
 use flaneur::{BuildOptions, Database};
 use glam::Vec3;
 
@@ -37,6 +38,34 @@ fn cfg(p: Preset) -> ReviewConfig {
     }
 }
 
+/// Walks `path` through `db` under `cfg`, drawing nothing, its frames kept.
+fn review_walk(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &ReviewConfig,
+) -> flaneur::Result<review::WalkReport> {
+    review_walk_by(db, cfg, &mut Playback::path(path))
+}
+
+/// [`review_walk`], handing each frame to `sink`.
+fn review_walk_sink(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &ReviewConfig,
+    sink: &mut dyn FrameSink,
+) -> flaneur::Result<review::WalkReport> {
+    review_walk_by(db, cfg, &mut Playback::path(path).drawn_by(sink))
+}
+
+/// Walks `db` under `cfg` along the poses `viewer` gives, its frames kept.
+fn review_walk_by(
+    db: &Database,
+    cfg: &ReviewConfig,
+    viewer: &mut dyn Viewer,
+) -> flaneur::Result<review::WalkReport> {
+    walk::run(db, &cfg.clone().into(), viewer, Frames::Keep)?.try_into()
+}
+
 fn path(db: &Database, m: Motion, frames: usize) -> CameraPath {
     motion::generate(&db.bounds(), m, frames, 30.0, 4).unwrap()
 }
@@ -48,7 +77,7 @@ fn every_configuration_shows_everything_in_view() {
     let p = path(&db, Motion::Normal, 240);
     let mut pages = Vec::new();
     for preset in Preset::ALL {
-        let report = review::walk(&db, &p, &cfg(preset), |_| {}).unwrap();
+        let report = review_walk(&db, &p, &cfg(preset)).unwrap();
         let s = &report.summary;
         assert_eq!(report.frames.len(), 240);
         assert!(s.queries > 0, "{preset:?} never queried");
@@ -71,12 +100,8 @@ fn prefetching_takes_reads_off_the_viewers_thread() {
     let c = city();
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Fast, 300);
-    let optimal = review::walk(&db, &p, &cfg(Preset::Optimal), |_| {})
-        .unwrap()
-        .summary;
-    let np = review::walk(&db, &p, &cfg(Preset::Np), |_| {})
-        .unwrap()
-        .summary;
+    let optimal = review_walk(&db, &p, &cfg(Preset::Optimal)).unwrap().summary;
+    let np = review_walk(&db, &p, &cfg(Preset::Np)).unwrap().summary;
     assert_eq!(
         np.sync_queries, np.queries,
         "without prefetching every query is the viewer's"
@@ -113,12 +138,10 @@ fn a_turn_on_the_spot_is_prefetched() {
             })
             .collect(),
     };
-    let optimal = review::walk(&db, &turn, &cfg(Preset::Optimal), |_| {})
+    let optimal = review_walk(&db, &turn, &cfg(Preset::Optimal))
         .unwrap()
         .summary;
-    let np = review::walk(&db, &turn, &cfg(Preset::Np), |_| {})
-        .unwrap()
-        .summary;
+    let np = review_walk(&db, &turn, &cfg(Preset::Np)).unwrap().summary;
     assert!(
         np.sync_queries > 3,
         "a full turn leaves the cell again and again: {np:?}"
@@ -144,7 +167,7 @@ fn the_memory_budget_holds_every_frame() {
             memory_budget: 6 << 20,
             ..cfg(preset)
         };
-        let report = review::walk(&db, &p, &cfg, |_| {}).unwrap();
+        let report = review_walk(&db, &p, &cfg).unwrap();
         assert!(
             report
                 .frames
@@ -210,7 +233,7 @@ fn awkward_walks_are_handled() {
         ("outside", &outside),
     ] {
         for preset in Preset::ALL {
-            let report = review::walk(&db, p, &cfg(preset), |_| {}).unwrap();
+            let report = review_walk(&db, p, &cfg(preset)).unwrap();
             assert_eq!(report.summary.visual_misses, 0, "{name} {preset:?}");
             if name == "still" {
                 assert_eq!(report.summary.queries, 1, "standing still queries once");
@@ -245,7 +268,7 @@ fn a_read_error_is_the_walks_error_not_a_hang() {
     std::fs::write(&c.db, bytes).unwrap();
     let db = Database::open(&c.db).unwrap();
     for preset in Preset::ALL {
-        let err = review::walk(&db, &p, &cfg(preset), |_| {}).unwrap_err();
+        let err = review_walk(&db, &p, &cfg(preset)).unwrap_err();
         assert!(err.to_string().contains("corrupt"), "{preset:?}: {err}");
     }
 }
@@ -289,15 +312,9 @@ fn bad_settings_are_errors() {
             ..cfg(Preset::Box)
         },
     ] {
-        assert!(review::walk(&db, &p, &cfg, |_| {}).is_err());
+        assert!(review_walk(&db, &p, &cfg).is_err());
     }
-    assert!(review::walk(
-        &db,
-        &CameraPath { poses: vec![] },
-        &cfg(Preset::Box),
-        |_| {}
-    )
-    .is_err());
+    assert!(review_walk(&db, &CameraPath { poses: vec![] }, &cfg(Preset::Box)).is_err());
 }
 
 #[test]
@@ -306,14 +323,13 @@ fn a_never_wait_walk_never_searches_on_the_viewers_thread() {
     let db = Database::open(&c.db).unwrap();
     let p = path(&db, Motion::Fast, 240);
     for preset in [Preset::Optimal, Preset::Np, Preset::Box] {
-        let report = review::walk(
+        let report = review_walk(
             &db,
             &p,
             &ReviewConfig {
                 never_wait: true,
                 ..cfg(preset)
             },
-            |_| {},
         )
         .unwrap();
         let s = &report.summary;
@@ -377,7 +393,7 @@ fn a_wide_viewer_gets_a_wide_view_and_a_headless_walk_the_thesis_view() {
             fov_x: Vec::new(),
             culled: 0,
         };
-        review::walk_into(&db, &path, &cfg(Preset::Box), |_| {}, &mut sink).unwrap();
+        review_walk_sink(&db, &path, &cfg(Preset::Box), &mut sink).unwrap();
         sink
     };
     let square = walk(None);

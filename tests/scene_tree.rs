@@ -13,7 +13,8 @@ use glam::Vec3;
 use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::visibility::VisibilityOptions;
 use flaneur::walk::scene::{traverse, SceneTree, Traversal};
-use flaneur::walk::scene::{self, SceneConfig};
+use flaneur::walk::scene::{SceneConfig, SceneReport};
+use flaneur::walk::{Frames, Playback, WalkState};
 use flaneur::{BuildOptions, Database};
 
 fn city() -> &'static common::City {
@@ -35,6 +36,18 @@ fn city() -> &'static common::City {
 
 fn tree(db: &Database) -> SceneTree {
     SceneTree::load(db, &flaneur::progress::Silent).unwrap()
+}
+
+/// Walks `path` over the scene tree `state` holds (the same tree walk after walk) under
+/// `cfg`, drawing nothing, its frames kept.
+fn scene_walk(
+    state: &mut WalkState<'_>,
+    path: &CameraPath,
+    cfg: SceneConfig,
+) -> flaneur::Result<SceneReport> {
+    state
+        .run(&cfg.into(), &mut Playback::path(path), Frames::Keep)?
+        .try_into()
 }
 
 /// The ids of `db`'s walkable viewcells.
@@ -132,35 +145,24 @@ fn conv_draws_the_frustum_vsc_zero_the_visible_and_vsc_fewer_as_eta_grows() {
 #[test]
 fn pb_keeps_its_budget_and_names_what_is_too_big_for_a_tiny_one() {
     let db = Database::open(&city().db).unwrap();
-    let mut t = tree(&db);
+    let mut state = WalkState::new(&db).with_scene_tree(tree(&db));
     let path = cell_walk(&db, 120, 1.5, 10.0, 3).unwrap();
-    let conv = scene::walk(
-        &db,
-        &mut t,
-        &path,
-        &SceneConfig::new(Traversal::Conv),
-        |_| {},
-    )
-    .unwrap();
+    let conv = scene_walk(&mut state, &path, SceneConfig::new(Traversal::Conv)).unwrap();
     let budget = (conv.summary.mean_triangles / 4.0) as u64;
-    let pb = scene::walk(
-        &db,
-        &mut t,
+    let pb = scene_walk(
+        &mut state,
         &path,
-        &SceneConfig::new(Traversal::Pb { budget }),
-        |_| {},
+        SceneConfig::new(Traversal::Pb { budget }),
     )
     .unwrap();
     assert!(pb.within_budget() >= 0.99, "{:?}", pb.summary);
     assert!(pb.summary.mean_triangles > 0.0);
     assert!(pb.summary.mean_triangles < conv.summary.mean_triangles);
     // A budget below every object's coarsest level: said so, naming one.
-    let tiny = scene::walk(
-        &db,
-        &mut t,
+    let tiny = scene_walk(
+        &mut state,
         &path,
-        &SceneConfig::new(Traversal::Pb { budget: 4 }),
-        |_| {},
+        SceneConfig::new(Traversal::Pb { budget: 4 }),
     )
     .unwrap();
     let said = tiny
@@ -172,7 +174,7 @@ fn pb_keeps_its_budget_and_names_what_is_too_big_for_a_tiny_one() {
 #[test]
 fn a_walk_counts_conv_frames_before_any_cell_and_frames_outside() {
     let db = Database::open(&city().db).unwrap();
-    let mut t = tree(&db);
+    let mut state = WalkState::new(&db).with_scene_tree(tree(&db));
     let b = db.bounds();
     let inside = cell_walk(&db, 10, 1.0, 10.0, 2).unwrap();
     let above = |i: usize, p: &Pose| Pose {
@@ -190,12 +192,10 @@ fn a_walk_counts_conv_frames_before_any_cell_and_frames_outside() {
     }));
     poses.extend((0..5).map(|i| above(16 + i, inside.poses.last().unwrap())));
     let path = CameraPath::new(poses).unwrap();
-    let r = scene::walk(
-        &db,
-        &mut t,
+    let r = scene_walk(
+        &mut state,
         &path,
-        &SceneConfig::new(Traversal::Vsc { eta: 0.001 }),
-        |_| {},
+        SceneConfig::new(Traversal::Vsc { eta: 0.001 }),
     )
     .unwrap();
     assert_eq!(r.summary.frames_outside, 10);

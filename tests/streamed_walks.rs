@@ -1,18 +1,18 @@
-//! A walk that hands each frame on and keeps none (`walk_pvs_streamed`,
-//! `visual::walk_streamed`, `scene::walk_streamed`) reports what the same walk
-//! keeping its frames reports: every frame, in order, and figures that are the sums,
-//! counts and extremes of those frames, tallied a frame at a time.
+//! A walk that hands each frame on and keeps none (`walk::run` with `Frames::Each`,
+//! its poses generated as it goes by `Playback::poses`) reports what the same walk
+//! keeping its frames (`Frames::Keep`, along a `Playback::path`) reports: every frame,
+//! in order, and figures that are the sums, counts and extremes of those frames,
+//! tallied a frame at a time; for the PVS, VISUAL and scene-tree walks.
 
 mod common;
 
 use flaneur::hdov::HdovOptions;
 use flaneur::path::{cell_poses, cell_walk};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::pvs::{self, PvsFrame, PvsPrefetch};
-use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene::{self, SceneConfig, SceneFrame};
-use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
-use flaneur::walk::NoSink;
+use flaneur::walk::pvs::{PvsFrame, PvsPrefetch, PvsWalkReport};
+use flaneur::walk::scene::{SceneConfig, SceneFrame, SceneReport, SceneTree, Traversal};
+use flaneur::walk::visual::{VisualConfig, VisualFrame, VisualReport};
+use flaneur::walk::{self, Frame, Frames, Playback, WalkConfig, WalkState};
 use flaneur::{BuildOptions, Database};
 
 const FRAMES: usize = 600;
@@ -58,14 +58,28 @@ fn a_streamed_pvs_walk_reports_its_frames_sums() {
     let db = Database::open(&c.db).unwrap();
     let path = cell_walk(&db, FRAMES, STEP, 30.0, 5).unwrap();
     let rule = PvsPrefetch::Pbnp { border: 0.25 };
-    let kept = pvs::walk_pvs(&db, &path, rule, |_| {}).unwrap();
+    let cfg = WalkConfig::from(rule);
+    let kept: PvsWalkReport = walk::run(&db, &cfg, &mut Playback::path(&path), Frames::Keep)
+        .unwrap()
+        .try_into()
+        .unwrap();
     let db = Database::open(&c.db).unwrap();
     let mut handed: Vec<(usize, PvsFrame)> = Vec::new();
     let poses = cell_poses(&db, FRAMES, STEP, 30.0, 5).unwrap();
-    let r = pvs::walk_pvs_streamed(&db, poses, rule, |_| {}, &mut NoSink, &mut |i, f| {
-        handed.push((i, *f));
-        Ok(())
-    })
+    let r: PvsWalkReport = walk::run(
+        &db,
+        &cfg,
+        &mut Playback::poses(poses),
+        Frames::Each(&mut |f| {
+            match f {
+                Frame::Pvs(p) => handed.push((f.index(), *p)),
+                other => panic!("a PVS walk handed on {other:?}"),
+            }
+            Ok(())
+        }),
+    )
+    .unwrap()
+    .try_into()
     .unwrap();
     assert!(r.frames.is_empty());
     assert_eq!(handed.len(), FRAMES);
@@ -113,16 +127,34 @@ fn a_streamed_visual_walk_reports_its_frames_sums() {
     let db = Database::open(&c.db).unwrap();
     let path = cell_walk(&db, FRAMES, STEP, 30.0, 6).unwrap();
     let cfg = VisualConfig::default();
-    let kept = visual::walk(&db, &path, &cfg, |_| {}).unwrap();
+    let kept: VisualReport = walk::run(
+        &db,
+        &cfg.clone().into(),
+        &mut Playback::path(&path),
+        Frames::Keep,
+    )
+    .unwrap()
+    .try_into()
+    .unwrap();
     // A handle of its own, as the first walk's: the HDoV-tree's head is read once a
     // handle.
     let db = Database::open(&c.db).unwrap();
     let mut frames: Vec<VisualFrame> = Vec::new();
     let poses = cell_poses(&db, FRAMES, STEP, 30.0, 6).unwrap();
-    let r = visual::walk_streamed(&db, poses, &cfg, |_| {}, &mut NoSink, &mut |f| {
-        frames.push(f.clone());
-        Ok(())
-    })
+    let r: VisualReport = walk::run(
+        &db,
+        &cfg.into(),
+        &mut Playback::poses(poses),
+        Frames::Each(&mut |f| {
+            match f {
+                Frame::Visual(v) => frames.push(v.clone()),
+                other => panic!("a VISUAL walk handed on {other:?}"),
+            }
+            Ok(())
+        }),
+    )
+    .unwrap()
+    .try_into()
     .unwrap();
     assert!(r.frames.is_empty());
     let s = &r.summary;
@@ -176,20 +208,36 @@ fn a_streamed_visual_walk_reports_its_frames_sums() {
 fn a_streamed_scene_walk_reports_its_frames_sums() {
     let c = city();
     let db = Database::open(&c.db).unwrap();
-    let mut tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
+    let tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
     let budget = 4000;
-    let cfg = SceneConfig::new(Traversal::Pb { budget });
+    let cfg = WalkConfig::from(SceneConfig::new(Traversal::Pb { budget }));
     let path = cell_walk(&db, FRAMES, STEP, 30.0, 7).unwrap();
-    let kept = scene::walk(&db, &mut tree, &path, &cfg, |_| {}).unwrap();
+    let kept: SceneReport = WalkState::new(&db)
+        .with_scene_tree(tree)
+        .run(&cfg, &mut Playback::path(&path), Frames::Keep)
+        .unwrap()
+        .try_into()
+        .unwrap();
     let db = Database::open(&c.db).unwrap();
-    let mut tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
+    let tree = SceneTree::load(&db, &flaneur::progress::Silent).unwrap();
     let mut frames: Vec<SceneFrame> = Vec::new();
     let poses = cell_poses(&db, FRAMES, STEP, 30.0, 7).unwrap();
-    let r = scene::walk_streamed(&db, &mut tree, poses, &cfg, |_| {}, &mut NoSink, &mut |f| {
-        frames.push(f.clone());
-        Ok(())
-    })
-    .unwrap();
+    let r: SceneReport = WalkState::new(&db)
+        .with_scene_tree(tree)
+        .run(
+            &cfg,
+            &mut Playback::poses(poses),
+            Frames::Each(&mut |f| {
+                match f {
+                    Frame::Scene(s) => frames.push(s.clone()),
+                    other => panic!("a scene-tree walk handed on {other:?}"),
+                }
+                Ok(())
+            }),
+        )
+        .unwrap()
+        .try_into()
+        .unwrap();
     assert!(r.frames.is_empty());
     let s = &r.summary;
     let same = |f: &SceneFrame| (f.cell, f.visited, f.drawn, f.triangles, f.pages);

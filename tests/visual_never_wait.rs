@@ -11,8 +11,8 @@ use flaneur::geom::Camera;
 use flaneur::hdov::HdovOptions;
 use flaneur::path::{cell_walk, CameraPath};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::visual::{self, VisualConfig, VisualReport};
-use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
+use flaneur::walk::visual::{VisualConfig, VisualReport};
+use flaneur::walk::{self, FrameSink, Frames, ObjectBuffer, Playback, Selection};
 use flaneur::{BuildOptions, Database};
 use servers::Nginx;
 
@@ -62,7 +62,15 @@ fn config(never_wait: bool, prefetch_k: Option<f32>) -> VisualConfig {
 
 fn walk(db: &Database, path: &CameraPath, cfg: &VisualConfig) -> (VisualReport, LastDrawn) {
     let mut last = LastDrawn::default();
-    let r = visual::walk_into(db, path, cfg, |_| {}, &mut last).unwrap();
+    let r = walk::run(
+        db,
+        &cfg.clone().into(),
+        &mut Playback::path(path).drawn_by(&mut last),
+        Frames::Keep,
+    )
+    .unwrap()
+    .try_into()
+    .unwrap();
     (r, last)
 }
 

@@ -15,8 +15,8 @@ use flaneur::geom::{Camera, DEFAULT_FOV};
 use flaneur::hdov::{Found, HdovOptions, NodeErrors, ScreenRule, Selection};
 use flaneur::path::cell_walk;
 use flaneur::walk::scene::{traverse_screened, SceneErrors, SceneTree, ScreenView, Traversal};
-use flaneur::walk::visual::{self, screen_test, VisualConfig, FAINT_TAU_STRETCH};
-use flaneur::walk::{FrameSink, ObjectBuffer, GROUP_ID};
+use flaneur::walk::visual::{screen_test, VisualConfig, FAINT_TAU_STRETCH};
+use flaneur::walk::{self, FrameSink, Frames, ObjectBuffer, Playback, GROUP_ID};
 use flaneur::{BuildOptions, Database};
 
 /// The thesis's τ, 0.1 % of the viewport.
@@ -218,7 +218,13 @@ fn an_object_near_the_eye_with_a_small_dov_is_drawn_at_its_tau_level_not_eq_5_6s
             ..VisualConfig::default()
         };
         let mut seen = Levels::new(&db, selection == Selection::Screen);
-        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        walk::run(
+            &db,
+            &cfg.into(),
+            &mut Playback::path(&path).drawn_by(&mut seen),
+            Frames::Keep,
+        )
+        .unwrap();
         seen
     };
     let ours = walk(Selection::Screen);
@@ -274,7 +280,13 @@ fn faint_dov_tau_an_object_of_dov_at_most_eta_is_drawn_under_a_stretched_tau() {
             ..VisualConfig::default()
         };
         let mut seen = Levels::new(&db, true);
-        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        walk::run(
+            &db,
+            &cfg.into(),
+            &mut Playback::path(&path).drawn_by(&mut seen),
+            Frames::Keep,
+        )
+        .unwrap();
         seen
     };
     let ours = walk(FAINT_TAU_STRETCH);
@@ -333,7 +345,7 @@ fn faint_dov_tau_an_object_of_dov_at_most_eta_is_drawn_under_a_stretched_tau() {
             faint_tau: bad,
             ..VisualConfig::default()
         };
-        let e = visual::walk(&db, &path, &cfg, |_| {}).unwrap_err();
+        let e = walk::run(&db, &cfg.into(), &mut Playback::path(&path), Frames::Keep).unwrap_err();
         assert!(e.to_string().contains("≥ 1"), "{e}");
     }
     // `flaneur walk` takes the stretch too, and hands it to the walk's checks.
@@ -534,7 +546,13 @@ fn a_bad_rule_or_tau_is_an_error_that_says_what_to_give() {
         ..VisualConfig::default()
     };
     let path = cell_walk(&opened, 2, 1.0, 10.0, 1).unwrap();
-    let e = visual::walk(&opened, &path, &cfg, |_| {}).unwrap_err();
+    let e = walk::run(
+        &opened,
+        &cfg.into(),
+        &mut Playback::path(&path),
+        Frames::Keep,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("τ"), "{e}");
     // Both rules walk.
     let thesis = common::flaneur(&[

@@ -14,9 +14,10 @@ use flaneur::geom::Camera;
 use flaneur::hdov::{Found, HdovOptions};
 use flaneur::path::{cell_walk, CameraPath, Pose};
 use flaneur::visibility::VisibilityOptions;
-use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::visual::{self, VisualConfig};
-use flaneur::walk::{FrameSink, ObjectBuffer, Selection, Viewer, GROUP_ID};
+use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::visual::{VisualConfig, VisualReport};
+use flaneur::walk::{self, FrameSink, Frames, ObjectBuffer, Playback, Selection};
+use flaneur::walk::{Viewer, GROUP_ID};
 use flaneur::{BuildOptions, Database, Error};
 
 fn city() -> &'static common::City {
@@ -88,6 +89,34 @@ impl Viewer for Tolerant<'_> {
     }
 }
 
+/// Walks `path` over `db`'s HDoV-tree under `cfg`, drawing nothing, its frames kept.
+fn visual_walk(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &VisualConfig,
+) -> flaneur::Result<VisualReport> {
+    visual_walk_by(db, cfg, &mut Playback::path(path))
+}
+
+/// [`visual_walk`], handing each frame to `sink`.
+fn visual_walk_sink(
+    db: &Database,
+    path: &CameraPath,
+    cfg: &VisualConfig,
+    sink: &mut dyn FrameSink,
+) -> flaneur::Result<VisualReport> {
+    visual_walk_by(db, cfg, &mut Playback::path(path).drawn_by(sink))
+}
+
+/// Walks `db` under `cfg` along the poses `viewer` gives, its frames kept.
+fn visual_walk_by(
+    db: &Database,
+    cfg: &VisualConfig,
+    viewer: &mut dyn Viewer,
+) -> flaneur::Result<VisualReport> {
+    walk::run(db, &cfg.clone().into(), viewer, Frames::Keep)?.try_into()
+}
+
 fn unpaced(eta: f32) -> VisualConfig {
     VisualConfig {
         eta,
@@ -101,7 +130,7 @@ fn visual_draws_a_far_visible_object_that_reviews_box_loses() {
     let db = Database::open(&city().db).unwrap();
     let path = cell_walk(&db, 200, 1.0, 10.0, 5).unwrap();
     let mut seen = Recorder::default();
-    let r = visual::walk_into(&db, &path, &unpaced(0.0), |_| {}, &mut seen).unwrap();
+    let r = visual_walk_sink(&db, &path, &unpaced(0.0), &mut seen).unwrap();
     assert_eq!(
         r.summary.frames_outside, 0,
         "a cell walk stays in its cells"
@@ -113,7 +142,13 @@ fn visual_draws_a_far_visible_object_that_reviews_box_loses() {
         ..ReviewConfig::preset(Preset::Np)
     };
     let mut boxed = Recorder::default();
-    review::walk_into(&db, &path, &cfg, |_| {}, &mut boxed).unwrap();
+    walk::run(
+        &db,
+        &cfg.clone().into(),
+        &mut Playback::path(&path).drawn_by(&mut boxed),
+        Frames::Keep,
+    )
+    .unwrap();
     assert_eq!(seen.frames.len(), boxed.frames.len());
     let bounds: std::collections::HashMap<u64, flaneur::geom::Aabb> =
         city().boxes.iter().copied().collect();
@@ -144,7 +179,7 @@ fn cells_come_in_by_delta_and_each_frame_draws_its_cells_finds() {
         selection: flaneur::hdov::Selection::Thesis,
         ..unpaced(0.002)
     };
-    let r = visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+    let r = visual_walk_sink(&db, &path, &cfg, &mut seen).unwrap();
     let s = &r.summary;
     assert!(s.cells_entered >= 3, "{s:?}");
     assert_eq!(s.searches, s.cells_entered + 1);
@@ -197,7 +232,7 @@ fn outside_every_viewcell_it_falls_back_to_reviews_query_and_counts_the_frames()
         ..*p
     }));
     let path = CameraPath::new(poses).unwrap();
-    let r = visual::walk(&db, &path, &unpaced(0.001), |_| {}).unwrap();
+    let r = visual_walk(&db, &path, &unpaced(0.001)).unwrap();
     let s = &r.summary;
     assert_eq!(s.frames_outside, 10, "{s:?}");
     assert_eq!(s.fallback_queries, 1, "one box holds a standing viewer");
@@ -220,7 +255,7 @@ fn next_cell_prefetch_moves_the_reads_but_not_what_is_drawn() {
             ..VisualConfig::default()
         };
         let mut seen = Recorder::default();
-        let r = visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        let r = visual_walk_sink(&db, &path, &cfg, &mut seen).unwrap();
         (r, seen.frames)
     };
     let (plain, plain_drawn) = walk(None);
@@ -280,7 +315,7 @@ fn a_damaged_internal_lod_is_named_or_left_out_and_counted() {
     bytes[(lods.first_page * page_size + 40) as usize] ^= 0x5a;
     std::fs::write(&copy, &bytes).unwrap();
     let db = Database::open(&copy).unwrap();
-    match visual::walk(&db, &path, &unpaced(eta), |_| {}) {
+    match visual_walk(&db, &path, &unpaced(eta)) {
         Err(Error::CorruptPage { page, .. }) => assert_eq!(page, lods.first_page),
         other => panic!("expected the damaged page named, got {other:?}"),
     }
@@ -288,7 +323,7 @@ fn a_damaged_internal_lod_is_named_or_left_out_and_counted() {
         path: &path,
         damaged: Vec::new(),
     };
-    let r = visual::walk_live(&db, &unpaced(eta), |_| {}, &mut viewer).unwrap();
+    let r = visual_walk_by(&db, &unpaced(eta), &mut viewer).unwrap();
     assert_eq!(r.frames.len(), 5);
     assert!(r.summary.left_out >= 1, "{:?}", r.summary);
     assert!(
@@ -303,13 +338,13 @@ fn a_database_without_the_tree_says_so() {
     let c = common::city(40, 1, &common::with_visibility());
     let db = Database::open(&c.db).unwrap();
     let path = cell_walk(&db, 5, 1.0, 10.0, 1).unwrap();
-    let e = visual::walk(&db, &path, &VisualConfig::default(), |_| {}).unwrap_err();
+    let e = visual_walk(&db, &path, &VisualConfig::default()).unwrap_err();
     assert!(e.to_string().contains("--hdov"), "{e}");
     let bad = VisualConfig {
         eta: f32::NAN,
         ..VisualConfig::default()
     };
-    let e = visual::walk(&db, &path, &bad, |_| {}).unwrap_err();
+    let e = visual_walk(&db, &path, &bad).unwrap_err();
     assert!(e.to_string().contains("η"), "{e}");
 }
 
@@ -400,7 +435,7 @@ fn with_dov_tau_objects_hand_their_dov_to_lod_selection_and_groups_none() {
             ..unpaced(0.002)
         };
         let mut seen = Dovs::default();
-        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        visual_walk_sink(&db, &path, &cfg, &mut seen).unwrap();
         seen.0
     };
     let with = walk(true);
@@ -461,7 +496,7 @@ fn finer_by_tau_lets_lod_selection_draw_near_objects_finer_than_eq_5_6() {
             finer: 0,
             coarser_or_same: 0,
         };
-        visual::walk_into(&db, &path, &cfg, |_| {}, &mut seen).unwrap();
+        visual_walk_sink(&db, &path, &cfg, &mut seen).unwrap();
         (seen.finer, seen.coarser_or_same)
     };
     let (finer, _) = walk(false);

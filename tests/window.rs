@@ -8,8 +8,9 @@ mod window;
 
 use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::{ViewMode, WalkWindow};
+use flaneur_render::{WalkMode, WalkWindow};
 use window::{display, options, Player};
 
 #[test]
@@ -22,7 +23,7 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
     let db = Database::open(&city.db).unwrap();
     let poses = motion::generate(&db.bounds(), Motion::Normal, 40, 30.0, 2).unwrap();
     let opts = options(&db, &poses);
-    let mut window = WalkWindow::open(opts, ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(opts, WalkMode::Box).unwrap();
     // Boxes over the view from above: their drawing must not fail either.
     window.boxes = true;
     window.top_view = true;
@@ -37,7 +38,11 @@ fn a_recorded_path_plays_in_the_window_and_survives_a_resize() {
         lose_at: None,
         frames: 0,
     };
-    let report = review::walk_live(&db, &cfg, |_| {}, &mut player).unwrap();
+    let report: review::WalkReport =
+        walk::run(&db, &WalkConfig::Review(cfg), &mut player, Frames::Keep)
+            .unwrap()
+            .try_into()
+            .unwrap();
     assert_eq!(player.frames, 40);
     assert_eq!(report.frames.len(), 40);
     assert!(window.closed(), "the window closes when the path ends");

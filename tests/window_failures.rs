@@ -8,8 +8,9 @@ mod window;
 
 use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::{ViewMode, WalkWindow};
+use flaneur_render::{WalkMode, WalkWindow};
 use window::{display, options, Player};
 
 /// A mesh page damaged where the walk starts, and the GPU device lost a third of the
@@ -51,7 +52,7 @@ fn the_walk_goes_on_past_a_damaged_page_and_a_lost_device() {
     bytes[(victim.mesh.first_page * page_size + 30) as usize] ^= 0x5a;
     std::fs::write(&city.db, bytes).unwrap();
     let db = Database::open(&city.db).unwrap();
-    let mut window = WalkWindow::open(options(&db, &poses), ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(options(&db, &poses), WalkMode::Box).unwrap();
     let cfg = ReviewConfig {
         pace: Some(1.0),
         ..ReviewConfig::preset(Preset::Box)
@@ -62,7 +63,11 @@ fn the_walk_goes_on_past_a_damaged_page_and_a_lost_device() {
         lose_at: Some(20),
         frames: 0,
     };
-    let report = review::walk_live(&db, &cfg, |_| {}, &mut player).unwrap();
+    let report: review::WalkReport =
+        walk::run(&db, &WalkConfig::Review(cfg), &mut player, Frames::Keep)
+            .unwrap()
+            .try_into()
+            .unwrap();
     assert_eq!(report.frames.len(), 120, "the walk went on");
     let s = &window.summary;
     let said = |what: &str| s.problems.iter().any(|p| p.contains(what));

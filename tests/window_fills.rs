@@ -9,9 +9,10 @@ mod window;
 
 use flaneur::path::motion::{self, Motion};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::{ViewMode, WalkWindow};
-use window::{display_in, options, Player, Screen};
+use flaneur_render::{WalkMode, WalkWindow};
+use window::{display_in, options, Player, Screen, Ticking};
 
 const SIZE: (usize, usize) = (480, 160);
 
@@ -46,7 +47,7 @@ fn a_wide_window_is_drawn_edge_to_edge() {
     let poses = motion::generate(&db.bounds(), Motion::Normal, 30, 30.0, 2).unwrap();
     let mut opts = options(&db, &poses);
     opts.size = (SIZE.0 as u32, SIZE.1 as u32);
-    let mut window = WalkWindow::open(opts, ViewMode::Box).unwrap();
+    let mut window = WalkWindow::open(opts, WalkMode::Box).unwrap();
     window.show_hud = false;
     let cfg = ReviewConfig {
         pace: None,
@@ -61,17 +62,16 @@ fn a_wide_window_is_drawn_edge_to_edge() {
         frames: 0,
     };
     // The screen as the window shows it at the walk's last frames, before it closes.
-    let report = review::walk_live(
-        &db,
-        &cfg,
-        |frame| {
-            if frame == 25 {
-                shot = Some(Screen::read(&screen));
-            }
-        },
-        &mut player,
-    )
-    .unwrap();
+    let mut viewer = Ticking::new(&mut player, |frame| {
+        if frame == 25 {
+            shot = Some(Screen::read(&screen));
+        }
+    });
+    let report: review::WalkReport =
+        walk::run(&db, &WalkConfig::Review(cfg), &mut viewer, Frames::Keep)
+            .unwrap()
+            .try_into()
+            .unwrap();
     assert_eq!(report.frames.len(), 30);
     assert_eq!(window.drawn_size(), Some((SIZE.0 as u32, SIZE.1 as u32)));
     let shot = shot.expect("a frame 25");

@@ -10,10 +10,10 @@ mod window;
 use std::process::Command;
 
 use flaneur::path::Pose;
-use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::{FrameSink, Viewer};
+use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::{self, FrameSink, Frames, Viewer, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::{Change, ViewMode, WalkWindow};
+use flaneur_render::{Change, WalkMode, WalkWindow};
 use window::{display, options};
 
 /// Steers the window by sending `script` to `xdotool` at frame 3, and ends the walk
@@ -81,7 +81,7 @@ fn keys_and_the_mouse_steer_the_window() {
         ..options(&db, &flaneur::path::CameraPath { poses: Vec::new() })
     };
     let start = opts.start;
-    let mut window = WalkWindow::open(opts, ViewMode::Review).unwrap();
+    let mut window = WalkWindow::open(opts, WalkMode::Review).unwrap();
     let tau = window.lod_tau().unwrap();
     assert!(window.show_hud && !window.boxes);
     let cfg = ReviewConfig {
@@ -102,7 +102,7 @@ fn keys_and_the_mouse_steer_the_window() {
         typing: None,
         seen: Vec::new(),
     };
-    review::walk_live(&db, &cfg, |_| {}, &mut typist).unwrap();
+    walk::run(&db, &WalkConfig::Review(cfg), &mut typist, Frames::Keep).unwrap();
     let typed = typist.typing.take().unwrap().wait().unwrap();
     assert!(typed.success(), "xdotool failed");
     let seen = std::mem::take(&mut typist.seen);
@@ -112,7 +112,7 @@ fn keys_and_the_mouse_steer_the_window() {
     );
     assert_eq!(
         window.change,
-        Some(Change::Mode(ViewMode::Box)),
+        Some(Change::Mode(WalkMode::Box)),
         "2 asks for BOX"
     );
     let last = *seen.last().unwrap();

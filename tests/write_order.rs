@@ -9,6 +9,7 @@ use flaneur::geom::Aabb;
 use flaneur::path::motion::{self, Motion};
 use flaneur::scene::MeshCodec;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::{self, Frames, Playback};
 use flaneur::{BuildOptions, Database, ObjectEntry, WriteOrder};
 
 /// Format version 1's raw floats, whole pages an extent, so that the two orders give
@@ -87,10 +88,19 @@ fn both_orders_answer_alike_and_the_curve_keeps_a_cell_in_fewer_runs() {
         far: 150.0,
         ..ReviewConfig::preset(Preset::Np)
     };
-    let (hw, iw) = (
-        review::walk(&h, &path, &cfg, |_| {}).unwrap().summary,
-        review::walk(&i, &path, &cfg, |_| {}).unwrap().summary,
-    );
+    let summary = |db: &Database| {
+        let r: review::WalkReport = walk::run(
+            db,
+            &cfg.clone().into(),
+            &mut Playback::path(&path),
+            Frames::Keep,
+        )
+        .unwrap()
+        .try_into()
+        .unwrap();
+        r.summary
+    };
+    let (hw, iw) = (summary(&h), summary(&i));
     assert_eq!(
         (
             hw.index_pages,

@@ -13,9 +13,9 @@ use super::walk::print_walk;
 use flaneur::path::motion::{self, Motion};
 use flaneur::path::CameraPath;
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::settings;
+use flaneur::walk::{self, settings, Frames, Playback, WalkConfig};
 use flaneur::{BuildOptions, Database};
-use flaneur_render::ViewMode;
+use flaneur_render::WalkMode;
 
 /// `flaneur demo`'s arguments.
 #[derive(clap::Args)]
@@ -65,78 +65,121 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         objects,
         ..Default::default()
     };
-    // A database cached by another version of flaneur may not be readable by this one
-    // (its LOD table, say): built again rather than failing halfway through the demo.
-    let cached = if db_path.exists() {
-        match Database::open(&db_path).and_then(|db| db.lod_stats().map(|_| db)) {
-            Ok(db) if db.hdov().is_ok_and(|h| h.is_some()) => Some(db),
-            Ok(_) => {
-                println!(
-                    "{} has no HDoV-tree (an older demo's): building it again",
-                    db_path.display()
-                );
-                None
-            }
-            Err(e) => {
-                println!(
-                    "{} cannot be read by this version of flaneur ({e}): building it again",
-                    db_path.display()
-                );
-                None
-            }
+    let db = match cached_demo(&db_path) {
+        Some(db) => {
+            println!("using {} (delete it to rebuild)", db_path.display());
+            db
         }
-    } else {
-        None
+        None => build_demo(&city, &scene, &db_path)?,
     };
-    let db = if let Some(db) = cached {
-        println!("using {} (delete it to rebuild)", db_path.display());
-        db
-    } else {
-        if !scene.exists() {
-            println!(
-                "generating a city of {objects} objects into {}",
-                scene.display()
-            );
-            let bar = super::bars::city_bar(city.objects);
-            let s = citygen::write_city_with_progress(&city, &scene, |n| bar.set_position(n))?;
-            bar.finish_and_clear();
-            println!(
-                "  {} objects, {} triangles, {:.1} MiB",
-                s.objects,
-                s.triangles,
-                s.bytes as f64 / (1 << 20) as f64
-            );
-        }
-        println!("building {}", db_path.display());
-        let b = flaneur::build_from_scene_with_progress(
-            &scene,
-            &db_path,
-            &demo_build_options(),
-            &Bars::default(),
-        )?;
+    review_and_box(&db, frames)?;
+    let gpu = flaneur_render::Gpu::headless();
+    super::demo_modes::walk_modes(&db, frames, gpu.as_ref().ok())?;
+    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+    if display {
         println!(
-            "  {} pages, tree height {}, {:.1} s",
-            b.pages, b.height, b.seconds
+            "opening a window on the city's busiest street (close it or press Q to end the demo)"
         );
-        print_lod_report(b.lod.as_ref(), b.bytes);
-        if let Some(v) = &b.visibility {
-            println!(
-                "  visibility: {} walkable viewcells of {} m, {:.0} objects in a cell's PVS on \
-                 average, {:.1} s ({:.1} ms a cell)",
-                v.cells,
-                flaneur::visibility::VisibilityOptions::default().cell_size,
-                v.entries as f64 / v.cells.max(1) as f64,
-                v.seconds,
-                1000.0 * v.seconds / v.cells.max(1) as f64
-            );
+        let start = flaneur::walk::busiest_street(&db)?;
+        let opts = window_options(&db, start);
+        match view(&db, opts, WalkMode::Review, (false, false), None, None) {
+            Ok(()) => {
+                print_next_steps(&db_path);
+                return Ok(());
+            }
+            Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
         }
+    }
+    demo_flight(
+        gpu,
+        &db,
+        &cache.join("demo-frames"),
+        frames.min(FLIGHT_FRAMES),
+    )?;
+    print_next_steps(&db_path);
+    Ok(())
+}
+
+/// The demo's database cached by an earlier run, when this version of flaneur reads it
+/// whole (its LOD table, its HDoV-tree): else it is built again rather than failing
+/// halfway through the demo.
+fn cached_demo(db_path: &Path) -> Option<Database> {
+    if !db_path.exists() {
+        return None;
+    }
+    match Database::open(db_path).and_then(|db| db.lod_stats().map(|_| db)) {
+        Ok(db) if db.hdov().is_ok_and(|h| h.is_some()) => Some(db),
+        Ok(_) => {
+            println!(
+                "{} has no HDoV-tree (an older demo's): building it again",
+                db_path.display()
+            );
+            None
+        }
+        Err(e) => {
+            println!(
+                "{} cannot be read by this version of flaneur ({e}): building it again",
+                db_path.display()
+            );
+            None
+        }
+    }
+}
+
+/// Generates the demo's city into `scene` (unless there) and builds `db_path` from it.
+fn build_demo(city: &citygen::CityConfig, scene: &Path, db_path: &Path) -> Result<Database> {
+    if !scene.exists() {
         println!(
-            "  (LODs: each object's coarser levels of detail, read instead of its full mesh when it is far; \
-             PM + DAG: the largest objects' progressive meshes and their dependency graphs, \
-             refined view by view as the viewer comes near: Zheng 2007)"
+            "generating a city of {} objects into {}",
+            city.objects,
+            scene.display()
         );
-        Database::open(&db_path)?
-    };
+        let bar = super::bars::city_bar(city.objects);
+        let s = citygen::write_city_with_progress(city, scene, |n| bar.set_position(n))?;
+        bar.finish_and_clear();
+        println!(
+            "  {} objects, {} triangles, {:.1} MiB",
+            s.objects,
+            s.triangles,
+            s.bytes as f64 / (1 << 20) as f64
+        );
+    }
+    println!("building {}", db_path.display());
+    let b = flaneur::build_from_scene_with_progress(
+        scene,
+        db_path,
+        &demo_build_options(),
+        &Bars::default(),
+    )?;
+    println!(
+        "  {} pages, tree height {}, {:.1} s",
+        b.pages, b.height, b.seconds
+    );
+    print_lod_report(b.lod.as_ref(), b.bytes);
+    if let Some(v) = &b.visibility {
+        println!(
+            "  visibility: {} walkable viewcells of {} m, {:.0} objects in a cell's PVS on \
+             average, {:.1} s ({:.1} ms a cell)",
+            v.cells,
+            flaneur::visibility::VisibilityOptions::default().cell_size,
+            v.entries as f64 / v.cells.max(1) as f64,
+            v.seconds,
+            1000.0 * v.seconds / v.cells.max(1) as f64
+        );
+    }
+    println!(
+        "  (LODs: each object's coarser levels of detail, read instead of its full mesh when it is far; \
+         PM + DAG: the largest objects' progressive meshes and their dependency graphs, \
+         refined view by view as the viewer comes near: Zheng 2007)"
+    );
+    Ok(Database::open(db_path)?)
+}
+
+/// REVIEW, then BOX, along `frames` of the normal motion pattern: each query or
+/// prefetch they made, and their summaries.
+fn review_and_box(db: &Database, frames: usize) -> Result<()> {
     let path = motion::generate(&db.bounds(), Motion::Normal, frames, 30.0, 1)?;
     println!(
         "walking {frames} frames ({:.0} s of path, played {}x faster) of the 'normal' pattern in REVIEW mode, then with plain BOX queries",
@@ -146,7 +189,11 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
     print_legend();
     for preset in [Preset::Optimal, Preset::Box] {
         let bar = indicatif::ProgressBar::new(frames as u64);
-        let report = review::walk(&db, &path, &ReviewConfig::preset(preset), |_| bar.inc(1))?;
+        let cfg = WalkConfig::Review(ReviewConfig::preset(preset));
+        let mut tick = |_| bar.inc(1);
+        let mut viewer = Playback::path(&path).with_progress(&mut tick);
+        let report: review::WalkReport =
+            walk::run(db, &cfg, &mut viewer, Frames::Keep)?.try_into()?;
         bar.finish_and_clear();
         println!(
             "{}",
@@ -174,32 +221,6 @@ fn demo(objects: u64, cache: &Path, frames: usize) -> Result<()> {
         }
         print_walk(&report, db.store().page_size());
     }
-    let gpu = flaneur_render::Gpu::headless();
-    super::demo_modes::walk_modes(&db, frames, gpu.as_ref().ok())?;
-    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
-        .iter()
-        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
-    if display {
-        println!(
-            "opening a window on the city's busiest street (close it or press Q to end the demo)"
-        );
-        let start = flaneur::walk::busiest_street(&db)?;
-        let opts = window_options(&db, start);
-        match view(&db, opts, ViewMode::Review, (false, false), None, None) {
-            Ok(()) => {
-                print_next_steps(&db_path);
-                return Ok(());
-            }
-            Err(e) => println!("no window ({e:#}); drawing a flight headless instead"),
-        }
-    }
-    demo_flight(
-        gpu,
-        &db,
-        &cache.join("demo-frames"),
-        frames.min(FLIGHT_FRAMES),
-    )?;
-    print_next_steps(&db_path);
     Ok(())
 }
 
@@ -304,7 +325,15 @@ fn demo_flight(
     let mut writer = flaneur_render::FrameWriter::new(&gpu, (640, 640), (&b, cfg.far), dir, 10)?
         .with_lod_tau(flaneur::walk::lod_select::DEFAULT_TAU)?;
     let bar = indicatif::ProgressBar::new(frames as u64);
-    review::walk_into(db, &path, &cfg, |_| bar.inc(1), &mut writer)?;
+    let mut tick = |_| bar.inc(1);
+    walk::run(
+        db,
+        &WalkConfig::Review(cfg),
+        &mut Playback::path(&path)
+            .drawn_by(&mut writer)
+            .with_progress(&mut tick),
+        Frames::Each(&mut |_| Ok(())),
+    )?;
     bar.finish_and_clear();
     let t = &writer.times;
     println!(

@@ -8,12 +8,14 @@
 use anyhow::Result;
 use flaneur::path::{cell_walk, CameraPath};
 use flaneur::walk::lod_select::DEFAULT_TAU;
-use flaneur::walk::pvs::{self, PvsPrefetch};
-use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::visual::{self, VisualConfig};
-use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
+use flaneur::walk::pvs::PvsPrefetch;
+use flaneur::walk::review::{Preset, ReviewConfig};
+use flaneur::walk::visual::VisualConfig;
+use flaneur::walk::{
+    self, FrameSink, Frames, ObjectBuffer, Playback, Report, Selection, WalkConfig,
+};
 use flaneur::Database;
-use flaneur_bench::fidelity::{self, Drawing, ModeWalk};
+use flaneur_bench::fidelity::{self, Drawing};
 use flaneur_render::Gpu;
 
 /// Frames of each mode drawn against full detail, and their size.
@@ -98,16 +100,16 @@ pub fn walk_modes(db: &Database, frames: usize, gpu: Option<&Gpu>) -> Result<()>
     };
     let mut rows = Vec::new();
     for (name, walk) in [
-        ("REVIEW", ModeWalk::Review(&review_cfg)),
-        ("BOX", ModeWalk::Review(&box_cfg)),
-        ("PVS", ModeWalk::Pvs(prefetch)),
-        ("VISUAL (η 0.001)", ModeWalk::Visual(&visual_cfg)),
+        ("REVIEW", WalkConfig::Review(review_cfg)),
+        ("BOX", WalkConfig::Review(box_cfg)),
+        ("PVS", WalkConfig::from(prefetch)),
+        ("VISUAL (η 0.001)", WalkConfig::Visual(visual_cfg)),
     ] {
         let bar = indicatif::ProgressBar::new(frames as u64);
-        let mut row = walk_one(db, &path, name, walk, |_| bar.inc(1))?;
+        let mut row = walk_one(db, &path, name, &walk, &mut |_| bar.inc(1))?;
         bar.finish_and_clear();
         if let Some(gpu) = gpu {
-            row.psnr = Some(psnr(db, gpu, &path, name, walk)?);
+            row.psnr = Some(psnr(db, gpu, &path, name, &walk)?);
         }
         rows.push(row);
     }
@@ -120,8 +122,8 @@ fn walk_one(
     db: &Database,
     path: &CameraPath,
     name: &'static str,
-    walk: ModeWalk<'_>,
-    tick: impl FnMut(usize),
+    walk: &WalkConfig,
+    tick: &mut dyn FnMut(usize),
 ) -> Result<ModeRow> {
     // Pages from the store's own counters, so that every mode counts alike: index,
     // meshes, levels, PVS rows, HDoV nodes and V-pages. (REVIEW and VISUAL set them
@@ -131,21 +133,22 @@ fn walk_one(
         frames: 0,
         triangles: 0,
     };
+    let mut viewer = Playback::path(path).drawn_by(&mut sink).with_progress(tick);
+    let report = walk::run(db, walk, &mut viewer, Frames::Each(&mut |_| Ok(())))?;
+    drop(viewer);
     // Each walk's own frames, frames over 50 ms and visual misses.
-    let (frames, over_50ms, misses) = match walk {
-        ModeWalk::Review(cfg) => {
-            let s = review::walk_into(db, path, cfg, tick, &mut sink)?.summary;
-            (s.frames, s.frames_over_50ms, s.visual_misses)
-        }
-        ModeWalk::Pvs(prefetch) => {
-            let r = pvs::walk_pvs_into(db, path, prefetch, tick, &mut sink)?;
-            (r.walked, r.frames_over_50ms, r.visual_misses as u64)
-        }
-        ModeWalk::Visual(cfg) => {
-            let s = visual::walk_into(db, path, cfg, tick, &mut sink)?.summary;
+    let (frames, over_50ms, misses) = match &report {
+        Report::Review(r) => (
+            r.summary.frames,
+            r.summary.frames_over_50ms,
+            r.summary.visual_misses,
+        ),
+        Report::Pvs(r) => (r.walked, r.frames_over_50ms, r.visual_misses as u64),
+        Report::Visual(r) => {
+            let s = &r.summary;
             (s.frames, s.frames_over_50ms, s.visual_misses as u64)
         }
-        ModeWalk::Scene(_) => anyhow::bail!("the demo walks no memory scene tree ({name})"),
+        Report::Scene(_) => anyhow::bail!("the demo walks no memory scene tree ({name})"),
     };
     Ok(ModeRow {
         name,
@@ -160,13 +163,7 @@ fn walk_one(
 
 /// The first frames of `path` drawn by `walk` and at full detail: their mean PSNR (an
 /// identical frame counted as 60 dB).
-fn psnr(
-    db: &Database,
-    gpu: &Gpu,
-    path: &CameraPath,
-    name: &str,
-    walk: ModeWalk<'_>,
-) -> Result<f64> {
+fn psnr(db: &Database, gpu: &Gpu, path: &CameraPath, name: &str, walk: &WalkConfig) -> Result<f64> {
     let first = CameraPath::new(path.poses.iter().take(DRAWN_FRAMES).cloned().collect())?;
     let drawing = Drawing {
         width: DRAWN_SIZE.0,

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use super::source::{remote_line, SourceArgs};
+use flaneur::DatabaseInfo;
 
 /// `flaneur info`'s arguments.
 #[derive(clap::Args)]
@@ -32,6 +33,19 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&info)?);
         return Ok(());
     }
+    print_pages(path, &info);
+    print_lods(&info);
+    print_visibility(&info);
+    print_hdov(&info);
+    print_index(&info);
+    if let Some(stats) = db.remote_stats() {
+        println!("{}", remote_line(&stats));
+    }
+    Ok(())
+}
+
+/// Its size: objects, triangles, pages by kind, bytes per triangle, the codec.
+fn print_pages(path: &Path, info: &DatabaseInfo) {
     let k = &info.pages_by_kind;
     println!("database    {}", path.display());
     println!("objects     {}", info.objects);
@@ -77,6 +91,10 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
         "codec       {codec}{dictionaries} (format version {})",
         info.format_version
     );
+}
+
+/// Its stored LODs and the settings they were made with.
+fn print_lods(info: &DatabaseInfo) {
     match &info.lod {
         None => println!("lods        none (built with --no-lod, or before LODs were stored)"),
         Some(l) => {
@@ -102,12 +120,22 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
             }
         }
     }
+}
+
+/// Its viewcells, their PVS, and what computing them took.
+fn print_visibility(info: &DatabaseInfo) {
     match &info.visibility {
         None => println!("visibility  none (built without --visibility)"),
         Some(v) => {
             println!(
                 "visibility  {} walkable cells of {} × {} ({} m, eyes {}–{} m), {} pages",
-                v.cells, v.rows, v.columns, v.cell_size, v.eye[0], v.eye[1], k.visibility
+                v.cells,
+                v.rows,
+                v.columns,
+                v.cell_size,
+                v.eye[0],
+                v.eye[1],
+                info.pages_by_kind.visibility
             );
             println!(
                 "  PVS       {:.1} objects on average, {:.2}% of the scene (patches of {} m, occluders within {} m)",
@@ -134,6 +162,10 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
             }
         }
     }
+}
+
+/// Its HDoV-tree and the bytes of each storage scheme.
+fn print_hdov(info: &DatabaseInfo) {
     if let Some(h) = &info.hdov {
         println!(
             "hdov        {} nodes (fan-out {}, height {}), internal LODs {} pages; {} cells, {:.1} visible nodes per cell; built in {:.1} s",
@@ -154,6 +186,10 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
             );
         }
     }
+}
+
+/// Its names, bounds and R-tree.
+fn print_index(info: &DatabaseInfo) {
     if info.named_objects > 0 {
         println!(
             "names       {} objects named by the file they came from (`query` shows them)",
@@ -175,8 +211,4 @@ fn info(path: &Path, json: bool, source: &SourceArgs) -> Result<()> {
     for (level, (n, e)) in info.tree.nodes.iter().zip(&info.tree.entries).enumerate() {
         println!("  level {level}   {n} nodes, {e} entries");
     }
-    if let Some(stats) = db.remote_stats() {
-        println!("{}", remote_line(&stats));
-    }
-    Ok(())
 }

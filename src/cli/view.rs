@@ -10,7 +10,7 @@ use super::args::{parse_look, parse_size, parse_vec3};
 use super::source::SourceArgs;
 use flaneur::path::CameraPath;
 use flaneur::Database;
-use flaneur_render::{ViewMode, WalkWindow};
+use flaneur_render::{WalkMode, WalkWindow};
 
 /// `flaneur view`'s arguments.
 #[derive(clap::Args)]
@@ -65,7 +65,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = flaneur::walk::visual::DEFAULT_ETA, value_parser = eta, allow_negative_numbers = true)]
     eta: f32,
     /// The PB mode's polygon budget, triangles a frame.
-    #[arg(long, default_value_t = flaneur::walk::live::DEFAULT_BUDGET)]
+    #[arg(long, default_value_t = flaneur::walk::DEFAULT_BUDGET)]
     budget: u64,
     /// The rule that picks the VISUAL, VSC and PB modes' internal LODs and levels.
     /// `screen` (ours, the default): a node's internal LOD only where its DoV ≤ η and
@@ -111,13 +111,13 @@ impl ViewArgs {
             source,
         } = self;
         let mode = match mode.as_str() {
-            "review" => ViewMode::Review,
-            "box" => ViewMode::Box,
-            "pvs" => ViewMode::Pvs,
-            "visual" => ViewMode::Visual,
-            "vsc" => ViewMode::Vsc,
-            "pb" => ViewMode::Pb,
-            "conv" => ViewMode::Conv,
+            "review" => WalkMode::Review,
+            "box" => WalkMode::Box,
+            "pvs" => WalkMode::Pvs,
+            "visual" => WalkMode::Visual,
+            "vsc" => WalkMode::Vsc,
+            "pb" => WalkMode::Pb,
+            "conv" => WalkMode::Conv,
             other => {
                 bail!("the window shows the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'")
             }
@@ -188,7 +188,7 @@ pub fn window_options(db: &Database, start: flaneur::path::Pose) -> flaneur_rend
 pub fn view(
     db: &Database,
     opts: flaneur_render::ViewOptions,
-    mode: ViewMode,
+    mode: WalkMode,
     (boxes, top_view): (bool, bool),
     record: Option<&Path>,
     remote: Option<Box<dyn flaneur::walk::RemoteRefinements>>,

@@ -8,16 +8,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use super::args::{pace, parse_size};
+use super::args::parse_size;
 use super::source::SourceArgs;
 use flaneur::path::motion::{self, Motion};
 use flaneur::path::{cell_poses, CameraPath, Pose};
-use flaneur::walk::pvs::{self, PvsFrame, PvsPrefetch, PvsWalkConfig};
 use flaneur::walk::review::{self, Preset, ReviewConfig};
-use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene::{self, SceneConfig, SceneFrame};
+use flaneur::walk::scene::SceneTree;
 use flaneur::walk::settings;
-use flaneur::walk::visual::{self, VisualConfig, VisualFrame};
+use flaneur::walk::visual::{self, VisualConfig};
+use flaneur::walk::{Frame, Frames, Playback, WalkConfig, WalkMode, WalkState};
 use flaneur::Database;
 
 mod csv_rows;
@@ -25,12 +24,13 @@ mod gaps;
 mod render;
 mod summary;
 mod visual_args;
+mod walk_config;
 
 use csv_rows::{write_row, CsvRows};
 
 use render::{print_render, rendered, RenderOpts};
-use summary::{print_remote, print_scene};
-pub use summary::{print_visual, print_walk};
+pub use summary::print_walk;
+use summary::{print_remote, print_report};
 use visual_args::VisualArgs;
 
 /// `flaneur walk`'s arguments.
@@ -45,7 +45,7 @@ pub struct WalkArgs {
     /// the whole city traversed by `vsc` (under --eta), `pb` (under --budget) or
     /// `conv` (frustum culling only; each needs --visibility).
     #[arg(long, default_value = "review")]
-    mode: String,
+    mode: WalkMode,
     /// One of the thesis's configurations instead of --mode: optimal (review's
     /// default), nc (no index cache), np (no prefetching), box (neither, BOX queries).
     /// Default: none, --mode decides.
@@ -183,242 +183,124 @@ pub struct WalkArgs {
 impl WalkArgs {
     /// Walks the path in the mode asked and prints the walk's figures.
     pub fn run(self) -> Result<()> {
-        let WalkArgs {
-            db,
-            mode,
-            config,
-            path,
-            frames,
-            fps,
-            seed,
-            policy,
-            cache_bytes,
-            k,
-            sf,
-            far,
-            budget_mb,
-            speed,
-            never_wait,
-            csv,
-            save_path,
-            source,
-            quiet,
-            prefetch,
-            border,
-            render,
-            frames_dir,
-            size,
-            every,
-            lod_tau,
-            eta,
-            visual: visual_args,
-            budget,
-            selection,
-            adapt_ahead,
-            stream,
-        } = self;
-        let render = render.then_some(RenderOpts {
-            dir: frames_dir,
-            size,
-            every,
-            lod_tau: (lod_tau != 0.0).then_some(lod_tau),
-            adapt_ahead,
-            stream: stream.clone(),
-        });
-        if adapt_ahead && render.is_none() {
+        let render = self.render_opts()?;
+        let cfg = self.walk_config()?;
+        let db = self.source.open(&self.db)?;
+        if let WalkConfig::Review(ReviewConfig {
+            never_wait: true, ..
+        }) = cfg
+        {
+            // A packed file (format version 2) puts neighbours' small extents on one
+            // page, and a never-wait walk loads neighbours a batch apart: the last 1 MiB
+            // of pages read is kept rather than read again for each of them.
+            db.store()
+                .keep_recent_pages((1 << 20) / db.store().page_size());
+        }
+        let (poses, count) = self.poses(&db, cfg.mode())?;
+        let mut state = WalkState::new(&db);
+        if let WalkConfig::Scene(_) = cfg {
+            state = state.with_scene_tree(self.scene_tree(&db)?);
+        }
+        let mut rows = (self.csv.as_deref())
+            .map(|p| CsvRows::create(p, Frame::csv_header(cfg.mode())))
+            .transpose()?;
+        let (report, drawn) = rendered(
+            &db,
+            (count, self.quiet),
+            render.as_ref(),
+            cfg.far(),
+            |sink, tick| {
+                let mut viewer = Playback::poses(poses).drawn_by(sink).with_progress(tick);
+                // Each frame's figures go to the CSV as the frame ends: a walk of any
+                // length in constant memory.
+                let mut each = |f: &Frame| write_row(&mut rows, || f.csv_row());
+                state.run(&cfg, &mut viewer, Frames::Each(&mut each))
+            },
+        )?;
+        if let Some(rows) = rows {
+            rows.finish()?;
+        }
+        print_report(&report, db.store().page_size());
+        print_remote(&db);
+        print_render(drawn, render.as_ref())?;
+        let (failed, last) = report.failed_loads();
+        gaps::went_without(report.damaged(), failed, last)
+    }
+
+    /// What `--render` asks of the walk's frames, checked against the flags that need it.
+    fn render_opts(&self) -> Result<Option<RenderOpts>> {
+        if self.adapt_ahead && !self.render {
             bail!("--adapt-ahead is for a walk drawn with --render: only it refines objects");
         }
-        if stream.is_some() && (render.is_none() || lod_tau == 0.0) {
+        if self.stream.is_some() && (!self.render || self.lod_tau == 0.0) {
             bail!(
                 "--stream is for a walk drawn with --render under a --lod-tau above 0: only \
                  it draws landmarks refined view by view"
             );
         }
-        if never_wait
-            && config.is_none()
-            && !matches!(mode.as_str(), "review" | "box" | "pvs" | "visual")
-        {
-            bail!(
-                "--never-wait is for --mode review, box, pvs and visual; the {mode} walk \
-                 still waits on its reads"
-            );
-        }
-        if mode == "pvs" && config.is_none() {
-            let prefetch = match prefetch.as_str() {
-                "snp" => PvsPrefetch::Snp,
-                "pbnp" => PvsPrefetch::Pbnp { border },
-                "lanp" => PvsPrefetch::Lanp { border },
-                other => bail!("unknown prefetch '{other}' (snp, pbnp, lanp)"),
-            };
-            let rule = PvsWalkConfig {
-                prefetch,
-                never_wait,
-                // A waiting PVS walk plays its frames back to back, as the thesis's.
-                pace: if never_wait { pace(speed) } else { None },
-            };
-            rule.validate()?;
-            return pvs_walk_cmd(
-                &db,
-                path.as_deref().unwrap_or("cells"),
-                frames,
-                fps,
-                seed,
-                rule,
-                csv.as_deref(),
-                &source,
-                quiet,
-                render.as_ref(),
-            );
-        }
-        let traversal = match mode.as_str() {
-            "vsc" => Some(Traversal::Vsc { eta }),
-            "pb" => Some(Traversal::Pb { budget }),
-            "conv" => Some(Traversal::Conv),
-            _ => None,
-        };
-        if let (Some(how), None) = (traversal, config) {
-            let cfg = SceneConfig {
-                far: far.unwrap_or(settings::DEFAULT_FAR),
-                selection,
-                tau: lod_tau,
-                ..SceneConfig::new(how)
-            };
-            return scene_walk_cmd(
-                &db,
-                &cfg,
-                path.as_deref().unwrap_or("cells"),
-                (frames, fps, seed),
-                csv.as_deref(),
-                &source,
-                quiet,
-                render.as_ref(),
-            );
-        }
-        if mode == "visual" && config.is_none() {
-            let mut cfg = VisualConfig {
-                eta,
-                pace: pace(speed),
-                selection,
-                tau: lod_tau,
-                never_wait,
-                ..VisualConfig::default()
-            };
-            visual_args.apply(&mut cfg)?;
-            if let Some(bytes) = cache_bytes {
-                cfg.node_cache = (bytes > 0)
-                    .then(|| (policy.clone().unwrap_or_else(|| "dovtime".into()), bytes));
-            } else if let (Some(p), Some(c)) = (&policy, &mut cfg.node_cache) {
-                c.0 = p.clone();
-            }
-            cfg.far = far.unwrap_or(cfg.far);
-            cfg.fallback_sf = sf.unwrap_or(cfg.fallback_sf);
-            return visual_walk_cmd(
-                &db,
-                &cfg,
-                path.as_deref().unwrap_or("cells"),
-                (frames, fps, seed),
-                csv.as_deref(),
-                &source,
-                quiet,
-                render.as_ref(),
-            );
-        }
-        let path = path.unwrap_or_else(|| "normal".into());
-        let preset = match config {
-            Some(p) => p,
-            None => match mode.as_str() {
-                "review" => Preset::Optimal,
-                "box" => Preset::Box,
-                other => bail!("unknown mode '{other}' (review, box, pvs, visual, vsc, pb, conv)"),
-            },
-        };
-        let mut cfg = ReviewConfig::preset(preset);
-        if let Some(bytes) = cache_bytes {
-            cfg.index_cache =
-                (bytes > 0).then(|| (policy.clone().unwrap_or_else(|| "dplru".into()), bytes));
-        } else if let (Some(p), Some(c)) = (&policy, &mut cfg.index_cache) {
-            c.0 = p.clone();
-        }
-        if let Some(k) = k {
-            cfg.prefetch_k = (k >= 0.0).then_some(k);
-        }
-        cfg.sf = sf.unwrap_or(cfg.sf);
-        cfg.far = far.unwrap_or(cfg.far);
-        cfg.memory_budget = budget_mb.map_or(cfg.memory_budget, |m| m << 20);
-        cfg.pace = pace(speed);
-        cfg.never_wait = never_wait;
-        walk_cmd(
-            &db,
-            &cfg,
-            &path,
-            frames,
-            fps,
-            seed,
-            csv.as_deref(),
-            save_path.as_deref(),
-            &source,
-            quiet,
-            render.as_ref(),
-        )
+        Ok(self.render.then(|| RenderOpts {
+            dir: self.frames_dir.clone(),
+            size: self.size,
+            every: self.every,
+            lod_tau: (self.lod_tau != 0.0).then_some(self.lod_tau),
+            adapt_ahead: self.adapt_ahead,
+            stream: self.stream.clone(),
+        }))
     }
-}
 
-#[allow(clippy::too_many_arguments)]
-fn walk_cmd(
-    path: &Path,
-    cfg: &ReviewConfig,
-    camera: &str,
-    frames: Option<usize>,
-    fps: f32,
-    seed: u64,
-    csv: Option<&Path>,
-    save_path: Option<&Path>,
-    source: &SourceArgs,
-    quiet: bool,
-    render: Option<&RenderOpts>,
-) -> Result<()> {
-    let db = source.open(path)?;
-    if cfg.never_wait {
-        // A packed file (format version 2) puts neighbours' small extents on one page,
-        // and a never-wait walk loads neighbours a batch apart: the last 1 MiB of pages
-        // read is kept rather than read again for each of them.
-        db.store()
-            .keep_recent_pages((1 << 20) / db.store().page_size());
-    }
-    // A motion pattern's poses are made as the walk asks for them, and each frame's
-    // figures go to the CSV as the frame ends: a walk of any length in constant memory.
-    let (poses, count): (Box<dyn Iterator<Item = Pose>>, usize) = match camera.parse::<Motion>() {
-        Ok(m) if save_path.is_none() => {
-            let poses =
-                motion::poses(&db.bounds(), m, frames.unwrap_or(DEFAULT_FRAMES), fps, seed)?;
-            let count = poses.len();
-            (Box::new(poses), count)
+    /// The walk's poses, made as the walk asks for them where they are generated, and
+    /// how many: over disk cells (REVIEW and BOX) a motion pattern by default, saved
+    /// with `--save-path` if asked; over viewcells `cells` by default.
+    fn poses<'db>(
+        &self,
+        db: &'db Database,
+        mode: WalkMode,
+    ) -> Result<(Box<dyn Iterator<Item = Pose> + 'db>, usize)> {
+        let (frames, fps, seed) = (self.frames, self.fps, self.seed);
+        if !matches!(mode, WalkMode::Review | WalkMode::Box) {
+            let camera = self.path.as_deref().unwrap_or("cells");
+            return viewcell_poses(db, camera, frames, fps, seed);
         }
-        _ => {
-            let path = camera_path(&db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
-            if let Some(p) = save_path {
-                path.save_csv(p)?;
+        let camera = self.path.as_deref().unwrap_or("normal");
+        match camera.parse::<Motion>() {
+            Ok(m) if self.save_path.is_none() => {
+                let poses =
+                    motion::poses(&db.bounds(), m, frames.unwrap_or(DEFAULT_FRAMES), fps, seed)?;
+                let count = poses.len();
+                Ok((Box::new(poses), count))
             }
-            let count = path.len();
-            (Box::new(path.poses.into_iter()), count)
+            _ => {
+                let path = camera_path(db, camera, (frames, DEFAULT_FRAMES), fps, seed)?;
+                if let Some(p) = &self.save_path {
+                    path.save_csv(p)?;
+                }
+                let count = path.len();
+                Ok((Box::new(path.poses.into_iter()), count))
+            }
         }
-    };
-    let mut rows = csv
-        .map(|p| CsvRows::create(p, review::FrameStats::CSV_HEADER))
-        .transpose()?;
-    let (report, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
-        review::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| {
-            write_row(&mut rows, || f.csv_row())
-        })
-    })?;
-    if let Some(rows) = rows {
-        rows.finish()?;
     }
-    print_walk(&report, db.store().page_size());
-    print_remote(&db);
-    print_render(drawn, render)?;
-    let s = &report.summary;
-    gaps::went_without(&s.damaged, s.failed_loads, s.last_load_error.as_deref())
+
+    /// `db`'s memory scene tree for a VSC, PB or CONV walk, loaded under a bar.
+    fn scene_tree(&self, db: &Database) -> Result<SceneTree> {
+        let started = std::time::Instant::now();
+        let bars = super::bars::Bars::default();
+        let tree = SceneTree::load(
+            db,
+            if self.quiet {
+                &flaneur::progress::Silent
+            } else {
+                &bars
+            },
+        )?;
+        if !self.quiet {
+            eprintln!(
+                "scene tree: {} nodes, loaded in {:.1} s",
+                tree.nodes.len(),
+                started.elapsed().as_secs_f64()
+            );
+        }
+        Ok(tree)
+    }
 }
 
 /// The poses of `camera` for a walk over viewcells, made as the walk asks for them where
@@ -474,159 +356,4 @@ pub fn camera_path(
         path.validate()?;
     }
     Ok(path)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn pvs_walk_cmd(
-    path: &Path,
-    camera: &str,
-    frames: Option<usize>,
-    fps: f32,
-    seed: u64,
-    rule: PvsWalkConfig,
-    csv: Option<&Path>,
-    source: &SourceArgs,
-    quiet: bool,
-    render: Option<&RenderOpts>,
-) -> Result<()> {
-    let db = source.open(path)?;
-    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
-    let mut rows = csv
-        .map(|p| CsvRows::create(p, PvsFrame::CSV_HEADER))
-        .transpose()?;
-    // The PVS walk's cameras have the default frustum (`Pose::camera`).
-    let (r, drawn) = rendered(
-        &db,
-        (count, quiet),
-        render,
-        flaneur::geom::DEFAULT_FAR,
-        |sink, tick| {
-            pvs::walk_pvs_streamed(&db, poses, rule, tick, sink, &mut |i, f| {
-                write_row(&mut rows, || f.csv_row(i))
-            })
-        },
-    )?;
-    if let Some(rows) = rows {
-        rows.finish()?;
-    }
-    println!(
-        "pvs walk, {} prefetch: {} frames ({} outside any walkable cell), {} cells entered",
-        r.prefetch.name(),
-        r.walked,
-        r.frames_outside,
-        r.cells_entered
-    );
-    println!(
-        "  {} prefetch transactions, {} cache swaps, {:.1} objects per transaction, {} visual misses",
-        r.transactions,
-        r.swaps,
-        r.objects_per_transaction(),
-        r.visual_misses
-    );
-    println!(
-        "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
-        r.mean_drawn, r.pages
-    );
-    println!(
-        "  frame time on the viewer's thread: mean {:.2} ms   max {:.2} ms   over 50 ms: {}",
-        r.mean_frame_ms, r.max_frame_ms, r.frames_over_50ms
-    );
-    if r.never_wait {
-        println!(
-            "  never waits on a read (ours): round trip measured up to {} frames   first complete frame {}   visual misses after it {}",
-            r.round_trip_frames,
-            r.first_complete_frame
-                .map_or("none".to_string(), |f| f.to_string()),
-            r.visual_misses_after_start
-        );
-    }
-    if r.failed_loads > 0 {
-        println!(
-            "  {} loads failed on the network and were asked for again; the last: {}",
-            r.failed_loads,
-            r.last_load_error.as_deref().unwrap_or("")
-        );
-    }
-    gaps::print_damaged(&r.damaged);
-    print_remote(&db);
-    print_render(drawn, render)?;
-    gaps::went_without(&r.damaged, r.failed_loads, r.last_load_error.as_deref())
-}
-
-#[allow(clippy::too_many_arguments)]
-fn visual_walk_cmd(
-    path: &Path,
-    cfg: &VisualConfig,
-    camera: &str,
-    (frames, fps, seed): (Option<usize>, f32, u64),
-    csv: Option<&Path>,
-    source: &SourceArgs,
-    quiet: bool,
-    render: Option<&RenderOpts>,
-) -> Result<()> {
-    let db = source.open(path)?;
-    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
-    let mut rows = csv
-        .map(|p| CsvRows::create(p, VisualFrame::CSV_HEADER))
-        .transpose()?;
-    let (r, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
-        visual::walk_streamed(&db, poses, cfg, tick, sink, &mut |f| {
-            write_row(&mut rows, || f.csv_row())
-        })
-    })?;
-    if let Some(rows) = rows {
-        rows.finish()?;
-    }
-    print_visual(&r);
-    print_remote(&db);
-    print_render(drawn, render)?;
-    // Its damage stops the walk where met, or is left out at a window.
-    let s = &r.summary;
-    gaps::went_without(&[], s.failed_loads, s.last_load_error.as_deref())
-}
-
-#[allow(clippy::too_many_arguments)]
-fn scene_walk_cmd(
-    path: &Path,
-    cfg: &SceneConfig,
-    camera: &str,
-    (frames, fps, seed): (Option<usize>, f32, u64),
-    csv: Option<&Path>,
-    source: &SourceArgs,
-    quiet: bool,
-    render: Option<&RenderOpts>,
-) -> Result<()> {
-    let db = source.open(path)?;
-    let (poses, count) = viewcell_poses(&db, camera, frames, fps, seed)?;
-    let started = std::time::Instant::now();
-    let bars = super::bars::Bars::default();
-    let mut tree = SceneTree::load(
-        &db,
-        if quiet {
-            &flaneur::progress::Silent
-        } else {
-            &bars
-        },
-    )?;
-    if !quiet {
-        eprintln!(
-            "scene tree: {} nodes, loaded in {:.1} s",
-            tree.nodes.len(),
-            started.elapsed().as_secs_f64()
-        );
-    }
-    let mut rows = csv
-        .map(|p| CsvRows::create(p, SceneFrame::CSV_HEADER))
-        .transpose()?;
-    let (r, drawn) = rendered(&db, (count, quiet), render, cfg.far, |sink, tick| {
-        scene::walk_streamed(&db, &mut tree, poses, cfg, tick, sink, &mut |f| {
-            write_row(&mut rows, || f.csv_row())
-        })
-    })?;
-    if let Some(rows) = rows {
-        rows.finish()?;
-    }
-    print_scene(&r);
-    print_remote(&db);
-    print_render(drawn, render)
 }

@@ -119,6 +119,80 @@ impl Viewer for Player<'_> {
     }
 }
 
+/// `viewer`, telling `tick` the index of each frame once the frame is drawn and its
+/// figures are taken (a walk's progress): everything else is `viewer`'s own.
+pub struct Ticking<'v, V: Viewer + ?Sized, F: FnMut(usize)> {
+    pub viewer: &'v mut V,
+    pub tick: F,
+    at: usize,
+}
+
+impl<'v, V: Viewer + ?Sized, F: FnMut(usize)> Ticking<'v, V, F> {
+    pub fn new(viewer: &'v mut V, tick: F) -> Self {
+        Ticking {
+            viewer,
+            tick,
+            at: 0,
+        }
+    }
+}
+
+impl<V: Viewer + ?Sized, F: FnMut(usize)> FrameSink for Ticking<'_, V, F> {
+    fn frame(
+        &mut self,
+        index: usize,
+        camera: &flaneur::geom::Camera,
+        buffer: &flaneur::walk::ObjectBuffer,
+        selection: &mut flaneur::walk::Selection<'_>,
+    ) -> flaneur::Result<()> {
+        self.viewer.frame(index, camera, buffer, selection)
+    }
+
+    fn draws(&self) -> bool {
+        self.viewer.draws()
+    }
+
+    fn aspect(&self) -> Option<f32> {
+        self.viewer.aspect()
+    }
+
+    fn lod_tau(&self) -> Option<f32> {
+        self.viewer.lod_tau()
+    }
+
+    fn lod_restart(&mut self) -> bool {
+        self.viewer.lod_restart()
+    }
+
+    fn lod_settled(&self) -> bool {
+        self.viewer.lod_settled()
+    }
+
+    fn lod_adapt_ahead(&self) -> bool {
+        self.viewer.lod_adapt_ahead()
+    }
+
+    fn lod_remote(&mut self) -> Option<Box<dyn flaneur::walk::RemoteRefinements>> {
+        self.viewer.lod_remote()
+    }
+}
+
+impl<V: Viewer + ?Sized, F: FnMut(usize)> Viewer for Ticking<'_, V, F> {
+    fn next_pose(&mut self, frame: usize) -> flaneur::Result<Option<Pose>> {
+        self.at = frame;
+        self.viewer.next_pose(frame)
+    }
+
+    fn figures(&mut self, figures: &flaneur::walk::FrameFigures) {
+        self.viewer.figures(figures);
+        (self.tick)(self.at);
+    }
+
+    fn skips_damaged(&self) -> bool {
+        self.viewer.skips_damaged()
+    }
+}
+
 /// A small window over `db` playing `poses` from its busiest street, with LODs and a
 /// GPU budget of 4 MiB.
 pub fn options(db: &Database, poses: &flaneur::path::CameraPath) -> ViewOptions {

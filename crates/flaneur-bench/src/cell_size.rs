@@ -16,12 +16,14 @@ use std::path::Path;
 use crate::report::Report;
 use crate::view_culling::THESIS_SFS;
 use crate::walk_setup::{
-    check_sf, check_sweep, describe_review, label, mean_query_ms, num, per_query, WalkSetup,
+    check_sf, check_sweep, describe_review, label, mean_query_ms, num, per_query, walk_path,
+    WalkSetup,
 };
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -133,7 +135,7 @@ pub fn run_with_progress(
     let mut rows = Vec::with_capacity(total);
     for &sf in &cfg.sfs {
         for preset in Preset::ALL {
-            let walk = review::walk(db, &path, &cfg.review(preset, sf), |_| {})?;
+            let walk = walk_path(db, &path, cfg.review(preset, sf), &mut NoSink)?;
             rows.push(CellSizeRow::from_walk(sf, preset, &walk));
             progress(rows.len(), total);
         }

@@ -16,12 +16,13 @@ use std::thread;
 use std::time::Instant;
 
 use crate::report::Report;
-use crate::walk_setup::WalkSetup;
+use crate::walk_setup::{walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RequestTimes};
-use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+use flaneur::walk::NoSink;
 
 /// Walkers by default: the 32.
 pub const DEFAULT_WALKERS: usize = 32;
@@ -283,8 +284,9 @@ fn walker(
     walk_cfg: &ReviewConfig,
 ) -> WalkerRow {
     let t = Instant::now();
-    let walked = Database::open_url_with(url, opts)
-        .and_then(|db| review::walk(&db, path, walk_cfg, |_| {}).map(|r| (db, r)));
+    let walked = Database::open_url_with(url, opts).and_then(|db| {
+        walk_path::<WalkReport>(&db, path, walk_cfg.clone(), &mut NoSink).map(|r| (db, r))
+    });
     let (db, report) = match walked {
         Ok(x) => x,
         Err(e) => return failed(i, cfg, e.to_string()),

@@ -20,13 +20,14 @@ use crate::city_series::{self, SeriesCity};
 use crate::report::Report;
 use crate::walk_setup::{
     check_sweep, describe_review, label, mean_query_ms, mean_search_ms, num, per_query,
-    searches_timed, WalkSetup,
+    searches_timed, walk_path, WalkSetup,
 };
 use flaneur::build::BuildOptions;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset};
+use flaneur::walk::review::{Preset, WalkReport};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -137,7 +138,7 @@ pub fn run_with_progress(
         let db = Database::open(&city.path)?;
         let path = cfg.walk.path(&db, pattern)?;
         for preset in PRESETS {
-            let walk = review::walk(&db, &path, &cfg.walk.review(preset), |_| {})?;
+            let walk: WalkReport = walk_path(&db, &path, cfg.walk.review(preset), &mut NoSink)?;
             let s = &walk.summary;
             rows.push(DbSizeRow {
                 objects: city.objects,

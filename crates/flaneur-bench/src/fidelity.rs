@@ -31,39 +31,8 @@ use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::path::CameraPath;
 use flaneur::walk::lod_select::LodCounts;
-use flaneur::walk::pvs::{self, PvsPrefetch};
-use flaneur::walk::review::{self, ReviewConfig};
-use flaneur::walk::scene::SceneTree;
-use flaneur::walk::scene::{self, SceneConfig};
-use flaneur::walk::visual::{self, VisualConfig};
-use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
+use flaneur::walk::{self, FrameSink, Frames, ObjectBuffer, Playback, Selection, WalkConfig};
 use flaneur_render::{Frame, FrameWriter, Gpu, GpuMeshes, Offscreen};
-
-/// The walk whose frames are compared.
-#[derive(Clone, Copy, Debug)]
-pub enum ModeWalk<'a> {
-    /// REVIEW (or BOX) under this configuration.
-    Review(&'a ReviewConfig),
-    /// The PVS walk over the database's precomputed visibility, with this prefetcher.
-    Pvs(PvsPrefetch),
-    /// VISUAL over the database's HDoV-tree under this configuration.
-    Visual(&'a VisualConfig),
-    /// The memory scene tree (loaded first) under this traversal.
-    Scene(&'a SceneConfig),
-}
-
-impl ModeWalk<'_> {
-    /// The depth of the walk's view frustum, metres.
-    fn far(&self) -> f32 {
-        match self {
-            ModeWalk::Review(cfg) => cfg.far,
-            // The PVS walk's cameras have the default frustum (`Pose::camera`).
-            ModeWalk::Pvs(_) => flaneur::geom::DEFAULT_FAR,
-            ModeWalk::Visual(cfg) => cfg.far,
-            ModeWalk::Scene(cfg) => cfg.far,
-        }
-    }
-}
 
 /// The PSNR the quantised geometry of format version 2 is held to against version 1's
 /// (the codec issue's "pictures unchanged by quantisation": every frame identical or
@@ -341,7 +310,7 @@ pub fn run(
     db: &Database,
     gpu: &Gpu,
     path: &CameraPath,
-    walk: ModeWalk<'_>,
+    walk: &WalkConfig,
     mode: &str,
     drawing: &Drawing,
     progress: impl FnMut(usize),
@@ -357,7 +326,7 @@ pub fn run_against(
     reference: Reference<'_>,
     gpu: &Gpu,
     path: &CameraPath,
-    (walk, mode): (ModeWalk<'_>, &str),
+    (walk, mode): (&WalkConfig, &str),
     drawing: &Drawing,
     progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
@@ -381,9 +350,9 @@ fn draw_twice(
     reference: Option<Reference<'_>>,
     gpu: &Gpu,
     path: &CameraPath,
-    (walk, mode): (ModeWalk<'_>, &str),
+    (walk, mode): (&WalkConfig, &str),
     drawing: &Drawing,
-    progress: impl FnMut(usize),
+    mut progress: impl FnMut(usize),
 ) -> Result<FidelityReport> {
     let (width, height) = (drawing.width, drawing.height);
     // Both pictures' ground and height colours from the walked database's bounds, so
@@ -405,21 +374,16 @@ fn draw_twice(
         resident: GpuMeshes::default(),
         rows: Vec::with_capacity(path.poses.len()),
     };
-    match walk {
-        ModeWalk::Review(cfg) => {
-            review::walk_into(db, path, cfg, progress, &mut sink)?;
-        }
-        ModeWalk::Pvs(prefetch) => {
-            pvs::walk_pvs_into(db, path, prefetch, progress, &mut sink)?;
-        }
-        ModeWalk::Visual(cfg) => {
-            visual::walk_into(db, path, cfg, progress, &mut sink)?;
-        }
-        ModeWalk::Scene(cfg) => {
-            let mut tree = SceneTree::load(db, &flaneur::progress::Silent)?;
-            scene::walk_into(db, &mut tree, path, cfg, progress, &mut sink)?;
-        }
-    }
+    // The figures are the sink's rows, not the walk's report. The viewer, which holds
+    // the sink, ends with the statement, so that the rows can be taken below.
+    walk::run(
+        db,
+        walk,
+        &mut Playback::path(path)
+            .drawn_by(&mut sink)
+            .with_progress(&mut progress),
+        Frames::Keep,
+    )?;
     Ok(FidelityReport {
         mode: mode.into(),
         width,

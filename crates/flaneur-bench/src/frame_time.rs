@@ -11,11 +11,12 @@
 use std::path::Path;
 
 use crate::report::Report;
-use crate::walk_setup::{describe_review, label, num, WalkSetup};
+use crate::walk_setup::{describe_review, label, num, walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport, WalkSummary};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport, WalkSummary};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -93,9 +94,9 @@ pub fn run_with_progress(
     let path = cfg
         .walk
         .path(db, cfg.walk.single_pattern("the frame-time walk")?)?;
-    let optimal = review::walk(db, &path, &cfg.review(Preset::Optimal), |_| {})?;
+    let optimal: WalkReport = walk_path(db, &path, cfg.review(Preset::Optimal), &mut NoSink)?;
     progress(1, 2);
-    let boxed = review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?;
+    let boxed: WalkReport = walk_path(db, &path, cfg.review(Preset::Box), &mut NoSink)?;
     progress(2, 2);
     Ok(FrameTimeReport {
         config: cfg.clone(),

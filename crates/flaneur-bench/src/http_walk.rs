@@ -26,12 +26,13 @@ use std::time::{Duration, Instant};
 use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
 use crate::through_link::{check_link, open_through};
-use crate::walk_setup::{num, WalkSetup};
+use crate::walk_setup::{num, walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -213,7 +214,7 @@ pub fn run(
                 ..cfg.review()
             };
             let t = Instant::now();
-            let report = review::walk(local, &path, &walk_cfg, |_| {})?;
+            let report = walk_path(local, &path, walk_cfg, &mut NoSink)?;
             rows.push(row(
                 pattern,
                 source,
@@ -236,7 +237,7 @@ pub fn run(
                 let open_ms = t.elapsed().as_secs_f64() * 1e3;
                 let before = db.remote_stats().unwrap_or_default();
                 let t = Instant::now();
-                let report = review::walk(&db, &path, &cfg.review(), |_| {})?;
+                let report = walk_path(&db, &path, cfg.review(), &mut NoSink)?;
                 let took = t.elapsed();
                 let net = db.remote_stats().map(|s| s.since(&before));
                 rows.push(row(pattern, source, &report, took, open_ms, net, page_size));

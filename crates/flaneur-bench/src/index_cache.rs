@@ -13,12 +13,13 @@
 use std::path::Path;
 
 use crate::report::Report;
-use crate::walk_setup::{check_sweep, num, WalkSetup};
+use crate::walk_setup::{check_sweep, num, walk_path, WalkSetup};
 use flaneur::cache::{belady_replay, policy_by_name, CacheStats, Trace};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+use flaneur::walk::NoSink;
 
 /// The walks and the cache sizes.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -126,7 +127,7 @@ fn record(db: &Database, cfg: &IndexCacheConfig, pattern: Motion) -> Result<(Tra
         record_trace: true,
         ..cfg.walk.review(Preset::Optimal)
     };
-    let report = review::walk(db, &path, &walk_cfg, |_| {})?;
+    let report: WalkReport = walk_path(db, &path, walk_cfg, &mut NoSink)?;
     let trace = report
         .trace
         .ok_or_else(|| Error::Invalid("the walk recorded no trace".into()))?;

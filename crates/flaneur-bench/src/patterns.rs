@@ -18,12 +18,13 @@
 use std::path::Path;
 
 use crate::report::Report;
-use crate::walk_setup::{check_k, num, per_query, WalkSetup, PATTERN_FRAMES};
+use crate::walk_setup::{check_k, num, per_query, walk_path, WalkSetup, PATTERN_FRAMES};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
 use flaneur::walk::settings;
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -158,15 +159,15 @@ pub fn run_with_progress(
     let mut rows = Vec::with_capacity(patterns.len());
     for (i, &pattern) in patterns.iter().enumerate() {
         let path = cfg.walk.path(db, pattern)?;
-        let optimal = PresetIo::from_walk(&review::walk(
+        let optimal = PresetIo::from_walk(&walk_path(
             db,
             &path,
-            &cfg.review(Preset::Optimal),
-            |_| {},
+            cfg.review(Preset::Optimal),
+            &mut NoSink,
         )?);
         progress(2 * i + 1, total);
         let box_io =
-            PresetIo::from_walk(&review::walk(db, &path, &cfg.review(Preset::Box), |_| {})?);
+            PresetIo::from_walk(&walk_path(db, &path, cfg.review(Preset::Box), &mut NoSink)?);
         progress(2 * i + 2, total);
         let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
         rows.push(PatternRow {

@@ -21,11 +21,12 @@
 use std::path::Path;
 
 use crate::report::Report;
-use crate::walk_setup::{check_k, check_sweep, mean_query_ms, num, WalkSetup};
+use crate::walk_setup::{check_k, check_sweep, mean_query_ms, num, walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkReport};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -162,7 +163,7 @@ pub fn run_with_progress(
         for &k in &cfg.ks {
             let mut runs = Vec::with_capacity(cfg.repeats);
             for _ in 0..cfg.repeats {
-                let walk = review::walk(db, &path, &cfg.review(k), |_| {})?;
+                let walk = walk_path(db, &path, cfg.review(k), &mut NoSink)?;
                 runs.push(PrefetchKRow::from_walk(pattern, k, &walk));
                 done += 1;
                 progress(done, total);

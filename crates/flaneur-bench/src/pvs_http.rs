@@ -21,13 +21,14 @@ use std::time::Duration;
 use crate::plot::{line_plot, LinePlot, Series};
 use crate::report::Report;
 use crate::through_link::{check_link, open_through, timed};
-use crate::walk_setup::WalkSetup;
+use crate::walk_setup::{walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::prefetch::pvs::DEFAULT_BORDER;
 use flaneur::store::{HttpOptions, RemoteStats};
-use flaneur::walk::pvs::{self, PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::pvs::{PvsPrefetch, PvsWalkConfig, PvsWalkReport};
+use flaneur::walk::NoSink;
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -182,7 +183,7 @@ pub fn run(
                 walk_cfg.prefetch.name(),
                 source.describe()
             ));
-            let (r, took, net) = timed(db, || pvs::walk_pvs(db, &path, walk_cfg, |_| {}))?;
+            let (r, took, net) = timed(db, || walk_path(db, &path, walk_cfg, &mut NoSink))?;
             let speed = walk_cfg.pace.map_or(1.0, f64::from);
             let first = |i: usize| (path.poses[i].time - path.poses[0].time) / speed;
             rows.push(row(pattern, source, &r, took, net, first));

@@ -17,8 +17,8 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::cell_walk;
-use flaneur::walk::scene::{SceneTree, Traversal};
-use flaneur::walk::scene::{self, SceneConfig};
+use flaneur::walk::scene::{SceneConfig, SceneReport, SceneTree, Traversal};
+use flaneur::walk::{Frames, Playback, WalkState};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -119,8 +119,12 @@ pub fn run(
     cfg.validate()?;
     let path = cell_walk(db, cfg.frames, cfg.speed / cfg.fps, cfg.fps, cfg.seed)?;
     let t = Instant::now();
-    let mut tree = SceneTree::load(db, &flaneur::progress::Silent)?;
+    let tree = SceneTree::load(db, &flaneur::progress::Silent)?;
     let load_s = t.elapsed().as_secs_f64();
+    let nodes = tree.nodes.len();
+    // One state, the tree loaded once, for every traversal: the walks draw nothing, so
+    // no LOD selection runs and nothing but the tree passes from one walk to the next.
+    let mut state = WalkState::new(db).with_scene_tree(tree);
     let traversals = cfg.traversals();
     let total = traversals.len();
     let mut rows = Vec::with_capacity(traversals.len());
@@ -130,7 +134,9 @@ pub fn run(
             selection: cfg.selection,
             ..SceneConfig::new(how)
         };
-        let r = scene::walk(db, &mut tree, &path, &sc, |_| {})?;
+        let r: SceneReport = state
+            .run(&sc.into(), &mut Playback::path(&path), Frames::Keep)?
+            .try_into()?;
         let s = &r.summary;
         series.push((
             how.label(),
@@ -155,7 +161,7 @@ pub fn run(
     Ok(SceneTreeReport {
         config: cfg.clone(),
         objects: db.objects(),
-        nodes: tree.nodes.len(),
+        nodes,
         load_s,
         rows,
         series,

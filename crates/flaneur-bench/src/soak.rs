@@ -20,8 +20,8 @@ use crate::report::Report;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::{self, Motion};
-use flaneur::walk::review::{self, Preset, ReviewConfig, WalkSummary};
-use flaneur::walk::NoSink;
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport, WalkSummary};
+use flaneur::walk::{self, Frame, Frames, Playback};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -142,9 +142,13 @@ pub fn run(db: &Database, cfg: &SoakConfig) -> Result<SoakReport> {
     }
     let rss_before = resident_set()?.0;
     let poses = motion::poses(&db.bounds(), cfg.motion, cfg.frames, cfg.fps, cfg.seed)?;
+    let walk_cfg = cfg.review.clone().into();
     let start = Instant::now();
     let mut samples = Vec::with_capacity(cfg.frames / cfg.sample_every + 2);
-    let report = review::walk_streamed(db, poses, &cfg.review, |_| {}, &mut NoSink, &mut |f| {
+    let mut sample = |f: &Frame| -> Result<()> {
+        let Frame::Review(f) = f else {
+            unreachable!("a REVIEW walk's frames are REVIEW frames")
+        };
         if f.frame % cfg.sample_every == 0 || f.frame + 1 == cfg.frames {
             let (rss, anon) = resident_set()?;
             samples.push(Sample {
@@ -156,7 +160,15 @@ pub fn run(db: &Database, cfg: &SoakConfig) -> Result<SoakReport> {
             });
         }
         Ok(())
-    })?;
+    };
+    // Each frame handed on and none kept, so that the walk's memory stays flat.
+    let report: WalkReport = walk::run(
+        db,
+        &walk_cfg,
+        &mut Playback::poses(poses),
+        Frames::Each(&mut sample),
+    )?
+    .try_into()?;
     Ok(SoakReport {
         config: cfg.clone(),
         samples,

@@ -19,13 +19,14 @@ use crate::plot::{line_plot, LinePlot, Series};
 use crate::pvs_http::Source;
 use crate::report::Report;
 use crate::through_link::{check_link, open_through, timed};
-use crate::walk_setup::WalkSetup;
+use crate::walk_setup::{walk_path, WalkSetup};
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::path::motion::Motion;
 use flaneur::store::{HttpOptions, RemoteStats};
 use flaneur::walk::settings::DEFAULT_K;
-use flaneur::walk::visual::{self, VisualConfig, VisualReport, DEFAULT_ETA};
+use flaneur::walk::visual::{VisualConfig, VisualReport, DEFAULT_ETA};
+use flaneur::walk::{NoSink, WalkConfig};
 
 /// The settings of the experiment.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -154,7 +155,9 @@ pub fn run(
         let mut walk = |db: &Database, source: Source| -> Result<()> {
             progress(&format!("{} {}", pattern.name(), source.describe()));
             let walk_cfg = cfg.walk_config(source != Source::LocalWaiting);
-            let (r, took, net) = timed(db, || visual::walk(db, &path, &walk_cfg, |_| {}))?;
+            // Made before the clock starts, so that only the walk is timed.
+            let run_cfg = WalkConfig::from(walk_cfg.clone());
+            let (r, took, net) = timed(db, || walk_path(db, &path, run_cfg, &mut NoSink))?;
             let speed = walk_cfg.pace.map_or(1.0, f64::from);
             let first = |i: usize| (path.poses[i].time - path.poses[0].time) / speed;
             rows.push(row(pattern, source, &r, took, net, first));

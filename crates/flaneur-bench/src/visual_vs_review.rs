@@ -27,13 +27,14 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use crate::report::Report;
+use crate::walk_setup::walk_path;
 use flaneur::database::Database;
 use flaneur::error::{Error, Result};
 use flaneur::geom::{Aabb, Camera};
 use flaneur::path::{cell_walk, CameraPath, Pose};
-use flaneur::walk::review::{self, Preset, ReviewConfig};
+use flaneur::walk::review::{Preset, ReviewConfig, WalkReport};
 use flaneur::walk::settings;
-use flaneur::walk::visual::{self, VisualConfig};
+use flaneur::walk::visual::{VisualConfig, VisualReport};
 use flaneur::walk::{FrameSink, ObjectBuffer, Selection};
 
 /// The settings of the experiment.
@@ -210,34 +211,9 @@ pub fn run(
     for session in &cfg.sessions {
         let path = session_path(&base, session)?;
         let normal = session == "normal";
-        let mut visuals: Vec<(String, VisualConfig)> = cfg
-            .etas
-            .iter()
-            .map(|&eta| {
-                (
-                    "visual".to_string(),
-                    VisualConfig {
-                        eta,
-                        pace: Some(cfg.pace),
-                        selection: cfg.selection,
-                        ..VisualConfig::default()
-                    },
-                )
-            })
-            .collect();
-        visuals.push((
-            "visual+prefetch".into(),
-            VisualConfig {
-                eta: COMPARED_ETA,
-                prefetch_k: Some(settings::DEFAULT_K),
-                pace: Some(cfg.pace),
-                selection: cfg.selection,
-                ..VisualConfig::default()
-            },
-        ));
-        for (system, vc) in visuals {
+        for (system, vc) in visual_configs(cfg) {
             let mut drawn = Drawn::default();
-            let r = visual::walk_into(db, &path, &vc, |_| {}, &mut drawn)?;
+            let r: VisualReport = walk_path(db, &path, vc.clone(), &mut drawn)?;
             let s = &r.summary;
             if normal {
                 series.push((
@@ -272,7 +248,7 @@ pub fn run(
                 ..preset
             };
             let mut drawn = Drawn::default();
-            let r = review::walk_into(db, &path, &rc, |_| {}, &mut drawn)?;
+            let r: WalkReport = walk_path(db, &path, rc, &mut drawn)?;
             let s = &r.summary;
             let sync: Vec<f64> = r
                 .frames
@@ -318,6 +294,38 @@ pub fn run(
         rows,
         series,
     })
+}
+
+/// The VISUAL walks of each session, each with the system its rows name: one per η of
+/// `cfg`, then VISUAL with prefetching at [`COMPARED_ETA`]. A function of its own to
+/// keep `run` short.
+fn visual_configs(cfg: &VisualVsReviewConfig) -> Vec<(String, VisualConfig)> {
+    let mut visuals: Vec<(String, VisualConfig)> = cfg
+        .etas
+        .iter()
+        .map(|&eta| {
+            (
+                "visual".to_string(),
+                VisualConfig {
+                    eta,
+                    pace: Some(cfg.pace),
+                    selection: cfg.selection,
+                    ..VisualConfig::default()
+                },
+            )
+        })
+        .collect();
+    visuals.push((
+        "visual+prefetch".into(),
+        VisualConfig {
+            eta: COMPARED_ETA,
+            prefetch_k: Some(settings::DEFAULT_K),
+            pace: Some(cfg.pace),
+            selection: cfg.selection,
+            ..VisualConfig::default()
+        },
+    ));
+    visuals
 }
 
 /// `base` as session `name` plays it: the same walk, looking about or going back and

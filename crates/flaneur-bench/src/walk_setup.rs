@@ -5,8 +5,9 @@
 //! only what it sweeps, so the settings are defined, defaulted and checked once.
 //!
 //! Also here: what the experiments' sweeps share (their checks and how a swept value is
-//! printed), the thesis's names of the configurations, and the figures of a walk that
-//! its summary does not hold (mean wait and mean search time per query).
+//! printed), the thesis's names of the configurations, the figures of a walk that its
+//! summary does not hold (mean wait and mean search time per query), and the call
+//! most experiments walk a path with (`walk_path`).
 
 use std::fmt::Display;
 
@@ -17,6 +18,7 @@ use flaneur::path::CameraPath;
 use flaneur::walk::review::{FrameStats, Preset, Retrieval, ReviewConfig, WalkReport};
 use flaneur::walk::settings::{self, check_budget, check_far, check_pace};
 pub(super) use flaneur::walk::settings::{check_k, check_sf};
+use flaneur::walk::{self, FrameSink, Frames, Playback, WalkConfig};
 
 /// The five motion patterns of the thesis's sessions (Fig. 4.17, Table 4.1), in this
 /// order; `Motion::ALL` also has a random walk, which the thesis did not use.
@@ -184,6 +186,23 @@ impl WalkSetup {
             self.memory_budget >> 20
         )
     }
+}
+
+/// Walks `path` through `db` under `cfg` into `sink` ([`NoSink`](flaneur::walk::NoSink)
+/// where nothing is drawn) and gives the walked mode's own report (`R`:
+/// `review::WalkReport`, `visual::VisualReport`, ...). Every frame is kept: several
+/// experiments read their figures from the frames, not the summary.
+pub(super) fn walk_path<R>(
+    db: &Database,
+    path: &CameraPath,
+    cfg: impl Into<WalkConfig>,
+    sink: &mut dyn FrameSink,
+) -> Result<R>
+where
+    R: TryFrom<walk::Report, Error = Error>,
+{
+    let viewer = &mut Playback::path(path).drawn_by(sink);
+    walk::run(db, &cfg.into(), viewer, Frames::Keep)?.try_into()
 }
 
 /// The viewer's mean wait per query, ms: `query_ms` averaged over the frames that

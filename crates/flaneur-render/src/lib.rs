@@ -19,7 +19,7 @@ mod window;
 
 /// The walk modes the window shows, and the changes its keys ask of the walk, which
 /// the walk engine's live session ([`flaneur::walk::live`]) acts on.
-pub use flaneur::walk::live::{Change, ViewMode};
+pub use flaneur::walk::{live::Change, WalkMode};
 pub use frames::{FrameTimes, FrameWriter};
 pub use gpu::Gpu;
 pub use hud::{rasterise, Hud, HudContent};

@@ -14,9 +14,10 @@ use crate::cli::walk::camera_path;
 use flaneur::path::cell_walk;
 use flaneur::walk::pvs::PvsPrefetch;
 use flaneur::walk::review::{Preset, ReviewConfig};
-use flaneur::walk::scene::Traversal;
 use flaneur::walk::scene::SceneConfig;
+use flaneur::walk::scene::Traversal;
 use flaneur::walk::visual::VisualConfig;
+use flaneur::walk::{WalkConfig, WalkMode};
 use flaneur_bench::pvs_prefetch::PvsPrefetchConfig;
 
 /// `flaneur bench fidelity`'s arguments.
@@ -39,7 +40,7 @@ pub struct FidelityArgs {
     /// built with --visibility --hdov), or the memory scene tree by vsc (under --eta),
     /// pb (under --budget) or conv.
     #[arg(long, default_value = "review")]
-    mode: String,
+    mode: WalkMode,
     /// Frames to draw: of a motion pattern or `cells`, how many to make (default 300);
     /// of a path file, its first N poses (default: all of them).
     #[arg(long, value_name = "N")]
@@ -88,36 +89,11 @@ pub struct FidelityArgs {
 impl FidelityArgs {
     /// Draws every frame twice, compares them and writes the report.
     pub fn run(self) -> Result<()> {
-        let FidelityArgs {
-            db,
-            reference,
-            path,
-            mode,
-            frames,
-            seed,
-            size,
-            lod_tau,
-            eta,
-            dov_tau,
-            finer_by_tau,
-            selection,
-            faint_tau,
-            budget,
-            out,
-        } = self;
-        let preset = match mode.as_str() {
-            "review" => Some(Preset::Optimal),
-            "box" => Some(Preset::Box),
-            "pvs" | "visual" | "vsc" | "pb" | "conv" => None,
-            other => bail!(
-                "fidelity draws the review, box, pvs, visual, vsc, pb and conv modes, not '{other}'"
-            ),
-        };
-        let db_name = db.display().to_string();
-        let db = crate::cli::source::open(&db)?;
-        let reference = match reference {
+        let db_name = self.db.display().to_string();
+        let db = crate::cli::source::open(&self.db)?;
+        let reference = match &self.reference {
             Some(r) => {
-                let (r, name) = (crate::cli::source::open(&r)?, r.display().to_string());
+                let (r, name) = (crate::cli::source::open(r)?, r.display().to_string());
                 // Before the GPU is asked for: another city is the first thing to hear of.
                 flaneur_bench::fidelity::same_city(&db, &r)
                     .with_context(|| format!("{name} against {db_name}"))?;
@@ -125,55 +101,26 @@ impl FidelityArgs {
             }
             None => None,
         };
-        if preset.is_none() && !db.has_visibility() {
+        let mode = self.mode;
+        let over_cells = !matches!(mode, WalkMode::Review | WalkMode::Box);
+        if over_cells && !db.has_visibility() {
             bail!(
                 "{} has no precomputed visibility for the {mode} mode (build it with --visibility)",
                 db.store().path().display()
             );
         }
         let fps = 30.0;
-        let path =
-            path.unwrap_or_else(|| if preset.is_some() { "normal" } else { "cells" }.to_string());
+        let path = (self.path.clone())
+            .unwrap_or_else(|| if over_cells { "cells" } else { "normal" }.to_string());
         let poses = match path.as_str() {
-            "cells" if preset.is_none() => {
-                cell_walk(&db, frames.unwrap_or(300), 1.4 / fps, fps, seed)?
+            "cells" if over_cells => {
+                cell_walk(&db, self.frames.unwrap_or(300), 1.4 / fps, fps, self.seed)?
             }
-            other => camera_path(&db, other, (frames, 300), fps, seed)?,
+            other => camera_path(&db, other, (self.frames, 300), fps, self.seed)?,
         };
-        let cfg = ReviewConfig {
-            pace: None,
-            ..ReviewConfig::preset(preset.unwrap_or(Preset::Optimal))
-        };
-        let visual = VisualConfig {
-            eta,
-            dov_tau,
-            finer_by_tau,
-            selection,
-            tau: lod_tau,
-            faint_tau,
-            pace: None,
-            ..VisualConfig::default()
-        };
-        let scene = SceneConfig {
-            selection,
-            tau: lod_tau,
-            ..SceneConfig::new(match mode.as_str() {
-                "vsc" => Traversal::Vsc { eta },
-                "pb" => Traversal::Pb { budget },
-                _ => Traversal::Conv,
-            })
-        };
-        let walk = match preset {
-            Some(_) => flaneur_bench::fidelity::ModeWalk::Review(&cfg),
-            None if mode == "visual" => flaneur_bench::fidelity::ModeWalk::Visual(&visual),
-            None if matches!(mode.as_str(), "vsc" | "pb" | "conv") => {
-                flaneur_bench::fidelity::ModeWalk::Scene(&scene)
-            }
-            None => flaneur_bench::fidelity::ModeWalk::Pvs(PvsPrefetch::Pbnp {
-                border: PvsPrefetchConfig::default().border,
-            }),
-        };
+        let walk = self.walk_config();
         let gpu = flaneur_render::Gpu::headless()?;
+        let size = self.size;
         println!(
             "fidelity: {} frames of {} in {mode} mode, {} × {}, each drawn twice{}",
             poses.poses.len(),
@@ -190,33 +137,76 @@ impl FidelityArgs {
         let drawing = flaneur_bench::fidelity::Drawing {
             width: size.0,
             height: size.1,
-            lod_tau: (lod_tau != 0.0).then_some(lod_tau),
+            lod_tau: (self.lod_tau != 0.0).then_some(self.lod_tau),
         };
-        let label = match mode.as_str() {
-            "visual" => format!(
-                "visual (η = {eta}, {} selection{}{})",
-                selection.name(),
-                if dov_tau { ", DoV τ" } else { "" },
-                if finer_by_tau { ", finer by τ" } else { "" }
-            ),
-            "vsc" | "pb" => format!(
-                "{}, {} selection",
-                scene.traversal.label(),
-                selection.name()
-            ),
-            "conv" => scene.traversal.label(),
-            _ => mode.clone(),
-        };
+        let label = self.label(&walk);
         let tick = |_| bar.inc(1);
         let r = match &reference {
             Some((r, name)) => {
                 let r = flaneur_bench::fidelity::Reference { db: r, name };
-                let walk = (walk, label.as_str());
+                let walk = (&walk, label.as_str());
                 flaneur_bench::fidelity::run_against(&db, r, &gpu, &poses, walk, &drawing, tick)?
             }
-            None => flaneur_bench::fidelity::run(&db, &gpu, &poses, walk, &label, &drawing, tick)?,
+            None => flaneur_bench::fidelity::run(&db, &gpu, &poses, &walk, &label, &drawing, tick)?,
         };
         bar.finish_and_clear();
-        write_report(&out, &r)
+        write_report(&self.out, &r)
+    }
+
+    /// The walk drawn: REVIEW or BOX unpaced, PVS with PBNP prefetching, VISUAL under
+    /// --eta unpaced, the scene tree under --eta or --budget; the LOD flags as given.
+    fn walk_config(&self) -> WalkConfig {
+        let (eta, tau, selection) = (self.eta, self.lod_tau, self.selection);
+        let scene = |traversal| {
+            WalkConfig::Scene(SceneConfig {
+                selection,
+                tau,
+                ..SceneConfig::new(traversal)
+            })
+        };
+        match self.mode {
+            WalkMode::Review | WalkMode::Box => WalkConfig::Review(ReviewConfig {
+                pace: None,
+                ..ReviewConfig::preset(match self.mode {
+                    WalkMode::Box => Preset::Box,
+                    _ => Preset::Optimal,
+                })
+            }),
+            WalkMode::Pvs => WalkConfig::from(PvsPrefetch::Pbnp {
+                border: PvsPrefetchConfig::default().border,
+            }),
+            WalkMode::Visual => WalkConfig::Visual(VisualConfig {
+                eta,
+                dov_tau: self.dov_tau,
+                finer_by_tau: self.finer_by_tau,
+                selection,
+                tau,
+                faint_tau: self.faint_tau,
+                pace: None,
+                ..VisualConfig::default()
+            }),
+            WalkMode::Vsc => scene(Traversal::Vsc { eta }),
+            WalkMode::Pb => scene(Traversal::Pb {
+                budget: self.budget,
+            }),
+            WalkMode::Conv => scene(Traversal::Conv),
+        }
+    }
+
+    /// The walk's name in the report: the mode, with VISUAL's and the scene tree's
+    /// settings.
+    fn label(&self, walk: &WalkConfig) -> String {
+        let selection = self.selection.name();
+        match walk {
+            WalkConfig::Visual(v) => format!(
+                "visual (η = {}, {selection} selection{}{})",
+                v.eta,
+                if v.dov_tau { ", DoV τ" } else { "" },
+                if v.finer_by_tau { ", finer by τ" } else { "" }
+            ),
+            WalkConfig::Scene(s) if s.traversal == Traversal::Conv => s.traversal.label(),
+            WalkConfig::Scene(s) => format!("{}, {selection} selection", s.traversal.label()),
+            _ => self.mode.name().to_string(),
+        }
     }
 }

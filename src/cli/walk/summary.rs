@@ -1,16 +1,71 @@
 //! What a walk prints when it ends: the summary of each mode's report, and what the
 //! network cost when the database was read over HTTP.
 
+use flaneur::walk::pvs::PvsWalkReport;
 use flaneur::walk::review::WalkReport;
-use flaneur::walk::scene::Traversal;
 use flaneur::walk::scene::SceneReport;
+use flaneur::walk::scene::Traversal;
 use flaneur::walk::visual::VisualReport;
+use flaneur::walk::Report;
 use flaneur::Database;
 
 use super::gaps;
 
+/// Any walk's summary, as its mode prints it (`page_size` for REVIEW's bytes).
+pub(super) fn print_report(report: &Report, page_size: usize) {
+    match report {
+        Report::Review(r) => print_walk(r, page_size),
+        Report::Pvs(r) => print_pvs(r),
+        Report::Visual(r) => print_visual(r),
+        Report::Scene(r) => print_scene(r),
+    }
+}
+
+/// A PVS walk's summary: its prefetching, transactions, misses and frame times.
+fn print_pvs(r: &PvsWalkReport) {
+    println!(
+        "pvs walk, {} prefetch: {} frames ({} outside any walkable cell), {} cells entered",
+        r.prefetch.name(),
+        r.walked,
+        r.frames_outside,
+        r.cells_entered
+    );
+    println!(
+        "  {} prefetch transactions, {} cache swaps, {:.1} objects per transaction, {} visual misses",
+        r.transactions,
+        r.swaps,
+        r.objects_per_transaction(),
+        r.visual_misses
+    );
+    println!(
+        "  {:.1} objects drawn per frame (the current cell's PVS), {} pages read",
+        r.mean_drawn, r.pages
+    );
+    println!(
+        "  frame time on the viewer's thread: mean {:.2} ms   max {:.2} ms   over 50 ms: {}",
+        r.mean_frame_ms, r.max_frame_ms, r.frames_over_50ms
+    );
+    if r.never_wait {
+        println!(
+            "  never waits on a read (ours): round trip measured up to {} frames   first complete frame {}   visual misses after it {}",
+            r.round_trip_frames,
+            r.first_complete_frame
+                .map_or("none".to_string(), |f| f.to_string()),
+            r.visual_misses_after_start
+        );
+    }
+    if r.failed_loads > 0 {
+        println!(
+            "  {} loads failed on the network and were asked for again; the last: {}",
+            r.failed_loads,
+            r.last_load_error.as_deref().unwrap_or("")
+        );
+    }
+    gaps::print_damaged(&r.damaged);
+}
+
 /// A scene-tree walk's summary.
-pub(super) fn print_scene(r: &SceneReport) {
+fn print_scene(r: &SceneReport) {
     let s = &r.summary;
     println!(
         "scene tree walk, {} ({} selection): frames {}   mean {:.3} ms   max {:.2} ms   variance {:.4}   traversal {:.3} ms",
@@ -38,7 +93,7 @@ pub(super) fn print_scene(r: &SceneReport) {
 }
 
 /// A VISUAL walk's summary: its settings, frames, searches, pages and memory.
-pub fn print_visual(r: &VisualReport) {
+fn print_visual(r: &VisualReport) {
     let (s, c) = (&r.summary, &r.config);
     let cache = c
         .node_cache

@@ -35,12 +35,12 @@ pub(super) struct VisualArgs {
 
 impl VisualArgs {
     /// Sets these options in `cfg`; an error for a scheme that is none of the three.
-    pub(super) fn apply(self, cfg: &mut VisualConfig) -> Result<()> {
+    pub(super) fn apply(&self, cfg: &mut VisualConfig) -> Result<()> {
         cfg.dov_tau = self.dov_tau;
         cfg.finer_by_tau = self.finer_by_tau;
         cfg.faint_tau = self.faint_tau;
         cfg.prefetch_k = self.next_cell_prefetch;
-        if let Some(s) = self.scheme {
+        if let Some(s) = &self.scheme {
             cfg.scheme = Some(s.parse().map_err(anyhow::Error::msg)?);
         }
         Ok(())

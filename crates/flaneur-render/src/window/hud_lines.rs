@@ -4,7 +4,7 @@
 
 use std::collections::VecDeque;
 
-use super::{ViewMode, WalkWindow};
+use super::{WalkMode, WalkWindow};
 use crate::hud::HudContent;
 use crate::meshes::GpuMeshes;
 use flaneur::walk::lod_select::{Drawn, REFINED};
@@ -39,7 +39,7 @@ fn network_line(f: &FrameFigures) -> Option<String> {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hud_content(
     f: &FrameFigures,
-    mode: ViewMode,
+    mode: WalkMode,
     tau: Option<f32>,
     (selected, gpu): (&[Drawn], &GpuMeshes),
     (flying, p, pages_per_s): (bool, glam::Vec3, f64),
@@ -127,7 +127,7 @@ mod tests {
             let gpu = GpuMeshes::default();
             hud_content(
                 f,
-                ViewMode::Review,
+                WalkMode::Review,
                 Some(0.001),
                 (&[], &gpu),
                 (false, glam::Vec3::ZERO, 0.0),

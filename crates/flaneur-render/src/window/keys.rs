@@ -6,7 +6,7 @@
 use winit::keyboard::KeyCode;
 use winit::window::CursorGrabMode;
 
-use super::{Change, ViewMode, WalkWindow};
+use super::{Change, WalkMode, WalkWindow};
 use flaneur::walk::Move;
 
 impl WalkWindow {
@@ -35,13 +35,13 @@ impl WalkWindow {
                 KeyCode::KeyG => self.wireframe = !self.wireframe,
                 KeyCode::KeyB => self.boxes = !self.boxes,
                 KeyCode::KeyT => self.top_view = !self.top_view,
-                KeyCode::Digit1 => self.change = Some(Change::Mode(ViewMode::Review)),
-                KeyCode::Digit2 => self.change = Some(Change::Mode(ViewMode::Box)),
-                KeyCode::Digit3 => self.change = Some(Change::Mode(ViewMode::Pvs)),
-                KeyCode::Digit4 => self.change = Some(Change::Mode(ViewMode::Visual)),
-                KeyCode::Digit5 => self.change = Some(Change::Mode(ViewMode::Vsc)),
-                KeyCode::Digit6 => self.change = Some(Change::Mode(ViewMode::Pb)),
-                KeyCode::Digit7 => self.change = Some(Change::Mode(ViewMode::Conv)),
+                KeyCode::Digit1 => self.change = Some(Change::Mode(WalkMode::Review)),
+                KeyCode::Digit2 => self.change = Some(Change::Mode(WalkMode::Box)),
+                KeyCode::Digit3 => self.change = Some(Change::Mode(WalkMode::Pvs)),
+                KeyCode::Digit4 => self.change = Some(Change::Mode(WalkMode::Visual)),
+                KeyCode::Digit5 => self.change = Some(Change::Mode(WalkMode::Vsc)),
+                KeyCode::Digit6 => self.change = Some(Change::Mode(WalkMode::Pb)),
+                KeyCode::Digit7 => self.change = Some(Change::Mode(WalkMode::Conv)),
                 KeyCode::BracketLeft | KeyCode::BracketRight => {
                     let factor = if code == KeyCode::BracketLeft {
                         0.5

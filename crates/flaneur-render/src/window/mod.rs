@@ -49,7 +49,8 @@ use events::Events;
 use flaneur::error::{Error, Result};
 use flaneur::geom::Aabb;
 use flaneur::path::Pose;
-use flaneur::walk::live::{Change, LiveViewer, ViewMode};
+use flaneur::walk::live::{Change, LiveViewer};
+use flaneur::walk::WalkMode;
 use flaneur::walk::{FrameFigures, Steer, Viewer};
 use hud_lines::GRAPH_FRAMES;
 pub use options::{ViewOptions, ViewSummary};
@@ -78,7 +79,7 @@ pub struct WalkWindow {
     pub boxes: bool,
     pub top_view: bool,
     /// The mode shown, and a change a key asked for.
-    pub mode: ViewMode,
+    pub mode: WalkMode,
     pub change: Option<Change>,
     /// The session's clock, and the time of the last pose given.
     clock: Instant,
@@ -109,7 +110,7 @@ pub struct WalkWindow {
 impl WalkWindow {
     /// Opens the window as `opts` say, showing `mode`. An `Error::Render` when there is
     /// no display to open it on, saying what to use instead.
-    pub fn open(opts: ViewOptions, mode: ViewMode) -> Result<WalkWindow> {
+    pub fn open(opts: ViewOptions, mode: WalkMode) -> Result<WalkWindow> {
         let (w, h) = opts.size;
         if w == 0 || h == 0 {
             return Err(Error::Invalid(format!("a window of {w} × {h} pixels")));
@@ -355,7 +356,7 @@ impl LiveViewer for WalkWindow {
         self.change
     }
 
-    fn show_mode(&mut self, mode: ViewMode) {
+    fn show_mode(&mut self, mode: WalkMode) {
         self.mode = mode;
     }
 

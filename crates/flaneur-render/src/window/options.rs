@@ -64,7 +64,7 @@ impl ViewOptions {
             gpu_budget: Some(256 << 20),
             speed: flaneur::walk::WALK_SPEED,
             eta: flaneur::walk::visual::DEFAULT_ETA,
-            polygon_budget: flaneur::walk::live::DEFAULT_BUDGET,
+            polygon_budget: flaneur::walk::DEFAULT_BUDGET,
             selection: flaneur::hdov::Selection::Screen,
             adapt_ahead: false,
         }

@@ -6,64 +6,28 @@
 //! in the window because it is the walk engine's side of the window: which walk runs,
 //! and with what; the window only supplies poses and draws frames.
 
-use super::review::{self, Preset, ReviewConfig};
-use super::visual::{self, VisualConfig, DEFAULT_ETA};
-use super::walk_lods::WalkLods;
+use super::config::{WalkConfig, DEFAULT_BUDGET};
+use super::review::{Preset, ReviewConfig};
+use super::run::{Frames, WalkState};
+use super::visual::{VisualConfig, DEFAULT_ETA};
+use super::walk_mode::WalkMode;
 use super::Viewer;
 use crate::database::Database;
 use crate::error::{Error, Result};
 use crate::hdov::Selection;
 use crate::prefetch::pvs::DEFAULT_BORDER;
-use crate::walk::pvs::{self, PvsPrefetch, PvsWalkConfig};
-use crate::walk::scene::{self, SceneConfig};
-use crate::walk::scene::{SceneTree, Traversal};
+use crate::walk::pvs::{PvsPrefetch, PvsWalkConfig};
+use crate::walk::scene::{SceneConfig, SceneTree, Traversal};
 
 /// Failed walks in a row that end the session: the walk is then not getting over it.
 const FAILURES: usize = 5;
-
-/// The walk modes a live viewer can show so far.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ViewMode {
-    /// CSearch over disk cells with the index cache and prefetching (Shou 2002 §4.4).
-    Review,
-    /// Plain BOX queries over disk cells.
-    Box,
-    /// The current viewcell's PVS, neighbours prefetched (a database built with
-    /// visibility).
-    Pvs,
-    /// The HDoV-tree searched from the current viewcell under the viewer's η (a
-    /// database built with visibility and the tree).
-    Visual,
-    /// The memory scene tree traversed by VSC under the viewer's η (a database built
-    /// with visibility; the tree is loaded when first shown).
-    Vsc,
-    /// The memory scene tree under the viewer's polygon budget (PB).
-    Pb,
-    /// The memory scene tree with view frustum culling only (CONV).
-    Conv,
-}
-
-impl ViewMode {
-    /// The mode's name, as the CLI's `--mode` spells it.
-    pub fn name(self) -> &'static str {
-        match self {
-            ViewMode::Review => "review",
-            ViewMode::Box => "box",
-            ViewMode::Pvs => "pvs",
-            ViewMode::Visual => "visual",
-            ViewMode::Vsc => "vsc",
-            ViewMode::Pb => "pb",
-            ViewMode::Conv => "conv",
-        }
-    }
-}
 
 /// What a live viewer asks the walk to change: the walk ends its run and starts again
 /// from where the viewer stands.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Change {
     /// Another mode.
-    Mode(ViewMode),
+    Mode(WalkMode),
     /// The object buffer's budget, times this factor.
     Budget(f32),
 }
@@ -79,7 +43,7 @@ pub trait LiveViewer: Viewer {
     fn change(&self) -> Option<Change>;
 
     /// The mode walked from now on.
-    fn show_mode(&mut self, mode: ViewMode);
+    fn show_mode(&mut self, mode: WalkMode);
 
     /// A problem met and got over, or a setting changed, in words.
     fn report(&mut self, what: String);
@@ -104,20 +68,16 @@ pub trait LiveViewer: Viewer {
     }
 }
 
-/// The polygon budget a live PB walk draws under unless the viewer says otherwise:
-/// Fig. 6.7's smallest, 20,000 triangles.
-pub const DEFAULT_BUDGET: u64 = 20_000;
-
-/// The REVIEW settings a live walk in `mode` takes: Optimal (BOX for [`ViewMode::Box`]),
+/// The REVIEW settings a live walk in `mode` takes: Optimal (BOX for [`WalkMode::Box`]),
 /// unpaced, and over HTTP (`remote`) never waiting on a read, so that a round trip never
 /// holds up a frame at the window (the missing objects are counted and drawn when they
 /// come, coarse levels first).
-fn review_config(mode: ViewMode, remote: bool) -> ReviewConfig {
+fn review_config(mode: WalkMode, remote: bool) -> ReviewConfig {
     ReviewConfig {
         pace: None,
         never_wait: remote,
         ..ReviewConfig::preset(match mode {
-            ViewMode::Box => Preset::Box,
+            WalkMode::Box => Preset::Box,
             _ => Preset::Optimal,
         })
     }
@@ -137,42 +97,41 @@ fn visual_config(eta: f32, remote: bool) -> VisualConfig {
 }
 
 /// Tells `viewer` `what` and shows it mode `to`, which the session walks from now on.
-fn fall_back<V: LiveViewer>(viewer: &mut V, what: String, to: ViewMode) -> ViewMode {
+fn fall_back<V: LiveViewer>(viewer: &mut V, what: String, to: WalkMode) -> WalkMode {
     viewer.report(what);
     viewer.show_mode(to);
     to
 }
 
 /// A mode's name as a report says it: REVIEW, PVS.
-fn shown(mode: ViewMode) -> String {
+fn shown(mode: WalkMode) -> String {
     mode.name().to_uppercase()
 }
 
-/// Walks `db` at `viewer`, starting in `mode`, until the viewer closes: REVIEW and BOX
-/// as [`review::walk_live`] walks them (unpaced: a person sets the pace; over HTTP never
-/// waiting on a read, [`ReviewConfig::never_wait`]), PVS as
-/// [`pvs::walk_pvs_live`] does with PBNP prefetching (over HTTP LANP, never
-/// waiting; REVIEW instead, said so, on a database without visibility), VISUAL as [`visual::walk_live`] does under the
-/// viewer's [η](LiveViewer::eta) (over HTTP never waiting, the next viewcell prefetched; PVS instead, said so, on a database without the
-/// HDoV-tree), VSC, PB and CONV as [`scene::walk_live`] does over the memory scene
-/// tree, loaded when first shown (REVIEW instead, said so, without visibility).
-/// LOD selection's state is kept from walk to walk, so that a restart keeps the levels
-/// read and the objects refined. An error when the walk failed five times running.
+/// Walks `db` at `viewer`, starting in `mode`, until the viewer closes, each walk by
+/// [`WalkState::run`]: REVIEW and BOX unpaced (a person sets the pace; over HTTP never
+/// waiting on a read, [`ReviewConfig::never_wait`]), PVS with PBNP prefetching (over
+/// HTTP LANP, never waiting; REVIEW instead, said so, on a database without
+/// visibility), VISUAL under the viewer's [η](LiveViewer::eta) (over HTTP never
+/// waiting, the next viewcell prefetched; PVS instead, said so, on a database without
+/// the HDoV-tree), VSC, PB and CONV over the memory scene tree, loaded when first shown
+/// (REVIEW instead, said so, without visibility). LOD selection's state and the scene
+/// tree are kept from walk to walk, so that a restart keeps the levels read and the
+/// objects refined. An error when the walk failed five times running.
 ///
 /// ```no_run
 /// # fn run(db: &flaneur::Database, window: &mut impl flaneur::walk::live::LiveViewer) -> flaneur::Result<()> {
-/// use flaneur::walk::live::{self, ViewMode};
-/// live::run(db, ViewMode::Review, window)?;
+/// use flaneur::walk::{live, WalkMode};
+/// live::run(db, WalkMode::Review, window)?;
 /// # Ok(()) }
 /// ```
-pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Result<()> {
+pub fn run<V: LiveViewer>(db: &Database, mode: WalkMode, viewer: &mut V) -> Result<()> {
     let remote = db.remote_stats().is_some();
-    let preset = |m: ViewMode| review_config(m, remote);
+    let preset = |m: WalkMode| review_config(m, remote);
     let mut mode = mode;
-    let mut cfg = preset(mode);
+    let mut review = preset(mode);
     viewer.show_mode(mode);
-    let mut lods = WalkLods::new(db);
-    let mut tree: Option<SceneTree> = None;
+    let mut state = WalkState::new(db);
     let mut failures = 0;
     loop {
         if let Some((what, to)) = lacking(db, mode)? {
@@ -184,64 +143,25 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
             );
             continue;
         }
-        let walked = match mode {
-            ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv => {
-                if tree.is_none() {
-                    viewer.report("loading the scene tree: every object and its LODs".into());
-                    match SceneTree::load(db, &crate::progress::Silent) {
-                        Ok(t) => tree = Some(t),
-                        Err(e) => {
-                            let what = format!(
-                                "the scene tree could not be loaded: {e}; showing {}",
-                                shown(ViewMode::Review)
-                            );
-                            mode = fall_back(viewer, what, ViewMode::Review);
-                            continue;
-                        }
-                    }
+        if mode.over_scene_tree() && !state.has_scene_tree() {
+            viewer.report("loading the scene tree: every object and its LODs".into());
+            match SceneTree::load(db, &crate::progress::Silent) {
+                Ok(t) => state = state.with_scene_tree(t),
+                Err(e) => {
+                    let what = format!(
+                        "the scene tree could not be loaded: {e}; showing {}",
+                        shown(WalkMode::Review)
+                    );
+                    mode = fall_back(viewer, what, WalkMode::Review);
+                    continue;
                 }
-                let how = match mode {
-                    ViewMode::Vsc => Traversal::Vsc { eta: viewer.eta() },
-                    ViewMode::Pb => Traversal::Pb {
-                        budget: viewer.polygon_budget(),
-                    },
-                    _ => Traversal::Conv,
-                };
-                let tree = tree.as_mut().expect("loaded above");
-                let cfg = SceneConfig {
-                    selection: viewer.selection(),
-                    tau: viewer.lod_tau().unwrap_or(0.0),
-                    ..SceneConfig::new(how)
-                };
-                scene::walk_live_with(db, tree, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
             }
-            ViewMode::Visual => {
-                let cfg = VisualConfig {
-                    selection: viewer.selection(),
-                    tau: viewer.lod_tau().unwrap_or(0.0),
-                    ..visual_config(viewer.eta(), remote)
-                };
-                visual::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ())
-            }
-            ViewMode::Pvs => {
-                // Over HTTP the client looks as far ahead as the round trip asks, and
-                // the viewer never waits on it.
-                let border = DEFAULT_BORDER;
-                let cfg = PvsWalkConfig {
-                    prefetch: if remote {
-                        PvsPrefetch::Lanp { border }
-                    } else {
-                        PvsPrefetch::Pbnp { border }
-                    },
-                    never_wait: remote,
-                    pace: None,
-                };
-                pvs::walk_pvs_live_with(db, cfg, &mut lods, |_| {}, viewer).map(|_| ())
-            }
-            _ => review::walk_live_with(db, &cfg, &mut lods, |_| {}, viewer).map(|_| ()),
-        };
+        }
+        let cfg = live_config(mode, &review, &*viewer, remote);
+        // A live walk hands its frames on: a session of any length in constant memory.
+        let walked = state.run(&cfg, viewer, Frames::Each(&mut |_| Ok(())));
         match walked {
-            Ok(()) => failures = 0,
+            Ok(_) => failures = 0,
             Err(e) => {
                 failures += 1;
                 viewer.report(format!(
@@ -259,18 +179,18 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
         }
         match viewer.change() {
             Some(Change::Mode(m)) => {
-                cfg = ReviewConfig {
-                    memory_budget: cfg.memory_budget,
+                review = ReviewConfig {
+                    memory_budget: review.memory_budget,
                     ..preset(m)
                 };
                 mode = m;
                 viewer.show_mode(m);
             }
             Some(Change::Budget(f)) => {
-                cfg.memory_budget = ((cfg.memory_budget as f32 * f) as usize).max(1 << 20);
+                review.memory_budget = ((review.memory_budget as f32 * f) as usize).max(1 << 20);
                 viewer.report(format!(
                     "object buffer budget {:.0} MiB",
-                    cfg.memory_budget as f64 / 1048576.0
+                    review.memory_budget as f64 / 1048576.0
                 ));
             }
             None => {}
@@ -279,18 +199,64 @@ pub fn run<V: LiveViewer>(db: &Database, mode: ViewMode, viewer: &mut V) -> Resu
     }
 }
 
+/// The walk a live `viewer` in `mode` takes: REVIEW and BOX under `review` (its budget
+/// the person's), the others as the viewer's η, polygon budget, selection rule and LOD
+/// τ say, over HTTP (`remote`) never waiting where the mode can.
+fn live_config<V: LiveViewer>(
+    mode: WalkMode,
+    review: &ReviewConfig,
+    viewer: &V,
+    remote: bool,
+) -> WalkConfig {
+    let tau = viewer.lod_tau().unwrap_or(0.0);
+    let scene = |how| {
+        WalkConfig::Scene(SceneConfig {
+            selection: viewer.selection(),
+            tau,
+            ..SceneConfig::new(how)
+        })
+    };
+    match mode {
+        WalkMode::Review | WalkMode::Box => WalkConfig::Review(review.clone()),
+        WalkMode::Vsc => scene(Traversal::Vsc { eta: viewer.eta() }),
+        WalkMode::Pb => scene(Traversal::Pb {
+            budget: viewer.polygon_budget(),
+        }),
+        WalkMode::Conv => scene(Traversal::Conv),
+        WalkMode::Visual => WalkConfig::Visual(VisualConfig {
+            selection: viewer.selection(),
+            tau,
+            ..visual_config(viewer.eta(), remote)
+        }),
+        WalkMode::Pvs => {
+            // Over HTTP the client looks as far ahead as the round trip asks, and the
+            // viewer never waits on it.
+            let border = DEFAULT_BORDER;
+            WalkConfig::Pvs(PvsWalkConfig {
+                prefetch: if remote {
+                    PvsPrefetch::Lanp { border }
+                } else {
+                    PvsPrefetch::Pbnp { border }
+                },
+                never_wait: remote,
+                pace: None,
+            })
+        }
+    }
+}
+
 /// What `db` lacks to show `mode`, and the mode it falls back to; `None` when it can.
-fn lacking(db: &Database, mode: ViewMode) -> Result<Option<(&'static str, ViewMode)>> {
+fn lacking(db: &Database, mode: WalkMode) -> Result<Option<(&'static str, WalkMode)>> {
     Ok(match mode {
-        ViewMode::Pvs | ViewMode::Vsc | ViewMode::Pb | ViewMode::Conv if !db.has_visibility() => {
+        WalkMode::Pvs | WalkMode::Vsc | WalkMode::Pb | WalkMode::Conv if !db.has_visibility() => {
             Some((
                 "no visibility data (build it with --visibility)",
-                ViewMode::Review,
+                WalkMode::Review,
             ))
         }
-        ViewMode::Visual if db.hdov()?.is_none() => Some((
+        WalkMode::Visual if db.hdov()?.is_none() => Some((
             "no HDoV-tree (build it with --visibility --hdov)",
-            ViewMode::Pvs,
+            WalkMode::Pvs,
         )),
         _ => None,
     })
@@ -302,7 +268,7 @@ mod tests {
 
     #[test]
     fn a_live_walk_over_http_never_waits_and_a_local_one_walks_as_the_thesis() {
-        for mode in [ViewMode::Review, ViewMode::Box] {
+        for mode in [WalkMode::Review, WalkMode::Box] {
             let local = review_config(mode, false);
             let remote = review_config(mode, true);
             assert!(!local.never_wait && remote.never_wait, "{mode:?}");
@@ -317,7 +283,13 @@ mod tests {
         assert!(remote.prefetch_k.is_some() && remote.pace.is_none());
         assert_eq!((local.eta, remote.eta), (0.01, 0.01));
         let retrieval = |m| review_config(m, false).retrieval;
-        assert_eq!(retrieval(ViewMode::Box), review::Retrieval::Box);
-        assert_eq!(retrieval(ViewMode::Review), review::Retrieval::CSearch);
+        assert_eq!(
+            retrieval(WalkMode::Box),
+            crate::walk::review::Retrieval::Box
+        );
+        assert_eq!(
+            retrieval(WalkMode::Review),
+            crate::walk::review::Retrieval::CSearch
+        );
     }
 }

@@ -98,18 +98,16 @@ pub(crate) struct Culled<'b> {
     pub ms: f64,
 }
 
-/// Walks `mode` with `viewer` until it has no more poses; `progress` is told each
-/// finished frame. Each frame the viewer is handed is selected by `lods` under the τ
+/// Walks `mode` with `viewer` until it has no more poses. Each frame the viewer is handed is selected by `lods` under the τ
 /// the viewer wants (its LOD pages counted apart from the mode's figures, which are
 /// finished before). The mode's figures of every frame, in order.
 pub(crate) fn run<M: Mode + ?Sized>(
     mode: &mut M,
     viewer: &mut dyn Viewer,
     lods: &mut WalkLods<'_>,
-    progress: impl FnMut(usize),
 ) -> Result<Vec<M::Frame>> {
     let mut frames = Vec::new();
-    run_each(mode, viewer, lods, progress, |f| {
+    run_each(mode, viewer, lods, |f| {
         frames.push(f);
         Ok(())
     })?;
@@ -122,7 +120,6 @@ pub(crate) fn run_each<M: Mode + ?Sized>(
     mode: &mut M,
     viewer: &mut dyn Viewer,
     lods: &mut WalkLods<'_>,
-    mut progress: impl FnMut(usize),
     mut each: impl FnMut(M::Frame) -> Result<()>,
 ) -> Result<()> {
     let mut buffer = ObjectBuffer::new(mode.memory_budget());
@@ -181,7 +178,6 @@ pub(crate) fn run_each<M: Mode + ?Sized>(
             ..mode.figures(&frame, &buffer)
         });
         each(frame)?;
-        progress(index);
     }
     Ok(())
 }
@@ -215,7 +211,7 @@ mod tests {
     use super::*;
     use crate::path::CameraPath;
     use crate::walk::buffer::tests::loaded;
-    use crate::walk::sink::Played;
+    use crate::walk::playback::Playback;
     use crate::walk::FrameSink;
 
     /// Loads an object in front of the eye (+x) and one behind it each frame, offers
@@ -299,11 +295,13 @@ mod tests {
         let mut sink = Sink(&drawn);
         let mut mode = Probe::default();
         let mut ticks = Vec::new();
+        let mut tick = |i| ticks.push(i);
         let frames = run(
             &mut mode,
-            &mut Played::path(&path, &mut sink),
+            &mut Playback::path(&path)
+                .drawn_by(&mut sink)
+                .with_progress(&mut tick),
             &mut WalkLods::default(),
-            |i| ticks.push(i),
         )
         .unwrap();
         // Frame 0 draws all in view; frame 1 only those offered, in their order; frame 2

@@ -7,7 +7,7 @@
 //! new and asks for nothing: the client keeps what it holds and the frame counts as
 //! outside. That is the walk's choice; the prefetcher itself refuses such positions.
 //!
-//! Drawn ([`walk_pvs_into`] with a renderer), the objects the client holds are loaded
+//! Drawn (a [`Playback`](super::Playback) to a renderer), the objects the client holds are loaded
 //! into an object buffer as they arrive and dropped when it evicts them, and each frame
 //! draws the current cell's PVS (the last cell's, outside cells) within the frustum.
 //! Those mesh reads are the renderer's: a frame's page count is taken before them.
@@ -19,7 +19,8 @@
 //! frames, and LANP ([`PvsPrefetch::Lanp`]) looks as far ahead as the viewer may go in
 //! it (`prefetch::pvs::Lanp`).
 //!
-//! Here: the settings, the entry points and the figures a walk reports. The frame loop
+//! Here: the settings, the walk [`walk::run`](super::run) walks and the figures it
+//! reports. The frame loop
 //! is the walk session's (`walk/session.rs`), the client the PVS mode's
 //! (`walk/pvs/mode.rs`; never waiting, `never_wait.rs` and its `loader.rs`, the two
 //! chosen by `run.rs`).
@@ -36,5 +37,4 @@ mod walks;
 
 pub use config::{PvsPrefetch, PvsWalkConfig};
 pub use report::{PvsFrame, PvsWalkReport};
-pub(crate) use walks::walk_pvs_live_with;
-pub use walks::{walk_pvs, walk_pvs_into, walk_pvs_live, walk_pvs_streamed};
+pub(crate) use walks::walk;

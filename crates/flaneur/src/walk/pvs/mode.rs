@@ -28,11 +28,9 @@ pub(super) fn walk_waiting<'db>(
     source: &StoredPvs<'db>,
     rule: &dyn PrefetchArea,
     lods: &mut WalkLods<'db>,
-    tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     each: impl FnMut((PvsFrame, f64)) -> Result<()>,
 ) -> Result<()> {
-    let rule: &dyn PrefetchArea = &*rule;
     let client = PvsClient::new(source, rule, THESIS_CAPACITY)?;
     // For a renderer: every object's index entry, to load what the client holds.
     let entries = if viewer.draws() {
@@ -48,7 +46,7 @@ pub(super) fn walk_waiting<'db>(
         shown: None,
         pending: None,
     };
-    session::run_each(&mut mode, viewer, lods, tick, each)
+    session::run_each(&mut mode, viewer, lods, each)
 }
 
 /// The PVS mode: the client, and what a drawing viewer needs beside it.

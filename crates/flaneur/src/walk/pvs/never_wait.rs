@@ -36,7 +36,6 @@ pub(crate) fn walk_live<'db>(
     rule: &(dyn PrefetchArea + Sync),
     pace: Option<f32>,
     lods: &mut WalkLods<'db>,
-    tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     each: impl FnMut((PvsFrame, f64)) -> Result<()>,
 ) -> Result<PvsRun> {
@@ -66,7 +65,7 @@ pub(crate) fn walk_live<'db>(
             page_reads: db.io().page_reads,
             run: PvsRun::default(),
         };
-        let walked = session::run_each(&mut mode, viewer, lods, tick, each);
+        let walked = session::run_each(&mut mode, viewer, lods, each);
         mailbox.end();
         (walked, mode.rx, mode.run)
     });

@@ -13,6 +13,8 @@ use crate::walk::sink::FrameFigures;
 /// One frame of a PVS walk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct PvsFrame {
+    /// The frame's index in the walk, from 0.
+    pub frame: usize,
     /// The viewcell the eye is in, if walkable.
     pub cell: Option<u32>,
     /// Objects drawn: the current cell's PVS (0 outside cells).
@@ -41,10 +43,11 @@ impl PvsFrame {
     pub const CSV_HEADER: &'static str =
         "frame,cell,drawn,transaction,sent,swaps,visual_misses,pages,damaged";
 
-    /// Frame `index` as one CSV row (no line end), its columns [`PvsFrame::CSV_HEADER`].
-    pub fn csv_row(&self, index: usize) -> String {
+    /// The frame as one CSV row (no line end), its columns [`PvsFrame::CSV_HEADER`].
+    pub fn csv_row(&self) -> String {
         format!(
-            "{index},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
+            self.frame,
             self.cell.map_or(String::new(), |c| c.to_string()),
             self.drawn,
             self.transaction as u8,
@@ -65,7 +68,7 @@ pub struct PvsWalkReport {
     /// Whether the viewer's thread never waited on a read.
     pub never_wait: bool,
     /// Every frame's figures, in order (empty for a walk that handed them on,
-    /// [`walk_pvs_streamed`](super::walk_pvs_streamed)).
+    /// [`Frames::Each`](crate::walk::Frames::Each)).
     pub frames: Vec<PvsFrame>,
     /// Frames walked.
     pub walked: usize,

@@ -17,17 +17,14 @@ pub(crate) fn walk_live<'db>(
     db: &'db Database,
     cfg: PvsWalkConfig,
     lods: &mut WalkLods<'db>,
-    tick: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     each: impl FnMut((PvsFrame, f64)) -> Result<()>,
 ) -> Result<PvsRun> {
     let source = StoredPvs::new(db)?;
     let rule = cfg.prefetch.rule()?;
     if cfg.never_wait {
-        return super::never_wait::walk_live(
-            db, &source, &*rule, cfg.pace, lods, tick, viewer, each,
-        );
+        return super::never_wait::walk_live(db, &source, &*rule, cfg.pace, lods, viewer, each);
     }
-    super::mode::walk_waiting(db, &source, &*rule, lods, tick, viewer, each)?;
+    super::mode::walk_waiting(db, &source, &*rule, lods, viewer, each)?;
     Ok(PvsRun::default())
 }

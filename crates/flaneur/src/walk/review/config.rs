@@ -57,7 +57,7 @@ impl std::str::FromStr for Preset {
 }
 
 /// Everything a walk can vary.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ReviewConfig {
     /// How a new disk cell's objects are retrieved: BOX or CSearch.
     pub retrieval: Retrieval,
@@ -128,7 +128,8 @@ impl ReviewConfig {
         }
     }
 
-    pub(crate) fn validate(&self) -> Result<()> {
+    /// Checks the settings, naming the first one out of range.
+    pub fn validate(&self) -> Result<()> {
         check_sf(self.sf)?;
         if let Some(k) = self.prefetch_k {
             check_k(k)?;

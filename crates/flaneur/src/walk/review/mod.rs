@@ -12,7 +12,8 @@
 //! viewer gets there; index pages go through the index cache when one is
 //! configured. The four configurations of §4.4 are presets.
 //!
-//! Here: REVIEW's settings, the entry points and the figures a walk reports; the
+//! Here: REVIEW's settings, the walk [`walk::run`](super::run) walks and the figures it
+//! reports; the
 //! defaults and checks every walk shares are `walk::settings`'.
 //! The frame loop is the walk session's (`walk/session.rs`), the retrieval the REVIEW
 //! mode's (`walk/review/mode.rs`, set up with its threads by `run.rs`), the motion
@@ -46,9 +47,7 @@ mod mode;
 mod report;
 mod run;
 mod tally;
-mod walks;
 
 pub use config::{Preset, Retrieval, ReviewConfig, DEFAULT_INDEX_CACHE};
 pub use report::{FrameStats, WalkReport, WalkSummary};
-pub(crate) use walks::walk_live_with;
-pub use walks::{walk, walk_into, walk_live, walk_streamed};
+pub(crate) use run::walk;

@@ -4,7 +4,7 @@ use super::config::ReviewConfig;
 use crate::cache::{CacheStats, Trace};
 
 /// One frame's figures. Times in milliseconds.
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     /// The frame's index in the walk, from 0.
     pub frame: usize,
@@ -186,7 +186,8 @@ pub struct WalkSummary {
 pub struct WalkReport {
     /// The settings walked.
     pub config: ReviewConfig,
-    /// Every frame's figures, in order.
+    /// Every frame's figures, in order (empty for a walk that handed them on,
+    /// [`Frames::Each`](crate::walk::Frames::Each)).
     pub frames: Vec<FrameStats>,
     /// The walk's figures in all.
     pub summary: WalkSummary,

@@ -27,11 +27,10 @@ use std::sync::{mpsc, Mutex};
 /// the REVIEW mode, its index cache and its loader threads, each frame's figures handed
 /// to `each` as the frame ends and none kept (the report's `frames` is empty, its
 /// summary whole).
-pub(crate) fn walk_each<'db>(
+pub(crate) fn walk<'db>(
     db: &'db Database,
     cfg: &ReviewConfig,
     lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     each: &mut dyn FnMut(&FrameStats) -> Result<()>,
 ) -> Result<WalkReport> {
@@ -111,7 +110,7 @@ pub(crate) fn walk_each<'db>(
         };
         let mut mode = Review::new((db, source, cfg), boxes, pool.as_ref(), sets, channels);
         let mut tally = ReviewTally::default();
-        let walked = session::run_each(&mut mode, viewer, lods, progress, |f| {
+        let walked = session::run_each(&mut mode, viewer, lods, |f| {
             tally.add(&f);
             each(&f)
         });

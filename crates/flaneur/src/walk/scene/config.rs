@@ -5,7 +5,7 @@ use crate::walk::scene::Traversal;
 use serde::Serialize;
 
 /// What a scene-tree walk can vary.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SceneConfig {
     /// The traversal: CONV, VSC(η) or PB(n).
     pub traversal: Traversal,
@@ -31,5 +31,12 @@ impl SceneConfig {
             selection: Selection::Screen,
             tau: crate::walk::lod_select::DEFAULT_TAU,
         }
+    }
+
+    /// Checks the settings, naming the first one out of range.
+    pub fn validate(&self) -> crate::error::Result<()> {
+        self.traversal.validate()?;
+        crate::walk::settings::check_far(self.far)?;
+        crate::walk::settings::check_screen_tau(self.tau)
     }
 }

@@ -59,13 +59,16 @@
 //! #     ..Default::default()
 //! # };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::walk::scene::{SceneTree, Traversal};
-//! use flaneur::{path, walk::scene};
+//! use flaneur::walk::scene::{SceneConfig, SceneReport, SceneTree, Traversal};
+//! use flaneur::walk::{Frames, Playback, WalkState};
 //! let db = flaneur::Database::open(&file)?;
-//! let mut tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
-//! let poses = path::cell_walk(&db, 30, 0.5, 10.0, 3)?;
-//! let cfg = scene::SceneConfig::new(Traversal::Vsc { eta: 0.001 });
-//! let report = scene::walk(&db, &mut tree, &poses, &cfg, |_| {})?;
+//! // Loaded once (with a progress bar, say), for as many walks as the state runs.
+//! let tree = SceneTree::load(&db, &flaneur::progress::Silent)?;
+//! let mut state = WalkState::new(&db).with_scene_tree(tree);
+//! let poses = flaneur::path::cell_walk(&db, 30, 0.5, 10.0, 3)?;
+//! let cfg = SceneConfig::new(Traversal::Vsc { eta: 0.001 }).into();
+//! let viewer = &mut Playback::path(&poses);
+//! let report: SceneReport = state.run(&cfg, viewer, Frames::Keep)?.try_into()?;
 //! assert_eq!(report.frames.len(), 30);
 //! # Ok(()) }
 //! ```
@@ -85,5 +88,4 @@ pub use traverse::{
     MAX_ATTEMPTS, PB_TAU_STEP,
 };
 pub use tree::{SceneNode, SceneTree};
-pub(crate) use walks::walk_live_with;
-pub use walks::{walk, walk_into, walk_live, walk_streamed};
+pub(crate) use walks::walk;

@@ -29,7 +29,6 @@ pub(crate) fn walk_live<'db>(
     tree: &mut SceneTree,
     cfg: &SceneConfig,
     lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     mut each: impl FnMut(SceneFrame) -> Result<()>,
 ) -> Result<()> {
@@ -47,7 +46,7 @@ pub(crate) fn walk_live<'db>(
         pending: None,
     };
     let mut walked = 0;
-    session::run_each(&mut mode, viewer, lods, progress, |f| {
+    session::run_each(&mut mode, viewer, lods, |f| {
         walked += 1;
         each(f)
     })?;

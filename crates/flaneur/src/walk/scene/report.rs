@@ -112,7 +112,7 @@ pub struct SceneReport {
     /// The settings walked.
     pub config: SceneConfig,
     /// Every frame's figures, in order (empty for a walk that handed them on,
-    /// [`walk_streamed`](super::walk_streamed)).
+    /// [`Frames::Each`](crate::walk::Frames::Each)).
     pub frames: Vec<SceneFrame>,
     /// The walk in all.
     pub summary: SceneSummary,

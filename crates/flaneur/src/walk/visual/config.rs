@@ -20,7 +20,7 @@ pub const FAINT_TAU_STRETCH: f32 = 2.5;
 pub const DEFAULT_NODE_CACHE: usize = 400 * 4096;
 
 /// Everything a VISUAL walk can vary.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct VisualConfig {
     /// The DoV threshold η of the search: 0 finds every visible object at the detail
     /// of its DoV; larger draws more of the city at nodes' internal LODs.
@@ -107,7 +107,8 @@ impl VisualConfig {
         self.selection == Selection::Screen || self.finer_by_tau
     }
 
-    pub(crate) fn validate(&self) -> Result<()> {
+    /// Checks the settings, naming the first one out of range.
+    pub fn validate(&self) -> Result<()> {
         if !(self.eta.is_finite() && self.eta >= 0.0) {
             return Err(Error::Invalid(format!(
                 "a DoV threshold η of {}: give a number ≥ 0",

@@ -35,7 +35,8 @@
 //!   naming the page; for a viewer that [walks on](super::Viewer::skips_damaged) it is
 //!   left out instead, counted and told of.
 //!
-//! Here: the settings, the entry points and the figures a walk reports. The frame loop
+//! Here: the settings, the walk [`walk::run`](super::run) walks and the figures it
+//! reports. The frame loop
 //! is the walk session's (`walk/session.rs`), the retrieval the VISUAL mode's
 //! (`walk/visual/`: `run.rs` sets a walk up, `mode.rs` waits, `never_wait.rs` and
 //! `loader.rs` never wait, and `search.rs` is what both search with).
@@ -52,10 +53,12 @@
 //! #     ..Default::default()
 //! # };
 //! # flaneur::build_from_scene(&scene, &file, &opts)?;
-//! use flaneur::{path, walk::visual};
+//! use flaneur::walk::{self, visual, Frames, Playback};
 //! let db = flaneur::Database::open(&file)?;
-//! let poses = path::cell_walk(&db, 40, 0.5, 10.0, 3)?;
-//! let report = visual::walk(&db, &poses, &visual::VisualConfig::default(), |_| {})?;
+//! let poses = flaneur::path::cell_walk(&db, 40, 0.5, 10.0, 3)?;
+//! let cfg = visual::VisualConfig::default().into();
+//! let viewer = &mut Playback::path(&poses);
+//! let report: visual::VisualReport = walk::run(&db, &cfg, viewer, Frames::Keep)?.try_into()?;
 //! assert_eq!(report.frames.len(), 40);
 //! assert!(report.summary.searches >= 1);
 //! # Ok(()) }
@@ -75,5 +78,4 @@ mod walks;
 pub use config::{VisualConfig, DEFAULT_ETA, DEFAULT_NODE_CACHE, FAINT_TAU_STRETCH};
 pub use report::{VisualFrame, VisualReport, VisualSummary};
 pub use screen::{faint_tau_scale, screen_test};
-pub(crate) use walks::walk_live_with;
-pub use walks::{walk, walk_into, walk_live, walk_streamed};
+pub(crate) use walks::walk;

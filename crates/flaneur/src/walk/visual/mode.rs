@@ -43,7 +43,6 @@ pub(super) fn walk_waiting<'db>(
     cfg: &VisualConfig,
     search: &Searcher<'_>,
     lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     counted: &mut dyn FnMut(VisualFrame) -> Result<()>,
 ) -> Result<()> {
@@ -83,7 +82,7 @@ pub(super) fn walk_waiting<'db>(
             clock: Instant::now(),
             pending: None,
         };
-        let walk = session::run_each(&mut mode, viewer, lods, progress, counted);
+        let walk = session::run_each(&mut mode, viewer, lods, counted);
         mode.req_tx = None;
         walk
     })

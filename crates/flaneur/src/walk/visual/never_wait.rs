@@ -48,7 +48,6 @@ pub(crate) fn walk_live<'db>(
     cfg: &VisualConfig,
     search: &Searcher<'_>,
     lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     each: &mut dyn FnMut(VisualFrame) -> Result<()>,
 ) -> Result<NeverWaitRun> {
@@ -82,7 +81,7 @@ pub(crate) fn walk_live<'db>(
             unknown: Vec::new(),
             run: NeverWaitRun::default(),
         };
-        let walked = session::run(&mut mode, viewer, lods, progress);
+        let walked = session::run(&mut mode, viewer, lods);
         mailbox.end();
         (
             walked.map(|frames| (frames, mode.unknown, mode.cells, mode.run)),

@@ -129,7 +129,8 @@ pub struct VisualSummary {
 pub struct VisualReport {
     /// The settings walked.
     pub config: VisualConfig,
-    /// Every frame's figures, in order.
+    /// Every frame's figures, in order (empty for a walk that handed them on,
+    /// [`Frames::Each`](crate::walk::Frames::Each)).
     pub frames: Vec<VisualFrame>,
     /// The walk in all.
     pub summary: VisualSummary,

@@ -18,7 +18,6 @@ pub(crate) fn walk_live<'db>(
     db: &'db Database,
     cfg: &VisualConfig,
     lods: &mut WalkLods<'db>,
-    progress: impl FnMut(usize),
     viewer: &mut dyn Viewer,
     mut each: impl FnMut(VisualFrame) -> Result<()>,
 ) -> Result<(Option<CacheStats>, NeverWaitRun)> {
@@ -66,9 +65,9 @@ pub(crate) fn walk_live<'db>(
         each(f)
     };
     let run = if cfg.never_wait {
-        super::never_wait::walk_live(db, cfg, search, lods, progress, viewer, &mut counted)?
+        super::never_wait::walk_live(db, cfg, search, lods, viewer, &mut counted)?
     } else {
-        super::mode::walk_waiting(db, cfg, search, lods, progress, viewer, &mut counted)?;
+        super::mode::walk_waiting(db, cfg, search, lods, viewer, &mut counted)?;
         NeverWaitRun::default()
     };
     if walked == 0 {
